@@ -1,0 +1,31 @@
+"""Errors a user can act on; the CLI prints them as one line and exits non-zero."""
+
+
+class ToolchainError(Exception):
+    """Base class of every error the CLI reports as one clear line."""
+
+    exit_code = 1
+
+
+class ScenarioError(ToolchainError, ValueError):
+    """A scenario file (or batch file) is malformed: names the file and the key."""
+
+    exit_code = 2
+
+
+class FmuError(ToolchainError):
+    """An FMU is missing, invalid, or lacks a mapped variable."""
+
+    exit_code = 2
+
+
+class ModelError(ToolchainError):
+    """A participant produced a non-finite value or refused a step during a run."""
+
+    exit_code = 3
+
+
+class SolverError(ToolchainError):
+    """An optimisation problem could not be solved and no fallback applies."""
+
+    exit_code = 3

@@ -1,0 +1,116 @@
+"""The one lifecycle every co-simulation participant follows, FMU or Python.
+
+A participant has named input and output ports.  The master
+
+1. calls ``setup(start_time, inputs)`` once, in the scenario's participant order,
+   with whatever connected inputs are already known (outputs of participants set
+   up before it), and records the returned initial outputs;
+2. at every communication point ``t`` at which the participant is due (every
+   ``every`` macro steps), gathers its inputs from the connections and calls
+   ``step(t, step_size, inputs)``, which returns the outputs;
+3. calls ``terminate()`` once at the end, also after a failure.
+
+Timing of outputs: a *sampled* participant (``outputs_at_step_end = False``, the
+default for Python participants: navigation, control, traffic, scripts) returns
+outputs that are decided at ``t`` and held over ``[t, t + step_size)``.  A
+*dynamic* participant (``outputs_at_step_end = True``: FMUs) returns its outputs at
+``t + step_size``.  The recorder labels each output with that time.
+
+Port values are floats or numpy arrays (vectors or matrices of floats); FMU ports
+are floats only.  Participants never call each other: everything they exchange
+goes through the master's connections.
+"""
+
+from __future__ import annotations
+
+import abc
+from collections.abc import Mapping, Sequence
+from typing import Any, Union
+
+import numpy as np
+
+Value = Union[float, np.ndarray]
+
+
+class Participant(abc.ABC):
+    """Base class of every co-simulation participant.
+
+    Parameters
+    ----------
+    name : str
+        The participant's name in the scenario (``ship``, ``nav``, ...).
+    """
+
+    #: True for participants whose outputs describe the end of the step (FMUs).
+    outputs_at_step_end: bool = False
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    @property
+    @abc.abstractmethod
+    def input_names(self) -> Sequence[str]:
+        """Names of the input ports."""
+
+    @property
+    @abc.abstractmethod
+    def output_names(self) -> Sequence[str]:
+        """Names of the output ports."""
+
+    @abc.abstractmethod
+    def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
+        """Prepare for a run starting at ``start_time`` [s]; return the initial outputs.
+
+        ``inputs`` holds only the connected inputs already known at set-up.
+        """
+
+    @abc.abstractmethod
+    def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
+        """Advance from ``time`` to ``time + step_size`` [s] with ``inputs``; return outputs."""
+
+    def terminate(self) -> None:
+        """Release resources; called once, also after a failed run."""
+
+    def summary(self) -> dict[str, Any]:
+        """Key figures for ``summary.json`` (JSON-serialisable), gathered after the run."""
+        return {}
+
+
+def reject_unknown_options(options: Mapping[str, Any], allowed: Sequence[str], where: str) -> None:
+    """Raise ``ScenarioError`` naming the first option key not in ``allowed``.
+
+    ``where`` names the place in the scenario, e.g. ``"scenario.toml: participants.nav"``.
+    """
+    from orchestrator.errors import ScenarioError
+
+    for key in options:
+        if key not in allowed:
+            raise ScenarioError(
+                f"{where}: unknown option '{key}' (valid: {', '.join(sorted(allowed))})"
+            )
+
+
+class BuildContext:
+    """What a participant factory may know about the scenario it is built for.
+
+    Attributes
+    ----------
+    where : str
+        Prefix for error messages: ``"<scenario file>: participants.<name>"``.
+    scenario_dir : pathlib.Path
+        Folder of the scenario file; relative paths in options resolve against it.
+    step_size : float
+        This participant's communication step [s] (``every`` times the macro step).
+    start_time, stop_time : float
+        Simulation interval [s].
+    metocean : rhnc.metocean.MetOceanField or None
+        The scenario's one met-ocean source (same data the environment FMU reads).
+    """
+
+    def __init__(self, where, scenario_dir, step_size, start_time, stop_time, metocean=None):
+        self.where = where
+        self.scenario_dir = scenario_dir
+        self.step_size = step_size
+        self.start_time = start_time
+        self.stop_time = stop_time
+        self.metocean = metocean

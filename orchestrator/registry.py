@@ -1,0 +1,15 @@
+"""Python participant types a scenario can name with ``type = "..."``.
+
+Each entry maps a type name to ``"module:Class"``; the class provides
+``from_options(name, options, context) -> Participant`` (see
+:mod:`orchestrator.participant`).  Users plug in their own participants with
+``type = "python"`` and ``class = "package.module:Class"`` instead.
+"""
+
+PARTICIPANT_TYPES = {
+    "scripted_tau": "orchestrator.scripted:ScriptedTau",
+    "navigation": "rhnc.navigation_participant:NavigationParticipant",
+    "control": "rhnc.control_participant:ControlParticipant",
+    "traffic": "rhnc.traffic:TrafficParticipant",
+    "reference_path": "rhnc.reference_participant:ReferencePathParticipant",
+}
