@@ -1,0 +1,111 @@
+/* KCS plant FMU: start values, get/set by value reference and doStep over the shared
+ * dynamics of models/common/kcs_dynamics.h. Equations and sources: readme.md. */
+#include "fmu_model.h"
+
+#define IN(name) {vr_##name, #name, TypeReal, CausalityInput, VariabilityContinuous}
+#define OUT(name) {vr_##name, #name, TypeReal, CausalityOutput, VariabilityContinuous}
+#define INITIAL(name) {vr_##name, #name, TypeReal, CausalityParameter, VariabilityFixed}
+#define PARAM(name, variability) {vr_##name, #name, TypeReal, CausalityParameter, variability},
+
+const ModelVariable model_variables[N_VARIABLES] = {
+    IN(tau_u), IN(tau_r), IN(current_north), IN(current_east), IN(wind_speed),
+    IN(wind_direction), IN(hs),
+    OUT(x), OUT(y), OUT(psi), OUT(u), OUT(v), OUT(r), OUT(sog), OUT(cog),
+    INITIAL(x0), INITIAL(y0), INITIAL(psi0), INITIAL(u0), INITIAL(v0), INITIAL(r0),
+    KCS_PARAMETERS(PARAM)
+};
+
+/* Storage of every input and parameter (outputs are computed). */
+static double *field(ModelData *d, fmi2ValueReference vr) {
+    switch (vr) {
+    case vr_tau_u: return &d->in.tau_u;
+    case vr_tau_r: return &d->in.tau_r;
+    case vr_current_north: return &d->in.current_north;
+    case vr_current_east: return &d->in.current_east;
+    case vr_wind_speed: return &d->in.wind_speed;
+    case vr_wind_direction: return &d->in.wind_direction;
+    case vr_hs: return &d->in.hs;
+    case vr_x0: return &d->X0[KCS_X];
+    case vr_y0: return &d->X0[KCS_Y];
+    case vr_psi0: return &d->X0[KCS_PSI];
+    case vr_u0: return &d->X0[KCS_U];
+    case vr_v0: return &d->X0[KCS_V];
+    case vr_r0: return &d->X0[KCS_R];
+#define KCS_CASE(name, variability) case vr_##name: return &d->p.name;
+    KCS_PARAMETERS(KCS_CASE)
+#undef KCS_CASE
+    default: return NULL;
+    }
+}
+
+void model_set_start_values(ModelInstance *comp) {
+    ModelData *d = &comp->data;
+    int i;
+    kcs_default_parameters(&d->p);
+    d->in = (KcsInputs){0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    for (i = 0; i < KCS_NSTATES; i++) d->X0[i] = d->X[i] = 0.0;
+}
+
+fmi2Status model_exit_initialization(ModelInstance *comp) {
+    ModelData *d = &comp->data;
+    const char *bad = kcs_invalid_parameter(&d->p);
+    int i;
+    if (bad) {
+        log_error(comp, "fmi2ExitInitializationMode: parameter %s has an invalid value", bad);
+        return fmi2Error;
+    }
+    for (i = 0; i < KCS_NSTATES; i++) d->X[i] = d->X0[i];
+    d->X[KCS_PSI] = kcs_wrap_angle(d->X[KCS_PSI]);
+    return fmi2OK;
+}
+
+fmi2Status model_get_real(ModelInstance *comp, fmi2ValueReference vr, fmi2Real *value) {
+    ModelData *d = &comp->data;
+    /* before initialisation ends the outputs show the initial state */
+    const double *X = comp->state == InitializationMode ? d->X0 : d->X;
+    double sog, cog, *f;
+    switch (vr) {
+    case vr_x: *value = X[KCS_X]; return fmi2OK;
+    case vr_y: *value = X[KCS_Y]; return fmi2OK;
+    case vr_psi: *value = kcs_wrap_angle(X[KCS_PSI]); return fmi2OK;
+    case vr_u: *value = X[KCS_U]; return fmi2OK;
+    case vr_v: *value = X[KCS_V]; return fmi2OK;
+    case vr_r: *value = X[KCS_R]; return fmi2OK;
+    case vr_sog:
+    case vr_cog:
+        kcs_over_ground(X, &d->in, &sog, &cog);
+        *value = vr == vr_sog ? sog : cog;
+        return fmi2OK;
+    default:
+        f = field(d, vr);
+        *value = *f;
+        return fmi2OK;
+    }
+}
+
+fmi2Status model_set_real(ModelInstance *comp, fmi2ValueReference vr, fmi2Real value) {
+    double *f = field(&comp->data, vr);
+    if (vr == vr_h_int && !(value > 0.0)) {
+        log_error(comp, "fmi2SetReal: h_int (value reference %u) = %g must be positive",
+                  (unsigned)vr, value);
+        return fmi2Error;
+    }
+    if ((vr == vr_tau_u_max || vr == vr_tau_r_max) && value < 0.0) {
+        log_error(comp, "fmi2SetReal: %s (value reference %u) = %g must not be negative",
+                  model_variables[vr].name, (unsigned)vr, value);
+        return fmi2Error;
+    }
+    *f = value;
+    return fmi2OK;
+}
+
+fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+    ModelData *d = &comp->data;
+    if (kcs_integrate(&d->p, d->X, &d->in, h) != 0) {
+        log_error(comp, "fmi2DoStep: the state became non-finite in the step from t = %g s", t);
+        return fmi2Error;
+    }
+    return fmi2OK;
+}
+
+void model_free_resources(ModelInstance *comp) { (void)comp; }
