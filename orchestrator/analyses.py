@@ -1,0 +1,101 @@
+"""Post-run analyses and figures a scenario names in ``[outputs]``.
+
+An analysis is ``function(frame, scenario, cosim, out_dir) -> dict`` returning key
+figures for ``summary.json`` (and writing its own figures into ``out_dir``).  A figure is
+``function(frame, scenario, cosim, out_dir) -> list[str]`` of file names written.
+Both registries map a name to ``"module:function"`` so heavy imports stay lazy.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+import numpy as np
+
+from orchestrator.errors import ScenarioError, ToolchainError
+
+ANALYSES = {
+    "turning_circle": "orchestrator.analyses:turning_circle_analysis",
+    "zigzag": "orchestrator.analyses:zigzag_analysis",
+}
+FIGURES = {
+    "track": "orchestrator.figures:track_figure",
+}
+
+#: KCS length between perpendiculars [m], used when the plant FMU has no length parameter.
+KCS_LENGTH_M = 230.0
+
+
+def run_analysis(name, frame, scenario, cosim, out_dir) -> dict:
+    return _resolve(ANALYSES, name, "analyses")(frame, scenario, cosim, out_dir)
+
+
+def draw_figure(name, frame, scenario, cosim, out_dir) -> list[str]:
+    return _resolve(FIGURES, name, "figures")(frame, scenario, cosim, out_dir)
+
+
+def _resolve(registry, name, key):
+    if name not in registry:
+        raise ScenarioError(f"outputs.{key}: unknown name '{name}' (valid: {', '.join(sorted(registry))})")
+    module, _, function = registry[name].partition(":")
+    return getattr(importlib.import_module(module), function)
+
+
+def plant_name(cosim) -> str:
+    """The participant whose outputs include the ship state (x, y, psi)."""
+    for participant in cosim.participants:
+        if {"x", "y", "psi"} <= set(participant.output_names):
+            return participant.name
+    raise ToolchainError("no participant outputs the ship state x, y, psi")
+
+
+def driver_column(scenario, target: str, port: str) -> str:
+    """Time-series column of the output connected to ``target.port``."""
+    for connection in scenario.connections:
+        if connection.target == target and connection.target_port == port:
+            return f"{connection.source}.{connection.source_port}"
+    raise ToolchainError(f"nothing drives {target}.{port}")
+
+
+def _execute_time(frame, column) -> float:
+    moving = np.nonzero(np.abs(frame[column].to_numpy()) > 0)[0]
+    if moving.size == 0:
+        raise ToolchainError(f"{column} is zero throughout: no manoeuvre to analyse")
+    return float(frame["time_s"].iloc[moving[0]])
+
+
+def _ship_length(cosim, plant) -> float:
+    parameters = getattr(cosim.participant(plant), "parameters", {})
+    return float(parameters.get("lpp", parameters.get("length_m", KCS_LENGTH_M)))
+
+
+def turning_circle_analysis(frame, scenario, cosim, out_dir) -> dict:
+    from rhnc.manoeuvres import turning_circle
+
+    plant = plant_name(cosim)
+    execute = _execute_time(frame, driver_column(scenario, plant, "tau_r"))
+    cols = [frame[f"{plant}.{c}"].to_numpy() for c in ("x", "y", "psi")]
+    figures = turning_circle(frame["time_s"].to_numpy(), *cols, execute_s=execute,
+                             length_m=_ship_length(cosim, plant))
+    figures["execute_s"] = execute
+    figures["approach_speed_kn"] = float(frame[f"{plant}.u"].iloc[int(np.searchsorted(frame["time_s"], execute))]
+                                         / (1852 / 3600))
+    from orchestrator.figures import manoeuvre_figure
+
+    manoeuvre_figure(frame, plant, figures, out_dir / "turning_circle.png", "Turning circle")
+    return figures
+
+
+def zigzag_analysis(frame, scenario, cosim, out_dir) -> dict:
+    from rhnc.manoeuvres import zigzag
+
+    plant = plant_name(cosim)
+    column = driver_column(scenario, plant, "tau_r")
+    execute = _execute_time(frame, column)
+    figures = zigzag(frame["time_s"].to_numpy(), frame[f"{plant}.psi"].to_numpy(), frame[column].to_numpy(),
+                     execute_s=execute)
+    figures["execute_s"] = execute
+    from orchestrator.figures import zigzag_figure
+
+    zigzag_figure(frame, plant, column, out_dir / "zigzag.png")
+    return figures

@@ -1,0 +1,119 @@
+"""Command line: ``python -m orchestrator {run,validate,build,plan} ...``.
+
+Known errors (bad scenario, missing FMU, failed model) print one line and exit non-zero:
+2 for bad input, 3 for a run that failed, 130 for Ctrl-C.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+
+from orchestrator import __version__
+
+log = logging.getLogger("orchestrator")
+
+EXIT_RUN_FAILED = 3
+EXIT_INTERRUPTED = 130
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="python -m orchestrator",
+                                     description="RHNC co-simulation toolchain (FMI 2.0 co-simulation master).")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
+    sub = parser.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run", help="run a scenario and write results/<scenario>/<run-id>/")
+    run.add_argument("scenario", help="scenario TOML file")
+    run.add_argument("--results", default="results", help="results folder (default: ./results)")
+    run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    validate = sub.add_parser("validate", help="check a scenario and its FMUs without running it")
+    validate.add_argument("scenario", help="scenario TOML file")
+    build = sub.add_parser("build", help="compile the FMUs in models/ into fmus/")
+    build.add_argument("models", nargs="*", help="model names (default: all)")
+    plan = sub.add_parser("plan", help="run an offline planning experiment (e.g. Experiment 1)")
+    plan.add_argument("scenario", help="offline planning TOML file")
+    plan.add_argument("--results", default="results", help="results folder (default: ./results)")
+    return parser
+
+
+def main(argv=None) -> int:
+    """Entry point; returns the exit code."""
+    from orchestrator.errors import ToolchainError
+
+    args = _parser().parse_args(argv)
+    logging.basicConfig(level=logging.DEBUG if args.verbose else logging.WARNING,
+                        format="%(levelname)s %(name)s: %(message)s")
+    try:
+        return _COMMANDS[args.command](args)
+    except ToolchainError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return exc.exit_code
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+def _run(args) -> int:
+    from orchestrator.run import run_scenario
+
+    report = run_scenario(args.scenario, args.results, progress=not args.no_progress)
+    print(f"{report.status}: results in {report.folder}")
+    for line in _key_lines(report.summary):
+        print(f"  {line}")
+    if report.status == "interrupted":
+        print(f"error: {report.reason}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    if not report.ok:
+        print(f"error: {report.reason}", file=sys.stderr)
+        return EXIT_RUN_FAILED
+    return 0
+
+
+def _key_lines(summary) -> list[str]:
+    lines = [f"steps {summary['simulation']['steps_done']}/{summary['simulation']['steps_planned']}, "
+             f"wall time {summary['wall_time_s']:.2f} s"]
+    for name, figures in summary.get("analyses", {}).items():
+        shown = ", ".join(f"{k} {v:.4g}" for k, v in figures.items() if isinstance(v, (int, float)))
+        lines.append(f"{name}: {shown}")
+    return lines
+
+
+def _validate(args) -> int:
+    from orchestrator.validate import validate_scenario
+
+    problems = validate_scenario(args.scenario)
+    for problem in problems:
+        print(f"error: {problem}", file=sys.stderr)
+    if problems:
+        return 2
+    print(f"ok: {args.scenario}")
+    return 0
+
+
+def _build(args) -> int:
+    from orchestrator import fmu_build
+
+    names = args.models or fmu_build.model_names()
+    for name in names:
+        print(fmu_build.build_fmu(name))
+    return 0
+
+
+def _plan(args) -> int:
+    from pathlib import Path
+
+    from rhnc.offline_planning import run_offline_planning
+
+    folder = run_offline_planning(Path(args.scenario), Path(args.results))
+    print(f"finished: results in {folder}")
+    return 0
+
+
+_COMMANDS = {"run": _run, "validate": _validate, "build": _build, "plan": _plan}
+
+
+def console_main() -> None:
+    """Console-script entry point."""
+    sys.exit(main())

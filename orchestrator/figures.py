@@ -1,0 +1,98 @@
+"""Figures of a run (matplotlib, Agg backend): east on the horizontal axis, north vertical."""
+
+from __future__ import annotations
+
+import numpy as np
+
+NM = 1852.0
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def track_figure(frame, scenario, cosim, out_dir) -> list[str]:
+    """The ship's track over the met-ocean wind speed (when the run has a field)."""
+    from orchestrator.analyses import plant_name
+
+    plt = _pyplot()
+    plant = plant_name(cosim)
+    fig, ax = plt.subplots(figsize=(7, 6))
+    field = cosim.metocean
+    if field is not None:
+        mesh = ax.pcolormesh(field.y / NM, field.x / NM, field.wind_speed, shading="auto", cmap="viridis")
+        fig.colorbar(mesh, ax=ax, label="wind speed [m/s]")
+    ax.plot(frame[f"{plant}.y"] / NM, frame[f"{plant}.x"] / NM, color="tab:red", lw=2, label=f"{plant} track")
+    ax.plot(frame[f"{plant}.y"].iloc[0] / NM, frame[f"{plant}.x"].iloc[0] / NM, "o", color="tab:red")
+    _draw_obstacles(ax, frame)
+    ax.set_xlabel("east [nm]")
+    ax.set_ylabel("north [nm]")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_title(f"{scenario.simulation.name}: track")
+    ax.legend(loc="best")
+    fig.tight_layout()
+    fig.savefig(out_dir / "track.png", dpi=120)
+    plt.close(fig)
+    return ["track.png"]
+
+
+def _draw_obstacles(ax, frame) -> None:
+    """Obstacle circles from an ``obstacles`` array output (columns x, y, vx, vy, radius)."""
+    columns = [c for c in frame.columns if c.endswith("]") and ".obstacles[" in c]
+    if not columns:
+        return
+    prefix = columns[0].split("[")[0]
+    count = 1 + max(int(c.split("[")[1].split(",")[0]) for c in columns)
+    for i in range(count):
+        x, y, radius = (frame[f"{prefix}[{i},{k}]"].to_numpy() for k in (0, 1, 4))
+        ax.plot(y / NM, x / NM, ":", color="grey", lw=1)
+        for index in (0, len(x) // 2, len(x) - 1):
+            circle = _circle(x[index], y[index], radius[index])
+            ax.plot(circle[1] / NM, circle[0] / NM, color="black", lw=1)
+
+
+def _circle(x, y, radius):
+    angle = np.linspace(0, 2 * np.pi, 90)
+    return x + radius * np.cos(angle), y + radius * np.sin(angle)
+
+
+def manoeuvre_figure(frame, plant, figures, path, title) -> None:
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6, 6))
+    ax.plot(frame[f"{plant}.y"], frame[f"{plant}.x"], color="tab:blue")
+    ax.set_xlabel("east [m]")
+    ax.set_ylabel("north [m]")
+    ax.set_aspect("equal", adjustable="datalim")
+    text = "\n".join(f"{k.replace('_', ' ')}: {v:.2f}" for k, v in figures.items()
+                     if k.endswith("_L") and v is not None)
+    ax.text(0.02, 0.98, text, transform=ax.transAxes, va="top", fontsize=9,
+            bbox={"facecolor": "white", "alpha": 0.8})
+    ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def zigzag_figure(frame, plant, moment_column, path) -> None:
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(8, 4))
+    t = frame["time_s"] / 60
+    psi = np.degrees(np.unwrap(frame[f"{plant}.psi"].to_numpy()))
+    ax.plot(t, psi - psi[0], label="heading change [deg]")
+    moment = frame[moment_column].to_numpy()
+    scale = np.max(np.abs(moment)) or 1.0
+    ax.plot(t, 10 * moment / scale, "--", label="yaw moment (scaled to +-10)")
+    ax.set_xlabel("time [min]")
+    ax.set_ylabel("deg")
+    ax.legend()
+    ax.grid(True, alpha=0.3)
+    ax.set_title("Zig-zag 10/10 (yaw moment)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

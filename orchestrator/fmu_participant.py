@@ -1,0 +1,288 @@
+"""FMI 2.0 co-simulation FMUs as participants, through FMPy's own classes.
+
+Ports are the FMU's input and output variables, or, where the scenario maps them,
+canonical names (``x``, ``tau_u``, ...) bound to vendor variables with a unit scale
+(``canonical = scale * fmu_value``).  The plant's canonical names have a fixed
+causality, so a mapping that binds ``tau_u`` to an FMU output is refused.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import shutil
+import tempfile
+import tomllib
+from collections.abc import Mapping
+from ctypes import byref
+from pathlib import Path
+
+from orchestrator.errors import FmuError, ModelError, ScenarioError
+from orchestrator.participant import Participant, Value
+from orchestrator.scenario import ParticipantSpec, VariableMapping
+
+log = logging.getLogger(__name__)
+
+#: Canonical plant ports (spec section 1) and the causality each must have.
+CANONICAL_PLANT_PORTS = {
+    **{name: "output" for name in ("x", "y", "psi", "u", "v", "r", "sog", "cog")},
+    **{name: "input" for name in ("tau_u", "tau_r", "current_north", "current_east",
+                                  "wind_speed", "wind_direction", "hs")},
+}
+
+
+def resolve_fmu(reference: str, scenario_dir: Path, where: str) -> Path:
+    """Path of the FMU a scenario names: a built-in model (built on demand) or a file."""
+    from orchestrator import fmu_build
+
+    if not reference.endswith(".fmu") and "/" not in reference and "\\" not in reference:
+        if reference not in fmu_build.model_names():
+            raise FmuError(
+                f"{where}.fmu: no built-in model '{reference}' (valid: {', '.join(fmu_build.model_names())},"
+                " or a path to an .fmu file)"
+            )
+        return fmu_build.ensure_built(reference)
+    path = Path(reference)
+    path = path if path.is_absolute() else scenario_dir / path
+    if not path.is_file():
+        raise FmuError(f"{where}.fmu: FMU file not found: {path}")
+    return path
+
+
+def read_parameter_set(fmu_reference: str, set_name: str, where: str) -> dict:
+    """Values of a named parameter set of a built-in model (``models/<Name>/parameter_sets.toml``)."""
+    from orchestrator import fmu_build
+
+    file = fmu_build.MODELS_DIR / fmu_reference / "parameter_sets.toml"
+    if not file.is_file():
+        raise ScenarioError(f"{where}.parameter_set: model '{fmu_reference}' has no parameter sets ({file} missing)")
+    with file.open("rb") as handle:
+        sets = tomllib.load(handle)
+    if set_name not in sets:
+        raise ScenarioError(
+            f"{where}.parameter_set: no set '{set_name}' in {file.name} (valid: {', '.join(sets)})"
+        )
+    return {key: value for key, value in sets[set_name].items() if key != "description"}
+
+
+class FmuParticipant(Participant):
+    """A co-simulation FMU stepped with ``fmpy.fmi2.FMU2Slave``.
+
+    Parameters
+    ----------
+    spec : ParticipantSpec
+        The scenario's table for this participant.
+    fmu_path : Path
+        The FMU file.
+    where : str
+        Error prefix naming the scenario file and table.
+    string_substitutions : mapping
+        Values for ``${...}`` placeholders in string parameters (``${metocean.grid}``).
+    """
+
+    outputs_at_step_end = True
+
+    def __init__(self, spec: ParticipantSpec, fmu_path: Path, where: str,
+                 string_substitutions: Mapping[str, str] | None = None) -> None:
+        super().__init__(spec.name)
+        from fmpy import read_model_description
+
+        self.fmu_path = Path(fmu_path)
+        self.where = where
+        try:
+            self.model_description = read_model_description(str(self.fmu_path))
+        except Exception as exc:  # fmpy raises plain exceptions for broken archives/XML
+            raise FmuError(f"{where}.fmu: {self.fmu_path} is not a valid FMU: {exc}") from exc
+        if self.model_description.fmiVersion != "2.0" or self.model_description.coSimulation is None:
+            raise FmuError(f"{where}.fmu: {self.fmu_path} is not an FMI 2.0 co-simulation FMU")
+        self.variables = {v.name: v for v in self.model_description.modelVariables}
+        self.parameters = self._parameter_values(spec, string_substitutions or {})
+        self._inputs: dict[str, VariableMapping] = {}
+        self._outputs: dict[str, VariableMapping] = {}
+        self._bind_ports(spec.mapping)
+        self._slave = None
+        self._unzip_dir = None
+        self._messages: list[str] = []
+        self._callbacks = None
+
+    # -- ports -------------------------------------------------------------------------
+    @property
+    def input_names(self):
+        return list(self._inputs)
+
+    @property
+    def output_names(self):
+        return list(self._outputs)
+
+    def _bind_ports(self, mapping: Mapping[str, VariableMapping]) -> None:
+        mapped_variables = set()
+        for port, target in mapping.items():
+            variable = self.variables.get(target.variable)
+            if variable is None:
+                raise FmuError(
+                    f"{self.where}.mapping.{port}: FMU {self.fmu_path.name} has no variable '{target.variable}'"
+                )
+            if variable.causality not in ("input", "output"):
+                raise FmuError(
+                    f"{self.where}.mapping.{port}: variable '{target.variable}' has causality "
+                    f"'{variable.causality}'; only inputs and outputs can be mapped"
+                )
+            expected = CANONICAL_PLANT_PORTS.get(port)
+            if expected is not None and variable.causality != expected:
+                raise FmuError(
+                    f"{self.where}.mapping.{port}: '{port}' is a plant {expected} but FMU variable "
+                    f"'{target.variable}' is an {variable.causality}"
+                )
+            if variable.type != "Real":
+                raise FmuError(f"{self.where}.mapping.{port}: variable '{target.variable}' is not Real")
+            (self._inputs if variable.causality == "input" else self._outputs)[port] = target
+            mapped_variables.add(target.variable)
+        for variable in self.model_description.modelVariables:
+            if variable.name in mapped_variables or variable.type != "Real":
+                continue
+            if variable.causality == "input":
+                self._inputs.setdefault(variable.name, VariableMapping(variable.name))
+            elif variable.causality == "output":
+                self._outputs.setdefault(variable.name, VariableMapping(variable.name))
+
+    def _parameter_values(self, spec: ParticipantSpec, substitutions: Mapping[str, str]) -> dict:
+        values = {}
+        if spec.parameter_set is not None:
+            values.update(read_parameter_set(spec.fmu, spec.parameter_set, self.where))
+        values.update(spec.parameters)
+        for name, value in values.items():
+            variable = self.variables.get(name)
+            if variable is None:
+                raise FmuError(f"{self.where}.parameters.{name}: FMU {self.fmu_path.name} has no variable '{name}'")
+            if variable.causality != "parameter" or variable.variability == "constant":
+                raise FmuError(
+                    f"{self.where}.parameters.{name}: variable '{name}' is a {variable.causality}, not a parameter"
+                )
+            if isinstance(value, str):
+                for key, replacement in substitutions.items():
+                    value = value.replace("${" + key + "}", replacement)
+                if "${" in value:
+                    raise ScenarioError(f"{self.where}.parameters.{name}: unknown placeholder in {value!r}")
+                if variable.type != "String":
+                    raise ScenarioError(f"{self.where}.parameters.{name}: '{name}' is {variable.type}, got a string")
+            elif variable.type == "String":
+                raise ScenarioError(f"{self.where}.parameters.{name}: '{name}' is a String parameter")
+            values[name] = value
+        return values
+
+    # -- lifecycle -----------------------------------------------------------------------
+    def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
+        from fmpy import extract
+        from fmpy.fmi2 import FMU2Slave
+
+        self._unzip_dir = tempfile.mkdtemp(prefix=f"fmu-{self.name}-")
+        extract(str(self.fmu_path), self._unzip_dir)
+        self._slave = FMU2Slave(
+            guid=self.model_description.guid,
+            unzipDirectory=self._unzip_dir,
+            modelIdentifier=self.model_description.coSimulation.modelIdentifier,
+            instanceName=self.name,
+        )
+        self._slave.instantiate(callbacks=self._make_callbacks(), loggingOn=False)
+        self._call("fmi2SetupExperiment", self._slave.setupExperiment, startTime=start_time)
+        self._call("fmi2EnterInitializationMode", self._slave.enterInitializationMode)
+        for name, value in self.parameters.items():
+            self._set_variable(name, value)
+        self._set_inputs(inputs)
+        self._call("fmi2ExitInitializationMode", self._slave.exitInitializationMode)
+        return self._read_outputs(start_time)
+
+    def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
+        self._set_inputs(inputs)
+        self._call("fmi2DoStep", self._slave.doStep, currentCommunicationPoint=time,
+                   communicationStepSize=step_size)
+        return self._read_outputs(time + step_size)
+
+    def terminate(self) -> None:
+        if self._slave is not None:
+            try:
+                self._slave.terminate()
+            except Exception:  # a failed FMU may refuse terminate; freeing it is what matters
+                log.debug("%s: fmi2Terminate failed", self.name, exc_info=True)
+            try:
+                self._slave.freeInstance()
+            except Exception:
+                log.debug("%s: fmi2FreeInstance failed", self.name, exc_info=True)
+            self._slave = None
+        if self._unzip_dir is not None:
+            shutil.rmtree(self._unzip_dir, ignore_errors=True)
+            self._unzip_dir = None
+
+    # -- helpers ---------------------------------------------------------------------------
+    def _make_callbacks(self):
+        from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+        from fmpy import calloc, free
+
+        def logger(_component, _instance, status, category, message):
+            text = message.decode("utf-8", "replace") if message else ""
+            level = logging.WARNING if status >= 1 else logging.DEBUG
+            log.log(level, "%s [%s]: %s", self.name, (category or b"").decode(), text)
+            if status >= 1:
+                self._messages.append(text)
+
+        callbacks = fmi2CallbackFunctions()
+        callbacks.logger = fmi2CallbackLoggerTYPE(logger)
+        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        try:
+            from fmpy.logging import addLoggerProxy
+
+            addLoggerProxy(byref(callbacks))  # formats the FMU's printf-style messages
+        except Exception:
+            log.debug("fmpy logger proxy unavailable; FMU messages stay unformatted", exc_info=True)
+        self._callbacks = callbacks  # keep the ctypes objects alive
+        return callbacks
+
+    def _call(self, function: str, call, **kwargs):
+        from fmpy.fmi1 import FMICallException
+
+        self._messages.clear()
+        try:
+            return call(**kwargs)
+        except FMICallException as exc:
+            detail = self._messages[-1] if self._messages else str(exc)
+            raise ModelError(f"{self.name} ({self.fmu_path.name}): {function} failed: {detail}") from exc
+
+    def _set_variable(self, name: str, value) -> None:
+        variable = self.variables[name]
+        refs = [variable.valueReference]
+        if variable.type == "Real":
+            self._call("fmi2SetReal", self._slave.setReal, vr=refs, value=[float(value)])
+        elif variable.type in ("Integer", "Enumeration"):
+            self._call("fmi2SetInteger", self._slave.setInteger, vr=refs, value=[int(value)])
+        elif variable.type == "Boolean":
+            self._call("fmi2SetBoolean", self._slave.setBoolean, vr=refs, value=[bool(value)])
+        else:
+            self._call("fmi2SetString", self._slave.setString, vr=refs, value=[str(value)])
+
+    def _set_inputs(self, inputs: Mapping[str, Value]) -> None:
+        refs, values = [], []
+        for port, value in inputs.items():
+            binding = self._inputs[port]
+            number = float(value)
+            if not math.isfinite(number):
+                raise ModelError(f"{self.name}: input '{port}' received a non-finite value ({number})")
+            refs.append(self.variables[binding.variable].valueReference)
+            values.append(number / binding.scale)
+        if refs:
+            self._call("fmi2SetReal", self._slave.setReal, vr=refs, value=values)
+
+    def _read_outputs(self, time: float) -> dict[str, Value]:
+        ports = list(self._outputs)
+        refs = [self.variables[self._outputs[p].variable].valueReference for p in ports]
+        values = self._call("fmi2GetReal", self._slave.getReal, vr=refs) if refs else []
+        outputs = {}
+        for port, value in zip(ports, values):
+            if not math.isfinite(value):
+                raise ModelError(
+                    f"{self.name} ({self.fmu_path.name}): output '{self._outputs[port].variable}' "
+                    f"is {value} at t = {time:g} s"
+                )
+            outputs[port] = value * self._outputs[port].scale
+        return outputs

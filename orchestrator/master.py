@@ -1,0 +1,232 @@
+"""The co-simulation master: builds the participants of a scenario and steps them.
+
+Exchange order (documented in ``docs/scenario-format.md``): at every communication
+point the participants due there step in declaration order (Gauss-Seidel); each sees
+the latest outputs of all others.  A participant declared with ``every = m`` steps
+every m macro steps with a step of ``m * dt_s`` and holds its outputs in between.
+"""
+
+from __future__ import annotations
+
+import importlib
+import logging
+import math
+import tempfile
+import time as wallclock
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from orchestrator.errors import ModelError, ScenarioError, ToolchainError
+from orchestrator.participant import BuildContext, Participant, Value
+from orchestrator.recorder import Recorder
+from orchestrator.registry import PARTICIPANT_TYPES
+from orchestrator.scenario import Scenario
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class RunOutcome:
+    """What a run produced, finished or not."""
+
+    status: str  # "finished", "failed" or "interrupted"
+    reason: str
+    steps_done: int
+    wall_time_s: float
+    recorder: Recorder
+    participant_summaries: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+
+class CoSimulation:
+    """The participants and connections of one scenario, ready to run.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        A loaded scenario.
+    work_dir : Path, optional
+        Where derived inputs (the FMU's met-ocean grid) are written; a temporary
+        folder by default.
+    """
+
+    def __init__(self, scenario: Scenario, work_dir: Path | None = None) -> None:
+        self.scenario = scenario
+        self._own_work_dir = work_dir is None
+        self.work_dir = Path(tempfile.mkdtemp(prefix="rhnc-run-")) if work_dir is None else Path(work_dir)
+        self.metocean = None
+        substitutions = {}
+        if scenario.metocean is not None:
+            from rhnc.metocean import MetOceanField
+
+            self.metocean = MetOceanField.from_scenario_table(
+                scenario.metocean, scenario.directory, f"{scenario.path}: metocean")
+            grid = self.metocean.write_fmu_grid(self.work_dir / "metocean.grid")
+            substitutions["metocean.grid"] = str(grid)
+        self.participants: list[Participant] = []
+        self.every: dict[str, int] = {}
+        for spec in scenario.participants:
+            self.participants.append(self._build(spec, substitutions))
+            self.every[spec.name] = spec.every
+        self._check_connections()
+
+    # -- construction ------------------------------------------------------------------
+    def _build(self, spec, substitutions) -> Participant:
+        where = f"{self.scenario.path}: participants.{spec.name}"
+        if spec.is_fmu:
+            from orchestrator.fmu_participant import FmuParticipant, resolve_fmu
+
+            path = resolve_fmu(spec.fmu, self.scenario.directory, where)
+            return FmuParticipant(spec, path, where, substitutions)
+        if spec.type == "python":
+            target = spec.class_path
+        elif spec.type in PARTICIPANT_TYPES:
+            target = PARTICIPANT_TYPES[spec.type]
+        else:
+            raise ScenarioError(
+                f"{where}.type: unknown participant type '{spec.type}' "
+                f"(valid: {', '.join(sorted(PARTICIPANT_TYPES))}, python)"
+            )
+        cls = _import_class(target, f"{where}.class")
+        context = BuildContext(
+            where=where,
+            scenario_dir=self.scenario.directory,
+            step_size=spec.every * self.scenario.simulation.dt_s,
+            start_time=self.scenario.simulation.start_s,
+            stop_time=self.scenario.simulation.stop_s,
+            metocean=self.metocean,
+        )
+        participant = cls.from_options(spec.name, spec.options, context)
+        if not isinstance(participant, Participant):
+            raise ScenarioError(f"{where}: {target} does not build an orchestrator.participant.Participant")
+        return participant
+
+    def _check_connections(self) -> None:
+        by_name = {p.name: p for p in self.participants}
+        where = self.scenario.path
+        for connection in self.scenario.connections:
+            source = by_name[connection.source]
+            target = by_name[connection.target]
+            if connection.source_port not in source.output_names:
+                raise ScenarioError(
+                    f"{where}: connection '{connection}': {connection.source} has no output "
+                    f"'{connection.source_port}' (outputs: {', '.join(source.output_names)})"
+                )
+            if connection.target_port not in target.input_names:
+                raise ScenarioError(
+                    f"{where}: connection '{connection}': {connection.target} has no input "
+                    f"'{connection.target_port}' (inputs: {', '.join(target.input_names)})"
+                )
+
+    def participant(self, name: str) -> Participant:
+        for participant in self.participants:
+            if participant.name == name:
+                return participant
+        raise KeyError(name)
+
+    # -- running -------------------------------------------------------------------------
+    def run(self, progress: bool = True, on_step: Callable[[int], None] | None = None) -> RunOutcome:
+        """Set up, step and terminate every participant; never raises for a model failure.
+
+        A failure inside the run (a model error, an FMU refusing a step, a participant
+        raising) ends the run with status ``failed`` and its reason; what was computed
+        until then stays in the recorder.
+        """
+        sim = self.scenario.simulation
+        recorder = Recorder(sim.start_s, sim.dt_s, sim.steps)
+        bus: dict[tuple[str, str], Value] = {}
+        inbound = {p.name: [c for c in self.scenario.connections if c.target == p.name] for p in self.participants}
+        status, reason, steps_done = "finished", "", 0
+        started = wallclock.perf_counter()
+        bar = _progress_bar(sim.steps, self.scenario.simulation.name, progress)
+        try:
+            for participant in self.participants:
+                inputs = {c.target_port: bus[(c.source, c.source_port)] for c in inbound[participant.name]
+                          if (c.source, c.source_port) in bus}
+                outputs = participant.setup(sim.start_s, inputs)
+                self._publish(participant, sim.start_s, outputs, bus, recorder)
+            for k in range(sim.steps):
+                t = sim.start_s + k * sim.dt_s
+                for participant in self.participants:
+                    every = self.every[participant.name]
+                    if k % every:
+                        continue
+                    step_size = min(every, sim.steps - k) * sim.dt_s
+                    inputs = {c.target_port: bus[(c.source, c.source_port)] for c in inbound[participant.name]
+                              if (c.source, c.source_port) in bus}
+                    outputs = participant.step(t, step_size, inputs)
+                    stamp = t + step_size if participant.outputs_at_step_end else t
+                    self._publish(participant, stamp, outputs, bus, recorder)
+                steps_done = k + 1
+                if bar is not None:
+                    bar.update(1)
+                if on_step is not None:
+                    on_step(k)
+        except KeyboardInterrupt:
+            status, reason = "interrupted", "interrupted by the user (Ctrl-C)"
+        except ToolchainError as exc:
+            status, reason = "failed", str(exc)
+        except Exception as exc:  # a participant's own bug must still leave the results
+            log.debug("participant raised", exc_info=True)
+            status, reason = "failed", f"{type(exc).__name__}: {exc}"
+        finally:
+            if bar is not None:
+                bar.close()
+            for participant in self.participants:
+                participant.terminate()
+        summaries = {}
+        for participant in self.participants:
+            try:
+                summaries[participant.name] = participant.summary()
+            except Exception as exc:  # a summary must not hide the run's own outcome
+                summaries[participant.name] = {"error": f"{type(exc).__name__}: {exc}"}
+        return RunOutcome(status, reason, steps_done, wallclock.perf_counter() - started, recorder, summaries)
+
+    @staticmethod
+    def _publish(participant: Participant, stamp: float, outputs, bus, recorder) -> None:
+        for port, value in outputs.items():
+            if port not in participant.output_names:
+                raise ModelError(f"{participant.name}: returned an undeclared output '{port}'")
+            if not _finite(value):
+                raise ModelError(f"{participant.name}: output '{port}' is not finite at t = {stamp:g} s")
+            bus[(participant.name, port)] = value
+        recorder.add(participant.name, stamp, outputs)
+
+    def close(self) -> None:
+        """Remove the temporary work folder (if the master made it)."""
+        if self._own_work_dir:
+            import shutil
+
+            shutil.rmtree(self.work_dir, ignore_errors=True)
+
+
+def _finite(value) -> bool:
+    if isinstance(value, np.ndarray):
+        return bool(np.all(np.isfinite(value)))
+    return math.isfinite(float(value))
+
+
+def _import_class(target: str, where: str):
+    module_name, _, class_name = target.partition(":")
+    if not module_name or not class_name:
+        raise ScenarioError(f"{where}: '{target}' must read 'package.module:Class'")
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as exc:
+        raise ScenarioError(f"{where}: cannot import module '{module_name}': {exc}") from exc
+    cls = getattr(module, class_name, None)
+    if cls is None or not hasattr(cls, "from_options"):
+        raise ScenarioError(f"{where}: '{target}' is not a participant class with from_options()")
+    return cls
+
+
+def _progress_bar(total: int, name: str, enabled: bool):
+    if not enabled:
+        return None
+    from tqdm import tqdm
+
+    # delay: only runs longer than a couple of seconds show a bar
+    return tqdm(total=total, desc=name, unit="step", delay=2.0, leave=False)

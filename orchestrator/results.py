@@ -1,0 +1,91 @@
+"""A run's results folder: written in a hidden staging folder and renamed when complete.
+
+``results/<scenario>/<run-id>/`` holds
+
+* ``timeseries.parquet`` (or ``.csv``): every participant output on the macro-step grid,
+* ``summary.json``: scenario, hash, versions, status and reason, key figures,
+* ``metocean.nc``: the met-ocean field the run used (when it has one),
+* figures (``track.png`` and those of the scenario's analyses).
+
+Nothing is half-written: a crash while writing leaves only the staging folder
+``.<run-id>.partial``, never a run folder that looks complete.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import logging
+import platform
+import shutil
+from pathlib import Path
+from typing import Any
+
+log = logging.getLogger(__name__)
+
+
+def new_run_id(scenario_hash: str) -> str:
+    """``<UTC timestamp>-<scenario hash prefix>``, unique enough and sortable."""
+    stamp = dt.datetime.now(dt.timezone.utc).strftime("%Y%m%dT%H%M%S%fZ")
+    return f"{stamp}-{scenario_hash[:8]}"
+
+
+def versions() -> dict[str, str]:
+    """Versions of the toolchain and the libraries a result depends on."""
+    import importlib.metadata as md
+
+    found = {"python": platform.python_version()}
+    for package in ("rhnc-cosim", "fmpy", "numpy", "scipy", "casadi", "pandas"):
+        try:
+            found[package] = md.version(package)
+        except md.PackageNotFoundError:
+            found[package] = "not installed"
+    return found
+
+
+class RunFolder:
+    """Stages a run's files and publishes them atomically.
+
+    Parameters
+    ----------
+    results_root : Path
+        The ``results`` folder.
+    scenario_name : str
+        Sub-folder name.
+    run_id : str
+        The run's id.
+    """
+
+    def __init__(self, results_root: Path, scenario_name: str, run_id: str) -> None:
+        self.final = Path(results_root) / scenario_name / run_id
+        self.staging = self.final.parent / f".{run_id}.partial"
+        self.staging.mkdir(parents=True, exist_ok=False)
+
+    def path(self, name: str) -> Path:
+        """Where to write ``name`` while staging."""
+        return self.staging / name
+
+    def write_json(self, name: str, data: dict[str, Any]) -> Path:
+        target = self.path(name)
+        target.write_text(json.dumps(data, indent=2, sort_keys=False, default=_json_default) + "\n")
+        return target
+
+    def publish(self) -> Path:
+        """Rename the staging folder to the run folder; returns the final path."""
+        self.staging.rename(self.final)
+        return self.final
+
+    def discard(self) -> None:
+        shutil.rmtree(self.staging, ignore_errors=True)
+
+
+def _json_default(value):
+    import numpy as np
+
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, Path):
+        return str(value)
+    raise TypeError(f"cannot write {type(value).__name__} to JSON")

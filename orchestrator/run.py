@@ -1,0 +1,109 @@
+"""Run a scenario end to end: load, build, step, analyse, write results."""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from orchestrator.errors import ToolchainError
+from orchestrator.master import CoSimulation
+from orchestrator.results import RunFolder, new_run_id, versions
+from orchestrator.scenario import Scenario, load_scenario
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class RunReport:
+    """Where a run's results are and how it ended."""
+
+    folder: Path
+    status: str
+    reason: str
+    summary: dict[str, Any]
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "finished"
+
+
+def run_scenario(path, results_root="results", progress: bool = True, run_id: str | None = None) -> RunReport:
+    """Run the scenario in ``path`` and write ``results_root/<name>/<run-id>/``.
+
+    Errors in the scenario or its FMUs raise before anything is written
+    (:class:`~orchestrator.errors.ToolchainError`).  A failure during the run is
+    reported in the returned status; its results are written all the same.
+    """
+    scenario = load_scenario(path)
+    folder = RunFolder(Path(results_root), scenario.simulation.name, run_id or new_run_id(scenario.sha256))
+    try:
+        cosim = CoSimulation(scenario, work_dir=None)
+    except BaseException:
+        folder.discard()
+        raise
+    try:
+        outcome = cosim.run(progress=progress)
+        report = _write(scenario, cosim, outcome, folder)
+    except BaseException:
+        folder.discard()
+        raise
+    finally:
+        cosim.close()
+    return report
+
+
+def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder) -> RunReport:
+    from orchestrator import analyses
+
+    frame = outcome.recorder.to_frame()
+    series_name = "timeseries.parquet" if scenario.outputs.format == "parquet" else "timeseries.csv"
+    if scenario.outputs.format == "parquet":
+        frame.to_parquet(folder.path(series_name), index=False)
+    else:
+        frame.to_csv(folder.path(series_name), index=False)
+    if cosim.metocean is not None:
+        cosim.metocean.to_netcdf(folder.path("metocean.nc"))
+    figures: dict[str, Any] = {}
+    status, reason = outcome.status, outcome.reason
+    for name in scenario.outputs.analyses:
+        try:
+            figures[name] = analyses.run_analysis(name, frame, scenario, cosim, folder.staging)
+        except ToolchainError as exc:
+            figures[name] = {"error": str(exc)}
+            if status == "finished":
+                status, reason = "failed", f"analysis '{name}': {exc}"
+    figure_files = []
+    for name in scenario.outputs.figures:
+        try:
+            figure_files += analyses.draw_figure(name, frame, scenario, cosim, folder.staging)
+        except ToolchainError as exc:
+            log.warning("figure '%s' not drawn: %s", name, exc)
+    sim = scenario.simulation
+    summary = {
+        "scenario": str(scenario.path),
+        "scenario_name": sim.name,
+        "scenario_sha256": scenario.sha256,
+        "run_id": folder.final.name,
+        "status": status,
+        "reason": reason,
+        "versions": versions(),
+        "simulation": {"start_s": sim.start_s, "stop_s": sim.stop_s, "dt_s": sim.dt_s,
+                       "steps_planned": sim.steps, "steps_done": outcome.steps_done},
+        "wall_time_s": round(outcome.wall_time_s, 4),
+        "real_time_factor": _ratio(outcome.steps_done * sim.dt_s, outcome.wall_time_s),
+        "metocean": cosim.metocean.source if cosim.metocean is not None else None,
+        "timeseries": series_name,
+        "figures": figure_files,
+        "analyses": figures,
+        "participants": outcome.participant_summaries,
+    }
+    folder.write_json("summary.json", summary)
+    final = folder.publish()
+    return RunReport(final, status, reason, summary)
+
+
+def _ratio(simulated: float, wall: float):
+    return round(simulated / wall, 1) if wall > 0 and math.isfinite(simulated / wall) else None

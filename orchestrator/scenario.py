@@ -1,0 +1,306 @@
+"""Scenario loading: TOML into frozen dataclasses, every error naming the file and the key.
+
+The format is documented in ``docs/scenario-format.md``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from orchestrator.errors import ScenarioError
+
+TOP_LEVEL_KEYS = ("connections", "simulation", "metocean", "participants", "outputs")
+SIMULATION_KEYS = ("name", "start_s", "stop_s", "steps", "dt_s")
+FMU_PARTICIPANT_KEYS = ("fmu", "every", "parameter_set", "parameters", "mapping")
+PYTHON_PARTICIPANT_KEYS = ("type", "class", "every", "options")
+OUTPUT_KEYS = ("format", "analyses", "figures")
+OUTPUT_FORMATS = ("parquet", "csv")
+
+
+@dataclass(frozen=True)
+class VariableMapping:
+    """A canonical port bound to an FMU variable: ``canonical = scale * fmu_value``."""
+
+    variable: str
+    scale: float = 1.0
+
+
+@dataclass(frozen=True)
+class ParticipantSpec:
+    """One ``[participants.<name>]`` table."""
+
+    name: str
+    every: int
+    fmu: str | None = None
+    parameter_set: str | None = None
+    parameters: dict[str, Any] = field(default_factory=dict)
+    mapping: dict[str, VariableMapping] = field(default_factory=dict)
+    type: str | None = None
+    class_path: str | None = None
+    options: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def is_fmu(self) -> bool:
+        return self.fmu is not None
+
+
+@dataclass(frozen=True)
+class Connection:
+    """``source.port -> target.port``."""
+
+    source: str
+    source_port: str
+    target: str
+    target_port: str
+
+    def __str__(self) -> str:
+        return f"{self.source}.{self.source_port} -> {self.target}.{self.target_port}"
+
+
+@dataclass(frozen=True)
+class SimulationSpec:
+    name: str
+    start_s: float
+    stop_s: float
+    dt_s: float
+
+    @property
+    def steps(self) -> int:
+        """Number of macro steps."""
+        return int(round((self.stop_s - self.start_s) / self.dt_s))
+
+
+@dataclass(frozen=True)
+class OutputSpec:
+    format: str = "parquet"
+    analyses: tuple[str, ...] = ()
+    figures: tuple[str, ...] = ("track",)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A loaded, checked scenario."""
+
+    path: Path
+    simulation: SimulationSpec
+    participants: tuple[ParticipantSpec, ...]
+    connections: tuple[Connection, ...]
+    metocean: dict[str, Any] | None
+    outputs: OutputSpec
+    sha256: str
+
+    @property
+    def directory(self) -> Path:
+        return self.path.parent
+
+    def participant(self, name: str) -> ParticipantSpec:
+        for spec in self.participants:
+            if spec.name == name:
+                return spec
+        raise KeyError(name)
+
+
+def load_scenario(path) -> Scenario:
+    """Read and check a scenario file.
+
+    Raises
+    ------
+    ScenarioError
+        For a missing file, a TOML syntax error, an unknown key, a wrong type or an
+        inconsistent value; the message names the file and the key.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ScenarioError(f"{path}: scenario file not found")
+    raw = path.read_bytes()
+    try:
+        data = tomllib.loads(raw.decode("utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ScenarioError(f"{path}: not valid TOML: {exc}") from exc
+    where = str(path)
+    _reject_unknown(data, TOP_LEVEL_KEYS, where, "")
+    simulation = _simulation(_table(data, "simulation", where, required=True), path)
+    participants = _participants(_table(data, "participants", where, required=True), where)
+    connections = _connections(data.get("connections", []), participants, where)
+    metocean = data.get("metocean")
+    if metocean is not None and not isinstance(metocean, dict):
+        raise ScenarioError(f"{where}: 'metocean' must be a table")
+    outputs = _outputs(_table(data, "outputs", where, required=False), where)
+    return Scenario(
+        path=path.resolve(),
+        simulation=simulation,
+        participants=participants,
+        connections=connections,
+        metocean=metocean,
+        outputs=outputs,
+        sha256=hashlib.sha256(raw).hexdigest(),
+    )
+
+
+def _table(data: dict, key: str, where: str, required: bool) -> dict:
+    if key not in data:
+        if required:
+            raise ScenarioError(f"{where}: missing table [{key}]")
+        return {}
+    value = data[key]
+    if not isinstance(value, dict):
+        raise ScenarioError(f"{where}: '{key}' must be a table ([{key}])")
+    return value
+
+
+def _reject_unknown(table: dict, allowed, where: str, prefix: str) -> None:
+    for key in table:
+        if key not in allowed:
+            hint = ""
+            if key == "connections":
+                hint = " ('connections' must come before the first [table] of the file)"
+            raise ScenarioError(
+                f"{where}: unknown key '{prefix}{key}'{hint} (valid: {', '.join(allowed)})"
+            )
+
+
+def _number(table: dict, key: str, where: str, prefix: str, default=None, positive=False) -> float:
+    if key not in table:
+        if default is None:
+            raise ScenarioError(f"{where}: missing key '{prefix}{key}'")
+        return default
+    value = table[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ScenarioError(f"{where}: '{prefix}{key}' must be a finite number, got {value!r}")
+    if positive and value <= 0:
+        raise ScenarioError(f"{where}: '{prefix}{key}' must be positive, got {value!r}")
+    return float(value)
+
+
+def _simulation(table: dict, path: Path) -> SimulationSpec:
+    where, prefix = str(path), "simulation."
+    _reject_unknown(table, SIMULATION_KEYS, where, prefix)
+    name = table.get("name", path.stem)
+    if not isinstance(name, str) or not name or any(c in name for c in "/\\"):
+        raise ScenarioError(f"{where}: 'simulation.name' must be a non-empty string without slashes")
+    start = _number(table, "start_s", where, prefix, default=0.0)
+    dt = _number(table, "dt_s", where, prefix, positive=True)
+    if ("stop_s" in table) == ("steps" in table):
+        raise ScenarioError(f"{where}: give exactly one of 'simulation.stop_s' or 'simulation.steps'")
+    if "steps" in table:
+        steps = table["steps"]
+        if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
+            raise ScenarioError(f"{where}: 'simulation.steps' must be a positive integer, got {steps!r}")
+        stop = start + steps * dt
+    else:
+        stop = _number(table, "stop_s", where, prefix)
+        count = (stop - start) / dt
+        if count < 1 - 1e-9 or abs(count - round(count)) > 1e-9 * max(1.0, count):
+            raise ScenarioError(
+                f"{where}: 'simulation.stop_s' - 'start_s' must be a positive whole number of 'dt_s' steps"
+            )
+    return SimulationSpec(name=name, start_s=start, stop_s=stop, dt_s=dt)
+
+
+def _participants(table: dict, where: str) -> tuple[ParticipantSpec, ...]:
+    if not table:
+        raise ScenarioError(f"{where}: [participants] declares no participant")
+    specs = []
+    for name, body in table.items():
+        prefix = f"participants.{name}."
+        if not isinstance(body, dict):
+            raise ScenarioError(f"{where}: 'participants.{name}' must be a table")
+        if not name.isidentifier():
+            raise ScenarioError(f"{where}: participant name '{name}' must be an identifier")
+        every = body.get("every", 1)
+        if isinstance(every, bool) or not isinstance(every, int) or every < 1:
+            raise ScenarioError(f"{where}: '{prefix}every' must be a positive integer, got {every!r}")
+        if "fmu" in body:
+            _reject_unknown(body, FMU_PARTICIPANT_KEYS, where, prefix)
+            specs.append(_fmu_participant(name, body, every, where, prefix))
+        elif "type" in body:
+            _reject_unknown(body, PYTHON_PARTICIPANT_KEYS, where, prefix)
+            kind = body["type"]
+            class_path = body.get("class")
+            if kind == "python" and not isinstance(class_path, str):
+                raise ScenarioError(f"{where}: '{prefix}class' must name 'package.module:Class' for type = \"python\"")
+            if kind != "python" and class_path is not None:
+                raise ScenarioError(f"{where}: '{prefix}class' is only for type = \"python\"")
+            options = body.get("options", {})
+            if not isinstance(options, dict):
+                raise ScenarioError(f"{where}: '{prefix}options' must be a table")
+            specs.append(ParticipantSpec(name=name, every=every, type=kind, class_path=class_path, options=options))
+        else:
+            raise ScenarioError(f"{where}: 'participants.{name}' needs either 'fmu' or 'type'")
+    return tuple(specs)
+
+
+def _fmu_participant(name: str, body: dict, every: int, where: str, prefix: str) -> ParticipantSpec:
+    fmu = body["fmu"]
+    if not isinstance(fmu, str) or not fmu:
+        raise ScenarioError(f"{where}: '{prefix}fmu' must be a model name or a path to an .fmu")
+    parameter_set = body.get("parameter_set")
+    if parameter_set is not None and not isinstance(parameter_set, str):
+        raise ScenarioError(f"{where}: '{prefix}parameter_set' must be a string")
+    parameters = body.get("parameters", {})
+    if not isinstance(parameters, dict):
+        raise ScenarioError(f"{where}: '{prefix}parameters' must be a table")
+    for key, value in parameters.items():
+        if not isinstance(value, (int, float, bool, str)):
+            raise ScenarioError(f"{where}: '{prefix}parameters.{key}' must be a number, boolean or string")
+    mapping = {}
+    for port, target in body.get("mapping", {}).items():
+        key = f"{prefix}mapping.{port}"
+        if isinstance(target, str):
+            mapping[port] = VariableMapping(target)
+        elif isinstance(target, dict):
+            unknown = set(target) - {"variable", "scale"}
+            if unknown or not isinstance(target.get("variable"), str):
+                raise ScenarioError(f"{where}: '{key}' must be \"variable\" or {{ variable = \"...\", scale = 1.0 }}")
+            scale = _number(target, "scale", where, key + ".", default=1.0)
+            if scale == 0:
+                raise ScenarioError(f"{where}: '{key}.scale' must not be zero")
+            mapping[port] = VariableMapping(target["variable"], scale)
+        else:
+            raise ScenarioError(f"{where}: '{key}' must be a variable name or a table")
+    return ParticipantSpec(name=name, every=every, fmu=fmu, parameter_set=parameter_set,
+                           parameters=parameters, mapping=mapping)
+
+
+def _connections(entries, participants, where: str) -> tuple[Connection, ...]:
+    if not isinstance(entries, list):
+        raise ScenarioError(f"{where}: 'connections' must be a list of \"a.port -> b.port\" strings")
+    names = {spec.name for spec in participants}
+    result = []
+    for entry in entries:
+        if not isinstance(entry, str) or entry.count("->") != 1:
+            raise ScenarioError(f"{where}: connection {entry!r} must read \"source.port -> target.port\"")
+        ends = []
+        for end in (part.strip() for part in entry.split("->")):
+            participant, dot, port = end.partition(".")
+            if not dot or not participant or not port:
+                raise ScenarioError(f"{where}: connection {entry!r}: '{end}' must read participant.port")
+            if participant not in names:
+                raise ScenarioError(
+                    f"{where}: connection {entry!r}: no participant '{participant}' (declared: {', '.join(sorted(names))})"
+                )
+            ends.append((participant, port))
+        connection = Connection(ends[0][0], ends[0][1], ends[1][0], ends[1][1])
+        if any((c.target, c.target_port) == (connection.target, connection.target_port) for c in result):
+            raise ScenarioError(f"{where}: connection {entry!r}: {connection.target}.{connection.target_port} is already driven")
+        result.append(connection)
+    return tuple(result)
+
+
+def _outputs(table: dict, where: str) -> OutputSpec:
+    _reject_unknown(table, OUTPUT_KEYS, where, "outputs.")
+    fmt = table.get("format", "parquet")
+    if fmt not in OUTPUT_FORMATS:
+        raise ScenarioError(f"{where}: 'outputs.format' must be one of {', '.join(OUTPUT_FORMATS)}, got {fmt!r}")
+    lists = {}
+    for key, default in (("analyses", ()), ("figures", ("track",))):
+        value = table.get(key, list(default))
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            raise ScenarioError(f"{where}: 'outputs.{key}' must be a list of names")
+        lists[key] = tuple(value)
+    return OutputSpec(format=fmt, **lists)
