@@ -1,0 +1,116 @@
+/* KCSVendorB plant FMU: the shared KCS dynamics (models/common/kcs_dynamics.h) behind a
+ * vendor interface in kN, kN m, knots and degrees. Every value is converted to SI at the
+ * boundary (set/get); the state and the integration are those of the KCS FMU. */
+#include "fmu_model.h"
+
+#define KNOT 0.514444444444444444 /* m/s per knot (1852 m / 3600 s) */
+#define DEG (M_PI / 180.0)        /* rad per degree */
+#define KILO 1000.0
+
+#define IN(name) {vr_##name, #name, TypeReal, CausalityInput, VariabilityContinuous}
+#define OUT(name) {vr_##name, #name, TypeReal, CausalityOutput, VariabilityContinuous}
+#define INITIAL(name) {vr_##name, #name, TypeReal, CausalityParameter, VariabilityFixed}
+#define PARAM(name, variability) {vr_##name, #name, TypeReal, CausalityParameter, variability},
+
+const ModelVariable model_variables[N_VARIABLES] = {
+    IN(thrust_kN), IN(yaw_moment_kNm), IN(current_n_kn), IN(current_e_kn), IN(wind_speed_kn),
+    IN(wind_from_deg), IN(sig_wave_height_m),
+    OUT(north_m), OUT(east_m), OUT(heading_deg), OUT(surge_speed_kn), OUT(sway_speed_kn),
+    OUT(yaw_rate_deg_s), OUT(sog_kn), OUT(cog_deg),
+    INITIAL(north0_m), INITIAL(east0_m), INITIAL(heading0_deg), INITIAL(surge0_kn),
+    INITIAL(sway0_kn), INITIAL(yaw_rate0_deg_s),
+    KCS_PARAMETERS(PARAM)
+};
+
+/* SI storage of an input or parameter and the factor from the vendor unit to SI. */
+static double *field(ModelData *d, fmi2ValueReference vr, double *to_si) {
+    *to_si = 1.0;
+    switch (vr) {
+    case vr_thrust_kN: *to_si = KILO; return &d->in.tau_u;
+    case vr_yaw_moment_kNm: *to_si = KILO; return &d->in.tau_r;
+    case vr_current_n_kn: *to_si = KNOT; return &d->in.current_north;
+    case vr_current_e_kn: *to_si = KNOT; return &d->in.current_east;
+    case vr_wind_speed_kn: *to_si = KNOT; return &d->in.wind_speed;
+    case vr_wind_from_deg: *to_si = DEG; return &d->in.wind_direction;
+    case vr_sig_wave_height_m: return &d->in.hs;
+    case vr_north0_m: return &d->X0[KCS_X];
+    case vr_east0_m: return &d->X0[KCS_Y];
+    case vr_heading0_deg: *to_si = DEG; return &d->X0[KCS_PSI];
+    case vr_surge0_kn: *to_si = KNOT; return &d->X0[KCS_U];
+    case vr_sway0_kn: *to_si = KNOT; return &d->X0[KCS_V];
+    case vr_yaw_rate0_deg_s: *to_si = DEG; return &d->X0[KCS_R];
+#define KCS_CASE(name, variability) case vr_##name: return &d->p.name;
+    KCS_PARAMETERS(KCS_CASE)
+#undef KCS_CASE
+    default: return NULL;
+    }
+}
+
+void model_set_start_values(ModelInstance *comp) {
+    ModelData *d = &comp->data;
+    kcs_default_parameters(&d->p);
+    d->in = (KcsInputs){0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    for (int i = 0; i < KCS_NSTATES; i++) d->X0[i] = d->X[i] = 0.0;
+}
+
+fmi2Status model_exit_initialization(ModelInstance *comp) {
+    ModelData *d = &comp->data;
+    const char *bad = kcs_invalid_parameter(&d->p);
+    if (bad) {
+        log_error(comp, "fmi2ExitInitializationMode: parameter %s has an invalid value", bad);
+        return fmi2Error;
+    }
+    for (int i = 0; i < KCS_NSTATES; i++) d->X[i] = d->X0[i];
+    d->X[KCS_PSI] = kcs_wrap_angle(d->X[KCS_PSI]);
+    return fmi2OK;
+}
+
+fmi2Status model_get_real(ModelInstance *comp, fmi2ValueReference vr, fmi2Real *value) {
+    ModelData *d = &comp->data;
+    const double *X = comp->state == InitializationMode ? d->X0 : d->X;
+    double sog, cog, to_si, *f;
+    switch (vr) {
+    case vr_north_m: *value = X[KCS_X]; return fmi2OK;
+    case vr_east_m: *value = X[KCS_Y]; return fmi2OK;
+    case vr_heading_deg: *value = kcs_wrap_angle(X[KCS_PSI]) / DEG; return fmi2OK;
+    case vr_surge_speed_kn: *value = X[KCS_U] / KNOT; return fmi2OK;
+    case vr_sway_speed_kn: *value = X[KCS_V] / KNOT; return fmi2OK;
+    case vr_yaw_rate_deg_s: *value = X[KCS_R] / DEG; return fmi2OK;
+    case vr_sog_kn:
+    case vr_cog_deg:
+        kcs_over_ground(X, &d->in, &sog, &cog);
+        *value = vr == vr_sog_kn ? sog / KNOT : cog / DEG;
+        return fmi2OK;
+    default:
+        f = field(d, vr, &to_si);
+        *value = *f / to_si;
+        return fmi2OK;
+    }
+}
+
+fmi2Status model_set_real(ModelInstance *comp, fmi2ValueReference vr, fmi2Real value) {
+    double to_si, *f = field(&comp->data, vr, &to_si);
+    if (vr == vr_h_int && !(value > 0.0)) {
+        log_error(comp, "fmi2SetReal: h_int (value reference %u) = %g must be positive",
+                  (unsigned)vr, value);
+        return fmi2Error;
+    }
+    if ((vr == vr_tau_u_max || vr == vr_tau_r_max) && value < 0.0) {
+        log_error(comp, "fmi2SetReal: %s (value reference %u) = %g must not be negative",
+                  model_variables[vr].name, (unsigned)vr, value);
+        return fmi2Error;
+    }
+    *f = value * to_si;
+    return fmi2OK;
+}
+
+fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
+    ModelData *d = &comp->data;
+    if (kcs_integrate(&d->p, d->X, &d->in, h) != 0) {
+        log_error(comp, "fmi2DoStep: the state became non-finite in the step from t = %g s", t);
+        return fmi2Error;
+    }
+    return fmi2OK;
+}
+
+void model_free_resources(ModelInstance *comp) { (void)comp; }
