@@ -1,0 +1,141 @@
+"""Local path planning by fixed-step descent of the superposed field (Algorithm 1).
+
+From the start point the planner takes N_L steps of length ``alpha = v_s delta`` along
+the negative normalised gradient of U (or of G alone in the collision-avoidance state),
+``p(k+1) = p(k) - alpha grad(p) / |grad(p)|``, giving N_L + 1 points.  The gradient is
+``np.gradient`` of the field at the grid nodes, interpolated bilinearly to the point
+(:meth:`rhnc.fields.SuperpositionField.gradient_at`), so the path is not snapped to the
+grid.
+
+Three guards the paper does not spell out:
+
+* **Goal.**  When the goal is within one step, the step ends on the goal and the
+  remaining points stay there (the reference then stops: zero speed), instead of
+  oscillating about it.
+* **Flat field.**  Where ``|grad| < flat_gradient_per_m`` (default 1e-9 per metre, i.e.
+  U changing by less than 1e-6 over a kilometre, against ~1e-4 per metre for the
+  guidance term at k3 = 16 on a 100 nm map), the step goes along the direct bearing to
+  the goal.
+* **Map border.**  The path never leaves the map.  A start outside it is moved to the
+  nearest point on the border.  A step that would cross the border is projected onto
+  it: the outward component of the step direction is removed and the step keeps its
+  length along the border (sliding rather than stopping); in a corner, where nothing is
+  left, the step goes along the bearing to the goal, itself projected.  A final clip
+  guards rounding.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+from collections.abc import Sequence
+
+import numpy as np
+
+from rhnc.fields import SuperpositionField
+
+log = logging.getLogger(__name__)
+
+
+@dataclasses.dataclass(frozen=True)
+class PlannedPath:
+    """Result of one planning instant.
+
+    Attributes
+    ----------
+    points : ndarray (N_L + 1, 2)
+        Path points (x north, y east) [m]; row 0 is the start.
+    reached_goal : bool
+        The path ends on the goal.
+    flat_steps : int
+        Steps that fell back to the direct bearing (flat gradient).
+    border_steps : int
+        Steps projected onto the map border.
+    """
+
+    points: np.ndarray
+    reached_goal: bool
+    flat_steps: int
+    border_steps: int
+
+
+def _project_direction(position: np.ndarray, direction: np.ndarray, step: float,
+                       extent: tuple[float, float, float, float]) -> np.ndarray:
+    """Remove the components of ``direction`` that would carry a step out of the map."""
+    lows = (extent[0], extent[2])
+    highs = (extent[1], extent[3])
+    projected = direction.copy()
+    for axis in range(2):
+        target = position[axis] + step * projected[axis]
+        if target < lows[axis] or target > highs[axis]:
+            projected[axis] = 0.0
+    return projected
+
+
+def plan_local_path(field: SuperpositionField, start: Sequence[float], step_length: float,
+                    horizon_steps: int, avoidance: bool = False,
+                    flat_gradient_per_m: float = 1e-9) -> PlannedPath:
+    """Plan N_L steps down the field (Algorithm 1).
+
+    Parameters
+    ----------
+    field : SuperpositionField
+        Already updated for this start point and speed.
+    start : (float, float)
+        Start point (x north, y east) [m].
+    step_length : float
+        alpha = v_s delta [m].
+    horizon_steps : int
+        N_L.
+    avoidance : bool
+        Collision-avoidance state (ET = 1): descend G alone.
+    flat_gradient_per_m : float
+        Gradient magnitude [1/m] below which the direct bearing to the goal is used.
+
+    Returns
+    -------
+    PlannedPath
+    """
+    if horizon_steps < 1:
+        raise ValueError("horizon_steps must be at least 1")
+    if not step_length > 0:
+        raise ValueError("step_length must be positive")
+    extent = field.extent
+    low = np.array([extent[0], extent[2]])
+    high = np.array([extent[1], extent[3]])
+    goal = np.clip(np.array(field.goal, dtype=float), low, high)
+    position = np.array(start, dtype=float)
+    if np.any(position < low) or np.any(position > high):
+        log.warning("planning start (%.0f, %.0f) m lies outside the map; moved onto its border",
+                    position[0], position[1])
+        position = np.clip(position, low, high)
+    points = np.empty((horizon_steps + 1, 2))
+    points[0] = position
+    flat_steps = border_steps = 0
+    reached = False
+    for k in range(horizon_steps):
+        to_goal = goal - position
+        distance = float(np.hypot(*to_goal))
+        if reached or distance <= step_length:
+            position = goal.copy()
+            reached = True
+            points[k + 1] = position
+            continue
+        gx, gy = field.gradient_at(position[0], position[1], avoidance)
+        magnitude = float(np.hypot(gx, gy))
+        if magnitude < flat_gradient_per_m:
+            direction = to_goal / distance
+            flat_steps += 1
+        else:
+            direction = -np.array([gx, gy]) / magnitude
+        projected = _project_direction(position, direction, step_length, extent)
+        if not np.array_equal(projected, direction):
+            border_steps += 1
+            norm = float(np.hypot(*projected))
+            if norm < 1e-9:
+                projected = _project_direction(position, to_goal / distance, step_length, extent)
+                norm = float(np.hypot(*projected))
+            direction = projected / norm if norm >= 1e-9 else np.zeros(2)
+        position = np.clip(position + step_length * direction, low, high)
+        points[k + 1] = position
+    return PlannedPath(points=points, reached_goal=reached, flat_steps=flat_steps, border_steps=border_steps)
