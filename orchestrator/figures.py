@@ -20,6 +20,8 @@ def track_figure(frame, scenario, cosim, out_dir) -> list[str]:
     """The ship's track over the met-ocean wind speed (when the run has a field)."""
     from orchestrator.analyses import plant_name
 
+    if not any({"x", "y", "psi"} <= set(p.output_names) for p in cosim.participants):
+        return []  # no ship in this scenario: no track to draw
     plt = _pyplot()
     plant = plant_name(cosim)
     fig, ax = plt.subplots(figsize=(7, 6))

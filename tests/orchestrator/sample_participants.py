@@ -1,0 +1,81 @@
+"""Small Python participants the orchestrator tests wire into scenarios."""
+
+import math
+
+import numpy as np
+
+from orchestrator.participant import Participant, reject_unknown_options
+
+
+class Clock(Participant):
+    """Outputs its own step count and the time it was stepped at."""
+
+    def __init__(self, name, nan_at=None):
+        super().__init__(name)
+        self.count = 0
+        self.nan_at = nan_at
+        self.calls = []
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        reject_unknown_options(options, ("nan_at_s",), context.where + ".options")
+        return cls(name, options.get("nan_at_s"))
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["count", "time", "vector"])
+
+    def setup(self, start_time, inputs):
+        return {"count": 0.0, "time": start_time, "vector": np.array([0.0, 1.0])}
+
+    def step(self, time, step_size, inputs):
+        self.count += 1
+        self.calls.append((time, step_size))
+        value = math.nan if self.nan_at is not None and time >= self.nan_at else float(self.count)
+        return {"count": value, "time": time, "vector": np.array([time, 2 * time])}
+
+    def summary(self):
+        return {"steps": self.count}
+
+
+class Echo(Participant):
+    """Copies its input `value` to its output `seen`, and remembers what it saw."""
+
+    def __init__(self, name):
+        super().__init__(name)
+        self.seen = []
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        reject_unknown_options(options, (), context.where + ".options")
+        return cls(name)
+
+    input_names = property(lambda self: ["value"])
+    output_names = property(lambda self: ["seen"])
+
+    def setup(self, start_time, inputs):
+        return {"seen": float(inputs.get("value", -1.0))}
+
+    def step(self, time, step_size, inputs):
+        self.seen.append((time, float(inputs["value"])))
+        return {"seen": float(inputs["value"])}
+
+
+class Crash(Participant):
+    """Raises a plain exception at a given time (a participant's own bug)."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        participant = cls(name)
+        participant.at = options.get("at_s", 0.0)
+        return participant
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["ok"])
+
+    def setup(self, start_time, inputs):
+        return {"ok": 1.0}
+
+    def step(self, time, step_size, inputs):
+        if time >= self.at:
+            raise RuntimeError("boom")
+        return {"ok": 1.0}

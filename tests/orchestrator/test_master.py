@@ -1,0 +1,140 @@
+"""The master loop: exchange order, multi-rate stepping, recording and failures."""
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from orchestrator.errors import ScenarioError
+from orchestrator.master import CoSimulation
+from orchestrator.run import run_scenario
+from orchestrator.scenario import load_scenario
+
+TWO = """
+connections = ["clock.count -> echo.value"]
+
+[simulation]
+stop_s = 10.0
+dt_s = 1.0
+
+[participants.{first}]
+type = "python"
+class = "sample_participants:{first_class}"
+every = {first_every}
+
+[participants.{second}]
+type = "python"
+class = "sample_participants:{second_class}"
+every = {second_every}
+"""
+
+
+def scenario_text(order=("clock", "echo"), every=(1, 1)):
+    classes = {"clock": "Clock", "echo": "Echo"}
+    return TWO.format(first=order[0], first_class=classes[order[0]], first_every=every[0],
+                      second=order[1], second_class=classes[order[1]], second_every=every[1])
+
+
+def run(write_scenario, text):
+    cosim = CoSimulation(load_scenario(write_scenario(text)))
+    outcome = cosim.run(progress=False)
+    cosim.close()
+    return cosim, outcome
+
+
+def test_gauss_seidel_a_later_participant_sees_this_steps_outputs(write_scenario):
+    cosim, outcome = run(write_scenario, scenario_text(("clock", "echo")))
+    assert outcome.status == "finished"
+    # echo steps after clock at t = k: it sees clock's count of this step, k + 1
+    assert cosim.participant("echo").seen[:3] == [(0.0, 1.0), (1.0, 2.0), (2.0, 3.0)]
+
+
+def test_an_earlier_participant_sees_the_previous_steps_outputs(write_scenario):
+    cosim, outcome = run(write_scenario, scenario_text(("echo", "clock")))
+    assert outcome.status == "finished"
+    # echo steps first: at t = k it still sees clock's count from step k - 1 (set-up: 0)
+    assert cosim.participant("echo").seen[:3] == [(0.0, 0.0), (1.0, 1.0), (2.0, 2.0)]
+
+
+def test_multi_rate_steps_and_hold(write_scenario):
+    cosim, outcome = run(write_scenario, scenario_text(("clock", "echo"), every=(3, 1)))
+    clock = cosim.participant("clock")
+    # 10 macro steps, clock every 3: at 0, 3, 6 with step 3 s, the last at 9 shortened to 1 s
+    assert clock.calls == [(0.0, 3.0), (3.0, 3.0), (6.0, 3.0), (9.0, 1.0)]
+    seen = dict(cosim.participant("echo").seen)
+    assert [seen[t] for t in (0.0, 1.0, 2.0, 3.0, 4.0)] == [1.0, 1.0, 1.0, 2.0, 2.0]
+    frame = outcome.recorder.to_frame()
+    assert list(frame["clock.count"][:5]) == [1.0, 1.0, 1.0, 2.0, 2.0]
+
+
+def test_recorder_flattens_arrays_and_stamps_times(write_scenario):
+    _, outcome = run(write_scenario, scenario_text())
+    frame = outcome.recorder.to_frame()
+    assert list(frame["time_s"]) == [float(t) for t in range(10)]
+    np.testing.assert_allclose(frame["clock.vector[1]"], 2 * frame["time_s"])
+    np.testing.assert_allclose(frame["clock.time"], frame["time_s"])
+
+
+def test_a_nan_output_fails_the_run_and_keeps_what_was_computed(write_scenario, tmp_path):
+    text = scenario_text() + "[participants.clock.options]\nnan_at_s = 4.0\n"
+    report = run_scenario(write_scenario(text), tmp_path / "results", progress=False)
+    assert report.status == "failed"
+    assert report.reason == "clock: output 'count' is not finite at t = 4 s"
+    summary = json.loads((report.folder / "summary.json").read_text())
+    assert summary["status"] == "failed"
+    assert summary["simulation"]["steps_done"] == 4
+    frame = pd.read_parquet(report.folder / "timeseries.parquet")
+    assert frame["time_s"].iloc[-1] == 3.0
+    assert not list((tmp_path / "results" / "scenario").glob(".*partial"))
+
+
+def test_a_participant_exception_is_a_failed_run(write_scenario, tmp_path):
+    text = scenario_text() + '\n[participants.crash]\ntype = "python"\nclass = "sample_participants:Crash"\n' \
+        "[participants.crash.options]\nat_s = 2.0\n"
+    report = run_scenario(write_scenario(text), tmp_path, progress=False)
+    assert (report.status, report.reason) == ("failed", "RuntimeError: boom")
+    assert report.summary["participants"]["clock"] == {"steps": 3}
+
+
+def test_connection_to_a_missing_port_is_refused(write_scenario):
+    text = scenario_text().replace("clock.count -> echo.value", "clock.speed -> echo.value")
+    with pytest.raises(ScenarioError, match=r"connection 'clock.speed -> echo.value': clock has no output 'speed' "
+                                            r"\(outputs: count, time, vector\)"):
+        CoSimulation(load_scenario(write_scenario(text)))
+    text = scenario_text().replace("clock.count -> echo.value", "echo.seen -> clock.count")
+    with pytest.raises(ScenarioError, match=r"clock has no input 'count'"):
+        CoSimulation(load_scenario(write_scenario(text)))
+
+
+def test_unknown_type_and_class(write_scenario):
+    text = scenario_text().replace('type = "python"\nclass = "sample_participants:Echo"', 'type = "radar"')
+    with pytest.raises(ScenarioError, match=r"participants.echo.type: unknown participant type 'radar'"):
+        CoSimulation(load_scenario(write_scenario(text)))
+    text = scenario_text().replace("sample_participants:Echo", "no_such_module:Echo")
+    with pytest.raises(ScenarioError, match=r"participants.echo.class: cannot import module 'no_such_module'"):
+        CoSimulation(load_scenario(write_scenario(text)))
+
+
+def test_unknown_participant_option(write_scenario):
+    text = scenario_text() + "[participants.echo.options]\ngain = 2\n"
+    with pytest.raises(ScenarioError, match=r"participants.echo.options: unknown option 'gain'"):
+        CoSimulation(load_scenario(write_scenario(text)))
+
+
+def test_interrupt_keeps_results(write_scenario, tmp_path, monkeypatch):
+    from orchestrator import master
+
+    original = master.CoSimulation.run
+
+    def interrupted_run(self, progress=True, on_step=None):
+        def stop(k):
+            if k == 2:
+                raise KeyboardInterrupt
+        return original(self, progress=False, on_step=stop)
+
+    monkeypatch.setattr(master.CoSimulation, "run", interrupted_run)
+    report = run_scenario(write_scenario(scenario_text()), tmp_path, progress=False)
+    assert report.status == "interrupted"
+    assert report.summary["simulation"]["steps_done"] == 3  # steps 0, 1, 2 completed
+    assert (report.folder / "timeseries.parquet").is_file()
