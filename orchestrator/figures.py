@@ -22,8 +22,10 @@ def track_figure(frame, scenario, cosim, out_dir) -> list[str]:
 
     if not any({"x", "y", "psi"} <= set(p.output_names) for p in cosim.participants):
         return []  # no ship in this scenario: no track to draw
-    plt = _pyplot()
     plant = plant_name(cosim)
+    if f"{plant}.x" not in frame.columns:
+        return []  # the run failed before the ship reported a position
+    plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 6))
     field = cosim.metocean
     if field is not None:

@@ -221,7 +221,8 @@ class FmuParticipant(Participant):
 
         def logger(_component, _instance, status, category, message):
             text = message.decode("utf-8", "replace") if message else ""
-            level = logging.WARNING if status >= 1 else logging.DEBUG
+            # errors are raised with this text (ModelError); warnings are only logged
+            level = logging.WARNING if status in (1, 2) else logging.DEBUG
             log.log(level, "%s [%s]: %s", self.name, (category or b"").decode(), text)
             if status >= 1:
                 self._messages.append(text)

@@ -75,12 +75,13 @@ def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder) 
             figures[name] = {"error": str(exc)}
             if status == "finished":
                 status, reason = "failed", f"analysis '{name}': {exc}"
-    figure_files = []
+    figure_files, figure_errors = [], {}
     for name in scenario.outputs.figures:
         try:
             figure_files += analyses.draw_figure(name, frame, scenario, cosim, folder.staging)
-        except ToolchainError as exc:
+        except Exception as exc:  # a figure that cannot be drawn must not lose the results
             log.warning("figure '%s' not drawn: %s", name, exc)
+            figure_errors[name] = f"{type(exc).__name__}: {exc}"
     sim = scenario.simulation
     summary = {
         "scenario": str(scenario.path),
@@ -97,6 +98,7 @@ def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder) 
         "metocean": cosim.metocean.source if cosim.metocean is not None else None,
         "timeseries": series_name,
         "figures": figure_files,
+        "figure_errors": figure_errors,
         "analyses": figures,
         "participants": outcome.participant_summaries,
     }
