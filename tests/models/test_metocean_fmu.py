@@ -1,0 +1,136 @@
+"""MetOcean FMU: MOGRID1 reading, exact node values, bilinear interpolation, errors."""
+
+from __future__ import annotations
+
+import struct
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy.fmi1 import FMICallException
+from fmpy.validation import validate_fmu
+
+FIELDS = ["wind_north", "wind_east", "hs", "current_north", "current_east"]
+OUTPUTS = ["wind_speed", "wind_direction", *FIELDS]
+
+
+def write_grid(path: Path, x0, dx, y0, dy, fields: dict[str, np.ndarray]) -> Path:
+    """Minimal MOGRID1 writer (spec'd format, written independently of rhnc/metocean.py)."""
+    nx, ny = fields["hs"].shape
+    with path.open("wb") as f:
+        f.write(b"MOGRID1\n")
+        f.write(struct.pack("<ii", nx, ny))
+        f.write(struct.pack("<dddd", x0, dx, y0, dy))
+        for name in FIELDS:
+            f.write(np.ascontiguousarray(fields[name], dtype="<f8").tobytes())  # [i * ny + j]
+    return path
+
+
+@pytest.fixture
+def grid(tmp_path):
+    nx, ny = 4, 3
+    rng = np.random.default_rng(7)
+    fields = {name: rng.uniform(-10, 10, (nx, ny)) for name in FIELDS}
+    fields["hs"] = np.abs(fields["hs"])
+    geometry = dict(x0=-1000.0, dx=500.0, y0=2000.0, dy=250.0)
+    path = write_grid(tmp_path / "grid.mogrid", **geometry, fields=fields)
+    return path, geometry, fields
+
+
+def expected(fields, name, wn=None, we=None):
+    if name == "wind_speed":
+        return np.hypot(wn, we)
+    if name == "wind_direction":
+        return np.arctan2(-we, -wn)
+    return fields[name]
+
+
+def test_validates(fmus):
+    assert validate_fmu(str(fmus["MetOcean"])) == []
+
+
+def test_exact_values_at_nodes(fmus, open_slave, grid):
+    path, g, fields = grid
+    slave = open_slave(fmus["MetOcean"])
+    slave.initialize({"grid_file": str(path)})
+    for i in range(4):
+        for j in range(3):
+            slave.set({"x": g["x0"] + i * g["dx"], "y": g["y0"] + j * g["dy"]})
+            values = dict(zip(OUTPUTS, slave.get(*OUTPUTS)))
+            node = {n: fields[n][i, j] for n in FIELDS}
+            for name in FIELDS:
+                assert values[name] == node[name]
+            assert values["wind_speed"] == pytest.approx(np.hypot(node["wind_north"],
+                                                                  node["wind_east"]), rel=1e-15)
+            assert values["wind_direction"] == pytest.approx(
+                np.arctan2(-node["wind_east"], -node["wind_north"]), rel=1e-15)
+
+
+def test_bilinear_between_nodes_and_direction_convention(fmus, open_slave, grid):
+    path, g, fields = grid
+    slave = open_slave(fmus["MetOcean"])
+    slave.initialize({"grid_file": str(path)})
+    # midpoint of the cell (1, 1)-(2, 2): mean of its four corners
+    slave.set({"x": g["x0"] + 1.5 * g["dx"], "y": g["y0"] + 1.5 * g["dy"]})
+    slave.fmu.doStep(0.0, 10.0)
+    for name, value in zip(FIELDS, slave.get(*FIELDS)):
+        assert value == pytest.approx(np.mean(fields[name][1:3, 1:3]), rel=1e-13)
+    # a quarter into cell (0, 1) along x, three quarters along y
+    tx, ty = 0.25, 0.75
+    slave.set({"x": g["x0"] + tx * g["dx"], "y": g["y0"] + (1 + ty) * g["dy"]})
+    for name, value in zip(FIELDS, slave.get(*FIELDS)):
+        f = fields[name]
+        want = ((1 - tx) * ((1 - ty) * f[0, 1] + ty * f[0, 2])
+                + tx * ((1 - ty) * f[1, 1] + ty * f[1, 2]))
+        assert value == pytest.approx(want, rel=1e-13)
+
+
+def test_wind_from_the_north_blowing_south(fmus, open_slave, tmp_path):
+    shape = (2, 2)
+    fields = {n: np.zeros(shape) for n in FIELDS}
+    fields["wind_north"][:] = -12.0  # air moves south: it comes from the north
+    path = write_grid(tmp_path / "north.mogrid", 0.0, 1.0, 0.0, 1.0, fields)
+    slave = open_slave(fmus["MetOcean"])
+    slave.initialize({"grid_file": str(path), "x": 0.5, "y": 0.5})
+    speed, direction = slave.get("wind_speed", "wind_direction")
+    assert speed == 12.0 and direction == 0.0
+
+
+def test_point_outside_the_grid_is_an_error_naming_it(fmus, open_slave, grid):
+    path, g, _ = grid
+    slave = open_slave(fmus["MetOcean"])
+    slave.initialize({"grid_file": str(path)})
+    slave.set({"x": 600.0, "y": 2100.0})  # north of the last node at x = 500 m
+    with pytest.raises(FMICallException):
+        slave.fmu.doStep(0.0, 10.0)
+    message = slave.errors()
+    assert "x = 600.000 m, y = 2100.000 m is outside the grid" in message
+    assert "x -1000.000..500.000 m, y 2000.000..2500.000 m" in message
+
+
+def test_output_read_outside_the_grid_is_an_error(fmus, open_slave, grid):
+    path, g, _ = grid
+    slave = open_slave(fmus["MetOcean"])
+    slave.initialize({"grid_file": str(path)})
+    slave.set({"x": 0.0, "y": 1999.0})
+    with pytest.raises(FMICallException):
+        slave.get("hs")
+    assert "fmi2GetReal: point x = 0.000 m, y = 1999.000 m is outside" in slave.errors()
+
+
+def test_missing_grid_file_fails_initialisation_naming_it(fmus, open_slave, tmp_path):
+    missing = tmp_path / "nowhere.mogrid"
+    slave = open_slave(fmus["MetOcean"])
+    with pytest.raises(FMICallException):
+        slave.initialize({"grid_file": str(missing)})
+    assert f'grid_file "{missing}" cannot be opened' in slave.errors()
+
+
+def test_corrupt_grid_file_fails_initialisation_naming_it(fmus, open_slave, grid, tmp_path):
+    path, _, _ = grid
+    truncated = tmp_path / "truncated.mogrid"
+    truncated.write_bytes(path.read_bytes()[:-8])
+    slave = open_slave(fmus["MetOcean"])
+    with pytest.raises(FMICallException):
+        slave.initialize({"grid_file": str(truncated)})
+    assert f'grid_file "{truncated}" is truncated' in slave.errors()
