@@ -1,0 +1,64 @@
+"""The command line, called as main([...]) and once as a user would, in a subprocess."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+from orchestrator.cli import main
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def test_run_turning_circle_writes_results_and_figures(tmp_path, capsys):
+    code = main(["run", str(REPO / "scenarios" / "turning_circle.toml"), "--results", str(tmp_path), "--no-progress"])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert out.startswith("finished: results in ")
+    folder = Path(out.splitlines()[0].split("results in ")[1])
+    summary = json.loads((folder / "summary.json").read_text())
+    figures = summary["analyses"]["turning_circle"]
+    # the issue's acceptance band for the default KCS: 2.5 to 5 ship lengths
+    assert 2.5 <= figures["tactical_diameter_L"] <= 5.0
+    assert figures["advance_L"] > figures["transfer_L"] > 0
+    assert {"track.png", "turning_circle.png", "timeseries.parquet"} <= {p.name for p in folder.iterdir()}
+
+
+def test_bad_scenario_is_one_line_and_exit_2(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[simulation]\ndt_s = 1.0\nsteps = 2\nwarp = 9\n[participants.a]\ntype = 'scripted_tau'\n")
+    assert main(["run", str(bad), "--results", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"error: {bad}: unknown key 'simulation.warp' (valid: name, start_s, stop_s, steps, dt_s)"]
+    assert not (tmp_path / "bad").exists()  # nothing written for a scenario that never ran
+
+
+def test_failed_run_exits_3(tmp_path, capsys):
+    scenario = (REPO / "scenarios" / "turning_circle.toml").read_text().replace("u0 = 9.26", "u0 = 9.26\nd11 = -1.0e9")
+    path = tmp_path / "diverge.toml"
+    path.write_text(scenario)
+    assert main(["run", str(path), "--results", str(tmp_path), "--no-progress"]) == 3
+    assert "error: ship (KCS.fmu): fmi2DoStep failed" in capsys.readouterr().err
+
+
+def test_validate(tmp_path, capsys):
+    assert main(["validate", str(REPO / "scenarios" / "zigzag_10_10.toml")]) == 0
+    assert capsys.readouterr().out.startswith("ok: ")
+    missing = tmp_path / "missing_fmu.toml"
+    missing.write_text((REPO / "scenarios" / "zigzag_10_10.toml").read_text().replace('fmu = "KCS"', 'fmu = "x.fmu"'))
+    assert main(["validate", str(missing)]) == 2
+    assert "participants.ship.fmu: FMU file not found" in capsys.readouterr().err
+
+
+def test_subprocess_as_a_user_would(tmp_path):
+    result = subprocess.run(
+        [sys.executable, "-m", "orchestrator", "run", str(REPO / "scenarios" / "zigzag_10_10.toml"),
+         "--results", str(tmp_path), "--no-progress"],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert result.returncode == 0, result.stderr
+    assert "zigzag: first_overshoot_deg" in result.stdout
+    result = subprocess.run([sys.executable, "-m", "orchestrator", "run", str(tmp_path / "none.toml")],
+                            capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2
+    assert result.stderr.strip() == f"error: {tmp_path / 'none.toml'}: scenario file not found"

@@ -1,0 +1,103 @@
+"""Met-ocean data: the paper's generated field, NetCDF round trips, ERA5-style files, errors."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from orchestrator.errors import ScenarioError
+from rhnc.metocean import NM, MetOceanField, fetch_limited_hs
+
+
+def test_paper_default_field_is_plausible():
+    field = MetOceanField.generate_paper_default()
+    assert field.x.size == field.y.size == 101
+    assert field.extent == (0.0, 100 * NM, 0.0, 100 * NM)
+    # the spline passes through the control points at the lattice nodes
+    assert field.wind_speed[50, 50] == pytest.approx(18.0)
+    assert field.wind_speed[0, 0] == pytest.approx(8.0)
+    np.testing.assert_allclose(field.wind_direction, np.radians(45.0))
+    assert np.all(field.hs > 0) and np.all(field.hs <= 0.21 * field.wind_speed**2 / 9.81 + 1e-12)
+    np.testing.assert_allclose(np.hypot(field.current_north, field.current_east), 0.5 * 1852 / 3600)
+
+
+def test_fetch_limited_hs_by_hand():
+    # U = 15 m/s, F = 100 km: 0.0016 * 15 * sqrt(1e5 / 9.81) = 2.4231 m (below PM's 4.82 m)
+    assert fetch_limited_hs(15.0, 100e3) == pytest.approx(0.0016 * 15 * np.sqrt(1e5 / 9.81))
+    # short wind over a long fetch is capped by the fully developed sea: 0.21 * 5^2 / 9.81
+    assert fetch_limited_hs(5.0, 1e7) == pytest.approx(0.21 * 25 / 9.81)
+
+
+def test_sample_is_bilinear_and_refuses_outside_points():
+    x = np.array([0.0, 1000.0])
+    y = np.array([0.0, 2000.0])
+    values = {name: np.array([[0.0, 2.0], [4.0, 6.0]]) for name in
+              ("wind_north", "wind_east", "hs", "current_north", "current_east")}
+    field = MetOceanField(x, y, values)
+    sample = field.sample(500.0, 1000.0)
+    assert sample["hs"] == pytest.approx(3.0)
+    assert field.sample(250.0, 0.0)["current_east"] == pytest.approx(1.0)
+    with pytest.raises(ValueError, match=r"x=1001.0 m, y=0.0 m lies outside the met-ocean grid"):
+        field.sample([0.0, 1001.0], [0.0, 0.0])
+
+
+def test_netcdf_round_trip_keeps_cf_names(tmp_path):
+    field = MetOceanField.generate_paper_default(resolution_nm=5.0)
+    path = field.to_netcdf(tmp_path / "weather.nc")
+    with xr.open_dataset(path) as ds:
+        assert {"u10", "v10", "swh", "uo", "vo"} <= set(ds.data_vars)
+        assert ds["swh"].attrs["standard_name"] == "sea_surface_wave_significant_height"
+    again = MetOceanField.from_netcdf(path)
+    for name in ("wind_north", "wind_east", "hs", "current_north", "current_east"):
+        np.testing.assert_array_equal(getattr(again, name), getattr(field, name))
+
+
+def test_era5_style_latitude_longitude_file(tmp_path):
+    lat = np.linspace(51.0, 50.0, 11)  # ERA5 stores latitude north to south
+    lon = np.linspace(-5.0, -3.0, 21)
+    shape = (2, lat.size, lon.size)
+    u10 = np.broadcast_to(np.linspace(0, 10, lon.size), shape)  # wind towards east, growing eastward
+    ds = xr.Dataset(
+        {"u10": (("time", "latitude", "longitude"), u10),
+         "v10": (("time", "latitude", "longitude"), np.zeros(shape)),
+         "swh": (("time", "latitude", "longitude"), np.full(shape, 2.0))},
+        coords={"latitude": lat, "longitude": lon, "time": [0, 1]},
+    )
+    ds.to_netcdf(tmp_path / "era5.nc")
+    field = MetOceanField.from_netcdf(tmp_path / "era5.nc")
+    assert field.x[0] == 0.0 and field.y[0] == 0.0
+    assert field.x[-1] == pytest.approx(np.radians(1.0) * 6_371_000, rel=0.01)
+    np.testing.assert_allclose(field.wind_direction[:, 1:], 1.5 * np.pi)  # from the west (calm at y = 0)
+    assert field.wind_speed[0, -1] == pytest.approx(10.0, rel=0.05)
+    np.testing.assert_allclose(field.hs, 2.0)
+    np.testing.assert_allclose(field.current_north, 0.0)  # ERA5 has no current: zero
+
+
+def test_missing_wave_variable_is_an_error(tmp_path):
+    ds = xr.Dataset({"u10": (("northing", "easting"), np.zeros((2, 2)))},
+                    coords={"northing": [0.0, 1.0], "easting": [0.0, 1.0]})
+    ds.to_netcdf(tmp_path / "thin.nc")
+    with pytest.raises(ValueError, match=r"thin.nc: no variable for wind_north \(looked for v10, northward_wind\)"):
+        MetOceanField.from_netcdf(tmp_path / "thin.nc")
+
+
+def test_scenario_table_errors_name_the_key(tmp_path):
+    where = "s.toml: metocean"
+    with pytest.raises(ScenarioError, match=r"s.toml: metocean: give exactly one of 'generator' or 'file'"):
+        MetOceanField.from_scenario_table({}, tmp_path, where)
+    with pytest.raises(ScenarioError, match=r"metocean.generator: unknown generator 'storm'"):
+        MetOceanField.from_scenario_table({"generator": "storm"}, tmp_path, where)
+    with pytest.raises(ScenarioError, match=r"metocean: unknown key 'wind_kn'"):
+        MetOceanField.from_scenario_table({"generator": "paper_default", "wind_kn": 3}, tmp_path, where)
+    with pytest.raises(ScenarioError, match=r"metocean.file: met-ocean file not found: .*none.nc"):
+        MetOceanField.from_scenario_table({"file": "none.nc"}, tmp_path, where)
+    with pytest.raises(ScenarioError, match=r"metocean: wind_control_points_ms needs a 2-D lattice"):
+        MetOceanField.from_scenario_table({"generator": "paper_default", "wind_control_points_ms": [1, 2]},
+                                          tmp_path, where)
+
+
+def test_scenario_table_reads_a_file_relative_to_the_scenario(tmp_path):
+    MetOceanField.generate_paper_default(resolution_nm=10.0).to_netcdf(tmp_path / "w.nc")
+    field = MetOceanField.from_scenario_table({"file": "w.nc"}, Path(tmp_path), "s.toml: metocean")
+    assert field.x.size == 11
