@@ -7,7 +7,7 @@ the negative normalised gradient of U (or of G alone in the collision-avoidance 
 (:meth:`rhnc.fields.SuperpositionField.gradient_at`), so the path is not snapped to the
 grid.
 
-Three guards the paper does not spell out:
+Four guards the paper does not spell out:
 
 * **Goal.**  When the goal is within one step, the step ends on the goal and the
   remaining points stay there (the reference then stops: zero speed), instead of
@@ -16,6 +16,12 @@ Three guards the paper does not spell out:
   U changing by less than 1e-6 over a kilometre, against ~1e-4 per metre for the
   guidance term at k3 = 16 on a 100 nm map), the step goes along the direct bearing to
   the goal.
+* **Local minimum.**  Fixed-step descent into a local minimum of U (in front of a
+  high-cost patch placed symmetrically on the line, say) would turn back and forth
+  there for ever.  A step that turns by more than 120 degrees from the previous one
+  (no ship turns so in one interval) marks the path as trapped; that step and the
+  rest of this plan descend G alone, which has no minimum but the goal.  The next
+  planning instant starts afresh.
 * **Map border.**  The path never leaves the map.  A start outside it is moved to the
   nearest point on the border.  A step that would cross the border is projected onto
   it: the outward component of the step direction is removed and the step keeps its
@@ -51,12 +57,16 @@ class PlannedPath:
         Steps that fell back to the direct bearing (flat gradient).
     border_steps : int
         Steps projected onto the map border.
+    trapped_at : int or None
+        Index of the step at which a local minimum of U was detected (the rest of the
+        path descends G alone), or None.
     """
 
     points: np.ndarray
     reached_goal: bool
     flat_steps: int
     border_steps: int
+    trapped_at: int | None = None
 
 
 def _project_direction(position: np.ndarray, direction: np.ndarray, step: float,
@@ -74,7 +84,7 @@ def _project_direction(position: np.ndarray, direction: np.ndarray, step: float,
 
 def plan_local_path(field: SuperpositionField, start: Sequence[float], step_length: float,
                     horizon_steps: int, avoidance: bool = False,
-                    flat_gradient_per_m: float = 1e-9) -> PlannedPath:
+                    flat_gradient_per_m: float = 1e-9, reversal_cosine: float = -0.5) -> PlannedPath:
     """Plan N_L steps down the field (Algorithm 1).
 
     Parameters
@@ -91,6 +101,9 @@ def plan_local_path(field: SuperpositionField, start: Sequence[float], step_leng
         Collision-avoidance state (ET = 1): descend G alone.
     flat_gradient_per_m : float
         Gradient magnitude [1/m] below which the direct bearing to the goal is used.
+    reversal_cosine : float
+        A step whose direction has a cosine below this with the previous step's marks a
+        local minimum (default -0.5: a turn of more than 120 degrees).
 
     Returns
     -------
@@ -113,6 +126,8 @@ def plan_local_path(field: SuperpositionField, start: Sequence[float], step_leng
     points[0] = position
     flat_steps = border_steps = 0
     reached = False
+    trapped_at = None
+    previous = None
     for k in range(horizon_steps):
         to_goal = goal - position
         distance = float(np.hypot(*to_goal))
@@ -121,21 +136,39 @@ def plan_local_path(field: SuperpositionField, start: Sequence[float], step_leng
             reached = True
             points[k + 1] = position
             continue
-        gx, gy = field.gradient_at(position[0], position[1], avoidance)
-        magnitude = float(np.hypot(gx, gy))
-        if magnitude < flat_gradient_per_m:
-            direction = to_goal / distance
-            flat_steps += 1
-        else:
-            direction = -np.array([gx, gy]) / magnitude
-        projected = _project_direction(position, direction, step_length, extent)
-        if not np.array_equal(projected, direction):
-            border_steps += 1
-            norm = float(np.hypot(*projected))
-            if norm < 1e-9:
-                projected = _project_direction(position, to_goal / distance, step_length, extent)
-                norm = float(np.hypot(*projected))
-            direction = projected / norm if norm >= 1e-9 else np.zeros(2)
+        unit_to_goal = to_goal / distance
+        guidance_only = avoidance or trapped_at is not None
+        direction, flat, border = _step_direction(field, position, unit_to_goal, guidance_only,
+                                                  flat_gradient_per_m, step_length, extent)
+        if previous is not None and not guidance_only and float(direction @ previous) < reversal_cosine:
+            trapped_at = k
+            log.info("local minimum of U at (%.0f, %.0f) m, step %d: descending G alone", *position, k)
+            direction, flat, border = _step_direction(field, position, unit_to_goal, True,
+                                                      flat_gradient_per_m, step_length, extent)
+        flat_steps += flat
+        border_steps += border
         position = np.clip(position + step_length * direction, low, high)
         points[k + 1] = position
-    return PlannedPath(points=points, reached_goal=reached, flat_steps=flat_steps, border_steps=border_steps)
+        previous = direction
+    return PlannedPath(points=points, reached_goal=reached, flat_steps=flat_steps, border_steps=border_steps,
+                       trapped_at=trapped_at)
+
+
+def _step_direction(field: SuperpositionField, position: np.ndarray, unit_to_goal: np.ndarray,
+                    guidance_only: bool, flat_gradient_per_m: float, step_length: float,
+                    extent: tuple[float, float, float, float]) -> tuple[np.ndarray, bool, bool]:
+    """Unit step direction at ``position``: down the gradient (or to the goal where flat),
+    projected onto the map border.  Returns (direction, was flat, was projected)."""
+    gx, gy = field.gradient_at(position[0], position[1], guidance_only)
+    magnitude = float(np.hypot(gx, gy))
+    flat = magnitude < flat_gradient_per_m
+    direction = unit_to_goal if flat else -np.array([gx, gy]) / magnitude
+    projected = _project_direction(position, direction, step_length, extent)
+    border = not np.array_equal(projected, direction)
+    if border:
+        norm = float(np.hypot(*projected))
+        if norm < 1e-9:
+            projected = _project_direction(position, unit_to_goal, step_length, extent)
+            norm = float(np.hypot(*projected))
+        direction = projected / norm if norm >= 1e-9 else np.zeros(2)
+    return direction, flat, border

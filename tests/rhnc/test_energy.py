@@ -1,0 +1,120 @@
+"""Energy, cost and emission model against values computed by hand (spec section 3)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from orchestrator.errors import ScenarioError
+from rhnc.energy import (EnergyParameters, brake_power, cost_rate, emission_rate, frictional_coefficient,
+                         power_components, speed_through_water, wave_speed)
+
+V18 = 18 * 1852 / 3600  # 9.26 m/s
+NORTH = 0.0
+
+# Hand computation at 18 kn (v = 9.26 m/s), default parameters:
+#   Re = 9.26 * 230 / 1.27e-6 = 1.677e9, log10 Re = 9.2245
+#   C_F = 0.075 / 7.2245^2 = 1.4369e-3
+#   Ps  = 1025 * 1.4369e-3 * 9424 * 9.26^3 / 2 * (32000 * 0.5 / 40000 + 0.5)
+#       = 5.5107e6 * 0.9 = 4.9596e6 W
+#   Pa (no wind) = 0.1 * 1.225 * 2200.43 * 9.26^3 / 2 = 1.0702e5 W
+#   K  = 1 / (0.65 * (0.7 + 0.3 * 18/24)) = 1 / (0.65 * 0.925) = 1.66320
+#   P  = 1.66320 * (4.9596e6 + 1.0702e5) = 8.4268e6 W
+#   fuel = 8426.8 kW * 190 g/kWh = 1.60109 t/h
+#   EC = 1.60109 * 640 + 12000 / 24 = 1524.70 USD/h,  EM = 1.60109 * 3114 = 4985.8 kg/h
+CALM_PS = 4.9596e6
+CALM_PA = 1.0702e5
+CALM_P = 8.4268e6
+
+
+def test_frictional_coefficient_ittc57_at_18_knots():
+    assert frictional_coefficient(V18) == pytest.approx(1.4369e-3, rel=1e-4)
+
+
+def test_calm_water_at_18_knots():
+    parts = power_components(V18, NORTH, 0.0, 0.0, 0.0)
+    assert parts["still_water"] == pytest.approx(CALM_PS, rel=1e-4)
+    assert parts["added_wave"] == 0.0
+    assert parts["wind"] == pytest.approx(CALM_PA, rel=1e-4)
+    assert parts["propulsion_factor"] == pytest.approx(1.66320, rel=1e-5)
+    assert parts["brake_power"] == pytest.approx(CALM_P, rel=1e-4)
+    assert cost_rate(CALM_P) == pytest.approx(1524.70, rel=1e-4)
+    assert emission_rate(CALM_P) == pytest.approx(4985.8, rel=1e-4)
+
+
+def test_head_seas_hs_3m():
+    # Waves travel with the wind: a 1 m/s wind from ahead (towards south) for a ship heading north.
+    # Tp = 5 sqrt(3) = 8.660 s, c = 9.81 * 8.660 / (2 pi) = 13.521 m/s (head seas: u_wave = +13.521)
+    # Pw = 0.57e-3 * 1025 * 9.81 * 1.5^2 * 32.2^2 / 230 * (9.26 + 13.521) = 1324.4 W
+    # Pa = 0.1 * 1.225 * 2200.43 * (9.26 + 1)^3 / 2 = 1.4556e5 W
+    # K  = max(1.66320, 1 / (0.65 * (1 - 0.3))) = 2.19780
+    # P  = 2.19780 * (4.9596e6 + 1324.4 + 1.4556e5) = 1.12230e7 W
+    parts = power_components(V18, NORTH, -1.0, 0.0, 3.0)
+    assert parts["wave_encounter_speed"] == pytest.approx(13.521, rel=1e-4)
+    assert parts["added_wave"] == pytest.approx(1324.4, rel=1e-4)
+    assert parts["wind"] == pytest.approx(1.4556e5, rel=1e-4)
+    assert parts["propulsion_factor"] == pytest.approx(2.19780, rel=1e-5)
+    assert parts["brake_power"] == pytest.approx(1.12230e7, rel=1e-4)
+
+
+def test_c_w_reading_gives_the_smaller_of_two_implausible_ratios():
+    """0.57e-3 -> Pw/Ps = 0.027 %; 0.57e3 -> Pw/Ps = 267: the default is 0.57e-3 (see rhnc.energy)."""
+    ratios = {}
+    for reading in (0.57e-3, 0.57e3):
+        params = EnergyParameters(wave_drag_coefficient=reading)
+        parts = power_components(V18, NORTH, -1.0, 0.0, 3.0, params)
+        ratios[reading] = parts["added_wave"] / parts["still_water"]
+    assert ratios[0.57e-3] == pytest.approx(2.670e-4, rel=1e-3)
+    assert ratios[0.57e3] == pytest.approx(267.0, rel=1e-3)
+    assert EnergyParameters().wave_drag_coefficient == 0.57e-3
+    # the sea-state branch of K carries the wave effect: +32 % over the speed branch at Hs = 3 m
+    calm = power_components(V18, NORTH, 0.0, 0.0, 0.0)["propulsion_factor"]
+    rough = power_components(V18, NORTH, 0.0, 0.0, 3.0)["propulsion_factor"]
+    assert rough / calm == pytest.approx(1.3214, rel=1e-4)
+
+
+def test_head_wind_20_m_s():
+    # Pa = 0.1 * 1.225 * 2200.43 * (9.26 + 20)^3 / 2 = 3.37627e6 W
+    # P  = 1.66320 * (4.9596e6 + 3.37627e6) = 1.38642e7 W
+    parts = power_components(V18, NORTH, -20.0, 0.0, 0.0)
+    assert parts["head_wind"] == pytest.approx(20.0)
+    assert parts["wind"] == pytest.approx(3.37627e6, rel=1e-4)
+    assert parts["brake_power"] == pytest.approx(1.38642e7, rel=1e-4)
+    # the same wind from astern helps
+    assert brake_power(V18, NORTH, 20.0, 0.0, 0.0) < CALM_P
+
+
+def test_wind_and_waves_are_relative_to_the_heading():
+    east = math.pi / 2
+    # wind towards west is a head wind for a ship heading east
+    assert power_components(V18, east, 0.0, -20.0, 0.0)["head_wind"] == pytest.approx(20.0)
+    # beam wind: no head component
+    assert power_components(V18, NORTH, 0.0, -20.0, 0.0)["head_wind"] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_speed_through_water_subtracts_current_along_heading():
+    assert speed_through_water(V18, NORTH, 1.0, 5.0) == pytest.approx(V18 - 1.0)
+    assert speed_through_water(V18, math.pi, 1.0, 0.0) == pytest.approx(V18 + 1.0)
+    assert speed_through_water(0.5, NORTH, 1.0, 0.0) == 0.0
+
+
+def test_vectorised_over_a_grid_with_broadcasting():
+    heading = np.linspace(-math.pi, math.pi, 7)[:, None]
+    hs = np.linspace(0, 4, 5)[None, :]
+    power = brake_power(V18, heading, -5.0, 2.0, hs)
+    assert power.shape == (7, 5)
+    assert power[0, 0] == pytest.approx(float(brake_power(V18, heading[0, 0], -5.0, 2.0, 0.0)))
+    assert np.all(np.isfinite(brake_power(np.array([0.0, 1.0]), 0.0, 0.0, 0.0, 0.0)))
+
+
+def test_wave_speed_from_hs():
+    assert wave_speed(3.0) == pytest.approx(9.81 * 5 * math.sqrt(3) / (2 * math.pi))
+
+
+def test_overrides_reject_unknown_keys():
+    params = EnergyParameters().with_overrides({"fuel_price_usd_t": 500}, "s.toml: energy")
+    assert params.fuel_price_usd_t == 500.0
+    with pytest.raises(ScenarioError, match=r"s.toml: energy: unknown energy parameter 'C_w' \(valid: .*wave_drag"):
+        EnergyParameters().with_overrides({"C_w": 0.1}, "s.toml: energy")
+    with pytest.raises(ScenarioError, match=r"energy.cargo_t: expected a finite number"):
+        EnergyParameters().with_overrides({"cargo_t": "lots"}, "s.toml: energy")

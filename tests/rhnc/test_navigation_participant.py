@@ -1,0 +1,87 @@
+"""NavigationParticipant: options, Interface I start, outputs and the trigger log."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from orchestrator.errors import ScenarioError
+from orchestrator.participant import BuildContext
+from rhnc.metocean import KNOT, NM, MetOceanField
+from rhnc.navigation_participant import NavigationParticipant
+
+DELTA = 240.0
+
+
+@pytest.fixture(scope="module")
+def metocean():
+    return MetOceanField.generate_paper_default(resolution_nm=2.0)
+
+
+def context(metocean):
+    return BuildContext("exp.toml: participants.nav", Path("."), DELTA, 0.0, 3600.0, metocean=metocean)
+
+
+def build(metocean, **options):
+    return NavigationParticipant.from_options("nav", {"goal_nm": [100, 100], **options}, context(metocean))
+
+
+def test_unknown_option_names_the_key_and_the_valid_ones(metocean):
+    with pytest.raises(ScenarioError, match=r"exp.toml: participants.nav.options: unknown option 'speed_knots' "
+                                            r"\(valid: .*speed_kn.*\)"):
+        build(metocean, speed_knots=18)
+
+
+def test_bad_values_are_scenario_errors(metocean):
+    with pytest.raises(ScenarioError, match=r"nav.options.start_from: 'predicted' is not valid"):
+        build(metocean, start_from="predicted")
+    with pytest.raises(ScenarioError, match=r"nav.options.energy: unknown energy parameter 'Cw'"):
+        build(metocean, energy={"Cw": 1.0})
+    with pytest.raises(ScenarioError, match=r"goal_nm: the goal lies outside"):
+        NavigationParticipant.from_options("nav", {"goal_nm": [150, 10]}, context(metocean))
+    with pytest.raises(ScenarioError, match=r"needs the scenario's \[metocean\]"):
+        NavigationParticipant.from_options("nav", {"goal_nm": [1, 1]}, context(None))
+
+
+def test_setup_and_step_outputs(metocean):
+    nav = build(metocean, start_nm=[0, 0], horizon_steps=16, resolution_nm=2.0)
+    out = nav.setup(0.0, {})
+    ref = out["reference"]
+    assert ref.shape == (17, 7)
+    assert np.allclose(ref[:, 0], DELTA * np.arange(17))
+    assert np.allclose(np.linalg.norm(np.diff(ref[:, 1:3], axis=0), axis=1), 18 * KNOT * DELTA)
+    assert out["et"] == 0.0
+    assert out["goal_distance_m"] == pytest.approx(np.hypot(100, 100) * NM)
+    assert 1000 < out["ec_rate"] < 5000 and out["em_rate"] > 1000
+
+    # Interface I: the start is the prediction interpolated at t, not the measurement
+    prediction = ref.copy()
+    prediction[:, 2] += 500.0
+    t = 1.5 * DELTA
+    step = nav.step(t, DELTA, {"x": 0.0, "y": 0.0, "psi": 0.0, "u": 9.0, "prediction": prediction})
+    expected = np.interp(t, prediction[:, 0], prediction[:, 1]), np.interp(t, prediction[:, 0], prediction[:, 2])
+    assert step["reference"][0, 1:3] == pytest.approx(expected)
+    assert step["reference"][0, 0] == t
+    measured = build(metocean, start_nm=[0, 0], start_from="measured")
+    measured.setup(0.0, {})
+    step = measured.step(t, DELTA, {"x": 10.0, "y": 20.0, "psi": 0.0, "u": 9.0, "prediction": prediction})
+    assert tuple(step["reference"][0, 1:3]) == (10.0, 20.0)
+
+
+def test_obstacle_switches_to_avoidance_and_is_logged(metocean):
+    nav = build(metocean, eps_static_nm=6.0)
+    nav.setup(0.0, {"x": 0.0, "y": 0.0, "psi": 0.8, "u": 9.26})
+    island = np.array([[4 * NM, 4 * NM, 0.0, 0.0, 3 * NM]])
+    out = nav.step(DELTA, DELTA, {"x": 0.0, "y": 0.0, "psi": 0.8, "u": 9.26, "obstacles": island})
+    assert out["et"] == 1.0
+    # in the avoidance state the path follows G alone: the straight line to the goal
+    assert np.allclose(out["reference"][:, 1], out["reference"][:, 2])
+    summary = nav.summary()
+    assert summary["et_activations"] == 1 and summary["avoidance_plans"] == 1
+    assert summary["et_transitions"][0]["range_m"] == pytest.approx(np.hypot(4, 4) * NM)
+
+
+def test_setup_without_position_needs_start(metocean):
+    nav = build(metocean)
+    with pytest.raises(ScenarioError, match="start_nm"):
+        nav.setup(0.0, {})
