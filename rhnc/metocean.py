@@ -262,7 +262,8 @@ class MetOceanField:
             Which time to take when the data have a ``time`` dimension.
 
         Missing variables are an error, except the current, which defaults to zero
-        (ERA5 carries no current) with a warning.
+        (ERA5 carries no current) with a warning.  NaN (land in ocean products)
+        becomes zero.
         """
         import xarray as xr
 
@@ -296,8 +297,9 @@ class MetOceanField:
         north = np.radians(lat - lat0) * EARTH_RADIUS
         east = np.radians(lon - lon0) * EARTH_RADIUS * np.cos(np.radians(lat0))
         step = resolution_nm * NM if resolution_nm else float(np.min(np.diff(north)))
-        x = np.arange(north[0], north[-1] + 1e-6, step)
-        y = np.arange(east[0], east[-1] + 1e-6, step)
+        # cover the data's whole extent with a spacing no coarser than `step`
+        x = np.linspace(north[0], north[-1], int(np.ceil((north[-1] - north[0]) / step - 1e-9)) + 1)
+        y = np.linspace(east[0], east[-1], int(np.ceil((east[-1] - east[0]) / step - 1e-9)) + 1)
         from scipy.interpolate import RegularGridInterpolator
 
         xx, yy = np.meshgrid(x, y, indexing="ij")
