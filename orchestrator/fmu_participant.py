@@ -17,6 +17,8 @@ from collections.abc import Mapping
 from ctypes import byref
 from pathlib import Path
 
+from fmpy.fmi1 import FMICallException
+
 from orchestrator.errors import FmuError, ModelError, ScenarioError
 from orchestrator.participant import Participant, Value
 from orchestrator.scenario import ParticipantSpec, VariableMapping
@@ -81,6 +83,8 @@ class FmuParticipant(Participant):
     """
 
     outputs_at_step_end = True
+    #: outputs are checked here, where the FMU variable can be named
+    checks_outputs_finite = True
 
     def __init__(self, spec: ParticipantSpec, fmu_path: Path, where: str,
                  string_substitutions: Mapping[str, str] | None = None) -> None:
@@ -100,6 +104,10 @@ class FmuParticipant(Participant):
         self._inputs: dict[str, VariableMapping] = {}
         self._outputs: dict[str, VariableMapping] = {}
         self._bind_ports(spec.mapping)
+        self._input_refs = {port: self.variables[b.variable].valueReference for port, b in self._inputs.items()}
+        self._output_ports = list(self._outputs)
+        self._output_refs = [self.variables[self._outputs[p].variable].valueReference for p in self._output_ports]
+        self._output_scales = [self._outputs[p].scale for p in self._output_ports]
         self._slave = None
         self._unzip_dir = None
         self._messages: list[str] = []
@@ -194,8 +202,7 @@ class FmuParticipant(Participant):
 
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         self._set_inputs(inputs)
-        self._call("fmi2DoStep", self._slave.doStep, currentCommunicationPoint=time,
-                   communicationStepSize=step_size)
+        self._call("fmi2DoStep", self._slave.doStep, time, step_size)
         return self._read_outputs(time + step_size)
 
     def terminate(self) -> None:
@@ -240,12 +247,11 @@ class FmuParticipant(Participant):
         self._callbacks = callbacks  # keep the ctypes objects alive
         return callbacks
 
-    def _call(self, function: str, call, **kwargs):
-        from fmpy.fmi1 import FMICallException
-
-        self._messages.clear()
+    def _call(self, function: str, call, *args, **kwargs):
+        if self._messages:
+            self._messages.clear()
         try:
-            return call(**kwargs)
+            return call(*args, **kwargs)
         except FMICallException as exc:
             detail = self._messages[-1] if self._messages else str(exc)
             raise ModelError(f"{self.name} ({self.fmu_path.name}): {function} failed: {detail}") from exc
@@ -263,27 +269,27 @@ class FmuParticipant(Participant):
             self._call("fmi2SetString", self._slave.setString, vr=refs, value=[str(value)])
 
     def _set_inputs(self, inputs: Mapping[str, Value]) -> None:
+        if not inputs:
+            return
         refs, values = [], []
         for port, value in inputs.items():
-            binding = self._inputs[port]
             number = float(value)
             if not math.isfinite(number):
                 raise ModelError(f"{self.name}: input '{port}' received a non-finite value ({number})")
-            refs.append(self.variables[binding.variable].valueReference)
-            values.append(number / binding.scale)
-        if refs:
-            self._call("fmi2SetReal", self._slave.setReal, vr=refs, value=values)
+            refs.append(self._input_refs[port])
+            values.append(number / self._inputs[port].scale)
+        self._call("fmi2SetReal", self._slave.setReal, refs, values)
 
     def _read_outputs(self, time: float) -> dict[str, Value]:
-        ports = list(self._outputs)
-        refs = [self.variables[self._outputs[p].variable].valueReference for p in ports]
-        values = self._call("fmi2GetReal", self._slave.getReal, vr=refs) if refs else []
+        if not self._output_refs:
+            return {}
+        values = self._call("fmi2GetReal", self._slave.getReal, self._output_refs)
         outputs = {}
-        for port, value in zip(ports, values):
+        for port, value, scale in zip(self._output_ports, values, self._output_scales):
             if not math.isfinite(value):
                 raise ModelError(
                     f"{self.name} ({self.fmu_path.name}): output '{self._outputs[port].variable}' "
                     f"is {value} at t = {time:g} s"
                 )
-            outputs[port] = value * self._outputs[port].scale
+            outputs[port] = value * scale
         return outputs

@@ -33,7 +33,9 @@ class Recorder:
         flat = {}
         for port, value in outputs.items():
             column = f"{participant}.{port}"
-            if isinstance(value, np.ndarray):
+            if type(value) is float:
+                flat[column] = value
+            elif isinstance(value, np.ndarray):
                 if value.ndim == 0:
                     flat[column] = float(value)
                 for index in np.ndindex(value.shape):
