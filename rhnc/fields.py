@@ -17,6 +17,11 @@ bilinearly from the scenario's met-ocean grid.  On it:
 * The superposition is U = k1 EC_bar + k2 EM_bar + k3 G_bar (Eq. 6, default 1, 1, 16);
   in the collision-avoidance state the planner descends G_bar alone.
 
+Note: EC is affine and EM linear in the brake power P (Eq. 2, 3), so after Eq. 5
+EC_bar and EM_bar are the same field (P_bar).  Adding the emission field (k2 = 1) is
+therefore the same as doubling the energy weight against k3; it cannot trade cost
+against emission.  A differing emission field would need, e.g., a speed-dependent SFC.
+
 EC and EM depend on the goal and the speed only, so :class:`SuperpositionField` keeps
 them until the speed changes; G is rebuilt at every planning instant from the current
 start point (receding horizon).  G is computed in float32 over the grid (only its

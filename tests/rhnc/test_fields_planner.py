@@ -148,3 +148,10 @@ def test_avoidance_state_descends_guidance_alone():
     field.update(start, SPEED)
     path = plan_local_path(field, start, STEP, 20, avoidance=True)
     assert np.abs(path.points[:, 0] - path.points[:, 1]).max() < 1e-6 * NM
+
+
+def test_normalised_cost_and_emission_fields_coincide():
+    """EC is affine and EM linear in P: Eq. 5 maps both to the same field (see rhnc.fields)."""
+    field = SuperpositionField(weather(hs=patch(3, (20, 30), 5)), (45 * NM, 40 * NM))
+    field.update((2 * NM, 3 * NM), SPEED)
+    assert np.allclose(normalise(field.ec), normalise(field.em), atol=1e-12)
