@@ -30,15 +30,19 @@ class RunReport:
         return self.status == "finished"
 
 
-def run_scenario(path, results_root="results", progress: bool = True, run_id: str | None = None) -> RunReport:
-    """Run the scenario in ``path`` and write ``results_root/<name>/<run-id>/``.
+def run_scenario(path, results_root="results", progress: bool = True, run_id: str | None = None,
+                 overrides=None, group: str | None = None) -> RunReport:
+    """Run the scenario in ``path`` and write ``results_root/<group>/<run-id>/``.
 
-    Errors in the scenario or its FMUs raise before anything is written
+    ``group`` defaults to the scenario's name; ``overrides`` are dotted-key values applied
+    to the scenario (see :func:`~orchestrator.scenario.load_scenario`).  Errors in the
+    scenario or its FMUs raise before anything is written
     (:class:`~orchestrator.errors.ToolchainError`).  A failure during the run is
     reported in the returned status; its results are written all the same.
     """
-    scenario = load_scenario(path)
-    folder = RunFolder(Path(results_root), scenario.simulation.name, run_id or new_run_id(scenario.sha256))
+    scenario = load_scenario(path, overrides)
+    folder = RunFolder(Path(results_root), group or scenario.simulation.name,
+                       run_id or new_run_id(scenario.sha256))
     try:
         cosim = CoSimulation(scenario, work_dir=None)
     except BaseException:
@@ -46,7 +50,7 @@ def run_scenario(path, results_root="results", progress: bool = True, run_id: st
         raise
     try:
         outcome = cosim.run(progress=progress)
-        report = _write(scenario, cosim, outcome, folder)
+        report = _write(scenario, cosim, outcome, folder, overrides)
     except BaseException:
         folder.discard()
         raise
@@ -55,7 +59,7 @@ def run_scenario(path, results_root="results", progress: bool = True, run_id: st
     return report
 
 
-def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder) -> RunReport:
+def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, overrides) -> RunReport:
     from orchestrator import analyses
 
     frame = outcome.recorder.to_frame()
@@ -87,6 +91,7 @@ def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder) 
         "scenario": str(scenario.path),
         "scenario_name": sim.name,
         "scenario_sha256": scenario.sha256,
+        "overrides": dict(overrides or {}),
         "run_id": folder.final.name,
         "status": status,
         "reason": reason,

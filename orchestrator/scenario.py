@@ -6,9 +6,11 @@ The format is documented in ``docs/scenario-format.md``.
 from __future__ import annotations
 
 import hashlib
+import json
 import math
 import tomllib
 from dataclasses import dataclass, field
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -105,8 +107,17 @@ class Scenario:
         raise KeyError(name)
 
 
-def load_scenario(path) -> Scenario:
+def load_scenario(path, overrides: Mapping[str, Any] | None = None) -> Scenario:
     """Read and check a scenario file.
+
+    Parameters
+    ----------
+    path : path-like
+        The scenario TOML file; relative paths inside it resolve against its folder.
+    overrides : mapping, optional
+        Values replacing (or adding) keys of the file before it is checked, by dotted
+        path: ``{"participants.nav.options.k2": 0.0, "simulation.dt_s": 60.0}``.  The
+        batch runner varies scenarios this way.  The scenario hash covers them.
 
     Raises
     ------
@@ -122,6 +133,10 @@ def load_scenario(path) -> Scenario:
         data = tomllib.loads(raw.decode("utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ScenarioError(f"{path}: not valid TOML: {exc}") from exc
+    if overrides:
+        for dotted, value in overrides.items():
+            apply_override(data, dotted, value, str(path))
+        raw = raw + b"\n# overrides\n" + json.dumps(dict(overrides), sort_keys=True, default=str).encode()
     where = str(path)
     _reject_unknown(data, TOP_LEVEL_KEYS, where, "")
     simulation = _simulation(_table(data, "simulation", where, required=True), path)
@@ -140,6 +155,25 @@ def load_scenario(path) -> Scenario:
         outputs=outputs,
         sha256=hashlib.sha256(raw).hexdigest(),
     )
+
+
+def apply_override(data: dict, dotted: str, value: Any, where: str) -> None:
+    """Set ``data[a][b][c] = value`` for ``dotted = "a.b.c"``, creating missing tables.
+
+    A path running through a value that is not a table is an error naming it.
+    """
+    keys = dotted.split(".")
+    if not all(keys):
+        raise ScenarioError(f"{where}: override '{dotted}' is not a dotted key path")
+    node = data
+    for depth, key in enumerate(keys[:-1]):
+        child = node.setdefault(key, {})
+        if not isinstance(child, dict):
+            raise ScenarioError(
+                f"{where}: override '{dotted}': '{'.'.join(keys[:depth + 1])}' is a value, not a table"
+            )
+        node = child
+    node[keys[-1]] = value
 
 
 def _table(data: dict, key: str, where: str, required: bool) -> dict:

@@ -102,3 +102,16 @@ def test_mapping_entries_are_checked(write_scenario):
 def test_outputs_format_is_checked(write_scenario):
     with pytest.raises(ScenarioError, match=r"'outputs.format' must be one of parquet, csv, got 'xlsx'"):
         load_scenario(write_scenario(GOOD + '\n[outputs]\nformat = "xlsx"\n'))
+
+
+def test_overrides_replace_keys_and_change_the_hash(write_scenario):
+    path = write_scenario(GOOD)
+    plain = load_scenario(path)
+    varied = load_scenario(path, {"simulation.dt_s": 1.0, "participants.echo.options.gain": 2})
+    assert varied.simulation.steps == 10
+    assert varied.participant("echo").options == {"gain": 2}
+    assert varied.sha256 != plain.sha256
+    with pytest.raises(ScenarioError, match=r"override 'simulation.dt_s.x': 'simulation.dt_s' is a value"):
+        load_scenario(path, {"simulation.dt_s.x": 1})
+    with pytest.raises(ScenarioError, match=r"unknown key 'simulation.warp'"):
+        load_scenario(path, {"simulation.warp": 9})
