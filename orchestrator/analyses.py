@@ -17,6 +17,7 @@ from orchestrator.errors import ScenarioError, ToolchainError
 ANALYSES = {
     "turning_circle": "orchestrator.analyses:turning_circle_analysis",
     "zigzag": "orchestrator.analyses:zigzag_analysis",
+    "voyage": "orchestrator.analyses:voyage_analysis",
 }
 FIGURES = {
     "track": "orchestrator.figures:track_figure",
@@ -99,3 +100,32 @@ def zigzag_analysis(frame, scenario, cosim, out_dir) -> dict:
 
     zigzag_figure(frame, plant, column, out_dir / "zigzag.png")
     return figures
+
+
+def voyage_analysis(frame, scenario, cosim, out_dir) -> dict:
+    """Cost, CO2 per nm and CII of the sailed track (:mod:`rhnc.voyage`).
+
+    The weather is what the plant met: the outputs of the participant driving the
+    plant's ``hs`` input (the environment FMU), else the scenario's met-ocean field at the
+    ship's positions, else calm water.  The energy constants are the navigation
+    participant's (so a scenario's overrides apply), else the defaults.
+    """
+    from rhnc.energy import EnergyParameters
+    from rhnc.voyage import account_voyage
+
+    plant = plant_name(cosim)
+    x, y = frame[f"{plant}.x"].to_numpy(), frame[f"{plant}.y"].to_numpy()
+    try:
+        environment = driver_column(scenario, plant, "hs").split(".")[0]
+        weather = {name: frame[f"{environment}.{name}"].to_numpy() for name in ("wind_north", "wind_east", "hs")}
+    except (ToolchainError, KeyError):
+        if cosim.metocean is not None:
+            weather = cosim.metocean.sample(x, y)
+        else:
+            weather = {name: np.zeros_like(x) for name in ("wind_north", "wind_east", "hs")}
+    energy = next((p.energy for p in cosim.participants if isinstance(getattr(p, "energy", None), EnergyParameters)),
+                  EnergyParameters())
+    account = account_voyage(frame["time_s"].to_numpy(), x, y, frame[f"{plant}.u"].to_numpy(),
+                             frame[f"{plant}.psi"].to_numpy(), weather["wind_north"], weather["wind_east"],
+                             weather["hs"], energy)
+    return account.as_dict()
