@@ -1,0 +1,93 @@
+"""Prediction model: parameter sets, RK4 against an independent integrator, CasADi = numpy."""
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from orchestrator.errors import ScenarioError
+from rhnc.ship_model import (
+    ShipParameters,
+    casadi_derivatives,
+    derivatives,
+    load_parameter_set,
+    rk4_function,
+    rk4_step,
+)
+
+KNOT = 1852.0 / 3600.0
+
+
+@pytest.fixture(scope="module")
+def kcs():
+    return load_parameter_set("default")
+
+
+def test_default_set_is_full_scale_kcs_and_course_stable(kcs):
+    assert kcs.m11 > 1e7 and kcs.tau_u_max > 1e5
+    assert kcs.straight_line_stable(18 * KNOT)
+
+
+def test_paper_table2_is_unstable_at_18_kn_as_spec_1a_says():
+    paper = load_parameter_set("paper_table2")
+    assert paper.m11 == pytest.approx(897.77)
+    assert not paper.straight_line_stable(18 * KNOT)
+    assert max(np.linalg.eigvals(paper.sway_yaw_matrix(18 * KNOT)).real) == pytest.approx(17.7, abs=0.6)
+
+
+def test_unknown_set_names_the_valid_ones():
+    with pytest.raises(ScenarioError, match=r"unknown parameter set 'kcs_model'.*valid: default, paper_table2"):
+        load_parameter_set("kcs_model")
+
+
+def test_overrides_replace_values_and_reject_unknown_keys(kcs):
+    heavier = load_parameter_set("default", {"m11": 2 * kcs.m11})
+    assert heavier.m11 == 2 * kcs.m11 and heavier.m22 == kcs.m22
+    with pytest.raises(ScenarioError, match="override of unknown key 'm44'"):
+        load_parameter_set("default", {"m44": 1.0})
+
+
+def test_missing_dynamics_key_is_named(tmp_path):
+    path = tmp_path / "sets.toml"
+    path.write_text("[tiny]\nm11 = 1.0\nm22 = 2.0\nm33 = 3.0\nd11 = 1.0\nd22 = 1.0\ntau_u_max = 1.0\ntau_r_max = 1.0\n")
+    with pytest.raises(ScenarioError, match="missing key 'd33'"):
+        load_parameter_set("tiny", path=path)
+    path.write_text(path.read_text() + "d33 = 1.0\n")
+    tiny = load_parameter_set("tiny", path=path)
+    assert tiny.d23 == 0.0 and tiny.d32 == 0.0  # the paper's Eq. 11
+
+
+def test_rk4_matches_solve_ivp_on_a_turning_manoeuvre(kcs):
+    state = np.array([100.0, -50.0, 0.3, 18 * KNOT, 0.2, 0.002])
+    tau = np.array([0.8 * kcs.tau_u_max, 0.6 * kcs.tau_r_max])
+    reference = solve_ivp(lambda t, x: derivatives(x, tau, kcs), (0.0, 120.0), state, rtol=1e-10, atol=1e-10)
+    end = rk4_step(state, tau, 120.0, 60, kcs)
+    np.testing.assert_allclose(end, reference.y[:, -1], rtol=1e-6, atol=1e-6)
+    # and the yaw rate really changed: a test of a turning ship, not of a straight line
+    assert abs(end[5] - state[5]) > 1e-3
+
+
+def test_casadi_model_equals_numpy_model(kcs):
+    rng = np.random.default_rng(3)
+    f = casadi_derivatives(kcs)
+    F = rk4_function(kcs, 20.0, 4, with_substeps=True)
+    for _ in range(5):
+        state = rng.normal(size=6) * np.array([1e3, 1e3, 1.0, 5.0, 0.5, 0.01])
+        tau = rng.uniform(-1, 1, 2) * kcs.tau_max
+        np.testing.assert_allclose(np.array(f(state, tau)).ravel(), derivatives(state, tau, kcs), rtol=1e-12)
+        x_next, substeps = F(state, tau)
+        np.testing.assert_allclose(np.array(x_next).ravel(), rk4_step(state, tau, 20.0, 4, kcs), rtol=1e-10, atol=1e-9)
+        np.testing.assert_allclose(np.array(substeps)[:, 1], rk4_step(state, tau, 10.0, 2, kcs), rtol=1e-10, atol=1e-9)
+
+
+def test_equilibrium_tau_holds_speed(kcs):
+    u0 = 18 * KNOT
+    state = np.array([0.0, 0.0, 0.0, u0, 0.0, 0.0])
+    end = rk4_step(state, kcs.equilibrium_tau(u0), 600.0, 120, kcs)
+    assert end[3] == pytest.approx(u0, rel=1e-9)
+    assert end[0] == pytest.approx(600.0 * u0, rel=1e-9)
+
+
+def test_parameters_are_frozen(kcs):
+    with pytest.raises(AttributeError):
+        kcs.m11 = 1.0
+    assert isinstance(kcs, ShipParameters)
