@@ -1,0 +1,241 @@
+"""Co-simulation participant around the NMPC: measured state + reference + obstacles -> tau.
+
+Inputs: ``x, y, psi, u, v, r`` (floats, SI), ``reference`` ((M, 7): t, x, y, psi, u, v, r),
+``et`` (float, optional), ``obstacles`` ((n, 5): x, y, vx, vy, radius, optional).
+Outputs: ``tau_u`` [N], ``tau_r`` [N·m], ``prediction`` ((N_c+1, 7), absolute time
+column), and per-solve telemetry ``solve_time_s``, ``iterations``, ``solver_ok``,
+``fallback``, ``cost``, ``constraint_violation``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from orchestrator.errors import ModelError, ScenarioError
+from orchestrator.participant import BuildContext, Participant, Value, reject_unknown_options
+from rhnc.nmpc import SOLVERS, NMPCController, NMPCSettings
+from rhnc.ship_model import STATE_NAMES, load_parameter_set
+
+LOG = logging.getLogger(__name__)
+NM = 1852.0
+
+OPTIONS = (
+    "parameter_set",
+    "parameter_overrides",
+    "horizon_steps",
+    "control_interval_s",
+    "substeps",
+    "own_radius_nm",
+    "solver",
+    "max_iterations",
+    "max_obstacles",
+    "weights",
+    "length_scale_m",
+    "speed_scale_mps",
+    "et_default",
+)
+WEIGHT_KEYS = ("q", "r", "r_rate")
+
+
+def interpolate_reference(reference: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """Reference states (len(times), 6) at ``times`` [s] from an (M, 7) timed reference.
+
+    Linear in time between the reference's points (heading unwrapped first); before its
+    first point the first point is held; past its last point the last point's velocity is
+    held (straight on at its course and speed, r = 0).
+    """
+    reference = np.atleast_2d(np.asarray(reference, dtype=float))
+    if reference.ndim != 2 or reference.shape[1] != 7 or len(reference) < 1:
+        raise ValueError(f"reference must be an (M, 7) array, got shape {reference.shape}")
+    t = reference[:, 0]
+    columns = reference[:, 1:].copy()
+    columns[:, 2] = np.unwrap(columns[:, 2])
+    if len(reference) > 1 and np.any(np.diff(t) <= 0.0):
+        raise ValueError("reference times must increase strictly")
+    out = np.column_stack([np.interp(times, t, columns[:, j]) for j in range(6)])
+    late = times > t[-1]
+    if np.any(late):
+        x, y, psi, u, v, _ = columns[-1]
+        dt = times[late] - t[-1]
+        out[late, 0] = x + (u * math.cos(psi) - v * math.sin(psi)) * dt
+        out[late, 1] = y + (u * math.sin(psi) + v * math.cos(psi)) * dt
+        out[late, 2] = psi
+        out[late, 3] = u
+        out[late, 4] = v
+        out[late, 5] = 0.0
+    return out
+
+
+class ControlParticipant(Participant):
+    """NMPC trajectory tracking with collision constraints (spec section 5).
+
+    Options
+    -------
+    parameter_set : str
+        Set of ``models/KCS/parameter_sets.toml`` for the prediction model (default ``default``).
+    parameter_overrides : table
+        Single parameter values replacing the set's (same keys as the plant's).
+    horizon_steps : int
+        N_c (default 15).
+    control_interval_s : float
+        Prediction interval delta [s] (default: this participant's step size).
+    substeps : int
+        RK4 steps per interval, where collisions are also checked (default 4).
+    own_radius_nm : float
+        Own ship's hazard radius R [nm] (default 0).
+    solver : str
+        ``fatrop`` (default), ``ipopt`` or ``sqpmethod``.
+    max_iterations, max_obstacles : int
+        Solver iteration limit (200), obstacle slots (4).
+    weights : table
+        ``q`` (6 values), ``r`` (2), ``r_rate`` (2) replacing the paper's diagonals.
+    length_scale_m, speed_scale_mps : float
+        Units of the scaled errors (see :mod:`rhnc.nmpc`).
+    et_default : float
+        Event trigger used when no ``et`` input is connected (default 0: constraints off).
+    """
+
+    def __init__(self, name: str, controller: NMPCController, et_default: float) -> None:
+        super().__init__(name)
+        self.controller = controller
+        self.et_default = et_default
+        n = controller.settings.horizon_steps
+        self._prediction = np.zeros((n + 1, 7))
+        self._tau = np.zeros(2)
+        self._solve_times: list[float] = []
+        self._steps = 0
+
+    @classmethod
+    def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "ControlParticipant":
+        """Build from scenario options (see class docstring); errors name the key."""
+        where = context.where
+        reject_unknown_options(options, OPTIONS, where)
+        set_name = options.get("parameter_set", "default")
+        if not isinstance(set_name, str):
+            raise ScenarioError(f"{where}: option 'parameter_set' must be a string")
+        overrides = options.get("parameter_overrides", {})
+        if not isinstance(overrides, Mapping):
+            raise ScenarioError(f"{where}: option 'parameter_overrides' must be a table")
+        try:
+            params = load_parameter_set(set_name, overrides)
+        except ScenarioError as error:
+            raise ScenarioError(f"{where}: {error}") from None
+        kwargs: dict[str, Any] = {
+            "control_interval_s": _number(options, "control_interval_s", where, context.step_size),
+            "own_radius_m": _number(options, "own_radius_nm", where, 0.0) * NM,
+        }
+        for key in ("horizon_steps", "substeps", "max_iterations", "max_obstacles"):
+            if key in options:
+                value = options[key]
+                if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                    raise ScenarioError(f"{where}: option '{key}' must be an integer >= 1, got {value!r}")
+                kwargs[key] = value
+        if "solver" in options:
+            if options["solver"] not in SOLVERS:
+                raise ScenarioError(f"{where}: option 'solver' must be one of {', '.join(SOLVERS)}, got {options['solver']!r}")
+            kwargs["solver"] = options["solver"]
+        for key in ("length_scale_m", "speed_scale_mps"):
+            if key in options:
+                kwargs[key] = _number(options, key, where, None)
+        weights = options.get("weights", {})
+        if not isinstance(weights, Mapping):
+            raise ScenarioError(f"{where}: option 'weights' must be a table with keys {', '.join(WEIGHT_KEYS)}")
+        reject_unknown_options(weights, WEIGHT_KEYS, f"{where}.weights")
+        for key, size in zip(WEIGHT_KEYS, (6, 2, 2)):
+            if key in weights:
+                values = weights[key]
+                if not isinstance(values, list) or len(values) != size or not all(
+                    isinstance(v, (int, float)) and not isinstance(v, bool) and v >= 0 for v in values
+                ):
+                    raise ScenarioError(f"{where}.weights: '{key}' must be a list of {size} numbers >= 0")
+                kwargs[key] = tuple(float(v) for v in values)
+        try:
+            settings = NMPCSettings(**kwargs)
+        except ValueError as error:
+            raise ScenarioError(f"{where}: {error}") from None
+        et_default = _number(options, "et_default", where, 0.0)
+        return cls(name, NMPCController(params, settings), et_default)
+
+    @property
+    def input_names(self) -> Sequence[str]:
+        return (*STATE_NAMES, "reference", "et", "obstacles")
+
+    @property
+    def output_names(self) -> Sequence[str]:
+        return (
+            "tau_u", "tau_r", "prediction", "solve_time_s", "iterations",
+            "solver_ok", "fallback", "cost", "constraint_violation",
+        )
+
+    def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
+        """Reset the controller; initial outputs are zero inputs (the first step decides)."""
+        self.controller.reset()
+        self._tau = np.zeros(2)
+        return self._outputs(self._tau, self._prediction, 0.0, 0, True, False, 0.0, 0.0)
+
+    def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
+        """Solve the NMPC at ``time`` from the measured state; return tau held over the step."""
+        missing = [name for name in (*STATE_NAMES, "reference") if name not in inputs]
+        if missing:
+            raise ModelError(f"{self.name}: inputs not connected or not available: {', '.join(missing)}")
+        state = np.array([float(inputs[name]) for name in STATE_NAMES])
+        if not np.all(np.isfinite(state)):
+            raise ModelError(f"{self.name}: non-finite measured state at t = {time} s: {state}")
+        settings = self.controller.settings
+        horizon = time + settings.control_interval_s * np.arange(settings.horizon_steps + 1)
+        try:
+            reference = interpolate_reference(np.asarray(inputs["reference"]), horizon)
+        except ValueError as error:
+            raise ModelError(f"{self.name}: input 'reference' at t = {time} s: {error}") from None
+        obstacles = np.asarray(inputs.get("obstacles", np.zeros((0, 5))), dtype=float).reshape(-1, 5)
+        et = float(inputs.get("et", self.et_default)) > 0.5
+        solution = self.controller.solve(time, state, reference, obstacles, et, previous_tau=self._tau)
+        self._tau = solution.tau
+        self._steps += 1
+        self._solve_times.append(solution.solve_time_s)
+        if solution.fallback:
+            LOG.warning("%s: NMPC failed at t = %.1f s (%s), fallback applied", self.name, time, solution.status)
+        prediction = np.column_stack([horizon, solution.states])
+        return self._outputs(
+            solution.tau, prediction, solution.solve_time_s, solution.iterations,
+            solution.success, solution.fallback, solution.cost, solution.constraint_violation,
+        )
+
+    def _outputs(self, tau, prediction, solve_time, iterations, ok, fallback, cost, violation) -> dict[str, Value]:
+        return {
+            "tau_u": float(tau[0]),
+            "tau_r": float(tau[1]),
+            "prediction": prediction,
+            "solve_time_s": float(solve_time),
+            "iterations": float(iterations),
+            "solver_ok": 1.0 if ok else 0.0,
+            "fallback": 1.0 if fallback else 0.0,
+            "cost": float(cost),
+            "constraint_violation": float(violation),
+        }
+
+    def summary(self) -> dict[str, Any]:
+        """Solve-time median/max [s], solves, fallbacks and solver failures."""
+        times = np.array(self._solve_times)
+        return {
+            "solver": self.controller.settings.solver,
+            "solves": self._steps,
+            "solve_time_median_s": float(np.median(times)) if len(times) else None,
+            "solve_time_max_s": float(np.max(times)) if len(times) else None,
+            "fallback_count": self.controller.fallback_count,
+            "failure_count": self.controller.failure_count,
+        }
+
+
+def _number(options: Mapping[str, Any], key: str, where: str, default: float | None) -> float | None:
+    if key not in options:
+        return default
+    value = options[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ScenarioError(f"{where}: option '{key}' must be a finite number, got {value!r}")
+    return float(value)

@@ -1,0 +1,181 @@
+"""NMPC: tracking (line, turn), input bounds, collision constraint between samples, fallback."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from orchestrator.errors import ScenarioError
+from orchestrator.participant import BuildContext
+from rhnc.control_participant import ControlParticipant, interpolate_reference
+from rhnc.nmpc import NMPCController, NMPCSettings
+from rhnc.reference_participant import line_or_turn_reference
+from rhnc.ship_model import load_parameter_set, rk4_step
+
+NM = 1852.0
+KNOT = NM / 3600.0
+DT = 20.0
+N = 15
+
+
+@pytest.fixture(scope="module")
+def kcs():
+    return load_parameter_set("default")
+
+
+@pytest.fixture(scope="module")
+def controller(kcs):
+    return NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=DT))
+
+
+def closed_loop(controller, kcs, reference_at, state, steps, obstacles=None, plant_dt=0.5):
+    """Run NMPC + numpy plant; return states at plant_dt, applied inputs and solutions."""
+    controller.reset()
+    trajectory, inputs, solutions = [state.copy()], [], []
+    for k in range(steps):
+        t = k * DT
+        obs = None if obstacles is None else obstacles(t)
+        solution = controller.solve(t, state, reference_at(t), obs, et=obstacles is not None)
+        solutions.append(solution)
+        inputs.append(solution.tau)
+        for _ in range(int(round(DT / plant_dt))):
+            state = rk4_step(state, solution.tau, plant_dt, 1, kcs)
+            trajectory.append(state.copy())
+    return np.array(trajectory), np.array(inputs), solutions
+
+
+def test_tracks_a_straight_line_from_a_lateral_offset(controller, kcs):
+    course = math.radians(45.0)
+    speed = 18 * KNOT
+
+    def reference_at(t):
+        return line_or_turn_reference(t + DT * np.arange(N + 1), (0.0, 0.0), course, speed)
+
+    start = np.array([-300.0 * math.sin(course), 300.0 * math.cos(course), course, 14 * KNOT, 0.0, 0.0])
+    trajectory, inputs, solutions = closed_loop(controller, kcs, reference_at, start, 50)
+    cross_track = -np.sin(course) * trajectory[:, 0] + np.cos(course) * trajectory[:, 1]
+    assert abs(cross_track[0]) == pytest.approx(300.0)
+    after_transient = cross_track[int(500.0 / 0.5) :]  # after 500 s (25 control intervals)
+    assert np.max(np.abs(after_transient)) < 0.05 * NM
+    assert abs(cross_track[-1]) < 15.0
+    assert np.all(np.abs(inputs) <= kcs.tau_max * (1 + 1e-9))
+    assert trajectory[-1, 3] == pytest.approx(speed, rel=0.02)
+    assert all(s.success and not s.fallback for s in solutions)
+
+
+def test_tracks_a_constant_radius_turn(controller, kcs):
+    radius = 2.0 * NM  # starboard turn at 18 kn, well inside the ship's turning ability
+    speed = 18 * KNOT
+
+    def reference_at(t):
+        return line_or_turn_reference(t + DT * np.arange(N + 1), (0.0, 0.0), 0.0, speed, radius)
+
+    start = reference_at(0.0)[0]
+    start[5] = 0.0  # entering the turn from straight motion
+    trajectory, inputs, _ = closed_loop(controller, kcs, reference_at, start, 45)
+    centre = np.array([0.0, radius])
+    radial_error = np.hypot(trajectory[:, 0] - centre[0], trajectory[:, 1] - centre[1]) - radius
+    assert np.max(np.abs(radial_error[len(radial_error) // 3 :])) < 0.05 * NM
+    assert trajectory[-1, 2] > 2.0  # really turned (> 115 deg)
+    assert np.all(np.abs(inputs) <= kcs.tau_max * (1 + 1e-9))
+
+
+def test_passes_a_static_obstacle_on_the_track_outside_its_radius(kcs):
+    own_radius = 0.2 * NM
+    controller = NMPCController(kcs, NMPCSettings(own_radius_m=own_radius))
+    course, speed = math.radians(45.0), 18 * KNOT
+    centre = 2.0 * NM * np.array([math.cos(course), math.sin(course)])
+    obstacle = np.array([[centre[0], centre[1], 0.0, 0.0, 0.5 * NM]])
+
+    def reference_at(t):
+        return line_or_turn_reference(t + DT * np.arange(N + 1), (0.0, 0.0), course, speed)
+
+    start = np.array([0.0, 0.0, course, speed, 0.0, 0.0])
+    trajectory, inputs, solutions = closed_loop(controller, kcs, reference_at, start, 45, lambda t: obstacle)
+    distance = np.hypot(trajectory[:, 0] - centre[0], trajectory[:, 1] - centre[1])
+    assert distance.min() >= own_radius + 0.5 * NM  # checked every 0.5 s, not only at samples
+    assert distance.min() < own_radius + 0.5 * NM + 0.1 * NM  # and it did pass close, not stop
+    along = trajectory[-1, 0] * math.cos(course) + trajectory[-1, 1] * math.sin(course)
+    assert along > 3.0 * NM  # got past the obstacle
+    assert np.all(np.abs(inputs) <= kcs.tau_max * (1 + 1e-9))
+    assert all(s.success for s in solutions)
+
+
+def test_infeasible_solve_falls_back_to_the_shifted_plan(controller, kcs):
+    course, speed = 0.3, 18 * KNOT
+
+    def reference_at(t):
+        return line_or_turn_reference(t + DT * np.arange(N + 1), (0.0, 0.0), course, speed)
+
+    controller.reset()
+    state = np.array([0.0, 0.0, course, speed, 0.0, 0.0])
+    first = controller.solve(0.0, state, reference_at(0.0))
+    assert first.success and not first.fallback
+    state = rk4_step(state, first.tau, DT, 40, kcs)
+    before = controller.fallback_count
+    on_the_ship = np.array([[state[0], state[1], 0.0, 0.0, 500.0]])
+    second = controller.solve(DT, state, reference_at(DT), on_the_ship, et=True)
+    assert not second.success and second.fallback
+    assert controller.fallback_count == before + 1
+    np.testing.assert_allclose(second.tau, first.inputs[1])  # next input of the previous plan
+    # with no previous plan: hold the surge force, zero yaw moment
+    controller.reset()
+    third = controller.solve(2 * DT, state, reference_at(2 * DT), on_the_ship, et=True, previous_tau=np.array([7e5, 1e8]))
+    assert third.fallback
+    np.testing.assert_allclose(third.tau, [7e5, 0.0])
+
+
+def test_heading_error_is_wrapped(controller, kcs):
+    """A reference heading 2 pi away is the same heading: same input, no turn-around."""
+    course, speed = 0.5, 18 * KNOT
+    state = np.array([0.0, 0.0, course, speed, 0.0, 0.0])
+    reference = line_or_turn_reference(DT * np.arange(N + 1), (0.0, 0.0), course, speed)
+    controller.reset()
+    plain = controller.solve(0.0, state, reference)
+    shifted = reference.copy()
+    shifted[:, 2] += 2 * math.pi
+    controller.reset()
+    wrapped = controller.solve(0.0, state, shifted)
+    np.testing.assert_allclose(wrapped.tau, plain.tau, rtol=1e-4, atol=1e-3 * kcs.tau_r_max)
+
+
+def test_terminal_weight_is_the_dare_solution(controller):
+    P = controller.terminal_weight(18 * KNOT)
+    assert np.allclose(P, P.T)
+    assert np.all(np.linalg.eigvalsh(P) > 0)
+    assert P[0, 0] > controller.settings.q[0]  # cost-to-go exceeds one stage's weight
+
+
+def test_interpolated_reference_holds_last_velocity():
+    reference = np.array([[0.0, 0.0, 0.0, 0.0, 5.0, 0.0, 0.0], [10.0, 50.0, 0.0, 0.0, 5.0, 0.0, 0.01]])
+    states = interpolate_reference(reference, np.array([5.0, 10.0, 30.0]))
+    np.testing.assert_allclose(states[:, 0], [25.0, 50.0, 150.0])
+    assert states[2, 5] == 0.0
+
+
+def context(step_size=20.0):
+    return BuildContext("exp.toml: participants.ctrl", Path("."), step_size, 0.0, 2200.0)
+
+
+def test_participant_rejects_unknown_option():
+    with pytest.raises(ScenarioError, match=r"participants.ctrl: unknown option 'horizon' \(valid: .*horizon_steps"):
+        ControlParticipant.from_options("ctrl", {"horizon": 15}, context())
+
+
+def test_participant_rejects_unknown_parameter_set():
+    with pytest.raises(ScenarioError, match="participants.ctrl: .*unknown parameter set 'kcs'.*valid: default"):
+        ControlParticipant.from_options("ctrl", {"parameter_set": "kcs"}, context())
+
+
+def test_participant_step_outputs(kcs):
+    ctrl = ControlParticipant.from_options("ctrl", {"horizon_steps": 10, "solver": "ipopt"}, context())
+    ctrl.setup(0.0, {})
+    reference = np.column_stack([np.arange(0.0, 400.0, 20.0), line_or_turn_reference(np.arange(0.0, 400.0, 20.0), (0, 0), 0.0, 9.0)])
+    state = {"x": 0.0, "y": 50.0, "psi": 0.0, "u": 9.0, "v": 0.0, "r": 0.0}
+    out = ctrl.step(100.0, 20.0, {**state, "reference": reference})
+    assert out["prediction"].shape == (11, 7)
+    np.testing.assert_allclose(out["prediction"][:, 0], 100.0 + 20.0 * np.arange(11))
+    assert out["solver_ok"] == 1.0 and out["fallback"] == 0.0
+    assert out["tau_r"] < 0.0  # 50 m east (starboard) of a northbound track: turn to port
+    assert ctrl.summary()["solves"] == 1
