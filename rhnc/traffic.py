@@ -1,0 +1,189 @@
+"""Target ships and static obstacles: publishes the ``obstacles`` port (x, y, vx, vy, radius; SI).
+
+Targets sail at constant velocity from a start point, or along waypoints at constant
+speed (stopping at the last one); static obstacles are circles.  Options are in nautical
+miles and knots.  The paper's Eq. 32 head-on target, ``x_T = y_T = 4 - 0.05 t`` nm with
+t counted in 20 s steps, is ``start_nm = [4, 4]``, ``velocity_kn = [-9, -9]``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from orchestrator.errors import ScenarioError
+from orchestrator.participant import BuildContext, Participant, Value, reject_unknown_options
+
+NM = 1852.0
+KNOT = NM / 3600.0
+
+TARGET_KEYS = ("start_nm", "velocity_kn", "waypoints_nm", "speed_kn", "radius_nm")
+STATIC_KEYS = ("center_nm", "radius_nm")
+
+
+class Target:
+    """A moving obstacle: constant velocity or a waypoint track, all SI inside.
+
+    Parameters
+    ----------
+    waypoints_m : numpy.ndarray
+        (k, 2) track [m]; with k = 1 the start of a constant-velocity target.
+    velocity_mps : numpy.ndarray or None
+        Constant velocity (vx, vy) [m/s] (k = 1), else None.
+    speed_mps : float
+        Speed along the waypoints [m/s] (k >= 2).
+    radius_m : float
+        Hazard radius [m].
+    """
+
+    def __init__(self, waypoints_m: np.ndarray, velocity_mps: np.ndarray | None, speed_mps: float, radius_m: float) -> None:
+        self.waypoints_m = waypoints_m
+        self.velocity_mps = velocity_mps
+        self.speed_mps = speed_mps
+        self.radius_m = radius_m
+        if velocity_mps is None:
+            legs = np.diff(waypoints_m, axis=0)
+            self._leg_lengths = np.hypot(legs[:, 0], legs[:, 1])
+            self._cumulative = np.concatenate([[0.0], np.cumsum(self._leg_lengths)])
+
+    def state(self, elapsed_s: float) -> np.ndarray:
+        """Row (x, y, vx, vy, radius) [m, m/s] at ``elapsed_s`` [s] after the start."""
+        if self.velocity_mps is not None:
+            position = self.waypoints_m[0] + self.velocity_mps * elapsed_s
+            return np.r_[position, self.velocity_mps, self.radius_m]
+        s = max(elapsed_s, 0.0) * self.speed_mps
+        if s >= self._cumulative[-1]:
+            return np.r_[self.waypoints_m[-1], 0.0, 0.0, self.radius_m]
+        leg = int(np.searchsorted(self._cumulative, s, side="right") - 1)
+        direction = (self.waypoints_m[leg + 1] - self.waypoints_m[leg]) / self._leg_lengths[leg]
+        position = self.waypoints_m[leg] + direction * (s - self._cumulative[leg])
+        return np.r_[position, direction * self.speed_mps, self.radius_m]
+
+
+class TrafficParticipant(Participant):
+    """Other ships and static obstacles of a scenario.
+
+    Options
+    -------
+    targets : list of tables
+        Each with ``radius_nm`` and either ``start_nm = [x, y]`` + ``velocity_kn = [vx, vy]``
+        or ``waypoints_nm = [[x, y], ...]`` + ``speed_kn``.
+    static_obstacles : list of tables
+        Each with ``center_nm = [x, y]`` and ``radius_nm``.
+
+    Outputs
+    -------
+    obstacles : (n, 5) array
+        Targets first (in option order), then static obstacles: x, y [m], vx, vy [m/s],
+        radius [m], at the step's time.
+    target<i>_x, target<i>_y : float
+        Position of target i (1-based) [m], for plots and analyses.
+    """
+
+    OPTIONS = ("targets", "static_obstacles")
+
+    def __init__(self, name: str, targets: Sequence[Target], static: np.ndarray, start_time: float) -> None:
+        super().__init__(name)
+        self.targets = list(targets)
+        self.static = static
+        self._start_time = start_time
+
+    @classmethod
+    def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "TrafficParticipant":
+        """Build from scenario options (see class docstring); errors name the key."""
+        where = context.where
+        reject_unknown_options(options, cls.OPTIONS, where)
+        targets = [_target(entry, f"{where}.targets[{i}]") for i, entry in enumerate(_tables(options, "targets", where))]
+        static_rows = []
+        for i, entry in enumerate(_tables(options, "static_obstacles", where)):
+            here = f"{where}.static_obstacles[{i}]"
+            reject_unknown_options(entry, STATIC_KEYS, here)
+            center = _pair(entry, "center_nm", here) * NM
+            static_rows.append([center[0], center[1], 0.0, 0.0, _radius(entry, here)])
+        static = np.array(static_rows, dtype=float).reshape(-1, 5)
+        return cls(name, targets, static, context.start_time)
+
+    @property
+    def input_names(self) -> Sequence[str]:
+        return ()
+
+    @property
+    def output_names(self) -> Sequence[str]:
+        names = ["obstacles"]
+        for i in range(1, len(self.targets) + 1):
+            names += [f"target{i}_x", f"target{i}_y"]
+        return names
+
+    def obstacles_at(self, time: float) -> np.ndarray:
+        """The (n, 5) obstacle array at ``time`` [s]."""
+        moving = [target.state(time - self._start_time) for target in self.targets]
+        return np.vstack([np.array(moving).reshape(-1, 5), self.static])
+
+    def _outputs(self, time: float) -> dict[str, Value]:
+        obstacles = self.obstacles_at(time)
+        outputs: dict[str, Value] = {"obstacles": obstacles}
+        for i in range(len(self.targets)):
+            outputs[f"target{i + 1}_x"] = float(obstacles[i, 0])
+            outputs[f"target{i + 1}_y"] = float(obstacles[i, 1])
+        return outputs
+
+    def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
+        self._start_time = start_time
+        return self._outputs(start_time)
+
+    def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
+        return self._outputs(time)
+
+
+def _tables(options: Mapping[str, Any], key: str, where: str) -> list:
+    entries = options.get(key, [])
+    if not isinstance(entries, list) or not all(isinstance(e, Mapping) for e in entries):
+        raise ScenarioError(f"{where}: option '{key}' must be a list of tables ([[...{key}]] or [{{...}}])")
+    return entries
+
+
+def _target(entry: Mapping[str, Any], where: str) -> Target:
+    reject_unknown_options(entry, TARGET_KEYS, where)
+    radius = _radius(entry, where)
+    if "waypoints_nm" in entry:
+        if "start_nm" in entry or "velocity_kn" in entry:
+            raise ScenarioError(f"{where}: give either 'waypoints_nm' + 'speed_kn' or 'start_nm' + 'velocity_kn'")
+        try:
+            points = np.asarray(entry["waypoints_nm"], dtype=float) * NM
+        except (TypeError, ValueError):
+            points = np.empty((0,))
+        if points.ndim != 2 or points.shape[1] != 2 or len(points) < 2 or not np.all(np.isfinite(points)):
+            raise ScenarioError(f"{where}: 'waypoints_nm' must be >= 2 [x, y] pairs of numbers")
+        if np.any(np.hypot(*np.diff(points, axis=0).T) == 0.0):
+            raise ScenarioError(f"{where}: 'waypoints_nm' has two equal consecutive points")
+        speed = entry.get("speed_kn")
+        if isinstance(speed, bool) or not isinstance(speed, (int, float)) or not speed > 0:
+            raise ScenarioError(f"{where}: 'speed_kn' must be a number > 0 with 'waypoints_nm'")
+        return Target(points, None, float(speed) * KNOT, radius)
+    for key in ("start_nm", "velocity_kn"):
+        if key not in entry:
+            raise ScenarioError(f"{where}: missing '{key}' (or give 'waypoints_nm' + 'speed_kn')")
+    if "speed_kn" in entry:
+        raise ScenarioError(f"{where}: 'speed_kn' goes with 'waypoints_nm'; use 'velocity_kn' = [vx, vy]")
+    start = _pair(entry, "start_nm", where) * NM
+    velocity = _pair(entry, "velocity_kn", where) * KNOT
+    return Target(start[None, :], velocity, float(np.hypot(*velocity)), radius)
+
+
+def _pair(entry: Mapping[str, Any], key: str, where: str) -> np.ndarray:
+    value = entry.get(key)
+    ok = isinstance(value, (list, tuple)) and len(value) == 2
+    ok = ok and all(not isinstance(v, bool) and isinstance(v, (int, float)) and math.isfinite(v) for v in value)
+    if not ok:
+        raise ScenarioError(f"{where}: '{key}' must be a pair of numbers [x, y], got {value!r}")
+    return np.array(value, dtype=float)
+
+
+def _radius(entry: Mapping[str, Any], where: str) -> float:
+    value = entry.get("radius_nm")
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not value >= 0:
+        raise ScenarioError(f"{where}: 'radius_nm' must be a number >= 0, got {value!r}")
+    return float(value) * NM
