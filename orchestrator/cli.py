@@ -1,4 +1,4 @@
-"""Command line: ``python -m orchestrator {run,validate,build,plan} ...``.
+"""Command line: ``python -m orchestrator {run,validate,build,plan,batch} ...``.
 
 Known errors (bad scenario, missing FMU, failed model) print one line and exit non-zero:
 2 for bad input, 3 for a run that failed, 130 for Ctrl-C.
@@ -35,6 +35,14 @@ def _parser() -> argparse.ArgumentParser:
     plan = sub.add_parser("plan", help="run an offline planning experiment (e.g. Experiment 1)")
     plan.add_argument("scenario", help="offline planning TOML file")
     plan.add_argument("--results", default="results", help="results folder (default: ./results)")
+    batch = sub.add_parser("batch", help="run a batch of scenario variations into results/<batch>/ (resumable)")
+    batch.add_argument("batch", help="batch TOML file")
+    batch.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
+    batch.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help="run on a Dask distributed cluster, e.g. tcp://host:8786 (instead of the local pool)")
+    batch.add_argument("--results", default="results", help="results folder (default: ./results)")
+    batch.add_argument("--retry-failed", action="store_true", help="redo runs recorded as failed")
+    batch.add_argument("--no-progress", action="store_true", help="no progress bar")
     return parser
 
 
@@ -111,7 +119,28 @@ def _plan(args) -> int:
     return 0
 
 
-_COMMANDS = {"run": _run, "validate": _validate, "build": _build, "plan": _plan}
+def _batch(args) -> int:
+    from orchestrator.batch import run_batch
+
+    if args.workers is not None and args.workers < 1:
+        print("error: --workers must be at least 1", file=sys.stderr)
+        return 2
+    report = run_batch(args.batch, args.results, workers=args.workers, scheduler=args.scheduler,
+                       progress=not args.no_progress, retry_failed=args.retry_failed)
+    table = report.table
+    counts = ", ".join(f"{count} {status}" for status, count in table["status"].value_counts().items())
+    print(f"{report.passed}/{report.total} runs passed ({counts}); ran {report.ran}, "
+          f"skipped {report.skipped} already done; wall time {report.wall_time_s:.1f} s")
+    print(f"  table: {report.folder / 'summary.parquet'} (and .csv), overview: {report.folder / 'overview.png'}")
+    for _, row in table[~table["passed"]].head(5).iterrows():
+        print(f"  {row['run_id']} {row['status']}: {row['reason'] or row['failed_criteria']}")
+    if report.interrupted:
+        print("interrupted: rerun the same command to finish the batch", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    return 0 if report.passed == report.total else EXIT_RUN_FAILED
+
+
+_COMMANDS = {"run": _run, "validate": _validate, "build": _build, "plan": _plan, "batch": _batch}
 
 
 def console_main() -> None:

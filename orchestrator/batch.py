@@ -1,0 +1,455 @@
+"""Batch runner: many runs of one scenario on a local process pool or a Dask cluster, resumable.
+
+``results/<batch>/`` holds
+
+* ``runs/<run-id>/``: each run's results folder, published atomically by
+  :func:`orchestrator.run.run_scenario` (or a ``summary.json`` with status ``failed`` and
+  the reason when the run could not start or its worker died),
+* ``batch.json``: the batch file, the base scenario's hash and every run's id and overrides,
+* ``summary.parquet`` and ``summary.csv``: one row per run (parameters, figures,
+  verdicts, status and reason), rebuilt from the run folders after every batch,
+* ``overview.png``: pass/fail counts and the distributions of the key figures.
+
+A run folder with a ``summary.json`` is done: rerunning the batch skips it (runs that were
+interrupted are redone; failed ones too with ``retry_failed``).  Runs are deterministic, so
+the table does not depend on the executor or the number of workers, except for the
+columns in :data:`NONDETERMINISTIC_COLUMNS`.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import json
+import logging
+import math
+import multiprocessing
+import os
+import shutil
+import signal
+import time as wallclock
+from collections import deque
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from orchestrator import acceptance
+from orchestrator.batch_spec import BatchSpec, RunSpec, load_batch
+from orchestrator.errors import ScenarioError, ToolchainError
+
+log = logging.getLogger(__name__)
+
+#: Table columns that depend on the machine, not on the run's inputs.
+NONDETERMINISTIC_COLUMNS = ("wall_time_s",)
+#: Figures shown in the overview whenever the table has them (suffix match).
+OVERVIEW_FIGURES = ("min_separation_nm", "cost_per_nm", "co2_per_nm")
+WORKER_DIED = "the worker process died during the run (crash, or killed by the system)"
+
+
+class BatchError(ToolchainError):
+    """A batch cannot be run (cluster unreachable, results folder unusable)."""
+
+    exit_code = 2
+
+
+@dataclass(frozen=True)
+class RunTask:
+    """What a worker needs to run one run (small and picklable)."""
+
+    scenario: str
+    batch_root: str
+    run_id: str
+    overrides: dict[str, Any]
+
+
+@dataclass
+class BatchReport:
+    """How a batch ended and where its table is."""
+
+    folder: Path
+    table: Any  # pandas.DataFrame
+    ran: int
+    skipped: int
+    interrupted: bool
+    wall_time_s: float
+
+    @property
+    def passed(self) -> int:
+        return int(self.table["passed"].sum())
+
+    @property
+    def total(self) -> int:
+        return len(self.table)
+
+
+def run_batch(path, results_root="results", workers: int | None = None, scheduler: str | None = None,
+              progress: bool = True, retry_failed: bool = False) -> BatchReport:
+    """Run every run of the batch file ``path`` not yet done, then rebuild its table.
+
+    Parameters
+    ----------
+    path : path-like
+        The batch TOML file.
+    results_root : path-like
+        Results folder; the batch writes ``results_root/<batch name>/``.
+    workers : int, optional
+        Local worker processes (default: one per core).  Ignored with ``scheduler``.
+    scheduler : str, optional
+        Address of a Dask distributed scheduler (``tcp://host:8786``); its workers must
+        import this package and see the scenario and the results folder at the same paths.
+    progress : bool
+        Show a progress bar (tqdm).
+    retry_failed : bool
+        Redo runs recorded as failed (by default a failed run counts as done).
+
+    Raises
+    ------
+    ScenarioError
+        For a malformed batch file or an override the scenario does not accept.
+    BatchError
+        When the Dask scheduler cannot be reached.
+    """
+    started = wallclock.perf_counter()
+    spec = load_batch(path)
+    runs = spec.runs()
+    check_against_scenario(spec, runs)
+    root = Path(results_root) / spec.name
+    (root / "runs").mkdir(parents=True, exist_ok=True)
+    _write_json_atomic(root / "batch.json", _manifest(spec, runs))
+    todo = pending_runs(root, runs, retry_failed)
+    tasks = [RunTask(str(spec.scenario), str(root.resolve()), run.run_id, run.overrides) for run in todo]
+    executor = DaskExecutor(scheduler) if scheduler else LocalPool(workers or os.cpu_count() or 1)
+    bar = _progress_bar(len(runs), len(runs) - len(todo), spec.name, progress)
+    interrupted, ran = False, 0
+    results = executor.run(tasks)
+    try:
+        for task, record in results:
+            ran += 1
+            if record["status"] == "worker_died":
+                write_failure(Path(task.batch_root), task, record["reason"])
+            if bar is not None:
+                bar.update(1)
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        results.close()
+        if bar is not None:
+            bar.close()
+    table = batch_table(spec, root)
+    write_table(table, root)
+    write_overview(table, spec, root / "overview.png")
+    return BatchReport(root, table, ran, len(runs) - len(todo), interrupted, wallclock.perf_counter() - started)
+
+
+# -- checks and resumption ------------------------------------------------------------------
+def check_against_scenario(spec: BatchSpec, runs: list[RunSpec]) -> None:
+    """Every run's overrides load, and the first run's participants build.
+
+    An error names the batch file and the batch key the scenario rejects.
+    """
+    from orchestrator.master import CoSimulation
+    from orchestrator.scenario import load_scenario
+
+    def fails(overrides, build: bool) -> str | None:
+        try:
+            scenario = load_scenario(spec.scenario, overrides)
+            if build:
+                CoSimulation(scenario).close()
+        except ToolchainError as exc:
+            return str(exc)
+        return None
+
+    for run in runs:
+        problem = fails(run.overrides, build=run.index == 0)
+        if problem is None:
+            continue
+        for key, value in run.overrides.items():
+            if fails({key: value}, build=run.index == 0) is not None:
+                table = "set" if key in spec.fixed else "grid" if key in spec.grid else "monte_carlo"
+                raise ScenarioError(f"{spec.path}: '{table}.\"{key}\"' (run {run.index}, value {_short(value)}): "
+                                    f"the scenario does not accept it: {problem}")
+        raise ScenarioError(f"{spec.path}: run {run.index}: the scenario does not accept its overrides: {problem}")
+
+
+def pending_runs(root: Path, runs: list[RunSpec], retry_failed: bool = False) -> list[RunSpec]:
+    """The runs without a published result; clears their stale folders (interrupted, partial)."""
+    todo = []
+    for run in runs:
+        folder = root / "runs" / run.run_id
+        shutil.rmtree(folder.parent / f".{run.run_id}.partial", ignore_errors=True)
+        summary = _read_summary(folder)
+        if summary is not None and summary.get("status") != "interrupted" and not (
+                retry_failed and summary.get("status") == "failed"):
+            continue
+        shutil.rmtree(folder, ignore_errors=True)
+        todo.append(run)
+    return todo
+
+
+def _read_summary(folder: Path) -> dict | None:
+    try:
+        return json.loads((folder / "summary.json").read_text())
+    except (OSError, ValueError):
+        return None
+
+
+# -- the work of one run (in a worker) -----------------------------------------------------------
+def execute_run(task: RunTask) -> dict[str, str]:
+    """Run one run into ``<batch_root>/runs/<run_id>/``; returns its status and reason.
+
+    A scenario that cannot start (:class:`ToolchainError`, or a participant raising while
+    it is built) is recorded as a failed run with the reason, so the batch goes on.
+    """
+    from orchestrator.run import run_scenario
+
+    try:
+        report = run_scenario(task.scenario, task.batch_root, progress=False, run_id=task.run_id,
+                              overrides=task.overrides, group="runs")
+        return {"status": report.status, "reason": report.reason}
+    except KeyboardInterrupt:
+        return {"status": "interrupted", "reason": "interrupted by the user (Ctrl-C)"}
+    except ToolchainError as exc:
+        reason = str(exc)
+    except Exception as exc:  # a participant's own bug while building: record it, go on
+        reason = f"{type(exc).__name__}: {exc}"
+    write_failure(Path(task.batch_root), task, reason)
+    return {"status": "failed", "reason": reason}
+
+
+def write_failure(batch_root: Path, task: RunTask, reason: str) -> Path:
+    """Publish a run folder holding only a ``summary.json`` with status ``failed`` and ``reason``."""
+    from orchestrator.results import RunFolder
+
+    shutil.rmtree(batch_root / "runs" / f".{task.run_id}.partial", ignore_errors=True)
+    folder = RunFolder(batch_root, "runs", task.run_id)
+    folder.write_json("summary.json", {"scenario": task.scenario, "overrides": task.overrides,
+                                       "run_id": task.run_id, "status": "failed", "reason": reason,
+                                       "recorded_by": "batch runner (the run produced no results)"})
+    return folder.publish()
+
+
+def _pool_worker_init() -> None:
+    # Idle workers ignore Ctrl-C (the batch stops them); a running run gets it (see _pool_execute).
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _pool_execute(task: RunTask) -> dict[str, str]:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        return execute_run(task)
+    finally:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+# -- executors ----------------------------------------------------------------------------------
+class LocalPool:
+    """A local process pool (``spawn``: no inherited threads or state).
+
+    At most ``workers`` runs are in flight.  When a worker dies, the runs that were in
+    flight are redone one at a time in a fresh pool, so the run that kills its worker is
+    found and recorded as failed while the others complete.
+    """
+
+    def __init__(self, workers: int) -> None:
+        self.workers = max(1, int(workers))
+
+    def _pool(self, workers: int) -> cf.ProcessPoolExecutor:
+        return cf.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                                      initializer=_pool_worker_init)
+
+    def run(self, tasks: list[RunTask]) -> Iterator[tuple[RunTask, dict]]:
+        """Yield ``(task, record)`` as runs complete; closing the generator stops the pool."""
+        if not tasks:
+            return
+        queue, suspects = deque(tasks), deque()
+        in_flight: dict[cf.Future, tuple[RunTask, bool]] = {}
+        pool = self._pool(min(self.workers, len(tasks)))
+        try:
+            while queue or suspects or in_flight:
+                if suspects:
+                    if not in_flight:  # a suspect runs alone: if its worker dies, it is the culprit
+                        task = suspects.popleft()
+                        in_flight[pool.submit(_pool_execute, task)] = (task, True)
+                else:
+                    while queue and len(in_flight) < self.workers:
+                        task = queue.popleft()
+                        in_flight[pool.submit(_pool_execute, task)] = (task, False)
+                done, _ = cf.wait(in_flight, return_when=cf.FIRST_COMPLETED)
+                broken = False
+                for future in done:
+                    task, alone = in_flight.pop(future)
+                    try:
+                        yield task, future.result()
+                    except cf.process.BrokenProcessPool:
+                        broken = True
+                        if alone:
+                            yield task, {"status": "worker_died", "reason": WORKER_DIED}
+                        else:
+                            suspects.append(task)
+                if broken:
+                    for future, (task, _) in list(in_flight.items()):
+                        suspects.append(task)  # the pool is gone: everything in flight is redone
+                        in_flight.pop(future)
+                    pool.shutdown(wait=True, cancel_futures=True)
+                    pool = self._pool(min(self.workers, len(queue) + len(suspects)) or 1)
+        finally:
+            # normal end, Ctrl-C or an error: never start another run; running ones end
+            # (as 'interrupted' when they got the Ctrl-C too) and publish their folders
+            pool.shutdown(wait=True, cancel_futures=True)
+
+
+class DaskExecutor:
+    """Runs on a Dask distributed cluster at ``address`` (a worker that dies is Dask's ``KilledWorker``)."""
+
+    def __init__(self, address: str) -> None:
+        self.address = address
+
+    def run(self, tasks: list[RunTask]) -> Iterator[tuple[RunTask, dict]]:
+        """Yield ``(task, record)`` as runs complete; closing the generator cancels the rest."""
+        from distributed import CancelledError, Client, KilledWorker, as_completed
+
+        try:
+            client = Client(self.address, timeout="10s", set_as_default=False)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise BatchError(f"cannot reach the Dask scheduler at {self.address}: {exc}") from exc
+        futures = {}
+        try:
+            for task in tasks:
+                future = client.submit(execute_run, task, key=f"rhnc-run-{task.run_id}-{os.urandom(4).hex()}",
+                                       pure=False, retries=0)
+                futures[future] = task
+            for future in as_completed(futures):
+                task = futures[future]
+                try:
+                    record = future.result()
+                except KilledWorker:
+                    record = {"status": "worker_died", "reason": WORKER_DIED}
+                except CancelledError:
+                    continue
+                except Exception as exc:  # e.g. the package is missing on the worker
+                    record = {"status": "worker_died", "reason": f"the worker could not run it: {type(exc).__name__}: {exc}"}
+                yield task, record
+        finally:
+            client.cancel(list(futures))
+            client.close()
+
+
+# -- the table and the overview -------------------------------------------------------------------
+def batch_table(spec: BatchSpec, root: Path):
+    """One row per run of ``spec``, read from ``root/runs/<id>/summary.json``.
+
+    Columns: ``run_id``, ``index``, ``param:<key>`` per varied parameter, ``status``,
+    ``reason``, one column per figure (acceptance metrics and ``report.columns``, by their
+    dotted path), ``ok:<criterion>`` per criterion, ``passed`` (finished and every criterion
+    met), ``failed_criteria`` and ``wall_time_s``.  A run never started has status
+    ``not run``.
+    """
+    import pandas as pd
+
+    figures = list(dict.fromkeys([c.metric for c in spec.acceptance] + list(spec.report_columns)))
+    rows = []
+    for run in spec.runs():
+        summary = _read_summary(root / "runs" / run.run_id) or {"status": "not run", "reason": "no results yet"}
+        row = {"run_id": run.run_id, "index": run.index}
+        row.update({f"param:{k}": v for k, v in run.parameters.items()})
+        row.update(status=summary.get("status"), reason=summary.get("reason", ""))
+        for path in figures:
+            try:
+                row[path] = acceptance.lookup(summary, path)
+            except acceptance.MissingFigure:
+                row[path] = None
+        verdicts = acceptance.evaluate(spec.acceptance, summary)
+        row.update({f"ok:{v.name}": v.passed for v in verdicts})
+        row["passed"] = summary.get("status") == "finished" and all(v.passed for v in verdicts)
+        row["failed_criteria"] = "; ".join(f"{v.name}: {v.reason}" for v in verdicts if not v.passed)
+        row["wall_time_s"] = summary.get("wall_time_s")
+        rows.append(row)
+    table = pd.DataFrame(rows)
+    for column in table.columns:
+        table[column] = _uniform_column(table[column])
+    return table
+
+
+def _uniform_column(column):
+    """Numbers stay numbers; anything else becomes text (JSON for lists and tables), for Parquet."""
+    import pandas as pd
+
+    values = [v for v in column if v is not None and not (isinstance(v, float) and math.isnan(v))]
+    if all(isinstance(v, bool) for v in values):
+        return column.astype("boolean") if len(values) < len(column) else column.astype(bool)
+    if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+        return pd.to_numeric(column).astype(float) if len(values) < len(column) or any(
+            isinstance(v, float) for v in values) else column.astype("int64")
+    return column.map(lambda v: None if v is None else v if isinstance(v, str) else json.dumps(v, sort_keys=True))
+
+
+def write_table(table, root: Path) -> None:
+    """``summary.parquet`` and ``summary.csv``, each replaced atomically."""
+    for name, write in (("summary.parquet", lambda p: table.to_parquet(p, index=False)),
+                        ("summary.csv", lambda p: table.to_csv(p, index=False))):
+        staging = root / f".{name}.partial"
+        write(staging)
+        os.replace(staging, root / name)
+
+
+def write_overview(table, spec: BatchSpec, target: Path) -> Path:
+    """One page: runs by outcome, and histograms of the key figures present in the table."""
+    from matplotlib.figure import Figure
+
+    outcome = table.apply(lambda r: "passed" if r["passed"] else r["status"] if r["status"] != "finished"
+                          else "criteria not met", axis=1)
+    numeric = [c for c in table.columns if c not in ("index", "wall_time_s") and not c.startswith(("param:", "ok:"))
+               and table[c].dtype.kind in "fi" and table[c].notna().any()]
+    numeric = sorted(numeric, key=lambda c: not c.endswith(OVERVIEW_FIGURES))[:5]  # stable: key figures first
+    fig = Figure(figsize=(11, 7.5), layout="constrained")
+    axes = fig.subplots(2, 3).ravel()
+    order = ["passed", "criteria not met", "failed", "interrupted", "not run"]
+    counts = outcome.value_counts()
+    labels = [k for k in order if k in counts] + [k for k in counts.index if k not in order]
+    colors = {"passed": "tab:green", "criteria not met": "tab:orange", "failed": "tab:red"}
+    axes[0].bar(labels, [counts[k] for k in labels], color=[colors.get(k, "tab:gray") for k in labels])
+    axes[0].set_title("runs by outcome")
+    axes[0].set_ylabel("runs")
+    for ax, column in zip(axes[1:], numeric):
+        values = table[column].dropna()
+        ax.hist(values, bins=min(20, max(5, len(values) // 3)), color="tab:blue", alpha=0.8)
+        for criterion in spec.acceptance:
+            if criterion.metric == column and isinstance(criterion.value, (int, float)) and not isinstance(criterion.value, bool):
+                ax.axvline(criterion.value, color="tab:red", ls="--", label=f"{criterion.op} {criterion.value:g}")
+                ax.legend()
+        ax.set_title(column, fontsize=9)
+        ax.set_ylabel("runs")
+    for ax in axes[1 + len(numeric):]:
+        ax.axis("off")
+    passed = int(table["passed"].sum())
+    fig.suptitle(f"{spec.name}: {passed}/{len(table)} runs passed ({100.0 * passed / max(len(table), 1):.0f} %)")
+    fig.savefig(target, dpi=100)
+    return target
+
+
+# -- helpers --------------------------------------------------------------------------------------
+def _manifest(spec: BatchSpec, runs: list[RunSpec]) -> dict:
+    return {"batch": str(spec.path), "name": spec.name, "scenario": str(spec.scenario),
+            "scenario_sha256": spec.scenario_sha256, "description": spec.description,
+            "acceptance": [c.describe() for c in spec.acceptance],
+            "runs": [{"run_id": r.run_id, "index": r.index, "overrides": r.overrides, "parameters": r.parameters}
+                     for r in runs]}
+
+
+def _write_json_atomic(target: Path, data: dict) -> None:
+    staging = target.parent / f".{target.name}.partial"
+    staging.write_text(json.dumps(data, indent=2) + "\n")
+    os.replace(staging, target)
+
+
+def _progress_bar(total: int, initial: int, name: str, enabled: bool):
+    if not enabled:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, initial=initial, desc=name, unit="run")
+
+
+def _short(value, limit: int = 60) -> str:
+    text = json.dumps(value, default=str)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
