@@ -18,9 +18,11 @@ ANALYSES = {
     "turning_circle": "orchestrator.analyses:turning_circle_analysis",
     "zigzag": "orchestrator.analyses:zigzag_analysis",
     "voyage": "orchestrator.analyses:voyage_analysis",
+    "encounter": "orchestrator.analyses:encounter_analysis",
 }
 FIGURES = {
     "track": "orchestrator.figures:track_figure",
+    "controls": "orchestrator.figures:controls_figure",
 }
 
 #: KCS length between perpendiculars [m], used when the plant FMU has no length parameter.
@@ -129,3 +131,68 @@ def voyage_analysis(frame, scenario, cosim, out_dir) -> dict:
                              frame[f"{plant}.psi"].to_numpy(), weather["wind_north"], weather["wind_east"],
                              weather["hs"], energy)
     return account.as_dict()
+
+
+def array_output(frame, column: str) -> np.ndarray:
+    """A flattened array output back as (samples, rows, cols) from ``column[i,j]`` columns."""
+    prefix = column + "["
+    cells = [c for c in frame.columns if c.startswith(prefix)]
+    if not cells:
+        raise ToolchainError(f"no recorded array output '{column}'")
+    indices = [tuple(int(v) for v in c[len(prefix):-1].split(",")) for c in cells]
+    shape = tuple(max(index[d] for index in indices) + 1 for d in range(len(indices[0])))
+    values = np.full((len(frame),) + shape, np.nan)
+    for cell, index in zip(cells, indices):
+        values[(slice(None),) + index] = frame[cell].to_numpy()
+    return values
+
+
+def _own_radius_m(cosim) -> float:
+    for participant in cosim.participants:
+        settings = getattr(getattr(participant, "controller", None), "settings", None)
+        if settings is not None and hasattr(settings, "own_radius_m"):
+            return float(settings.own_radius_m)
+    return 0.0
+
+
+def encounter_analysis(frame, scenario, cosim, out_dir) -> dict:
+    """Minimum separation against R + R_i per obstacle, input bounds, return to the track.
+
+    The obstacles are the array output feeding any participant's ``obstacles`` input; the
+    reference is the array feeding a ``reference`` input (its first row is the reference
+    state at the current time).  Cross-track error is measured from that point across the
+    reference course; "back on track" is the first time after the closest approach from
+    which it stays within 0.2 nm.
+    """
+    from rhnc.encounter import cross_track_error, separations, time_back_on_track
+
+    plant = plant_name(cosim)
+    t = frame["time_s"].to_numpy()
+    x, y = frame[f"{plant}.x"].to_numpy(), frame[f"{plant}.y"].to_numpy()
+    sources = {c.target_port: f"{c.source}.{c.source_port}" for c in scenario.connections}
+    result: dict = {}
+    if "obstacles" in sources:
+        obstacles = array_output(frame, sources["obstacles"])
+        per_obstacle = separations(t, x, y, obstacles, _own_radius_m(cosim))
+        result["obstacles"] = per_obstacle
+        result["min_clearance_nm"] = min(o["min_clearance_nm"] for o in per_obstacle)
+        result["separation_respected"] = bool(result["min_clearance_nm"] >= -1e-6)
+        passed_at = max(o["time_of_min_s"] for o in per_obstacle)
+    else:
+        passed_at = float(t[0])
+    for port in ("tau_u", "tau_r"):
+        column = driver_column(scenario, plant, port)
+        bound = getattr(cosim.participant(plant), "parameters", {}).get(f"{port}_max")
+        peak = float(np.max(np.abs(frame[column].to_numpy())))
+        result[f"{port}_max_abs"] = peak
+        if bound is not None:
+            result[f"{port}_within_bound"] = bool(peak <= float(bound) * (1 + 1e-9))
+    if "reference" in sources:
+        reference = array_output(frame, sources["reference"])[:, 0, :]
+        cross = cross_track_error(x, y, reference[:, 1], reference[:, 2], reference[:, 3])
+        after = t >= passed_at
+        result["cross_track_end_nm"] = float(abs(cross[-1]) / 1852.0)
+        result["cross_track_max_after_passing_nm"] = float(np.max(np.abs(cross[after])) / 1852.0)
+        result["back_on_track_s"] = time_back_on_track(t, cross, passed_at, 0.2 * 1852.0)
+        result["passed_at_s"] = passed_at
+    return result

@@ -31,6 +31,7 @@ def track_figure(frame, scenario, cosim, out_dir) -> list[str]:
     if field is not None:
         mesh = ax.pcolormesh(field.y / NM, field.x / NM, field.wind_speed, shading="auto", cmap="viridis")
         fig.colorbar(mesh, ax=ax, label="wind speed [m/s]")
+    _draw_reference(ax, frame, scenario)
     ax.plot(frame[f"{plant}.y"] / NM, frame[f"{plant}.x"] / NM, color="tab:red", lw=2, label=f"{plant} track")
     ax.plot(frame[f"{plant}.y"].iloc[0] / NM, frame[f"{plant}.x"].iloc[0] / NM, "o", color="tab:red")
     _draw_obstacles(ax, frame)
@@ -43,6 +44,15 @@ def track_figure(frame, scenario, cosim, out_dir) -> list[str]:
     fig.savefig(out_dir / "track.png", dpi=120)
     plt.close(fig)
     return ["track.png"]
+
+
+def _draw_reference(ax, frame, scenario) -> None:
+    """The reference path: the first point of each recorded reference trajectory."""
+    sources = [f"{c.source}.{c.source_port}" for c in scenario.connections if c.target_port == "reference"]
+    if not sources or f"{sources[0]}[0,1]" not in frame.columns:
+        return
+    ax.plot(frame[f"{sources[0]}[0,2]"] / NM, frame[f"{sources[0]}[0,1]"] / NM, "--", color="tab:blue",
+            lw=1, label="reference")
 
 
 def _draw_obstacles(ax, frame) -> None:
@@ -100,3 +110,32 @@ def zigzag_figure(frame, plant, moment_column, path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+def controls_figure(frame, scenario, cosim, out_dir) -> list[str]:
+    """Surge force and yaw moment applied to the plant over time, with their bounds."""
+    from orchestrator.analyses import driver_column, plant_name
+
+    if not any({"x", "y", "psi"} <= set(p.output_names) for p in cosim.participants):
+        return []
+    plant = plant_name(cosim)
+    parameters = getattr(cosim.participant(plant), "parameters", {})
+    plt = _pyplot()
+    fig, axes = plt.subplots(2, 1, figsize=(8, 5), sharex=True)
+    t = frame["time_s"] / 60.0
+    for ax, port, unit, scale in ((axes[0], "tau_u", "MN", 1e-6), (axes[1], "tau_r", "MN m", 1e-6)):
+        column = driver_column(scenario, plant, port)
+        ax.step(t, frame[column] * scale, where="post", label=column)
+        bound = parameters.get(f"{port}_max")
+        if bound is not None:
+            for sign in (1, -1):
+                ax.axhline(sign * float(bound) * scale, color="grey", ls="--", lw=1)
+        ax.set_ylabel(f"{port} [{unit}]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    axes[1].set_xlabel("time [min]")
+    fig.suptitle(f"{scenario.simulation.name}: control history")
+    fig.tight_layout()
+    fig.savefig(out_dir / "controls.png", dpi=120)
+    plt.close(fig)
+    return ["controls.png"]
