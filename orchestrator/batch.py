@@ -202,6 +202,8 @@ def execute_run(task: RunTask) -> dict[str, str]:
     """
     from orchestrator.run import run_scenario
 
+    # a worker that died while running this id left its staging folder behind
+    shutil.rmtree(Path(task.batch_root) / "runs" / f".{task.run_id}.partial", ignore_errors=True)
     try:
         report = run_scenario(task.scenario, task.batch_root, progress=False, run_id=task.run_id,
                               overrides=task.overrides, group="runs")
@@ -318,7 +320,7 @@ class DaskExecutor:
                 future = client.submit(execute_run, task, key=f"rhnc-run-{task.run_id}-{os.urandom(4).hex()}",
                                        pure=False, retries=0)
                 futures[future] = task
-            for future in as_completed(futures):
+            for future in as_completed(futures, loop=client.loop):
                 task = futures[future]
                 try:
                     record = future.result()
