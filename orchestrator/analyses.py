@@ -23,6 +23,7 @@ ANALYSES = {
 FIGURES = {
     "track": "orchestrator.figures:track_figure",
     "controls": "orchestrator.figures:controls_figure",
+    "navigation_fields": "orchestrator.figures:navigation_fields_figure",
 }
 
 #: KCS length between perpendiculars [m], used when the plant FMU has no length parameter.
@@ -30,7 +31,17 @@ KCS_LENGTH_M = 230.0
 
 
 def run_analysis(name, frame, scenario, cosim, out_dir) -> dict:
-    return _resolve(ANALYSES, name, "analyses")(frame, scenario, cosim, out_dir)
+    """Run analysis ``name`` with its ``[outputs.options.<name>]`` keywords."""
+    function = _resolve(ANALYSES, name, "analyses")
+    options = scenario.outputs.options.get(name, {})
+    import inspect
+
+    accepted = [p for p in inspect.signature(function).parameters][4:]
+    for key in options:
+        if key not in accepted:
+            raise ScenarioError(f"{scenario.path}: unknown option 'outputs.options.{name}.{key}' "
+                                f"(valid: {', '.join(accepted) or 'none'})")
+    return function(frame, scenario, cosim, out_dir, **options)
 
 
 def draw_figure(name, frame, scenario, cosim, out_dir) -> list[str]:
@@ -104,13 +115,20 @@ def zigzag_analysis(frame, scenario, cosim, out_dir) -> dict:
     return figures
 
 
-def voyage_analysis(frame, scenario, cosim, out_dir) -> dict:
+def voyage_analysis(frame, scenario, cosim, out_dir, goal_nm=None, arrival_radius_nm: float = 0.5,
+                    cii_year: int = 2026) -> dict:
     """Cost, CO2 per nm and CII of the sailed track (:mod:`rhnc.voyage`).
 
     The weather is what the plant met: the outputs of the participant driving the
     plant's ``hs`` input (the environment FMU), else the scenario's met-ocean field at the
     ship's positions, else calm water.  The energy constants are the navigation
     participant's (so a scenario's overrides apply), else the defaults.
+
+    With ``goal_nm = [north, east]`` the voyage ends on arrival, the first sample within
+    ``arrival_radius_nm`` of the goal (time spent waiting there is not sailing); the
+    result says whether and when the ship arrived.  ``made_good_nm`` is the straight-line
+    distance from the first to the last position of the voyage, the paper's "linear
+    mileage" in its Table 3, next to the distance sailed along the track.
     """
     from rhnc.energy import EnergyParameters
     from rhnc.voyage import account_voyage
@@ -127,10 +145,31 @@ def voyage_analysis(frame, scenario, cosim, out_dir) -> dict:
             weather = {name: np.zeros_like(x) for name in ("wind_north", "wind_east", "hs")}
     energy = next((p.energy for p in cosim.participants if isinstance(getattr(p, "energy", None), EnergyParameters)),
                   EnergyParameters())
-    account = account_voyage(frame["time_s"].to_numpy(), x, y, frame[f"{plant}.u"].to_numpy(),
-                             frame[f"{plant}.psi"].to_numpy(), weather["wind_north"], weather["wind_east"],
-                             weather["hs"], energy)
-    return account.as_dict()
+    end = len(frame)
+    arrival = {}
+    if goal_nm is not None:
+        try:
+            goal = np.asarray(goal_nm, dtype=float).reshape(2) * 1852.0
+        except (TypeError, ValueError) as exc:
+            raise ScenarioError(f"{scenario.path}: 'outputs.options.voyage.goal_nm' must be [north, east]") from exc
+        inside = np.nonzero(np.hypot(x - goal[0], y - goal[1]) <= arrival_radius_nm * 1852.0)[0]
+        arrival["arrived"] = bool(inside.size)
+        arrival["arrival_time_min"] = float(frame["time_s"].iloc[inside[0]] / 60.0) if inside.size else None
+        arrival["goal_distance_end_nm"] = float(np.hypot(x[-1] - goal[0], y[-1] - goal[1]) / 1852.0)
+        if inside.size:
+            end = inside[0] + 1
+    window = slice(0, end)
+    account = account_voyage(frame["time_s"].to_numpy()[window], x[window], y[window],
+                             frame[f"{plant}.u"].to_numpy()[window], frame[f"{plant}.psi"].to_numpy()[window],
+                             np.asarray(weather["wind_north"])[window], np.asarray(weather["wind_east"])[window],
+                             np.asarray(weather["hs"])[window], energy, cii_year=cii_year)
+    result = account.as_dict()
+    made_good = float(np.hypot(x[end - 1] - x[0], y[end - 1] - y[0]) / 1852.0)
+    result["made_good_nm"] = made_good
+    result["cost_per_made_good_nm_usd"] = account.cost_usd / made_good if made_good > 0 else None
+    result["co2_per_made_good_nm_kg"] = account.co2_t * 1000.0 / made_good if made_good > 0 else None
+    result.update(arrival)
+    return result
 
 
 def array_output(frame, column: str) -> np.ndarray:

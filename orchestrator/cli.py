@@ -1,4 +1,4 @@
-"""Command line: ``python -m orchestrator {run,validate,build,plan,batch} ...``.
+"""Command line: ``python -m orchestrator {run,validate,build,plan,compare,batch} ...``.
 
 Known errors (bad scenario, missing FMU, failed model) print one line and exit non-zero:
 2 for bad input, 3 for a run that failed, 130 for Ctrl-C.
@@ -32,6 +32,10 @@ def _parser() -> argparse.ArgumentParser:
     validate.add_argument("scenario", help="scenario TOML file")
     build = sub.add_parser("build", help="compile the FMUs in models/ into fmus/")
     build.add_argument("models", nargs="*", help="model names (default: all)")
+    compare = sub.add_parser("compare", help="run several scenarios and tabulate them (e.g. Table 3)")
+    compare.add_argument("comparison", help="comparison TOML file")
+    compare.add_argument("--results", default="results", help="results folder (default: ./results)")
+    compare.add_argument("--no-progress", action="store_true", help="no progress bar")
     plan = sub.add_parser("plan", help="run an offline planning experiment (e.g. Experiment 1)")
     plan.add_argument("scenario", help="offline planning TOML file")
     plan.add_argument("--results", default="results", help="results folder (default: ./results)")
@@ -140,7 +144,17 @@ def _batch(args) -> int:
     return 0 if report.passed == report.total else EXIT_RUN_FAILED
 
 
-_COMMANDS = {"run": _run, "validate": _validate, "build": _build, "plan": _plan, "batch": _batch}
+def _compare(args) -> int:
+    from orchestrator.compare import run_comparison
+
+    folder = run_comparison(args.comparison, args.results, progress=not args.no_progress)
+    print(f"finished: results in {folder}")
+    print((folder / "table.md").read_text())
+    return 0
+
+
+_COMMANDS = {"run": _run, "validate": _validate, "build": _build, "plan": _plan, "batch": _batch,
+             "compare": _compare}
 
 
 def console_main() -> None:

@@ -139,3 +139,52 @@ def controls_figure(frame, scenario, cosim, out_dir) -> list[str]:
     fig.savefig(out_dir / "controls.png", dpi=120)
     plt.close(fig)
     return ["controls.png"]
+
+
+def navigation_fields_figure(frame, scenario, cosim, out_dir, panels: int = 6) -> list[str]:
+    """The superposed field U and the track at six instants (the paper's Fig. 10 and 17).
+
+    For each instant the navigation participant's field is rebuilt from the ship's
+    position then (as the navigation did at that planning instant); the panel shows U (or
+    G alone while the event trigger was on), the track sailed so far and the local plan.
+    """
+    from orchestrator.analyses import plant_name
+
+    navigation = next((p for p in cosim.participants if hasattr(p, "field") and hasattr(p.field, "potential")), None)
+    if navigation is None:
+        return []
+    plant = plant_name(cosim)
+    if f"{plant}.x" not in frame.columns or len(frame) < 2:
+        return []
+    plt = _pyplot()
+    every = next(spec.every for spec in scenario.participants if spec.name == navigation.name)
+    nav_steps = (len(frame) - 1) // every
+    instants = [int(round(nav_steps * (i + 1) / panels)) * every for i in range(panels)]
+    field = navigation.field
+    x_nm, y_nm = field.weather.x / NM, field.weather.y / NM
+    fig, axes = plt.subplots(2, 3, figsize=(14, 9))
+    for ax, row in zip(axes.ravel(), instants):
+        row = min(row, len(frame) - 1)
+        x, y = frame[f"{plant}.x"].iloc[row], frame[f"{plant}.y"].iloc[row]
+        avoidance = bool(frame.get(f"{navigation.name}.et", np.zeros(len(frame))).iloc[row] > 0.5)
+        field.update((x, y), navigation.speed)
+        mesh = ax.pcolormesh(y_nm, x_nm, field.potential(avoidance), shading="auto", cmap="viridis")
+        ax.plot(frame[f"{plant}.y"].iloc[: row + 1] / NM, frame[f"{plant}.x"].iloc[: row + 1] / NM,
+                color="tab:red", lw=1.5)
+        ref = f"{navigation.name}.reference"
+        if f"{ref}[0,1]" in frame.columns:
+            count = 1 + max(int(c.split("[")[1].split(",")[0]) for c in frame.columns if c.startswith(ref + "["))
+            ax.plot([frame[f"{ref}[{k},2]"].iloc[row] / NM for k in range(count)],
+                    [frame[f"{ref}[{k},1]"].iloc[row] / NM for k in range(count)], "w.", ms=3)
+        _draw_obstacles(ax, frame.iloc[: row + 1])
+        minutes = frame["time_s"].iloc[row] / 60.0
+        ax.set_title(f"step {row // every} ({minutes:.0f} min){' ET = 1: G only' if avoidance else ''}", fontsize=10)
+        ax.set_xlabel("east [nm]")
+        ax.set_ylabel("north [nm]")
+        ax.set_aspect("equal")
+        fig.colorbar(mesh, ax=ax, shrink=0.8)
+    fig.suptitle(f"{scenario.simulation.name}: superposed field U and track at six planning instants")
+    fig.tight_layout()
+    fig.savefig(out_dir / "navigation_fields.png", dpi=110)
+    plt.close(fig)
+    return ["navigation_fields.png"]

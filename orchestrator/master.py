@@ -72,6 +72,7 @@ class CoSimulation:
             self.participants.append(self._build(spec, substitutions))
             self.every[spec.name] = spec.every
         self._check_connections()
+        self._check_stop_conditions()
         # ports are fixed once a participant is built
         self._declared = {p.name: frozenset(p.output_names) for p in self.participants}
 
@@ -123,6 +124,15 @@ class CoSimulation:
                     f"'{connection.target_port}' (inputs: {', '.join(target.input_names)})"
                 )
 
+    def _check_stop_conditions(self) -> None:
+        by_name = {p.name: p for p in self.participants}
+        for condition in self.scenario.simulation.stop_when:
+            participant = by_name.get(condition.participant)
+            if participant is None or condition.port not in participant.output_names:
+                raise ScenarioError(
+                    f"{self.scenario.path}: simulation.stop_when '{condition}': no output "
+                    f"'{condition.port}' of a participant '{condition.participant}'")
+
     def participant(self, name: str) -> Participant:
         for participant in self.participants:
             if participant.name == name:
@@ -167,6 +177,11 @@ class CoSimulation:
                     bar.update(1)
                 if on_step is not None:
                     on_step(k)
+                met = [c for c in sim.stop_when if (c.participant, c.port) in bus
+                       and c.holds(float(bus[(c.participant, c.port)]))]
+                if met:
+                    reason = f"stopped at t = {t + sim.dt_s:g} s: {met[0]}"
+                    break
         except KeyboardInterrupt:
             status, reason = "interrupted", "interrupted by the user (Ctrl-C)"
         except ToolchainError as exc:

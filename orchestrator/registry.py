@@ -12,4 +12,5 @@ PARTICIPANT_TYPES = {
     "control": "rhnc.control_participant:ControlParticipant",
     "traffic": "rhnc.traffic:TrafficParticipant",
     "reference_path": "rhnc.reference_participant:ReferencePathParticipant",
+    "goal": "rhnc.goal:GoalMonitor",
 }

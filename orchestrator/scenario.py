@@ -17,10 +17,11 @@ from typing import Any
 from orchestrator.errors import ScenarioError
 
 TOP_LEVEL_KEYS = ("connections", "simulation", "metocean", "participants", "outputs")
-SIMULATION_KEYS = ("name", "start_s", "stop_s", "steps", "dt_s")
+SIMULATION_KEYS = ("name", "start_s", "stop_s", "steps", "dt_s", "stop_when")
+STOP_OPERATORS = ("<=", ">=", "<", ">")
 FMU_PARTICIPANT_KEYS = ("fmu", "every", "parameter_set", "parameters", "mapping")
 PYTHON_PARTICIPANT_KEYS = ("type", "class", "every", "options")
-OUTPUT_KEYS = ("format", "analyses", "figures")
+OUTPUT_KEYS = ("format", "analyses", "figures", "options")
 OUTPUT_FORMATS = ("parquet", "csv")
 
 
@@ -65,11 +66,29 @@ class Connection:
 
 
 @dataclass(frozen=True)
+class StopCondition:
+    """``participant.port <op> value``: the run ends (finished) once it holds."""
+
+    participant: str
+    port: str
+    operator: str
+    value: float
+
+    def holds(self, observed: float) -> bool:
+        return {"<": observed < self.value, "<=": observed <= self.value,
+                ">": observed > self.value, ">=": observed >= self.value}[self.operator]
+
+    def __str__(self) -> str:
+        return f"{self.participant}.{self.port} {self.operator} {self.value:g}"
+
+
+@dataclass(frozen=True)
 class SimulationSpec:
     name: str
     start_s: float
     stop_s: float
     dt_s: float
+    stop_when: tuple[StopCondition, ...] = ()
 
     @property
     def steps(self) -> int:
@@ -82,6 +101,8 @@ class OutputSpec:
     format: str = "parquet"
     analyses: tuple[str, ...] = ()
     figures: tuple[str, ...] = ("track",)
+    #: keyword options per analysis, from ``[outputs.options.<analysis>]``
+    options: dict[str, dict[str, Any]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -233,7 +254,36 @@ def _simulation(table: dict, path: Path) -> SimulationSpec:
             raise ScenarioError(
                 f"{where}: 'simulation.stop_s' - 'start_s' must be a positive whole number of 'dt_s' steps"
             )
-    return SimulationSpec(name=name, start_s=start, stop_s=stop, dt_s=dt)
+    return SimulationSpec(name=name, start_s=start, stop_s=stop, dt_s=dt,
+                          stop_when=_stop_conditions(table.get("stop_when", []), where))
+
+
+def _stop_conditions(entries, where: str) -> tuple[StopCondition, ...]:
+    if isinstance(entries, str):
+        entries = [entries]
+    if not isinstance(entries, list):
+        raise ScenarioError(f"{where}: 'simulation.stop_when' must be a condition string or a list of them")
+    conditions = []
+    for entry in entries:
+        parsed = None
+        if isinstance(entry, str):
+            for operator in STOP_OPERATORS:
+                left, found, right = entry.partition(operator)
+                if found:
+                    participant, dot, port = left.strip().partition(".")
+                    try:
+                        value = float(right)
+                    except ValueError:
+                        break
+                    if dot and participant and port and math.isfinite(value):
+                        parsed = StopCondition(participant, port, operator, value)
+                    break
+        if parsed is None:
+            raise ScenarioError(
+                f"{where}: 'simulation.stop_when' entry {entry!r} must read \"participant.port < number\" "
+                f"(operators {', '.join(STOP_OPERATORS)})")
+        conditions.append(parsed)
+    return tuple(conditions)
 
 
 def _participants(table: dict, where: str) -> tuple[ParticipantSpec, ...]:
@@ -337,4 +387,12 @@ def _outputs(table: dict, where: str) -> OutputSpec:
         if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
             raise ScenarioError(f"{where}: 'outputs.{key}' must be a list of names")
         lists[key] = tuple(value)
-    return OutputSpec(format=fmt, **lists)
+    options = table.get("options", {})
+    if not isinstance(options, dict):
+        raise ScenarioError(f"{where}: 'outputs.options' must be a table of [outputs.options.<analysis>] tables")
+    for name, values in options.items():
+        if name not in lists["analyses"]:
+            raise ScenarioError(f"{where}: 'outputs.options.{name}' is for an analysis not listed in 'outputs.analyses'")
+        if not isinstance(values, dict):
+            raise ScenarioError(f"{where}: 'outputs.options.{name}' must be a table")
+    return OutputSpec(format=fmt, options=options, **lists)

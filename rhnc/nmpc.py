@@ -28,6 +28,9 @@ model linearised about straight motion at the reference speed (python-control ``
 Q and R as above), expressed in the reference's along-/cross-track frame and rotated to
 the reference heading at the horizon's end; cached per reference speed (0.25 m/s bins).
 
+Below ``MIN_TERMINAL_SPEED_MPS`` (a reference that stops at its destination) P is taken
+at that speed: about zero speed the linearised model is not stabilisable.
+
 Collision constraints (only while ET = 1): for every obstacle i and at every RK4 substep
 of every interval (not only at the shooting nodes)
 
@@ -63,6 +66,9 @@ LOG = logging.getLogger(__name__)
 KNOT = 1852.0 / 3600.0
 #: Parameters per obstacle slot: cx, cy [L], vx, vy [L/s], (R + R_i) [L], inflation [-], active.
 OBSTACLE_FIELDS = 7
+#: lowest speed [m/s] about which the terminal weight P is linearised
+MIN_TERMINAL_SPEED_MPS = 1.0
+
 SOLVERS = ("ipopt", "fatrop", "sqpmethod")
 
 
@@ -352,7 +358,10 @@ class NMPCController:
         s = self.settings
         if not s.terminal_weight:
             return np.diag(s.q)
-        key = round(max(speed_mps, 0.0) * 4.0) / 4.0
+        # Below ~1 m/s the linearised model loses stabilisability (the cross-track position
+        # is reached only through sway, which is unactuated at u = 0) and the DARE has no
+        # solution: a stopping or stopped reference takes P of slow straight motion.
+        key = round(max(speed_mps, MIN_TERMINAL_SPEED_MPS) * 4.0) / 4.0
         if key not in self._terminal_cache:
             z0 = np.array([0.0, 0.0, 0.0, key / self.speed_scale, 0.0, 0.0])
             w0 = self.params.equilibrium_tau(key) / self.input_scale

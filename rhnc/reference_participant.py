@@ -60,21 +60,23 @@ def line_or_turn_reference(
 def waypoint_reference(elapsed_s: np.ndarray, waypoints_m: np.ndarray, speed_mps: float) -> np.ndarray:
     """Reference states (len, 6) sailing the polyline ``waypoints_m`` (k, 2) [m] at ``speed_mps``.
 
-    Legs are straight with the heading of the leg (r_d = 0, corners are sharp); past the
-    last waypoint the virtual ship continues on the last leg's course.
+    Legs are straight with the heading of the leg (r_d = 0, corners are sharp).  The last
+    waypoint is the destination: the virtual ship arrives there and stops (u_d = 0,
+    heading of the last leg), so the tracked ship stops at the goal instead of sailing on.
     """
     points = np.asarray(waypoints_m, dtype=float)
     legs = np.diff(points, axis=0)
     lengths = np.hypot(legs[:, 0], legs[:, 1])
     cumulative = np.concatenate([[0.0], np.cumsum(lengths)])
-    s = np.maximum(np.asarray(elapsed_s, dtype=float) * speed_mps, 0.0)
+    s = np.clip(np.asarray(elapsed_s, dtype=float) * speed_mps, 0.0, cumulative[-1])
     leg = np.clip(np.searchsorted(cumulative, s, side="right") - 1, 0, len(legs) - 1)
     along = s - cumulative[leg]
     direction = legs[leg] / lengths[leg, None]
     position = points[leg] + direction * along[:, None]
     psi = np.arctan2(direction[:, 1], direction[:, 0])
     zeros = np.zeros_like(s)
-    return np.column_stack([position, psi, np.full_like(s, speed_mps), zeros, zeros])
+    speed = np.where(s < cumulative[-1], speed_mps, 0.0)
+    return np.column_stack([position, psi, speed, zeros, zeros])
 
 
 class ReferencePathParticipant(Participant):

@@ -95,6 +95,10 @@ def test_waypoint_reference_and_option_errors():
     )
     out = ref.reference_at(270.0)  # 1.5 nm: on the second (northbound) leg
     np.testing.assert_allclose(out[0, 1:4], [0.5 * NM, NM, 0.0], atol=1e-9)
+    # 2 nm of path at 20 kn take 360 s: afterwards the virtual ship waits at the last waypoint
+    late = ref.reference_at(1000.0)
+    np.testing.assert_allclose(late[:, 1:3], np.tile([NM, NM], (len(late), 1)), atol=1e-9)
+    np.testing.assert_allclose(late[:, 4], 0.0)
     with pytest.raises(ScenarioError, match="participants.traffic: missing option 'course_deg'"):
         ReferencePathParticipant.from_options("ref", {"start_nm": [0, 0], "speed_kn": 10.0}, context())
     with pytest.raises(ScenarioError, match="unknown option 'course'"):

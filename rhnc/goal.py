@@ -1,0 +1,62 @@
+"""Goal monitor: distance to the destination and arrival, for stop conditions and acceptance."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from orchestrator.errors import ModelError, ScenarioError
+from orchestrator.participant import BuildContext, Participant, Value, reject_unknown_options
+from rhnc.metocean import NM
+
+OPTIONS = ("goal_nm", "arrival_radius_nm")
+
+
+class GoalMonitor(Participant):
+    """Watches the ship's position against a destination.
+
+    Options: ``goal_nm = [north, east]``, ``arrival_radius_nm`` (default 0.5).
+    Inputs: ``x``, ``y`` [m].  Outputs: ``goal_distance_m`` [m] and ``arrived`` (1.0 once
+    the ship has come within the arrival radius, and from then on).
+    """
+
+    def __init__(self, name: str, goal_m: tuple[float, float], radius_m: float) -> None:
+        super().__init__(name)
+        self.goal_m = goal_m
+        self.radius_m = radius_m
+        self.arrival_time_s: float | None = None
+
+    @classmethod
+    def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "GoalMonitor":
+        where = f"{context.where}.options"
+        reject_unknown_options(options, OPTIONS, where)
+        goal = options.get("goal_nm")
+        if (not isinstance(goal, list) or len(goal) != 2
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in goal)):
+            raise ScenarioError(f"{where}.goal_nm: expected [north, east] in nm")
+        radius = options.get("arrival_radius_nm", 0.5)
+        if isinstance(radius, bool) or not isinstance(radius, (int, float)) or not radius > 0:
+            raise ScenarioError(f"{where}.arrival_radius_nm: expected a positive number, got {radius!r}")
+        return cls(name, (goal[0] * NM, goal[1] * NM), radius * NM)
+
+    input_names = property(lambda self: ("x", "y"))
+    output_names = property(lambda self: ("goal_distance_m", "arrived"))
+
+    def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
+        self.arrival_time_s = None
+        return self._observe(start_time, inputs) if "x" in inputs and "y" in inputs else {}
+
+    def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
+        if "x" not in inputs or "y" not in inputs:
+            raise ModelError(f"participant '{self.name}': inputs 'x' and 'y' must be connected")
+        return self._observe(time, inputs)
+
+    def _observe(self, time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
+        distance = math.hypot(float(inputs["x"]) - self.goal_m[0], float(inputs["y"]) - self.goal_m[1])
+        if distance <= self.radius_m and self.arrival_time_s is None:
+            self.arrival_time_s = time
+        return {"goal_distance_m": distance, "arrived": 1.0 if self.arrival_time_s is not None else 0.0}
+
+    def summary(self) -> dict[str, Any]:
+        return {"arrived": self.arrival_time_s is not None, "arrival_time_s": self.arrival_time_s}
