@@ -4,7 +4,8 @@ Inputs: ``x, y, psi, u, v, r`` (floats, SI), ``reference`` ((M, 7): t, x, y, psi
 ``et`` (float, optional), ``obstacles`` ((n, 5): x, y, vx, vy, radius, optional).
 Outputs: ``tau_u`` [N], ``tau_r`` [N·m], ``prediction`` ((N_c+1, 7), absolute time
 column), and per-solve telemetry ``solve_time_s``, ``iterations``, ``solver_ok``,
-``fallback``, ``cost``, ``constraint_violation``.
+``fallback``, ``cost``, ``constraint_violation``, ``collision_slack`` (> 0 when the soft
+collision constraints had to give way).
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ OPTIONS = (
     "length_scale_m",
     "speed_scale_mps",
     "et_default",
+    "collision_slack_weight",
 )
 WEIGHT_KEYS = ("q", "r", "r_rate")
 
@@ -98,6 +100,9 @@ class ControlParticipant(Participant):
         Units of the scaled errors (see :mod:`rhnc.nmpc`).
     et_default : float
         Event trigger used when no ``et`` input is connected (default 0: constraints off).
+    collision_slack_weight : float or false
+        Weight of the soft collision constraints' slack (default 1e4, see
+        :class:`rhnc.nmpc.NMPCSettings`); ``false`` makes them hard.
     """
 
     def __init__(self, name: str, controller: NMPCController, et_default: float) -> None:
@@ -109,6 +114,7 @@ class ControlParticipant(Participant):
         self._tau = np.zeros(2)
         self._solve_times: list[float] = []
         self._steps = 0
+        self._slack_steps = 0
 
     @classmethod
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "ControlParticipant":
@@ -142,6 +148,10 @@ class ControlParticipant(Participant):
         for key in ("length_scale_m", "speed_scale_mps"):
             if key in options:
                 kwargs[key] = _number(options, key, where, None)
+        if "collision_slack_weight" in options:  # false: hard collision constraints
+            value = options["collision_slack_weight"]
+            kwargs["collision_slack_weight"] = None if value is False else _number(
+                options, "collision_slack_weight", where, None)
         weights = options.get("weights", {})
         if not isinstance(weights, Mapping):
             raise ScenarioError(f"{where}: option 'weights' must be a table with keys {', '.join(WEIGHT_KEYS)}")
@@ -169,14 +179,15 @@ class ControlParticipant(Participant):
     def output_names(self) -> Sequence[str]:
         return (
             "tau_u", "tau_r", "prediction", "solve_time_s", "iterations",
-            "solver_ok", "fallback", "cost", "constraint_violation",
+            "solver_ok", "fallback", "cost", "constraint_violation", "collision_slack",
         )
 
     def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         """Reset the controller; initial outputs are zero inputs (the first step decides)."""
         self.controller.reset()
         self._tau = np.zeros(2)
-        return self._outputs(self._tau, self._prediction, 0.0, 0, True, False, 0.0, 0.0)
+        self._slack_steps = 0
+        return self._outputs(self._tau, self._prediction, 0.0, 0, True, False, 0.0, 0.0, 0.0)
 
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         """Solve the NMPC at ``time`` from the measured state; return tau held over the step."""
@@ -200,13 +211,16 @@ class ControlParticipant(Participant):
         self._solve_times.append(solution.solve_time_s)
         if solution.fallback:
             LOG.warning("%s: NMPC failed at t = %.1f s (%s), fallback applied", self.name, time, solution.status)
+        self._slack_steps += int(solution.collision_slack > 0.0)
         prediction = np.column_stack([horizon, solution.states])
         return self._outputs(
             solution.tau, prediction, solution.solve_time_s, solution.iterations,
             solution.success, solution.fallback, solution.cost, solution.constraint_violation,
+            solution.collision_slack,
         )
 
-    def _outputs(self, tau, prediction, solve_time, iterations, ok, fallback, cost, violation) -> dict[str, Value]:
+    def _outputs(self, tau, prediction, solve_time, iterations, ok, fallback, cost, violation,
+                 slack) -> dict[str, Value]:
         return {
             "tau_u": float(tau[0]),
             "tau_r": float(tau[1]),
@@ -217,6 +231,7 @@ class ControlParticipant(Participant):
             "fallback": 1.0 if fallback else 0.0,
             "cost": float(cost),
             "constraint_violation": float(violation),
+            "collision_slack": float(slack),
         }
 
     def summary(self) -> dict[str, Any]:
@@ -229,6 +244,7 @@ class ControlParticipant(Participant):
             "solve_time_max_s": float(np.max(times)) if len(times) else None,
             "fallback_count": self.controller.fallback_count,
             "failure_count": self.controller.failure_count,
+            "relaxed_clearance_steps": self._slack_steps,
         }
 
 

@@ -66,6 +66,9 @@ LOG = logging.getLogger(__name__)
 KNOT = 1852.0 / 3600.0
 #: Parameters per obstacle slot: cx, cy [L], vx, vy [L/s], (R + R_i) [L], inflation [-], active.
 OBSTACLE_FIELDS = 7
+#: collision slack (scaled clearance, |p - c|^2 / (R + R_i)^2 - 1) below which a plan counts as
+#: keeping R + R_i: the solver's tolerance, about 0.05 % of the distance
+SLACK_TOLERANCE = 1e-3
 #: lowest speed [m/s] about which the terminal weight P is linearised
 MIN_TERMINAL_SPEED_MPS = 1.0
 
@@ -100,6 +103,14 @@ class NMPCSettings:
         U for surge and sway speed [m/s].
     terminal_weight : bool
         Use the DARE terminal weight P (else P = Q).
+    collision_slack_weight : float or None
+        Soft collision constraints: one slack sigma_k >= 0 per stage relaxes that stage's
+        clearance constraints, at the cost ``w (sigma_k + sigma_k^2)``.  The L1 term is an
+        exact penalty: while the hard problem is feasible (and w exceeds its multipliers)
+        the solution is the hard-constrained one; when it is not (an obstacle noticed too
+        late, a target that closes faster than the ship can turn) the NMPC still returns
+        the plan that violates the clearance least instead of failing into a fallback that
+        ignores the obstacle.  None: hard constraints.
     """
 
     horizon_steps: int = 15
@@ -115,6 +126,7 @@ class NMPCSettings:
     length_scale_m: float | None = None
     speed_scale_mps: float = 1.0
     terminal_weight: bool = True
+    collision_slack_weight: float | None = 1.0e4
 
     def __post_init__(self) -> None:
         if self.horizon_steps < 1:
@@ -129,6 +141,8 @@ class NMPCSettings:
             raise ValueError("weights: q needs 6 values, r and r_rate 2 each")
         if min(self.q + self.r + self.r_rate) < 0.0:
             raise ValueError("weights must be >= 0")
+        if self.collision_slack_weight is not None and not self.collision_slack_weight > 0.0:
+            raise ValueError(f"collision_slack_weight must be > 0 or None, got {self.collision_slack_weight}")
 
 
 @dataclasses.dataclass
@@ -157,6 +171,9 @@ class NMPCSolution:
         Optimal (or last) objective value (scaled, dimensionless).
     constraint_violation : float
         Largest violation of the NLP's constraints and bounds at the returned point (scaled).
+    collision_slack : float
+        Largest collision slack sigma of the plan (0: every clearance R + R_i is kept;
+        > 0: the soft constraints had to give way, see ``collision_slack_weight``).
     """
 
     tau: np.ndarray
@@ -169,6 +186,7 @@ class NMPCSolution:
     fallback: bool
     cost: float
     constraint_violation: float
+    collision_slack: float = 0.0
 
 
 def wrap_angle(angle):
@@ -244,6 +262,8 @@ class NMPCController:
 
         Z = [ca.SX.sym(f"z{k}", 6) for k in range(N + 1)]
         W = [ca.SX.sym(f"w{k}", 2) for k in range(N)]
+        soft = s.collision_slack_weight is not None
+        SIGMA = [ca.SX.sym(f"sigma{k}", 1 if soft else 0) for k in range(N)]
         ref = ca.SX.sym("ref", 6, N + 1)
         w_d = ca.SX.sym("w_d", 2, N)
         w_prev = ca.SX.sym("w_prev", 2)
@@ -271,6 +291,10 @@ class NMPCController:
             cost += ca.sum1(R * dw**2)
             dw_rate = W[k] - (W[k - 1] if k > 0 else w_prev)
             cost += ca.sum1(R1 * dw_rate**2)
+            relax = 0
+            if soft:
+                cost += s.collision_slack_weight * (SIGMA[k][0] + SIGMA[k][0] ** 2)
+                relax = SIGMA[k][0]
             # dynamics of stage k first, then its path constraints (fatrop's structure)
             g.append(Z[k + 1] - Z_next)
             lbg += [0.0] * 6
@@ -283,7 +307,7 @@ class NMPCController:
                     dx = Z_sub[0, j] - (cx + vx * t_sub)
                     dy = Z_sub[1, j] - (cy + vy * t_sub)
                     clearance = (dx**2 + dy**2) / rsum**2 - 1.0 - inflation
-                    g.append(active * clearance + (1.0 - active))
+                    g.append(active * clearance + (1.0 - active) + relax)
                     lbg.append(0.0)
                     ubg.append(ca.inf)
                     equality.append(False)
@@ -302,18 +326,20 @@ class NMPCController:
 
         decision = []
         for k in range(N):
-            decision += [Z[k], W[k]]
+            decision += [Z[k], W[k], SIGMA[k]]
         decision.append(Z[N])
-        self._nx = 6 * (N + 1) + 2 * N
+        n_sigma = 1 if soft else 0
+        self._nx = 6 * (N + 1) + (2 + n_sigma) * N
         parameters = ca.vertcat(ca.vec(ref), ca.vec(w_d), w_prev, ca.vec(P), ca.vec(obs))
         nlp = {"x": ca.vertcat(*decision), "f": cost, "g": ca.vertcat(*g), "p": parameters}
         self._lbg = np.array(lbg, dtype=float)
         self._ubg = np.array(ubg, dtype=float)
         self._solver = ca.nlpsol("rhnc_nmpc", s.solver, nlp, self._solver_options(equality))
         # index helpers into the stacked decision vector (z_k then w_k per stage)
-        stride = 8
+        stride = 8 + n_sigma
         self._z_index = np.array([[k * stride + i for i in range(6)] for k in range(N + 1)])
         self._w_index = np.array([[k * stride + 6 + i for i in range(2)] for k in range(N)])
+        self._sigma_index = np.array([k * stride + 8 for k in range(N)]) if soft else np.zeros(0, dtype=int)
 
     def _solver_options(self, equality: Sequence[bool]) -> dict:
         s = self.settings
@@ -524,6 +550,7 @@ class NMPCController:
         lbx[self._w_index.ravel()] = -1.0
         ubx[self._w_index.ravel()] = 1.0
         lbx[self._z_index[1:, 3]] = 0.0  # u >= 0: no sailing backwards
+        lbx[self._sigma_index] = 0.0  # collision slacks
         z0 = self._to_scaled(state, origin)
         lbx[self._z_index[0]] = z0
         ubx[self._z_index[0]] = z0
@@ -550,10 +577,17 @@ class NMPCController:
             status = "Solve_Succeeded" if stats.get("success", False) else f"fatrop_return_code_{status}"
         iterations = int(stats.get("iter_count", -1))
         cost = float(result["f"])
+        slack = float(np.max(x_opt[self._sigma_index], initial=0.0))
+        slack = slack if slack > SLACK_TOLERANCE else 0.0
+        if success and slack > 0.0:
+            LOG.warning("NMPC at t = %.1f s: collision clearance relaxed (slack %.3g): no plan keeps R + R_i",
+                        time_s, slack)
         states = self._from_scaled(x_opt[self._z_index], origin)
-        inputs = x_opt[self._w_index] * self.input_scale
+        # the solver meets the bounds |w| <= 1 only to its tolerance: never apply more than tau_max
+        inputs = np.clip(x_opt[self._w_index], -1.0, 1.0) * self.input_scale
         if success:
-            solution = NMPCSolution(inputs[0].copy(), states, inputs, elapsed, iterations, status, True, False, cost, violation)
+            solution = NMPCSolution(inputs[0].copy(), states, inputs, elapsed, iterations, status, True, False, cost,
+                                    violation, slack)
             self._previous, self._previous_time = solution, time_s
             return solution
         self.failure_count += 1

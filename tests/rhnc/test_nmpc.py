@@ -102,7 +102,10 @@ def test_passes_a_static_obstacle_on_the_track_outside_its_radius(kcs):
     assert all(s.success for s in solutions)
 
 
-def test_infeasible_solve_falls_back_to_the_shifted_plan(controller, kcs):
+def test_infeasible_solve_falls_back_to_the_shifted_plan(kcs):
+    # hard collision constraints: an obstacle on the ship makes the problem infeasible
+    controller = NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=DT,
+                                                  collision_slack_weight=None))
     course, speed = 0.3, 18 * KNOT
 
     def reference_at(t):
@@ -124,6 +127,25 @@ def test_infeasible_solve_falls_back_to_the_shifted_plan(controller, kcs):
     third = controller.solve(2 * DT, state, reference_at(2 * DT), on_the_ship, et=True, previous_tau=np.array([7e5, 1e8]))
     assert third.fallback
     np.testing.assert_allclose(third.tau, [7e5, 0.0])
+
+
+def test_soft_constraints_give_the_least_violating_plan_instead_of_failing(controller, kcs):
+    course, speed = 0.3, 18 * KNOT
+    state = np.array([0.0, 0.0, course, speed, 0.0, 0.0])
+    reference = line_or_turn_reference(DT * np.arange(N + 1), (0.0, 0.0), course, speed)
+    controller.reset()
+    # an obstacle 300 m off the starboard bow with a 500 m radius: already inside it
+    ahead = np.array([[300 * math.cos(course + 0.5), 300 * math.sin(course + 0.5), 0.0, 0.0, 500.0]])
+    solution = controller.solve(0.0, state, reference, ahead, et=True)
+    assert solution.success and not solution.fallback
+    assert solution.collision_slack > 0
+    # the plan opens the distance to the obstacle over the horizon
+    distance = np.hypot(solution.states[:, 0] - ahead[0, 0], solution.states[:, 1] - ahead[0, 1])
+    assert distance[-1] > distance[0] + 200.0
+    # with the obstacle far away the slack is zero: the soft problem is the hard one
+    far = ahead + np.array([[5e4, 5e4, 0.0, 0.0, 0.0]])
+    controller.reset()
+    assert controller.solve(0.0, state, reference, far, et=True).collision_slack < 1e-6
 
 
 def test_heading_error_is_wrapped(controller, kcs):
