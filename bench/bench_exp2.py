@@ -1,0 +1,50 @@
+"""Wall time of the full Experiment 2 RHNC run (issue 5; goal: at most 10 s on 2 cores).
+
+Prints the co-simulation loop time (480 macro steps: 120 navigation plans, 480 NMPC
+solves, the KCS and MetOcean FMUs), the whole ``run_scenario`` time including results,
+figures and set-up, and the real-time factor.
+
+    python bench/bench_exp2.py [--repeat 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+SCENARIO = REPO / "scenarios" / "exp2_rhnc.toml"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=3)
+    args = parser.parse_args()
+    from orchestrator.master import CoSimulation
+    from orchestrator.run import run_scenario
+    from orchestrator.scenario import load_scenario
+
+    scenario = load_scenario(SCENARIO)
+    loops, totals, simulated = [], [], 0.0
+    for _ in range(args.repeat):
+        cosim = CoSimulation(scenario)
+        started = time.perf_counter()
+        outcome = cosim.run(progress=False)
+        loops.append(time.perf_counter() - started)
+        cosim.close()
+        simulated = outcome.steps_done * scenario.simulation.dt_s
+        with tempfile.TemporaryDirectory() as results:
+            started = time.perf_counter()
+            run_scenario(SCENARIO, results, progress=False)
+            totals.append(time.perf_counter() - started)
+    best = min(loops)
+    print(f"simulated time                     {simulated / 60:.0f} min")
+    print(f"co-simulation loop (best of {args.repeat})     {best:6.2f} s   real-time factor {simulated / best:,.0f}"
+          "   (goal <= 10 s, ~2 900)")
+    print(f"run_scenario incl. results+figures {min(totals):6.2f} s")
+
+
+if __name__ == "__main__":
+    main()
