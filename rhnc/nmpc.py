@@ -56,7 +56,6 @@ import time
 from collections.abc import Sequence
 
 import casadi as ca
-import control
 import numpy as np
 
 from rhnc.ship_model import ShipParameters, rk4_function
@@ -396,6 +395,8 @@ class NMPCController:
             z_next = self._F_scaled(z, w)[0]
             jac = ca.Function("linearised_step", [z, w], [ca.jacobian(z_next, z), ca.jacobian(z_next, w)])
             A, B = (np.array(m) for m in jac(z0, w0))
+            import control  # python-control: 1.5 s to import, needed only here
+
             P, _, _ = control.dare(A, B, np.diag(s.q), np.diag(s.r))
             self._terminal_cache[key] = 0.5 * (P + P.T)
         return self._terminal_cache[key]
