@@ -37,7 +37,13 @@ def track_figure(frame, scenario, cosim, out_dir) -> list[str]:
     _draw_obstacles(ax, frame)
     ax.set_xlabel("east [nm]")
     ax.set_ylabel("north [nm]")
-    ax.set_aspect("equal", adjustable="datalim")
+    if field is not None:  # the map is the frame; traffic beyond it is not drawn
+        x_min, x_max, y_min, y_max = (v / NM for v in field.extent)
+        ax.set_xlim(y_min, y_max)
+        ax.set_ylim(x_min, x_max)
+        ax.set_aspect("equal")
+    else:
+        ax.set_aspect("equal", adjustable="datalim")
     ax.set_title(f"{scenario.simulation.name}: track")
     ax.legend(loc="best")
     fig.tight_layout()
