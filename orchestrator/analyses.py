@@ -30,18 +30,30 @@ FIGURES = {
 KCS_LENGTH_M = 230.0
 
 
+def check_outputs(scenario) -> None:
+    """Refuse unknown analyses, figures and analysis options before a run starts."""
+    import inspect
+
+    def resolve(registry, name, key):
+        try:
+            return _resolve(registry, name, key)
+        except ScenarioError as exc:
+            raise ScenarioError(f"{scenario.path}: {exc}") from None
+
+    for name in scenario.outputs.figures:
+        resolve(FIGURES, name, "figures")
+    for name in scenario.outputs.analyses:
+        accepted = list(inspect.signature(resolve(ANALYSES, name, "analyses")).parameters)[4:]
+        for key in scenario.outputs.options.get(name, {}):
+            if key not in accepted:
+                raise ScenarioError(f"{scenario.path}: unknown option 'outputs.options.{name}.{key}' "
+                                    f"(valid: {', '.join(accepted) or 'none'})")
+
+
 def run_analysis(name, frame, scenario, cosim, out_dir) -> dict:
     """Run analysis ``name`` with its ``[outputs.options.<name>]`` keywords."""
     function = _resolve(ANALYSES, name, "analyses")
-    options = scenario.outputs.options.get(name, {})
-    import inspect
-
-    accepted = [p for p in inspect.signature(function).parameters][4:]
-    for key in options:
-        if key not in accepted:
-            raise ScenarioError(f"{scenario.path}: unknown option 'outputs.options.{name}.{key}' "
-                                f"(valid: {', '.join(accepted) or 'none'})")
-    return function(frame, scenario, cosim, out_dir, **options)
+    return function(frame, scenario, cosim, out_dir, **scenario.outputs.options.get(name, {}))
 
 
 def draw_figure(name, frame, scenario, cosim, out_dir) -> list[str]:
@@ -50,7 +62,7 @@ def draw_figure(name, frame, scenario, cosim, out_dir) -> list[str]:
 
 def _resolve(registry, name, key):
     if name not in registry:
-        raise ScenarioError(f"outputs.{key}: unknown name '{name}' (valid: {', '.join(sorted(registry))})")
+        raise ScenarioError(f"'outputs.{key}': unknown name '{name}' (valid: {', '.join(sorted(registry))})")
     module, _, function = registry[name].partition(":")
     return getattr(importlib.import_module(module), function)
 

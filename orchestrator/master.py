@@ -54,6 +54,9 @@ class CoSimulation:
     """
 
     def __init__(self, scenario: Scenario, work_dir: Path | None = None) -> None:
+        from orchestrator.analyses import check_outputs
+
+        check_outputs(scenario)
         self.scenario = scenario
         self._own_work_dir = work_dir is None
         self.work_dir = Path(tempfile.mkdtemp(prefix="rhnc-run-")) if work_dir is None else Path(work_dir)

@@ -138,3 +138,29 @@ def test_interrupt_keeps_results(write_scenario, tmp_path, monkeypatch):
     assert report.status == "interrupted"
     assert report.summary["simulation"]["steps_done"] == 3  # steps 0, 1, 2 completed
     assert (report.folder / "timeseries.parquet").is_file()
+
+
+def test_stop_condition_ends_the_run_as_finished(write_scenario, tmp_path):
+    text = scenario_text().replace("dt_s = 1.0", 'dt_s = 1.0\nstop_when = "clock.count >= 4"')
+    report = run_scenario(write_scenario(text), tmp_path, progress=False)
+    assert report.status == "finished"
+    assert report.reason == "stopped at t = 4 s: clock.count >= 4"
+    assert report.summary["simulation"]["steps_done"] == 4
+
+
+def test_stop_condition_on_a_missing_output(write_scenario):
+    text = scenario_text().replace("dt_s = 1.0", 'dt_s = 1.0\nstop_when = "clock.speed > 1"')
+    with pytest.raises(ScenarioError, match=r"simulation.stop_when 'clock.speed > 1': no output 'speed'"):
+        CoSimulation(load_scenario(write_scenario(text)))
+
+
+@pytest.mark.parametrize("outputs, message", [
+    ('analyses = ["speed_trial"]', r"scenario.toml: 'outputs.analyses': unknown name 'speed_trial' \(valid: .*voyage"),
+    ('figures = ["radar"]', r"scenario.toml: 'outputs.figures': unknown name 'radar'"),
+    ('analyses = ["voyage"]\n[outputs.options.voyage]\ngoal = [1, 2]',
+     r"unknown option 'outputs.options.voyage.goal' \(valid: goal_nm, arrival_radius_nm, cii_year\)"),
+])
+def test_unknown_outputs_are_refused_before_the_run(write_scenario, outputs, message):
+    text = scenario_text() + f"\n[outputs]\n{outputs}\n"
+    with pytest.raises(ScenarioError, match=message):
+        CoSimulation(load_scenario(write_scenario(text)))

@@ -115,3 +115,16 @@ def test_overrides_replace_keys_and_change_the_hash(write_scenario):
         load_scenario(path, {"simulation.dt_s.x": 1})
     with pytest.raises(ScenarioError, match=r"unknown key 'simulation.warp'"):
         load_scenario(path, {"simulation.warp": 9})
+
+
+@pytest.mark.parametrize("condition", ['"clock.count ~ 3"', '"count < 3"', '"clock.count < many"', "5"])
+def test_malformed_stop_condition(write_scenario, condition):
+    text = GOOD.replace("dt_s = 2.0", f"dt_s = 2.0\nstop_when = {condition}")
+    with pytest.raises(ScenarioError, match=r"'simulation.stop_when' (entry .* must read|must be a condition)"):
+        load_scenario(write_scenario(text))
+
+
+def test_analysis_options_need_a_listed_analysis(write_scenario):
+    text = GOOD + '\n[outputs]\nanalyses = ["voyage"]\n[outputs.options.encounter]\nx = 1\n'
+    with pytest.raises(ScenarioError, match=r"'outputs.options.encounter' is for an analysis not listed"):
+        load_scenario(write_scenario(text))

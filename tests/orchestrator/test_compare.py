@@ -1,0 +1,87 @@
+"""The compare command: runs, the table beside published figures, and its input errors."""
+
+import textwrap
+
+import pandas as pd
+import pytest
+
+from orchestrator.cli import main
+from orchestrator.compare import comparison_table, load_comparison
+from orchestrator.errors import ScenarioError
+
+SCENARIO = """
+connections = ["helm.tau_u -> ship.tau_u", "helm.tau_r -> ship.tau_r"]
+[simulation]
+stop_s = 600.0
+dt_s = 10.0
+[participants.helm]
+type = "scripted_tau"
+[participants.helm.options]
+tau_u_N = {tau}
+[participants.ship]
+fmu = "KCS"
+[participants.ship.parameters]
+u0 = 9.0
+[outputs]
+analyses = ["voyage"]
+figures = []
+"""
+
+COMPARISON = """
+name = "speeds"
+analysis = "voyage"
+metrics = ["distance_nm", "cost_usd"]
+baseline = "slow"
+[[runs]]
+label = "slow"
+scenario = "slow.toml"
+paper = {{ distance_nm = 1.0 }}
+[[runs]]
+label = "fast"
+scenario = "fast.toml"
+paper = {{ distance_nm = 2.0 }}
+{extra}
+"""
+
+
+def write(tmp_path, extra=""):
+    (tmp_path / "slow.toml").write_text(textwrap.dedent(SCENARIO.format(tau=6.0e5)))
+    (tmp_path / "fast.toml").write_text(textwrap.dedent(SCENARIO.format(tau=9.0e5)))
+    path = tmp_path / "compare.toml"
+    path.write_text(textwrap.dedent(COMPARISON.format(extra=extra)))
+    return path
+
+
+def test_compare_runs_both_and_tabulates_changes(tmp_path, capsys):
+    assert main(["compare", str(write(tmp_path)), "--results", str(tmp_path / "results"), "--no-progress"]) == 0
+    folder = next((tmp_path / "results" / "speeds").iterdir())
+    table = pd.read_csv(folder / "table.csv").set_index("metric")
+    slow, fast = table.loc["distance_nm", "slow (ours)"], table.loc["distance_nm", "fast (ours)"]
+    assert fast > slow > 0
+    assert table.loc["distance_nm", "fast vs slow (% ours)"] == pytest.approx(100 * (fast - slow) / slow)
+    assert table.loc["distance_nm", "fast vs slow (% paper)"] == pytest.approx(100.0)
+    assert (folder / "tracks.png").is_file() and (folder / "table.md").is_file()
+    assert "| distance_nm |" in capsys.readouterr().out
+
+
+def test_table_leaves_missing_figures_empty():
+    spec = {"analysis": "voyage", "metrics": ["cost_usd"], "runs": [{"label": "a"}]}
+    table = comparison_table(spec, {"a": {"analyses": {}}})
+    assert table.loc[0, "a (ours)"] is None
+
+
+@pytest.mark.parametrize("extra, message", [
+    ('colour = "red"', r"compare.toml: runs\[1\]: unknown key 'colour'"),
+    ('[[runs]]\nlabel = "x"\nscenario = "none.toml"', r"runs\[2\].scenario: scenario file not found"),
+    ('[[runs]]\nlabel = "x"\nscenario = "slow.toml"\npaper = { speed = 1 }', r"runs\[2\].paper: 'speed' is not one of"),
+])
+def test_comparison_file_errors(tmp_path, extra, message):
+    with pytest.raises(ScenarioError, match=message):
+        load_comparison(write(tmp_path, extra))
+
+
+def test_unknown_baseline_and_cli_exit_code(tmp_path, capsys):
+    path = write(tmp_path)
+    path.write_text(path.read_text().replace('baseline = "slow"', 'baseline = "medium"'))
+    assert main(["compare", str(path)]) == 2
+    assert "baseline 'medium' is not a run label (slow, fast)" in capsys.readouterr().err
