@@ -1,6 +1,6 @@
 /* KCS plant FMU: start values, get/set by value reference and doStep over the shared
  * dynamics of models/common/kcs_dynamics.h. Equations and sources: readme.md. */
-#include "fmu_model.h"
+#include "kcs_fmu.h"
 
 #define IN(name) {vr_##name, #name, TypeReal, CausalityInput, VariabilityContinuous}
 #define OUT(name) {vr_##name, #name, TypeReal, CausalityOutput, VariabilityContinuous}
@@ -84,28 +84,12 @@ fmi2Status model_get_real(ModelInstance *comp, fmi2ValueReference vr, fmi2Real *
 }
 
 fmi2Status model_set_real(ModelInstance *comp, fmi2ValueReference vr, fmi2Real value) {
-    double *f = field(&comp->data, vr);
-    if (vr == vr_h_int && !(value > 0.0)) {
-        log_error(comp, "fmi2SetReal: h_int (value reference %u) = %g must be positive",
-                  (unsigned)vr, value);
-        return fmi2Error;
-    }
-    if ((vr == vr_tau_u_max || vr == vr_tau_r_max) && value < 0.0) {
-        log_error(comp, "fmi2SetReal: %s (value reference %u) = %g must not be negative",
-                  model_variables[vr].name, (unsigned)vr, value);
-        return fmi2Error;
-    }
-    *f = value;
-    return fmi2OK;
+    return kcs_set_checked(comp, vr, field(&comp->data, vr), value);
 }
 
 fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
     ModelData *d = &comp->data;
-    if (kcs_integrate(&d->p, d->X, &d->in, h) != 0) {
-        log_error(comp, "fmi2DoStep: the state became non-finite in the step from t = %g s", t);
-        return fmi2Error;
-    }
-    return fmi2OK;
+    return kcs_step(comp, &d->p, d->X, &d->in, t, h);
 }
 
 void model_free_resources(ModelInstance *comp) { (void)comp; }

@@ -1,7 +1,7 @@
 /* KCSVendorB plant FMU: the shared KCS dynamics (models/common/kcs_dynamics.h) behind a
  * vendor interface in kN, kN m, knots and degrees. Every value is converted to SI at the
  * boundary (set/get); the state and the integration are those of the KCS FMU. */
-#include "fmu_model.h"
+#include "kcs_fmu.h"
 
 #define KNOT 0.514444444444444444 /* m/s per knot (1852 m / 3600 s) */
 #define DEG (M_PI / 180.0)        /* rad per degree */
@@ -90,27 +90,12 @@ fmi2Status model_get_real(ModelInstance *comp, fmi2ValueReference vr, fmi2Real *
 
 fmi2Status model_set_real(ModelInstance *comp, fmi2ValueReference vr, fmi2Real value) {
     double to_si, *f = field(&comp->data, vr, &to_si);
-    if (vr == vr_h_int && !(value > 0.0)) {
-        log_error(comp, "fmi2SetReal: h_int (value reference %u) = %g must be positive",
-                  (unsigned)vr, value);
-        return fmi2Error;
-    }
-    if ((vr == vr_tau_u_max || vr == vr_tau_r_max) && value < 0.0) {
-        log_error(comp, "fmi2SetReal: %s (value reference %u) = %g must not be negative",
-                  model_variables[vr].name, (unsigned)vr, value);
-        return fmi2Error;
-    }
-    *f = value * to_si;
-    return fmi2OK;
+    return kcs_set_checked(comp, vr, f, value * to_si);
 }
 
 fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
     ModelData *d = &comp->data;
-    if (kcs_integrate(&d->p, d->X, &d->in, h) != 0) {
-        log_error(comp, "fmi2DoStep: the state became non-finite in the step from t = %g s", t);
-        return fmi2Error;
-    }
-    return fmi2OK;
+    return kcs_step(comp, &d->p, d->X, &d->in, t, h);
 }
 
 void model_free_resources(ModelInstance *comp) { (void)comp; }

@@ -1,0 +1,41 @@
+/* Glue shared by the plant FMUs built on kcs_dynamics.h (KCS, KCSVendorB): the checks on a
+ * parameter set through fmi2SetReal and the communication step. The variables are matched by
+ * their names, which both models share for the KCS parameters (h_int, tau_u_max, ...).
+ */
+#ifndef KCS_FMU_H
+#define KCS_FMU_H
+
+#include <string.h>
+
+#include "fmu_model.h"
+#include "kcs_dynamics.h"
+
+/* Store si_value (already in SI) in *field after the checks a plant parameter needs. */
+static inline fmi2Status kcs_set_checked(ModelInstance *comp, fmi2ValueReference vr, double *field,
+                                         double si_value) {
+    const char *name = model_variables[vr].name;
+    if (strcmp(name, "h_int") == 0 && !(si_value > 0.0)) {
+        log_error(comp, "fmi2SetReal: h_int (value reference %u) = %g must be positive", (unsigned)vr,
+                  si_value);
+        return fmi2Error;
+    }
+    if ((strcmp(name, "tau_u_max") == 0 || strcmp(name, "tau_r_max") == 0) && si_value < 0.0) {
+        log_error(comp, "fmi2SetReal: %s (value reference %u) = %g must not be negative", name,
+                  (unsigned)vr, si_value);
+        return fmi2Error;
+    }
+    *field = si_value;
+    return fmi2OK;
+}
+
+/* Integrate the plant over one communication step [t, t + h]. */
+static inline fmi2Status kcs_step(ModelInstance *comp, const KcsParameters *p, double X[KCS_NSTATES],
+                                  const KcsInputs *in, double t, double h) {
+    if (kcs_integrate(p, X, in, h) != 0) {
+        log_error(comp, "fmi2DoStep: the state became non-finite in the step from t = %g s", t);
+        return fmi2Error;
+    }
+    return fmi2OK;
+}
+
+#endif
