@@ -14,7 +14,6 @@ import hashlib
 import itertools
 import json
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -23,6 +22,7 @@ import numpy as np
 
 from orchestrator import encounters
 from orchestrator.errors import ScenarioError
+from orchestrator.scenario import read_toml
 
 BATCH_TOP_KEYS = ("batch", "set", "grid", "monte_carlo", "acceptance", "report")
 BATCH_KEYS = ("name", "scenario", "description")
@@ -158,12 +158,7 @@ def load_batch(path) -> BatchSpec:
         message names the batch file and the key.
     """
     path = Path(path)
-    if not path.is_file():
-        raise ScenarioError(f"{path}: batch file not found")
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ScenarioError(f"{path}: not valid TOML: {exc}") from exc
+    data, _ = read_toml(path, "batch")
     where = str(path)
     _reject_unknown(data, BATCH_TOP_KEYS, where, "")
     batch = _table(data, "batch", where, "batch", required=True)
@@ -186,7 +181,7 @@ def load_batch(path) -> BatchSpec:
             raise ScenarioError(f"{where}: 'grid.\"{key}\"' must be a non-empty list of values")
         if len({_canonical(v) for v in values}) != len(values):
             raise ScenarioError(f"{where}: 'grid.\"{key}\"' lists a value twice")
-    scenario_data = tomllib.loads(scenario.read_text(encoding="utf-8"))
+    scenario_data, _ = read_toml(scenario, "scenario")
     monte_carlo = None
     if "monte_carlo" in data:
         monte_carlo = _monte_carlo(_table(data, "monte_carlo", where, "monte_carlo", True), where, scenario_data)

@@ -24,13 +24,13 @@ from __future__ import annotations
 import logging
 import math
 import shutil
-import tomllib
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
 from orchestrator.errors import ScenarioError
+from orchestrator.scenario import read_toml
 
 log = logging.getLogger(__name__)
 
@@ -40,12 +40,7 @@ RUN_KEYS = ("label", "scenario", "paper", "figures")
 
 def load_comparison(path: Path) -> dict[str, Any]:
     """Read and check a comparison file; errors name the file and the key."""
-    if not path.is_file():
-        raise ScenarioError(f"{path}: comparison file not found")
-    try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: not valid TOML: {exc}") from exc
+    data, _ = read_toml(path, "comparison")
     for key in data:
         if key not in KEYS:
             raise ScenarioError(f"{path}: unknown key '{key}' (valid: {', '.join(KEYS)})")

@@ -147,13 +147,7 @@ def load_scenario(path, overrides: Mapping[str, Any] | None = None) -> Scenario:
         inconsistent value; the message names the file and the key.
     """
     path = Path(path)
-    if not path.is_file():
-        raise ScenarioError(f"{path}: scenario file not found")
-    raw = path.read_bytes()
-    try:
-        data = tomllib.loads(raw.decode("utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ScenarioError(f"{path}: not valid TOML: {exc}") from exc
+    data, raw = read_toml(path, "scenario")
     if overrides:
         for dotted, value in overrides.items():
             apply_override(data, dotted, value, str(path))
@@ -176,6 +170,23 @@ def load_scenario(path, overrides: Mapping[str, Any] | None = None) -> Scenario:
         outputs=outputs,
         sha256=hashlib.sha256(raw).hexdigest(),
     )
+
+
+def read_toml(path: Path, kind: str) -> tuple[dict, bytes]:
+    """Parse a TOML input file; return its data and raw bytes.
+
+    Every file the toolchain reads (scenario, batch, comparison, offline planning) comes in
+    here, so a missing or malformed one always reads ``<path>: <kind> file not found`` or
+    ``<path>: not valid TOML: <where the parser stopped>``.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ScenarioError(f"{path}: {kind} file not found")
+    raw = path.read_bytes()
+    try:
+        return tomllib.loads(raw.decode("utf-8")), raw
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ScenarioError(f"{path}: not valid TOML: {exc}") from exc
 
 
 def apply_override(data: dict, dotted: str, value: Any, where: str) -> None:

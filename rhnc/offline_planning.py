@@ -41,7 +41,6 @@ from __future__ import annotations
 import csv
 import hashlib
 import logging
-import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -49,6 +48,7 @@ from typing import Any
 import numpy as np
 
 from orchestrator.errors import ScenarioError
+from orchestrator.scenario import read_toml
 from rhnc.energy import EnergyParameters
 from rhnc.fields import FieldWeights, GuidanceParameters, SuperpositionField, resample_weather
 from rhnc.metocean import KNOT, NM, MetOceanField
@@ -92,12 +92,7 @@ def _point(table: Mapping[str, Any], key: str, where: str) -> np.ndarray:
 def load_offline_scenario(path: Path) -> dict[str, Any]:
     """Read and check an offline planning TOML; errors name the file and the key."""
     path = Path(path)
-    if not path.is_file():
-        raise ScenarioError(f"{path}: scenario file not found")
-    try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: not valid TOML: {exc}") from exc
+    data, _ = read_toml(path, "scenario")
     where = str(path)
     _reject(data, TOP_KEYS, where)
     for key in ("metocean", "planner", "cases"):
