@@ -210,12 +210,12 @@ def encounter_analysis(frame, scenario, cosim, out_dir) -> dict:
     """Minimum separation against R + R_i per obstacle, input bounds, return to the track.
 
     The obstacles are the array output feeding any participant's ``obstacles`` input; the
-    reference is the array feeding a ``reference`` input (its first row is the reference
-    state at the current time).  Cross-track error is measured from that point across the
-    reference course; "back on track" is the first time after the closest approach from
-    which it stays within 0.2 nm.
+    reference is the array feeding a ``reference`` input, interpolated at each sample's
+    time.  Cross-track error is measured from that point across the reference course;
+    "back on track" is the first time after the closest approach from which it stays
+    within 0.2 nm.
     """
-    from rhnc.encounter import cross_track_error, separations, time_back_on_track
+    from rhnc.encounter import cross_track_error, reference_at_times, separations, time_back_on_track
 
     plant = plant_name(cosim)
     t = frame["time_s"].to_numpy()
@@ -239,8 +239,8 @@ def encounter_analysis(frame, scenario, cosim, out_dir) -> dict:
         if bound is not None:
             result[f"{port}_within_bound"] = bool(peak <= float(bound) * (1 + 1e-9))
     if "reference" in sources:
-        reference = array_output(frame, sources["reference"])[:, 0, :]
-        cross = cross_track_error(x, y, reference[:, 1], reference[:, 2], reference[:, 3])
+        reference = reference_at_times(array_output(frame, sources["reference"]), t)
+        cross = cross_track_error(x, y, reference[:, 0], reference[:, 1], reference[:, 2])
         after = t >= passed_at
         result["cross_track_end_nm"] = float(abs(cross[-1]) / 1852.0)
         result["cross_track_max_after_passing_nm"] = float(np.max(np.abs(cross[after])) / 1852.0)

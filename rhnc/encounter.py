@@ -86,3 +86,21 @@ def time_back_on_track(t, cross_track_m, after_s: float, tolerance_m: float):
         return float(t[t >= after_s][0])
     last_outside = np.nonzero(outside)[0][-1]
     return float(t[last_outside + 1]) if last_outside + 1 < t.size else None
+
+
+def reference_at_times(reference: np.ndarray, times) -> np.ndarray:
+    """The reference state at each sample's own time.
+
+    ``reference`` is the recorded reference output, shape (samples, N + 1, 7) with columns
+    t, x, y, psi, u, v, r: the trajectory last published (held between the publisher's
+    steps).  Each sample's state is interpolated in its own trajectory at its time, so a
+    reference planned every 4 min, or not republished at the last sample, still gives the
+    point the ship should be at then.  Returns (samples, 6).
+    """
+    reference = np.asarray(reference, dtype=float)
+    out = np.empty((reference.shape[0], 6))
+    for k, (trajectory, t) in enumerate(zip(reference, np.asarray(times, dtype=float))):
+        columns = trajectory[:, 1:].copy()
+        columns[:, 2] = np.unwrap(columns[:, 2])
+        out[k] = [np.interp(t, trajectory[:, 0], columns[:, j]) for j in range(6)]
+    return out

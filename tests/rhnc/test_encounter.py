@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from rhnc.encounter import cross_track_error, segment_min_distance, separations, time_back_on_track
+from rhnc.encounter import (cross_track_error, reference_at_times, segment_min_distance, separations,
+                             time_back_on_track)
 from rhnc.metocean import NM
 
 
@@ -38,3 +39,12 @@ def test_cross_track_sign_and_return():
     cross = np.array([0.0, 500.0, 300.0, 100.0, 50.0, 20.0])
     assert time_back_on_track(t, cross, after_s=1.0, tolerance_m=200.0) == 3.0
     assert time_back_on_track(t, cross + 1000, after_s=1.0, tolerance_m=200.0) is None
+
+
+def test_reference_is_read_at_each_samples_own_time():
+    # one trajectory published at t = 0 (points every 60 s), held over three samples 20 s apart
+    trajectory = np.array([[0.0, 0.0, 0.0, 0.0, 5.0, 0.0, 0.0],
+                           [60.0, 300.0, 0.0, 0.0, 5.0, 0.0, 0.0]])
+    held = np.repeat(trajectory[None], 3, axis=0)
+    states = reference_at_times(held, [0.0, 20.0, 40.0])
+    np.testing.assert_allclose(states[:, 0], [0.0, 100.0, 200.0])
