@@ -92,6 +92,14 @@ class ReferencePathParticipant(Participant):
         Constant-radius turn [nm]; > 0 starboard, < 0 port; absent: straight line.
     waypoints_nm : list of [x, y]
         Instead of start/course: a polyline sailed from its first point.
+    goal_nm : [x, y]
+        Instead of course or waypoints: with ``start_nm``, the shortest obstacle-free route
+        from start to goal, planned once before departure (Offline-SPNC,
+        :mod:`rhnc.offline_route`) around the circles of ``avoid``.
+    avoid : list of tables
+        Static obstacles for ``goal_nm``: ``{ center_nm = [x, y], radius_nm = r }``.
+    avoid_margin_nm : float
+        Added to every radius in ``avoid`` (own hazard radius, a safety margin; default 0).
     speed_kn : float
         Speed along the path [kn].
     horizon_steps : int
@@ -100,7 +108,8 @@ class ReferencePathParticipant(Participant):
         Spacing of the points [s] (default: this participant's step size).
     """
 
-    OPTIONS = ("start_nm", "course_deg", "turn_radius_nm", "waypoints_nm", "speed_kn", "horizon_steps", "interval_s")
+    OPTIONS = ("start_nm", "course_deg", "turn_radius_nm", "waypoints_nm", "goal_nm", "avoid", "avoid_margin_nm",
+               "speed_kn", "horizon_steps", "interval_s")
 
     def __init__(self, name: str, path, horizon_steps: int, interval_s: float, start_time: float) -> None:
         super().__init__(name)
@@ -119,10 +128,14 @@ class ReferencePathParticipant(Participant):
         speed = _number(options, "speed_kn", where) * KNOT
         if speed <= 0.0:
             raise ScenarioError(f"{where}: option 'speed_kn' must be > 0")
+        if "goal_nm" in options:
+            waypoints = _planned_route(options, where)
         if "waypoints_nm" in options:
-            if any(k in options for k in ("start_nm", "course_deg", "turn_radius_nm")):
-                raise ScenarioError(f"{where}: give either 'waypoints_nm' or 'start_nm' + 'course_deg', not both")
+            if any(k in options for k in ("start_nm", "course_deg", "turn_radius_nm", "goal_nm")):
+                raise ScenarioError(f"{where}: give either 'waypoints_nm', 'start_nm' + 'course_deg' "
+                                    "or 'start_nm' + 'goal_nm'")
             waypoints = _points(options["waypoints_nm"], where, "waypoints_nm") * NM
+        if "waypoints_nm" in options or "goal_nm" in options:
             if len(waypoints) < 2 or np.any(np.hypot(*np.diff(waypoints, axis=0).T) == 0.0):
                 raise ScenarioError(f"{where}: option 'waypoints_nm' needs >= 2 distinct consecutive points")
 
@@ -167,6 +180,33 @@ class ReferencePathParticipant(Participant):
 
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         return {"reference": self.reference_at(time)}
+
+
+def _planned_route(options: Mapping[str, Any], where: str) -> np.ndarray:
+    """The shortest obstacle-free route [m] for ``start_nm`` + ``goal_nm`` + ``avoid``."""
+    from rhnc.offline_route import shortest_route
+
+    if "start_nm" not in options or any(k in options for k in ("course_deg", "turn_radius_nm")):
+        raise ScenarioError(f"{where}: option 'goal_nm' goes with 'start_nm' (and no 'course_deg')")
+    start = _points([options["start_nm"]], where, "start_nm")[0] * NM
+    goal = _points([options["goal_nm"]], where, "goal_nm")[0] * NM
+    avoid = options.get("avoid", [])
+    if not isinstance(avoid, list):
+        raise ScenarioError(f"{where}: option 'avoid' must be a list of {{ center_nm, radius_nm }} tables")
+    circles = []
+    for i, entry in enumerate(avoid):
+        if not isinstance(entry, Mapping):
+            raise ScenarioError(f"{where}.avoid[{i}]: expected {{ center_nm = [x, y], radius_nm = r }}")
+        reject_unknown_options(entry, ("center_nm", "radius_nm"), f"{where}.avoid[{i}]")
+        centre = _points([entry.get("center_nm")], f"{where}.avoid[{i}]", "center_nm")[0]
+        if "radius_nm" not in entry:
+            raise ScenarioError(f"{where}.avoid[{i}]: missing 'radius_nm'")
+        circles.append([*(centre * NM), _number(entry, "radius_nm", f"{where}.avoid[{i}]") * NM])
+    margin = _number(options, "avoid_margin_nm", where) * NM if "avoid_margin_nm" in options else 0.0
+    try:
+        return shortest_route(start, goal, circles, margin)
+    except ValueError as error:
+        raise ScenarioError(f"{where}: {error}") from None
 
 
 def _number(options: Mapping[str, Any], key: str, where: str) -> float:
