@@ -39,6 +39,7 @@ class RunOutcome:
     wall_time_s: float
     recorder: Recorder
     participant_summaries: dict[str, dict[str, Any]] = field(default_factory=dict)
+    participant_tables: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
 
 
 class CoSimulation:
@@ -197,13 +198,16 @@ class CoSimulation:
                 bar.close()
             for participant in self.participants:
                 participant.terminate()
-        summaries = {}
+        summaries, tables = {}, {}
         for participant in self.participants:
             try:
                 summaries[participant.name] = participant.summary()
+                for table, rows in participant.tables().items():
+                    tables[f"{participant.name}_{table}"] = rows
             except Exception as exc:  # a summary must not hide the run's own outcome
                 summaries[participant.name] = {"error": f"{type(exc).__name__}: {exc}"}
-        return RunOutcome(status, reason, steps_done, wallclock.perf_counter() - started, recorder, summaries)
+        return RunOutcome(status, reason, steps_done, wallclock.perf_counter() - started, recorder, summaries,
+                          tables)
 
     def _publish(self, participant: Participant, stamp: float, outputs, bus, recorder) -> None:
         declared = self._declared[participant.name]

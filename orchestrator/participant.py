@@ -75,6 +75,10 @@ class Participant(abc.ABC):
         """Key figures for ``summary.json`` (JSON-serialisable), gathered after the run."""
         return {}
 
+    def tables(self) -> dict[str, list[dict[str, Any]]]:
+        """Event logs for the results folder: each written as ``<participant>_<name>.csv``."""
+        return {}
+
 
 def reject_unknown_options(options: Mapping[str, Any], allowed: Sequence[str], where: str) -> None:
     """Raise ``ScenarioError`` naming the first option key not in ``allowed``.

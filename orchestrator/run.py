@@ -8,6 +8,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import pandas as pd
+
 from orchestrator.errors import ToolchainError
 from orchestrator.master import CoSimulation
 from orchestrator.results import RunFolder, new_run_id, versions
@@ -70,6 +72,8 @@ def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, 
         frame.to_csv(folder.path(series_name), index=False)
     if cosim.metocean is not None:
         cosim.metocean.to_netcdf(folder.path("metocean.nc"))
+    for name, rows in outcome.participant_tables.items():
+        pd.DataFrame(rows).to_csv(folder.path(f"{name}.csv"), index=False)
     figures: dict[str, Any] = {}
     status, reason = outcome.status, outcome.reason
     for name in scenario.outputs.analyses:
@@ -102,6 +106,7 @@ def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, 
         "real_time_factor": _ratio(outcome.steps_done * sim.dt_s, outcome.wall_time_s),
         "metocean": cosim.metocean.source if cosim.metocean is not None else None,
         "timeseries": series_name,
+        "tables": [f"{name}.csv" for name in outcome.participant_tables],
         "figures": figure_files,
         "figure_errors": figure_errors,
         "analyses": figures,

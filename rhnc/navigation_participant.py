@@ -178,6 +178,10 @@ class NavigationParticipant(Participant):
             "et_activations": sum(1 for t in transitions if t["state"] == TRIGGERED),
         }
 
+    def tables(self) -> dict[str, list[dict]]:
+        """The event trigger's transitions (time, obstacle, kind, range, cause, state, ET)."""
+        return {"et_transitions": [t.as_dict() for t in self.trigger.transitions]}
+
     # -- one planning instant -------------------------------------------------------------
     def _planning_start(self, time: float, measured: Mapping[str, Value],
                         inputs: Mapping[str, Value]) -> tuple[float, float, float]:

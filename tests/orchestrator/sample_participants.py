@@ -36,6 +36,9 @@ class Clock(Participant):
     def summary(self):
         return {"steps": self.count}
 
+    def tables(self):
+        return {"calls": [{"time": t, "step": h} for t, h in self.calls]}
+
 
 class Echo(Participant):
     """Copies its input `value` to its output `seen`, and remembers what it saw."""

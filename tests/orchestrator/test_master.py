@@ -87,6 +87,8 @@ def test_a_nan_output_fails_the_run_and_keeps_what_was_computed(write_scenario, 
     frame = pd.read_parquet(report.folder / "timeseries.parquet")
     assert frame["time_s"].iloc[-1] == 3.0
     assert not list((tmp_path / "results" / "scenario").glob(".*partial"))
+    calls = pd.read_csv(report.folder / "clock_calls.csv")  # a participant's event log
+    assert list(calls["time"]) == [0.0, 1.0, 2.0, 3.0, 4.0]
 
 
 def test_a_participant_exception_is_a_failed_run(write_scenario, tmp_path):
