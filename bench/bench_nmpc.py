@@ -172,7 +172,7 @@ def main() -> None:
         rows.append((f"rhnc {solver}", np.median(t), np.max(t), f"{np.median(run['iterations']):.0f}/{np.max(run['iterations'])}", run["fallbacks"], f"{run['clearance_m']:.1f}"))
     soft = closed_loop("fatrop", args.steps, soft=True)
     t = soft["times"] * 1e3
-    rows.append(("rhnc fatrop, soft (default)", np.median(t), np.max(t),
+    rows.append(("rhnc fatrop, default", np.median(t), np.max(t),
                  f"{np.median(soft['iterations']):.0f}/{np.max(soft['iterations'])}", soft["fallbacks"],
                  f"{soft['clearance_m']:.1f}"))
     if not args.no_do_mpc:

@@ -103,13 +103,14 @@ class NMPCSettings:
     terminal_weight : bool
         Use the DARE terminal weight P (else P = Q).
     collision_slack_weight : float or None
-        Soft collision constraints: one slack sigma_k >= 0 per stage relaxes that stage's
-        clearance constraints, at the cost ``w (sigma_k + sigma_k^2)``.  The L1 term is an
-        exact penalty: while the hard problem is feasible (and w exceeds its multipliers)
-        the solution is the hard-constrained one; when it is not (an obstacle noticed too
-        late, a target that closes faster than the ship can turn) the NMPC still returns
-        the plan that violates the clearance least instead of failing into a fallback that
-        ignores the obstacle.  None: hard constraints.
+        Soft collision constraints as the second attempt: one slack sigma_k >= 0 per stage
+        relaxes that stage's clearance constraints, at the cost ``w (sigma_k + sigma_k^2)``.
+        Each step first solves the hard problem (the slacks fixed at zero by their bounds,
+        the same NLP); only when that fails (an obstacle noticed too late, a target that
+        closes faster than the ship can turn) it re-solves with the slacks free and returns
+        the plan that violates the clearance least, instead of a fallback that ignores the
+        obstacle.  (The L1 term is an exact penalty: were the hard problem feasible, the
+        soft one would give the same plan.)  None: no slacks and no second attempt.
     """
 
     horizon_steps: int = 15
@@ -334,6 +335,12 @@ class NMPCController:
         self._lbg = np.array(lbg, dtype=float)
         self._ubg = np.array(ubg, dtype=float)
         self._solver = ca.nlpsol("rhnc_nmpc", s.solver, nlp, self._solver_options(equality))
+        # The second, relaxed attempt gets a solver of its own, built on first need: a solver
+        # keeps state between calls (fatrop), and a failed hard attempt left in it spoils the
+        # relaxed one started from the same guess (seen: 162 iterations and failure, against
+        # 59 and success from a fresh solver).
+        self._relaxed_solver = None
+        self._relaxed_build = (nlp, self._solver_options(equality))
         # index helpers into the stacked decision vector (z_k then w_k per stage)
         stride = 8 + n_sigma
         self._z_index = np.array([[k * stride + i for i in range(6)] for k in range(N + 1)])
@@ -558,11 +565,21 @@ class NMPCController:
         x0 = self._initial_guess(time_s, state, ref_scaled, w_d, origin)
         self._push_guess_to_starboard(x0, obs, ref_scaled)
 
-        start = time.perf_counter()
-        result = self._solver(x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=self._lbg, ubg=self._ubg)
-        elapsed = time.perf_counter() - start
-        stats = self._solver.stats()
-        x_opt = np.array(result["x"]).ravel()
+        # First the hard problem (slacks fixed at zero: the paper's constraints); only when it
+        # fails, the soft one (slacks free): the plan that violates the clearance least.
+        elapsed, iterations = 0.0, 0
+        for relaxed in ((False, True) if self._sigma_index.size else (False,)):
+            ubx[self._sigma_index] = np.inf if relaxed else 0.0
+            start = time.perf_counter()
+            solver = self._relaxed() if relaxed else self._solver
+            result = solver(x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=self._lbg, ubg=self._ubg)
+            elapsed += time.perf_counter() - start
+            stats = solver.stats()
+            x_opt = np.array(result["x"]).ravel()
+            iterations += int(stats.get("iter_count", -1))
+            success = bool(stats.get("success", False)) and np.all(np.isfinite(x_opt))
+            if success:
+                break
         g_opt = np.array(result["g"]).ravel()
         violation = float(
             max(
@@ -572,11 +589,9 @@ class NMPCController:
                 np.max(np.maximum(x_opt - ubx, 0.0), initial=0.0),
             )
         )
-        success = bool(stats.get("success", False)) and np.all(np.isfinite(x_opt))
         status = str(stats.get("return_status", "unknown"))
         if self.settings.solver == "fatrop":  # fatrop reports an integer code
             status = "Solve_Succeeded" if stats.get("success", False) else f"fatrop_return_code_{status}"
-        iterations = int(stats.get("iter_count", -1))
         cost = float(result["f"])
         slack = float(np.max(x_opt[self._sigma_index], initial=0.0))
         slack = slack if slack > SLACK_TOLERANCE else 0.0
@@ -596,6 +611,13 @@ class NMPCController:
         solution = self._fallback(time_s, state, previous_tau, elapsed, iterations, status, cost, violation)
         LOG.info("NMPC solve at t = %.1f s failed (%s); fallback applied", time_s, status)
         return solution
+
+    def _relaxed(self):
+        """The solver of the relaxed (soft-constraint) attempt, built on first use."""
+        if self._relaxed_solver is None:
+            nlp, options = self._relaxed_build
+            self._relaxed_solver = ca.nlpsol("rhnc_nmpc_relaxed", self.settings.solver, nlp, options)
+        return self._relaxed_solver
 
     def _fallback(self, time_s, state, previous_tau, elapsed, iterations, status, cost, violation) -> NMPCSolution:
         """Shifted previous plan, or hold the surge force with zero yaw moment."""
