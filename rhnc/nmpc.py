@@ -42,9 +42,14 @@ the straight chord between two admissible substep points cannot enter the circle
 ``R + R_i``.  Obstacle slots are fixed (``max_obstacles``); unused or switched-off slots
 get an "active" parameter of 0, which turns their constraint into ``1 >= 0``.
 
-Failures: when the solver does not report success, the controller applies the previous
-plan shifted by one interval (its next input and predicted states) and flags the step; when
-no previous plan is left it holds the previous surge force with zero yaw moment.
+When the problem with these hard constraints has no solution (an obstacle noticed too
+late), the step is solved again with one slack per stage relaxing them at a heavy L1 + L2
+cost (``collision_slack_weight``): the plan that violates the clearance least, reported in
+the telemetry as ``collision_slack``.
+
+Failures: when neither attempt reports success, the controller applies the previous plan
+shifted by one interval (its next input and predicted states) and flags the step; when no
+previous plan is left it holds the previous surge force with zero yaw moment.
 """
 
 from __future__ import annotations
