@@ -1,7 +1,6 @@
 """Offline-SPNC's route: shortest obstacle-free path around circles."""
 
 import math
-import textwrap
 
 import numpy as np
 import pandas as pd
@@ -46,39 +45,18 @@ def test_start_inside_an_obstacle():
         shortest_route((0, 0), (10, 0), [(0, 0, 5)])
 
 
-SCENARIO = """
-connections = [
-  "route.reference -> ctrl.reference",
-  "ship.x -> ctrl.x", "ship.y -> ctrl.y", "ship.psi -> ctrl.psi",
-  "ship.u -> ctrl.u", "ship.v -> ctrl.v", "ship.r -> ctrl.r",
-  "ctrl.tau_u -> ship.tau_u", "ctrl.tau_r -> ship.tau_r",
-]
-[simulation]
-steps = 110
-dt_s = 20.0
-[participants.route]
-type = "reference_path"
-[participants.route.options]
+ROUTE = """
 start_nm = [0.0, 0.0]
 goal_nm = [10.0, 10.0]
 speed_kn = 18.0
 avoid = [{{ center_nm = [5.0, 5.0], radius_nm = 2.0 }}]
 avoid_margin_nm = {margin}
-[participants.ctrl]
-type = "control"
-[participants.ship]
-fmu = "KCS"
-[participants.ship.parameters]
-u0 = 9.26
-psi0 = 0.785398
-[outputs]
-figures = []
 """
+SHIP = "u0 = 9.26\npsi0 = 0.785398"
 
 
-def test_offline_spnc_tracks_the_planned_route_around_an_island(tmp_path):
-    path = tmp_path / "spnc.toml"
-    path.write_text(textwrap.dedent(SCENARIO.format(margin=0.3)))
+def test_offline_spnc_tracks_the_planned_route_around_an_island(tmp_path, tracking_scenario):
+    path = tracking_scenario("spnc", 110, ROUTE.format(margin=0.3), SHIP)
     report = run_scenario(path, tmp_path, progress=False)
     assert report.ok, report.reason
     frame = pd.read_parquet(report.folder / "timeseries.parquet")
@@ -87,12 +65,10 @@ def test_offline_spnc_tracks_the_planned_route_around_an_island(tmp_path):
     assert distance.min() <= 2.6 * NM  # and it is the short way round, not a wide berth
 
 
-def test_route_option_errors(tmp_path):
-    path = tmp_path / "bad.toml"
-    path.write_text(textwrap.dedent(SCENARIO.format(margin=0.3)).replace(
-        'avoid = [{ center_nm = [5.0, 5.0], radius_nm = 2.0 }]', 'avoid = [{ center_nm = [0.0, 0.0], radius_nm = 2.0 }]'))
-    with pytest.raises(ScenarioError, match=r"participants.route: the start lies inside obstacle 0"):
-        run_scenario(path, tmp_path, progress=False)
-    path.write_text(textwrap.dedent(SCENARIO.format(margin=0.3)).replace("radius_nm = 2.0 }]", "size = 2.0 }]"))
-    with pytest.raises(ScenarioError, match=r"participants.route.avoid\[0\]: unknown option 'size'"):
-        run_scenario(path, tmp_path, progress=False)
+def test_route_option_errors(tmp_path, tracking_scenario):
+    inside = ROUTE.format(margin=0.3).replace("center_nm = [5.0, 5.0]", "center_nm = [0.0, 0.0]")
+    with pytest.raises(ScenarioError, match=r"participants.ref: the start lies inside obstacle 0"):
+        run_scenario(tracking_scenario("inside", 10, inside, SHIP), tmp_path, progress=False)
+    unknown = ROUTE.format(margin=0.3).replace("radius_nm = 2.0 }]", "size = 2.0 }]")
+    with pytest.raises(ScenarioError, match=r"participants.ref.avoid\[0\]: unknown option 'size'"):
+        run_scenario(tracking_scenario("unknown", 10, unknown, SHIP), tmp_path, progress=False)
