@@ -62,3 +62,30 @@ def test_subprocess_as_a_user_would(tmp_path):
                             capture_output=True, text=True, timeout=60)
     assert result.returncode == 2
     assert result.stderr.strip() == f"error: {tmp_path / 'none.toml'}: scenario file not found"
+
+
+def test_ctrl_c_in_a_terminal_run_keeps_the_results(tmp_path):
+    """SIGINT to a running `orchestrator run`: exit 130, results written, status interrupted."""
+    import signal
+    import time
+
+    scenario = (REPO / "scenarios" / "turning_circle.toml").read_text().replace(
+        "stop_s = 1800.0\ndt_s = 5.0", "stop_s = 360000.0\ndt_s = 0.5")  # long enough to interrupt
+    path = tmp_path / "long.toml"
+    path.write_text(scenario)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "orchestrator", "run", str(path), "--results", str(tmp_path), "--no-progress"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while not list(tmp_path.glob("turning_circle/.*.partial")) and time.monotonic() < deadline:
+        time.sleep(0.05)  # wait until the run has started writing
+    time.sleep(1.0)
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=120)
+    assert process.returncode == 130, err
+    assert "interrupted by the user" in err
+    folder = Path(out.split("results in ")[1].split()[0])
+    summary = json.loads((folder / "summary.json").read_text())
+    assert summary["status"] == "interrupted"
+    assert 0 < summary["simulation"]["steps_done"] < summary["simulation"]["steps_planned"]
+    assert (folder / "timeseries.parquet").is_file()
