@@ -95,3 +95,21 @@ def test_paper_geometry_of_experiment4_triggers_on_the_island_and_keeps_clear(tm
     # the goal is approached after the encounter
     frame = pd.read_parquet(report.folder / "timeseries.parquet")
     assert frame["goal.goal_distance_m"].iloc[-1] < frame["goal.goal_distance_m"].iloc[-60]
+
+
+def test_close_pass_variant_triggers_and_releases_on_both_obstacles(tmp_path):
+    """Both encounters of Experiment 4 with the paper's ranges, on the close-pass variant."""
+    report = run_scenario(REPO / "scenarios" / "exp4_close_pass_variant.toml", tmp_path, progress=False,
+                          overrides={"simulation.steps": 360})
+    summary = json.loads((report.folder / "summary.json").read_text())
+    transitions = pd.read_csv(report.folder / "nav_et_transitions.csv")
+    for kind in ("ship", "static"):
+        states = list(transitions.loc[transitions["kind"] == kind, "state"])
+        assert states[:2] == ["triggered", "passed"], kind
+    for obstacle in summary["analyses"]["encounter"]["obstacles"]:
+        assert obstacle["min_distance_nm"] >= obstacle["required_nm"]
+    assert summary["participants"]["ctrl"]["fallback_count"] == 0
+    frame = pd.read_parquet(report.folder / "timeseries.parquet")
+    after_ship = frame["time_s"] > transitions["time"].iloc[2]
+    distance = frame.loc[after_ship, "goal.goal_distance_m"]
+    assert distance.iloc[-1] < distance.iloc[0]  # the goal is approached after the encounters
