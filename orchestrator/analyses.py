@@ -67,12 +67,20 @@ def _resolve(registry, name, key):
     return getattr(importlib.import_module(module), function)
 
 
-def plant_name(cosim) -> str:
-    """The participant whose outputs include the ship state (x, y, psi)."""
+def find_plant(cosim) -> str | None:
+    """The participant whose outputs include the ship state (x, y, psi), or None."""
     for participant in cosim.participants:
         if {"x", "y", "psi"} <= set(participant.output_names):
             return participant.name
-    raise ToolchainError("no participant outputs the ship state x, y, psi")
+    return None
+
+
+def plant_name(cosim) -> str:
+    """As :func:`find_plant`, for analyses that need a ship: raises without one."""
+    plant = find_plant(cosim)
+    if plant is None:
+        raise ToolchainError("no participant outputs the ship state x, y, psi")
+    return plant
 
 
 def driver_column(scenario, target: str, port: str) -> str:

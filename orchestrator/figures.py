@@ -18,11 +18,11 @@ def _pyplot():
 
 def track_figure(frame, scenario, cosim, out_dir) -> list[str]:
     """The ship's track over the met-ocean wind speed (when the run has a field)."""
-    from orchestrator.analyses import plant_name
+    from orchestrator.analyses import find_plant
 
-    if not any({"x", "y", "psi"} <= set(p.output_names) for p in cosim.participants):
+    plant = find_plant(cosim)
+    if plant is None:
         return []  # no ship in this scenario: no track to draw
-    plant = plant_name(cosim)
     if f"{plant}.x" not in frame.columns:
         return []  # the run failed before the ship reported a position
     plt = _pyplot()
@@ -120,11 +120,11 @@ def zigzag_figure(frame, plant, moment_column, path) -> None:
 
 def controls_figure(frame, scenario, cosim, out_dir) -> list[str]:
     """Surge force and yaw moment applied to the plant over time, with their bounds."""
-    from orchestrator.analyses import driver_column, plant_name
+    from orchestrator.analyses import driver_column, find_plant
 
-    if not any({"x", "y", "psi"} <= set(p.output_names) for p in cosim.participants):
+    plant = find_plant(cosim)
+    if plant is None:
         return []
-    plant = plant_name(cosim)
     parameters = getattr(cosim.participant(plant), "parameters", {})
     plt = _pyplot()
     fig, axes = plt.subplots(2, 1, figsize=(8, 5), sharex=True)
