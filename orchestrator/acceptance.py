@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import math
 import operator
 import re
 from dataclasses import dataclass
 from typing import Any
 
 from orchestrator.batch_spec import Criterion
+from orchestrator.participant import is_finite_number
 
 _OPERATORS = {"<": operator.lt, "<=": operator.le, "==": operator.eq, "!=": operator.ne,
               ">=": operator.ge, ">": operator.gt}
@@ -73,7 +73,7 @@ def reference_value(summary: dict, ref: str) -> float:
             term = float(token)
         except ValueError:
             term = lookup(summary, token)
-            if not _is_number(term):
+            if not is_finite_number(term):
                 raise MissingFigure(f"'{token}' in ref '{ref}' is {term!r}, not a number") from None
         total += sign * float(term)
     return total
@@ -89,7 +89,7 @@ def evaluate(criteria: tuple[Criterion, ...], summary: dict) -> list[Verdict]:
         except MissingFigure as exc:
             verdicts.append(Verdict(criterion.name, False, None, str(exc)))
             continue
-        if criterion.op in _ORDERING and not (_is_number(value) and _is_number(bound)):
+        if criterion.op in _ORDERING and not (is_finite_number(value) and is_finite_number(bound)):
             verdicts.append(Verdict(criterion.name, False, value,
                                     f"'{criterion.metric}' = {value!r} is not a number to compare with {bound!r}"))
             continue
@@ -99,9 +99,5 @@ def evaluate(criteria: tuple[Criterion, ...], summary: dict) -> list[Verdict]:
     return verdicts
 
 
-def _is_number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-
-
 def _show(value) -> str:
-    return f"{value:.6g}" if _is_number(value) else repr(value)
+    return f"{value:.6g}" if is_finite_number(value) else repr(value)

@@ -13,7 +13,6 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -21,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from orchestrator import encounters
+from orchestrator.participant import is_finite_number
 from orchestrator.errors import ScenarioError
 from orchestrator.scenario import read_toml
 
@@ -330,7 +330,7 @@ def _monte_carlo(table: dict, where: str, scenario_data: dict) -> MonteCarloSpec
                for k, v in _table(table, "uniform", where, "monte_carlo.uniform", False).items()}
     normal = {}
     for key, value in _table(table, "normal", where, "monte_carlo.normal", False).items():
-        if not (isinstance(value, list) and len(value) == 2 and all(_is_number(v) for v in value) and value[1] >= 0):
+        if not (isinstance(value, list) and len(value) == 2 and all(is_finite_number(v) for v in value) and value[1] >= 0):
             raise ScenarioError(f"{where}: 'monte_carlo.normal.\"{key}\"' must be [mean, standard deviation >= 0]")
         normal[key] = (float(value[0]), float(value[1]))
     choice = {}
@@ -429,31 +429,27 @@ def _scenario_value(data: dict, dotted: str):
 def _numeric_tree(value) -> bool:
     if isinstance(value, list):
         return bool(value) and all(_numeric_tree(v) for v in value)
-    return _is_number(value)
-
-
-def _is_number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    return is_finite_number(value)
 
 
 def _range(value, where: str, key: str) -> Range:
-    if _is_number(value):
+    if is_finite_number(value):
         return Range(float(value), float(value))
-    if isinstance(value, list) and len(value) == 2 and all(_is_number(v) for v in value) and value[0] <= value[1]:
+    if isinstance(value, list) and len(value) == 2 and all(is_finite_number(v) for v in value) and value[0] <= value[1]:
         return Range(float(value[0]), float(value[1]))
     raise ScenarioError(f"{where}: '{key}' must be a number or [low, high] with low <= high, got {value!r}")
 
 
 def _pair(table: dict, key: str, where: str, prefix: str) -> tuple[float, float]:
     value = table.get(key)
-    if not (isinstance(value, list) and len(value) == 2 and all(_is_number(v) for v in value)):
+    if not (isinstance(value, list) and len(value) == 2 and all(is_finite_number(v) for v in value)):
         raise ScenarioError(f"{where}: '{prefix}{key}' must be [north, east] in nm, got {value!r}")
     return float(value[0]), float(value[1])
 
 
 def _number(table: dict, key: str, where: str, prefix: str, positive: bool = False) -> float:
     value = table.get(key)
-    if not _is_number(value) or (positive and value <= 0):
+    if not is_finite_number(value) or (positive and value <= 0):
         kind = "a positive number" if positive else "a finite number"
         raise ScenarioError(f"{where}: '{prefix}{key}' must be {kind}, got {value!r}")
     return float(value)

@@ -24,6 +24,7 @@ goes through the master's connections.
 from __future__ import annotations
 
 import abc
+import math
 from collections.abc import Mapping, Sequence
 from typing import Any, Union
 
@@ -78,6 +79,14 @@ class Participant(abc.ABC):
     def tables(self) -> dict[str, list[dict[str, Any]]]:
         """Event logs for the results folder: each written as ``<participant>_<name>.csv``."""
         return {}
+
+
+def is_finite_number(value) -> bool:
+    """True for a finite int or float that is not a bool: what every numeric option must be.
+
+    (TOML's ``true`` is a Python bool, itself an int subclass, so it must be excluded.)
+    """
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def reject_unknown_options(options: Mapping[str, Any], allowed: Sequence[str], where: str) -> None:

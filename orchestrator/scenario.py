@@ -14,6 +14,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from orchestrator.participant import is_finite_number
 from orchestrator.errors import ScenarioError
 
 TOP_LEVEL_KEYS = ("connections", "simulation", "metocean", "participants", "outputs")
@@ -236,7 +237,7 @@ def _number(table: dict, key: str, where: str, prefix: str, default=None, positi
             raise ScenarioError(f"{where}: missing key '{prefix}{key}'")
         return default
     value = table[key]
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    if not is_finite_number(value):
         raise ScenarioError(f"{where}: '{prefix}{key}' must be a finite number, got {value!r}")
     if positive and value <= 0:
         raise ScenarioError(f"{where}: '{prefix}{key}' must be positive, got {value!r}")

@@ -21,7 +21,7 @@ import math
 from collections.abc import Mapping
 
 from orchestrator.errors import ScenarioError
-from orchestrator.participant import BuildContext, Participant, reject_unknown_options
+from orchestrator.participant import BuildContext, Participant, is_finite_number, reject_unknown_options
 
 OPTIONS = ("mode", "tau_u_N", "tau_r_steps", "tau_r_Nm", "angle_deg", "execute_s")
 
@@ -100,6 +100,6 @@ def _number(options, key, where, default=None) -> float:
             raise ScenarioError(f"{where}: missing option '{key}'")
         return float(default)
     value = options[key]
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    if not is_finite_number(value):
         raise ScenarioError(f"{where}.{key}: must be a finite number, got {value!r}")
     return float(value)

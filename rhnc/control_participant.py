@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from orchestrator.errors import ModelError, ScenarioError
-from orchestrator.participant import BuildContext, Participant, Value, reject_unknown_options
+from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
 from rhnc.nmpc import SOLVERS, NMPCController, NMPCSettings
 from rhnc.ship_model import STATE_NAMES, load_parameter_set
 
@@ -252,6 +252,6 @@ def _number(options: Mapping[str, Any], key: str, where: str, default: float | N
     if key not in options:
         return default
     value = options[key]
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    if not is_finite_number(value):
         raise ScenarioError(f"{where}: option '{key}' must be a finite number, got {value!r}")
     return float(value)

@@ -69,6 +69,7 @@ from typing import Any
 
 import numpy as np
 
+from orchestrator.participant import is_finite_number
 from orchestrator.errors import ScenarioError
 from rhnc.metocean import KNOT
 
@@ -151,7 +152,7 @@ class EnergyParameters:
                 raise ScenarioError(
                     f"{where}: unknown energy parameter '{key}' (valid: {', '.join(sorted(valid))})"
                 )
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+            if not is_finite_number(value):
                 raise ScenarioError(f"{where}.{key}: expected a finite number, got {value!r}")
             values[key] = float(value)
         return dataclasses.replace(self, **values)

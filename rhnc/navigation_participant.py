@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from orchestrator.errors import ModelError, ScenarioError
-from orchestrator.participant import BuildContext, Participant, Value, reject_unknown_options
+from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
 from rhnc.energy import EnergyParameters, brake_power, cost_rate, emission_rate
 from rhnc.fields import FieldWeights, GuidanceParameters, SuperpositionField, bearing, resample_weather
 from rhnc.metocean import KNOT, NM
@@ -54,7 +54,7 @@ OPTIONS = ("goal_nm", "speed_kn", "horizon_steps", "k1", "k2", "k3", "guidance_e
 
 def _number(options: Mapping[str, Any], key: str, default: float, where: str, positive: bool = False) -> float:
     value = options.get(key, default)
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+    if not is_finite_number(value):
         raise ScenarioError(f"{where}.{key}: expected a number, got {value!r}")
     if positive and not value > 0:
         raise ScenarioError(f"{where}.{key}: must be positive, got {value!r}")

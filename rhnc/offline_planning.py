@@ -47,6 +47,7 @@ from typing import Any
 
 import numpy as np
 
+from orchestrator.participant import is_finite_number
 from orchestrator.errors import ScenarioError
 from orchestrator.scenario import read_toml
 from rhnc.energy import EnergyParameters
@@ -74,7 +75,7 @@ def _number(table: Mapping[str, Any], key: str, where: str, default=None, positi
             raise ScenarioError(f"{where}: missing key '{key}'")
         return float(default)
     value = table[key]
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+    if not is_finite_number(value):
         raise ScenarioError(f"{where}.{key}: expected a number, got {value!r}")
     if (positive and not value > 0) or value < 0:
         raise ScenarioError(f"{where}.{key}: must be {'positive' if positive else 'non-negative'}, got {value!r}")

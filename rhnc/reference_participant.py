@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from orchestrator.errors import ScenarioError
-from orchestrator.participant import BuildContext, Participant, Value, reject_unknown_options
+from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
 
 NM = 1852.0
 KNOT = NM / 3600.0
@@ -211,7 +211,7 @@ def _planned_route(options: Mapping[str, Any], where: str) -> np.ndarray:
 
 def _number(options: Mapping[str, Any], key: str, where: str) -> float:
     value = options[key]
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    if not is_finite_number(value):
         raise ScenarioError(f"{where}: option '{key}' must be a finite number, got {value!r}")
     return float(value)
 

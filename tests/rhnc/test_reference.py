@@ -3,7 +3,6 @@
 import math
 
 import numpy as np
-import pytest
 
 from rhnc.reference import reference_states
 
