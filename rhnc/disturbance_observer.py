@@ -119,3 +119,59 @@ class DisturbanceObserver:
     def ready(self) -> bool:
         """True when the previous sample has its input (an update will correct the estimate)."""
         return self._previous is not None and self._previous[2] is not None
+
+
+def trimmed_reference(reference: np.ndarray, disturbance: np.ndarray, dt_s: float,
+                      params: ShipParameters) -> tuple[np.ndarray, np.ndarray]:
+    """The reference made consistent with the estimated disturbance, and its feed-forward input.
+
+    A reference with the heading along the track and no sway (the paper's Eq. 19) cannot be
+    followed in a cross current or a beam wind: holding the track needs a drift angle.
+    Left as it is, the heading weight (Q = 10 per rad²) outbids the cross-track weight and
+    the ship settles off the track however well the disturbance is known.  So each node
+    keeps its position and yaw rate and gets the body velocity that yields the reference's
+    velocity over ground under the estimate: the water-relative velocity is the ground
+    velocity minus the current, the sway speed is the steady one under the sway load
+    (``v = w_v / d22``), and the heading turns by the drift angle ``atan2(v, u)``.  The
+    feed-forward input balances the surge and yaw equations at that state.
+
+    Parameters
+    ----------
+    reference : (N+1, 6) array
+        Reference states [SI].
+    disturbance : (5,) array
+        Current north, east [m/s], w_u, w_v [N], w_r [N m].
+    dt_s : float
+        Spacing of the reference nodes [s].
+    params : ShipParameters
+
+    Returns
+    -------
+    reference : (N+1, 6) array
+        Trimmed reference states [SI].
+    tau : (N, 2) array
+        Feed-forward input [N, N m], clipped to the bounds.
+    """
+    reference = np.array(reference, dtype=float)
+    c_n, c_e, w_u, w_v, w_r = np.asarray(disturbance, dtype=float)
+    psi, u, v, r = reference[:, 2], reference[:, 3], reference[:, 4], reference[:, 5]
+    ground_n = u * np.cos(psi) - v * np.sin(psi)
+    ground_e = u * np.sin(psi) + v * np.cos(psi)
+    water_n, water_e = ground_n - c_n, ground_e - c_e
+    water_speed = np.hypot(water_n, water_e)
+    sway = np.full_like(u, w_v / params.d22)
+    sway = np.clip(sway, -0.5 * water_speed, 0.5 * water_speed)
+    surge = np.sqrt(np.maximum(water_speed**2 - sway**2, 0.0))
+    heading = np.arctan2(water_e, water_n) - np.arctan2(sway, np.maximum(surge, 1e-9))
+    # keep the heading's turns as the reference had them
+    heading = psi + np.remainder(heading - psi + np.pi, 2.0 * np.pi) - np.pi
+    trimmed = reference.copy()
+    trimmed[:, 2], trimmed[:, 3], trimmed[:, 4] = heading, surge, sway
+    p = params
+    udot = np.diff(surge) / dt_s
+    rdot = np.diff(r) / dt_s
+    su, sv, sr = surge[:-1], sway[:-1], r[:-1]
+    tau_u = p.m11 * udot + p.d11 * su - p.m22 * sv * sr - w_u
+    tau_r = p.m33 * rdot + p.d33 * sr - (p.m11 - p.m22) * su * sv + p.d32 * sv - w_r
+    tau = np.clip(np.column_stack([tau_u, tau_r]), -p.tau_max, p.tau_max)
+    return trimmed, tau

@@ -64,8 +64,8 @@ import casadi as ca
 import numpy as np
 
 from rhnc.colregs import ENCOUNTER_CLASSES
-from rhnc.disturbance_observer import DisturbanceObserver
-from rhnc.nmpc_colregs import CollisionDomains, DomainReport, DomainSettings
+from rhnc.disturbance_observer import DisturbanceObserver, trimmed_reference
+from rhnc.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport, DomainSettings
 from rhnc.nmpc_problem import DISTURBANCE_SIZE, OBSTACLE_FIELDS, build_problem, solver_options
 from rhnc.nmpc_terminal import MIN_TERMINAL_SPEED_MPS, TerminalWeight
 from rhnc.nmpc_warm_start import PlanMemory, push_guess_clear
@@ -415,11 +415,15 @@ class NMPCController:
         reference[:, 3] = np.minimum(reference[:, 3], s.max_speed_mps)
         disturbance = np.zeros(DISTURBANCE_SIZE)
         if self.observer is not None:
+            # offset-free: predict with the estimate, and ask for the drift angle and the
+            # force that hold the reference against it
             disturbance = self.observer.update(time_s, state)
+            reference, tau_d = trimmed_reference(reference, disturbance, s.control_interval_s, self.params)
+            reference[:, 3] = np.minimum(reference[:, 3], s.max_speed_mps)
+        else:
+            tau_d = reference_inputs(reference, s.control_interval_s, self.params)
         ref_scaled = ((reference - np.r_[origin, 0, 0, 0, 0]) / self.state_scale).T
-        # feed-forward: the input that holds the reference against the estimated loads
-        tau_d = reference_inputs(reference, s.control_interval_s, self.params) - disturbance[[2, 4]]
-        w_d = (np.clip(tau_d, -self.params.tau_max, self.params.tau_max) / self.input_scale).T
+        w_d = (tau_d / self.input_scale).T
         if previous_tau is None:
             previous_tau = self.memory.inputs[0] if self.memory.inputs is not None else self.params.equilibrium_tau(state[3])
         w_prev = np.clip(np.asarray(previous_tau, dtype=float) / self.input_scale, -1.0, 1.0)
@@ -430,6 +434,9 @@ class NMPCController:
                                                 s.control_interval_s / s.substeps, self.length_scale, et)
         p = self.problem.parameters(ref_scaled, w_d, w_prev, P, disturbance, slots)
         lbx, ubx = self._bounds(state, origin)
+        if report.no_port_turn:  # Rules 14, 15, 17(c): no alteration to port
+            allowance = math.radians(PORT_ALLOWANCE_DEG)
+            lbx[self.problem.z_index[1:, 2]] = np.minimum(ref_scaled[2, 1:] - allowance, state[2])
         x0 = self._initial_guess(time_s, state, ref_scaled, w_d, origin, slots, disturbance)
 
         if not np.all(np.isfinite(x0)):

@@ -27,6 +27,15 @@ shaped by the own ship's role:
 ``static``, ``none``
     The symmetric circle.
 
+No alteration to port (Rules 14, 15, 17(c)): while a head-on or crossing target whose
+way we give (or a stand-on target on our port side we have had to act for) is still
+approaching (TCPA > 0), the predicted heading may not fall more than
+``PORT_ALLOWANCE_DEG`` to port of the reference heading (nor further to port than the
+measured heading, if the ship is there already).  Without it the NMPC, whose
+horizon (5-15 min) sees the domain of a ship crossing from starboard come in from that
+side, first turned away from it to port and only later under its stern (seen in trials);
+the bound leaves turning to starboard or slowing down, which is what the rules ask.
+
 Why shifted circles rather than side constraints or ellipses: a circle that contains the
 paper's circle never admits a plan the paper's constraint forbids, so separation >= R + R_i
 still follows from feasibility; it keeps one smooth constraint per slot (no switching
@@ -59,6 +68,10 @@ GIVE_WAY_OFFSET = (0.5, 0.25)
 OVERTAKING_OFFSET = (0.25, 0.0)
 OFFSETS = {"head_on": HEAD_ON_OFFSET, "crossing_give_way": GIVE_WAY_OFFSET, "overtaking": OVERTAKING_OFFSET}
 STAND_ON_CLASSES = ("crossing_stand_on", "overtaken")
+#: classes under which the own ship must not alter to port while the target approaches
+STARBOARD_CLASSES = ("head_on", "crossing_give_way", "crossing_stand_on")
+#: how far to port of the reference heading the plan may go while that holds [deg]
+PORT_ALLOWANCE_DEG = 2.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -101,6 +114,7 @@ class DomainReport:
 
     class_codes: np.ndarray
     active: np.ndarray
+    no_port_turn: bool = False
 
 
 class CollisionDomains:
@@ -172,6 +186,7 @@ class CollisionDomains:
             LOG.warning("%d obstacles given, NMPC uses the %d nearest", len(order), self.max_obstacles)
             order = order[: self.max_obstacles]
         own_velocity = own_speed * np.array([math.cos(own_course), math.sin(own_course)])
+        no_port_turn = False
         for slot, i in enumerate(order):
             x, y, vx, vy, radius = rows[i]
             rho = s.own_radius_m + radius + s.clearance_margin_m
@@ -202,4 +217,6 @@ class CollisionDomains:
             slots[:, slot] = [(x - origin[0]) / L, (y - origin[1]) / L, vx / L, vy / L, offset[0] / L,
                               offset[1] / L, domain_radius / L, s.clearance_margin_growth_mps / L, inflation, 1.0]
             active_rows[i] = 1.0
-        return slots, DomainReport(codes, active_rows)
+            if name in STARBOARD_CLASSES and encounter.tcpa_s > 0.0:
+                no_port_turn = True
+        return slots, DomainReport(codes, active_rows, no_port_turn)
