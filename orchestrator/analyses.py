@@ -19,6 +19,7 @@ ANALYSES = {
     "zigzag": "orchestrator.analyses:zigzag_analysis",
     "voyage": "orchestrator.analyses:voyage_analysis",
     "encounter": "orchestrator.analyses:encounter_analysis",
+    "colregs": "rhnc.colregs_analysis:colregs_analysis",
 }
 FIGURES = {
     "track": "orchestrator.figures:track_figure",
@@ -206,7 +207,8 @@ def array_output(frame, column: str) -> np.ndarray:
     return values
 
 
-def _own_radius_m(cosim) -> float:
+def own_radius_m(cosim) -> float:
+    """The own hazard radius R [m]: the controller's setting, 0 without a controller."""
     for participant in cosim.participants:
         settings = getattr(getattr(participant, "controller", None), "settings", None)
         if settings is not None and hasattr(settings, "own_radius_m"):
@@ -232,7 +234,7 @@ def encounter_analysis(frame, scenario, cosim, out_dir) -> dict:
     result: dict = {}
     if "obstacles" in sources:
         obstacles = array_output(frame, sources["obstacles"])
-        per_obstacle = separations(t, x, y, obstacles, _own_radius_m(cosim))
+        per_obstacle = separations(t, x, y, obstacles, own_radius_m(cosim))
         result["obstacles"] = per_obstacle
         result["min_clearance_nm"] = min(o["min_clearance_nm"] for o in per_obstacle)
         result["separation_respected"] = bool(result["min_clearance_nm"] >= -1e-6)
