@@ -47,6 +47,7 @@ OPTIONS = (
     "et_default",
     "collision_slack_weight",
     "wall_time_limit_s",
+    "cpu_time_limit_s",
     "max_speed_kn",
     "colregs",
     "clearance_margin_nm",
@@ -118,9 +119,13 @@ class ControlParticipant(Participant):
     collision_slack_weight : float or false
         Weight of the soft collision constraints' slack (default 1e4, see
         :class:`rhnc.nmpc.NMPCSettings`); ``false`` makes them hard.
+    cpu_time_limit_s : float or false
+        Processor-time limit of each solver attempt [s] (default 2; the shifted previous
+        plan is applied when it is hit; processor time, so the load of the machine does not
+        change the outcome); ``false``: none.
     wall_time_limit_s : float or false
-        Wall-time limit of one control step's solves [s] (default 5; the shifted previous
-        plan is applied when it is hit); ``false``: iteration limit only.
+        Hard wall-time limit of one control step's solves [s] (default 20); ``false``: none
+        (both false: iteration limit only).
     max_speed_kn : float
         Upper bound of the surge speed, also caps the reference (default 24, the KCS's
         service speed).
@@ -183,9 +188,9 @@ class ControlParticipant(Participant):
         for key in ("length_scale_m", "speed_scale_mps"):
             if key in options:
                 kwargs[key] = _number(options, key, where, None)
-        if "wall_time_limit_s" in options:  # false: iteration limit only
-            value = options["wall_time_limit_s"]
-            kwargs["wall_time_limit_s"] = None if value is False else _number(options, "wall_time_limit_s", where, None)
+        for key in ("cpu_time_limit_s", "wall_time_limit_s"):  # false: no such limit
+            if key in options:
+                kwargs[key] = None if options[key] is False else _number(options, key, where, None)
         if "max_speed_kn" in options:
             kwargs["max_speed_mps"] = _number(options, "max_speed_kn", where, None) * KNOT
         for key in ("colregs", "disturbance_observer"):

@@ -41,8 +41,9 @@ Speed bound: u <= ``max_speed_mps`` at every node after the first (the KCS's ser
 speed, 24 kn, unless the scenario says otherwise), and the reference speed is capped at
 the same value; a ship measured faster is allowed to slow down at its deceleration limit.
 
-Time limits: every solve is limited to ``max_iterations`` and ``wall_time_limit_s`` (both
-attempts together, :mod:`rhnc.solver_watchdog`).  A prediction from the measured state
+Time limits: every solve is limited to ``max_iterations``, to ``cpu_time_limit_s`` of
+processor time per attempt and to ``wall_time_limit_s`` (both attempts together,
+:mod:`rhnc.solver_watchdog`).  A prediction from the measured state
 that is not finite (a state far outside the model's range) skips the solver.
 
 Failures: when neither attempt reports success, or the time limit stops the solve, the
@@ -87,6 +88,8 @@ SERVICE_SPEED_MPS = 24.0 * KNOT
 SLOW_DOWN_MPS2 = 0.02
 
 SOLVERS = ("ipopt", "fatrop", "sqpmethod")
+#: cost and constraint violation reported when a solve left no finite iterate (stopped, NaN)
+UNKNOWN = -1.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -105,10 +108,14 @@ class NMPCSettings:
         ``"ipopt"``, ``"fatrop"`` or ``"sqpmethod"``.
     max_iterations : int
         Iteration limit of the NLP solver (each attempt).
+    cpu_time_limit_s : float or None
+        Limit of the processor time of each solver attempt [s] (Linux, see
+        :mod:`rhnc.solver_watchdog`): set far above the normal solve (tens of ms) so that
+        it stops runaways only; processor time, not wall time, so that the verdict does not
+        depend on the machine's load.
     wall_time_limit_s : float or None
-        Wall-time limit of one control step's solves [s]; None: iterations only.  Set far
-        above the normal solve time (tens of ms) so that it only stops runaways and results
-        do not depend on the machine's load.
+        Hard wall-time limit of one control step's solves [s], whatever the load.  Both
+        None: iteration limit only, solves in this process.
     max_obstacles : int
         Obstacle slots in the problem; the nearest ones are used when more are given.
     own_radius_m : float
@@ -149,7 +156,8 @@ class NMPCSettings:
     substeps: int = 4
     solver: str = "fatrop"
     max_iterations: int = 200
-    wall_time_limit_s: float | None = 5.0
+    cpu_time_limit_s: float | None = 2.0
+    wall_time_limit_s: float | None = 20.0
     max_obstacles: int = 4
     own_radius_m: float = 0.0
     q: tuple[float, ...] = (0.1, 0.1, 10.0, 1.0, 1.0, 1.0)
@@ -183,8 +191,10 @@ class NMPCSettings:
             raise ValueError("weights must be >= 0")
         if self.collision_slack_weight is not None and not self.collision_slack_weight > 0.0:
             raise ValueError(f"collision_slack_weight must be > 0 or None, got {self.collision_slack_weight}")
-        if self.wall_time_limit_s is not None and not self.wall_time_limit_s > 0.0:
-            raise ValueError(f"wall_time_limit_s must be > 0 or None, got {self.wall_time_limit_s}")
+        for name in ("cpu_time_limit_s", "wall_time_limit_s"):
+            value = getattr(self, name)
+            if value is not None and not value > 0.0:
+                raise ValueError(f"{name} must be > 0 or None, got {value}")
         if not self.max_speed_mps > 0.0:
             raise ValueError(f"max_speed_mps must be > 0, got {self.max_speed_mps}")
         for name in ("clearance_margin_m", "clearance_margin_growth_mps", "stand_on_action_tcpa_s",
@@ -227,9 +237,11 @@ class NMPCSolution:
     fallback : bool
         The applied input came from the fallback, not from this solve.
     cost : float
-        Optimal (or last) objective value (scaled, dimensionless).
+        Optimal (or last) objective value (scaled, dimensionless); -1 when the solve left
+        no finite iterate (stopped at the time limit, NaN).
     constraint_violation : float
-        Largest violation of the NLP's constraints and bounds at the returned point (scaled).
+        Largest violation of the NLP's constraints and bounds at the returned point
+        (scaled); -1 when unknown, as for the cost.
     collision_slack : float
         Largest collision slack sigma of the plan (0: every clearance is kept; > 0: the
         soft constraints had to give way, see ``collision_slack_weight``).
@@ -310,7 +322,8 @@ class NMPCController:
         self._F_scaled = self.problem.step
         self.terminal_weight = TerminalWeight(self.problem.step, params, s.q, s.r, U, self.input_scale,
                                               s.terminal_weight)
-        options = solver_options(s.solver, self.problem.equality, s.max_iterations, s.wall_time_limit_s)
+        options = solver_options(s.solver, self.problem.equality, s.max_iterations, s.wall_time_limit_s,
+                                 s.cpu_time_limit_s)
         nlp = self.problem.nlp
         hard = ca.nlpsol("rhnc_nmpc", s.solver, nlp, options)
         # The second, relaxed attempt gets a solver of its own, built on first need: a solver
@@ -319,7 +332,7 @@ class NMPCController:
         # 59 and success from a fresh solver).
         self.solvers = BoundedSolver({"hard": hard},
                                      {"relaxed": lambda: ca.nlpsol("rhnc_nmpc_relaxed", s.solver, nlp, options)},
-                                     s.wall_time_limit_s)
+                                     s.wall_time_limit_s, s.cpu_time_limit_s)
         self.domains = CollisionDomains(s.domain_settings(), s.max_obstacles)
         self.observer = (DisturbanceObserver(params, self.state_scale, s.observer_gain)
                          if s.disturbance_observer else None)
@@ -443,8 +456,8 @@ class NMPCController:
             # a state far outside the model's range: the prediction itself overflows, and the
             # solver would iterate on NaN (seen: fatrop running for minutes); skip it
             LOG.warning("NMPC at t = %.1f s: prediction from the measured state is not finite; fallback", time_s)
-            return self._fail(time_s, state, previous_tau, 0.0, 0, "prediction_not_finite", float("nan"),
-                              float("inf"), False, disturbance, report)
+            return self._fail(time_s, state, previous_tau, 0.0, 0, "prediction_not_finite", UNKNOWN, UNKNOWN,
+                              False, disturbance, report)
         # First the hard problem (slacks fixed at zero: the paper's constraints); only when it
         # fails, the soft one (slacks free): the plan that violates the clearance least.
         problem = self.problem
@@ -467,9 +480,10 @@ class NMPCController:
         if s.solver == "fatrop" and not timed_out:  # fatrop reports an integer code
             status = "Solve_Succeeded" if outcome.success else f"fatrop_return_code_{status}"
         if not success:
-            violation = float("inf") if timed_out else self._violation(x_opt, g_opt, lbx, ubx)
-            return self._fail(time_s, state, previous_tau, elapsed, iterations, status, outcome.f, violation,
-                              timed_out, disturbance, report)
+            finite = bool(np.all(np.isfinite(x_opt)) and np.all(np.isfinite(g_opt)) and np.isfinite(outcome.f))
+            violation = self._violation(x_opt, g_opt, lbx, ubx) if finite else UNKNOWN
+            return self._fail(time_s, state, previous_tau, elapsed, iterations, status,
+                              outcome.f if finite else UNKNOWN, violation, timed_out, disturbance, report)
         violation = self._violation(x_opt, g_opt, lbx, ubx)
         slack = float(np.max(x_opt[problem.sigma_index], initial=0.0))
         slack = slack if slack > SLACK_TOLERANCE else 0.0

@@ -221,7 +221,8 @@ def build_problem(params: ShipParameters, horizon_steps: int, control_interval_s
     )
 
 
-def solver_options(solver: str, equality: Sequence[bool], max_iterations: int, wall_time_s: float | None) -> dict:
+def solver_options(solver: str, equality: Sequence[bool], max_iterations: int, wall_time_s: float | None,
+                   cpu_time_s: float | None = None) -> dict:
     """``nlpsol`` options per solver: quiet, iteration-limited (IPOPT also wall-time-limited)."""
     common = {"expand": True, "print_time": False, "error_on_fail": False}
     if solver == "ipopt":
@@ -229,6 +230,8 @@ def solver_options(solver: str, equality: Sequence[bool], max_iterations: int, w
                  "mu_strategy": "adaptive", "warm_start_init_point": "no"}
         if wall_time_s is not None:
             ipopt["max_wall_time"] = float(wall_time_s)
+        if cpu_time_s is not None:
+            ipopt["max_cpu_time"] = float(cpu_time_s)
         return {**common, "ipopt": ipopt}
     if solver == "fatrop":
         return {**common, "structure_detection": "auto", "equality": list(equality), "debug": False,

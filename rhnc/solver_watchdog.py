@@ -1,4 +1,4 @@
-"""A wall-time limit for CasADi NLP solves: the solver runs in a forked worker that can be killed.
+"""Time limits for CasADi NLP solves: the solver runs in a forked worker that can be killed.
 
 fatrop has an iteration limit but no clock, and CasADi's iteration callback is not called
 by its interface; on a state outside the model's range (NaN in the dynamics) it was seen
@@ -6,17 +6,26 @@ to loop inside one iteration for more than 11 minutes, where no iteration limit 
 it.  A thread cannot be stopped from outside either.  So the solver runs in a child
 process, forked from the controller after the problem is built (the child inherits the
 compiled solvers, nothing is rebuilt or pickled): each solve sends the numeric arguments
-through a pipe and waits at most ``wall_time_s``.  When the limit is hit, the child is
-killed, the call reports ``wall_time_exceeded`` and the next call forks a fresh worker.
+through a pipe and waits for the answer under two limits,
 
-The pipe adds some 0.1-0.3 ms per solve.  Where ``os.fork`` does not exist (Windows),
-or with ``wall_time_s = None``, solves run in this process under the iteration limit only.
+* ``cpu_time_s``: the processor time the worker spends on this solve (read from
+  ``/proc/<pid>/stat`` on Linux), so that the verdict does not depend on how many other
+  processes share the machine: on a loaded machine a solve of a few hundred ms of CPU
+  can take seconds of wall time, and a wall-clock limit would then cut normal solves;
+* ``wall_time_s``: a hard cap on the wall time, for a worker that gets no CPU at all
+  and for platforms without ``/proc``.
+
+When a limit is hit, the child is killed, the call reports ``wall_time_exceeded`` and
+the next call forks a fresh worker.  The pipe adds some 0.1-0.3 ms per solve.  Where
+``os.fork`` does not exist (Windows), or with both limits None, solves run in this
+process under the iteration limit only.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import logging
+import math
 import multiprocessing
 import os
 import signal
@@ -29,8 +38,21 @@ import numpy as np
 
 LOG = logging.getLogger(__name__)
 
-#: status reported when a solve was stopped at its wall-time limit
+#: status reported when a solve was stopped at its time limit
 WALL_TIME_STATUS = "wall_time_exceeded"
+#: how often the parent checks the worker's processor time [s]
+POLL_S = 0.02
+_TICKS_PER_S = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
+
+
+def process_cpu_time_s(pid: int) -> float | None:
+    """User + system processor time [s] of process ``pid`` so far, or None without /proc."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as stream:
+            fields = stream.read().rsplit(b")", 1)[1].split()
+    except (OSError, IndexError):
+        return None
+    return (int(fields[11]) + int(fields[12])) / _TICKS_PER_S
 
 
 @dataclasses.dataclass
@@ -52,7 +74,9 @@ class SolveOutcome:
     wall_time_s : float
         Wall time of the call [s], pipe included.
     timed_out : bool
-        Stopped at the wall-time limit.
+        Stopped at a time limit.
+    stopped_by : str
+        Which limit stopped it: ``"cpu"``, ``"wall"`` or ``""``.
     """
 
     x: np.ndarray
@@ -63,6 +87,7 @@ class SolveOutcome:
     status: str
     wall_time_s: float
     timed_out: bool = False
+    stopped_by: str = ""
 
 
 def _outcome(solver: ca.Function, result: Mapping, elapsed: float) -> SolveOutcome:
@@ -111,25 +136,29 @@ class BoundedSolver:
     factories : mapping of str to callable
         Builds the other solvers by name on first use (in the worker when there is one).
     wall_time_s : float or None
-        Limit per call [s]; None: no limit, solve in this process.
+        Hard wall-time limit per call [s]; None with ``cpu_time_s`` None: no limits, solve
+        in this process.
+    cpu_time_s : float or None
+        Limit of the worker's processor time per call [s] (Linux; ignored elsewhere).
     """
 
     def __init__(self, solvers: Mapping[str, ca.Function], factories: Mapping[str, Callable[[], ca.Function]],
-                 wall_time_s: float | None) -> None:
+                 wall_time_s: float | None, cpu_time_s: float | None = None) -> None:
         self.factories = dict(factories)
         self.wall_time_s = wall_time_s
+        self.cpu_time_s = cpu_time_s
         self._solvers: dict[str, ca.Function] = dict(solvers)
         self._pid: int | None = None
         self._connection = None
         self._finalizer = None
         self.timeouts = 0
-        if wall_time_s is not None and not hasattr(os, "fork"):
+        if (wall_time_s is not None or cpu_time_s is not None) and not hasattr(os, "fork"):
             LOG.warning("no os.fork on this platform: NMPC solves are limited by iterations only")
-            self.wall_time_s = None
+            self.wall_time_s = self.cpu_time_s = None
 
     def solve(self, name: str, **arguments) -> SolveOutcome:
         """Call solver ``name`` with nlpsol arguments (x0, p, lbx, ubx, lbg, ubg)."""
-        if self.wall_time_s is None:
+        if self.wall_time_s is None and self.cpu_time_s is None:
             if name not in self._solvers:
                 self._solvers[name] = self.factories[name]()
             start = time.perf_counter()
@@ -139,19 +168,28 @@ class BoundedSolver:
         start = time.perf_counter()
         self._ensure_worker()
         self._connection.send((name, arguments))
-        if self._connection.poll(self.wall_time_s):
-            try:
-                outcome = self._connection.recv()
-            except EOFError:  # the worker died (out of memory, a crash in the solver)
-                LOG.warning("NMPC solver worker died; starting a new one")
+        cpu_start = process_cpu_time_s(self._pid) if self.cpu_time_s is not None else None
+        wall_limit = math.inf if self.wall_time_s is None else self.wall_time_s
+        while not self._connection.poll(min(POLL_S, wall_limit)):
+            elapsed = time.perf_counter() - start
+            cpu = process_cpu_time_s(self._pid) if cpu_start is not None else None
+            over_cpu = cpu is not None and cpu - cpu_start > self.cpu_time_s
+            if elapsed > wall_limit or over_cpu:
+                self.timeouts += 1
+                LOG.warning("NMPC solve stopped at its time limit (%.3g s wall, %s s CPU)", elapsed,
+                            "?" if cpu is None else f"{cpu - cpu_start:.3g}")
                 self.close()
-                return self._stopped(arguments, time.perf_counter() - start, "solver_worker_died")
-            outcome.wall_time_s = time.perf_counter() - start
-            return outcome
-        self.timeouts += 1
-        LOG.warning("NMPC solve stopped at its wall-time limit of %.3g s", self.wall_time_s)
-        self.close()
-        return self._stopped(arguments, time.perf_counter() - start, WALL_TIME_STATUS)
+                stopped = self._stopped(arguments, elapsed, WALL_TIME_STATUS)
+                stopped.stopped_by = "cpu" if over_cpu else "wall"
+                return stopped
+        try:
+            outcome = self._connection.recv()
+        except EOFError:  # the worker died (out of memory, a crash in the solver)
+            LOG.warning("NMPC solver worker died; starting a new one")
+            self.close()
+            return self._stopped(arguments, time.perf_counter() - start, "solver_worker_died")
+        outcome.wall_time_s = time.perf_counter() - start
+        return outcome
 
     @staticmethod
     def _stopped(arguments, elapsed: float, status: str) -> SolveOutcome:

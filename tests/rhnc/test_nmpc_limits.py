@@ -46,10 +46,28 @@ class QuickSolver:
         return {"success": True, "iter_count": 3, "return_status": "Solve_Succeeded"}
 
 
+class SpinningSolver:
+    """Never returns and keeps the processor busy (a solver iterating on NaN)."""
+
+    def __call__(self, **arguments):
+        x = 0.0
+        while True:
+            x = math.sin(x + 1.0)
+
+
+def test_watchdog_stops_a_runaway_by_processor_time_before_the_wall_cap():
+    bounded = BoundedSolver({}, {"spinning": SpinningSolver}, wall_time_s=60.0, cpu_time_s=0.3)
+    stopped = bounded.solve("spinning", x0=np.zeros(2), lbg=np.zeros(1))
+    assert stopped.timed_out and stopped.status == WALL_TIME_STATUS
+    assert stopped.stopped_by == "cpu"  # the processor-time limit, not the wall cap
+    bounded.close()
+
+
 def test_watchdog_stops_an_endless_solve_and_recovers():
     bounded = BoundedSolver({"quick": QuickSolver()}, {"endless": EndlessSolver}, wall_time_s=0.5)
     stopped = bounded.solve("endless", x0=np.zeros(3), lbg=np.zeros(1))
     assert stopped.timed_out and not stopped.success and stopped.status == WALL_TIME_STATUS
+    assert stopped.stopped_by == "wall"  # sleeping: no processor time, the wall cap stops it
     assert np.all(np.isnan(stopped.x)) and stopped.x.shape == (3,)
     assert bounded.timeouts == 1
     # a fresh worker serves the next call
@@ -63,7 +81,7 @@ def test_watchdog_stops_an_endless_solve_and_recovers():
 def test_out_of_range_state_returns_with_the_fallback_flagged(kcs, yaw_rate, status):
     # r0 = 0.35 rad/s: fatrop iterates on NaN without end (iteration limit or not);
     # r0 = 0.5 rad/s: the model's prediction overflows in the first interval
-    controller = NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=60.0, wall_time_limit_s=1.0))
+    controller = NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=60.0, cpu_time_limit_s=1.0))
     state = np.array([0.0, 0.0, math.radians(45.0), 18 * KNOT, 0.0, yaw_rate])
     reference = line_or_turn_reference(60.0 * np.arange(N + 1), (0.0, 0.0), math.radians(45.0), 18 * KNOT)
     solution = controller.solve(0.0, state, reference, previous_tau=np.array([7e5, 0.0]))
