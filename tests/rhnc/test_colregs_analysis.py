@@ -159,6 +159,20 @@ def test_stand_on_turning_to_port_fails_rule_17c():
     assert result["side_correct"] is False
 
 
+def test_stand_on_manoeuvre_made_while_giving_way_to_another_target_is_allowed():
+    # a head-on ship ahead (we give way) and a ship crossing from port (we stand on): the early
+    # starboard turn answers the head-on encounter, so it breaks no stand-on obligation
+    track = own_track(30, turns=[(1.0, 45.0)])
+    t = track[0]
+    obstacles = np.concatenate([target_states(t, (7.0, 0.1), 180.0, 18.0), _stand_on_target(t)], axis=1)
+    head_on, stand_on = judge_encounters(*track, obstacles)["targets"]
+    assert head_on["encounter_class"] == "head_on" and stand_on["encounter_class"] == "crossing_stand_on"
+    assert stand_on["manoeuvre_time_s"] < 600.0
+    assert stand_on["rule_17"] == PASS, stand_on["reasons"]
+    alone = judge(track, _stand_on_target(t))  # the same turn with no one to give way to
+    assert alone["rule_17"] == FAIL
+
+
 def test_overtaken_ship_standing_on_passes_and_rule_8_does_not_apply():
     track = own_track(40)
     result = judge(track, target_states(track[0], (-2.0, 1.2), 0.0, 26.0))
