@@ -352,14 +352,10 @@ def colregs_analysis(frame, scenario, cosim, out_dir, manoeuvre_threshold_deg: f
     (``[outputs.options.colregs]``).
     """
     from orchestrator.analyses import array_output, own_radius_m, plant_name
-    from orchestrator.errors import ScenarioError
 
-    try:
-        settings = JudgementSettings(manoeuvre_threshold_deg, manoeuvre_hold_s, apparent_course_change_deg,
-                                     apparent_speed_reduction, early_before_cpa_min, stand_on_wait_min,
-                                     risk_cpa_nm, risk_tcpa_min)
-    except ValueError as exc:
-        raise ScenarioError(f"{scenario.path}: outputs.options.colregs: {exc}") from None
+    settings = JudgementSettings(manoeuvre_threshold_deg, manoeuvre_hold_s, apparent_course_change_deg,
+                                 apparent_speed_reduction, early_before_cpa_min, stand_on_wait_min,
+                                 risk_cpa_nm, risk_tcpa_min)
     plant = plant_name(cosim)
     sources = {c.target_port: f"{c.source}.{c.source_port}" for c in scenario.connections}
     if "obstacles" not in sources:
@@ -368,3 +364,11 @@ def colregs_analysis(frame, scenario, cosim, out_dir, manoeuvre_threshold_deg: f
     return judge_encounters(frame["time_s"].to_numpy(), frame[f"{plant}.x"].to_numpy(),
                             frame[f"{plant}.y"].to_numpy(), frame[f"{plant}.psi"].to_numpy(),
                             array_output(frame, sources["obstacles"]), own_radius_m(cosim), settings)
+
+
+def _check_options(options) -> None:
+    """Refuse bad ``[outputs.options.colregs]`` values before a run (ValueError names the key)."""
+    JudgementSettings(**dict(options))
+
+
+colregs_analysis.check_options = _check_options

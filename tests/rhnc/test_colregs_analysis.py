@@ -225,3 +225,21 @@ def test_yaw_oscillation_is_not_a_manoeuvre():
 def test_bad_settings_are_refused():
     with pytest.raises(ValueError, match="early_before_cpa_min"):
         JudgementSettings(early_before_cpa_min=-1.0)
+
+
+def test_bad_analysis_option_is_refused_before_the_run(tmp_path, capsys):
+    from pathlib import Path
+
+    from orchestrator.cli import main
+
+    repo = Path(__file__).resolve().parents[2]
+    text = (repo / "scenarios" / "exp3b_head_on.toml").read_text()
+    text = text.replace('analyses = ["encounter"]', 'analyses = ["encounter", "colregs"]\n'
+                        '[outputs.options.colregs]\nearly_before_cpa_min = -2.0')
+    scenario = tmp_path / "bad.toml"
+    scenario.write_text(text)
+    results = tmp_path / "results"
+    assert main(["run", str(scenario), "--results", str(results), "--no-progress"]) == 2
+    error = capsys.readouterr().err.strip().splitlines()
+    assert len(error) == 1 and "bad.toml: 'outputs.options.colregs': early_before_cpa_min must be" in error[0]
+    assert not results.exists() or not any(results.rglob("summary.json"))
