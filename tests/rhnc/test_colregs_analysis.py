@@ -234,8 +234,8 @@ def test_bad_analysis_option_is_refused_before_the_run(tmp_path, capsys):
 
     repo = Path(__file__).resolve().parents[2]
     text = (repo / "scenarios" / "exp3b_head_on.toml").read_text()
-    text = text.replace('analyses = ["encounter"]', 'analyses = ["encounter", "colregs"]\n'
-                        '[outputs.options.colregs]\nearly_before_cpa_min = -2.0')
+    text = text.replace('analyses = ["encounter"]', 'analyses = ["encounter", "colregs"]')
+    text += "\n[outputs.options.colregs]\nearly_before_cpa_min = -2.0\n"
     scenario = tmp_path / "bad.toml"
     scenario.write_text(text)
     results = tmp_path / "results"
