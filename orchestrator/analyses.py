@@ -44,11 +44,21 @@ def check_outputs(scenario) -> None:
     for name in scenario.outputs.figures:
         resolve(FIGURES, name, "figures")
     for name in scenario.outputs.analyses:
-        accepted = list(inspect.signature(resolve(ANALYSES, name, "analyses")).parameters)[4:]
-        for key in scenario.outputs.options.get(name, {}):
+        function = resolve(ANALYSES, name, "analyses")
+        accepted = list(inspect.signature(function).parameters)[4:]
+        options = scenario.outputs.options.get(name, {})
+        for key in options:
             if key not in accepted:
                 raise ScenarioError(f"{scenario.path}: unknown option 'outputs.options.{name}.{key}' "
                                     f"(valid: {', '.join(accepted) or 'none'})")
+        # an analysis may check its option values too (``function.check_options(options)``
+        # raising ValueError), so that a bad value is refused before the run, not after it
+        checker = getattr(function, "check_options", None)
+        if checker is not None:
+            try:
+                checker(options)
+            except ValueError as exc:
+                raise ScenarioError(f"{scenario.path}: 'outputs.options.{name}': {exc}") from None
 
 
 def run_analysis(name, frame, scenario, cosim, out_dir) -> dict:

@@ -96,10 +96,9 @@ def _encounter_extent_nm(frame, plant, margin_nm: float = 1.5):
     own_x, own_y = frame[f"{plant}.x"].to_numpy(), frame[f"{plant}.y"].to_numpy()
     north = [own_x.min(), own_x.max()]
     east = [own_y.min(), own_y.max()]
-    prefix, count = _obstacle_columns(frame)
-    for i in range(count):
-        x, y, radius = (frame[f"{prefix}[{i},{k}]"].to_numpy() for k in (0, 1, 4))
-        k = int(np.argmin(np.hypot(x - own_x, y - own_y)))
+    prefix, _ = _obstacle_columns(frame)
+    for i, k, _ in closest_approach_rows(frame, plant):
+        x, y, radius = (frame[f"{prefix}[{i},{c}]"].to_numpy() for c in (0, 1, 4))
         north = [min(north[0], x[k] - radius[k]), max(north[1], x[k] + radius[k])]
         east = [min(east[0], y[k] - radius[k]), max(east[1], y[k] + radius[k])]
     margin = margin_nm * NM
@@ -126,6 +125,22 @@ def _draw_time_marks(ax, t, x, y, interval_min: float, color, label_marks: bool)
                         fontsize=7, color=color)
 
 
+def closest_approach_rows(frame, plant) -> list[tuple[int, int, float]]:
+    """Per obstacle of the recorded ``obstacles`` output: (obstacle, sample, range [m]) where
+    the own ship came closest to it."""
+    found = _obstacle_columns(frame)
+    if found is None:
+        return []
+    prefix, count = found
+    own_x, own_y = frame[f"{plant}.x"].to_numpy(), frame[f"{plant}.y"].to_numpy()
+    rows = []
+    for i in range(count):
+        distance = np.hypot(frame[f"{prefix}[{i},0]"].to_numpy() - own_x, frame[f"{prefix}[{i},1]"].to_numpy() - own_y)
+        k = int(np.argmin(distance))
+        rows.append((i, k, float(distance[k])))
+    return rows
+
+
 def _draw_encounters(ax, frame, plant) -> None:
     """Tracks with time marks; each obstacle drawn where it was at the own ship's closest approach.
 
@@ -142,11 +157,9 @@ def _draw_encounters(ax, frame, plant) -> None:
     if found is None:
         return
     prefix, count = found
-    for i in range(count):
-        x, y, vx, vy, radius = (frame[f"{prefix}[{i},{k}]"].to_numpy() for k in range(5))
+    for i, k, distance in closest_approach_rows(frame, plant):
+        x, y, vx, vy, radius = (frame[f"{prefix}[{i},{c}]"].to_numpy() for c in range(5))
         moving = bool(np.any(np.hypot(vx, vy) > 0.1))
-        k = int(np.argmin(np.hypot(x - own_x, y - own_y)))
-        distance = float(np.hypot(x[k] - own_x[k], y[k] - own_y[k]))
         if moving:
             ax.plot(y / NM, x / NM, "-.", color="dimgrey", lw=1,
                     label=f"target tracks (marks every {interval:g} min)" if i == 0 else None)
