@@ -34,7 +34,7 @@ def test_bad_scenario_is_one_line_and_exit_2(tmp_path, capsys):
 
 
 def test_failed_run_exits_3(tmp_path, capsys):
-    scenario = (REPO / "scenarios" / "turning_circle.toml").read_text().replace("u0 = 9.26", "u0 = 9.26\nd11 = -1.0e9")
+    scenario = (REPO / "scenarios" / "turning_circle.toml").read_text().replace("u0 = 9.26", "u0 = 9.26\nm11 = 1.0")
     path = tmp_path / "diverge.toml"
     path.write_text(scenario)
     assert main(["run", str(path), "--results", str(tmp_path), "--no-progress"]) == 3
