@@ -28,7 +28,6 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               fmi2String fmuResourceLocation,
                               const fmi2CallbackFunctions *functions, fmi2Boolean visible,
                               fmi2Boolean loggingOn) {
-    (void)fmuResourceLocation;
     (void)visible;
     if (!functions || !functions->allocateMemory || !functions->freeMemory) return NULL;
     if (!instanceName || !instanceName[0]) {
@@ -53,9 +52,14 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               fmuGUID ? fmuGUID : "(null)");
         return NULL;
     }
-    return core_instantiate(instanceName, emit_fmi2, (void *)functions->logger,
-                            functions->componentEnvironment, functions->allocateMemory,
-                            functions->freeMemory, loggingOn ? true : false);
+    {
+        ModelInstance *comp = core_instantiate(
+            instanceName, NULL, emit_fmi2, (void *)functions->logger,
+            functions->componentEnvironment, functions->allocateMemory, functions->freeMemory,
+            loggingOn ? true : false);
+        core_set_resource_uri(comp, fmuResourceLocation);
+        return comp;
+    }
 }
 
 void fmi2FreeInstance(fmi2Component c) { core_free_instance(COMP); }

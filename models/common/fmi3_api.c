@@ -67,7 +67,7 @@ fmi3Instance fmi3InstantiateCoSimulation(
     fmi3Boolean earlyReturnAllowed, const fmi3ValueReference requiredIntermediateVariables[],
     size_t nRequiredIntermediateVariables, fmi3InstanceEnvironment instanceEnvironment,
     fmi3LogMessageCallback logMessage, fmi3IntermediateUpdateCallback intermediateUpdate) {
-    (void)resourcePath, (void)visible, (void)earlyReturnAllowed, (void)requiredIntermediateVariables;
+    (void)visible, (void)earlyReturnAllowed, (void)requiredIntermediateVariables;
     (void)intermediateUpdate;
     if (!instanceName || !instanceName[0]) {
         if (logMessage)
@@ -89,8 +89,8 @@ fmi3Instance fmi3InstantiateCoSimulation(
                        " has no event mode and no intermediate variables");
         return NULL;
     }
-    return core_instantiate(instanceName, emit_fmi3, (void *)logMessage, instanceEnvironment,
-                            calloc, free, loggingOn);
+    return core_instantiate(instanceName, resourcePath, emit_fmi3, (void *)logMessage,
+                            instanceEnvironment, calloc, free, loggingOn);
 }
 
 fmi3Instance fmi3InstantiateScheduledExecution(

@@ -146,17 +146,39 @@ fmi2Status core_set_debug_logging(ModelInstance *comp, const char *function, boo
     return fmi2OK;
 }
 
-ModelInstance *core_instantiate(const char *instanceName, LogEmitter emit, void *logger,
-                                void *environment, fmi2CallbackAllocateMemory allocate,
-                                fmi2CallbackFreeMemory release, bool loggingOn) {
+static char *copy_string(fmi2CallbackAllocateMemory allocate, const char *text) {
+    char *copy = (char *)allocate(strlen(text) + 1, 1);
+    if (copy) strcpy(copy, text);
+    return copy;
+}
+
+/* A resources folder path with a trailing '/', or "" for none. */
+static char *folder_path(fmi2CallbackAllocateMemory allocate, const char *path) {
+    size_t n = path ? strlen(path) : 0;
+    char *copy = (char *)allocate(n + 2, 1);
+    if (!copy) return NULL;
+    if (n) {
+        memcpy(copy, path, n);
+        if (copy[n - 1] != '/') copy[n++] = '/';
+    }
+    copy[n] = '\0';
+    return copy;
+}
+
+ModelInstance *core_instantiate(const char *instanceName, const char *resourcePath, LogEmitter emit,
+                                void *logger, void *environment,
+                                fmi2CallbackAllocateMemory allocate, fmi2CallbackFreeMemory release,
+                                bool loggingOn) {
     ModelInstance *comp = (ModelInstance *)allocate(1, sizeof(ModelInstance));
     if (!comp) return NULL;
-    comp->instanceName = (char *)allocate(strlen(instanceName) + 1, 1);
-    if (!comp->instanceName) {
+    comp->instanceName = copy_string(allocate, instanceName);
+    comp->resourcePath = folder_path(allocate, resourcePath);
+    if (!comp->instanceName || !comp->resourcePath) {
+        if (comp->instanceName) release(comp->instanceName);
+        if (comp->resourcePath) release(comp->resourcePath);
         release(comp);
         return NULL;
     }
-    strcpy(comp->instanceName, instanceName);
     comp->emit = emit;
     comp->importerLogger = logger;
     comp->importerEnvironment = environment;
@@ -176,7 +198,53 @@ void core_free_instance(ModelInstance *comp) {
     if (!comp) return;
     model_free_resources(comp);
     comp->freeMemory(comp->instanceName);
+    comp->freeMemory(comp->resourcePath);
     comp->freeMemory(comp);
+}
+
+static int hex_value(char c) {
+    if (c >= '0' && c <= '9') return c - '0';
+    if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+    return -1;
+}
+
+void core_set_resource_uri(ModelInstance *comp, const char *uri) {
+    char *path;
+    size_t k = 0;
+    if (!comp || !uri) return;
+    if (strncmp(uri, "file:///", 8) == 0) uri += 7;        /* file:///p -> /p */
+    else if (strncmp(uri, "file://localhost/", 17) == 0) uri += 16;
+    else if (strncmp(uri, "file:/", 6) == 0) uri += 5;     /* file:/p -> /p */
+    else return;                                          /* not a local file: no resources */
+    path = (char *)comp->allocateMemory(strlen(uri) + 1, 1);
+    if (!path) return;
+    for (size_t i = 0; uri[i]; i++) {                     /* percent-decoding */
+        if (uri[i] == '%' && hex_value(uri[i + 1]) >= 0 && hex_value(uri[i + 2]) >= 0) {
+            path[k++] = (char)(hex_value(uri[i + 1]) * 16 + hex_value(uri[i + 2]));
+            i += 2;
+        } else {
+            path[k++] = uri[i];
+        }
+    }
+    path[k] = '\0';
+    comp->freeMemory(comp->resourcePath);
+    comp->resourcePath = folder_path(comp->allocateMemory, path);
+    comp->freeMemory(path);
+    if (!comp->resourcePath) comp->resourcePath = copy_string(comp->allocateMemory, "");
+}
+
+bool resolve_resource(ModelInstance *comp, const char *name, char *out, size_t size) {
+    int n;
+    if (name[0] == '/' || !comp->resourcePath || !comp->resourcePath[0])
+        n = snprintf(out, size, "%s", name);
+    else
+        n = snprintf(out, size, "%s%s", comp->resourcePath, name);
+    if (n < 0 || (size_t)n >= size) {
+        log_error(comp, "the path of \"%s\" is longer than %zu bytes", name, size - 1);
+        return false;
+    }
+    return true;
 }
 
 fmi2Status core_setup_experiment(ModelInstance *comp, const char *function, int states,

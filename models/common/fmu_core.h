@@ -20,10 +20,15 @@ bool core_allowed(ModelInstance *comp, const char *function, int states);
 /* Logs and returns true when p is NULL. */
 bool core_null_argument(ModelInstance *comp, const char *function, const char *arg, const void *p);
 
-/* Allocates an instance and sets the start values; NULL when out of memory. */
-ModelInstance *core_instantiate(const char *instanceName, LogEmitter emit, void *logger,
-                                void *environment, fmi2CallbackAllocateMemory allocate,
-                                fmi2CallbackFreeMemory release, bool loggingOn);
+/* Allocates an instance and sets the start values; NULL when out of memory. resourcePath is
+ * the resources folder as a plain path (FMI 3.0) or NULL; set it from an FMI 2.0 URI with
+ * core_set_resource_uri. */
+ModelInstance *core_instantiate(const char *instanceName, const char *resourcePath, LogEmitter emit,
+                                void *logger, void *environment,
+                                fmi2CallbackAllocateMemory allocate, fmi2CallbackFreeMemory release,
+                                bool loggingOn);
+/* Store the resources folder given as a file URI (FMI 2.0's fmuResourceLocation). */
+void core_set_resource_uri(ModelInstance *comp, const char *uri);
 void core_free_instance(ModelInstance *comp);
 
 fmi2Status core_set_debug_logging(ModelInstance *comp, const char *function, bool loggingOn,

@@ -69,6 +69,7 @@ typedef void (*LogEmitter)(struct ModelInstance *comp, fmi2Status status, const 
 
 typedef struct ModelInstance {
     char *instanceName;
+    char *resourcePath;        /* the FMU's resources folder, ending in '/' ("" if unknown) */
     LogEmitter emit;
     void *importerLogger;      /* the FMI version's logger callback, called by emit */
     void *importerEnvironment; /* fmi2ComponentEnvironment / fmi3InstanceEnvironment */
@@ -81,6 +82,10 @@ typedef struct ModelInstance {
     bool stopTimeDefined;
     ModelData data;
 } ModelInstance;
+
+/* Resolve a file name against the FMU's resources folder unless it is absolute; writes at
+ * most size bytes into out and returns false (logged) when the result does not fit. */
+bool resolve_resource(ModelInstance *comp, const char *name, char *out, size_t size);
 
 /* Logging through the environment's logger callback; errors are always logged. */
 void log_error(ModelInstance *comp, const char *format, ...);
