@@ -38,6 +38,7 @@ COMMON = "common"
 PARAMETER_SETS = Path("KCS") / "parameter_sets.toml"
 DEFAULTS_HEADER = "kcs_parameter_defaults.h"
 BOUNDS_HEADER = "model_bounds.h"
+RESOURCES = "resources"
 HASH_PREFIX = "rhnc-source-sha256="
 # Bump when the build recipe itself changes, so existing FMUs are rebuilt.
 RECIPE_VERSION = "2"
@@ -77,10 +78,16 @@ def _sources(name: str, models_dir: Path, fmi_version: str = "2.0") -> list[Path
     return files
 
 
+def _resources(name: str, models_dir: Path) -> list[Path]:
+    """Files shipped in the FMU's ``resources/``: the model folder's ``resources/`` (e.g. a default grid)."""
+    folder = Path(models_dir) / name / RESOURCES
+    return sorted(p for p in folder.rglob("*") if p.is_file()) if folder.is_dir() else []
+
+
 def _inputs(name: str, models_dir: Path, fmi_version: str = "2.0") -> list[Path]:
     """Every file whose content determines the FMU."""
     models_dir = Path(models_dir)
-    return _sources(name, models_dir, fmi_version) + [
+    return _sources(name, models_dir, fmi_version) + _resources(name, models_dir) + [
         models_dir / name / "modelDescription.xml",
         models_dir / PARAMETER_SETS,
     ]
@@ -243,6 +250,8 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR
                 z.write(path, f"sources/{path.name}")
             for file_name, text in extra_sources.items():
                 z.writestr(f"sources/{file_name}", text)
+            for path in _resources(name, models_dir):
+                z.write(path, f"resources/{path.relative_to(model_dir / RESOURCES).as_posix()}")
             z.comment = (HASH_PREFIX + digest).encode()
         partial.replace(fmu)
     log.info("built %s", fmu)

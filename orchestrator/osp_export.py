@@ -28,6 +28,8 @@ log = logging.getLogger(__name__)
 
 NAMESPACE = "http://opensimulationplatform.com/MSMI/OSPSystemStructure"
 CONFIG_NAME = "OspSystemStructure.xml"
+#: Name of the scenario's met-ocean grid inside the environment FMU's resources.
+GRID_RESOURCE = "scenario.grid"
 
 
 def export_osp_system(scenario_path, out_dir) -> Path:
@@ -48,14 +50,15 @@ def export_osp_system(scenario_path, out_dir) -> Path:
     cosim = CoSimulation(scenario)
     try:
         fmus = {}
+        grid = cosim.work_dir / "metocean.grid"
         for participant in cosim.participants:
             if isinstance(participant, FmuParticipant):
                 target = out_dir / f"{participant.name}.fmu"
-                shutil.copyfile(participant.fmu_path, target)
+                extra = {GRID_RESOURCE: grid} if str(grid) in map(str, participant.parameters.values()) else {}
+                _copy_with_resources(participant.fmu_path, target, extra)
                 fmus[participant.name] = (target, participant)
                 for port in (*participant.input_names, *participant.output_names):
                     shapes[(participant.name, port)] = []
-        grid = cosim.work_dir / "metocean.grid"
         for spec in scenario.participants:
             if spec.is_fmu:
                 continue
@@ -94,14 +97,28 @@ def export_osp_system(scenario_path, out_dir) -> Path:
         cosim.close()
 
 
+def _copy_with_resources(source: Path, target: Path, extra: dict[str, Path]) -> None:
+    """Copy an FMU, adding files to its ``resources/`` (the scenario's met-ocean grid)."""
+    if not extra:
+        shutil.copyfile(source, target)
+        return
+    import zipfile
+
+    with zipfile.ZipFile(source) as old, zipfile.ZipFile(target, "w", zipfile.ZIP_DEFLATED) as new:
+        for item in old.infolist():
+            if item.filename not in {f"resources/{name}" for name in extra}:
+                new.writestr(item, old.read(item.filename))
+        for name, path in extra.items():
+            new.write(path, f"resources/{name}")
+
+
 def _initial_values(element: ET.Element, participant, grid: Path, out_dir: Path) -> None:
     values = ET.SubElement(element, "InitialValues")
     for name, value in participant.parameters.items():
         initial = ET.SubElement(values, "InitialValue", {"variable": name})
         if isinstance(value, str):
-            if Path(value) == grid:  # the scenario's met-ocean grid: shipped beside the system
-                shutil.copyfile(grid, out_dir / grid.name)
-                value = grid.name
+            if Path(value) == grid:  # the scenario's met-ocean grid, shipped in the FMU's resources
+                value = GRID_RESOURCE
             ET.SubElement(initial, "String", {"value": value})
         elif isinstance(value, bool):
             ET.SubElement(initial, "Boolean", {"value": "true" if value else "false"})
