@@ -57,3 +57,48 @@ def test_experiment3a_through_allocation_on_the_mmg_plant(tmp_path):
     assert np.count_nonzero(signs[1:] != signs[:-1]) <= 10 * len(demanded) / 100
     assert np.max(np.abs(np.diff(np.degrees(frame["ship.rudder_angle"].to_numpy())))) <= 2.32 * 5.0 + 1e-6
     assert {"track.png", "controls.png"} <= set(summary["figures"])
+
+
+STRAIGHT_RUN = """
+connections = [
+  "helm.rudder_angle_cmd -> ship.rudder_angle_cmd",
+  "helm.propeller_rps_cmd -> ship.propeller_rps_cmd",
+]
+[simulation]
+name = "straight_mmg"
+stop_s = 600.0
+dt_s = 5.0
+[participants.helm]
+type = "scripted_rudder"
+[participants.helm.options]
+propeller_rps = 1.2
+rudder_steps = [[300.0, 5.0]]
+[participants.ship]
+fmu = "KCSMMG"
+parameter_set = "default"
+[participants.ship.parameters]
+u0 = 9.26
+propeller_rps0 = 1.08568
+[outputs]
+analyses = ["voyage", "encounter"]
+figures = ["controls"]
+"""
+
+
+def test_voyage_counts_the_power_the_plant_delivers(tmp_path):
+    scenario = tmp_path / "straight_mmg.toml"
+    scenario.write_text(STRAIGHT_RUN)
+    report = run_scenario(scenario, tmp_path, progress=False)
+    assert report.ok, report.reason
+    summary = json.loads((report.folder / "summary.json").read_text())
+    voyage = summary["analyses"]["voyage"]
+    assert voyage["energy_source"] == "plant delivered_power"
+    frame = pd.read_parquet(report.folder / "timeseries.parquet")
+    brake_kw = frame["ship.delivered_power"].to_numpy() / 0.98 / 1000.0
+    fuel_t = np.trapezoid(brake_kw, frame["time_s"].to_numpy() / 3600.0) * 190e-6
+    assert voyage["co2_t"] == pytest.approx(fuel_t * 3.114, rel=1e-5)
+    # steered by a script at actuator level: no tau, but the actuators are reported
+    encounter = summary["analyses"]["encounter"]
+    assert "tau_r_max_abs" not in encounter
+    assert encounter["rudder_max_abs_deg"] == pytest.approx(5.0, abs=1e-3)
+    assert "controls.png" in summary["figures"]
