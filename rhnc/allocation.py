@@ -144,6 +144,7 @@ class AllocationParticipant(Participant):
         self.step_s = step_s
         self._rudder = 0.0
         self._rps = 0.0
+        self._actuators_known = False
         self._steps = 0
         self._saturated_steps = 0
 
@@ -166,7 +167,12 @@ class AllocationParticipant(Participant):
         return ("rudder_angle_cmd", "propeller_rps_cmd", "tau_u_achieved", "tau_r_achieved", "saturated")
 
     def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
-        """Start from the plant's actuators when reported (no jump at the first step)."""
+        """Start from the plant's actuators when already reported (no jump at the first step).
+
+        Declared before the plant (the usual order), the plant's rudder angle and revolutions
+        are not known yet at set-up; the first step then starts from them instead.
+        """
+        self._actuators_known = "rudder_angle" in inputs and "propeller_rps" in inputs
         self._rudder = float(inputs.get("rudder_angle", 0.0))
         self._rps = float(inputs.get("propeller_rps", 0.0))
         self._steps = self._saturated_steps = 0
@@ -183,6 +189,10 @@ class AllocationParticipant(Participant):
             raise ModelError(f"{self.name}: non-finite input at t = {time} s: tau = ({tau_u}, {tau_r}), u = {u}")
         c = self.model.c
         rps_wanted = self.model.rps_for(tau_u, u)
+        if not self._actuators_known:  # first step: start where the plant's actuators are
+            self._rps = float(inputs.get("propeller_rps", rps_wanted))
+            self._rudder = float(inputs.get("rudder_angle", self.model.rudder_for(tau_r, self._rps, u)))
+            self._actuators_known = True
         self._rps = _rate_limited(rps_wanted, self._rps, c["propeller_rate_max"], step_size)
         rudder_wanted = self.model.rudder_for(tau_r, self._rps, u)
         self._rudder = _rate_limited(rudder_wanted, self._rudder, c["rudder_rate_max"], step_size)

@@ -1,6 +1,6 @@
 """The actuator-level KCS (models/KCSMMG) through the orchestrator: the manoeuvre scenarios give
-the readme's figures from the plant's outputs, and Experiment 3a through the allocation keeps
-separation, returns to the track and is not marked failed."""
+the readme's figures from the plant's outputs, and Experiment 3 (static obstacle, head-on)
+through the allocation keeps separation, returns to the track and is not marked failed."""
 
 from __future__ import annotations
 
@@ -40,8 +40,9 @@ def test_turning_circle_and_zigzags_give_the_readme_figures(tmp_path):
 
 
 @pytest.mark.slow
-def test_experiment3a_through_allocation_on_the_mmg_plant(tmp_path):
-    report, summary = run("exp3a_static_mmg", tmp_path)
+@pytest.mark.parametrize("name", ["exp3a_static_mmg", "exp3b_head_on_mmg"])
+def test_experiment3_through_allocation_on_the_mmg_plant(name, tmp_path):
+    report, summary = run(name, tmp_path)
     encounter = summary["analyses"]["encounter"]
     for obstacle in encounter["obstacles"]:
         assert obstacle["min_distance_nm"] >= obstacle["required_nm"]

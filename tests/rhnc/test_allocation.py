@@ -85,3 +85,16 @@ def test_a_coefficient_given_as_an_option_replaces_the_default():
     ratio = smaller.model.tau(0.2, 1.0, 9.0)[1] / default.model.tau(0.2, 1.0, 9.0)[1]
     assert ratio == pytest.approx(20.0 / load_coefficients()["rudder_area"])
     assert np.isfinite(ratio)
+
+
+def test_first_step_starts_from_the_actuators_the_plant_reports():
+    """Declared before the plant, the allocation learns the actuators only at its first step:
+    it must start from them, not from zero revolutions."""
+    alloc = AllocationParticipant.from_options("alloc", {}, context(5.0))
+    alloc.setup(0.0, {})  # nothing known yet
+    out = alloc.step(0.0, 5.0, {"tau_u": 7.7e5, "tau_r": 0.0, "u": 9.26, "rudder_angle": 0.0,
+                                "propeller_rps": 1.08})
+    wanted = alloc.model.rps_for(7.7e5, 9.26)
+    rate = load_coefficients()["propeller_rate_max"]
+    assert abs(out["propeller_rps_cmd"] - 1.08) <= 5.0 * rate + 1e-12
+    assert out["propeller_rps_cmd"] == pytest.approx(wanted, abs=5.0 * rate)
