@@ -55,11 +55,11 @@ fmi2Status model_exit_initialization(ModelInstance *comp) {
     const char *bad = mmg_invalid_parameter(&d->p);
     int i;
     if (bad) {
-        log_error(comp, "fmi2ExitInitializationMode: parameter %s has an invalid value", bad);
+        log_error(comp, "parameter %s has an invalid value", bad);
         return fmi2Error;
     }
     if (fabs(d->X0[MMG_DELTA]) > d->p.rudder_max || d->X0[MMG_N] < 0.0 || d->X0[MMG_N] > d->p.propeller_rps_max) {
-        log_error(comp, "fmi2ExitInitializationMode: rudder_angle0 = %g rad or propeller_rps0 = %g 1/s "
+        log_error(comp, "rudder_angle0 = %g rad or propeller_rps0 = %g 1/s "
                   "outside the actuator range", d->X0[MMG_DELTA], d->X0[MMG_N]);
         return fmi2Error;
     }
@@ -110,7 +110,7 @@ fmi2Status model_set_real(ModelInstance *comp, fmi2ValueReference vr, fmi2Real v
         const char *bad = mmg_invalid_parameter(&d->p);
         if (bad) {
             *f = old;
-            log_error(comp, "fmi2SetReal: %s (value reference %u) = %g makes %s invalid",
+            log_error(comp, "%s (value reference %u) = %g makes %s invalid",
                       model_variables[vr].name, (unsigned)vr, value, bad);
             return fmi2Error;
         }
@@ -121,7 +121,7 @@ fmi2Status model_set_real(ModelInstance *comp, fmi2ValueReference vr, fmi2Real v
 fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
     ModelData *d = &comp->data;
     if (mmg_integrate(&d->p, d->X, &d->in, h) != 0) {
-        log_error(comp, "fmi2DoStep: the state became non-finite in the step from t = %g s", t);
+        log_error(comp, "the state became non-finite in the step from t = %g s", t);
         return fmi2Error;
     }
     return fmi2OK;
