@@ -19,6 +19,7 @@ ANALYSES = {
     "zigzag": "orchestrator.analyses:zigzag_analysis",
     "voyage": "orchestrator.analyses:voyage_analysis",
     "encounter": "orchestrator.analyses:encounter_analysis",
+    "colregs": "rhnc.colregs_analysis:colregs_analysis",
 }
 FIGURES = {
     "track": "orchestrator.figures:track_figure",
@@ -43,11 +44,21 @@ def check_outputs(scenario) -> None:
     for name in scenario.outputs.figures:
         resolve(FIGURES, name, "figures")
     for name in scenario.outputs.analyses:
-        accepted = list(inspect.signature(resolve(ANALYSES, name, "analyses")).parameters)[4:]
-        for key in scenario.outputs.options.get(name, {}):
+        function = resolve(ANALYSES, name, "analyses")
+        accepted = list(inspect.signature(function).parameters)[4:]
+        options = scenario.outputs.options.get(name, {})
+        for key in options:
             if key not in accepted:
                 raise ScenarioError(f"{scenario.path}: unknown option 'outputs.options.{name}.{key}' "
                                     f"(valid: {', '.join(accepted) or 'none'})")
+        # an analysis may check its option values too (``function.check_options(options)``
+        # raising ValueError), so that a bad value is refused before the run, not after it
+        checker = getattr(function, "check_options", None)
+        if checker is not None:
+            try:
+                checker(options)
+            except ValueError as exc:
+                raise ScenarioError(f"{scenario.path}: 'outputs.options.{name}': {exc}") from None
 
 
 def run_analysis(name, frame, scenario, cosim, out_dir) -> dict:
@@ -247,7 +258,8 @@ def array_output(frame, column: str) -> np.ndarray:
     return values
 
 
-def _own_radius_m(cosim) -> float:
+def own_radius_m(cosim) -> float:
+    """The own hazard radius R [m]: the controller's setting, 0 without a controller."""
     for participant in cosim.participants:
         settings = getattr(getattr(participant, "controller", None), "settings", None)
         if settings is not None and hasattr(settings, "own_radius_m"):
@@ -273,7 +285,7 @@ def encounter_analysis(frame, scenario, cosim, out_dir) -> dict:
     result: dict = {}
     if "obstacles" in sources:
         obstacles = array_output(frame, sources["obstacles"])
-        per_obstacle = separations(t, x, y, obstacles, _own_radius_m(cosim))
+        per_obstacle = separations(t, x, y, obstacles, own_radius_m(cosim))
         result["obstacles"] = per_obstacle
         result["min_clearance_nm"] = min(o["min_clearance_nm"] for o in per_obstacle)
         result["separation_respected"] = bool(result["min_clearance_nm"] >= -1e-6)
