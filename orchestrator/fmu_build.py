@@ -87,7 +87,7 @@ def _default_parameters(models_dir: Path) -> dict[str, float]:
             default = tomllib.load(f)["default"]
     except (OSError, tomllib.TOMLDecodeError, KeyError) as exc:
         raise FmuError(f"cannot read the [default] parameter set of {path}: {exc}") from exc
-    values = {k: v for k, v in default.items() if k != "description"}
+    values = {k: v for k, v in default.items() if k not in ("description", "plant_fmu", "plant_guid")}
     for key, value in values.items():
         if not isinstance(value, (int, float)) or isinstance(value, bool):
             raise FmuError(f"{path}: [default] {key} = {value!r} is not a number")

@@ -28,6 +28,9 @@ from orchestrator.scenario import ParticipantSpec
 
 log = logging.getLogger(__name__)
 
+#: Keys of a parameter set that describe it rather than set an FMU parameter.
+SET_METADATA_KEYS = ("description", "plant_fmu", "plant_guid")
+
 #: Canonical plant ports and the causality each must have.
 CANONICAL_PLANT_PORTS = {name: port.causality for name, port in PLANT_PORTS.items()}
 
@@ -63,7 +66,7 @@ def read_parameter_set(fmu_reference: str, set_name: str, where: str) -> dict:
         raise ScenarioError(
             f"{where}.parameter_set: no set '{set_name}' in {file.name} (valid: {', '.join(sets)})"
         )
-    return {key: value for key, value in sets[set_name].items() if key != "description"}
+    return {key: value for key, value in sets[set_name].items() if key not in SET_METADATA_KEYS}
 
 
 class FmuParticipant(Participant):
