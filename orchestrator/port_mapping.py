@@ -134,7 +134,6 @@ def scalar_conversion(port: str, entry: VariableMapping, variable, model_descrip
     dimension than the port's, and an angle port without unit and without scale.
     """
     spec = PLANT_PORTS.get(port)
-    explicit = entry.scale is not None or entry.offset is not None
     unit_name = entry.unit or declared_unit(variable, model_description)
     si = None
     if unit_name is not None:
@@ -146,19 +145,22 @@ def scalar_conversion(port: str, entry: VariableMapping, variable, model_descrip
         if si is not None and si.dimension != spec.dimension:
             raise _fail(where, f"port '{port}' is in {spec.si_unit} but FMU variable '{variable.name}' is in "
                                f"'{unit_name}' ({describe_dimension(si.dimension)}): not convertible")
-        if si is None and spec.is_angle and not explicit:
+        if si is None and spec.is_angle and entry.scale is None:
             raise _fail(where, f"port '{port}' is an angle ({spec.si_unit}) and FMU variable '{variable.name}' "
                                "declares no unit: give its unit (unit = \"deg\") or a scale")
-    if explicit:
-        scale = 1.0 if entry.scale is None else entry.scale
-        offset = 0.0 if entry.offset is None else entry.offset
-        if si is not None and spec is not None and not math.isclose(scale, si.factor, rel_tol=1e-6):
+    converts = si is not None and spec is not None
+    if entry.scale is not None:
+        scale = entry.scale
+        if converts and not math.isclose(scale, si.factor, rel_tol=1e-6):
             log.warning("%s: scale %g differs from the factor %g of the declared unit '%s' of '%s'",
                         where, scale, si.factor, unit_name, variable.name)
-        return scale, offset
-    if si is not None and spec is not None:
-        return si.factor, si.offset
-    return 1.0, 0.0
+    else:
+        scale = si.factor if converts else 1.0
+    if entry.offset is not None:
+        offset = entry.offset
+    else:
+        offset = si.offset if converts and entry.scale is None else 0.0
+    return scale, offset
 
 
 def _degree_conversion(entry: VariableMapping, variable, model_description, where: str) -> tuple[float, float]:
