@@ -85,13 +85,12 @@ class GeodeticBinding:
         east, north = self._forward.transform(lon, lat)
         return {"x": float(north), "y": float(east)}
 
-    def to_fmu(self, canonical: Mapping[str, float]) -> dict[str, float]:
+    def latitude_longitude(self, north_m: float, east_m: float) -> tuple[float, float]:
+        """Latitude and longitude [deg] of a point ``north_m``, ``east_m`` of the origin."""
         from pyproj.enums import TransformDirection
 
-        lon, lat = self._forward.transform(canonical.get("y", 0.0), canonical.get("x", 0.0),
-                                           direction=TransformDirection.INVERSE)
-        (lat_scale, lat_offset), (lon_scale, lon_offset) = self.to_degrees
-        return {self.variables[0]: (lat - lat_offset) / lat_scale, self.variables[1]: (lon - lon_offset) / lon_scale}
+        lon, lat = self._forward.transform(east_m, north_m, direction=TransformDirection.INVERSE)
+        return float(lat), float(lon)
 
 
 class VectorBinding:
@@ -293,14 +292,12 @@ def initial_start_values(spec: ParticipantSpec, outputs: list, variables: Mappin
         scale, offset = scalar_conversion(port, entry, parameter, model_description, key)
         starts[name] = (value - offset) / scale
     if geodetic is not None and ({"x", "y"} & set(canonical)):
-        lat_lon = geodetic.to_fmu(canonical)
-        for port, variable in zip(("x", "y"), geodetic.variables):
+        degrees = geodetic.latitude_longitude(canonical.get("x", 0.0), canonical.get("y", 0.0))
+        for port, value in zip(("x", "y"), degrees):
             entry = spec.mapping[port]
             parameter = variables[entry.start or f"{port}0"]
             scale, offset = _degree_conversion(entry, parameter, model_description, f"{where}.initial: '{port}'")
-            degrees = lat_lon[variable] * geodetic.to_degrees[("x", "y").index(port)][0] + \
-                geodetic.to_degrees[("x", "y").index(port)][1]
-            starts[parameter.name] = (degrees - offset) / scale
+            starts[parameter.name] = (value - offset) / scale
     for name in starts:
         if name in spec.parameters:
             raise ScenarioError(f"{where}.parameters.{name}: the initial state is already given in [initial]")
