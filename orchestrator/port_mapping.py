@@ -30,6 +30,9 @@ from orchestrator.units import UnitParseError, declared_unit, describe_dimension
 
 log = logging.getLogger(__name__)
 
+#: Type names of real variables: FMI 2.0 ``Real``, FMI 3.0 ``Float64``/``Float32``.
+REAL_TYPES = ("Real", "Float64", "Float32")
+
 
 def _wrap(angle: float) -> float:
     """Angle in (-pi, pi]."""
@@ -192,7 +195,7 @@ def bind_ports(spec: ParticipantSpec, variables: Mapping[str, object], model_des
                            "only inputs and outputs can be mapped")
         if causality is not None and variable.causality != causality:
             raise FmuError(f"{key}: '{port}' is a plant {causality} but FMU variable '{name}' is an {variable.causality}")
-        if variable.type != "Real":
+        if variable.type not in REAL_TYPES:
             raise FmuError(f"{key}: variable '{name}' is not Real")
         if name in used:
             raise ScenarioError(f"{key}: FMU variable '{name}' already feeds port '{used[name]}'; "
@@ -219,7 +222,7 @@ def bind_ports(spec: ParticipantSpec, variables: Mapping[str, object], model_des
         outputs.append(_geodetic_binding(spec, geodetic, variables, model_description, where))
     bound_ports = {port for binding in inputs + outputs for port in binding.ports}
     for variable in model_description.modelVariables:
-        if variable.name in used or variable.type != "Real" or variable.name in bound_ports:
+        if variable.name in used or variable.type not in REAL_TYPES or variable.name in bound_ports:
             continue
         if variable.causality not in ("input", "output"):
             continue
