@@ -220,7 +220,12 @@ def bind_ports(spec: ParticipantSpec, variables: Mapping[str, object], model_des
         (inputs if variable.causality == "input" else outputs).append(binding)
     if geodetic:
         outputs.append(_geodetic_binding(spec, geodetic, variables, model_description, where))
-    bound_ports = {port for binding in inputs + outputs for port in binding.ports}
+    bound_ports = set()
+    for binding in inputs + outputs:
+        for port in binding.ports:
+            if port in bound_ports:
+                raise ScenarioError(f"{where}.mapping: port '{port}' is mapped twice (directly and in a vector)")
+            bound_ports.add(port)
     for variable in model_description.modelVariables:
         if variable.name in used or variable.type not in REAL_TYPES or variable.name in bound_ports:
             continue

@@ -202,6 +202,9 @@ MISTAKES = {
         lambda m: m.replace('v = "sway_speed"', 'v = { variable = "sway_speed", unit = "furlongs/fortnite" }'), "",
         r"mapping\.v: FMU variable 'sway_speed': unknown unit 'furlongs/fortnite'"),
     "unknown initial key": (lambda m: m, "u_mph = 3.0", r"unknown key 'participants\.ship\.initial\.u_mph'"),
+    "a port mapped twice": (
+        lambda m: m.replace('hs = "wave_height"', 'current_north = { variable = "wave_height", unit = "kn" }'), "",
+        r"mapping: port 'current_north' is mapped twice"),
 }
 
 
