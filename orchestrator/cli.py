@@ -185,6 +185,7 @@ def _identify(args) -> int:
     print(f"  parameter set '{report.report['set']}' in {report.parameter_file}")
     print(f"  held-out {report.report['held_out']}: heading RMS {held['heading_rms_deg']:.2f} deg, "
           f"speed RMS {held['speed_rms_kn']:.3f} kn")
+    return 0
 
 
 def _export(args) -> int:

@@ -24,7 +24,8 @@ SIMULATION_KEYS = ("name", "start_s", "stop_s", "steps", "dt_s", "stop_when", "e
 #: before the point ("jacobi", as masters that step FMUs in parallel do, e.g. libcosim).
 EXCHANGE_ORDERS = ("gauss-seidel", "jacobi")
 STOP_OPERATORS = ("<=", ">=", "<", ">")
-FMU_PARTICIPANT_KEYS = ("fmu", "fmi_version", "every", "parameter_set", "parameters", "mapping", "geodetic", "initial")
+FMU_PARTICIPANT_KEYS = ("fmu", "fmi_version", "every", "parameter_set", "parameters", "mapping", "geodetic",
+                        "initial")
 MAPPING_KEYS = ("variable", "scale", "offset", "unit", "geodetic", "start")
 VECTOR_MAPPING_KEYS = ("speed", "direction", "direction_is", "north", "east", "units")
 GEODETIC_ROLES = ("latitude", "longitude")
