@@ -418,7 +418,8 @@ def _fmu_participant(name: str, body: dict, every: int, where: str, prefix: str)
         if not is_finite_number(value):
             raise ScenarioError(f"{where}: '{prefix}initial.{key}' must be a finite number, got {value!r}")
     return ParticipantSpec(name=name, every=every, fmu=fmu, parameter_set=parameter_set,
-                           parameters=parameters, mapping=mapping, geodetic_origin_deg=origin, fmi_version=fmi_version,
+                           parameters=parameters, mapping=mapping, geodetic_origin_deg=origin,
+                           fmi_version=fmi_version,
                            initial={k: float(v) for k, v in initial.items()})
 
 
