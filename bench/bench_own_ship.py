@@ -68,9 +68,10 @@ def main() -> None:
                 ctrl = report.summary["participants"]["ctrl"]
                 encounter = report.summary["analyses"].get("encounter", {})
                 clearance = encounter.get("min_clearance_nm")
-                print(f"| {experiment} | {'KCS (default)' if model == 'kcs_model' else 'identified S175'} | "
-                      f"{'-' if clearance is None else f'{clearance * NM:+.1f}'} | "
-                      f"{encounter.get('cross_track_end_nm', float('nan')):.3f} | "
+                separation = "-" if clearance is None else f"{clearance * NM:+.1f}"
+                track = f"{encounter['cross_track_end_nm']:.3f}" if "cross_track_end_nm" in encounter else "-"
+                label = "KCS (default)" if model == "kcs_model" else "identified S175"
+                print(f"| {experiment} | {label} | {separation} | {track} | "
                       f"{ctrl['tau_r_sign_changes_per_100_solves']:.1f} | {ctrl['fallback_count']} | "
                       f"{ctrl['relaxed_clearance_steps']} | {ctrl['model_check']['check']} |")
                 if experiment == "exp2":
