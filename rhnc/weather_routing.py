@@ -44,7 +44,7 @@ from rhnc.track_cost import constant_speed_times, cost_of_track, densify, is_tim
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RoutingProblem", "RouteResult", "optimal_route", "straight_route", "cost_of_track",
+__all__ = ["RoutingProblem", "RouteResult", "RouteSearch", "optimal_route", "straight_route", "cost_of_track",
            "time_price_usd_h"]
 
 #: Bracket of the speed through water solved for a fixed arrival time [m/s].
@@ -167,8 +167,14 @@ def straight_route(problem: RoutingProblem, *, speed_mps: float | None = None,
     return _result(problem, polyline, speed_mps, "straight")
 
 
-class _Search:
-    """The search grid of one problem and the weights of its edges at a speed and a price of time."""
+class RouteSearch:
+    """The search grid of one problem and the weights of its edges at a speed and a price of time.
+
+    The objective of a route at constant speed through water v is the integral over the
+    passage of ``F + lambda``: F the fuel cost rate [USD/h] with the course sailed,
+    lambda the price of an hour [USD/h] (the running cost C_c / 24 at fixed speed, the
+    shadow price of time at fixed arrival).
+    """
 
     def __init__(self, problem: RoutingProblem):
         self.problem = problem
@@ -294,7 +300,7 @@ def optimal_route(problem: RoutingProblem, *, speed_mps: float | None = None,
         Never dearer than :func:`straight_route` with the same argument.
     """
     _check(problem, speed_mps, arrival_s)
-    search = _Search(problem)
+    search = RouteSearch(problem)
     straight = straight_route(problem, speed_mps=speed_mps, arrival_s=arrival_s)
     best = straight
     if speed_mps is not None:
