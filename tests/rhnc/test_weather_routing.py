@@ -44,6 +44,12 @@ def test_a_storm_on_the_line_is_passed_around():
     assert np.min(offsets) > -0.5
     assert route.cost_usd < 0.97 * straight.cost_usd
     assert route.distance_nm > straight.distance_nm
+    # the hours count at the running cost: the fuel-only optimum sails further and costs more
+    search = RouteSearch(problem)
+    for hourly_usd in (0.0, 4 * problem.energy.running_cost_usd_day / 24.0):
+        other = search.route(SPEED, hourly_usd, passes=1)
+        other_times = constant_speed_times(field, other, SPEED)
+        assert route.cost_usd < 0.999 * cost_of_track(field, problem.energy, other, other_times)["cost_usd"]
     # and at the straight line's arrival time, with the speed that arrives then
     timed = optimal_route(problem, arrival_s=straight.arrival_s)
     assert abs(timed.arrival_s - straight.arrival_s) < 1.0
