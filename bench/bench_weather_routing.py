@@ -1,14 +1,14 @@
 """Optimal weather routing on a 100 x 100 nm map at 0.5 nm: time, saving, discretisation error.
 
-Prints, for the paper-style weather (``paper_default``) and for a storm off the direct
-route (wind 5 m/s plus a Gaussian storm of +17 m/s, radius 15 nm, at (55, 42) nm, from
-045), the straight line's cost at 18 kn and the optimum at that speed and at the
+Prints, for the generated weathers of :mod:`rhnc.weather_generators` (``paper_default``,
+``storm_off_route``, ``cyclone``, ``moving_storm``: see docs/weather.md), the straight line's
+cost at 18 kn and the optimum at that speed and at the
 straight line's arrival time, with the optimiser's wall time (goal: within 5 s on 2
 cores; the whole call, graph built).  Then the residual error of the discretisation in
 uniform weather: the cost of the graph's own path (before shortening) against the exact
 straight line, for 8, 16 and 32 headings and several bearings.
 
-Run: ``python bench/bench_weather_routing.py [--resolution-nm 0.5] [--repeat 3]``
+Run: ``python bench/bench_weather_routing.py [--resolution-nm 0.5] [--repeat 3] [--weather NAME ...]``
 """
 
 from __future__ import annotations
@@ -19,21 +19,11 @@ import time
 
 import numpy as np
 
-from rhnc.metocean import KNOT, NM, MetOceanField, fetch_limited_hs
+from rhnc import weather_generators
+from rhnc.metocean import KNOT, NM, MetOceanField
 from rhnc.route_search import shortest_path_tree
 from rhnc.track_cost import constant_speed_times, cost_of_track, densify
 from rhnc.weather_routing import RouteSearch, RoutingProblem, optimal_route, straight_route
-
-
-def storm_off_route(resolution_nm: float) -> MetOceanField:
-    x = np.linspace(0.0, 100.0, int(round(100.0 / resolution_nm)) + 1) * NM
-    xx, yy = np.meshgrid(x, x, indexing="ij")
-    speed = 5.0 + 17.0 * np.exp(-((xx - 55 * NM) ** 2 + (yy - 42 * NM) ** 2) / (2 * (15 * NM) ** 2))
-    towards = np.radians(45.0) + np.pi
-    zero = np.zeros_like(speed)
-    return MetOceanField(x, x, {"wind_north": speed * np.cos(towards), "wind_east": speed * np.sin(towards),
-                                "hs": fetch_limited_hs(speed, 100e3), "current_north": zero, "current_east": zero},
-                         source="bench: storm off the route")
 
 
 def timed(call, repeat: int):
@@ -93,12 +83,13 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--resolution-nm", type=float, default=0.5)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--weather", nargs="+", default=["paper_default", "storm_off_route", "cyclone", "moving_storm"])
     args = parser.parse_args()
     print(f"100 x 100 nm at {args.resolution_nm} nm, {os.cpu_count()} CPUs, load average "
           f"{os.getloadavg()[0]:.1f}")
-    weather_case("paper_default", MetOceanField.generate_paper_default(resolution_nm=args.resolution_nm),
-                 args.resolution_nm, args.repeat)
-    weather_case("storm off the route", storm_off_route(args.resolution_nm), args.resolution_nm, args.repeat)
+    for name in args.weather:
+        field = getattr(weather_generators, name)(resolution_nm=args.resolution_nm)
+        weather_case(name, field, args.resolution_nm, args.repeat)
     discretisation_error(args.resolution_nm)
 
 

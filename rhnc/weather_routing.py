@@ -186,6 +186,10 @@ class RouteSearch:
         self.nodes = self.graph.node_points()
         self.source = self.graph.nearest_free_node(problem.start_m)
         self.target = self.graph.nearest_free_node(problem.goal_m)
+        moves = len(self.graph.moves)
+        self._source_move = self.graph.source * moves + self.graph.move
+        self._target_move = self.graph.target * moves + self.graph.move
+        self._edge_length = self.graph.move_length_m[self.graph.move]
         self.static_weather = None if is_time_varying(problem.metocean) else problem.metocean.sample(
             self.nodes[:, 0], self.nodes[:, 1])
 
@@ -201,11 +205,12 @@ class RouteSearch:
         power = brake_power(speed_mps, heading, weather["wind_north"][:, None], weather["wind_east"][:, None],
                             weather["hs"][:, None], p.energy)
         rate = fuel_rate_t_h(power, p.energy) * p.energy.fuel_price_usd_t + time_price_usd_h
-        g = self.graph
-        edge_speed = 0.5 * (over_ground[g.source, g.move] + over_ground[g.target, g.move])
+        over_ground = over_ground.ravel()
+        rate = rate.ravel()
+        edge_speed = 0.5 * (over_ground[self._source_move] + over_ground[self._target_move])
         passable = edge_speed > 1e-3
-        duration = np.where(passable, g.move_length_m[g.move] / np.maximum(edge_speed, 1e-3), IMPASSABLE)
-        weight = np.where(passable, 0.5 * (rate[g.source, g.move] + rate[g.target, g.move]) * duration / 3600.0,
+        duration = np.where(passable, self._edge_length / np.maximum(edge_speed, 1e-3), IMPASSABLE)
+        weight = np.where(passable, (rate[self._source_move] + rate[self._target_move]) * (duration / 7200.0),
                           IMPASSABLE)
         return weight, duration
 

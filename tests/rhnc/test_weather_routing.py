@@ -8,7 +8,7 @@ from rhnc.metocean import KNOT, NM
 from rhnc.route_search import segment_clearance
 from rhnc.track_cost import constant_speed_times, cost_of_track
 from rhnc.weather_routing import RouteSearch, RoutingProblem, optimal_route, straight_route
-from weather_fixtures import SwitchedField, storm_field
+from weather_fixtures import storm_field, switched_field
 
 SPEED = 18 * KNOT
 
@@ -122,9 +122,9 @@ def test_a_storm_changes_the_route_only_where_the_ship_is_while_it_blows():
     static_late = profile(storm_field(storms=[late_storm]))
     static_early = profile(storm_field(storms=[early_storm]))
     # storms from half way on: the early one blows only after the ship has passed it
-    blowing_late = profile(SwitchedField(calm, both, switch_s=0.5 * passage_s))
+    blowing_late = profile(switched_field(calm, both, switch_s=0.5 * passage_s))
     # storms until half way: the late one has gone before the ship gets there
-    blowing_early = profile(SwitchedField(both, calm, switch_s=0.5 * passage_s))
+    blowing_early = profile(switched_field(both, calm, switch_s=0.5 * passage_s))
     assert np.max(np.abs(blowing_late - static_late)) < 0.3
     assert np.max(np.abs(blowing_early - static_early)) < 0.3
     assert np.max(np.abs(static_both - static_late)) > 0.8

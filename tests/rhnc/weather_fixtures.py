@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from rhnc.metocean import NM, MetOceanField, fetch_limited_hs
+from rhnc.metocean import FIELDS, NM, MetOceanField, fetch_limited_hs
 
 
 def axis_nm(size_nm: float, resolution_nm: float) -> np.ndarray:
@@ -30,24 +30,11 @@ def storm_field(size_nm=20.0, resolution_nm=0.5, storms=(), base_wind_ms=5.0, wi
     }, source="test storms")
 
 
-class SwitchedField:
-    """A field that is ``before`` until ``switch_s`` and ``after`` from then on.
-
-    The time-varying interface of the met-ocean field (``times_s``, ``sample(x, y, t_s)``)
-    with a step in time, so that a test knows exactly when the weather is where.
-    """
-
-    def __init__(self, before: MetOceanField, after: MetOceanField, switch_s: float):
-        self.before, self.after, self.switch_s = before, after, float(switch_s)
-        self.times_s = np.array([0.0, switch_s])
-        self.extent = before.extent
-
-    def contains(self, x, y, tolerance: float = 1e-6):
-        return self.before.contains(x, y, tolerance)
-
-    def sample(self, x, y, t_s=None):
-        if t_s is None:
-            return self.before.sample(x, y)
-        early, late = self.before.sample(x, y), self.after.sample(x, y)
-        use_late = np.asarray(t_s) >= self.switch_s
-        return {name: np.where(use_late, late[name], early[name]) for name in early}
+def switched_field(before: MetOceanField, after: MetOceanField, switch_s: float,
+                   ramp_s: float = 1.0) -> MetOceanField:
+    """A time-varying field that is ``before`` until ``switch_s`` and ``after`` from
+    ``switch_s + ramp_s`` on (linear in between), so a test knows when the weather is where."""
+    times = np.array([0.0, switch_s, switch_s + ramp_s, switch_s + ramp_s + 1e6])
+    fields = {name: np.stack([getattr(before, name), getattr(before, name), getattr(after, name),
+                              getattr(after, name)]) for name in FIELDS}
+    return MetOceanField(before.x, before.y, fields, times_s=times, source="test: switched")
