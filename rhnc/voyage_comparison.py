@@ -18,8 +18,9 @@ speed from the comparison:
 * the **available saving**: the optimal weather route (:mod:`rhnc.weather_routing`, over
   the same met-ocean field and energy model) against the straight route, both arriving
   when the system arrived; each system's saving is reported as a share of it;
-* the **sailed track at equal speed**: the system's track and the straight line costed at
-  the baseline's constant speed, which isolates the route from the speed;
+* the **sailed track at equal speed**: the system's track and the straight line costed by
+  the routing model at one constant speed through water (the baseline's mean), which
+  isolates the route from the speed;
 * each run's mean speed through water; runs whose mean speeds differ by more than
   :data:`SPEED_SPREAD_LIMIT_PERCENT` without an equal-arrival baseline beside each are
   flagged in the table.
@@ -112,6 +113,8 @@ class VoyageComparison:
         self.equal_arrival = equal_arrival
         self.optimal_route = optimal_route
         self.run_scenarios = dict(run_scenarios)
+        #: published figures per run label (the comparison file's ``paper`` tables)
+        self.published: dict[str, dict[str, Any]] = {}
         self.labels = tuple(run_scenarios)
 
     # -- construction --------------------------------------------------------------------
@@ -132,7 +135,9 @@ class VoyageComparison:
         if "optimal_route" in table:
             optimal = _optimal_route(table["optimal_route"], f"{where}.optimal_route")
         scenarios = {run["label"]: path.parent / run["scenario"] for run in spec["runs"]}
-        return cls(path, start * NM, goal * NM, radius, max_hours * 3600.0, equal, optimal, scenarios)
+        comparison = cls(path, start * NM, goal * NM, radius, max_hours * 3600.0, equal, optimal, scenarios)
+        comparison.published = {run["label"]: dict(run["paper"]) for run in spec["runs"] if "paper" in run}
+        return comparison
 
     # -- the extension's hooks -------------------------------------------------------------
     def run_overrides(self, scenario: Path, overrides: Mapping[str, Any], where: str) -> dict[str, Any]:
@@ -225,6 +230,7 @@ class VoyageComparison:
         if loaded.metocean is None:
             log.info("%s: no [metocean] table, no route costs", scenario)
             return {}
+        from rhnc.track_cost import constant_speed_times, densify
         from rhnc.weather_routing import RoutingProblem, cost_of_track, optimal_route, straight_route
 
         metocean = MetOceanField.from_scenario_table(loaded.metocean, loaded.directory,
@@ -243,12 +249,14 @@ class VoyageComparison:
                 entry["optimal"] = optimal_route(problem, arrival_s=system.arrival_s)
             best = baselines[label].best if label in baselines else None
             if best is not None and baselines[label].matched:
-                speed = best.speed_kn * KNOT
-                track = _with_goal(system.track_m, self.goal_m)
-                entry["equal_speed_kn"] = best.speed_kn
-                entry["track_at_equal_speed"] = cost_of_track(metocean, energy, track, _retimed(track, speed))
-                line = np.vstack([self.start_m, self.goal_m])
-                entry["line_at_equal_speed"] = cost_of_track(metocean, energy, line, _retimed(line, speed))
+                # both at the baseline's measured mean speed through water, from the same departure
+                speed = best.run.mean_speed_through_water_kn * KNOT
+                track = densify(_with_goal(system.track_m, self.goal_m), settings.resolution_nm * NM / 2.0)
+                line = densify(np.vstack([self.start_m, self.goal_m]), settings.resolution_nm * NM / 2.0)
+                entry["equal_speed_kn"] = speed / KNOT
+                for name, points in (("track_at_equal_speed", track), ("line_at_equal_speed", line)):
+                    entry[name] = cost_of_track(metocean, energy, points,
+                                                constant_speed_times(metocean, points, speed))
             costs[label] = entry
         return costs
 
@@ -281,11 +289,6 @@ def _with_goal(track_m: np.ndarray, goal_m: np.ndarray) -> np.ndarray:
     points = np.vstack([track_m, goal_m])
     keep = np.concatenate([[True], np.hypot(*np.diff(points, axis=0).T) > 1e-6])
     return points[keep]
-
-
-def _retimed(points_m: np.ndarray, speed_mps: float) -> np.ndarray:
-    """Times [s] at which a polyline's points are passed at a constant speed over ground."""
-    return np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(points_m, axis=0).T))]) / speed_mps
 
 
 def _uses_steps(scenario: Path) -> bool:

@@ -38,6 +38,8 @@ def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) ->
     rows = []
     for label, system in systems.items():
         rows.append(_voyage_row(label, "system (sailed)", system))
+        if label in comparison.published:
+            rows.append(_published_row(label, comparison.published[label]))
         equal = baselines.get(label)
         if equal is not None and equal.best is not None:
             best = equal.best.run
@@ -97,7 +99,8 @@ def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) ->
                      "Saving: the system's total against its equal-arrival baseline (positive: the system is "
                      "cheaper). Available: the optimal weather route against the straight route, both "
                      "arriving when the system arrived. Share: saving / available. Track vs line: the sailed "
-                     "track against the straight line, both costed at the baseline's constant speed "
+                     "track against the straight line, both costed at one constant speed through water, the "
+                     "baseline's mean "
                      "(positive: the track is dearer).", "", markdown_table(headline), ""]
     markdown += [f"**FLAG**: {flag}" for flag in flags] + ([""] if flags else [])
     tables = {"voyage_runs": runs}
@@ -159,14 +162,23 @@ def _voyage_row(label: str, kind: str, voyage) -> dict[str, Any]:
     }
 
 
+def _published_row(label: str, paper: dict[str, Any]) -> dict[str, Any]:
+    """The published figures of a run, where the comparison file gives them."""
+    minutes, made_good = paper.get("time_min"), paper.get("made_good_nm")
+    co2 = paper.get("co2_t")
+    return {
+        "voyage": f"{label} (paper)", "kind": "published", "arrived": None, "arrival [min]": minutes,
+        "mean speed through water [kn]": None,
+        "speed made good [kn]": made_good / (minutes / 60.0) if made_good and minutes else None,
+        "reference speed [kn]": None, "sailed [nm]": None, "made good [nm]": made_good,
+        "cost [USD]": paper.get("cost_usd"), "CO2 [t]": co2,
+        "cost per nm made good [USD]": paper.get("cost_per_made_good_nm_usd"),
+        "CO2 per nm made good [kg]": paper.get("co2_per_made_good_nm_kg"),
+    }
+
+
 def _route_row(label: str, kind: str, route, made_good_nm: float) -> dict[str, Any]:
-    times = np.asarray(route.times_s, dtype=float)
-    speed = np.asarray(route.speed_through_water_mps, dtype=float)
-    if speed.size == times.size - 1:
-        mean_kn = float(np.sum(speed * np.diff(times)) / (times[-1] - times[0]))
-    else:
-        mean_kn = float(np.trapezoid(speed, times) / (times[-1] - times[0]))
-    mean_kn /= 1852.0 / 3600.0
+    mean_kn = float(route.speed_through_water_mps) / (1852.0 / 3600.0)
     return {
         "voyage": label, "kind": kind, "arrived": True, "arrival [min]": route.duration_s / 60.0,
         "mean speed through water [kn]": mean_kn,
