@@ -157,7 +157,7 @@ class VoyageComparison:
         if (not isinstance(goal_nm, list) or len(goal_nm) != 2
                 or not np.allclose(np.asarray(goal_nm, dtype=float) * NM, self.goal_m, atol=1.0)):
             raise ScenarioError(f"{where}: participants.{goal.name}.options.goal_nm {goal_nm} is not the "
-                                f"comparison's voyage.goal_nm {list(self.goal_m / NM)}")
+                                f"comparison's voyage.goal_nm {[round(float(v), 6) for v in self.goal_m / NM]}")
         sim = loaded.simulation
         steps = int(math.ceil(self.max_duration_s / sim.dt_s))
         stop = [str(c) for c in sim.stop_when]

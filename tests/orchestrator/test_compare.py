@@ -85,3 +85,31 @@ def test_unknown_baseline_and_cli_exit_code(tmp_path, capsys):
     path.write_text(path.read_text().replace('baseline = "slow"', 'baseline = "medium"'))
     assert main(["compare", str(path)]) == 2
     assert "baseline 'medium' is not a run label (slow, fast)" in capsys.readouterr().err
+
+
+def test_sweep_runs_the_comparison_once_per_value(tmp_path):
+    from orchestrator.compare import run_comparison
+
+    extra = '[sweep]\nkey = "participants.helm.options.tau_u_N"\nvalues = [5.0e5, 9.0e5]'
+    path = write(tmp_path)
+    path.write_text(path.read_text().replace('baseline = "slow"', 'baseline = "slow"\n' + extra))
+    folder = run_comparison(path, tmp_path / "results", progress=False)
+    members = sorted(p.name for p in (folder / "members").iterdir())
+    assert members == ["participants.helm.options.tau_u_N=500000.0", "participants.helm.options.tau_u_N=900000.0"]
+    distances = [pd.read_csv(folder / "members" / m / "table.csv").set_index("metric").loc["distance_nm", "slow (ours)"]
+                 for m in members]
+    assert distances[1] > distances[0]   # the swept surge force reached the runs
+    summary = (folder / "summary.json").read_text()
+    assert '"sweep_key": "participants.helm.options.tau_u_N"' in summary
+
+
+@pytest.mark.parametrize("extra, message", [
+    ('[set]\n"a..b" = 1', r"compare.toml: 'set' key 'a..b' is not a dotted key path"),
+    ('[sweep]\nkey = "simulation.dt_s"', r"give exactly one of 'sweep.values' or 'sweep.range'"),
+    ('[sweep]\nkey = "simulation.dt_s"\nvalues = [1.0]\nstep = 2', r"unknown key 'sweep.step'"),
+])
+def test_set_and_sweep_errors(tmp_path, extra, message):
+    path = write(tmp_path)
+    path.write_text(path.read_text().replace('baseline = "slow"', 'baseline = "slow"\n' + extra))
+    with pytest.raises(ScenarioError, match=message):
+        load_comparison(path)
