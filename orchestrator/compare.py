@@ -17,6 +17,7 @@ A comparison file (TOML), e.g. ``scenarios/exp2_table3.toml`` for the paper's Ta
     [[runs]]
     label = "RHNC"
     scenario = "exp2_rhnc.toml"                  # relative to this file
+    set = { "participants.nav.options.k3" = 8.0 }   # this run's own overrides, optional
     paper = { cost_usd = 10473, co2_t = 31.264 } # published values, optional
     figures = { "navigation_fields.png" = "figure10_fields.png" }   # copied, renamed
 
@@ -35,6 +36,7 @@ The engine here knows nothing of what the extension measures.
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import importlib
 import json
@@ -55,7 +57,7 @@ from orchestrator.scenario import read_toml
 log = logging.getLogger(__name__)
 
 KEYS = ("name", "analysis", "metrics", "baseline", "runs", "set", "sweep")
-RUN_KEYS = ("label", "scenario", "paper", "figures")
+RUN_KEYS = ("label", "scenario", "set", "paper", "figures")
 SWEEP_KEYS = ("key", "values", "range")
 
 
@@ -88,7 +90,7 @@ class ScenarioRunner:
     def __call__(self, scenario: Path, overrides: dict[str, Any], label: str):
         from orchestrator.run import run_scenario
 
-        return run_scenario(scenario, self.runs_dir, progress=self.progress, overrides=overrides,
+        return run_scenario(scenario, self.runs_dir, progress=self.progress, overrides=copy.deepcopy(overrides),
                             group=slug(label))
 
 
@@ -124,19 +126,14 @@ def load_comparison(path: Path) -> dict[str, Any]:
         scenario = path.parent / run["scenario"]
         if not scenario.is_file():
             raise ScenarioError(f"{where}.scenario: scenario file not found: {scenario}")
+        run["set"] = _overrides(run.get("set", {}), f"{where}.set")
         for key in run.get("paper", {}):
             if key not in metrics:
                 raise ScenarioError(f"{where}.paper: '{key}' is not one of the metrics")
         labels.append(run["label"])
     if "baseline" in data and data["baseline"] not in labels:
         raise ScenarioError(f"{path}: baseline '{data['baseline']}' is not a run label ({', '.join(labels)})")
-    overrides = data.get("set", {})
-    if not isinstance(overrides, dict):
-        raise ScenarioError(f"{path}: 'set' must be a table of dotted-key overrides")
-    for key in overrides:
-        if not key or not all(key.split(".")):
-            raise ScenarioError(f"{path}: 'set' key '{key}' is not a dotted key path")
-    data["set"] = dict(overrides)
+    data["set"] = _overrides(data.get("set", {}), f"{path}: set")
     if "sweep" in data:
         data["sweep"] = _sweep(data["sweep"], path)
     return data
@@ -213,12 +210,10 @@ def _compare_once(spec, extensions, path: Path, overrides: dict, out_dir: Path, 
     """One pass over the runs (and the extensions' runs) into ``out_dir``."""
     runner = ScenarioRunner(out_dir / "runs", progress)
     reports = {}
-    for run in spec["runs"]:
+    for i, run in enumerate(spec["runs"]):
         scenario = path.parent / run["scenario"]
-        run_overrides = dict(overrides)
-        for extension in extensions.values():
-            run_overrides.update(extension.run_overrides(scenario, overrides, f"{path}: runs"))
-        report = runner(scenario, run_overrides, run["label"])
+        report = runner(scenario, _run_overrides(run, extensions, scenario, overrides, f"{path}: runs[{i}]"),
+                        run["label"])
         reports[run["label"]] = report
         for source, target in run.get("figures", {}).items():
             if (report.folder / source).is_file():
@@ -254,14 +249,19 @@ def _check_runs(spec, extensions, path: Path, overrides: dict) -> None:
 
     for i, run in enumerate(spec["runs"]):
         scenario = path.parent / run["scenario"]
-        run_overrides = dict(overrides)
-        for extension in extensions.values():
-            run_overrides.update(extension.run_overrides(scenario, overrides, f"{path}: runs[{i}]"))
-        load_scenario(scenario, run_overrides)
+        load_scenario(scenario, _run_overrides(run, extensions, scenario, overrides, f"{path}: runs[{i}]"))
+
+
+def _run_overrides(run, extensions, scenario: Path, overrides: dict, where: str) -> dict[str, Any]:
+    """The comparison's overrides, then the run's own ``set``, then the extensions'."""
+    merged = copy.deepcopy({**overrides, **run["set"]})
+    for extension in extensions.values():
+        merged.update(extension.run_overrides(scenario, merged, where))
+    return merged
 
 
 def _member_overrides(spec, value) -> dict[str, Any]:
-    overrides = dict(spec["set"])
+    overrides = copy.deepcopy(spec["set"])
     if value is not None:
         overrides[spec["sweep"]["key"]] = value
     return overrides
@@ -270,6 +270,15 @@ def _member_overrides(spec, value) -> dict[str, Any]:
 def _write_section(section: Section, out_dir: Path) -> None:
     for name, frame in section.tables.items():
         frame.to_csv(out_dir / f"{name}.csv", index=False)
+
+
+def _overrides(table, where: str) -> dict[str, Any]:
+    if not isinstance(table, dict):
+        raise ScenarioError(f"{where}: expected a table of dotted-key overrides")
+    for key in table:
+        if not key or not all(key.split(".")):
+            raise ScenarioError(f"{where}: key '{key}' is not a dotted key path")
+    return dict(table)
 
 
 def _sweep(table, path: Path) -> dict[str, Any]:

@@ -74,6 +74,7 @@ def test_table_leaves_missing_figures_empty():
     ('colour = "red"', r"compare.toml: runs\[1\]: unknown key 'colour'"),
     ('[[runs]]\nlabel = "x"\nscenario = "none.toml"', r"runs\[2\].scenario: scenario file not found"),
     ('[[runs]]\nlabel = "x"\nscenario = "slow.toml"\npaper = { speed = 1 }', r"runs\[2\].paper: 'speed' is not one of"),
+    ('[[runs]]\nlabel = "x"\nscenario = "slow.toml"\nset = 3', r"runs\[2\].set: expected a table"),
 ])
 def test_comparison_file_errors(tmp_path, extra, message):
     with pytest.raises(ScenarioError, match=message):
@@ -104,7 +105,7 @@ def test_sweep_runs_the_comparison_once_per_value(tmp_path):
 
 
 @pytest.mark.parametrize("extra, message", [
-    ('[set]\n"a..b" = 1', r"compare.toml: 'set' key 'a..b' is not a dotted key path"),
+    ('[set]\n"a..b" = 1', r"compare.toml: set: key 'a..b' is not a dotted key path"),
     ('[sweep]\nkey = "simulation.dt_s"', r"give exactly one of 'sweep.values' or 'sweep.range'"),
     ('[sweep]\nkey = "simulation.dt_s"\nvalues = [1.0]\nstep = 2', r"unknown key 'sweep.step'"),
 ])
