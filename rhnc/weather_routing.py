@@ -44,7 +44,7 @@ from rhnc.track_cost import constant_speed_times, cost_of_track, densify, is_tim
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RoutingProblem", "RouteResult", "optimal_route", "straight_route", "cost_of_track",
+__all__ = ["RoutingProblem", "RouteResult", "RouteSearch", "optimal_route", "straight_route", "cost_of_track",
            "time_price_usd_h"]
 
 #: Bracket of the speed through water solved for a fixed arrival time [m/s].
@@ -167,8 +167,14 @@ def straight_route(problem: RoutingProblem, *, speed_mps: float | None = None,
     return _result(problem, polyline, speed_mps, "straight")
 
 
-class _Search:
-    """The search grid of one problem and the weights of its edges at a speed and a price of time."""
+class RouteSearch:
+    """The search grid of one problem and the weights of its edges at a speed and a price of time.
+
+    The objective of a route at constant speed through water v is the integral over the
+    passage of ``F + lambda``: F the fuel cost rate [USD/h] with the course sailed,
+    lambda the price of an hour [USD/h] (the running cost C_c / 24 at fixed speed, the
+    shadow price of time at fixed arrival).
+    """
 
     def __init__(self, problem: RoutingProblem):
         self.problem = problem
@@ -180,6 +186,10 @@ class _Search:
         self.nodes = self.graph.node_points()
         self.source = self.graph.nearest_free_node(problem.start_m)
         self.target = self.graph.nearest_free_node(problem.goal_m)
+        moves = len(self.graph.moves)
+        self._source_move = self.graph.source * moves + self.graph.move
+        self._target_move = self.graph.target * moves + self.graph.move
+        self._edge_length = self.graph.move_length_m[self.graph.move]
         self.static_weather = None if is_time_varying(problem.metocean) else problem.metocean.sample(
             self.nodes[:, 0], self.nodes[:, 1])
 
@@ -195,11 +205,12 @@ class _Search:
         power = brake_power(speed_mps, heading, weather["wind_north"][:, None], weather["wind_east"][:, None],
                             weather["hs"][:, None], p.energy)
         rate = fuel_rate_t_h(power, p.energy) * p.energy.fuel_price_usd_t + time_price_usd_h
-        g = self.graph
-        edge_speed = 0.5 * (over_ground[g.source, g.move] + over_ground[g.target, g.move])
+        over_ground = over_ground.ravel()
+        rate = rate.ravel()
+        edge_speed = 0.5 * (over_ground[self._source_move] + over_ground[self._target_move])
         passable = edge_speed > 1e-3
-        duration = np.where(passable, g.move_length_m[g.move] / np.maximum(edge_speed, 1e-3), IMPASSABLE)
-        weight = np.where(passable, 0.5 * (rate[g.source, g.move] + rate[g.target, g.move]) * duration / 3600.0,
+        duration = np.where(passable, self._edge_length / np.maximum(edge_speed, 1e-3), IMPASSABLE)
+        weight = np.where(passable, (rate[self._source_move] + rate[self._target_move]) * (duration / 7200.0),
                           IMPASSABLE)
         return weight, duration
 
@@ -294,7 +305,7 @@ def optimal_route(problem: RoutingProblem, *, speed_mps: float | None = None,
         Never dearer than :func:`straight_route` with the same argument.
     """
     _check(problem, speed_mps, arrival_s)
-    search = _Search(problem)
+    search = RouteSearch(problem)
     straight = straight_route(problem, speed_mps=speed_mps, arrival_s=arrival_s)
     best = straight
     if speed_mps is not None:
