@@ -14,3 +14,10 @@ PARTICIPANT_TYPES = {
     "reference_path": "rhnc.reference_participant:ReferencePathParticipant",
     "goal": "rhnc.goal:GoalMonitor",
 }
+
+#: Comparison extensions: a table of that name in a comparison file hands the runs to
+#: ``"module:Class"`` (``from_table``, ``run_overrides``, ``evaluate``, ``summarise_sweep``;
+#: see :mod:`orchestrator.compare`), which adds its own runs, tables and figures.
+COMPARISON_EXTENSIONS = {
+    "voyage": "rhnc.voyage_comparison:VoyageComparison",
+}

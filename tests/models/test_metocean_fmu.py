@@ -1,4 +1,4 @@
-"""MetOcean FMU: MOGRID1 reading, exact node values, bilinear interpolation, errors."""
+"""MetOcean FMU: MOGRID1 and MOGRID2 reading, exact node values, bilinear and time interpolation, errors."""
 
 from __future__ import annotations
 
