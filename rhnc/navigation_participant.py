@@ -72,7 +72,7 @@ from rhnc.fields import FieldWeights, GuidanceParameters, SuperpositionField, be
 from rhnc.metocean import KNOT, NM
 from rhnc.planner import plan_local_path
 from rhnc.reference import reference_states
-from rhnc.route_navigation import RecedingRoutePlanner, calm_water_time_price_usd_h
+from rhnc.route_navigation import RecedingRoutePlanner
 from rhnc.trigger import TRIGGERED, EventTrigger
 
 log = logging.getLogger(__name__)
@@ -144,6 +144,7 @@ class NavigationParticipant(Participant):
         else:
             self.route_planner = RecedingRoutePlanner(metocean, goal, energy, resolution_nm)
             self._remaining_m = None
+            self._route = None
             self._current_along = 0.0
             self._planned_speed = self.speed
         self._reached_goal = False
@@ -340,8 +341,10 @@ class NavigationParticipant(Participant):
         if self.arrival_s is None:
             price = self.energy.running_cost_usd_day / 24.0
         else:  # hours are fixed: each costs the fuel of the speed-up that saves it
-            price = calm_water_time_price_usd_h(speed, self.energy)
+            route = self._route if self._route is not None else np.vstack([point, self.goal])
+            price = self.route_planner.time_price_usd_h(route, speed, time)
         plan = self.route_planner.plan(time, point, start_u, speed, price, self.delta, self.horizon_steps)
+        self._route = plan.route
         self._remaining_m = plan.remaining_nm * NM
         self._current_along = self.route_planner.mean_current_along_mps(plan.route, time)
         self._planned_speed = speed
