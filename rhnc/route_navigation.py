@@ -184,8 +184,18 @@ class RecedingRoutePlanner:
         horizon_steps : int
             N_L.
         """
-        horizon_m = speed_mps * delta_s * horizon_steps * 1.2
-        route = self.route(time_s, start_m, speed_mps, price_usd_h, horizon_m)
+        route = self.route(time_s, start_m, speed_mps, price_usd_h, self.horizon_m(speed_mps, delta_s, horizon_steps))
+        return self.timed_plan(route, time_s, start_speed_mps, speed_mps, delta_s, horizon_steps)
+
+    @staticmethod
+    def horizon_m(speed_mps: float, delta_s: float, horizon_steps: int) -> float:
+        """Length of route the reference may need [m] (with 20 % for a following current)."""
+        return speed_mps * delta_s * horizon_steps * 1.2
+
+    def timed_plan(self, route: np.ndarray, time_s: float, start_speed_mps: float, speed_mps: float,
+                   delta_s: float, horizon_steps: int) -> RoutePlan:
+        """Reference points along ``route`` (from :meth:`route`) at ``speed_mps`` through water."""
+        horizon_m = self.horizon_m(speed_mps, delta_s, horizon_steps)
         along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(route, axis=0).T))])
         head = int(min(np.searchsorted(along, horizon_m) + 1, len(route)))
         dense = densify(route[:head], min(self.resolution_m / 2.0, speed_mps * delta_s / 2.0))

@@ -97,6 +97,9 @@ class RouteResult:
         From :func:`rhnc.track_cost.cost_of_track`.
     method : str
         ``"optimal"`` or ``"straight"``.
+    time_price_usd_h : float
+        The price of an hour [USD/h] with which the search found this route (NaN for the
+        straight route).
     """
 
     waypoints_m: np.ndarray
@@ -108,6 +111,7 @@ class RouteResult:
     co2_t: float
     fuel_t: float
     method: str = "optimal"
+    time_price_usd_h: float = float("nan")
 
     @property
     def arrival_s(self) -> float:
@@ -297,7 +301,7 @@ def time_price_usd_h(problem: RoutingProblem, route: RouteResult) -> float:
 
 
 #: Multiples of the shadow price of time (along the straight route) tried at fixed arrival.
-PRICE_MULTIPLES = (0.45, 0.65, 1.0, 1.4)
+PRICE_MULTIPLES = (0.2, 0.3, 0.45, 0.65, 1.0, 1.4)
 
 
 def optimal_route(problem: RoutingProblem, *, speed_mps: float | None = None,
@@ -335,32 +339,33 @@ def optimal_route(problem: RoutingProblem, *, speed_mps: float | None = None,
         speed = speed_mps if speed_mps is not None else _speed_for_arrival(problem, polyline, arrival_s)
         return _result(problem, polyline, speed, "optimal")
 
-    candidates = []
     if speed_mps is not None:
-        candidates.append(search.route(speed_mps, problem.energy.running_cost_usd_day / 24.0, time_passes))
+        prices = [problem.energy.running_cost_usd_day / 24.0]
     else:
         base_price = time_price_usd_h(problem, straight)
-        for multiple in price_multiples:
-            candidates.append(search.route(straight.speed_through_water_mps, base_price * multiple, time_passes))
-    best, best_polyline = straight, None
-    for polyline in candidates:
+        prices = [base_price * multiple for multiple in price_multiples]
+    best, best_polyline, best_price = straight, None, float("nan")
+    for price in prices:
+        polyline = search.route(straight.speed_through_water_mps, price, time_passes)
         result = evaluate(polyline)
         if result.cost_usd < best.cost_usd:
-            best, best_polyline = result, polyline
+            best, best_polyline, best_price = result, polyline, price
     if refine and best_polyline is not None and len(best_polyline) > 2:
         best = _refine(problem, best_polyline, best, evaluate)
     if best is straight:
         best = dataclasses.replace(straight, method="optimal")
-    return best
+    return dataclasses.replace(best, time_price_usd_h=best_price)
 
 
 def _refine(problem: RoutingProblem, polyline: np.ndarray, best: RouteResult, evaluate,
-            max_evaluations: int = 120) -> RouteResult:
-    """Move each turning point across the route by halving steps (2 grid steps down to a
-    quarter) while the cost falls, at most ``max_evaluations`` candidates; points that
+            max_evaluations: int = 200) -> RouteResult:
+    """Move each turning point (and a new one midway along each leg) across the route by
+    halving steps (4 grid steps down to a quarter) while the cost falls, at most ``max_evaluations`` candidates; points that
     would enter an avoided circle stay."""
-    polyline = polyline.copy()
-    step = 2.0 * problem.resolution_nm * NM
+    # a turning point between each pair lets a straight leg bend
+    polyline = np.vstack([np.column_stack([polyline[:-1], 0.5 * (polyline[:-1] + polyline[1:])]).reshape(-1, 2),
+                          polyline[-1]])
+    step = 4.0 * problem.resolution_nm * NM
     x_min, x_max, y_min, y_max = problem.metocean.extent
     evaluations = 0
     while step >= 0.25 * problem.resolution_nm * NM and evaluations < max_evaluations:
