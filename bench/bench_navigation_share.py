@@ -65,7 +65,8 @@ def sail(field, options: dict, limit_s: float = 12 * 3600.0):
         t += DELTA_S
         points.append(nxt[1:3].copy())
         times.append(t)
-        state = {"x": nxt[1], "y": nxt[2], "psi": nxt[3], "u": step_m / DELTA_S}
+        # u is the speed through water: the planned one when the reference is tracked exactly
+        state = {"x": nxt[1], "y": nxt[2], "psi": nxt[3], "u": float(out.get("planned_speed_mps", nxt[4]))}
         begin = time.perf_counter()
         out = nav.step(t, DELTA_S, state)
         updates.append(time.perf_counter() - begin)
@@ -75,9 +76,15 @@ def sail(field, options: dict, limit_s: float = 12 * 3600.0):
 def measure(field, label: str, arrival_min: float) -> dict:
     problem = RoutingProblem((0.0, 0.0), (GOAL_NM[0] * NM, GOAL_NM[1] * NM), field)
     row = {"weather": label}
+    goal = np.array(GOAL_NM) * NM
     for method, options in (("routing", {"arrival_time_min": arrival_min}), ("paper", PAPER)):
         points, times, updates = sail(field, options)
         arrival = float(times[-1])
+        if np.hypot(*(points[-1] - goal)) > 0.5 * NM:  # did not arrive: no share
+            row[method] = {"arrival_h": float("nan"), "available_pct": float("nan"), "saving_pct": float("nan"),
+                           "share": float("nan"), "update_median_ms": 1e3 * float(np.median(updates[1:])),
+                           "update_max_ms": 1e3 * float(np.max(updates[1:]))}
+            continue
         sailed = cost_of_track(field, problem.energy, points, times)["cost_usd"]
         straight = straight_route(problem, arrival_s=arrival).cost_usd
         optimal = optimal_route(problem, arrival_s=arrival).cost_usd
@@ -117,7 +124,9 @@ def main() -> None:
     for method in ("routing", "paper"):
         shares = np.array([row[method]["share"] for row in rows])
         valid = shares[np.isfinite(shares)]
-        worst = min(row[method]["saving_pct"] for row in rows)
+        arrived = [row[method]["saving_pct"] for row in rows if np.isfinite(row[method]["saving_pct"])]
+        worst = min(arrived) if arrived else float("nan")
+        print(f"{method}: arrived in {len(arrived)} of {len(rows)} weathers")
         if valid.size:
             print(f"{method}: median share {np.median(valid):.2f} over {valid.size} weathers with a saving available "
                   f"(quartiles {np.percentile(valid, 25):.2f} / {np.percentile(valid, 75):.2f}); worst saving against "
