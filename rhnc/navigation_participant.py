@@ -21,6 +21,10 @@ participant's step size) it
    ``alpha = v_s delta`` (Algorithm 1), descending G alone while ET = 1;
 4. turns the path into reference states (Eq. 19) timed t + k delta.
 
+Goal: once the goal lies within the horizon (N_L alpha) of the planning start, the path
+runs straight to it and stops there (both methods): near the goal the bearing the energy
+fields assume swings round, and the paper's descent would run along the map edge.
+
 When the met-ocean field varies in time, the planning weather is resampled at each
 navigation instant t (the fields then see the weather of that instant, held over the
 horizon).
@@ -292,7 +296,7 @@ class NavigationParticipant(Participant):
             self.field.set_weather(self.weather)
         self.field.update((start_x, start_y), self.speed)
         path = plan_local_path(self.field, (start_x, start_y), self.speed * self.delta,
-                               self.horizon_steps, avoidance=et > 0.5)
+                               self.horizon_steps, avoidance=et > 0.5, final_approach=True)
         self.counts["plans"] += 1
         self.counts["avoidance_plans"] += int(et > 0.5)
         self.counts["flat_steps"] += path.flat_steps
