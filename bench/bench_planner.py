@@ -76,7 +76,7 @@ def routing_updates(metocean, args) -> None:
         searches = []
         for k in range(3):
             begin = time.perf_counter()
-            planner._cost_to_go(0.0, np.zeros(2), speed + k * 0.3, price)
+            planner.cost_to_go(0.0, np.zeros(2), speed + k * 0.3, price)
             searches.append(time.perf_counter() - begin)
         start = np.array([0.0, 0.0])
         times = []

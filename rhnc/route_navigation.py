@@ -115,7 +115,10 @@ class RecedingRoutePlanner:
         self._tree = None
         self.searches = 0
 
-    def _cost_to_go(self, time_s: float, start: np.ndarray, speed_mps: float, price_usd_h: float):
+    def cost_to_go(self, time_s: float, start: np.ndarray, speed_mps: float, price_usd_h: float):
+        """Every node's cost to the goal (a :class:`rhnc.route_search.ShortestPathTree`),
+        searched at ``speed_mps`` rounded to 0.25 kn and kept while speed and price hold
+        (for a static field)."""
         key = (round(speed_mps / SPEED_STEP_MPS), round(price_usd_h, 3))
         if self.time_varying or key != self._key:
             node_times = None
@@ -134,7 +137,7 @@ class RecedingRoutePlanner:
         start = np.asarray(start_m, dtype=float)
         if np.hypot(*(self.goal - start)) < 1.0:
             return np.vstack([start, self.goal])
-        tree = self._cost_to_go(time_s, start, speed_mps, price_usd_h)
+        tree = self.cost_to_go(time_s, start, speed_mps, price_usd_h)
         nodes = self.search.nodes
         radius = 2 * self.reach * self.resolution_m
         near = np.flatnonzero((np.hypot(nodes[:, 0] - start[0], nodes[:, 1] - start[1]) <= radius)

@@ -14,12 +14,14 @@ The cost of any candidate comes from the project's energy model with the course 
 leg (:func:`rhnc.track_cost.cost_of_track`).  The search (:mod:`rhnc.route_search`) runs
 Dijkstra's algorithm on a grid at ``resolution_nm`` with 32 headings; an edge weighs the
 trapezoid of the cost rate at its two ends (heading = the edge's course) over its
-duration.  At fixed arrival time each hour counts at the shadow price of time, lambda =
-v dF/dv - F (F the fuel cost rate along the current route): what one hour less at sea
-would cost in extra fuel for the speed-up it forces.  The route found is then shortened
-where straight segments cost no more (:func:`rhnc.route_search.shortcut_path`), timed at
-constant speed, and for a fixed arrival time its speed is solved so that it arrives on
-time; a few rounds update the speed and lambda.  The straight (or shortest obstacle-free)
+duration.  At fixed arrival time each hour counts at a multiple of the shadow price of
+time along the straight route, lambda = v dF/dv - F (F the fuel cost rate): what one hour
+less at sea would cost in extra fuel for the speed-up it forces; as that is only an
+estimate of the price along the best route, several multiples are searched.  Each route
+found is shortened where straight segments cost no more
+(:func:`rhnc.route_search.shortcut_path`), timed at constant speed (for a fixed arrival
+time, at the speed that arrives on time) and costed; the cheapest one's turning points
+are then moved sideways while the cost falls.  The straight (or shortest obstacle-free)
 route is always a candidate, so the optimum is never dearer than it.
 
 Time-dependent weather: node times come from the previous search (first from the
