@@ -73,11 +73,13 @@ def sail(field, options: dict, limit_s: float = 12 * 3600.0):
     return np.array(points), np.array(times), np.array(updates)
 
 
-def measure(field, label: str, arrival_min: float) -> dict:
+def measure(field, label: str, arrival_min: float, methods=("routing", "paper")) -> dict:
     problem = RoutingProblem((0.0, 0.0), (GOAL_NM[0] * NM, GOAL_NM[1] * NM), field)
     row = {"weather": label}
     goal = np.array(GOAL_NM) * NM
     for method, options in (("routing", {"arrival_time_min": arrival_min}), ("paper", PAPER)):
+        if method not in methods:
+            continue
         points, times, updates = sail(field, options)
         arrival = float(times[-1])
         if np.hypot(*(points[-1] - goal)) > 0.5 * NM:  # did not arrive: no share
@@ -103,6 +105,7 @@ def main() -> None:
     parser.add_argument("--members", type=int, nargs=2, default=(0, 29), metavar=("FIRST", "LAST"))
     parser.add_argument("--arrival-min", type=float, default=480.0)
     parser.add_argument("--resolution-nm", type=float, default=1.0)
+    parser.add_argument("--methods", nargs="+", default=["routing", "paper"], choices=["routing", "paper"])
     args = parser.parse_args()
     print(f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}; routing arrives at {args.arrival_min:g} min, "
           f"paper sails 18 kn; each costed against straight and optimal routes at its own arrival")
@@ -115,13 +118,13 @@ def main() -> None:
     print(f"{'weather':<14} {'method':<8} {'arrival h':>9} {'available %':>11} {'saving %':>9} {'share':>7} "
           f"{'update median/max ms':>21}")
     for label, field in cases:
-        row = measure(field, label, args.arrival_min)
+        row = measure(field, label, args.arrival_min, args.methods)
         rows.append(row)
-        for method in ("routing", "paper"):
+        for method in args.methods:
             r = row[method]
             print(f"{label:<14} {method:<8} {r['arrival_h']:9.2f} {r['available_pct']:11.2f} {r['saving_pct']:9.2f} "
                   f"{r['share']:7.2f} {r['update_median_ms']:10.1f} / {r['update_max_ms']:7.1f}", flush=True)
-    for method in ("routing", "paper"):
+    for method in args.methods:
         shares = np.array([row[method]["share"] for row in rows])
         valid = shares[np.isfinite(shares)]
         arrived = [row[method]["saving_pct"] for row in rows if np.isfinite(row[method]["saving_pct"])]
