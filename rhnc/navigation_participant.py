@@ -76,7 +76,7 @@ from rhnc.fields import FieldWeights, GuidanceParameters, SuperpositionField, be
 from rhnc.metocean import KNOT, NM
 from rhnc.planner import plan_local_path
 from rhnc.reference import reference_states
-from rhnc.route_navigation import RecedingRoutePlanner, calm_water_time_price_usd_h
+from rhnc.route_navigation import SPEED_STEP_MPS, RecedingRoutePlanner, calm_water_time_price_usd_h
 from rhnc.weather_routing import PRICE_MULTIPLES, RoutingProblem, optimal_route, straight_route, time_price_usd_h
 from rhnc.trigger import TRIGGERED, EventTrigger
 
@@ -372,7 +372,8 @@ class NavigationParticipant(Participant):
         else:  # hours are fixed: each costs the fuel of the speed-up that saves it
             if self._price_scale is None:
                 self._price_scale = self._calibrate_time_price(time, point)
-            price = self._price_scale * calm_water_time_price_usd_h(self._planned_speed, self.energy)
+            price = self._price_scale * calm_water_time_price_usd_h(
+                round(self._planned_speed / SPEED_STEP_MPS) * SPEED_STEP_MPS, self.energy)
         route = planner.route(time, point, self._planned_speed, price,
                               planner.horizon_m(max(self._planned_speed, self.max_speed), self.delta,
                                                 self.horizon_steps))

@@ -24,8 +24,7 @@ One planning update:
    the goal stay on the goal.
 
 Reuse between updates: for a static field the cost-to-go depends only on the speed and
-the price of time, so it is kept until the planned speed moves 0.25 kn (or the price 5 %)
-from those searched
+the price of time, so it is kept until the planned speed moves to another 0.25 kn step
 (the tree's successors make each update a walk, not a search).  For a field that changes
 in time the weights are evaluated at the time each node would be reached from the
 current start (distance / speed) and the search is redone at every update.
@@ -46,10 +45,8 @@ from rhnc.weather_routing import RouteSearch, RoutingProblem
 
 log = logging.getLogger(__name__)
 
-#: The cost-to-go is searched again when the planned speed moves this far [m/s] (0.25 kn) ...
+#: Planned speeds are rounded to this step [m/s] for the cost-to-go (0.25 kn).
 SPEED_STEP_MPS = 0.25 * KNOT
-#: ... or the price of an hour by this fraction.
-PRICE_TOLERANCE = 0.05
 
 
 @dataclasses.dataclass(frozen=True)
@@ -120,19 +117,17 @@ class RecedingRoutePlanner:
 
     def cost_to_go(self, time_s: float, start: np.ndarray, speed_mps: float, price_usd_h: float):
         """Every node's cost to the goal (a :class:`rhnc.route_search.ShortestPathTree`),
-        kept (for a static field) while the speed stays within 0.25 kn and the price within
-        5 % of those it was searched at."""
-        searched = self._key
-        stale = (searched is None or abs(speed_mps - searched[0]) > SPEED_STEP_MPS
-                 or abs(price_usd_h - searched[1]) > PRICE_TOLERANCE * max(searched[1], 1.0))
-        if self.time_varying or stale:
+        searched at ``speed_mps`` rounded to 0.25 kn and kept while speed and price hold
+        (for a static field)."""
+        key = (round(speed_mps / SPEED_STEP_MPS), round(price_usd_h, 3))
+        if self.time_varying or key != self._key:
             node_times = None
             if self.time_varying:
                 nodes = self.search.nodes
                 node_times = time_s + np.hypot(nodes[:, 0] - start[0], nodes[:, 1] - start[1]) / speed_mps
-            weights, _ = self.search.weights(speed_mps, price_usd_h, node_times)
+            weights, _ = self.search.weights(key[0] * SPEED_STEP_MPS, price_usd_h, node_times)
             self._tree = cost_to_go_tree(self.graph, weights, self.search.target)
-            self._key = (speed_mps, price_usd_h)
+            self._key = key
             self.searches += 1
         return self._tree
 
