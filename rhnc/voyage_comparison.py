@@ -245,8 +245,13 @@ class VoyageComparison:
                 continue
             entry: dict[str, Any] = {}
             if self.optimal_route is not None:
-                entry["straight"] = straight_route(problem, arrival_s=system.arrival_s)
-                entry["optimal"] = optimal_route(problem, arrival_s=system.arrival_s)
+                try:
+                    entry["straight"] = straight_route(problem, arrival_s=system.arrival_s)
+                    entry["optimal"] = optimal_route(problem, arrival_s=system.arrival_s)
+                except ValueError as exc:   # e.g. no speed arrives then: reported, the comparison goes on
+                    log.warning("%s: no optimal route at %s's arrival: %s", self.path, label, exc)
+                    entry.pop("straight", None)
+                    entry["routing_error"] = str(exc)
             best = baselines[label].best if label in baselines else None
             if best is not None and baselines[label].matched:
                 # both at the baseline's measured mean speed through water, from the same departure

@@ -86,7 +86,7 @@ def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) ->
             headline_rows.append(_headline_row(label, figures))
     headline = pd.DataFrame(headline_rows)
 
-    flags = _flags(systems, baselines, comparison.equal_arrival is not None, SPEED_SPREAD_LIMIT_PERCENT)
+    flags = _flags(systems, baselines, routes, SPEED_SPREAD_LIMIT_PERCENT)
     speeds = [s.mean_speed_through_water_kn for s in systems.values() if math.isfinite(s.mean_speed_through_water_kn)]
     spread = 100.0 * (max(speeds) / min(speeds) - 1.0) if len(speeds) > 1 and min(speeds) > 0 else 0.0
     markdown = ["## Voyages side by side", "",
@@ -205,7 +205,7 @@ def _headline_row(label: str, f: dict[str, Any]) -> dict[str, Any]:
     }
 
 
-def _flags(systems, baselines, has_equal_arrival: bool, limit_percent: float) -> list[str]:
+def _flags(systems, baselines, routes, limit_percent: float) -> list[str]:
     flags = []
     speeds = {label: s.mean_speed_through_water_kn for label, s in systems.items()
               if math.isfinite(s.mean_speed_through_water_kn)}
@@ -223,6 +223,10 @@ def _flags(systems, baselines, has_equal_arrival: bool, limit_percent: float) ->
             flags.append(f"{label} did not arrive: left out of the headline")
         elif system.status != "finished":
             flags.append(f"{label} ended '{system.status}': left out of the headline")
+    for label, entry in (routes or {}).items():
+        if "routing_error" in entry:
+            flags.append(f"no optimal route at {label}'s arrival time ({entry['routing_error']}): "
+                         "no available saving or share for it")
     for label, equal in baselines.items():
         if not equal.matched:
             best = equal.best

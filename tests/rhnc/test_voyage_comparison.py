@@ -226,3 +226,11 @@ def test_bad_voyage_table_exits_2_from_the_cli(tmp_path, capsys):
     assert main(["compare", str(path), "--results", str(tmp_path / "results")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "voyage.arrival_radius_nm: expected a positive number, got 0" in err
+
+
+def test_routing_failure_is_flagged_not_fatal(tmp_path):
+    system = voyage("RHNC", 17.5)
+    routes = {"RHNC": {"routing_error": "arrival at 600 s needs more than 30 m/s through water"}}
+    section = evaluation_section(COMPARISON_STUB, {"RHNC": system}, {"RHNC": matched(system)}, routes, tmp_path)
+    assert section.summary["systems"]["RHNC"].get("share_cost_percent") is None
+    assert any(f.startswith("no optimal route at RHNC's arrival time (arrival at 600 s") for f in section.flags)
