@@ -82,6 +82,9 @@ class GridGraph:
         CSR row pointer of the edges.
     edge_index : ndarray (nx * ny, k)
         Edge id of each (source node, move), -1 where the move is not an edge.
+    reverse_order, reverse_indptr : ndarray
+        The edges sorted by target node and their CSR row pointer (the reversed graph,
+        for costs-to-go towards one node).
     """
 
     x_m: np.ndarray
@@ -95,6 +98,8 @@ class GridGraph:
     move: np.ndarray
     indptr: np.ndarray
     edge_index: np.ndarray
+    reverse_order: np.ndarray
+    reverse_indptr: np.ndarray
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -136,6 +141,13 @@ class GridGraph:
         """The graph as a sparse matrix with one weight per edge (in edge order)."""
         n = self.node_count
         return csr_matrix((np.asarray(weights, dtype=float), self.target, self.indptr), shape=(n, n))
+
+    def reversed_edge_matrix(self, weights: np.ndarray) -> csr_matrix:
+        """The graph with every edge turned round, same weights (edge order of ``weights``)."""
+        n = self.node_count
+        order = self.reverse_order
+        return csr_matrix((np.asarray(weights, dtype=float)[order], self.source[order], self.reverse_indptr),
+                          shape=(n, n))
 
 
 def build_grid_graph(x_m: np.ndarray, y_m: np.ndarray, reach: int = 3,
@@ -183,9 +195,12 @@ def build_grid_graph(x_m: np.ndarray, y_m: np.ndarray, reach: int = 3,
     indptr = np.concatenate([[0], np.cumsum(np.bincount(source, minlength=nx * ny))])
     edge_index = np.full((nx * ny, len(moves)), -1, dtype=np.int64)
     edge_index[source, move] = np.arange(source.size)
+    target = np.concatenate(targets)[order]
+    reverse_order = np.argsort(target, kind="stable")
+    reverse_indptr = np.concatenate([[0], np.cumsum(np.bincount(target, minlength=nx * ny))])
     return GridGraph(x_m=x_m, y_m=y_m, moves=moves, heading_rad=heading, move_length_m=length,
-                     free=free.ravel(), source=source, target=np.concatenate(targets)[order],
-                     move=move, indptr=indptr, edge_index=edge_index)
+                     free=free.ravel(), source=source, target=target, move=move, indptr=indptr,
+                     edge_index=edge_index, reverse_order=reverse_order, reverse_indptr=reverse_indptr)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -214,6 +229,15 @@ def shortest_path_tree(graph: GridGraph, weights: np.ndarray, source: int) -> Sh
     return ShortestPathTree(source=int(source), cost=cost, predecessor=predecessor)
 
 
+def cost_to_go_tree(graph: GridGraph, weights: np.ndarray, target: int) -> ShortestPathTree:
+    """Dijkstra towards ``target``: ``cost`` is each node's cost to reach it and
+    ``predecessor`` the next node on the way (-9999 at the target and where it cannot
+    be reached).  ``source`` of the result is the target."""
+    cost, successor = dijkstra(graph.reversed_edge_matrix(weights), directed=True, indices=int(target),
+                               return_predecessors=True)
+    return ShortestPathTree(source=int(target), cost=cost, predecessor=successor)
+
+
 def times_along_tree(tree: ShortestPathTree, edge_duration_s: np.ndarray, graph: GridGraph,
                      start_time_s: float) -> np.ndarray:
     """Time [s] each node is reached along the shortest-path tree.
@@ -238,7 +262,8 @@ def times_along_tree(tree: ShortestPathTree, edge_duration_s: np.ndarray, graph:
 SegmentCosts = Callable[[int, np.ndarray], np.ndarray]
 
 
-def shortcut_path(vertex_count: int, segment_costs: SegmentCosts, relative_tolerance: float = 1e-9) -> list[int]:
+def shortcut_path(vertex_count: int, segment_costs: SegmentCosts, relative_tolerance: float = 1e-9,
+                  consecutive_costs: np.ndarray | None = None) -> list[int]:
     """Indices of the vertices kept when the path is shortened where it pays.
 
     Parameters
@@ -250,6 +275,8 @@ def shortcut_path(vertex_count: int, segment_costs: SegmentCosts, relative_toler
         to each vertex in ``js`` (``IMPASSABLE`` or inf where a segment is blocked).
     relative_tolerance : float
         A shortcut is taken when it costs at most ``(1 + tol)`` times the path it replaces.
+    consecutive_costs : ndarray (vertex_count - 1,), optional
+        Costs of the path's own legs when already known (else from ``segment_costs``).
 
     Returns
     -------
@@ -261,7 +288,10 @@ def shortcut_path(vertex_count: int, segment_costs: SegmentCosts, relative_toler
     if vertex_count < 2:
         raise ValueError("a path needs at least two vertices")
     last = vertex_count - 1
-    consecutive = np.array([float(segment_costs(i, np.array([i + 1]))[0]) for i in range(last)])
+    if consecutive_costs is not None:
+        consecutive = np.asarray(consecutive_costs, dtype=float)
+    else:
+        consecutive = np.array([float(segment_costs(i, np.array([i + 1]))[0]) for i in range(last)])
     cumulative = np.concatenate([[0.0], np.cumsum(consecutive)])
     kept = [0]
     i = 0

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from rhnc.route_search import (build_grid_graph, grid_moves, segment_clearance, shortcut_path,
+from rhnc.route_search import (build_grid_graph, cost_to_go_tree, grid_moves, segment_clearance, shortcut_path,
                                shortest_path_tree, times_along_tree)
 
 
@@ -61,3 +61,22 @@ def test_shortening_takes_the_farthest_segment_that_is_no_dearer():
     assert shortcut_path(len(vertices), costs) == [0, 3, 5]
     with pytest.raises(ValueError, match="at least two vertices"):
         shortcut_path(1, costs)
+
+
+def test_cost_to_go_is_the_cost_of_the_path_from_each_node():
+    axis = np.arange(0.0, 9.0) * 100.0
+    graph = build_grid_graph(axis, axis, reach=3, obstacles=[(400.0, 400.0, 150.0)])
+    rng = np.random.default_rng(1)
+    weights = graph.move_length_m[graph.move] * rng.uniform(1.0, 2.0, graph.source.size)  # direction-dependent
+    target = 8 * 9 + 8
+    backward = cost_to_go_tree(graph, weights, target)
+    for start in (0, 4, 36, 8 * 9):
+        forward = shortest_path_tree(graph, weights, start)
+        assert backward.cost[start] == pytest.approx(forward.cost[target])
+        # following the successors from the start reaches the target at that cost
+        node, total = start, 0.0
+        while node != target:
+            nxt = int(backward.predecessor[node])
+            total += weights[graph.edge_between(np.array([node]), np.array([nxt]))[0]]
+            node = nxt
+        assert total == pytest.approx(backward.cost[start])
