@@ -9,6 +9,7 @@ project's energy model); nothing is typed by hand.  Run the comparisons first:
     python -m orchestrator compare scenarios/weather/cyclone.toml
     python -m orchestrator compare scenarios/weather/moving_storm.toml
     python -m orchestrator compare scenarios/weather/storm_set.toml
+    python -m orchestrator compare scenarios/weather/storm_set_routing.toml
     python scripts/routing_results.py [--results results] [--out docs/routing-results.md]
 """
 
@@ -32,7 +33,12 @@ WEATHERS = (
     ("weather_moving_storm", "moving_storm: the rotating storm crossing the route (time-varying)",
      "scenarios/weather/moving_storm.toml"),
 )
-SWEEP = ("weather_storm_set", "scenarios/weather/storm_set.toml")
+#: (comparison name, navigation method in words, comparison file) of the storm-set sweeps
+SWEEPS = (
+    ("weather_storm_set", "the paper's navigation (RHNC)", "scenarios/weather/storm_set.toml"),
+    ("weather_storm_set_routing", "the routing navigation method (RHNC routing)",
+     "scenarios/weather/storm_set_routing.toml"),
+)
 HEADLINE = ["system", "arrival [min]", "cost [USD]", "baseline cost [USD]", "saving cost [%]", "saving CO2 [%]",
             "baseline speed [kn]", "available cost [%]", "available CO2 [%]", "share cost [%]",
             "track vs line at equal speed, cost [%]"]
@@ -70,7 +76,7 @@ def paper_speed_effect() -> dict:
     from rhnc.metocean import KNOT
 
     spec = tomllib.loads((REPO / "scenarios" / "exp2_table3.toml").read_text())
-    paper = {run["label"]: run["paper"] for run in spec["runs"]}
+    paper = {run["label"]: run["paper"] for run in spec["runs"] if "paper" in run}
     rhnc, spnc = paper["RHNC"], paper["Offline-SPNC"]
     speeds = {label: p["made_good_nm"] / (p["time_min"] / 60.0) for label, p in paper.items()}
     energy = EnergyParameters()
@@ -128,19 +134,22 @@ def main() -> None:
                   table(pd.DataFrame(summary_rows), ["weather"] + HEADLINE), ""]
     lines += ["## Per weather", ""] + sections
 
-    sweep_folder = latest(results, SWEEP[0])
-    lines += ["## The drawn storm set: RHNC's share of the available saving", ""]
-    if sweep_folder is None:
-        lines += [f"No results yet: `python -m orchestrator compare {SWEEP[1]}`.", ""]
-    else:
+    lines += ["## The drawn storm set: each navigation's share of the available saving", ""]
+    for name, method, path in SWEEPS:
+        sweep_folder = latest(results, name)
+        lines += [f"### {method}", ""]
+        if sweep_folder is None:
+            lines += [f"No results yet: `python -m orchestrator compare {path}`.", ""]
+            continue
         sweep = pd.read_csv(sweep_folder / "voyage_sweep.csv")
         stats = pd.read_csv(sweep_folder / "voyage_sweep_stats.csv")
-        shutil.copyfile(sweep_folder / "voyage_sweep.png", figures / "storm_set_share.png")
-        lines += [f"`python -m orchestrator compare {SWEEP[1]}` (results `{sweep_folder.name}`): one fair "
-                  "comparison per member; per member the saving available to a weather router at RHNC's arrival "
-                  "time first, then RHNC's saving against its equal-arrival baseline and its share.", "",
-                  table(sweep, list(sweep.columns)), "", "Distribution over the members:", "",
-                  table(stats, list(stats.columns)), "", "![storm set](figures/storm_set_share.png)", ""]
+        shutil.copyfile(sweep_folder / "voyage_sweep.png", figures / f"{name}_share.png")
+        lines += [f"`python -m orchestrator compare {path}` (results `{sweep_folder.name}`): one fair comparison "
+                  "per member; per member the saving available to a weather router at the system's arrival time "
+                  "first, then its saving against its equal-arrival baseline and its share.", "",
+                  "Distribution over the members:", "", table(stats, list(stats.columns)), "",
+                  f"![storm set](figures/{name}_share.png)", "", "Per member:", "",
+                  table(sweep, list(sweep.columns)), ""]
 
     effect = paper_speed_effect()
     lines += ["## How the paper's Table 3 mixes speed into routing", "",
