@@ -29,6 +29,9 @@ import pandas as pd
 
 from orchestrator.compare import Section, markdown_table
 
+#: A run whose first sample lies further than this from the comparison's start is flagged [m].
+START_TOLERANCE_M = 0.05 * 1852.0
+
 
 def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) -> Section:
     """Build the tables and flags of one comparison (see the module docstring)."""
@@ -86,7 +89,7 @@ def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) ->
             headline_rows.append(_headline_row(label, figures))
     headline = pd.DataFrame(headline_rows)
 
-    flags = _flags(systems, baselines, routes, SPEED_SPREAD_LIMIT_PERCENT)
+    flags = _flags(systems, baselines, routes, SPEED_SPREAD_LIMIT_PERCENT, getattr(comparison, "start_m", None))
     speeds = [s.mean_speed_through_water_kn for s in systems.values() if math.isfinite(s.mean_speed_through_water_kn)]
     spread = 100.0 * (max(speeds) / min(speeds) - 1.0) if len(speeds) > 1 and min(speeds) > 0 else 0.0
     markdown = ["## Voyages side by side", "",
@@ -205,8 +208,14 @@ def _headline_row(label: str, f: dict[str, Any]) -> dict[str, Any]:
     }
 
 
-def _flags(systems, baselines, routes, limit_percent: float) -> list[str]:
+def _flags(systems, baselines, routes, limit_percent: float, start_m=None) -> list[str]:
     flags = []
+    if start_m is not None:
+        runs = list(systems.values()) + [e.best.run for e in baselines.values() if e.best is not None]
+        for run in runs:
+            if len(run.track_m) and np.hypot(*(run.track_m[0] - start_m)) > START_TOLERANCE_M:
+                offset_nm = np.hypot(*(run.track_m[0] - start_m)) / 1852.0
+                flags.append(f"{run.label} started {offset_nm:.2f} nm from voyage.start_nm: not the same passage")
     speeds = {label: s.mean_speed_through_water_kn for label, s in systems.items()
               if math.isfinite(s.mean_speed_through_water_kn)}
     if len(speeds) > 1:

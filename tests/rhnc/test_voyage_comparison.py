@@ -234,3 +234,13 @@ def test_routing_failure_is_flagged_not_fatal(tmp_path):
     section = evaluation_section(COMPARISON_STUB, {"RHNC": system}, {"RHNC": matched(system)}, routes, tmp_path)
     assert section.summary["systems"]["RHNC"].get("share_cost_percent") is None
     assert any(f.startswith("no optimal route at RHNC's arrival time (arrival at 600 s") for f in section.flags)
+
+
+def test_run_from_another_start_is_flagged(tmp_path):
+    systems = {"RHNC": voyage("RHNC", 17.5)}
+    systems["RHNC"].track_m[:] = [[1852.0, 0.0], [3704.0, 0.0]]
+    comparison = SimpleNamespace(straight_distance_nm=18.0, published={}, equal_arrival=None, start_m=np.zeros(2))
+    section = evaluation_section(comparison, systems, {}, {}, tmp_path)
+    assert "RHNC started 1.00 nm from voyage.start_nm: not the same passage" in section.flags
+    systems["RHNC"].track_m[0] = [10.0, 0.0]
+    assert not evaluation_section(comparison, systems, {}, {}, tmp_path).flags
