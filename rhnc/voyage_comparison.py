@@ -92,6 +92,7 @@ class SailedVoyage:
     made_good_nm: float
     track_m: np.ndarray = field(repr=False)
     folder: Path | None = None
+    reason: str = ""
 
     @property
     def usable(self) -> bool:
@@ -286,7 +287,7 @@ def read_voyage(label: str, report) -> SailedVoyage:
         cost_usd=_float(figures.get("cost_usd")), co2_t=_float(figures.get("co2_t")),
         mean_speed_through_water_kn=_float(figures.get("mean_speed_through_water_kn")),
         distance_nm=_float(figures.get("distance_nm")), made_good_nm=_float(figures.get("made_good_nm")),
-        track_m=track, folder=folder)
+        track_m=track, folder=folder, reason=report.reason or "")
 
 
 def _with_goal(track_m: np.ndarray, goal_m: np.ndarray) -> np.ndarray:

@@ -229,7 +229,8 @@ def _flags(systems, baselines, routes, limit_percent: float, start_m=None) -> li
                          "baseline beside it: the differences between these runs mix speed with routing")
     for label, system in systems.items():
         if not system.arrived:
-            flags.append(f"{label} did not arrive: left out of the headline")
+            why = f" (the run {system.status}: {system.reason})" if system.status != "finished" else ""
+            flags.append(f"{label} did not arrive{why}: left out of the headline")
         elif system.status != "finished":
             flags.append(f"{label} ended '{system.status}': left out of the headline")
     for label, entry in (routes or {}).items():

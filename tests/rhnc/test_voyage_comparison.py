@@ -176,6 +176,9 @@ def test_run_that_does_not_arrive_is_left_out_of_the_headline(tmp_path):
                                  tmp_path)
     assert list(section.tables["voyage_headline"]["system"]) == ["Offline-SPNC"]
     assert "RHNC did not arrive: left out of the headline" in section.flags
+    failed = SailedVoyage(**{**systems["RHNC"].__dict__, "status": "failed", "reason": "left the map"})
+    section = evaluation_section(COMPARISON_STUB, {"RHNC": failed}, {}, {}, tmp_path)
+    assert "RHNC did not arrive (the run failed: left the map): left out of the headline" in section.flags
 
 
 def test_sweep_puts_the_available_saving_first_and_gives_the_distribution(tmp_path):
