@@ -78,7 +78,7 @@ def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) ->
                 available = figures[f"available_{quantity}_percent"]
                 saving = figures.get(f"saving_{quantity}_percent")
                 share = None
-                if saving is not None and available is not None and available > MIN_AVAILABLE_SAVING_PERCENT:
+                if saving is not None and available is not None and available >= MIN_AVAILABLE_SAVING_PERCENT:
                     share = 100.0 * saving / available
                 figures[f"share_{quantity}_percent"] = share
         if "track_at_equal_speed" in route:
@@ -101,9 +101,9 @@ def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) ->
         markdown += ["## Headline: the passage at equal arrival time", "",
                      "Saving: the system's total against its equal-arrival baseline (positive: the system is "
                      "cheaper). Available: the optimal weather route against the straight route, both "
-                     "arriving when the system arrived. Share: saving / available. Track vs line: the sailed "
-                     "track against the straight line, both costed at one constant speed through water, the "
-                     "baseline's mean "
+                     "arriving when the system arrived. Share: saving / available (none below "
+                     f"{MIN_AVAILABLE_SAVING_PERCENT} % available). Track vs line: the sailed track against the "
+                     "straight line, both costed at one constant speed through water, the baseline's mean "
                      "(positive: the track is dearer).", "", markdown_table(headline), ""]
     markdown += [f"**FLAG**: {flag}" for flag in flags] + ([""] if flags else [])
     tables = {"voyage_runs": runs}
@@ -115,6 +115,8 @@ def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) ->
 
 def sweep_section(key: str, members: list[tuple[Any, Section]], out_dir: Path) -> Section:
     """Per-member table, distribution of each system's share, and a figure."""
+    from rhnc.voyage_comparison import MIN_AVAILABLE_SAVING_PERCENT
+
     rows = []
     for value, section in members:
         row: dict[str, Any] = {key: value}
@@ -122,11 +124,14 @@ def sweep_section(key: str, members: list[tuple[Any, Section]], out_dir: Path) -
         for label, figures in systems.items():
             row[f"{label} available cost saving [%]"] = figures.get("available_cost_percent")
         for label, figures in systems.items():
+            row[f"{label} arrived"] = figures.get("arrived")
             row[f"{label} arrival [min]"] = figures.get("arrival_min")
-            row[f"{label} saving cost [%]"] = figures.get("saving_cost_percent")
-            row[f"{label} share cost [%]"] = figures.get("share_cost_percent")
-            row[f"{label} saving CO2 [%]"] = figures.get("saving_co2_percent")
-            row[f"{label} share CO2 [%]"] = figures.get("share_co2_percent")
+            for quantity, name in (("cost", "cost"), ("co2", "CO2")):
+                saving, available = figures.get(f"saving_{quantity}_percent"), figures.get(f"available_{quantity}_percent")
+                row[f"{label} saving {name} [%]"] = saving
+                row[f"{label} share {name} [%]"] = (
+                    100.0 * saving / available if saving is not None and available is not None
+                    and available >= MIN_AVAILABLE_SAVING_PERCENT else None)
         rows.append(row)
     table = pd.DataFrame(rows)
     labels = list(dict.fromkeys(label for _, s in members for label in s.summary.get("systems", {})))
@@ -140,6 +145,11 @@ def sweep_section(key: str, members: list[tuple[Any, Section]], out_dir: Path) -
             stats = _distribution(values)
             stats_rows.append({"system": label, "figure": quantity, **stats})
             summary.setdefault(label, {})[quantity] = stats
+    for label in labels:
+        arrived = table.get(f"{label} arrived")
+        count = int(sum(bool(v) for v in arrived)) if arrived is not None else 0
+        stats_rows.append({"system": label, "figure": "arrived", "count": count})
+        summary.setdefault(label, {})["arrived"] = count
     stats_table = pd.DataFrame(stats_rows)
     _sweep_figure(key, table, labels, out_dir / "voyage_sweep.png")
     markdown = [f"## Per {key}: the available saving first, then each system's", "", markdown_table(table), "",

@@ -53,6 +53,33 @@ def latest(results: Path, name: str) -> Path | None:
     return runs[-1] if runs else None
 
 
+def unfinished_sweep(results: Path, name: str) -> tuple[Path | None, int]:
+    """The members a sweep completed before it was stopped (its hidden staging folder), tabulated
+    by the same code as a finished sweep into ``<staging>/partial/``; (None, 0) without one."""
+    from orchestrator.compare import Section
+    from rhnc.voyage_comparison_tables import sweep_section
+
+    folder = results / name
+    staging = sorted(folder.glob(".*.partial")) if folder.is_dir() else []
+    if not staging:
+        return None, 0
+    spec = tomllib.loads(next(p for p in (REPO / "scenarios" / "weather").glob("*.toml")
+                              if tomllib.loads(p.read_text()).get("name") == name).read_text())
+    key = spec["sweep"]["key"]
+    members = []
+    for member in sorted(staging[-1].glob("members/*/summary.json"), key=lambda p: int(p.parent.name.split("=")[1])):
+        summary = json.loads(member.read_text())
+        members.append((int(member.parent.name.split("=")[1]), Section(summary=summary.get("voyage", {}))))
+    if not members:
+        return None, 0
+    target = staging[-1] / "partial"
+    target.mkdir(exist_ok=True)
+    section = sweep_section(key, members, target)
+    for table_name, frame in section.tables.items():
+        frame.to_csv(target / f"{table_name}.csv", index=False)
+    return target, len(members)
+
+
 def fmt(value, digits=2) -> str:
     if value is None or (isinstance(value, float) and value != value):
         return "-"
@@ -138,13 +165,17 @@ def main() -> None:
     for name, method, path in SWEEPS:
         sweep_folder = latest(results, name)
         lines += [f"### {method}", ""]
+        partial = ""
         if sweep_folder is None:
-            lines += [f"No results yet: `python -m orchestrator compare {path}`.", ""]
-            continue
+            sweep_folder, done = unfinished_sweep(results, name)
+            if sweep_folder is None:
+                lines += [f"No results yet: `python -m orchestrator compare {path}`.", ""]
+                continue
+            partial = f" **Unfinished sweep: the {done} members completed when it was stopped.**"
         sweep = pd.read_csv(sweep_folder / "voyage_sweep.csv")
         stats = pd.read_csv(sweep_folder / "voyage_sweep_stats.csv")
         shutil.copyfile(sweep_folder / "voyage_sweep.png", figures / f"{name}_share.png")
-        lines += [f"`python -m orchestrator compare {path}` (results `{sweep_folder.name}`): one fair comparison "
+        lines += [f"`python -m orchestrator compare {path}` (results `{sweep_folder.name}`):{partial} One fair comparison "
                   "per member; per member the saving available to a weather router at the system's arrival time "
                   "first, then its saving against its equal-arrival baseline and its share.", "",
                   "Distribution over the members:", "", table(stats, list(stats.columns)), "",

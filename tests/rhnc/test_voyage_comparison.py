@@ -183,15 +183,19 @@ def test_run_that_does_not_arrive_is_left_out_of_the_headline(tmp_path):
 
 def test_sweep_puts_the_available_saving_first_and_gives_the_distribution(tmp_path):
     members = []
-    for member, (available, share) in enumerate([(2.0, 10.0), (4.0, 30.0), (1.0, 50.0)]):
-        summary = {"systems": {"RHNC": {"available_cost_percent": available, "saving_cost_percent": available * share / 100,
-                                        "share_cost_percent": share, "arrival_min": 480.0}}}
-        members.append((member, Section(summary=summary)))
+    # the last member offers less than the 0.5 % a share needs, the one before did not arrive
+    for member, (available, share) in enumerate([(2.0, 10.0), (4.0, 30.0), (1.0, 50.0), (0.3, -500.0), (None, None)]):
+        figures = {"arrived": available is not None, "arrival_min": 480.0}
+        if available is not None:
+            figures.update(available_cost_percent=available, saving_cost_percent=available * share / 100)
+        members.append((member, Section(summary={"systems": {"RHNC": figures}})))
     section = sweep_section("metocean.member", members, tmp_path)
     table = section.tables["voyage_sweep"]
     assert list(table.columns[:2]) == ["metocean.member", "RHNC available cost saving [%]"]
+    assert list(table["RHNC share cost [%]"].iloc[:3]) == pytest.approx([10.0, 30.0, 50.0])
     stats = section.summary["distribution"]["RHNC"]["share cost [%]"]
     assert stats["median"] == pytest.approx(30.0) and stats["count"] == 3
+    assert section.summary["distribution"]["RHNC"]["arrived"] == 4
     assert (tmp_path / "voyage_sweep.png").is_file()
 
 
