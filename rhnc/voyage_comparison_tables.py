@@ -14,7 +14,8 @@ Three tables per comparison, written as CSV and appended to ``table.md``:
   beside each run, baselines that missed the arrival time, runs that did not arrive.
 
 A sweep (one comparison per weather member) adds ``voyage_sweep`` (per member the
-available saving first, then each system's saving and share), ``voyage_sweep_stats``
+available saving first: at the nominal speed, then at each system's arrival; then each
+system's saving and share), ``voyage_sweep_stats``
 (the distribution of the share) and ``voyage_sweep.png``.
 """
 
@@ -120,6 +121,9 @@ def sweep_section(key: str, members: list[tuple[Any, Section]], out_dir: Path) -
     rows = []
     for value, section in members:
         row: dict[str, Any] = {key: value}
+        nominal = section.summary.get("nominal", {})
+        row["available cost saving at the nominal speed [%]"] = nominal.get("available_cost_percent")
+        row["nominal arrival [min]"] = nominal.get("arrival_min")
         systems = section.summary.get("systems", {})
         for label, figures in systems.items():
             row[f"{label} available cost saving [%]"] = figures.get("available_cost_percent")
@@ -136,6 +140,9 @@ def sweep_section(key: str, members: list[tuple[Any, Section]], out_dir: Path) -
     table = pd.DataFrame(rows)
     labels = list(dict.fromkeys(label for _, s in members for label in s.summary.get("systems", {})))
     stats_rows, summary = [], {}
+    nominal = pd.to_numeric(table["available cost saving at the nominal speed [%]"], errors="coerce").dropna()
+    stats_rows.append({"system": "(the weather)", "figure": "available cost saving at the nominal speed [%]",
+                       **_distribution(nominal.to_numpy())})
     for label in labels:
         for quantity, column in (("available cost saving [%]", f"{label} available cost saving [%]"),
                                  ("saving cost [%]", f"{label} saving cost [%]"),

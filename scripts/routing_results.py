@@ -21,6 +21,7 @@ import shutil
 import tomllib
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 REPO = Path(__file__).resolve().parents[1]
@@ -53,37 +54,62 @@ def latest(results: Path, name: str) -> Path | None:
     return runs[-1] if runs else None
 
 
-def unfinished_sweep(results: Path, name: str) -> tuple[Path | None, int]:
-    """The members a sweep completed before it was stopped (its hidden staging folder), tabulated
-    by the same code as a finished sweep into ``<staging>/partial/``; (None, 0) without one."""
+_NOMINAL: dict[str, dict] = {}
+
+
+def nominal_saving(comparison: Path, overrides: dict) -> dict:
+    """:meth:`VoyageComparison.nominal_available_saving` of a sweep member (cached by its weather)."""
+    from orchestrator.compare import load_comparison, load_extensions
+
+    weather = json.dumps(overrides, sort_keys=True)
+    if weather not in _NOMINAL:
+        extension = load_extensions(load_comparison(comparison), comparison)["voyage"]
+        _NOMINAL[weather] = extension.nominal_available_saving(overrides)
+    return _NOMINAL[weather]
+
+
+def sweep_members(results: Path, name: str, path: Path, out_dir: Path):
+    """The sweep's members tabulated by the current code (:func:`sweep_section`).
+
+    From the newest published sweep, or else from the members an unfinished one (its hidden
+    staging folder) completed.  Returns (section, folder name, members done, finished) or None.
+    """
     from orchestrator.compare import Section
     from rhnc.voyage_comparison_tables import sweep_section
 
     folder = results / name
-    staging = sorted(folder.glob(".*.partial")) if folder.is_dir() else []
-    if not staging:
-        return None, 0
-    spec = tomllib.loads(next(p for p in (REPO / "scenarios" / "weather").glob("*.toml")
-                              if tomllib.loads(p.read_text()).get("name") == name).read_text())
-    key = spec["sweep"]["key"]
+    if not folder.is_dir():
+        return None
+    source, finished = latest(results, name), True
+    if source is None:
+        staging = sorted(folder.glob(".*.partial"))
+        if not staging:
+            return None
+        source, finished = staging[-1], False
     members = []
-    for member in sorted(staging[-1].glob("members/*/summary.json"), key=lambda p: int(p.parent.name.split("=")[1])):
+    for member in source.glob("members/*/summary.json"):
+        key, _, value = member.parent.name.partition("=")
         summary = json.loads(member.read_text())
-        members.append((int(member.parent.name.split("=")[1]), Section(summary=summary.get("voyage", {}))))
+        voyage = summary.get("voyage", {})
+        if "nominal" not in voyage:   # written before the comparison computed it: same code, here
+            voyage["nominal"] = nominal_saving(path, summary["overrides"])
+        members.append((int(value), Section(summary=voyage)))
     if not members:
-        return None, 0
-    target = staging[-1] / "partial"
-    target.mkdir(exist_ok=True)
-    section = sweep_section(key, members, target)
-    for table_name, frame in section.tables.items():
-        frame.to_csv(target / f"{table_name}.csv", index=False)
-    return target, len(members)
+        return None
+    members.sort(key=lambda item: item[0])
+    return sweep_section(key, members, out_dir), source.name, len(members), finished
 
 
 def fmt(value, digits=2) -> str:
     if value is None or (isinstance(value, float) and value != value):
         return "-"
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, float) and value.is_integer() and abs(value) < 1e4 and digits == 0:
+        return str(int(value))
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
         return f"{value:,.{digits}f}"
     return str(value)
 
@@ -163,24 +189,21 @@ def main() -> None:
 
     lines += ["## The drawn storm set: each navigation's share of the available saving", ""]
     for name, method, path in SWEEPS:
-        sweep_folder = latest(results, name)
+        found = sweep_members(results, name, REPO / path, figures)
         lines += [f"### {method}", ""]
-        partial = ""
-        if sweep_folder is None:
-            sweep_folder, done = unfinished_sweep(results, name)
-            if sweep_folder is None:
-                lines += [f"No results yet: `python -m orchestrator compare {path}`.", ""]
-                continue
-            partial = f" **Unfinished sweep: the {done} members completed when it was stopped.**"
-        sweep = pd.read_csv(sweep_folder / "voyage_sweep.csv")
-        stats = pd.read_csv(sweep_folder / "voyage_sweep_stats.csv")
-        shutil.copyfile(sweep_folder / "voyage_sweep.png", figures / f"{name}_share.png")
-        lines += [f"`python -m orchestrator compare {path}` (results `{sweep_folder.name}`):{partial} One fair comparison "
-                  "per member; per member the saving available to a weather router at the system's arrival time "
-                  "first, then its saving against its equal-arrival baseline and its share.", "",
-                  "Distribution over the members:", "", table(stats, list(stats.columns)), "",
+        if found is None:
+            lines += [f"No results yet: `python -m orchestrator compare {path}`.", ""]
+            continue
+        section, source, done, finished = found
+        (figures / "voyage_sweep.png").replace(figures / f"{name}_share.png")
+        state = "" if finished else f" **Unfinished: the {done} members completed when the sweep was stopped.**"
+        lines += [f"`python -m orchestrator compare {path}` (results `{source}`, {done} members).{state} One fair "
+                  "comparison per member; per member the saving available to a weather router at the system's "
+                  "arrival time first, then its saving against its equal-arrival baseline and its share.", "",
+                  "Distribution over the members:", "", table(section.tables["voyage_sweep_stats"],
+                                                              list(section.tables["voyage_sweep_stats"].columns)), "",
                   f"![storm set](figures/{name}_share.png)", "", "Per member:", "",
-                  table(sweep, list(sweep.columns)), ""]
+                  table(section.tables["voyage_sweep"], list(section.tables["voyage_sweep"].columns)), ""]
 
     effect = paper_speed_effect()
     lines += ["## How the paper's Table 3 mixes speed into routing", "",

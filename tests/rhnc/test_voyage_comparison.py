@@ -1,5 +1,6 @@
 """The fair voyage comparison: equal-arrival baselines, the headline, flags, sweeps and input errors."""
 
+import json
 import textwrap
 from pathlib import Path
 from types import SimpleNamespace
@@ -118,6 +119,11 @@ def test_equal_arrival_baseline_arrives_within_one_macro_step(tmp_path, capsys):
         "straight route at detour's arrival", "cost [USD]"] + 1e-6
     # a costed route arrives when the system did
     assert runs.loc["straight route at detour's arrival", "arrival [min]"] == pytest.approx(detour["arrival [min]"])
+    # the weather's own available saving: straight line at the baseline scenario's 18 kn through water
+    nominal = json.loads((folder / "summary.json").read_text())["voyage"]["nominal"]
+    assert nominal["speed_kn"] == 18.0
+    assert 4.0 / 18.6 * 60 < nominal["arrival_min"] < 4.0 / 17.4 * 60   # 4 nm at 18 kn, +- the 0.5 kn current
+    assert nominal["optimal_cost_usd"] <= nominal["straight_cost_usd"] + 1e-6
     out = capsys.readouterr().out
     assert "Headline: the passage at equal arrival time" in out
     assert "**FLAG**: mean speeds through water differ" in out and "straight has no equal-arrival baseline" in out
@@ -188,10 +194,13 @@ def test_sweep_puts_the_available_saving_first_and_gives_the_distribution(tmp_pa
         figures = {"arrived": available is not None, "arrival_min": 480.0}
         if available is not None:
             figures.update(available_cost_percent=available, saving_cost_percent=available * share / 100)
-        members.append((member, Section(summary={"systems": {"RHNC": figures}})))
+        nominal = {"available_cost_percent": 1.5 * member, "arrival_min": 471.0}
+        members.append((member, Section(summary={"systems": {"RHNC": figures}, "nominal": nominal})))
     section = sweep_section("metocean.member", members, tmp_path)
     table = section.tables["voyage_sweep"]
-    assert list(table.columns[:2]) == ["metocean.member", "RHNC available cost saving [%]"]
+    assert list(table.columns[:2]) == ["metocean.member", "available cost saving at the nominal speed [%]"]
+    assert table.columns[3] == "RHNC available cost saving [%]"
+    assert list(table["available cost saving at the nominal speed [%]"]) == pytest.approx([0.0, 1.5, 3.0, 4.5, 6.0])
     assert list(table["RHNC share cost [%]"].iloc[:3]) == pytest.approx([10.0, 30.0, 50.0])
     stats = section.summary["distribution"]["RHNC"]["share cost [%]"]
     assert stats["median"] == pytest.approx(30.0) and stats["count"] == 3
