@@ -131,7 +131,8 @@ def sweep_section(key: str, members: list[tuple[Any, Section]], out_dir: Path) -
             row[f"{label} arrived"] = figures.get("arrived")
             row[f"{label} arrival [min]"] = figures.get("arrival_min")
             for quantity, name in (("cost", "cost"), ("co2", "CO2")):
-                saving, available = figures.get(f"saving_{quantity}_percent"), figures.get(f"available_{quantity}_percent")
+                saving = figures.get(f"saving_{quantity}_percent")
+                available = figures.get(f"available_{quantity}_percent")
                 row[f"{label} saving {name} [%]"] = saving
                 row[f"{label} share {name} [%]"] = (
                     100.0 * saving / available if saving is not None and available is not None

@@ -141,7 +141,8 @@ def paper_speed_effect() -> dict:
     (cost_r, co2_r), (cost_s, co2_s) = per_nm(speeds["RHNC"]), per_nm(speeds["Offline-SPNC"])
     return {
         "rhnc_kn": speeds["RHNC"], "spnc_kn": speeds["Offline-SPNC"], "rhnc": rhnc, "spnc": spnc,
-        "paper_cost_per_nm_percent": 100.0 * (rhnc["cost_per_made_good_nm_usd"] / spnc["cost_per_made_good_nm_usd"] - 1),
+        "paper_cost_per_nm_percent": 100.0 * (rhnc["cost_per_made_good_nm_usd"]
+                                              / spnc["cost_per_made_good_nm_usd"] - 1),
         "paper_co2_per_nm_percent": 100.0 * (rhnc["co2_per_made_good_nm_kg"] / spnc["co2_per_made_good_nm_kg"] - 1),
         "speed_cost_per_nm_percent": 100.0 * (cost_r / cost_s - 1),
         "speed_co2_per_nm_percent": 100.0 * (co2_r / co2_s - 1),
