@@ -100,8 +100,12 @@ class SailedVoyage:
 
     @property
     def usable(self) -> bool:
-        """Arrived and finished: fit for the headline."""
-        return self.arrived and self.status == "finished"
+        """Fit for the headline: the recorded voyage reaches the arrival radius.
+
+        The totals are cut at the arrival sample, so a run that failed after it (say, the
+        ship crossed the edge of the weather map in the step it arrived) still counts; it is
+        flagged."""
+        return self.arrived and self.arrival_s is not None
 
 
 class VoyageComparison:

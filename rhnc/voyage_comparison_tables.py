@@ -250,7 +250,8 @@ def _flags(systems, baselines, routes, limit_percent: float, start_m=None) -> li
             why = f" (the run {system.status}: {system.reason})" if system.status != "finished" else ""
             flags.append(f"{label} did not arrive{why}: left out of the headline")
         elif system.status != "finished":
-            flags.append(f"{label} ended '{system.status}': left out of the headline")
+            flags.append(f"{label} arrived at {system.arrival_s / 60.0:.0f} min, then the run ended "
+                         f"'{system.status}' ({system.reason}): its totals up to arrival are used")
     for label, entry in (routes or {}).items():
         if "routing_error" in entry:
             flags.append(f"no optimal route at {label}'s arrival time ({entry['routing_error']}): "

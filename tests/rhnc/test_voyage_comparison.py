@@ -260,3 +260,13 @@ def test_run_from_another_start_is_flagged(tmp_path):
     assert "RHNC started 1.00 nm from voyage.start_nm: not the same passage" in section.flags
     systems["RHNC"].track_m[0] = [10.0, 0.0]
     assert not evaluation_section(comparison, systems, {}, {}, tmp_path).flags
+
+
+def test_run_that_failed_after_arriving_counts_and_is_flagged(tmp_path):
+    arrived_then_failed = SailedVoyage(**{**voyage("RHNC", 17.5).__dict__, "status": "failed",
+                                          "reason": "left the map"})
+    section = evaluation_section(COMPARISON_STUB, {"RHNC": arrived_then_failed},
+                                 {"RHNC": matched(arrived_then_failed)}, {}, tmp_path)
+    assert list(section.tables["voyage_headline"]["system"]) == ["RHNC"]
+    assert ("RHNC arrived at 60 min, then the run ended 'failed' (left the map): its totals up to arrival are used"
+            in section.flags)
