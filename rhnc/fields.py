@@ -105,7 +105,8 @@ def resample_weather(metocean, resolution_nm: float = 1.0, t_s: float | None = N
         south-west node and stops at the last node inside its extent.
     t_s : float, optional
         Time [s, simulation clock] at which a time-varying field is taken (linear between
-        its time steps); a static field ignores it.
+        its time steps; the two steps are combined first, then resampled in space, which
+        equals sampling at ``t_s`` to rounding); a static field ignores it.
     """
     if resolution_nm <= 0:
         raise ValueError("planning resolution must be positive")
@@ -115,6 +116,8 @@ def resample_weather(metocean, resolution_nm: float = 1.0, t_s: float | None = N
     if x.size < 2 or y.size < 2:
         raise ValueError(f"planning resolution {resolution_nm} nm leaves fewer than 2 nodes on the map")
     xx, yy = np.meshgrid(x, y, indexing="ij")
+    if getattr(metocean, "is_time_varying", False) and t_s is not None:
+        metocean = metocean.snapshot(t_s)  # one spatial pass instead of one per time step
     sampled = metocean.sample(xx, yy, t_s=t_s)
     return PlanningWeather(x=x, y=y, **{name: np.asarray(sampled[name], dtype=float) for name in WEATHER_NAMES})
 

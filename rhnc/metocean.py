@@ -277,7 +277,7 @@ class MetOceanField:
         :func:`rhnc.weather_generators.list_generators`), or ``file = "path.nc"`` with the
         options of :meth:`from_netcdf`.  Errors name ``where`` (file and table) and the key.
         """
-        from rhnc.weather_generators import build_generated
+        from rhnc.weather_generators import build_generated, checked_option
 
         table = dict(table)
         if ("generator" in table) == ("file" in table):
@@ -291,8 +291,7 @@ class MetOceanField:
         for key in table:
             if key not in _FILE_KEYS:
                 raise ScenarioError(f"{where}: unknown key '{key}' (valid: {', '.join(sorted(_FILE_KEYS))})")
-        if "origin_deg" in table:
-            table["origin_deg"] = tuple(table["origin_deg"])
+            table[key] = checked_option(table[key], _FILE_KEYS[key], f"{where}.{key}")
         try:
             return cls.from_netcdf(file, **table)
         except (ValueError, TypeError, KeyError) as exc:
@@ -330,7 +329,8 @@ class MetOceanField:
         return path
 
 
-_FILE_KEYS = ("origin_deg", "resolution_nm", "time_index", "start_time")
+#: Keys of a ``[metocean] file = ...`` table and their kinds (see rhnc.weather_generators.checked_option).
+_FILE_KEYS = {"origin_deg": "point", "resolution_nm": "number", "time_index": "integer", "start_time": "text"}
 
 
 def wind_from_direction(wind_north, wind_east):

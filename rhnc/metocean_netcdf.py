@@ -73,6 +73,8 @@ def read_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"met-ocean file not found: {path}")
+    if resolution_nm is not None and not resolution_nm > 0:
+        raise ValueError(f"resolution_nm must be positive, got {resolution_nm}")
     with xr.open_dataset(path) as ds:
         ds = ds.load()
     time_dim = next((d for d in TIME_DIMS if d in ds.dims), None)

@@ -308,14 +308,21 @@ def build_generated(name: Any, options: Mapping[str, Any], where: str) -> MetOce
         if key not in generator.keys:
             raise ScenarioError(f"{where}: unknown key '{key}' for generator '{name}' "
                                 f"(valid: {', '.join(sorted(generator.keys))})")
-        arguments[key] = _checked(value, generator.keys[key], f"{where}.{key}")
+        arguments[key] = checked_option(value, generator.keys[key], f"{where}.{key}")
     try:
         return generator.build(**arguments)
     except (ValueError, TypeError) as exc:
         raise ScenarioError(f"{where}: {exc}") from exc
 
 
-def _checked(value: Any, kind: str, where: str) -> Any:
+def checked_option(value: Any, kind: str, where: str) -> Any:
+    """``value`` as the kind of :class:`Generator` (number, integer, point, lattice, text).
+
+    Raises
+    ------
+    ScenarioError
+        ``<where>: expected ...`` when the value is not of that kind.
+    """
     if kind == "number":
         if not is_finite_number(value):
             raise ScenarioError(f"{where}: expected a number, got {value!r}")

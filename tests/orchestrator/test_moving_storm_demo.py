@@ -54,3 +54,50 @@ def test_navigation_rates_use_the_same_weather_at_its_planning_instants(demo):
     np.testing.assert_allclose(rows["nav.ec_rate"], cost_rate(power, EnergyParameters()), rtol=1e-12)
     # and that is the FMU's weather there and then
     np.testing.assert_allclose(rows["env.hs"], local["hs"], rtol=1e-12, atol=1e-12)
+
+
+def test_voyage_accounting_without_an_environment_samples_the_field_at_the_times(tmp_path):
+    """No weather FMU: the voyage analysis takes the scenario's field at each sample's place and time."""
+    import json
+
+    from rhnc.voyage import account_voyage
+
+    scenario = tmp_path / "no_env.toml"
+    scenario.write_text("""
+connections = ["helm.tau_u -> ship.tau_u", "helm.tau_r -> ship.tau_r"]
+[simulation]
+stop_s = 3600.0
+dt_s = 60.0
+[metocean]
+generator = "moving_storm"
+resolution_nm = 2.0
+duration_h = 2.0
+centre_nm = [0.0, 20.0]
+[participants.helm]
+type = "scripted_tau"
+[participants.helm.options]
+tau_u_N = 7.7377e5
+[participants.ship]
+fmu = "KCS"
+[participants.ship.parameters]
+u0 = 9.26
+psi0 = 0.785398
+[outputs]
+analyses = ["voyage"]
+figures = []
+""")
+    report = run_scenario(scenario, tmp_path / "results", progress=False)
+    assert report.ok, report.reason
+    frame = pd.read_parquet(report.folder / "timeseries.parquet")
+    field = MetOceanField.from_netcdf(report.folder / "metocean.nc")
+    t, x, y = frame["time_s"].to_numpy(), frame["ship.x"].to_numpy(), frame["ship.y"].to_numpy()
+    weather = field.sample(x, y, t_s=t)
+    expected = account_voyage(t, x, y, frame["ship.u"], frame["ship.psi"], weather["wind_north"],
+                              weather["wind_east"], weather["hs"])
+    at_departure = field.sample(x, y, t_s=0.0)
+    frozen = account_voyage(t, x, y, frame["ship.u"], frame["ship.psi"], at_departure["wind_north"],
+                            at_departure["wind_east"], at_departure["hs"])
+    summary = json.loads((report.folder / "summary.json").read_text())
+    cost = summary["analyses"]["voyage"]["cost_usd"]
+    assert cost == pytest.approx(expected.cost_usd, rel=1e-9)
+    assert abs(frozen.cost_usd - expected.cost_usd) > 1e-3 * expected.cost_usd  # the time mattered

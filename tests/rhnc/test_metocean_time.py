@@ -118,6 +118,10 @@ def test_file_options_are_checked(moving, tmp_path):
         MetOceanField.from_scenario_table({"file": "w.nc", "time_index": 3}, tmp_path, where)
     with pytest.raises(ScenarioError, match=r"s.toml: metocean: start_time 'noon' is not an ISO 8601 date"):
         MetOceanField.from_scenario_table({"file": "w.nc", "start_time": "noon"}, tmp_path, where)
+    with pytest.raises(ScenarioError, match=r"s.toml: metocean.start_time: expected a string, got 2023"):
+        MetOceanField.from_scenario_table({"file": "w.nc", "start_time": 2023}, tmp_path, where)
+    with pytest.raises(ScenarioError, match=r"s.toml: metocean.time_index: expected an integer, got '1'"):
+        MetOceanField.from_scenario_table({"file": "w.nc", "time_index": "1"}, tmp_path, where)
     with pytest.raises(ScenarioError, match=r"s.toml: metocean: unknown key 'start'"):
         MetOceanField.from_scenario_table({"file": "w.nc", "start": "noon"}, tmp_path, where)
 
