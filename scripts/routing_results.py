@@ -71,8 +71,10 @@ def nominal_saving(comparison: Path, overrides: dict) -> dict:
 def sweep_members(results: Path, name: str, path: Path, out_dir: Path):
     """The sweep's members tabulated by the current code (:func:`sweep_section`).
 
-    From the newest published sweep, or else from the members an unfinished one (its hidden
-    staging folder) completed.  Returns (section, folder name, members done, finished) or None.
+    Members are gathered from every folder of the sweep, published or unfinished (a hidden
+    staging folder keeps the members it completed), the newest folder winning for a member
+    run twice; so a sweep may be split over processes, or stopped and its members kept.
+    Returns (section, folders used, members, all published) or None.
     """
     from orchestrator.compare import Section
     from rhnc.voyage_comparison_tables import sweep_section
@@ -80,24 +82,25 @@ def sweep_members(results: Path, name: str, path: Path, out_dir: Path):
     folder = results / name
     if not folder.is_dir():
         return None
-    source, finished = latest(results, name), True
-    if source is None:
-        staging = sorted(folder.glob(".*.partial"))
-        if not staging:
-            return None
-        source, finished = staging[-1], False
-    members = []
-    for member in source.glob("members/*/summary.json"):
-        key, _, value = member.parent.name.partition("=")
-        summary = json.loads(member.read_text())
-        voyage = summary.get("voyage", {})
-        if "nominal" not in voyage:   # written before the comparison computed it: same code, here
-            voyage["nominal"] = nominal_saving(path, summary["overrides"])
-        members.append((int(value), Section(summary=voyage)))
-    if not members:
+    sources = sorted((p for p in folder.iterdir() if p.is_dir()), key=lambda p: p.name.lstrip("."))
+    by_member, used, key = {}, {}, None
+    for source in sources:   # oldest first: newer folders overwrite a member
+        for member in source.glob("members/*/summary.json"):
+            key, _, value = member.parent.name.partition("=")
+            summary = json.loads(member.read_text())
+            voyage = summary.get("voyage", {})
+            if "nominal" not in voyage:   # written before the comparison computed it: same code, here,
+                cached = member.parent / "nominal.json"   # kept beside the member's summary
+                if not cached.is_file():
+                    cached.write_text(json.dumps(nominal_saving(path, summary["overrides"]), indent=2) + "\n")
+                voyage["nominal"] = json.loads(cached.read_text())
+            by_member[int(value)] = (source, Section(summary=voyage))
+    if not by_member:
         return None
-    members.sort(key=lambda item: item[0])
-    return sweep_section(key, members, out_dir), source.name, len(members), finished
+    for source, _ in by_member.values():
+        used[source.name] = not source.name.startswith(".")
+    members = [(value, section) for value, (_, section) in sorted(by_member.items())]
+    return sweep_section(key, members, out_dir), used, len(members), all(used.values())
 
 
 def fmt(value, digits=2) -> str:
@@ -195,12 +198,14 @@ def main() -> None:
         if found is None:
             lines += [f"No results yet: `python -m orchestrator compare {path}`.", ""]
             continue
-        section, source, done, finished = found
+        section, used, done, finished = found
         (figures / "voyage_sweep.png").replace(figures / f"{name}_share.png")
-        state = "" if finished else f" **Unfinished: the {done} members completed when the sweep was stopped.**"
-        lines += [f"`python -m orchestrator compare {path}` (results `{source}`, {done} members).{state} One fair "
-                  "comparison per member; per member the saving available to a weather router at the system's "
-                  "arrival time first, then its saving against its equal-arrival baseline and its share.", "",
+        state = "" if finished else " Some members come from a sweep stopped before it published its folder."
+        folders = ", ".join(f"`{folder}`" for folder in used)
+        lines += [f"`python -m orchestrator compare {path}` ({done} members; results {folders}).{state} One fair "
+                  "comparison per member; per member the saving available to a weather router first (at the "
+                  "nominal speed, then at the system's arrival time), then the system's saving against its "
+                  "equal-arrival baseline and its share.", "",
                   "Distribution over the members:", "", table(section.tables["voyage_sweep_stats"],
                                                               list(section.tables["voyage_sweep_stats"].columns)), "",
                   f"![storm set](figures/{name}_share.png)", "", "Per member:", "",
