@@ -282,6 +282,9 @@ def _sweep_figure(key: str, table: pd.DataFrame, labels, target: Path) -> None:
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 6.5), sharex=True)
     members = np.arange(len(table))
     width = 0.8 / max(len(labels), 1)
+    nominal = pd.to_numeric(table.get("available cost saving at the nominal speed [%]"), errors="coerce")
+    if nominal is not None and nominal.notna().any():
+        top.bar(members, nominal, 0.9, color="none", edgecolor="tab:green", label="available (nominal speed)")
     for i, label in enumerate(labels):
         available = pd.to_numeric(table.get(f"{label} available cost saving [%]"), errors="coerce")
         saving = pd.to_numeric(table.get(f"{label} saving cost [%]"), errors="coerce")
@@ -293,6 +296,10 @@ def _sweep_figure(key: str, table: pd.DataFrame, labels, target: Path) -> None:
             top.plot(members + offset, saving, "o", label=f"{label} saving")
         if share is not None:
             bottom.plot(members + offset, share, "o", label=label)
+        arrived = table.get(f"{label} arrived")
+        if arrived is not None:
+            missed = members[[not bool(v) for v in arrived]]
+            top.plot(missed + offset, np.zeros(missed.size), "x", color="tab:red", label=f"{label} did not arrive")
     top.axhline(0.0, color="k", lw=0.5)
     top.set_ylabel("cost saving [%]")
     top.legend(fontsize=8)
