@@ -34,7 +34,8 @@ def _parser() -> argparse.ArgumentParser:
     build.add_argument("models", nargs="*", help="model names (default: all)")
     build.add_argument("--fmi-version", choices=("2.0", "3.0", "all"), default="2.0",
                        help="FMI standard of the FMUs (default 2.0; 'all' builds both)")
-    compare = sub.add_parser("compare", help="run several scenarios and tabulate them (e.g. Table 3)")
+    compare = sub.add_parser("compare", help="run several scenarios side by side (Table 3; fair voyage comparisons "
+                             "at equal arrival time with [voyage], docs/compare-format.md)")
     compare.add_argument("comparison", help="comparison TOML file")
     compare.add_argument("--results", default="results", help="results folder (default: ./results)")
     compare.add_argument("--no-progress", action="store_true", help="no progress bar")

@@ -30,6 +30,7 @@ Tables, figures and the sweep summary are built in :mod:`rhnc.voyage_comparison_
 
 from __future__ import annotations
 
+import copy
 import logging
 import math
 from collections.abc import Mapping
@@ -55,8 +56,11 @@ OPTIMAL_ROUTE_KEYS = ("resolution_nm", "avoid")
 #: Runs whose mean speeds through water differ by more than this are not comparable
 #: without an equal-arrival baseline [%].
 SPEED_SPREAD_LIMIT_PERCENT = 0.5
-#: Below this available saving [% of the straight route's cost] a share is not defined.
-MIN_AVAILABLE_SAVING_PERCENT = 0.01
+#: Below this available saving [% of the straight route's cost] no share is given: the
+#: baseline arrives in the same macro step as the system, up to half a step (30 s of an 8 h
+#: passage) apart, and with fuel rising with about the cube of speed that alone moves a
+#: total by a few tenths of a percent, so a share of a smaller saving measures noise.
+MIN_AVAILABLE_SAVING_PERCENT = 0.5
 
 
 @dataclass(frozen=True)
@@ -92,11 +96,16 @@ class SailedVoyage:
     made_good_nm: float
     track_m: np.ndarray = field(repr=False)
     folder: Path | None = None
+    reason: str = ""
 
     @property
     def usable(self) -> bool:
-        """Arrived and finished: fit for the headline."""
-        return self.arrived and self.status == "finished"
+        """Fit for the headline: the recorded voyage reaches the arrival radius.
+
+        The totals are cut at the arrival sample, so a run that failed after it (say, the
+        ship crossed the edge of the weather map in the step it arrived) still counts; it is
+        flagged."""
+        return self.arrived and self.arrival_s is not None
 
 
 class VoyageComparison:
@@ -189,7 +198,48 @@ class VoyageComparison:
                 if systems[label].usable:
                     baselines[label] = self._equal_arrival_baseline(systems[label], runner, overrides)
         routes = self._route_costs(systems, baselines, overrides) if self._needs_routing() else {}
-        return evaluation_section(self, systems, baselines, routes, out_dir)
+        section = evaluation_section(self, systems, baselines, routes, out_dir)
+        if self.optimal_route is not None and self.equal_arrival is not None:
+            try:
+                section.summary["nominal"] = self.nominal_available_saving(overrides)
+            except ValueError as exc:
+                log.warning("%s: no available saving at the nominal speed: %s", self.path, exc)
+        return section
+
+    def nominal_speed_kn(self, overrides: Mapping[str, Any]) -> float | None:
+        """The equal-arrival scenario's own reference speed [kn] (its ``speed_key`` value)."""
+        from orchestrator.scenario import apply_override, read_toml
+
+        data, _ = read_toml(self.equal_arrival.scenario, "scenario")
+        for key, value in copy.deepcopy(dict(overrides)).items():
+            apply_override(data, key, value, str(self.equal_arrival.scenario))
+        node: Any = data
+        for part in self.equal_arrival.speed_key.split("."):
+            node = node.get(part) if isinstance(node, Mapping) else None
+        return float(node) if is_finite_number(node) else None
+
+    def nominal_available_saving(self, overrides: Mapping[str, Any]) -> dict[str, float]:
+        """The weather's available saving, whatever any system did: the optimal route against the
+        straight route, both arriving when the straight route sailed at the equal-arrival
+        scenario's own reference speed (taken as speed through water) arrives."""
+        from rhnc.energy import EnergyParameters
+        from rhnc.metocean import MetOceanField
+        from rhnc.weather_routing import RoutingProblem, optimal_route, straight_route
+
+        speed_kn = self.nominal_speed_kn(overrides)
+        loaded = load_scenario(self.equal_arrival.scenario, dict(overrides))
+        if speed_kn is None or loaded.metocean is None:
+            raise ValueError("the equal-arrival scenario has no reference speed or no [metocean] table")
+        metocean = MetOceanField.from_scenario_table(loaded.metocean, loaded.directory, f"{loaded.path}: metocean")
+        settings = self.optimal_route
+        problem = RoutingProblem(self.start_m, self.goal_m, metocean, energy=EnergyParameters(),
+                                 resolution_nm=settings.resolution_nm, avoid=settings.avoid_m)
+        straight = straight_route(problem, speed_mps=speed_kn * KNOT)
+        optimal = optimal_route(problem, arrival_s=straight.arrival_s)
+        return {"speed_kn": speed_kn, "arrival_min": straight.duration_s / 60.0,
+                "straight_cost_usd": straight.cost_usd, "optimal_cost_usd": optimal.cost_usd,
+                "available_cost_percent": 100.0 * (straight.cost_usd - optimal.cost_usd) / straight.cost_usd,
+                "available_co2_percent": 100.0 * (straight.co2_t - optimal.co2_t) / straight.co2_t}
 
     def summarise_sweep(self, key: str, members: list[tuple[Any, Section]], out_dir: Path) -> Section:
         """The distribution, over a sweep's members, of each system's share of the available saving."""
@@ -245,8 +295,13 @@ class VoyageComparison:
                 continue
             entry: dict[str, Any] = {}
             if self.optimal_route is not None:
-                entry["straight"] = straight_route(problem, arrival_s=system.arrival_s)
-                entry["optimal"] = optimal_route(problem, arrival_s=system.arrival_s)
+                try:
+                    entry["straight"] = straight_route(problem, arrival_s=system.arrival_s)
+                    entry["optimal"] = optimal_route(problem, arrival_s=system.arrival_s)
+                except ValueError as exc:   # e.g. no speed arrives then: reported, the comparison goes on
+                    log.warning("%s: no optimal route at %s's arrival: %s", self.path, label, exc)
+                    entry.pop("straight", None)
+                    entry["routing_error"] = str(exc)
             best = baselines[label].best if label in baselines else None
             if best is not None and baselines[label].matched:
                 # both at the baseline's measured mean speed through water, from the same departure
@@ -281,7 +336,7 @@ def read_voyage(label: str, report) -> SailedVoyage:
         cost_usd=_float(figures.get("cost_usd")), co2_t=_float(figures.get("co2_t")),
         mean_speed_through_water_kn=_float(figures.get("mean_speed_through_water_kn")),
         distance_nm=_float(figures.get("distance_nm")), made_good_nm=_float(figures.get("made_good_nm")),
-        track_m=track, folder=folder)
+        track_m=track, folder=folder, reason=report.reason or "")
 
 
 def _with_goal(track_m: np.ndarray, goal_m: np.ndarray) -> np.ndarray:

@@ -14,7 +14,8 @@ Three tables per comparison, written as CSV and appended to ``table.md``:
   beside each run, baselines that missed the arrival time, runs that did not arrive.
 
 A sweep (one comparison per weather member) adds ``voyage_sweep`` (per member the
-available saving first, then each system's saving and share), ``voyage_sweep_stats``
+available saving first: at the nominal speed, then at each system's arrival; then each
+system's saving and share), ``voyage_sweep_stats``
 (the distribution of the share) and ``voyage_sweep.png``.
 """
 
@@ -28,6 +29,9 @@ import numpy as np
 import pandas as pd
 
 from orchestrator.compare import Section, markdown_table
+
+#: A run whose first sample lies further than this from the comparison's start is flagged [m].
+START_TOLERANCE_M = 0.05 * 1852.0
 
 
 def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) -> Section:
@@ -75,7 +79,7 @@ def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) ->
                 available = figures[f"available_{quantity}_percent"]
                 saving = figures.get(f"saving_{quantity}_percent")
                 share = None
-                if saving is not None and available is not None and available > MIN_AVAILABLE_SAVING_PERCENT:
+                if saving is not None and available is not None and available >= MIN_AVAILABLE_SAVING_PERCENT:
                     share = 100.0 * saving / available
                 figures[f"share_{quantity}_percent"] = share
         if "track_at_equal_speed" in route:
@@ -86,7 +90,7 @@ def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) ->
             headline_rows.append(_headline_row(label, figures))
     headline = pd.DataFrame(headline_rows)
 
-    flags = _flags(systems, baselines, comparison.equal_arrival is not None, SPEED_SPREAD_LIMIT_PERCENT)
+    flags = _flags(systems, baselines, routes, SPEED_SPREAD_LIMIT_PERCENT, getattr(comparison, "start_m", None))
     speeds = [s.mean_speed_through_water_kn for s in systems.values() if math.isfinite(s.mean_speed_through_water_kn)]
     spread = 100.0 * (max(speeds) / min(speeds) - 1.0) if len(speeds) > 1 and min(speeds) > 0 else 0.0
     markdown = ["## Voyages side by side", "",
@@ -98,9 +102,9 @@ def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) ->
         markdown += ["## Headline: the passage at equal arrival time", "",
                      "Saving: the system's total against its equal-arrival baseline (positive: the system is "
                      "cheaper). Available: the optimal weather route against the straight route, both "
-                     "arriving when the system arrived. Share: saving / available. Track vs line: the sailed "
-                     "track against the straight line, both costed at one constant speed through water, the "
-                     "baseline's mean "
+                     "arriving when the system arrived. Share: saving / available (none below "
+                     f"{MIN_AVAILABLE_SAVING_PERCENT} % available). Track vs line: the sailed track against the "
+                     "straight line, both costed at one constant speed through water, the baseline's mean "
                      "(positive: the track is dearer).", "", markdown_table(headline), ""]
     markdown += [f"**FLAG**: {flag}" for flag in flags] + ([""] if flags else [])
     tables = {"voyage_runs": runs}
@@ -112,22 +116,34 @@ def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) ->
 
 def sweep_section(key: str, members: list[tuple[Any, Section]], out_dir: Path) -> Section:
     """Per-member table, distribution of each system's share, and a figure."""
+    from rhnc.voyage_comparison import MIN_AVAILABLE_SAVING_PERCENT
+
     rows = []
     for value, section in members:
         row: dict[str, Any] = {key: value}
+        nominal = section.summary.get("nominal", {})
+        row["available cost saving at the nominal speed [%]"] = nominal.get("available_cost_percent")
+        row["nominal arrival [min]"] = nominal.get("arrival_min")
         systems = section.summary.get("systems", {})
         for label, figures in systems.items():
             row[f"{label} available cost saving [%]"] = figures.get("available_cost_percent")
         for label, figures in systems.items():
+            row[f"{label} arrived"] = figures.get("arrived")
             row[f"{label} arrival [min]"] = figures.get("arrival_min")
-            row[f"{label} saving cost [%]"] = figures.get("saving_cost_percent")
-            row[f"{label} share cost [%]"] = figures.get("share_cost_percent")
-            row[f"{label} saving CO2 [%]"] = figures.get("saving_co2_percent")
-            row[f"{label} share CO2 [%]"] = figures.get("share_co2_percent")
+            for quantity, name in (("cost", "cost"), ("co2", "CO2")):
+                saving = figures.get(f"saving_{quantity}_percent")
+                available = figures.get(f"available_{quantity}_percent")
+                row[f"{label} saving {name} [%]"] = saving
+                row[f"{label} share {name} [%]"] = (
+                    100.0 * saving / available if saving is not None and available is not None
+                    and available >= MIN_AVAILABLE_SAVING_PERCENT else None)
         rows.append(row)
     table = pd.DataFrame(rows)
     labels = list(dict.fromkeys(label for _, s in members for label in s.summary.get("systems", {})))
     stats_rows, summary = [], {}
+    nominal = pd.to_numeric(table["available cost saving at the nominal speed [%]"], errors="coerce").dropna()
+    stats_rows.append({"system": "(the weather)", "figure": "available cost saving at the nominal speed [%]",
+                       **_distribution(nominal.to_numpy())})
     for label in labels:
         for quantity, column in (("available cost saving [%]", f"{label} available cost saving [%]"),
                                  ("saving cost [%]", f"{label} saving cost [%]"),
@@ -137,6 +153,11 @@ def sweep_section(key: str, members: list[tuple[Any, Section]], out_dir: Path) -
             stats = _distribution(values)
             stats_rows.append({"system": label, "figure": quantity, **stats})
             summary.setdefault(label, {})[quantity] = stats
+    for label in labels:
+        arrived = table.get(f"{label} arrived")
+        count = int(sum(bool(v) for v in arrived)) if arrived is not None else 0
+        stats_rows.append({"system": label, "figure": "arrived", "count": count})
+        summary.setdefault(label, {})["arrived"] = count
     stats_table = pd.DataFrame(stats_rows)
     _sweep_figure(key, table, labels, out_dir / "voyage_sweep.png")
     markdown = [f"## Per {key}: the available saving first, then each system's", "", markdown_table(table), "",
@@ -205,8 +226,14 @@ def _headline_row(label: str, f: dict[str, Any]) -> dict[str, Any]:
     }
 
 
-def _flags(systems, baselines, has_equal_arrival: bool, limit_percent: float) -> list[str]:
+def _flags(systems, baselines, routes, limit_percent: float, start_m=None) -> list[str]:
     flags = []
+    if start_m is not None:
+        runs = list(systems.values()) + [e.best.run for e in baselines.values() if e.best is not None]
+        for run in runs:
+            if len(run.track_m) and np.hypot(*(run.track_m[0] - start_m)) > START_TOLERANCE_M:
+                offset_nm = np.hypot(*(run.track_m[0] - start_m)) / 1852.0
+                flags.append(f"{run.label} started {offset_nm:.2f} nm from voyage.start_nm: not the same passage")
     speeds = {label: s.mean_speed_through_water_kn for label, s in systems.items()
               if math.isfinite(s.mean_speed_through_water_kn)}
     if len(speeds) > 1:
@@ -220,9 +247,15 @@ def _flags(systems, baselines, has_equal_arrival: bool, limit_percent: float) ->
                          "baseline beside it: the differences between these runs mix speed with routing")
     for label, system in systems.items():
         if not system.arrived:
-            flags.append(f"{label} did not arrive: left out of the headline")
+            why = f" (the run {system.status}: {system.reason})" if system.status != "finished" else ""
+            flags.append(f"{label} did not arrive{why}: left out of the headline")
         elif system.status != "finished":
-            flags.append(f"{label} ended '{system.status}': left out of the headline")
+            flags.append(f"{label} arrived at {system.arrival_s / 60.0:.0f} min, then the run ended "
+                         f"'{system.status}' ({system.reason}): its totals up to arrival are used")
+    for label, entry in (routes or {}).items():
+        if "routing_error" in entry:
+            flags.append(f"no optimal route at {label}'s arrival time ({entry['routing_error']}): "
+                         "no available saving or share for it")
     for label, equal in baselines.items():
         if not equal.matched:
             best = equal.best
@@ -249,6 +282,9 @@ def _sweep_figure(key: str, table: pd.DataFrame, labels, target: Path) -> None:
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 6.5), sharex=True)
     members = np.arange(len(table))
     width = 0.8 / max(len(labels), 1)
+    nominal = pd.to_numeric(table.get("available cost saving at the nominal speed [%]"), errors="coerce")
+    if nominal is not None and nominal.notna().any():
+        top.bar(members, nominal, 0.9, color="none", edgecolor="tab:green", label="available (nominal speed)")
     for i, label in enumerate(labels):
         available = pd.to_numeric(table.get(f"{label} available cost saving [%]"), errors="coerce")
         saving = pd.to_numeric(table.get(f"{label} saving cost [%]"), errors="coerce")
@@ -260,6 +296,10 @@ def _sweep_figure(key: str, table: pd.DataFrame, labels, target: Path) -> None:
             top.plot(members + offset, saving, "o", label=f"{label} saving")
         if share is not None:
             bottom.plot(members + offset, share, "o", label=label)
+        arrived = table.get(f"{label} arrived")
+        if arrived is not None:
+            missed = members[[not bool(v) for v in arrived]]
+            top.plot(missed + offset, np.zeros(missed.size), "x", color="tab:red", label=f"{label} did not arrive")
     top.axhline(0.0, color="k", lw=0.5)
     top.set_ylabel("cost saving [%]")
     top.legend(fontsize=8)

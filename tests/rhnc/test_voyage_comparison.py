@@ -1,5 +1,6 @@
 """The fair voyage comparison: equal-arrival baselines, the headline, flags, sweeps and input errors."""
 
+import json
 import textwrap
 from pathlib import Path
 from types import SimpleNamespace
@@ -118,6 +119,11 @@ def test_equal_arrival_baseline_arrives_within_one_macro_step(tmp_path, capsys):
         "straight route at detour's arrival", "cost [USD]"] + 1e-6
     # a costed route arrives when the system did
     assert runs.loc["straight route at detour's arrival", "arrival [min]"] == pytest.approx(detour["arrival [min]"])
+    # the weather's own available saving: straight line at the baseline scenario's 18 kn through water
+    nominal = json.loads((folder / "summary.json").read_text())["voyage"]["nominal"]
+    assert nominal["speed_kn"] == 18.0
+    assert 4.0 / 18.6 * 60 < nominal["arrival_min"] < 4.0 / 17.4 * 60   # 4 nm at 18 kn, +- the 0.5 kn current
+    assert nominal["optimal_cost_usd"] <= nominal["straight_cost_usd"] + 1e-6
     out = capsys.readouterr().out
     assert "Headline: the passage at equal arrival time" in out
     assert "**FLAG**: mean speeds through water differ" in out and "straight has no equal-arrival baseline" in out
@@ -176,19 +182,29 @@ def test_run_that_does_not_arrive_is_left_out_of_the_headline(tmp_path):
                                  tmp_path)
     assert list(section.tables["voyage_headline"]["system"]) == ["Offline-SPNC"]
     assert "RHNC did not arrive: left out of the headline" in section.flags
+    failed = SailedVoyage(**{**systems["RHNC"].__dict__, "status": "failed", "reason": "left the map"})
+    section = evaluation_section(COMPARISON_STUB, {"RHNC": failed}, {}, {}, tmp_path)
+    assert "RHNC did not arrive (the run failed: left the map): left out of the headline" in section.flags
 
 
 def test_sweep_puts_the_available_saving_first_and_gives_the_distribution(tmp_path):
     members = []
-    for member, (available, share) in enumerate([(2.0, 10.0), (4.0, 30.0), (1.0, 50.0)]):
-        summary = {"systems": {"RHNC": {"available_cost_percent": available, "saving_cost_percent": available * share / 100,
-                                        "share_cost_percent": share, "arrival_min": 480.0}}}
-        members.append((member, Section(summary=summary)))
+    # the last member offers less than the 0.5 % a share needs, the one before did not arrive
+    for member, (available, share) in enumerate([(2.0, 10.0), (4.0, 30.0), (1.0, 50.0), (0.3, -500.0), (None, None)]):
+        figures = {"arrived": available is not None, "arrival_min": 480.0}
+        if available is not None:
+            figures.update(available_cost_percent=available, saving_cost_percent=available * share / 100)
+        nominal = {"available_cost_percent": 1.5 * member, "arrival_min": 471.0}
+        members.append((member, Section(summary={"systems": {"RHNC": figures}, "nominal": nominal})))
     section = sweep_section("metocean.member", members, tmp_path)
     table = section.tables["voyage_sweep"]
-    assert list(table.columns[:2]) == ["metocean.member", "RHNC available cost saving [%]"]
+    assert list(table.columns[:2]) == ["metocean.member", "available cost saving at the nominal speed [%]"]
+    assert table.columns[3] == "RHNC available cost saving [%]"
+    assert list(table["available cost saving at the nominal speed [%]"]) == pytest.approx([0.0, 1.5, 3.0, 4.5, 6.0])
+    assert list(table["RHNC share cost [%]"].iloc[:3]) == pytest.approx([10.0, 30.0, 50.0])
     stats = section.summary["distribution"]["RHNC"]["share cost [%]"]
     assert stats["median"] == pytest.approx(30.0) and stats["count"] == 3
+    assert section.summary["distribution"]["RHNC"]["arrived"] == 4
     assert (tmp_path / "voyage_sweep.png").is_file()
 
 
@@ -226,3 +242,31 @@ def test_bad_voyage_table_exits_2_from_the_cli(tmp_path, capsys):
     assert main(["compare", str(path), "--results", str(tmp_path / "results")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "voyage.arrival_radius_nm: expected a positive number, got 0" in err
+
+
+def test_routing_failure_is_flagged_not_fatal(tmp_path):
+    system = voyage("RHNC", 17.5)
+    routes = {"RHNC": {"routing_error": "arrival at 600 s needs more than 30 m/s through water"}}
+    section = evaluation_section(COMPARISON_STUB, {"RHNC": system}, {"RHNC": matched(system)}, routes, tmp_path)
+    assert section.summary["systems"]["RHNC"].get("share_cost_percent") is None
+    assert any(f.startswith("no optimal route at RHNC's arrival time (arrival at 600 s") for f in section.flags)
+
+
+def test_run_from_another_start_is_flagged(tmp_path):
+    systems = {"RHNC": voyage("RHNC", 17.5)}
+    systems["RHNC"].track_m[:] = [[1852.0, 0.0], [3704.0, 0.0]]
+    comparison = SimpleNamespace(straight_distance_nm=18.0, published={}, equal_arrival=None, start_m=np.zeros(2))
+    section = evaluation_section(comparison, systems, {}, {}, tmp_path)
+    assert "RHNC started 1.00 nm from voyage.start_nm: not the same passage" in section.flags
+    systems["RHNC"].track_m[0] = [10.0, 0.0]
+    assert not evaluation_section(comparison, systems, {}, {}, tmp_path).flags
+
+
+def test_run_that_failed_after_arriving_counts_and_is_flagged(tmp_path):
+    arrived_then_failed = SailedVoyage(**{**voyage("RHNC", 17.5).__dict__, "status": "failed",
+                                          "reason": "left the map"})
+    section = evaluation_section(COMPARISON_STUB, {"RHNC": arrived_then_failed},
+                                 {"RHNC": matched(arrived_then_failed)}, {}, tmp_path)
+    assert list(section.tables["voyage_headline"]["system"]) == ["RHNC"]
+    assert ("RHNC arrived at 60 min, then the run ended 'failed' (left the map): its totals up to arrival are used"
+            in section.flags)
