@@ -67,3 +67,16 @@ def test_mean_speed_through_water_weights_by_time_and_counts_sway():
     assert mean_speed_through_water_kn(t2, np.array([0.0, 0.0, 10.0]) * KNOT, np.zeros(3)) == pytest.approx(
         0.5 * 10.0 * 3000.0 / 3600.0)
     assert mean_speed_through_water_kn([0.0, 10.0], [3.0, 3.0], [4.0, 4.0]) == pytest.approx(5.0 / KNOT)
+
+
+def test_a_reported_brake_power_replaces_the_energy_model():
+    t = np.array([0.0, 1800.0, 3600.0])
+    x, y = np.array([0.0, 9260.0, 18520.0]), np.zeros(3)
+    calm = np.zeros(3)
+    power = np.full(3, 6.0e6)  # W
+    account = account_voyage(t, x, y, np.full(3, 9.26), calm, calm, calm, calm, brake_power_w=power)
+    fuel_t = 6000.0 * 190e-6  # t over one hour
+    assert account.co2_t == pytest.approx(fuel_t * 3.114)
+    assert account.cost_usd == pytest.approx(fuel_t * 640 + 500)
+    modelled = account_voyage(t, x, y, np.full(3, 9.26), calm, calm, calm, calm)
+    assert modelled.co2_t != pytest.approx(account.co2_t)
