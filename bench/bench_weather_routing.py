@@ -27,27 +27,31 @@ from rhnc.weather_routing import RouteSearch, RoutingProblem, optimal_route, str
 
 
 def timed(call, repeat: int):
-    times, result = [], None
+    """Result, median and max wall time [s], median CPU time of this process [s] (on a
+    loaded machine the CPU time is what the wall time would be on an idle one)."""
+    times, cpu, result = [], [], None
     for _ in range(repeat):
-        begin = time.perf_counter()
+        begin, begin_cpu = time.perf_counter(), time.process_time()
         result = call()
         times.append(time.perf_counter() - begin)
-    return result, float(np.median(times)), float(np.max(times))
+        cpu.append(time.process_time() - begin_cpu)
+    return result, float(np.median(times)), float(np.max(times)), float(np.median(cpu))
 
 
 def weather_case(name: str, field: MetOceanField, resolution_nm: float, repeat: int) -> None:
     problem = RoutingProblem((0.0, 0.0), (100 * NM, 100 * NM), field, resolution_nm=resolution_nm)
     speed = 18 * KNOT
     straight = straight_route(problem, speed_mps=speed)
-    fixed_speed, median_s, max_s = timed(lambda: optimal_route(problem, speed_mps=speed), repeat)
+    fixed_speed, median_s, max_s, cpu_s = timed(lambda: optimal_route(problem, speed_mps=speed), repeat)
     print(f"{name}: straight line at 18 kn: {straight.cost_usd:,.0f} USD, {straight.duration_s / 3600:.2f} h")
     print(f"  optimum at 18 kn:           {fixed_speed.cost_usd:,.0f} USD ({100 * (fixed_speed.cost_usd / straight.cost_usd - 1):+.2f} %), "
           f"{fixed_speed.duration_s / 3600:.2f} h, {fixed_speed.distance_nm:.1f} nm; "
-          f"time median {median_s:.2f} s, max {max_s:.2f} s")
-    fixed_arrival, median_s, max_s = timed(lambda: optimal_route(problem, arrival_s=straight.arrival_s), repeat)
+          f"time median {median_s:.2f} s, max {max_s:.2f} s, CPU {cpu_s:.2f} s")
+    fixed_arrival, median_s, max_s, cpu_s = timed(lambda: optimal_route(problem, arrival_s=straight.arrival_s),
+                                                  repeat)
     print(f"  optimum at equal arrival:   {fixed_arrival.cost_usd:,.0f} USD ({100 * (fixed_arrival.cost_usd / straight.cost_usd - 1):+.2f} %), "
           f"{fixed_arrival.speed_through_water_mps / KNOT:.2f} kn, {fixed_arrival.distance_nm:.1f} nm; "
-          f"time median {median_s:.2f} s, max {max_s:.2f} s")
+          f"time median {median_s:.2f} s, max {max_s:.2f} s, CPU {cpu_s:.2f} s")
 
 
 def discretisation_error(resolution_nm: float) -> None:

@@ -21,6 +21,10 @@ participant's step size) it
    ``alpha = v_s delta`` (Algorithm 1), descending G alone while ET = 1;
 4. turns the path into reference states (Eq. 19) timed t + k delta.
 
+Goal: once the goal lies within the horizon (N_L alpha) of the planning start, the path
+runs straight to it and stops there (both methods): near the goal the bearing the energy
+fields assume swings round, and the paper's descent would run along the map edge.
+
 When the met-ocean field varies in time, the planning weather is resampled at each
 navigation instant t (the fields then see the weather of that instant, held over the
 horizon).
@@ -72,7 +76,8 @@ from rhnc.fields import FieldWeights, GuidanceParameters, SuperpositionField, be
 from rhnc.metocean import KNOT, NM
 from rhnc.planner import plan_local_path
 from rhnc.reference import reference_states
-from rhnc.route_navigation import RecedingRoutePlanner, calm_water_time_price_usd_h
+from rhnc.route_navigation import SPEED_STEP_MPS, RecedingRoutePlanner, calm_water_time_price_usd_h
+from rhnc.weather_routing import PRICE_MULTIPLES, RoutingProblem, optimal_route, straight_route, time_price_usd_h
 from rhnc.trigger import TRIGGERED, EventTrigger
 
 log = logging.getLogger(__name__)
@@ -143,8 +148,8 @@ class NavigationParticipant(Participant):
             self.field = SuperpositionField(self.weather, goal, energy, guidance, weights)
         else:
             self.route_planner = RecedingRoutePlanner(metocean, goal, energy, resolution_nm)
-            self._remaining_m = None
-            self._current_along = 0.0
+            self._route = None
+            self._price_scale = None
             self._planned_speed = self.speed
         self._reached_goal = False
 
@@ -291,7 +296,7 @@ class NavigationParticipant(Participant):
             self.field.set_weather(self.weather)
         self.field.update((start_x, start_y), self.speed)
         path = plan_local_path(self.field, (start_x, start_y), self.speed * self.delta,
-                               self.horizon_steps, avoidance=et > 0.5)
+                               self.horizon_steps, avoidance=et > 0.5, final_approach=True)
         self.counts["plans"] += 1
         self.counts["avoidance_plans"] += int(et > 0.5)
         self.counts["flat_steps"] += path.flat_steps
@@ -317,33 +322,64 @@ class NavigationParticipant(Participant):
         return outputs
 
     # -- the routing method ----------------------------------------------------------------
-    def planned_speed(self, time: float, start: tuple[float, float]) -> float:
-        """Speed through water [m/s] for this instant: ``speed_kn``, or the remaining route
-        over the remaining time less the current along the route, within the bounds."""
+    def planned_speed(self, time: float, route: np.ndarray) -> float:
+        """Speed through water [m/s] for this instant: ``speed_kn``, or the length of
+        ``route`` (start to goal) over the remaining time less the current along it, within
+        the bounds."""
         if self.arrival_s is None:
             return self.speed
-        remaining_m = self._remaining_m
-        if remaining_m is None:
-            remaining_m = float(np.hypot(self.goal[0] - start[0], self.goal[1] - start[1]))
+        remaining_m = float(np.sum(np.hypot(*np.diff(route, axis=0).T)))
         remaining_s = self.arrival_s - time
         if remaining_s <= 0.0:
             return self.max_speed
-        wanted = remaining_m / remaining_s - self._current_along
+        wanted = remaining_m / remaining_s - self.route_planner.mean_current_along_mps(route, time)
         return float(min(max(wanted, MIN_PLANNED_SPEED_MPS), self.max_speed))
+
+    def _calibrate_time_price(self, time: float, point: np.ndarray) -> float:
+        """Price of an hour at fixed arrival, as a multiple of the calm-water shadow price.
+
+        The shadow price along a route (v dF/dv - F) only estimates what an hour is worth
+        on the best route, so once, at the first plan, the whole passage is routed at the
+        requested arrival time (:func:`rhnc.weather_routing.optimal_route`, which tries
+        several prices) and the price that found the best route is kept, scaled with the
+        calm-water price as the planned speed changes.  When the straight route wins, the
+        highest price tried is kept (it keeps the route straightest)."""
+        problem = RoutingProblem(tuple(point), tuple(self.goal), self.metocean, self.energy,
+                                 resolution_nm=self.resolution_nm, departure_s=time)
+        try:
+            best = optimal_route(problem, arrival_s=self.arrival_s, refine=False)
+        except ValueError as exc:
+            log.warning("participant '%s': no route arrives at %.0f s (%s); pricing hours by the "
+                        "calm-water shadow price", self.name, self.arrival_s, exc)
+            return 1.0
+        price = best.time_price_usd_h
+        if not np.isfinite(price):
+            price = max(PRICE_MULTIPLES) * time_price_usd_h(problem, straight_route(problem, arrival_s=self.arrival_s))
+        return price / max(calm_water_time_price_usd_h(best.speed_through_water_mps, self.energy), 1e-9)
 
     def _plan_route(self, time: float, ship: tuple[float, float, float, float],
                     start: tuple[float, float, float, float], et: float) -> dict[str, Value]:
         start_x, start_y, start_psi, start_u = start
         x_min, x_max, y_min, y_max = self.metocean.extent
-        point = (min(max(start_x, x_min), x_max), min(max(start_y, y_min), y_max))
-        speed = self.planned_speed(time, point)
+        point = np.array([min(max(start_x, x_min), x_max), min(max(start_y, y_min), y_max)])
+        planner = self.route_planner
+        # the route is searched at the previous instant's speed and price (the route hardly
+        # depends on them), then the speed is planned for the route found
+        if self._route is None:
+            self._planned_speed = self.planned_speed(time, np.vstack([point, self.goal]))
         if self.arrival_s is None:
             price = self.energy.running_cost_usd_day / 24.0
         else:  # hours are fixed: each costs the fuel of the speed-up that saves it
-            price = calm_water_time_price_usd_h(speed, self.energy)
-        plan = self.route_planner.plan(time, point, start_u, speed, price, self.delta, self.horizon_steps)
-        self._remaining_m = plan.remaining_nm * NM
-        self._current_along = self.route_planner.mean_current_along_mps(plan.route, time)
+            if self._price_scale is None:
+                self._price_scale = self._calibrate_time_price(time, point)
+            price = self._price_scale * calm_water_time_price_usd_h(
+                round(self._planned_speed / SPEED_STEP_MPS) * SPEED_STEP_MPS, self.energy)
+        route = planner.route(time, point, self._planned_speed, price,
+                              planner.horizon_m(max(self._planned_speed, self.max_speed), self.delta,
+                                                self.horizon_steps))
+        speed = self.planned_speed(time, route)
+        plan = planner.timed_plan(route, time, start_u, speed, self.delta, self.horizon_steps)
+        self._route = plan.route
         self._planned_speed = speed
         self.counts["plans"] += 1
         self.counts["avoidance_plans"] += int(et > 0.5)

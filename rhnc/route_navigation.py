@@ -12,7 +12,7 @@ as it pays.  No min-max normalisation is involved.
 
 One planning update:
 
-1. from the start point, every free node within ``3 * reach`` grid steps is a candidate
+1. from the start point, every free node within ``2 * reach`` grid steps is a candidate
    first node; the one minimising (cost of the straight segment to it) + (its cost-to-go)
    is taken, and the route follows the search tree from it to the goal (the goal itself
    is a candidate once it is that near, so the last leg runs straight to it);
@@ -115,7 +115,10 @@ class RecedingRoutePlanner:
         self._tree = None
         self.searches = 0
 
-    def _cost_to_go(self, time_s: float, start: np.ndarray, speed_mps: float, price_usd_h: float):
+    def cost_to_go(self, time_s: float, start: np.ndarray, speed_mps: float, price_usd_h: float):
+        """Every node's cost to the goal (a :class:`rhnc.route_search.ShortestPathTree`),
+        searched at ``speed_mps`` rounded to 0.25 kn and kept while speed and price hold
+        (for a static field)."""
         key = (round(speed_mps / SPEED_STEP_MPS), round(price_usd_h, 3))
         if self.time_varying or key != self._key:
             node_times = None
@@ -134,10 +137,10 @@ class RecedingRoutePlanner:
         start = np.asarray(start_m, dtype=float)
         if np.hypot(*(self.goal - start)) < 1.0:
             return np.vstack([start, self.goal])
-        tree = self._cost_to_go(time_s, start, speed_mps, price_usd_h)
+        tree = self.cost_to_go(time_s, start, speed_mps, price_usd_h)
         nodes = self.search.nodes
-        radius = 3 * self.reach * self.resolution_m
-        near = np.flatnonzero((np.abs(nodes[:, 0] - start[0]) <= radius) & (np.abs(nodes[:, 1] - start[1]) <= radius)
+        radius = 2 * self.reach * self.resolution_m
+        near = np.flatnonzero((np.hypot(nodes[:, 0] - start[0], nodes[:, 1] - start[1]) <= radius)
                               & self.graph.free & np.isfinite(tree.cost) & (tree.cost < 1e29))
         candidates = np.vstack([nodes[near], self.goal])
         to_go = np.concatenate([tree.cost[near], [0.0 if np.hypot(*(self.goal - start)) <= radius else np.inf]])
@@ -184,8 +187,18 @@ class RecedingRoutePlanner:
         horizon_steps : int
             N_L.
         """
-        horizon_m = speed_mps * delta_s * horizon_steps * 1.2
-        route = self.route(time_s, start_m, speed_mps, price_usd_h, horizon_m)
+        route = self.route(time_s, start_m, speed_mps, price_usd_h, self.horizon_m(speed_mps, delta_s, horizon_steps))
+        return self.timed_plan(route, time_s, start_speed_mps, speed_mps, delta_s, horizon_steps)
+
+    @staticmethod
+    def horizon_m(speed_mps: float, delta_s: float, horizon_steps: int) -> float:
+        """Length of route the reference may need [m] (with 20 % for a following current)."""
+        return speed_mps * delta_s * horizon_steps * 1.2
+
+    def timed_plan(self, route: np.ndarray, time_s: float, start_speed_mps: float, speed_mps: float,
+                   delta_s: float, horizon_steps: int) -> RoutePlan:
+        """Reference points along ``route`` (from :meth:`route`) at ``speed_mps`` through water."""
+        horizon_m = self.horizon_m(speed_mps, delta_s, horizon_steps)
         along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(route, axis=0).T))])
         head = int(min(np.searchsorted(along, horizon_m) + 1, len(route)))
         dense = densify(route[:head], min(self.resolution_m / 2.0, speed_mps * delta_s / 2.0))
@@ -197,6 +210,25 @@ class RecedingRoutePlanner:
         reached = bool(head == len(route) and wanted[-1] >= times[-1])
         return RoutePlan(points=points, route=route, remaining_nm=float(along[-1]) / NM, reached_goal=reached,
                          speed_through_water_mps=float(speed_mps))
+
+    def time_price_usd_h(self, route: np.ndarray, speed_mps: float, time_s: float) -> float:
+        """Shadow price of time at fixed arrival [USD/h] along ``route``: v dF/dv - F,
+        F the fuel cost rate with each leg's course and weather, averaged over the legs'
+        lengths, rounded to 50 USD/h (so the cost-to-go is kept while it holds)."""
+        if len(route) < 2:
+            return calm_water_time_price_usd_h(speed_mps, self.energy)
+        points = densify(route, 2.0 * self.resolution_m)
+        legs = np.diff(points, axis=0)
+        length = np.hypot(*legs.T)
+        heading = np.arctan2(legs[:, 1], legs[:, 0])
+        weather = sample_weather(self.metocean, points[:-1, 0], points[:-1, 1],
+                                 time_s + np.concatenate([[0.0], np.cumsum(length[:-1])]) / speed_mps)
+        speeds = speed_mps * np.array([0.99, 1.0, 1.01])[:, None]
+        rates = fuel_rate_t_h(brake_power(speeds, heading, weather["wind_north"], weather["wind_east"],
+                                          weather["hs"], self.energy), self.energy) * self.energy.fuel_price_usd_t
+        price = speed_mps * (rates[2] - rates[0]) / (0.02 * speed_mps) - rates[1]
+        price = float(np.sum(price * length) / max(np.sum(length), 1e-9))
+        return max(round(price / 50.0) * 50.0, 0.0)
 
     def mean_current_along_mps(self, route: np.ndarray, time_s: float) -> float:
         """Current component along ``route`` [m/s], averaged over its vertices' legs."""

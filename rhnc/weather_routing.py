@@ -14,12 +14,14 @@ The cost of any candidate comes from the project's energy model with the course 
 leg (:func:`rhnc.track_cost.cost_of_track`).  The search (:mod:`rhnc.route_search`) runs
 Dijkstra's algorithm on a grid at ``resolution_nm`` with 32 headings; an edge weighs the
 trapezoid of the cost rate at its two ends (heading = the edge's course) over its
-duration.  At fixed arrival time each hour counts at the shadow price of time, lambda =
-v dF/dv - F (F the fuel cost rate along the current route): what one hour less at sea
-would cost in extra fuel for the speed-up it forces.  The route found is then shortened
-where straight segments cost no more (:func:`rhnc.route_search.shortcut_path`), timed at
-constant speed, and for a fixed arrival time its speed is solved so that it arrives on
-time; a few rounds update the speed and lambda.  The straight (or shortest obstacle-free)
+duration.  At fixed arrival time each hour counts at a multiple of the shadow price of
+time along the straight route, lambda = v dF/dv - F (F the fuel cost rate): what one hour
+less at sea would cost in extra fuel for the speed-up it forces; as that is only an
+estimate of the price along the best route, several multiples are searched.  Each route
+found is shortened where straight segments cost no more
+(:func:`rhnc.route_search.shortcut_path`), timed at constant speed (for a fixed arrival
+time, at the speed that arrives on time) and costed; the cheapest one's turning points
+are then moved sideways while the cost falls.  The straight (or shortest obstacle-free)
 route is always a candidate, so the optimum is never dearer than it.
 
 Time-dependent weather: node times come from the previous search (first from the
@@ -97,6 +99,9 @@ class RouteResult:
         From :func:`rhnc.track_cost.cost_of_track`.
     method : str
         ``"optimal"`` or ``"straight"``.
+    time_price_usd_h : float
+        The price of an hour [USD/h] with which the search found this route (NaN for the
+        straight route).
     """
 
     waypoints_m: np.ndarray
@@ -108,6 +113,7 @@ class RouteResult:
     co2_t: float
     fuel_t: float
     method: str = "optimal"
+    time_price_usd_h: float = float("nan")
 
     @property
     def arrival_s(self) -> float:
@@ -144,9 +150,22 @@ def _result(problem: RoutingProblem, polyline: np.ndarray, speed_mps: float, met
 def _speed_for_arrival(problem: RoutingProblem, polyline: np.ndarray, arrival_s: float) -> float:
     """Constant speed through water [m/s] that sails ``polyline`` to arrive at ``arrival_s``."""
     points = densify(polyline, problem.resolution_nm * NM / 2.0)
+    if is_time_varying(problem.metocean):
+        def late_s(speed):
+            return constant_speed_times(problem.metocean, points, speed, problem.departure_s)[-1] - arrival_s
+    else:  # the current along each leg does not depend on the time: sample it once
+        legs = np.diff(points, axis=0)
+        length = np.hypot(*legs.T)
+        course = np.arctan2(legs[:, 1], legs[:, 0])
+        weather = problem.metocean.sample(points[:, 0], points[:, 1])
+        along = np.cos(course) * weather["current_north"][:-1] + np.sin(course) * weather["current_east"][:-1]
+        along = 0.5 * (along + np.cos(course) * weather["current_north"][1:]
+                       + np.sin(course) * weather["current_east"][1:])
+        moving = length > 0
 
-    def late_s(speed):
-        return constant_speed_times(problem.metocean, points, speed, problem.departure_s)[-1] - arrival_s
+        def late_s(speed):
+            return problem.departure_s + float(np.sum(length[moving] / np.maximum(
+                speed + along[moving], 1e-3))) - arrival_s
 
     low, high = SPEED_BRACKET_MPS
     if late_s(high) > 0:
@@ -246,7 +265,8 @@ class RouteSearch:
         spacing = p.resolution_nm * NM / 2.0
         pieces = np.maximum(np.ceil(length / spacing).astype(int), 1)
         owner = np.repeat(np.arange(len(ends)), pieces + 1)
-        fraction = np.concatenate([np.arange(n + 1) / n for n in pieces])
+        first = np.concatenate([[0], np.cumsum(pieces + 1)[:-1]])
+        fraction = (np.arange(owner.size) - first[owner]) / pieces[owner]
         points = a + fraction[:, None] * legs[owner]
         heading = np.arctan2(legs[:, 1], legs[:, 0])[owner]
         weather = sample_weather(p.metocean, points[:, 0], points[:, 1],
@@ -282,8 +302,13 @@ def time_price_usd_h(problem: RoutingProblem, route: RouteResult) -> float:
     return float(max(np.mean(v * derivative - rates[1]), 0.0))
 
 
+#: Multiples of the shadow price of time (along the straight route) tried at fixed arrival.
+PRICE_MULTIPLES = (0.2, 0.3, 0.45, 0.65, 1.0, 1.4)
+
+
 def optimal_route(problem: RoutingProblem, *, speed_mps: float | None = None,
-                  arrival_s: float | None = None, rounds: int = 3, time_passes: int = 3) -> RouteResult:
+                  arrival_s: float | None = None, price_multiples=PRICE_MULTIPLES, time_passes: int = 2,
+                  refine: bool = True) -> RouteResult:
     """The cheapest route at a constant speed through water.
 
     Parameters
@@ -294,10 +319,14 @@ def optimal_route(problem: RoutingProblem, *, speed_mps: float | None = None,
     arrival_s : float, optional
         Fixed arrival time [s]: minimise the cost over routes and the one constant speed
         through water that arrives then.  Give exactly one of the two.
-    rounds : int
-        Fixed arrival time: search rounds updating the speed and the price of time.
+    price_multiples : sequence of float
+        Fixed arrival time: the searches price an hour at these multiples of the shadow
+        price of time along the straight route (it is only an estimate of the price along
+        the best route); each route found gets its own arrival speed and the cheapest wins.
     time_passes : int
-        Time-varying weather: searches per round with node times from the previous one.
+        Time-varying weather: searches per price with node times from the previous one.
+    refine : bool
+        Move the turning points of the best route sideways while that lowers the cost.
 
     Returns
     -------
@@ -307,25 +336,56 @@ def optimal_route(problem: RoutingProblem, *, speed_mps: float | None = None,
     _check(problem, speed_mps, arrival_s)
     search = RouteSearch(problem)
     straight = straight_route(problem, speed_mps=speed_mps, arrival_s=arrival_s)
-    best = straight
+
+    def evaluate(polyline):
+        speed = speed_mps if speed_mps is not None else _speed_for_arrival(problem, polyline, arrival_s)
+        return _result(problem, polyline, speed, "optimal")
+
     if speed_mps is not None:
-        hourly = problem.energy.running_cost_usd_day / 24.0
-        candidate = _result(problem, search.route(speed_mps, hourly, time_passes), speed_mps, "optimal")
-        best = candidate if candidate.cost_usd <= straight.cost_usd else best
+        prices = [problem.energy.running_cost_usd_day / 24.0]
     else:
-        current = straight
-        previous = None
-        for _ in range(rounds):
-            price = time_price_usd_h(problem, current)
-            polyline = search.route(current.speed_through_water_mps, price, time_passes)
-            if previous is not None and polyline.shape == previous.shape and np.allclose(polyline, previous):
-                break
-            previous = polyline
-            current = _result(problem, polyline, _speed_for_arrival(problem, polyline, arrival_s), "optimal")
-            log.debug("fixed arrival round: price %.0f USD/h, speed %.2f m/s, cost %.0f USD", price,
-                      current.speed_through_water_mps, current.cost_usd)
-            if current.cost_usd < best.cost_usd:
-                best = current
+        base_price = time_price_usd_h(problem, straight)
+        prices = [base_price * multiple for multiple in price_multiples]
+    best, best_polyline, best_price = straight, None, float("nan")
+    for price in prices:
+        polyline = search.route(straight.speed_through_water_mps, price, time_passes)
+        result = evaluate(polyline)
+        if result.cost_usd < best.cost_usd:
+            best, best_polyline, best_price = result, polyline, price
+    if refine and best_polyline is not None and len(best_polyline) > 2:
+        best = _refine(problem, best_polyline, best, evaluate)
     if best is straight:
         best = dataclasses.replace(straight, method="optimal")
+    return dataclasses.replace(best, time_price_usd_h=best_price)
+
+
+def _refine(problem: RoutingProblem, polyline: np.ndarray, best: RouteResult, evaluate,
+            max_evaluations: int = 200) -> RouteResult:
+    """Move each turning point (and a new one midway along each leg) across the route by
+    halving steps (4 grid steps down to a quarter) while the cost falls, at most ``max_evaluations`` candidates; points that
+    would enter an avoided circle stay."""
+    # a turning point between each pair lets a straight leg bend
+    polyline = np.vstack([np.column_stack([polyline[:-1], 0.5 * (polyline[:-1] + polyline[1:])]).reshape(-1, 2),
+                          polyline[-1]])
+    step = 4.0 * problem.resolution_nm * NM
+    x_min, x_max, y_min, y_max = problem.metocean.extent
+    evaluations = 0
+    while step >= 0.25 * problem.resolution_nm * NM and evaluations < max_evaluations:
+        improved = False
+        for k in range(1, len(polyline) - 1):
+            chord = polyline[k + 1] - polyline[k - 1]
+            normal = np.array([-chord[1], chord[0]]) / max(np.hypot(*chord), 1e-9)
+            for sign in (1.0, -1.0):
+                moved = polyline.copy()
+                moved[k] = np.clip(polyline[k] + sign * step * normal, (x_min, y_min), (x_max, y_max))
+                if any(np.min(segment_clearance(moved[:-1], moved[1:], (cx, cy))) < radius
+                       for cx, cy, radius in problem.avoid):
+                    continue
+                result = evaluate(moved)
+                evaluations += 1
+                if result.cost_usd < best.cost_usd:
+                    best, polyline, improved = result, moved, True
+                    break
+        if not improved:
+            step /= 2.0
     return best

@@ -180,7 +180,9 @@ def test_edge_weights_are_the_energy_model_cost_of_the_edge_sailed_on_its_course
         assert weight[edge] == pytest.approx(cost_of_track(field, problem.energy, track, times)["cost_usd"], rel=1e-9)
         costs[tuple(graph.moves[graph.move[edge]])] = weight[edge]
     assert len(costs) == 32
-    assert costs[(1, 0)] > 1.1 * costs[(-1, 0)]
+    # head wind on the KCS's 1000 m2 frontal area: about 5.6 % dearer, although the current
+    # (0.3 m/s north) shortens the northbound edge; a course-blind cost would make it cheaper
+    assert costs[(1, 0)] > 1.03 * costs[(-1, 0)]
 
 
 def test_a_detour_does_not_pay_when_time_is_dear_enough():
