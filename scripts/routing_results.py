@@ -194,6 +194,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--results", default=str(REPO / "results"))
     parser.add_argument("--out", default=str(REPO / "docs" / "routing-results.md"))
+    parser.add_argument("--note", default="", help="a caveat printed under the title (e.g. which runs predate a "
+                                                   "model change)")
     args = parser.parse_args()
     results, out = Path(args.results), Path(args.out)
     figures = out.parent / "figures"
@@ -219,11 +221,11 @@ def main() -> None:
         speed_spreads[name] = summary.get("voyage", {}).get("speed_spread_percent")
         for _, row in headline.iterrows():
             summary_rows.append({"weather": words.split(":")[0], **row.to_dict()})
-        shutil.copyfile(folder / "tracks.png", figures / f"compare_{name}_tracks.png")
+        shutil.copyfile(folder / "tracks.png", figures / f"{out.stem}_{name}_tracks.png")
         sections += [f"### {words}", "", f"`python -m orchestrator compare {path}` (results `{folder.name}`)", "",
                      table(runs, RUNS), "", table(headline, HEADLINE), ""]
         sections += [f"**FLAG**: {flag}" for flag in summary.get("flags", [])]
-        sections += ["", f"![tracks](figures/compare_{name}_tracks.png)", ""]
+        sections += ["", f"![tracks](figures/{out.stem}_{name}_tracks.png)", ""]
     if summary_rows:
         lines += ["## Headline: each weather, each system, at equal arrival time", "",
                   table(pd.DataFrame(summary_rows), ["weather"] + HEADLINE), ""]
@@ -239,7 +241,7 @@ def main() -> None:
             continue
         section, used, done, finished = found
         sweep_facts[method] = (section, done)
-        (figures / "voyage_sweep.png").replace(figures / f"{name}_share.png")
+        (figures / "voyage_sweep.png").replace(figures / f"{out.stem}_{name}_share.png")
         state = "" if finished else " Some members come from a sweep stopped before it published its folder."
         folders = ", ".join(f"`{folder}`" for folder in used)
         lines += [f"`python -m orchestrator compare {path}` ({done} members; results {folders}).{state} One fair "
@@ -248,7 +250,7 @@ def main() -> None:
                   "equal-arrival baseline and its share.", "",
                   "Distribution over the members:", "", table(section.tables["voyage_sweep_stats"],
                                                               list(section.tables["voyage_sweep_stats"].columns)), "",
-                  f"![storm set](figures/{name}_share.png)", "", "Per member:", "",
+                  f"![storm set](figures/{out.stem}_{name}_share.png)", "", "Per member:", "",
                   table(section.tables["voyage_sweep"], list(section.tables["voyage_sweep"].columns)), ""]
 
     effect = paper_speed_effect()
@@ -267,6 +269,8 @@ def main() -> None:
                   f"{speed_spreads['exp2_table3']:.2f} %; the per-nm columns of the Table 3 comparison carry the "
                   "same mix, which is why the headline above is taken against the equal-arrival baseline.", ""]
     lines[4:4] = summary_text(summary_rows, sweep_facts, effect)
+    if args.note:
+        lines[2:2] = [f"**Note.** {args.note}", ""]
     out.write_text("\n".join(lines) + "\n")
     print(f"wrote {out}")
 
