@@ -56,6 +56,7 @@ OPTIONS = (
     "stand_on_action_range_factor",
     "disturbance_observer",
     "observer_gain",
+    "codegen",
 )
 WEIGHT_KEYS = ("q", "r", "r_rate")
 
@@ -141,6 +142,9 @@ class ControlParticipant(Participant):
         Offset-free NMPC: estimate current and loads and predict with them (default false).
     observer_gain : float
         The observer's correction per step, in (0, 1] (default 0.5).
+    codegen : bool
+        Compile the NLP to C once per machine and reuse it (default true; see
+        :mod:`rhnc.nmpc_codegen`); the summary reports ``codegen: compiled|interpreted``.
     """
 
     def __init__(self, name: str, controller: NMPCController, et_default: float) -> None:
@@ -193,7 +197,7 @@ class ControlParticipant(Participant):
                 kwargs[key] = None if options[key] is False else _number(options, key, where, None)
         if "max_speed_kn" in options:
             kwargs["max_speed_mps"] = _number(options, "max_speed_kn", where, None) * KNOT
-        for key in ("colregs", "disturbance_observer"):
+        for key in ("colregs", "disturbance_observer", "codegen"):
             if key in options:
                 if not isinstance(options[key], bool):
                     raise ScenarioError(f"{where}: option '{key}' must be true or false, got {options[key]!r}")
@@ -324,6 +328,7 @@ class ControlParticipant(Participant):
             "timeout_count": self._timeouts,
             "stand_on_actions": self.controller.domains.stand_on_actions,
             "max_speed_kn": float(max(self._speeds)) / KNOT if self._speeds else None,
+            **self.controller.library.summary(),
         }
 
 
