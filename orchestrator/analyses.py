@@ -44,11 +44,21 @@ def check_outputs(scenario) -> None:
     for name in scenario.outputs.figures:
         resolve(FIGURES, name, "figures")
     for name in scenario.outputs.analyses:
-        accepted = list(inspect.signature(resolve(ANALYSES, name, "analyses")).parameters)[4:]
-        for key in scenario.outputs.options.get(name, {}):
+        function = resolve(ANALYSES, name, "analyses")
+        accepted = list(inspect.signature(function).parameters)[4:]
+        options = scenario.outputs.options.get(name, {})
+        for key in options:
             if key not in accepted:
                 raise ScenarioError(f"{scenario.path}: unknown option 'outputs.options.{name}.{key}' "
                                     f"(valid: {', '.join(accepted) or 'none'})")
+        # an analysis may check its option values too (``function.check_options(options)``
+        # raising ValueError), so that a bad value is refused before the run, not after it
+        checker = getattr(function, "check_options", None)
+        if checker is not None:
+            try:
+                checker(options)
+            except ValueError as exc:
+                raise ScenarioError(f"{scenario.path}: 'outputs.options.{name}': {exc}") from None
 
 
 def run_analysis(name, frame, scenario, cosim, out_dir) -> dict:
@@ -142,7 +152,7 @@ def voyage_analysis(frame, scenario, cosim, out_dir, goal_nm=None, arrival_radiu
 
     The weather is what the plant met: the outputs of the participant driving the
     plant's ``hs`` input (the environment FMU), else the scenario's met-ocean field at the
-    ship's positions, else calm water.  The energy constants are the navigation
+    ship's positions and times, else calm water.  The energy constants are the navigation
     participant's (so a scenario's overrides apply), else the defaults.
 
     With ``goal_nm = [north, east]`` the voyage ends on arrival, the first sample within
@@ -161,7 +171,7 @@ def voyage_analysis(frame, scenario, cosim, out_dir, goal_nm=None, arrival_radiu
         weather = {name: frame[f"{environment}.{name}"].to_numpy() for name in ("wind_north", "wind_east", "hs")}
     except (ToolchainError, KeyError):
         if cosim.metocean is not None:
-            weather = cosim.metocean.sample(x, y)
+            weather = cosim.metocean.sample(x, y, t_s=frame["time_s"].to_numpy())
         else:
             weather = {name: np.zeros_like(x) for name in ("wind_north", "wind_east", "hs")}
     energy = next((p.energy for p in cosim.participants if isinstance(getattr(p, "energy", None), EnergyParameters)),

@@ -225,7 +225,10 @@ def _expand(spec: BatchSpec) -> list[RunSpec]:
             points, situations, draws):
         overrides = {**spec.fixed, **dict(zip(keys, point)), **situation_overrides, **draw_overrides}
         parameters = {**dict(zip(keys, point)), **situation_parameters, **draw_parameters}
-        identifier = run_id(spec.scenario_sha256, overrides)
+        # two situation files may hold the same geometry (Imazu's problems 5 and 8): the
+        # file's name keeps their runs apart
+        hashed = {**overrides, "<situation>": situation_parameters["situation"]} if situation_parameters else overrides
+        identifier = run_id(spec.scenario_sha256, hashed)
         if identifier in seen:
             raise ScenarioError(f"{spec.path}: runs {seen[identifier]} and {len(runs)} are identical "
                                 f"(same overrides); vary the grid or the draws")

@@ -34,8 +34,11 @@ def track_figure(frame, scenario, cosim, out_dir) -> list[str]:
     fig, ax = plt.subplots(figsize=(7, 6))
     field = cosim.metocean
     if field is not None:
-        mesh = ax.pcolormesh(field.y / NM, field.x / NM, field.wind_speed, shading="auto", cmap="viridis")
-        fig.colorbar(mesh, ax=ax, label="wind speed [m/s]")
+        departure_s = float(frame["time_s"].iloc[0])
+        mesh = ax.pcolormesh(field.y / NM, field.x / NM, field.snapshot(departure_s).wind_speed, shading="auto",
+                             cmap="viridis")
+        fig.colorbar(mesh, ax=ax, label="wind speed at departure [m/s]" if field.is_time_varying
+                     else "wind speed [m/s]")
     _draw_reference(ax, frame, scenario)
     ax.plot(frame[f"{plant}.y"] / NM, frame[f"{plant}.x"] / NM, color="tab:red", lw=2, label=f"{plant} track")
     ax.plot(frame[f"{plant}.y"].iloc[0] / NM, frame[f"{plant}.x"].iloc[0] / NM, "o", color="tab:red")
@@ -96,10 +99,9 @@ def _encounter_extent_nm(frame, plant, margin_nm: float = 1.5):
     own_x, own_y = frame[f"{plant}.x"].to_numpy(), frame[f"{plant}.y"].to_numpy()
     north = [own_x.min(), own_x.max()]
     east = [own_y.min(), own_y.max()]
-    prefix, count = _obstacle_columns(frame)
-    for i in range(count):
-        x, y, radius = (frame[f"{prefix}[{i},{k}]"].to_numpy() for k in (0, 1, 4))
-        k = int(np.argmin(np.hypot(x - own_x, y - own_y)))
+    prefix, _ = _obstacle_columns(frame)
+    for i, k, _ in closest_approach_rows(frame, plant):
+        x, y, radius = (frame[f"{prefix}[{i},{c}]"].to_numpy() for c in (0, 1, 4))
         north = [min(north[0], x[k] - radius[k]), max(north[1], x[k] + radius[k])]
         east = [min(east[0], y[k] - radius[k]), max(east[1], y[k] + radius[k])]
     margin = margin_nm * NM
@@ -126,6 +128,22 @@ def _draw_time_marks(ax, t, x, y, interval_min: float, color, label_marks: bool)
                         fontsize=7, color=color)
 
 
+def closest_approach_rows(frame, plant) -> list[tuple[int, int, float]]:
+    """Per obstacle of the recorded ``obstacles`` output: (obstacle, sample, range [m]) where
+    the own ship came closest to it."""
+    found = _obstacle_columns(frame)
+    if found is None:
+        return []
+    prefix, count = found
+    own_x, own_y = frame[f"{plant}.x"].to_numpy(), frame[f"{plant}.y"].to_numpy()
+    rows = []
+    for i in range(count):
+        distance = np.hypot(frame[f"{prefix}[{i},0]"].to_numpy() - own_x, frame[f"{prefix}[{i},1]"].to_numpy() - own_y)
+        k = int(np.argmin(distance))
+        rows.append((i, k, float(distance[k])))
+    return rows
+
+
 def _draw_encounters(ax, frame, plant) -> None:
     """Tracks with time marks; each obstacle drawn where it was at the own ship's closest approach.
 
@@ -142,11 +160,9 @@ def _draw_encounters(ax, frame, plant) -> None:
     if found is None:
         return
     prefix, count = found
-    for i in range(count):
-        x, y, vx, vy, radius = (frame[f"{prefix}[{i},{k}]"].to_numpy() for k in range(5))
+    for i, k, distance in closest_approach_rows(frame, plant):
+        x, y, vx, vy, radius = (frame[f"{prefix}[{i},{c}]"].to_numpy() for c in range(5))
         moving = bool(np.any(np.hypot(vx, vy) > 0.1))
-        k = int(np.argmin(np.hypot(x - own_x, y - own_y)))
-        distance = float(np.hypot(x[k] - own_x[k], y[k] - own_y[k]))
         if moving:
             ax.plot(y / NM, x / NM, "-.", color="dimgrey", lw=1,
                     label=f"target tracks (marks every {interval:g} min)" if i == 0 else None)
@@ -237,7 +253,8 @@ def navigation_fields_figure(frame, scenario, cosim, out_dir, panels: int = 6) -
     """The superposed field U and the track at six instants (the paper's Fig. 10 and 17).
 
     For each instant the navigation participant's field is rebuilt from the ship's
-    position then (as the navigation did at that planning instant); the panel shows U (or
+    position (and, when it varies in time, the weather) then, as the navigation did at that
+    planning instant; the panel shows U (or
     G alone while the event trigger was on), the track sailed so far and the local plan.
     """
     from orchestrator.analyses import plant_name
@@ -259,6 +276,11 @@ def navigation_fields_figure(frame, scenario, cosim, out_dir, panels: int = 6) -
         row = min(row, len(frame) - 1)
         x, y = frame[f"{plant}.x"].iloc[row], frame[f"{plant}.y"].iloc[row]
         avoidance = bool(frame.get(f"{navigation.name}.et", np.zeros(len(frame))).iloc[row] > 0.5)
+        if navigation.metocean.is_time_varying:  # the weather the navigation planned in then
+            from rhnc.fields import resample_weather
+
+            field.set_weather(resample_weather(navigation.metocean, navigation.resolution_nm,
+                                               t_s=float(frame["time_s"].iloc[row])))
         field.update((x, y), navigation.speed)
         mesh = ax.pcolormesh(y_nm, x_nm, field.potential(avoidance), shading="auto", cmap="viridis")
         ax.plot(frame[f"{plant}.y"].iloc[: row + 1] / NM, frame[f"{plant}.x"].iloc[: row + 1] / NM,

@@ -33,8 +33,10 @@ Rule 16 (action by the give-way vessel): an early alteration (as in Rule 8) and 
 separation kept ("keep well clear").
 Rule 17 (stand-on): keep course and speed; a manoeuvre is allowed only once the give-way
 vessel's action is clearly not enough, read here as: the CPA predicted at constant
-velocities is below the separation and less than ``stand_on_wait_min`` ahead; and in a
-crossing, no alteration to port for a vessel on the own port side (Rule 17(c)).
+velocities is below the separation and less than ``stand_on_wait_min`` ahead, or the own
+ship is at that time giving way to another target (with several targets a stand-on ship
+may have to act for a third one); and in a crossing, no alteration to port for a vessel on
+the own port side (Rule 17(c)).
 
 The target ships in our scenarios do not manoeuvre, so a stand-on own ship is eventually
 required to act (Rule 17(b)); the verdict checks that it waited long enough and turned
@@ -153,7 +155,8 @@ def crossed_ahead(own_xy: np.ndarray, target: np.ndarray, start: int, cpa_index:
 
 
 def judge_target(t, own_xy, heading_rad, speed_mps, target: np.ndarray, encounter_class: str,
-                 onset_index: int | None, required_m: float, settings: JudgementSettings) -> dict:
+                 onset_index: int | None, required_m: float, settings: JudgementSettings,
+                 give_way_onsets_s: tuple[float, ...] = ()) -> dict:
     """Everything the ``colregs`` analysis reports for one target (see the module docstring).
 
     Parameters
@@ -167,6 +170,11 @@ def judge_target(t, own_xy, heading_rad, speed_mps, target: np.ndarray, encounte
         The sample of the onset of risk.
     required_m : float
         R + R_i [m].
+    give_way_onsets_s : tuple of float
+        Onsets [s] of the encounters with *other* targets in which the own ship gives way.
+        A stand-on manoeuvre made once one of those had begun answers that obligation, so
+        Rule 17's "wait until the give-way vessel's action is not enough" does not apply
+        to it (Rule 17(c) still does).
     """
     t = np.asarray(t, dtype=float)
     cpa_m, cpa_time, cpa_index = closest_approach(t, own_xy, target[:, :2])
@@ -205,7 +213,8 @@ def judge_target(t, own_xy, heading_rad, speed_mps, target: np.ndarray, encounte
     speed0 = float(speed_mps[onset_index])
     if speed0 > 0 and np.any(before):
         result["max_speed_reduction"] = float(max(0.0, 1.0 - np.min(speed_mps[before]) / speed0))
-    verdicts, reasons = _verdicts(result, encounter_class, t, own_xy, speed_mps, target, settings)
+    verdicts, reasons = _verdicts(result, encounter_class, t, own_xy, speed_mps, target, settings,
+                                  give_way_onsets_s)
     result.update(verdicts)
     result["reasons"] = reasons
     result["side_correct"] = _side_correct(result, encounter_class)
@@ -225,7 +234,8 @@ def _side_correct(result: dict, encounter_class: str) -> bool | None:
     return None
 
 
-def _verdicts(result, encounter_class, t, own_xy, speed_mps, target, settings) -> tuple[dict, dict]:
+def _verdicts(result, encounter_class, t, own_xy, speed_mps, target, settings,
+              give_way_onsets_s=()) -> tuple[dict, dict]:
     verdicts = {rule: NOT_APPLICABLE for rule in RULES}
     reasons: dict[str, str] = {}
 
@@ -265,7 +275,9 @@ def _verdicts(result, encounter_class, t, own_xy, speed_mps, target, settings) -
             k = int(np.searchsorted(t, result["manoeuvre_time_s"]))
             own_velocity = np.gradient(own_xy, t, axis=0)[k]
             cpa, tcpa = cpa_tcpa(own_xy[k], own_velocity, target[k, :2], target[k, 2:4])
-            if not (cpa < result["required_nm"] * NM and 0.0 < tcpa <= settings.stand_on_wait_min * 60.0):
+            giving_way = any(onset <= result["manoeuvre_time_s"] for onset in give_way_onsets_s)
+            if not giving_way and not (cpa < result["required_nm"] * NM
+                                       and 0.0 < tcpa <= settings.stand_on_wait_min * 60.0):
                 failures.append(f"altered course with predicted CPA {cpa / NM:.2f} nm in {tcpa / 60:.1f} min: "
                                 f"the give-way vessel's action could still suffice")
             if encounter_class == "crossing_stand_on" and result["manoeuvre_side"] == "port":
@@ -313,7 +325,10 @@ def judge_encounters(t, x, y, heading_rad, obstacles: np.ndarray, own_radius_m: 
     for i in range(obstacles.shape[1]):
         name, onset = classes.get(i, ("none", None))
         required = own_radius_m + float(np.max(obstacles[:, i, 4]))
-        judged = judge_target(t, own_xy, heading, speed, obstacles[:, i], name, onset, required, settings)
+        give_way_onsets = tuple(float(t[k]) for j, (other, k) in classes.items()
+                                if j != i and other in GIVE_WAY_CLASSES)
+        judged = judge_target(t, own_xy, heading, speed, obstacles[:, i], name, onset, required, settings,
+                              give_way_onsets)
         targets.append({"obstacle": i, **judged})
     verdicts = [target["verdict"] for target in targets if target["verdict"] != NOT_APPLICABLE]
     sides = [target["side_correct"] for target in targets if target["side_correct"] is not None]
@@ -337,14 +352,10 @@ def colregs_analysis(frame, scenario, cosim, out_dir, manoeuvre_threshold_deg: f
     (``[outputs.options.colregs]``).
     """
     from orchestrator.analyses import array_output, own_radius_m, plant_name
-    from orchestrator.errors import ScenarioError
 
-    try:
-        settings = JudgementSettings(manoeuvre_threshold_deg, manoeuvre_hold_s, apparent_course_change_deg,
-                                     apparent_speed_reduction, early_before_cpa_min, stand_on_wait_min,
-                                     risk_cpa_nm, risk_tcpa_min)
-    except ValueError as exc:
-        raise ScenarioError(f"{scenario.path}: outputs.options.colregs: {exc}") from None
+    settings = JudgementSettings(manoeuvre_threshold_deg, manoeuvre_hold_s, apparent_course_change_deg,
+                                 apparent_speed_reduction, early_before_cpa_min, stand_on_wait_min,
+                                 risk_cpa_nm, risk_tcpa_min)
     plant = plant_name(cosim)
     sources = {c.target_port: f"{c.source}.{c.source_port}" for c in scenario.connections}
     if "obstacles" not in sources:
@@ -353,3 +364,11 @@ def colregs_analysis(frame, scenario, cosim, out_dir, manoeuvre_threshold_deg: f
     return judge_encounters(frame["time_s"].to_numpy(), frame[f"{plant}.x"].to_numpy(),
                             frame[f"{plant}.y"].to_numpy(), frame[f"{plant}.psi"].to_numpy(),
                             array_output(frame, sources["obstacles"]), own_radius_m(cosim), settings)
+
+
+def _check_options(options) -> None:
+    """Refuse bad ``[outputs.options.colregs]`` values before a run (ValueError names the key)."""
+    JudgementSettings(**dict(options))
+
+
+colregs_analysis.check_options = _check_options

@@ -237,8 +237,8 @@ def scenario_overrides(situation: TrafficSituation, scenario_data: Mapping, radi
 
     * ``participants.<traffic>.options.targets``: each target sailing straight from its
       start (one course) or along its waypoints, radius ``radius_nm``;
-    * ``participants.<plant>.parameters.psi0`` [rad] and ``u0`` [m/s]: the own ship's
-      initial course and speed;
+    * ``participants.<plant>.parameters.x0``, ``y0`` [m], ``psi0`` [rad] and ``u0`` [m/s]:
+      the own ship's start, initial course and speed;
     * every ``reference_path`` participant: ``start_nm``, ``course_deg``, ``speed_kn``;
     * every ``navigation`` participant: ``start_nm``, ``goal_nm`` and ``speed_kn``; every
       ``goal`` participant: ``goal_nm``.  The goal lies ``route_nm`` from the start along
@@ -257,6 +257,8 @@ def scenario_overrides(situation: TrafficSituation, scenario_data: Mapping, radi
     own = situation.own_ship
     overrides: dict[str, Any] = {
         f"participants.{traffic}.options.targets": [_target_entry(target, radius_nm) for target in situation.targets],
+        f"participants.{plant}.parameters.x0": round(own.start_nm[0] * NM, 3),
+        f"participants.{plant}.parameters.y0": round(own.start_nm[1] * NM, 3),
         f"participants.{plant}.parameters.psi0": round(math.radians(own.course_deg), 9),
         f"participants.{plant}.parameters.u0": round(own.speed_kn * KNOT, 9),
     }

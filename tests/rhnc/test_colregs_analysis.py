@@ -159,6 +159,20 @@ def test_stand_on_turning_to_port_fails_rule_17c():
     assert result["side_correct"] is False
 
 
+def test_stand_on_manoeuvre_made_while_giving_way_to_another_target_is_allowed():
+    # a head-on ship ahead (we give way) and a ship crossing from port (we stand on): the early
+    # starboard turn answers the head-on encounter, so it breaks no stand-on obligation
+    track = own_track(30, turns=[(1.0, 45.0)])
+    t = track[0]
+    obstacles = np.concatenate([target_states(t, (7.0, 0.1), 180.0, 18.0), _stand_on_target(t)], axis=1)
+    head_on, stand_on = judge_encounters(*track, obstacles)["targets"]
+    assert head_on["encounter_class"] == "head_on" and stand_on["encounter_class"] == "crossing_stand_on"
+    assert stand_on["manoeuvre_time_s"] < 600.0
+    assert stand_on["rule_17"] == PASS, stand_on["reasons"]
+    alone = judge(track, _stand_on_target(t))  # the same turn with no one to give way to
+    assert alone["rule_17"] == FAIL
+
+
 def test_overtaken_ship_standing_on_passes_and_rule_8_does_not_apply():
     track = own_track(40)
     result = judge(track, target_states(track[0], (-2.0, 1.2), 0.0, 26.0))
@@ -211,3 +225,21 @@ def test_yaw_oscillation_is_not_a_manoeuvre():
 def test_bad_settings_are_refused():
     with pytest.raises(ValueError, match="early_before_cpa_min"):
         JudgementSettings(early_before_cpa_min=-1.0)
+
+
+def test_bad_analysis_option_is_refused_before_the_run(tmp_path, capsys):
+    from pathlib import Path
+
+    from orchestrator.cli import main
+
+    repo = Path(__file__).resolve().parents[2]
+    text = (repo / "scenarios" / "exp3b_head_on.toml").read_text()
+    text = text.replace('analyses = ["encounter"]', 'analyses = ["encounter", "colregs"]')
+    text += "\n[outputs.options.colregs]\nearly_before_cpa_min = -2.0\n"
+    scenario = tmp_path / "bad.toml"
+    scenario.write_text(text)
+    results = tmp_path / "results"
+    assert main(["run", str(scenario), "--results", str(results), "--no-progress"]) == 2
+    error = capsys.readouterr().err.strip().splitlines()
+    assert len(error) == 1 and "bad.toml: 'outputs.options.colregs': early_before_cpa_min must be" in error[0]
+    assert not results.exists() or not any(results.rglob("summary.json"))

@@ -62,6 +62,7 @@ def test_overrides_put_the_situation_into_a_base_scenario():
     situation = load_traffic_situation(DATA / "crossing_give_way.json", origin_nm=(1.0, 2.0))
     overrides = scenario_overrides(situation, data, radius_nm=1.0, route_nm=12.0)
     assert overrides["participants.ship.parameters.psi0"] == pytest.approx(0.0, abs=1e-9)
+    assert (overrides["participants.ship.parameters.x0"], overrides["participants.ship.parameters.y0"]) == (NM, 2 * NM)
     assert overrides["participants.ship.parameters.u0"] == pytest.approx(18.0 * NM / 3600.0)
     assert overrides["participants.ref.options.start_nm"] == [1.0, 2.0]
     assert overrides["participants.ref.options.course_deg"] == pytest.approx(0.0, abs=1e-6)
