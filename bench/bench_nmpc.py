@@ -24,7 +24,9 @@ ours with its best solver (fatrop, compiled); do-mpc with its own code generatio
 (``compile_nlp``, gcc -O1) with ``--do-mpc-compiled`` (its build is cached in the NMPC
 cache folder).  acados: tried when ``acados_template`` imports (see ``--help``).
 
-The first control step of every configuration starts from the same state, so its applied
+The configurations advance in turn, one control step each, so that a change of the
+machine's load during the run falls on all of them alike.  The first control step of every
+configuration starts from the same state, so its applied
 input tells whether both tools solve the same problem: the table gives its difference
 from ours with IPOPT (as a fraction of tau_max).
 
@@ -81,44 +83,54 @@ def settings(solver: str, targets: int, codegen: bool, watchdog: bool) -> NMPCSe
                         collision_slack_weight=None, codegen=codegen, **limits)
 
 
-def closed_loop(step, targets: int, steps: int, params) -> dict:
-    """Sail ``steps`` control intervals; ``step(t, state) -> (tau, solver_s, iterations, ok)``."""
-    state = np.array([0.0, 0.0, COURSE_RAD, SPEED_MPS, 0.0, 0.0])
-    wall, solver, iterations, failures, taus = [], [], [], 0, []
-    clearance = np.inf
-    for k in range(steps):
-        t = k * DT_S
+class ClosedLoop:
+    """One configuration's closed loop, advanced one control step at a time.
+
+    ``step(t, state) -> (tau, solver_s, iterations, ok)`` is the controller under test.
+    All configurations advance in turn, step by step, so that a change of the machine's
+    load during the run falls on all of them alike.
+    """
+
+    def __init__(self, step, targets: int, params, codegen: str, close=None) -> None:
+        self.step, self.targets, self.params, self.codegen, self.close = step, targets, params, codegen, close
+        self.state = np.array([0.0, 0.0, COURSE_RAD, SPEED_MPS, 0.0, 0.0])
+        self.wall, self.solver, self.iterations, self.failures, self.taus = [], [], [], 0, []
+        self.clearance_m = np.inf
+        self.k = 0
+
+    def advance(self) -> None:
+        t = self.k * DT_S
         start = time.perf_counter()
-        tau, solver_s, its, ok = step(t, state)
-        wall.append(time.perf_counter() - start)
-        solver.append(solver_s)
-        iterations.append(its)
-        failures += 0 if ok else 1
-        taus.append(np.array(tau, dtype=float))
+        tau, solver_s, its, ok = self.step(t, self.state)
+        self.wall.append(time.perf_counter() - start)
+        self.solver.append(solver_s)
+        self.iterations.append(its)
+        self.failures += 0 if ok else 1
+        self.taus.append(np.array(tau, dtype=float))
         for j in range(int(DT_S / PLANT_DT_S)):
-            state = rk4_step(state, tau, PLANT_DT_S, 1, params)
-            obstacles = obstacles_at(t + PLANT_DT_S * (j + 1), targets)
-            gaps = np.hypot(state[0] - obstacles[:, 0], state[1] - obstacles[:, 1]) - obstacles[:, 4]
-            clearance = min(clearance, float(np.min(gaps)))
-    return {"wall": np.array(wall), "solver": np.array(solver), "iterations": np.array(iterations),
-            "failures": failures, "clearance_m": clearance, "first_tau": taus[0]}
+            self.state = rk4_step(self.state, tau, PLANT_DT_S, 1, self.params)
+            obstacles = obstacles_at(t + PLANT_DT_S * (j + 1), self.targets)
+            gaps = np.hypot(self.state[0] - obstacles[:, 0], self.state[1] - obstacles[:, 1]) - obstacles[:, 4]
+            self.clearance_m = min(self.clearance_m, float(np.min(gaps)))
+        self.k += 1
+
+    def result(self) -> dict:
+        return {"wall": np.array(self.wall), "solver": np.array(self.solver), "iterations": np.array(self.iterations),
+                "failures": self.failures, "clearance_m": self.clearance_m, "first_tau": self.taus[0],
+                "codegen": self.codegen}
 
 
-def ours(params, solver: str, targets: int, codegen: bool, watchdog: bool, steps: int) -> dict:
+def ours(params, solver: str, targets: int, codegen: bool, watchdog: bool) -> ClosedLoop:
     controller = NMPCController(params, settings(solver, targets, codegen, watchdog))
 
     def step(t, state):
+        if t == 0.0:
+            controller.reset()
         solution = controller.solve(t, state, reference_at(t), obstacles_at(t, targets), et=True)
         return solution.tau, solution.solve_time_s, solution.iterations, solution.success
 
-    try:
-        step(0.0, np.array([0.0, 0.0, COURSE_RAD, SPEED_MPS, 0.0, 0.0]))  # fork the worker, load the solver
-        controller.reset()
-        result = closed_loop(step, targets, steps, params)
-    finally:
-        controller.close()
-    result["codegen"] = controller.library.mode
-    return result
+    step(0.0, np.array([0.0, 0.0, COURSE_RAD, SPEED_MPS, 0.0, 0.0]))  # fork the worker, load the solver
+    return ClosedLoop(step, targets, params, controller.library.mode, controller.close)
 
 
 def do_mpc_controller(params, targets: int, compiled: bool):
@@ -204,6 +216,10 @@ def do_mpc_controller(params, targets: int, compiled: bool):
     if compiled:
         folder = cache_dir() / "do-mpc"
         folder.mkdir(parents=True, exist_ok=True)
+        import do_mpc.optimizer as optimizer_module
+
+        if not hasattr(optimizer_module, "nlpsol"):  # do-mpc 5.1's compile_nlp calls it without importing it
+            optimizer_module.nlpsol = ca.nlpsol
         with contextlib.chdir(folder):
             name = f"nlp_dompc_{targets}"
             mpc.compile_nlp(overwrite=False, cname=f"{name}.c", libname=f"{name}.so")
@@ -224,12 +240,10 @@ def do_mpc_controller(params, targets: int, compiled: bool):
     return step
 
 
-def do_mpc_run(params, targets: int, compiled: bool, steps: int) -> dict:
+def do_mpc_run(params, targets: int, compiled: bool) -> ClosedLoop:
     step = do_mpc_controller(params, targets, compiled)
     step(0.0, np.array([0.0, 0.0, COURSE_RAD, SPEED_MPS, 0.0, 0.0]))
-    result = closed_loop(step, targets, steps, params)
-    result["codegen"] = "compiled" if compiled else "interpreted"
-    return result
+    return ClosedLoop(step, targets, params, "compiled" if compiled else "interpreted")
 
 
 def acados_available() -> str:
@@ -266,21 +280,27 @@ def main() -> None:
     print(f"NMPC N_c = {N}, interval {DT_S:.0f} s, {args.steps} closed-loop steps; {os.cpu_count()} cores; "
           f"load average {load_before[0]:.1f} / {load_before[1]:.1f} / {load_before[2]:.1f} before")
     configurations = [
-        ("ours ipopt interpreted, in-process", lambda t: ours(params, "ipopt", t, False, False, args.steps)),
-        ("ours ipopt compiled, in-process", lambda t: ours(params, "ipopt", t, True, False, args.steps)),
-        ("ours ipopt compiled, watchdog", lambda t: ours(params, "ipopt", t, True, True, args.steps)),
-        ("ours fatrop interpreted, watchdog", lambda t: ours(params, "fatrop", t, False, True, args.steps)),
-        ("ours fatrop compiled, in-process", lambda t: ours(params, "fatrop", t, True, False, args.steps)),
-        ("ours fatrop compiled, watchdog", lambda t: ours(params, "fatrop", t, True, True, args.steps)),
+        ("ours ipopt interpreted, in-process", lambda t: ours(params, "ipopt", t, False, False)),
+        ("ours ipopt compiled, in-process", lambda t: ours(params, "ipopt", t, True, False)),
+        ("ours ipopt compiled, watchdog", lambda t: ours(params, "ipopt", t, True, True)),
+        ("ours fatrop interpreted, watchdog", lambda t: ours(params, "fatrop", t, False, True)),
+        ("ours fatrop compiled, in-process", lambda t: ours(params, "fatrop", t, True, False)),
+        ("ours fatrop compiled, watchdog", lambda t: ours(params, "fatrop", t, True, True)),
     ]
     if not args.no_do_mpc:
-        configurations.append(("do-mpc ipopt make_step", lambda t: do_mpc_run(params, t, False, args.steps)))
+        configurations.append(("do-mpc ipopt make_step", lambda t: do_mpc_run(params, t, False)))
         if args.do_mpc_compiled:
-            configurations.append(("do-mpc ipopt compiled make_step", lambda t: do_mpc_run(params, t, True, args.steps)))
+            configurations.append(("do-mpc ipopt compiled make_step", lambda t: do_mpc_run(params, t, True)))
     for targets in args.targets:
+        loops = {name: build(targets) for name, build in configurations}
+        for _ in range(args.steps):
+            for loop in loops.values():  # in turn, step by step
+                loop.advance()
         results = {}
-        for name, run in configurations:
-            results[name] = run(targets)
+        for name, loop in loops.items():
+            results[name] = loop.result()
+            if loop.close is not None:
+                loop.close()
         baseline = results[configurations[0][0]]["first_tau"]
         print(f"\n{targets} target(s); whole step [ms]: median, 95th percentile, max; solver-only median [ms]")
         print(f"{'configuration':34s} {'median':>8s} {'p95':>8s} {'max':>8s} {'solver':>8s} {'iter med/max':>10s} "
