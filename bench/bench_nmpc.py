@@ -86,7 +86,8 @@ def settings(solver: str, targets: int, codegen: bool, watchdog: bool) -> NMPCSe
 class ClosedLoop:
     """One configuration's closed loop, advanced one control step at a time.
 
-    ``step(t, state) -> (tau, solver_s, iterations, ok)`` is the controller under test.
+    ``step(t, state) -> (tau, solver_s, iterations, ok, worker_cpu_s)`` is the controller
+    under test (``worker_cpu_s``: processor time spent in the watchdog's worker process).
     All configurations advance in turn, step by step, so that a change of the machine's
     load during the run falls on all of them alike.
     """
@@ -94,15 +95,16 @@ class ClosedLoop:
     def __init__(self, step, targets: int, params, codegen: str, close=None) -> None:
         self.step, self.targets, self.params, self.codegen, self.close = step, targets, params, codegen, close
         self.state = np.array([0.0, 0.0, COURSE_RAD, SPEED_MPS, 0.0, 0.0])
-        self.wall, self.solver, self.iterations, self.failures, self.taus = [], [], [], 0, []
+        self.wall, self.cpu, self.solver, self.iterations, self.failures, self.taus = [], [], [], [], 0, []
         self.clearance_m = np.inf
         self.k = 0
 
     def advance(self) -> None:
         t = self.k * DT_S
-        start = time.perf_counter()
-        tau, solver_s, its, ok = self.step(t, self.state)
+        start, cpu_start = time.perf_counter(), time.process_time()
+        tau, solver_s, its, ok, worker_cpu_s = self.step(t, self.state)
         self.wall.append(time.perf_counter() - start)
+        self.cpu.append(time.process_time() - cpu_start + worker_cpu_s)
         self.solver.append(solver_s)
         self.iterations.append(its)
         self.failures += 0 if ok else 1
@@ -115,7 +117,7 @@ class ClosedLoop:
         self.k += 1
 
     def result(self) -> dict:
-        return {"wall": np.array(self.wall), "solver": np.array(self.solver), "iterations": np.array(self.iterations),
+        return {"wall": np.array(self.wall), "cpu": np.array(self.cpu), "solver": np.array(self.solver), "iterations": np.array(self.iterations),
                 "failures": self.failures, "clearance_m": self.clearance_m, "first_tau": self.taus[0],
                 "codegen": self.codegen}
 
@@ -127,7 +129,8 @@ def ours(params, solver: str, targets: int, codegen: bool, watchdog: bool) -> Cl
         if t == 0.0:
             controller.reset()
         solution = controller.solve(t, state, reference_at(t), obstacles_at(t, targets), et=True)
-        return solution.tau, solution.solve_time_s, solution.iterations, solution.success
+        worker_cpu_s = solution.solve_cpu_time_s if watchdog else 0.0
+        return solution.tau, solution.solve_time_s, solution.iterations, solution.success, worker_cpu_s
 
     step(0.0, np.array([0.0, 0.0, COURSE_RAD, SPEED_MPS, 0.0, 0.0]))  # fork the worker, load the solver
     return ClosedLoop(step, targets, params, controller.library.mode, controller.close)
@@ -235,7 +238,7 @@ def do_mpc_controller(params, targets: int, compiled: bool):
         w0 = np.array(mpc.make_step(z0)).ravel()
         stats = mpc.solver_stats
         return (w0 * ref_ctrl.input_scale, stats.get("t_wall_total", np.nan), stats.get("iter_count", -1),
-                bool(stats.get("success", False)))
+                bool(stats.get("success", False)), 0.0)
 
     return step
 
@@ -259,12 +262,13 @@ def acados_available() -> str:
 
 def row(name: str, result: dict, baseline_tau: np.ndarray, tau_max: np.ndarray) -> str:
     wall = result["wall"] * 1e3
+    cpu = result["cpu"] * 1e3
     solver = result["solver"] * 1e3
     its = result["iterations"]
     tau_gap = np.max(np.abs(result["first_tau"] - baseline_tau) / tau_max)
     solver_median = f"{np.median(solver):8.2f}" if np.all(np.isfinite(solver)) else f"{'-':>8s}"
     return (f"{name:34s} {np.median(wall):8.2f} {np.percentile(wall, 95):8.2f} {np.max(wall):8.2f} "
-            f"{solver_median} {np.median(its):5.0f}/{np.max(its):<4d} {result['failures']:5d} "
+            f"{solver_median} {np.median(cpu):7.2f} {np.max(cpu):7.2f} {np.median(its):5.0f}/{np.max(its):<4d} {result['failures']:5d} "
             f"{result['clearance_m'] / NM:8.2f} {tau_gap:9.1e}")
 
 
@@ -302,8 +306,9 @@ def main() -> None:
             if loop.close is not None:
                 loop.close()
         baseline = results[configurations[0][0]]["first_tau"]
-        print(f"\n{targets} target(s); whole step [ms]: median, 95th percentile, max; solver-only median [ms]")
-        print(f"{'configuration':34s} {'median':>8s} {'p95':>8s} {'max':>8s} {'solver':>8s} {'iter med/max':>10s} "
+        print(f"\n{targets} target(s); whole step [ms]: wall median, 95th percentile, max; solver-only wall median; "
+              "processor time median and max (this process plus the watchdog's worker)")
+        print(f"{'configuration':34s} {'median':>8s} {'p95':>8s} {'max':>8s} {'solver':>8s} {'cpu med':>7s} {'cpu max':>7s} {'iter med/max':>10s} "
               f"{'fails':>5s} {'min gap nm':>8s} {'tau0 diff':>9s}")
         for name, result in results.items():
             if result["codegen"] not in name:
@@ -311,10 +316,12 @@ def main() -> None:
             print(row(name, result, baseline, params.tau_max))
         if "do-mpc ipopt make_step" in results:
             dompc = np.median(results["do-mpc ipopt make_step"]["wall"])
+            dompc_cpu = np.median(results["do-mpc ipopt make_step"]["cpu"])
             for name in ("ours ipopt interpreted, in-process", "ours ipopt compiled, watchdog",
                          "ours ipopt compiled, in-process", "ours fatrop compiled, watchdog"):
                 print(f"  median speed-up, do-mpc ipopt make_step / {name}: "
-                      f"{dompc / np.median(results[name]['wall']):.1f}x")
+                      f"{dompc / np.median(results[name]['wall']):.1f}x wall, "
+                      f"{dompc_cpu / np.median(results[name]['cpu']):.1f}x processor time")
             if "do-mpc ipopt compiled make_step" in results:
                 compiled = np.median(results["do-mpc ipopt compiled make_step"]["wall"])
                 print(f"  median speed-up, do-mpc ipopt compiled / ours ipopt compiled, watchdog: "
