@@ -151,7 +151,10 @@ class NMPCSettings:
         Fraction of the observer's correction applied per step, in (0, 1].
     codegen : bool
         Compile the NLP's functions to C once per machine and reuse the cached library
-        (:mod:`rhnc.nmpc_codegen`); without a compiler they stay interpreted.
+        (:mod:`rhnc.nmpc_codegen`); without a compiler they stay interpreted.  Off by
+        default: measured in closed loop, the compiled default problem took more processor
+        time per step than the interpreted one (its 4 MB of straight-line code runs from
+        cold caches at every control step), see ``docs/nmpc-performance.md``.
     """
 
     horizon_steps: int = 15
@@ -178,7 +181,7 @@ class NMPCSettings:
     stand_on_action_range_factor: float = 2.0
     disturbance_observer: bool = False
     observer_gain: float = 0.5
-    codegen: bool = True
+    codegen: bool = False
 
     def __post_init__(self) -> None:
         if self.horizon_steps < 1:

@@ -3,10 +3,13 @@
 CasADi evaluates the NLP's functions (objective, constraints, their gradient, Jacobian and
 the Hessian of the Lagrangian) in its virtual machine unless they are compiled.  Here they
 are generated to C (``CodeGenerator``), compiled into a shared library with the machine's C
-compiler and handed to ``nlpsol`` as that library, which makes each solve about twice as
-fast (same iterates, same solution).  The library of the default problem is large (about
-10 MB of C), and compiling it takes about a minute of processor time, so it is done once
-and kept:
+compiler and handed to ``nlpsol`` as that library (same iterates, same solution).  Each
+function evaluation is then 2.5-3 times faster in a tight loop, but the default problem's
+library is large (about 10 MB of C, 4 MB of straight-line machine code), and in closed
+loop, where every control step starts from cold caches, the compiled solves were measured
+slower than the interpreted ones; so it is an option (``NMPCSettings.codegen``, off by
+default; figures in ``docs/nmpc-performance.md``).  Compiling takes about a minute of
+processor time, so it is done once and kept:
 
 * **Where.** ``$RHNC_NMPC_CACHE`` if set, else ``$XDG_CACHE_HOME/rhnc-cosim/nmpc``, else
   ``~/.cache/rhnc-cosim/nmpc``.  One ``nlp_<solver>_<key>.so`` per problem; delete the

@@ -20,7 +20,7 @@ KNOT = NM / 3600.0
 COURSE = math.radians(45.0)
 SPEED = 18 * KNOT
 #: a small problem (3 intervals, one obstacle slot) so that it compiles in seconds
-SMALL = dict(horizon_steps=3, substeps=1, max_obstacles=1, control_interval_s=30.0)
+SMALL = dict(horizon_steps=3, substeps=1, max_obstacles=1, control_interval_s=30.0, codegen=True)
 
 
 @pytest.fixture
@@ -61,7 +61,7 @@ def assert_same_solutions(compiled: NMPCController, interpreted: NMPCController,
 
 def interpreted_twin(kcs, **settings) -> NMPCController:
     """The same problem with interpreted functions, solved in this process."""
-    return NMPCController(kcs, NMPCSettings(**SMALL, **settings, codegen=False, wall_time_limit_s=None,
+    return NMPCController(kcs, NMPCSettings(**{**SMALL, "codegen": False}, **settings, wall_time_limit_s=None,
                                             cpu_time_limit_s=None))
 
 
@@ -122,9 +122,10 @@ def test_failing_compiler_keeps_the_interpreted_functions(cache, kcs, monkeypatc
 
 def test_control_participant_summary_says_which_was_used(cache, kcs):
     context = BuildContext("exp.toml: participants.ctrl", Path("."), 30.0, 0.0, 600.0)
-    participant = ControlParticipant.from_options("ctrl", {"horizon_steps": 3, "substeps": 1, "max_obstacles": 1,
-                                                           "codegen": False}, context)
-    summary = participant.summary()
+    options = {"horizon_steps": 3, "substeps": 1, "max_obstacles": 1}
+    summary = ControlParticipant.from_options("ctrl", options, context).summary()
     assert summary["codegen"] == "interpreted" and summary["codegen_note"] == "code generation off in the settings"
+    summary = ControlParticipant.from_options("ctrl", {**options, "codegen": True}, context).summary()
+    assert summary["codegen"] == "compiled" and summary["codegen_library"].startswith(str(cache))
     with pytest.raises(ScenarioError, match=r"participants.ctrl: option 'codegen' must be true or false"):
         ControlParticipant.from_options("ctrl", {"codegen": "yes"}, context)
