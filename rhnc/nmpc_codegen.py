@@ -220,15 +220,19 @@ class NLPLibrary:
         """Load the library once so that a broken file fails here, not at the first solve."""
         self._compiled_solver("rhnc_codegen_check", path)
 
-    def _compiled_solver(self, name: str, path: Path) -> ca.Function:
-        options = {key: value for key, value in self.options.items() if key != "expand"}
+    def _compiled_solver(self, name: str, path: Path, options: dict | None = None) -> ca.Function:
+        options = {key: value for key, value in (options or self.options).items() if key != "expand"}
         return ca.nlpsol(name, self.plugin, str(path), options)
 
-    def solver(self, name: str) -> ca.Function:
-        """A fresh ``nlpsol`` on this NLP (compiled library or expressions)."""
+    def solver(self, name: str, options: dict | None = None) -> ca.Function:
+        """A fresh ``nlpsol`` on this NLP (compiled library or expressions).
+
+        ``options`` replaces the library's ``nlpsol`` options for this solver (e.g. another
+        iteration limit); the compiled functions do not depend on them.
+        """
         if self.path is not None:
-            return self._compiled_solver(name, self.path)
-        return ca.nlpsol(name, self.plugin, self.nlp, self.options)
+            return self._compiled_solver(name, self.path, options)
+        return ca.nlpsol(name, self.plugin, self.nlp, options or self.options)
 
     def summary(self) -> dict:
         """``codegen`` (compiled|interpreted), the library's path, build time if built now, reason."""

@@ -185,3 +185,43 @@ def test_participant_rejects_bad_new_options():
         ControlParticipant.from_options("ctrl", {"wall_time_limit_s": "1s"}, context())
     with pytest.raises(ScenarioError, match=r"participants.ctrl: observer_gain must be in \(0, 1\]"):
         ControlParticipant.from_options("ctrl", {"observer_gain": 2.0}, context())
+
+
+def test_participant_reports_classes_domains_and_estimate(kcs):
+    from rhnc.colregs import ENCOUNTER_CLASSES
+
+    ctrl = ControlParticipant.from_options("ctrl", {"horizon_steps": 10, "colregs": True, "max_obstacles": 3,
+                                                    "disturbance_observer": True, "et_default": 1.0}, context())
+    first = ctrl.setup(0.0, {})
+    assert first["encounter_class"].shape == (3,) and first["disturbance"].shape == (5,)
+    times = np.arange(0.0, 600.0, 20.0)
+    reference = np.column_stack([times, line_or_turn_reference(times, (0, 0), 0.0, 18 * KNOT)])
+    head_on = np.array([[4.0 * NM, 0.1 * NM, -12 * KNOT, 0.0, NM]])
+    state = {"x": 0.0, "y": 0.0, "psi": 0.0, "u": 18 * KNOT, "v": 0.0, "r": 0.0}
+    out = ctrl.step(0.0, 20.0, {**state, "reference": reference, "obstacles": head_on})
+    np.testing.assert_array_equal(out["encounter_class"], [ENCOUNTER_CLASSES.index("head_on"), -1, -1])
+    np.testing.assert_array_equal(out["domain_active"], [1.0, 0.0, 0.0])
+    assert out["timed_out"] == 0.0 and out["solve_cpu_time_s"] > 0.0
+    summary = ctrl.summary()
+    assert summary["timeout_count"] == 0 and summary["max_speed_kn"] == pytest.approx(18.0)
+    ctrl.terminate()
+
+
+def test_a_short_hard_attempt_hands_over_to_the_relaxed_one_with_the_same_plan(kcs):
+    course, speed = 0.3, 18 * KNOT
+    state = np.array([0.0, 0.0, course, speed, 0.0, 0.0])
+    reference = line_or_turn_reference(20.0 * np.arange(N + 1), (0.0, 0.0), course, speed)
+    # a static obstacle across the track, 1.5 km ahead: the plan must swerve, clear of it
+    ahead = np.array([[1500 * math.cos(course), 1500 * math.sin(course), 0.0, 0.0, 500.0]])
+    plans = []
+    for hard_iterations in (None, 2):
+        controller = NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=20.0,
+                                                      hard_attempt_iterations=hard_iterations))
+        plans.append(controller.solve(0.0, state, reference, ahead, et=True))
+        controller.close()
+    full, short = plans
+    assert full.success and short.success and short.collision_slack == 0.0
+    assert short.iterations > 2  # the relaxed attempt ran after the 2 hard iterations
+    np.testing.assert_allclose(short.states[:, :2], full.states[:, :2], atol=5.0)  # same plan within 5 m
+    with pytest.raises(ScenarioError, match=r"participants.ctrl: option 'hard_attempt_iterations' must be an integer"):
+        ControlParticipant.from_options("ctrl", {"hard_attempt_iterations": 0}, context())

@@ -54,3 +54,16 @@ def test_unknown_cii_year():
     with pytest.raises(ValueError, match=r"cii_year 2031: reduction factor known for \[2023, 2024, 2025, 2026\]"):
         account_voyage([0.0, 1.0], [0.0, 1.0], [0.0, 0.0], [1.0, 1.0], [0.0, 0.0], [0, 0], [0, 0], [0, 0],
                        cii_year=2031)
+
+
+def test_a_reported_brake_power_replaces_the_energy_model():
+    t = np.array([0.0, 1800.0, 3600.0])
+    x, y = np.array([0.0, 9260.0, 18520.0]), np.zeros(3)
+    calm = np.zeros(3)
+    power = np.full(3, 6.0e6)  # W
+    account = account_voyage(t, x, y, np.full(3, 9.26), calm, calm, calm, calm, brake_power_w=power)
+    fuel_t = 6000.0 * 190e-6  # t over one hour
+    assert account.co2_t == pytest.approx(fuel_t * 3.114)
+    assert account.cost_usd == pytest.approx(fuel_t * 640 + 500)
+    modelled = account_voyage(t, x, y, np.full(3, 9.26), calm, calm, calm, calm)
+    assert modelled.co2_t != pytest.approx(account.co2_t)
