@@ -4,8 +4,8 @@ CasADi evaluates the NLP's functions (objective, constraints, their gradient, Ja
 the Hessian of the Lagrangian) in its virtual machine unless they are compiled.  Here they
 are generated to C (``CodeGenerator``), compiled into a shared library with the machine's C
 compiler and handed to ``nlpsol`` as that library (same iterates, same solution).  Each
-function evaluation is then 2.5-3 times faster in a tight loop, but the default problem's
-library is large (about 10 MB of C, 4 MB of straight-line machine code), and in closed
+function evaluation is then 2.5-3 times faster in a tight loop, but the library of a
+problem of the default size is large (about 10 MB of C, 4 MB of straight-line machine code), and in closed
 loop, where every control step starts from cold caches, the compiled solves were measured
 slower than the interpreted ones; so it is an option (``NMPCSettings.codegen``, off by
 default; figures in ``docs/nmpc-performance.md``).  Compiling takes about a minute of
@@ -51,9 +51,10 @@ LOG = logging.getLogger(__name__)
 CACHE_ENV = "RHNC_NMPC_CACHE"
 #: environment variable that turns code generation off (``0``, ``off``, ``false``, ``no``)
 CODEGEN_ENV = "RHNC_NMPC_CODEGEN"
-#: compiler flags.  Measured on a problem of N_c = 15 with two obstacle slots (10 MB of C): -O0 compiles in a quarter
-#: of -O1's processor time (15 s against 57 s) but its code is slower than the interpreted
-#: functions; -O2 took over 10 minutes on a loaded machine and was abandoned.
+#: compiler flags.  Measured on a problem of N_c = 15 with two obstacle slots (10 MB of C):
+#: -O0 compiles in a quarter of -O1's processor time (15 s against 57 s) but its code is
+#: slower than the interpreted functions; -O2 took over 10 minutes on a loaded machine and
+#: was abandoned.
 COMPILER_FLAGS = ("-O1", "-fPIC", "-shared")
 #: bump when the way libraries are made changes, so that old files are not reused
 RECIPE_VERSION = "1"
