@@ -56,7 +56,6 @@ OPTIONS = (
     "collision_slack_weight",
     "wall_time_limit_s",
     "cpu_time_limit_s",
-    "hard_attempt_iterations",
     "max_speed_kn",
     "colregs",
     "clearance_margin_nm",
@@ -135,9 +134,6 @@ class ControlParticipant(Participant):
     collision_slack_weight : float or false
         Weight of the soft collision constraints' slack (default 1e4, see
         :class:`rhnc.nmpc.NMPCSettings`); ``false`` makes them hard.
-    hard_attempt_iterations : int
-        Iteration limit of the hard attempt before the relaxed one takes over (default:
-        ``max_iterations``; see :class:`rhnc.nmpc.NMPCSettings`).
     cpu_time_limit_s : float or false
         Processor-time limit of each solver attempt [s] (default 2; the shifted previous
         plan is applied when it is hit; processor time, so the load of the machine does not
@@ -194,7 +190,7 @@ class ControlParticipant(Participant):
             "control_interval_s": _number(options, "control_interval_s", where, context.step_size),
             "own_radius_m": _number(options, "own_radius_nm", where, 0.0) * NM,
         }
-        for key in ("horizon_steps", "substeps", "max_iterations", "max_obstacles", "hard_attempt_iterations"):
+        for key in ("horizon_steps", "substeps", "max_iterations", "max_obstacles"):
             if key in options:
                 value = options[key]
                 if isinstance(value, bool) or not isinstance(value, int) or value < 1:

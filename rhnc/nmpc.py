@@ -108,11 +108,6 @@ class NMPCSettings:
         ``"ipopt"``, ``"fatrop"`` or ``"sqpmethod"``.
     max_iterations : int
         Iteration limit of the NLP solver (each attempt).
-    hard_attempt_iterations : int or None
-        Iteration limit of the first, hard attempt when a relaxed attempt follows it (None:
-        ``max_iterations``).  A hard problem that does not converge within a few dozen
-        iterations rarely converges at all; handing over early to the relaxed attempt (the
-        same plan when the hard problem is feasible: exact penalty) bounds the step's time.
     cpu_time_limit_s : float or None
         Limit of the processor time of each solver attempt [s] (Linux, see
         :mod:`rhnc.solver_watchdog`): set far above the normal solve (tens of ms) so that
@@ -167,7 +162,6 @@ class NMPCSettings:
     substeps: int = 4
     solver: str = "fatrop"
     max_iterations: int = 200
-    hard_attempt_iterations: int | None = None
     cpu_time_limit_s: float | None = 2.0
     wall_time_limit_s: float | None = 20.0
     max_obstacles: int = 4
@@ -202,8 +196,6 @@ class NMPCSettings:
             raise ValueError("weights: q needs 6 values, r and r_rate 2 each")
         if min(self.q + self.r + self.r_rate) < 0.0:
             raise ValueError("weights must be >= 0")
-        if self.hard_attempt_iterations is not None and self.hard_attempt_iterations < 1:
-            raise ValueError(f"hard_attempt_iterations must be >= 1 or None, got {self.hard_attempt_iterations}")
         if self.collision_slack_weight is not None and not self.collision_slack_weight > 0.0:
             raise ValueError(f"collision_slack_weight must be > 0 or None, got {self.collision_slack_weight}")
         for name in ("cpu_time_limit_s", "wall_time_limit_s"):
@@ -345,11 +337,7 @@ class NMPCController:
                                  s.cpu_time_limit_s)
         # the NLP's functions compiled once per machine and cached (or interpreted)
         library = self.library = NLPLibrary(self.problem.nlp, s.solver, options, s.codegen)
-        hard_options = None
-        if s.hard_attempt_iterations is not None and self.problem.sigma_index.size:
-            hard_options = solver_options(s.solver, self.problem.equality, s.hard_attempt_iterations,
-                                          s.wall_time_limit_s, s.cpu_time_limit_s)
-        solvers = {"hard": library.solver("rhnc_nmpc", hard_options)}
+        solvers = {"hard": library.solver("rhnc_nmpc")}
         # The second, relaxed attempt gets a solver of its own: a solver keeps state between
         # calls (fatrop), and a failed hard attempt left in it spoils the relaxed one started
         # from the same guess (seen: 162 iterations and failure, against 59 and success from a

@@ -205,23 +205,3 @@ def test_participant_reports_classes_domains_and_estimate(kcs):
     summary = ctrl.summary()
     assert summary["timeout_count"] == 0 and summary["max_speed_kn"] == pytest.approx(18.0)
     ctrl.terminate()
-
-
-def test_a_short_hard_attempt_hands_over_to_the_relaxed_one_with_the_same_plan(kcs):
-    course, speed = 0.3, 18 * KNOT
-    state = np.array([0.0, 0.0, course, speed, 0.0, 0.0])
-    reference = line_or_turn_reference(20.0 * np.arange(N + 1), (0.0, 0.0), course, speed)
-    # a static obstacle across the track, 1.5 km ahead: the plan must swerve, clear of it
-    ahead = np.array([[1500 * math.cos(course), 1500 * math.sin(course), 0.0, 0.0, 500.0]])
-    plans = []
-    for hard_iterations in (None, 2):
-        controller = NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=20.0,
-                                                      hard_attempt_iterations=hard_iterations))
-        plans.append(controller.solve(0.0, state, reference, ahead, et=True))
-        controller.close()
-    full, short = plans
-    assert full.success and short.success and short.collision_slack == 0.0
-    assert short.iterations > 2  # the relaxed attempt ran after the 2 hard iterations
-    np.testing.assert_allclose(short.states[:, :2], full.states[:, :2], atol=5.0)  # same plan within 5 m
-    with pytest.raises(ScenarioError, match=r"participants.ctrl: option 'hard_attempt_iterations' must be an integer"):
-        ControlParticipant.from_options("ctrl", {"hard_attempt_iterations": 0}, context())
