@@ -64,6 +64,7 @@ OPTIONS = (
     "stand_on_action_range_factor",
     "disturbance_observer",
     "observer_gain",
+    "codegen",
 )
 WEIGHT_KEYS = ("q", "r", "r_rate")
 
@@ -155,6 +156,9 @@ class ControlParticipant(Participant):
         Offset-free NMPC: estimate current and loads and predict with them (default false).
     observer_gain : float
         The observer's correction per step, in (0, 1] (default 0.5).
+    codegen : bool
+        Compile the NLP to C once per machine and reuse it (default false; see
+        :mod:`rhnc.nmpc_codegen`); the summary reports ``codegen: compiled|interpreted``.
     """
 
     def __init__(self, name: str, controller: NMPCController, et_default: float) -> None:
@@ -204,7 +208,7 @@ class ControlParticipant(Participant):
                 kwargs[key] = None if options[key] is False else _number(options, key, where, None)
         if "max_speed_kn" in options:
             kwargs["max_speed_mps"] = _number(options, "max_speed_kn", where, None) * KNOT
-        for key in ("colregs", "disturbance_observer"):
+        for key in ("colregs", "disturbance_observer", "codegen"):
             if key in options:
                 if not isinstance(options[key], bool):
                     raise ScenarioError(f"{where}: option '{key}' must be true or false, got {options[key]!r}")
@@ -344,6 +348,7 @@ class ControlParticipant(Participant):
             "tau_r_sign_changes_per_100_solves": tau_r_sign_changes_per_100(
                 self._tau_r_history, self.controller.params.tau_r_max),
             "model_check": self.model_check,
+            **self.controller.library.summary(),
         }
 
     def connected(self, sources: Mapping[str, Participant]) -> None:

@@ -61,11 +61,11 @@ import dataclasses
 import logging
 import math
 
-import casadi as ca
 import numpy as np
 
 from rhnc.colregs import ENCOUNTER_CLASSES
 from rhnc.disturbance_observer import DisturbanceObserver, trimmed_reference
+from rhnc.nmpc_codegen import NLPLibrary
 from rhnc.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport, DomainSettings
 from rhnc.nmpc_problem import DISTURBANCE_SIZE, OBSTACLE_FIELDS, build_problem, solver_options
 from rhnc.nmpc_terminal import MIN_TERMINAL_SPEED_MPS, TerminalWeight
@@ -149,6 +149,12 @@ class NMPCSettings:
         Estimate current and body-frame loads and predict with them (offset-free).
     observer_gain : float
         Fraction of the observer's correction applied per step, in (0, 1].
+    codegen : bool
+        Compile the NLP's functions to C once per machine and reuse the cached library
+        (:mod:`rhnc.nmpc_codegen`); without a compiler they stay interpreted.  Off by
+        default: measured in closed loop, the compiled default problem took more processor
+        time per step than the interpreted one (its 4 MB of straight-line code runs from
+        cold caches at every control step), see ``docs/nmpc-performance.md``.
     """
 
     horizon_steps: int = 15
@@ -175,6 +181,7 @@ class NMPCSettings:
     stand_on_action_range_factor: float = 2.0
     disturbance_observer: bool = False
     observer_gain: float = 0.5
+    codegen: bool = False
 
     def __post_init__(self) -> None:
         if self.horizon_steps < 1:
@@ -328,8 +335,9 @@ class NMPCController:
                                               s.terminal_weight)
         options = solver_options(s.solver, self.problem.equality, s.max_iterations, s.wall_time_limit_s,
                                  s.cpu_time_limit_s)
-        nlp = self.problem.nlp
-        solvers = {"hard": ca.nlpsol("rhnc_nmpc", s.solver, nlp, options)}
+        # the NLP's functions compiled once per machine and cached (or interpreted)
+        library = self.library = NLPLibrary(self.problem.nlp, s.solver, options, s.codegen)
+        solvers = {"hard": library.solver("rhnc_nmpc")}
         # The second, relaxed attempt gets a solver of its own: a solver keeps state between
         # calls (fatrop), and a failed hard attempt left in it spoils the relaxed one started
         # from the same guess (seen: 162 iterations and failure, against 59 and success from a
@@ -337,7 +345,7 @@ class NMPCController:
         # building it costs about 0.5 s of processor time, which inside a control step showed
         # up as an 8 s solve on a loaded machine.
         if self.problem.sigma_index.size:
-            solvers["relaxed"] = ca.nlpsol("rhnc_nmpc_relaxed", s.solver, nlp, options)
+            solvers["relaxed"] = library.solver("rhnc_nmpc_relaxed")
         self.solvers = BoundedSolver(solvers, {}, s.wall_time_limit_s, s.cpu_time_limit_s)
         self.domains = CollisionDomains(s.domain_settings(), s.max_obstacles)
         self.observer = (DisturbanceObserver(params, self.state_scale, s.observer_gain)

@@ -1,0 +1,252 @@
+"""The NMPC's nonlinear program compiled to C once per machine, cached, and loaded by every run.
+
+CasADi evaluates the NLP's functions (objective, constraints, their gradient, Jacobian and
+the Hessian of the Lagrangian) in its virtual machine unless they are compiled.  Here they
+are generated to C (``CodeGenerator``), compiled into a shared library with the machine's C
+compiler and handed to ``nlpsol`` as that library (same iterates, same solution).  Each
+function evaluation is then 2.5-3 times faster in a tight loop, but the library of a
+problem of the default size is large (about 10 MB of C, 4 MB of straight-line machine code), and in closed
+loop, where every control step starts from cold caches, the compiled solves were measured
+slower than the interpreted ones; so it is an option (``NMPCSettings.codegen``, off by
+default; figures in ``docs/nmpc-performance.md``).  Compiling takes about a minute of
+processor time, so it is done once and kept:
+
+* **Where.** ``$RHNC_NMPC_CACHE`` if set, else ``$XDG_CACHE_HOME/rhnc-cosim/nmpc``, else
+  ``~/.cache/rhnc-cosim/nmpc``.  One ``nlp_<solver>_<key>.so`` per problem; delete the
+  folder to clear the cache.
+* **Key.** SHA-256 of the NLP's serialized expression graph (``Function.serialize``: the
+  dynamics, horizon, weights, scaling, slots, so everything the generated C is made
+  from), the NLP solver plugin, the CasADi version, the compiler (path and
+  ``--version``) and its flags.  The same problem in another run, a batch worker or the
+  watchdog's forked solver process finds the same file; a changed weight or horizon gets
+  a file of its own.  The key is taken from the expression graph rather than from the
+  generated C because generating the C costs seconds on every start, and serializing the
+  graph 0.1 s; the C is a function of the graph and the CasADi version.
+* **Concurrency.** The build holds an exclusive lock (``<name>.lock``, ``fcntl``) so that
+  two processes starting together compile once; the library is written under a temporary
+  name and renamed into place, so a reader never sees half a file.
+* **Fallback.** Without a C compiler (``$CC`` if set, else ``cc``, ``gcc`` or ``clang`` on
+  the ``PATH``), when the compiler fails, or with ``RHNC_NMPC_CODEGEN=0``, the interpreted
+  functions remain (the same solutions, slower) and a warning says so; the run's summary
+  reports ``codegen: interpreted`` and why.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import logging
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import casadi as ca
+
+LOG = logging.getLogger(__name__)
+
+#: environment variable naming the cache directory
+CACHE_ENV = "RHNC_NMPC_CACHE"
+#: environment variable that turns code generation off (``0``, ``off``, ``false``, ``no``)
+CODEGEN_ENV = "RHNC_NMPC_CODEGEN"
+#: compiler flags.  Measured on a problem of N_c = 15 with two obstacle slots (10 MB of C):
+#: -O0 compiles in a quarter of -O1's processor time (15 s against 57 s) but its code is
+#: slower than the interpreted functions; -O2 took over 10 minutes on a loaded machine and
+#: was abandoned.
+COMPILER_FLAGS = ("-O1", "-fPIC", "-shared")
+#: bump when the way libraries are made changes, so that old files are not reused
+RECIPE_VERSION = "1"
+_OFF = {"0", "off", "false", "no"}
+
+
+def cache_dir() -> Path:
+    """Directory of the compiled NLP libraries (see the module docstring)."""
+    override = os.environ.get(CACHE_ENV)
+    if override:
+        return Path(override).expanduser()
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "rhnc-cosim" / "nmpc"
+
+
+def find_compiler() -> str | None:
+    """The C compiler to use: ``$CC`` when set (None if it does not exist), else cc, gcc or clang."""
+    named = os.environ.get("CC")
+    if named:
+        return shutil.which(named)
+    for candidate in ("cc", "gcc", "clang"):
+        found = shutil.which(candidate)
+        if found:
+            return found
+    return None
+
+
+def codegen_disabled_by_environment() -> bool:
+    """True when ``RHNC_NMPC_CODEGEN`` turns code generation off."""
+    return os.environ.get(CODEGEN_ENV, "").strip().lower() in _OFF
+
+
+def _compiler_identity(compiler: str) -> str:
+    try:
+        result = subprocess.run([compiler, "--version"], capture_output=True, text=True, timeout=30, check=False)
+        first = result.stdout.splitlines()[0] if result.stdout else ""
+    except (OSError, subprocess.SubprocessError):
+        first = ""
+    return f"{compiler}|{first}"
+
+
+def library_key(nlp: dict, plugin: str, compiler: str) -> str:
+    """Content hash of what the compiled library is made from (see the module docstring)."""
+    oracle = ca.Function("nlp", [nlp["x"], nlp["p"]], [nlp["f"], nlp["g"]], ["x", "p"], ["f", "g"])
+    digest = hashlib.sha256()
+    for part in (RECIPE_VERSION, ca.__version__, plugin, _compiler_identity(compiler), " ".join(COMPILER_FLAGS)):
+        digest.update(part.encode())
+        digest.update(b"\0")
+    digest.update(oracle.serialize().encode())
+    return digest.hexdigest()
+
+
+@contextlib.contextmanager
+def _exclusive(lock_path: Path):
+    """Hold an exclusive lock on ``lock_path`` (no-op where ``fcntl`` is missing)."""
+    try:
+        import fcntl
+    except ImportError:  # Windows: the atomic rename still keeps readers safe
+        yield
+        return
+    with open(lock_path, "a+") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+class NLPLibrary:
+    """The NLP for ``nlpsol``: a compiled, cached library when possible, else the expressions.
+
+    Parameters
+    ----------
+    nlp : dict
+        CasADi NLP (``x``, ``f``, ``g``, ``p``) of SX expressions.
+    plugin : str
+        NLP solver plugin (``"fatrop"``, ``"ipopt"``, ...): its derivative functions are
+        generated.
+    options : dict
+        ``nlpsol`` options of the solvers made from this library (``expand`` is dropped
+        when the library is compiled: its functions are already numeric code).
+    enabled : bool
+        False: use the interpreted functions without trying to compile.
+
+    Attributes
+    ----------
+    mode : str
+        ``"compiled"`` or ``"interpreted"``.
+    path : pathlib.Path or None
+        The shared library used (compiled mode).
+    build_time_s : float or None
+        Time spent generating and compiling [s] when this process built the library; None
+        when it was loaded from the cache (or not compiled).
+    reason : str
+        Why the functions are interpreted ("" when compiled).
+    """
+
+    #: libraries compiled by this process (the tests count them)
+    builds = 0
+
+    def __init__(self, nlp: dict, plugin: str, options: dict, enabled: bool = True) -> None:
+        self.nlp = nlp
+        self.plugin = plugin
+        self.options = dict(options)
+        self.mode = "interpreted"
+        self.path: Path | None = None
+        self.build_time_s: float | None = None
+        self.reason = ""
+        if not enabled:
+            self.reason = "code generation off in the settings"
+        elif codegen_disabled_by_environment():
+            self.reason = f"code generation off by {CODEGEN_ENV}"
+        else:
+            compiler = find_compiler()
+            if compiler is None:
+                self.reason = "no C compiler found" + (f" ($CC = {os.environ['CC']})" if os.environ.get("CC") else "")
+            else:
+                self._prepare(compiler)
+        if self.mode == "interpreted" and enabled and not codegen_disabled_by_environment():
+            LOG.warning("NMPC: %s; the NLP's functions stay interpreted (slower solves)", self.reason)
+
+    def _prepare(self, compiler: str) -> None:
+        directory = cache_dir()
+        try:
+            directory.mkdir(parents=True, exist_ok=True)
+            key = library_key(self.nlp, self.plugin, compiler)
+            path = directory / f"nlp_{self.plugin}_{key[:24]}.so"
+            if not path.is_file():
+                with _exclusive(directory / f"{path.stem}.lock"):
+                    if not path.is_file():  # another process may have built it meanwhile
+                        self.build_time_s = self._build(compiler, path)
+            self._load_check(path)
+        except (OSError, RuntimeError, subprocess.CalledProcessError) as error:
+            self.reason = f"compiling the NLP failed ({_one_line(error)})"
+            self.build_time_s = None
+            return
+        self.mode, self.path = "compiled", path
+
+    def _build(self, compiler: str, path: Path) -> float:
+        """Generate the C of the NLP's functions and compile it to ``path`` (atomically)."""
+        start = time.perf_counter()
+        LOG.info("NMPC: compiling the NLP for %s into %s (once per machine; about a minute)", self.plugin, path)
+        symbolic = ca.nlpsol("rhnc_codegen", self.plugin, self.nlp, self.options)
+        with tempfile.TemporaryDirectory(prefix="rhnc-nlp-") as work:
+            generator = ca.CodeGenerator(path.stem, {})
+            generator.add(symbolic.oracle())
+            for name in symbolic.get_function():
+                generator.add(symbolic.get_function(name))
+            source = generator.generate(work + os.sep)
+            partial = path.with_name(f".{path.stem}.{os.getpid()}.tmp.so")
+            try:
+                subprocess.run([compiler, *COMPILER_FLAGS, "-o", str(partial), source], check=True,
+                               capture_output=True, text=True)
+                os.replace(partial, path)
+            finally:
+                with contextlib.suppress(FileNotFoundError):
+                    partial.unlink()
+        NLPLibrary.builds += 1
+        elapsed = time.perf_counter() - start
+        LOG.info("NMPC: compiled %s in %.1f s", path.name, elapsed)
+        return elapsed
+
+    def _load_check(self, path: Path) -> None:
+        """Load the library once so that a broken file fails here, not at the first solve."""
+        self._compiled_solver("rhnc_codegen_check", path)
+
+    def _compiled_solver(self, name: str, path: Path, options: dict | None = None) -> ca.Function:
+        options = {key: value for key, value in (options or self.options).items() if key != "expand"}
+        return ca.nlpsol(name, self.plugin, str(path), options)
+
+    def solver(self, name: str, options: dict | None = None) -> ca.Function:
+        """A fresh ``nlpsol`` on this NLP (compiled library or expressions).
+
+        ``options`` replaces the library's ``nlpsol`` options for this solver (e.g. another
+        iteration limit); the compiled functions do not depend on them.
+        """
+        if self.path is not None:
+            return self._compiled_solver(name, self.path, options)
+        return ca.nlpsol(name, self.plugin, self.nlp, options or self.options)
+
+    def summary(self) -> dict:
+        """``codegen`` (compiled|interpreted), the library's path, build time if built now, reason."""
+        return {
+            "codegen": self.mode,
+            "codegen_library": str(self.path) if self.path is not None else None,
+            "codegen_build_s": self.build_time_s,
+            "codegen_note": self.reason or None,
+        }
+
+
+def _one_line(error: BaseException) -> str:
+    if isinstance(error, subprocess.CalledProcessError):
+        text = (error.stderr or "").strip().splitlines()
+        return f"compiler exit {error.returncode}: {text[0] if text else ''}"
+    return str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
