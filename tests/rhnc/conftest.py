@@ -1,5 +1,6 @@
 import textwrap
 
+import numpy as np
 import pytest
 
 # A reference_path participant "ref" tracked by the NMPC "ctrl" on the KCS FMU "ship", every
@@ -40,3 +41,67 @@ def tracking_scenario(tmp_path):
         return path
 
     return write
+
+
+
+class _RecordingSolver:
+    """Stands in for a CasADi NLP solver: passes every call through, keeps the raw inputs."""
+
+    def __init__(self, solver, controller, plans):
+        self._solver, self._controller, self._plans = solver, controller, plans
+
+    def __call__(self, **kwargs):
+        result = self._solver(**kwargs)
+        if self._solver.stats().get("success", False):
+            x = np.array(result["x"]).ravel()
+            self._plans.append(x[self._controller._w_index].copy())
+        return result
+
+    def stats(self):
+        return self._solver.stats()
+
+
+class RawInputs:
+    """The input plans successful NLP solves returned, in units of tau_max, before any clip.
+
+    The applied input is clipped to tau_max after the solve, so a bound check on the applied
+    input holds whatever bounds the optimiser was given; these plans show whether the
+    optimiser's own solution kept |w| <= 1.
+    """
+
+    def __init__(self):
+        self.plans: list[np.ndarray] = []
+
+    def attach(self, controller):
+        """Record the solves of an already built controller (both attempts)."""
+        solver = controller._solver
+        if isinstance(solver, _RecordingSolver):  # a module-scoped controller seen before
+            solver = solver._solver
+        controller._solver = _RecordingSolver(solver, controller, self.plans)
+        return controller
+
+    def largest(self) -> float:
+        """Largest |w| over the recorded plans (1 = the bound tau_max)."""
+        assert self.plans, "no successful NMPC solve was recorded"
+        return float(max(np.max(np.abs(w)) for w in self.plans))
+
+
+@pytest.fixture
+def raw_nmpc_inputs(monkeypatch):
+    """RawInputs of every NMPCController built (or attached) during the test."""
+    from rhnc.nmpc import NMPCController
+
+    raw = RawInputs()
+    original_init = NMPCController.__init__
+    original_relaxed = NMPCController._relaxed
+
+    def init(self, *args, **kwargs):
+        original_init(self, *args, **kwargs)
+        raw.attach(self)
+
+    def relaxed(self):
+        return _RecordingSolver(original_relaxed(self), self, raw.plans)
+
+    monkeypatch.setattr(NMPCController, "__init__", init)
+    monkeypatch.setattr(NMPCController, "_relaxed", relaxed)
+    return raw
