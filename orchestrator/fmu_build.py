@@ -196,7 +196,8 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR
             log.warning("compiler warnings for %s:\n%s", name, result.stderr.strip())
 
         fmu = out_dir / f"{name}.fmu"
-        partial = out_dir / f".{name}.fmu.partial"
+        # a staging file per process: two runs building the same FMU at once never mix files
+        partial = out_dir / f".{name}.fmu.{os.getpid()}.partial"
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
             z.writestr("modelDescription.xml", description)
             z.write(library, f"binaries/{platform}/{library.name}")

@@ -10,6 +10,7 @@ from typing import Any
 
 import pandas as pd
 
+from orchestrator import interrupts
 from orchestrator.errors import ToolchainError
 from orchestrator.master import CoSimulation
 from orchestrator.results import RunFolder, new_run_id, versions
@@ -43,22 +44,42 @@ def run_scenario(path, results_root="results", progress: bool = True, run_id: st
     reported in the returned status; its results are written all the same.
     """
     scenario = load_scenario(path, overrides)
-    folder = RunFolder(Path(results_root), group or scenario.simulation.name,
-                       run_id or new_run_id(scenario.sha256))
+    # build first: input refused before the run leaves no folder behind
+    cosim = CoSimulation(scenario, work_dir=None)
     try:
-        cosim = CoSimulation(scenario, work_dir=None)
+        folder = RunFolder(Path(results_root), group or scenario.simulation.name,
+                           run_id or new_run_id(scenario.sha256))
     except BaseException:
-        folder.discard()
+        cosim.close()
         raise
     try:
-        outcome = cosim.run(progress=progress)
-        report = _write(scenario, cosim, outcome, folder, overrides)
+        with interrupts.emergency_writer(lambda why: _write_interrupted(scenario, cosim, folder, overrides, why)):
+            outcome = cosim.run(progress=progress)
+            with interrupts.deferred():
+                report = _write(scenario, cosim, outcome, folder, overrides)
     except BaseException:
         folder.discard()
         raise
     finally:
         cosim.close()
     return report
+
+
+def _write_interrupted(scenario: Scenario, cosim: CoSimulation, folder: RunFolder, overrides, why: str) -> None:
+    """What the watchdog keeps of a run whose participant did not return: status and time series."""
+    sim = scenario.simulation
+    recorder = getattr(cosim, "recorder", None)
+    if recorder is not None:
+        recorder.to_frame().to_csv(folder.path("timeseries.csv"), index=False)
+    folder.write_json("summary.json", {
+        "scenario": str(scenario.path), "scenario_name": sim.name, "scenario_sha256": scenario.sha256,
+        "overrides": dict(overrides or {}), "run_id": folder.final.name, "status": "interrupted",
+        "reason": why, "versions": versions(),
+        "simulation": {"start_s": sim.start_s, "stop_s": sim.stop_s, "dt_s": sim.dt_s,
+                       "steps_planned": sim.steps, "steps_done": getattr(cosim, "steps_done", 0)},
+        "timeseries": "timeseries.csv" if recorder is not None else None,
+        "analyses": {}, "participants": {}})
+    print(f"interrupted: results in {folder.publish()}", flush=True)
 
 
 def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, overrides) -> RunReport:
@@ -77,6 +98,9 @@ def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, 
     figures: dict[str, Any] = {}
     status, reason = outcome.status, outcome.reason
     for name in scenario.outputs.analyses:
+        if outcome.steps_done == 0:  # a verdict on an empty time series would claim too much
+            figures[name] = {"evaluated": False, "note": "not evaluated: the run made no steps"}
+            continue
         try:
             figures[name] = analyses.run_analysis(name, frame, scenario, cosim, folder.staging)
         except ToolchainError as exc:
@@ -84,7 +108,7 @@ def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, 
             if status == "finished":
                 status, reason = "failed", f"analysis '{name}': {exc}"
     figure_files, figure_errors = [], {}
-    for name in scenario.outputs.figures:
+    for name in scenario.outputs.figures if outcome.steps_done else ():
         try:
             figure_files += analyses.draw_figure(name, frame, scenario, cosim, folder.staging)
         except Exception as exc:  # a figure that cannot be drawn must not lose the results

@@ -154,6 +154,7 @@ def load_scenario(path, overrides: Mapping[str, Any] | None = None) -> Scenario:
             apply_override(data, dotted, value, str(path))
         raw = raw + b"\n# overrides\n" + json.dumps(dict(overrides), sort_keys=True, default=str).encode()
     where = str(path)
+    _refuse_other_file_kinds(data, where)
     _reject_unknown(data, TOP_LEVEL_KEYS, where, "")
     simulation = _simulation(_table(data, "simulation", where, required=True), path)
     participants = _participants(_table(data, "participants", where, required=True), where)
@@ -218,6 +219,21 @@ def _table(data: dict, key: str, where: str, required: bool) -> dict:
     if not isinstance(value, dict):
         raise ScenarioError(f"{where}: '{key}' must be a table ([{key}])")
     return value
+
+
+#: Top-level keys that mark the other input files, their kind and the subcommand that reads them.
+OTHER_FILE_KINDS = (("batch", "a batch file", "batch"), ("runs", "a comparison file", "compare"),
+                    ("planner", "an offline planning file", "plan"), ("cases", "an offline planning file", "plan"))
+
+
+def _refuse_other_file_kinds(data: dict, where: str) -> None:
+    """A batch, comparison or planning file given where a scenario is read: name the right command."""
+    if "participants" in data or "simulation" in data:
+        return
+    for key, kind, command in OTHER_FILE_KINDS:
+        if key in data:
+            raise ScenarioError(f"{where}: {kind} (it has '{key}'), not a scenario: "
+                                f"use 'python -m orchestrator {command} {where}'")
 
 
 def _reject_unknown(table: dict, allowed, where: str, prefix: str) -> None:
