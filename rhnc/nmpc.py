@@ -63,6 +63,7 @@ from collections.abc import Sequence
 import casadi as ca
 import numpy as np
 
+from orchestrator.interrupts import stop_requested
 from rhnc.ship_model import ShipParameters, rk4_function
 
 LOG = logging.getLogger(__name__)
@@ -574,6 +575,8 @@ class NMPCController:
         # fails, the soft one (slacks free): the plan that violates the clearance least.
         elapsed, iterations = 0.0, 0
         for relaxed in ((False, True) if self._sigma_index.size else (False,)):
+            if relaxed and stop_requested():  # Ctrl-C aborted the first attempt: no second one
+                raise KeyboardInterrupt
             ubx[self._sigma_index] = np.inf if relaxed else 0.0
             start = time.perf_counter()
             solver = self._relaxed() if relaxed else self._solver
