@@ -341,6 +341,8 @@ class LocalPool:
         finally:
             # normal end, Ctrl-C or an error: never start another run; running ones end
             # (as 'interrupted' when they got the Ctrl-C too) and publish their folders
+            if interrupts.stop_requested():
+                interrupts.acknowledge()  # noticed: the running runs now end and write their folders
             if interrupts.stop_requested() == "SIGTERM":  # sent to this process alone: pass it on
                 for process in list(getattr(pool, "_processes", {}).values()):
                     with contextlib.suppress(OSError):
@@ -380,6 +382,8 @@ class DaskExecutor:
                     record = {"status": "worker_died", "reason": f"the worker could not run it: {type(exc).__name__}: {exc}"}
                 yield task, record
         finally:
+            if interrupts.stop_requested():
+                interrupts.acknowledge()
             client.cancel(list(futures))
             client.close()
 

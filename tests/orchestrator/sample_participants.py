@@ -64,18 +64,21 @@ class Echo(Participant):
 
 
 class Crash(Participant):
-    """Raises a plain exception at a given time (a participant's own bug)."""
+    """Raises a plain exception at a given time, or in its set-up (a participant's own bug)."""
 
     @classmethod
     def from_options(cls, name, options, context):
         participant = cls(name)
         participant.at = options.get("at_s", 0.0)
+        participant.in_setup = options.get("in_setup", False)
         return participant
 
     input_names = property(lambda self: [])
     output_names = property(lambda self: ["ok"])
 
     def setup(self, start_time, inputs):
+        if self.in_setup:
+            raise np.linalg.LinAlgError("Failed to find a finite solution.")
         return {"ok": 1.0}
 
     def step(self, time, step_size, inputs):
