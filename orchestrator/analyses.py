@@ -141,7 +141,7 @@ def voyage_analysis(frame, scenario, cosim, out_dir, goal_nm=None, arrival_radiu
 
     The weather is what the plant met: the outputs of the participant driving the
     plant's ``hs`` input (the environment FMU), else the scenario's met-ocean field at the
-    ship's positions, else calm water.  The energy constants are the navigation
+    ship's positions and times, else calm water.  The energy constants are the navigation
     participant's (so a scenario's overrides apply), else the defaults.
 
     With ``goal_nm = [north, east]`` the voyage ends on arrival, the first sample within
@@ -160,7 +160,7 @@ def voyage_analysis(frame, scenario, cosim, out_dir, goal_nm=None, arrival_radiu
         weather = {name: frame[f"{environment}.{name}"].to_numpy() for name in ("wind_north", "wind_east", "hs")}
     except (ToolchainError, KeyError):
         if cosim.metocean is not None:
-            weather = cosim.metocean.sample(x, y)
+            weather = cosim.metocean.sample(x, y, t_s=frame["time_s"].to_numpy())
         else:
             weather = {name: np.zeros_like(x) for name in ("wind_north", "wind_east", "hs")}
     energy = next((p.energy for p in cosim.participants if isinstance(getattr(p, "energy", None), EnergyParameters)),

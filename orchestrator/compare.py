@@ -171,7 +171,7 @@ def _tracks_figure(spec, reports, target: Path) -> None:
     fig, ax = plt.subplots(figsize=(7, 6))
     first = next(iter(reports.values())).folder / "metocean.nc"
     if first.is_file():
-        field = MetOceanField.from_netcdf(first)
+        field = MetOceanField.from_netcdf(first).snapshot(0.0)  # at departure when it varies in time
         mesh = ax.pcolormesh(field.y / NM, field.x / NM, field.wind_speed, shading="auto", cmap="viridis")
         fig.colorbar(mesh, ax=ax, label="wind speed [m/s]")
     for (label, report), colour in zip(reports.items(), ("tab:red", "white", "tab:orange", "tab:cyan")):

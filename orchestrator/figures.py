@@ -29,8 +29,11 @@ def track_figure(frame, scenario, cosim, out_dir) -> list[str]:
     fig, ax = plt.subplots(figsize=(7, 6))
     field = cosim.metocean
     if field is not None:
-        mesh = ax.pcolormesh(field.y / NM, field.x / NM, field.wind_speed, shading="auto", cmap="viridis")
-        fig.colorbar(mesh, ax=ax, label="wind speed [m/s]")
+        departure_s = float(frame["time_s"].iloc[0])
+        mesh = ax.pcolormesh(field.y / NM, field.x / NM, field.snapshot(departure_s).wind_speed, shading="auto",
+                             cmap="viridis")
+        fig.colorbar(mesh, ax=ax, label="wind speed at departure [m/s]" if field.is_time_varying
+                     else "wind speed [m/s]")
     _draw_reference(ax, frame, scenario)
     ax.plot(frame[f"{plant}.y"] / NM, frame[f"{plant}.x"] / NM, color="tab:red", lw=2, label=f"{plant} track")
     ax.plot(frame[f"{plant}.y"].iloc[0] / NM, frame[f"{plant}.x"].iloc[0] / NM, "o", color="tab:red")
@@ -151,7 +154,8 @@ def navigation_fields_figure(frame, scenario, cosim, out_dir, panels: int = 6) -
     """The superposed field U and the track at six instants (the paper's Fig. 10 and 17).
 
     For each instant the navigation participant's field is rebuilt from the ship's
-    position then (as the navigation did at that planning instant); the panel shows U (or
+    position (and, when it varies in time, the weather) then, as the navigation did at that
+    planning instant; the panel shows U (or
     G alone while the event trigger was on), the track sailed so far and the local plan.
     """
     from orchestrator.analyses import plant_name
@@ -173,6 +177,11 @@ def navigation_fields_figure(frame, scenario, cosim, out_dir, panels: int = 6) -
         row = min(row, len(frame) - 1)
         x, y = frame[f"{plant}.x"].iloc[row], frame[f"{plant}.y"].iloc[row]
         avoidance = bool(frame.get(f"{navigation.name}.et", np.zeros(len(frame))).iloc[row] > 0.5)
+        if navigation.metocean.is_time_varying:  # the weather the navigation planned in then
+            from rhnc.fields import resample_weather
+
+            field.set_weather(resample_weather(navigation.metocean, navigation.resolution_nm,
+                                               t_s=float(frame["time_s"].iloc[row])))
         field.update((x, y), navigation.speed)
         mesh = ax.pcolormesh(y_nm, x_nm, field.potential(avoidance), shading="auto", cmap="viridis")
         ax.plot(frame[f"{plant}.y"].iloc[: row + 1] / NM, frame[f"{plant}.x"].iloc[: row + 1] / NM,

@@ -11,6 +11,10 @@ At every navigation instant t (every ``delta`` = the participant's step size) it
    ``alpha = v_s delta`` (Algorithm 1), descending G alone while ET = 1;
 4. turns the path into reference states (Eq. 19) timed t + k delta.
 
+When the met-ocean field varies in time, the planning weather is resampled at each
+navigation instant t (the fields then see the weather of that instant, held over the
+horizon).
+
 Planning speed v_s is the option ``speed_kn`` (over ground), used both for the step
 length and for the fields, so the reference asks for a constant service speed.
 
@@ -95,7 +99,8 @@ class NavigationParticipant(Participant):
         self.energy = energy
         self.start_from = start_from
         self.start = start
-        self.weather = resample_weather(metocean, resolution_nm)
+        self.resolution_nm = float(resolution_nm)
+        self.weather = resample_weather(metocean, resolution_nm, t_s=0.0)
         self.field = SuperpositionField(self.weather, goal, energy, guidance, weights)
         self.trigger = EventTrigger(ship_range_m, static_range_m)
         self.counts = {"plans": 0, "avoidance_plans": 0, "prediction_starts": 0, "measured_starts": 0,
@@ -205,10 +210,10 @@ class NavigationParticipant(Participant):
             psi = bearing(float(measured["x"]), float(measured["y"]), *self.goal)
         return float(measured["x"]), float(measured["y"]), float(psi)
 
-    def _local_rates(self, x: float, y: float, psi: float, u: float) -> tuple[float, float]:
-        """EC [USD/h] and EM [kg/h] at the ship, speed through water u, in the local weather."""
+    def _local_rates(self, x: float, y: float, psi: float, u: float, time: float) -> tuple[float, float]:
+        """EC [USD/h] and EM [kg/h] at the ship, speed through water u, in the weather at ``time``."""
         x_min, x_max, y_min, y_max = self.metocean.extent
-        local = self.metocean.sample(min(max(x, x_min), x_max), min(max(y, y_min), y_max))
+        local = self.metocean.sample(min(max(x, x_min), x_max), min(max(y, y_min), y_max), t_s=time)
         power = brake_power(max(u, 0.0), psi, local["wind_north"], local["wind_east"], local["hs"], self.energy)
         return float(cost_rate(power, self.energy)), float(emission_rate(power, self.energy))
 
@@ -219,6 +224,9 @@ class NavigationParticipant(Participant):
         velocity = (u * np.cos(psi), u * np.sin(psi))
         et = self.trigger.update(time, (x, y), velocity, self.goal, inputs.get("obstacles"))
         start_x, start_y, start_psi = self._planning_start(time, measured, inputs)
+        if self.metocean.is_time_varying:  # plan in the weather of this instant
+            self.weather = resample_weather(self.metocean, self.resolution_nm, t_s=time)
+            self.field.set_weather(self.weather)
         self.field.update((start_x, start_y), self.speed)
         path = plan_local_path(self.field, (start_x, start_y), self.speed * self.delta,
                                self.horizon_steps, avoidance=et > 0.5)
@@ -228,7 +236,7 @@ class NavigationParticipant(Participant):
         self.counts["border_steps"] += path.border_steps
         self._reached_goal = path.reached_goal
         reference = reference_states(path.points, self.delta, start_time=time, initial_heading=start_psi)
-        ec, em = self._local_rates(x, y, psi, u)
+        ec, em = self._local_rates(x, y, psi, u, time)
         outputs = {
             "reference": reference,
             "et": et,

@@ -1,0 +1,200 @@
+"""Encounter classification under the rules of the road (COLREG Rules 13-15 and 17).
+
+The controller and the ``colregs`` analysis classify each target from the same geometry,
+so the side the NMPC is pushed to and the verdict it is judged by cannot disagree.
+
+Geometry (x north, y east, SI; courses clockwise from north):
+
+* relative bearing ``beta`` of the target seen from the own ship: the bearing from own
+  ship to target minus the own course, wrapped to (-180, 180] deg; positive to starboard;
+* aspect ``alpha`` of the own ship seen from the target: the bearing from target to own
+  ship minus the target's course, wrapped the same way.
+
+Classes (own ship's view), checked in this order:
+
+``static``
+    The obstacle does not move (speed below ``STATIC_SPEED_MPS``).
+``none``
+    No risk of collision: the ships are opening (TCPA <= 0) or the predicted CPA is beyond
+    ``cpa_limit_m``, or the TCPA beyond ``tcpa_limit_s``.
+``overtaking`` (Rule 13, own ship gives way)
+    The own ship comes up on the target from more than 22.5 deg abaft its beam:
+    ``|alpha| > 112.5 deg``.
+``overtaken`` (Rule 13 for the target; Rule 17 for us: stand on)
+    The target comes up from more than 22.5 deg abaft our beam: ``|beta| > 112.5 deg``.
+``head_on`` (Rule 14, both alter to starboard and pass port to port)
+    The target is nearly ahead, ``|beta| <= HEAD_ON_BEARING_DEG``, on a nearly reciprocal
+    course, ``|course difference - 180| <= HEAD_ON_COURSE_DEG``.
+``crossing_give_way`` (Rule 15: the target is on our starboard side; we keep out of its way
+    and avoid crossing ahead of it, Rule 16)
+``crossing_stand_on`` (Rule 15 for the target; Rule 17 for us)
+
+Rule 14 speaks of "reciprocal or nearly reciprocal courses" and of seeing the other ship
+"ahead or nearly ahead"; we take 10 deg for the bearing and 15 deg for the course
+difference (a mast-head light pair is seen in line within about 6 deg; radar plotting
+practice allows more).  The thresholds are module constants, not options, so the analysis
+and the controller always agree.
+
+Hysteresis: a class is decided when the risk of collision first appears and is kept for
+the whole encounter (COLREG roles do not change as the geometry evolves during the
+manoeuvre, e.g. a give-way ship turning to starboard would otherwise turn a crossing into
+a head-on).  The encounter ends, and the class is released, when the ships have passed
+(TCPA <= 0) and the range exceeds ``release_range_m``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+STATIC_SPEED_MPS = 0.1
+HEAD_ON_BEARING_DEG = 10.0
+HEAD_ON_COURSE_DEG = 15.0
+ABAFT_BEAM_DEG = 112.5
+
+ENCOUNTER_CLASSES = ("static", "none", "head_on", "crossing_give_way", "crossing_stand_on",
+                     "overtaking", "overtaken")
+
+#: The own ship's role per class: "give_way" (Rules 14-16: act early, to starboard),
+#: "stand_on" (Rule 17: keep course and speed until the other's action is not enough),
+#: "avoid" (a static obstacle), "none".
+ROLE = {"static": "avoid", "none": "none", "head_on": "give_way", "crossing_give_way": "give_way",
+        "crossing_stand_on": "stand_on", "overtaking": "give_way", "overtaken": "stand_on"}
+
+
+def wrap_deg(angle_deg):
+    """Wrap an angle [deg] to (-180, 180]."""
+    wrapped = np.mod(np.asarray(angle_deg, dtype=float) + 180.0, 360.0) - 180.0
+    return np.where(wrapped == -180.0, 180.0, wrapped)
+
+
+def bearing_deg(from_x, from_y, to_x, to_y):
+    """True bearing [deg in [0, 360)] from one point to another (x north, y east)."""
+    return np.mod(np.degrees(np.arctan2(np.asarray(to_y) - from_y, np.asarray(to_x) - from_x)), 360.0)
+
+
+def cpa_tcpa(own_xy, own_velocity, target_xy, target_velocity) -> tuple[float, float]:
+    """Closest approach of two constant-velocity motions (SI).
+
+    Returns
+    -------
+    cpa_m : float
+        Range at the closest approach [m] (the current range if they are opening).
+    tcpa_s : float
+        Time to the closest approach [s]; <= 0 when the range is already opening,
+        ``inf`` when the relative velocity is zero.
+    """
+    r = np.subtract(target_xy, own_xy).astype(float)
+    w = np.subtract(target_velocity, own_velocity).astype(float)
+    w2 = float(w @ w)
+    if w2 < 1e-12:
+        return float(np.hypot(*r)), math.inf
+    tcpa = -float(r @ w) / w2
+    closest = r + w * max(tcpa, 0.0)
+    return float(np.hypot(*closest)), tcpa
+
+
+@dataclasses.dataclass(frozen=True)
+class Encounter:
+    """The classified geometry of one target at one instant (own ship's view)."""
+
+    encounter_class: str
+    relative_bearing_deg: float
+    aspect_deg: float
+    range_m: float
+    cpa_m: float
+    tcpa_s: float
+
+    @property
+    def role(self) -> str:
+        return ROLE[self.encounter_class]
+
+
+def classify(own_xy: Sequence[float], own_course_rad: float, own_speed_mps: float,
+             target_xy: Sequence[float], target_velocity_mps: Sequence[float],
+             cpa_limit_m: float = 2.0 * 1852.0, tcpa_limit_s: float = 30.0 * 60.0) -> Encounter:
+    """Classify one target (rules in the module docstring).
+
+    Parameters
+    ----------
+    own_xy : (x, y) [m]; own_course_rad : course over ground [rad]; own_speed_mps [m/s]
+    target_xy : (x, y) [m]; target_velocity_mps : (vx, vy) [m/s]
+    cpa_limit_m : float
+        A predicted CPA beyond this is no risk of collision [m].
+    tcpa_limit_s : float
+        A CPA further ahead in time than this is no risk yet [s].
+    """
+    own_velocity = own_speed_mps * np.array([math.cos(own_course_rad), math.sin(own_course_rad)])
+    target_velocity = np.asarray(target_velocity_mps, dtype=float)
+    target_speed = float(np.hypot(*target_velocity))
+    own_course_deg = math.degrees(own_course_rad)
+    range_m = float(np.hypot(target_xy[0] - own_xy[0], target_xy[1] - own_xy[1]))
+    beta = float(wrap_deg(bearing_deg(own_xy[0], own_xy[1], target_xy[0], target_xy[1]) - own_course_deg))
+    cpa, tcpa = cpa_tcpa(own_xy, own_velocity, target_xy, target_velocity)
+    if target_speed < STATIC_SPEED_MPS:
+        return Encounter("static", beta, 0.0, range_m, cpa, tcpa)
+    target_course_deg = math.degrees(math.atan2(target_velocity[1], target_velocity[0]))
+    alpha = float(wrap_deg(bearing_deg(target_xy[0], target_xy[1], own_xy[0], own_xy[1]) - target_course_deg))
+    if not (0.0 < tcpa <= tcpa_limit_s) or cpa > cpa_limit_m:
+        name = "none"
+    elif abs(alpha) > ABAFT_BEAM_DEG:
+        name = "overtaking"
+    elif abs(beta) > ABAFT_BEAM_DEG:
+        name = "overtaken"
+    elif (abs(beta) <= HEAD_ON_BEARING_DEG
+          and abs(float(wrap_deg(target_course_deg - own_course_deg - 180.0))) <= HEAD_ON_COURSE_DEG):
+        name = "head_on"
+    elif beta > 0.0:
+        name = "crossing_give_way"
+    else:
+        name = "crossing_stand_on"
+    return Encounter(name, beta, alpha, range_m, cpa, tcpa)
+
+
+class EncounterTracker:
+    """Classes per target with hysteresis: decided at the onset of risk, kept until passed.
+
+    Targets are identified by their row in the ``obstacles`` array (x, y, vx, vy, radius),
+    as the traffic participant publishes them.
+
+    Parameters
+    ----------
+    cpa_limit_m, tcpa_limit_s : float
+        Risk of collision thresholds passed to :func:`classify`.
+    release_range_m : float
+        After the CPA, the class is released once the range exceeds this [m].
+    """
+
+    def __init__(self, cpa_limit_m: float = 2.0 * 1852.0, tcpa_limit_s: float = 30.0 * 60.0,
+                 release_range_m: float = 4.0 * 1852.0) -> None:
+        self.cpa_limit_m = float(cpa_limit_m)
+        self.tcpa_limit_s = float(tcpa_limit_s)
+        self.release_range_m = float(release_range_m)
+        self._locked: dict[int, str] = {}
+
+    def update(self, own_xy: Sequence[float], own_course_rad: float, own_speed_mps: float,
+               obstacles: np.ndarray) -> list[Encounter]:
+        """Classify every row of ``obstacles``, keeping locked classes; one Encounter per row."""
+        rows = np.zeros((0, 5)) if obstacles is None else np.atleast_2d(np.asarray(obstacles, dtype=float))
+        result = []
+        for index, row in enumerate(rows):
+            now = classify(own_xy, own_course_rad, own_speed_mps, row[:2], row[2:4],
+                           self.cpa_limit_m, self.tcpa_limit_s)
+            locked = self._locked.get(index)
+            if locked is not None:
+                if now.tcpa_s <= 0.0 and now.range_m > self.release_range_m:
+                    del self._locked[index]
+                else:
+                    now = dataclasses.replace(now, encounter_class=locked)
+            elif now.encounter_class not in ("none", "static"):
+                self._locked[index] = now.encounter_class
+            result.append(now)
+        return result
+
+    @property
+    def locked(self) -> dict[int, str]:
+        """Classes currently held, by obstacle row."""
+        return dict(self._locked)

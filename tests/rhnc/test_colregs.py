@@ -1,0 +1,86 @@
+"""Encounter classification (Rules 13-15) on constructed geometries, and its hysteresis."""
+
+import math
+
+import numpy as np
+import pytest
+
+from rhnc.colregs import EncounterTracker, classify, cpa_tcpa, wrap_deg
+
+NM = 1852.0
+KN = NM / 3600.0
+
+
+def _velocity(course_deg, speed_kn):
+    c = math.radians(course_deg)
+    return (speed_kn * KN * math.cos(c), speed_kn * KN * math.sin(c))
+
+
+def _classify(target_nm, target_course_deg, target_speed_kn, own_course_deg=0.0, own_speed_kn=18.0):
+    return classify((0.0, 0.0), math.radians(own_course_deg), own_speed_kn * KN,
+                    (target_nm[0] * NM, target_nm[1] * NM), _velocity(target_course_deg, target_speed_kn))
+
+
+@pytest.mark.parametrize("target_nm, course, speed, expected", [
+    ((6.0, 0.1), 180.0, 15.0, "head_on"),              # dead ahead, reciprocal
+    ((6.0, 0.5), 188.0, 15.0, "head_on"),              # nearly ahead, nearly reciprocal
+    ((4.0, 4.0), 270.0, 15.0, "crossing_give_way"),    # from starboard, crossing to port
+    ((4.0, -4.0), 90.0, 15.0, "crossing_stand_on"),    # from port, crossing to starboard
+    ((2.0, 0.2), 0.0, 9.0, "overtaking"),              # slower ship ahead on our course
+    ((-2.0, 0.2), 0.0, 25.0, "overtaken"),             # faster ship coming up astern
+    ((6.0, -0.2), 0.0, 0.0, "static"),
+    ((6.0, 6.0), 0.0, 18.0, "none"),                   # parallel course, never closes
+    ((-4.0, 0.0), 180.0, 15.0, "none"),                # opening astern
+])
+def test_classes_of_constructed_geometries(target_nm, course, speed, expected):
+    assert _classify(target_nm, course, speed).encounter_class == expected
+
+
+def test_crossing_from_starboard_is_not_head_on_when_course_differs():
+    # ahead, but crossing at 90 deg: Rule 15, not Rule 14
+    assert _classify((6.0, 1.0), 270.0, 3.0).encounter_class == "crossing_give_way"
+
+
+def test_roles():
+    assert _classify((6.0, 0.1), 180.0, 15.0).role == "give_way"
+    assert _classify((4.0, -4.0), 90.0, 15.0).role == "stand_on"
+    assert _classify((-2.0, 0.2), 0.0, 25.0).role == "stand_on"
+
+
+def test_cpa_tcpa_of_head_on_offset():
+    cpa, tcpa = cpa_tcpa((0.0, 0.0), (10.0, 0.0), (1000.0, 50.0), (-10.0, 0.0))
+    assert cpa == pytest.approx(50.0)
+    assert tcpa == pytest.approx(50.0)
+
+
+def test_wrap_deg():
+    np.testing.assert_allclose(wrap_deg([190.0, -190.0, 180.0, -180.0, 540.0]), [-170.0, 170.0, 180.0, 180.0, 180.0])
+
+
+def test_tracker_keeps_the_class_while_the_give_way_ship_turns():
+    tracker = EncounterTracker()
+    target = np.array([[4.0 * NM, 4.0 * NM, *_velocity(270.0, 15.0), NM]])
+    first = tracker.update((0.0, 0.0), 0.0, 18.0 * KN, target)[0]
+    assert first.encounter_class == "crossing_give_way"
+    # after turning 40 deg to starboard the raw geometry would read differently
+    raw = classify((0.5 * NM, 0.3 * NM), math.radians(40.0), 18.0 * KN, (4.0 * NM, 3.0 * NM), _velocity(270.0, 15.0))
+    assert raw.encounter_class != "crossing_give_way"
+    kept = tracker.update((0.5 * NM, 0.3 * NM), math.radians(40.0), 18.0 * KN,
+                          np.array([[4.0 * NM, 3.0 * NM, *_velocity(270.0, 15.0), NM]]))[0]
+    assert kept.encounter_class == "crossing_give_way"
+
+
+def test_tracker_releases_after_the_encounter():
+    tracker = EncounterTracker(release_range_m=4.0 * NM)
+    tracker.update((0.0, 0.0), 0.0, 18.0 * KN, np.array([[6.0 * NM, 0.1 * NM, *_velocity(180.0, 15.0), NM]]))
+    assert tracker.locked == {0: "head_on"}
+    # passed and 5 nm apart, opening
+    after = tracker.update((10.0 * NM, 0.0), 0.0, 18.0 * KN,
+                           np.array([[5.0 * NM, 0.1 * NM, *_velocity(180.0, 15.0), NM]]))[0]
+    assert tracker.locked == {}
+    assert after.encounter_class == "none"
+    # passed but still within the release range: kept
+    tracker.update((0.0, 0.0), 0.0, 18.0 * KN, np.array([[6.0 * NM, 0.1 * NM, *_velocity(180.0, 15.0), NM]]))
+    held = tracker.update((7.0 * NM, 0.0), 0.0, 18.0 * KN,
+                          np.array([[5.0 * NM, 0.1 * NM, *_velocity(180.0, 15.0), NM]]))[0]
+    assert held.encounter_class == "head_on"
