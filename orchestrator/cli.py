@@ -95,6 +95,10 @@ def _run(args) -> int:
     if not report.ok:
         print(f"error: {report.reason}", file=sys.stderr)
         return EXIT_RUN_FAILED
+    if not report.passed:
+        for line in report.failed_criteria:
+            print(f"error: acceptance criterion not met: {line}", file=sys.stderr)
+        return EXIT_RUN_FAILED
     return 0
 
 
@@ -108,6 +112,9 @@ def _key_lines(summary) -> list[str]:
         shown = ", ".join(f"{k} {v:.4g}" for k, v in figures.items()
                           if isinstance(v, (int, float)) and not isinstance(v, bool))
         lines.append(f"{name}: {shown}")
+    criteria = summary.get("acceptance", {}).get("criteria", [])
+    if criteria:
+        lines.append(f"acceptance: {sum(c['passed'] for c in criteria)}/{len(criteria)} criteria met")
     return lines
 
 

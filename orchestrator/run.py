@@ -10,7 +10,7 @@ from typing import Any
 
 import pandas as pd
 
-from orchestrator import interrupts
+from orchestrator import acceptance, interrupts
 from orchestrator.errors import ToolchainError
 from orchestrator.master import CoSimulation
 from orchestrator.results import RunFolder, new_run_id, versions
@@ -30,7 +30,19 @@ class RunReport:
 
     @property
     def ok(self) -> bool:
+        """The run finished (its acceptance criteria are another matter: :attr:`passed`)."""
         return self.status == "finished"
+
+    @property
+    def failed_criteria(self) -> list[str]:
+        """``name: reason`` of each of the scenario's acceptance criteria not met."""
+        criteria = self.summary.get("acceptance", {}).get("criteria", [])
+        return [f"{c['name']}: {c['reason']}" for c in criteria if not c["passed"]]
+
+    @property
+    def passed(self) -> bool:
+        """Finished, and every acceptance criterion of the scenario met."""
+        return self.ok and not self.failed_criteria
 
 
 def run_scenario(path, results_root="results", progress: bool = True, run_id: str | None = None,
@@ -136,6 +148,12 @@ def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, 
         "analyses": figures,
         "participants": outcome.participant_summaries,
     }
+    if scenario.acceptance:
+        verdicts = acceptance.evaluate(scenario.acceptance, summary)
+        summary["acceptance"] = {
+            "passed": all(v.passed for v in verdicts),
+            "criteria": [{"name": v.name, "criterion": c.describe(), "passed": v.passed, "value": v.value,
+                          "reason": v.reason} for v, c in zip(verdicts, scenario.acceptance)]}
     folder.write_json("summary.json", summary)
     final = folder.publish()
     return RunReport(final, status, reason, summary)

@@ -17,7 +17,7 @@ from typing import Any
 from orchestrator.participant import is_finite_number
 from orchestrator.errors import ScenarioError
 
-TOP_LEVEL_KEYS = ("connections", "simulation", "metocean", "participants", "outputs")
+TOP_LEVEL_KEYS = ("connections", "simulation", "metocean", "participants", "outputs", "acceptance")
 SIMULATION_KEYS = ("name", "start_s", "stop_s", "steps", "dt_s", "stop_when")
 STOP_OPERATORS = ("<=", ">=", "<", ">")
 FMU_PARTICIPANT_KEYS = ("fmu", "every", "parameter_set", "parameters", "mapping")
@@ -117,6 +117,8 @@ class Scenario:
     metocean: dict[str, Any] | None
     outputs: OutputSpec
     sha256: str
+    #: ``[[acceptance]]`` criteria checked on the run's summary.json after the run
+    acceptance: tuple = ()
 
     @property
     def directory(self) -> Path:
@@ -163,6 +165,9 @@ def load_scenario(path, overrides: Mapping[str, Any] | None = None) -> Scenario:
     if metocean is not None and not isinstance(metocean, dict):
         raise ScenarioError(f"{where}: 'metocean' must be a table")
     outputs = _outputs(_table(data, "outputs", where, required=False), where)
+    from orchestrator.batch_spec import parse_acceptance  # batch files share the format
+
+    acceptance = parse_acceptance(data.get("acceptance", []), where)
     return Scenario(
         path=path.resolve(),
         simulation=simulation,
@@ -171,6 +176,7 @@ def load_scenario(path, overrides: Mapping[str, Any] | None = None) -> Scenario:
         metocean=metocean,
         outputs=outputs,
         sha256=hashlib.sha256(raw).hexdigest(),
+        acceptance=acceptance,
     )
 
 
