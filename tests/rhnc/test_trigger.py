@@ -51,3 +51,61 @@ def test_no_obstacles_means_normal_state():
     assert trigger.update(0.0, (0, 0), (1, 0), (10, 10), None) == 0.0
     assert trigger.update(1.0, (0, 0), (1, 0), (10, 10), np.zeros((0, 5))) == 0.0
     assert trigger.transitions == []
+
+
+@pytest.mark.parametrize("ship_m, static_m", [(0.0, 1.0), (1.0, 0.0), (-1.0, 1.0), (1.0, -1.0)])
+def test_warning_ranges_must_be_positive(ship_m, static_m):
+    with pytest.raises(ValueError, match="warning ranges must be positive"):
+        EventTrigger(ship_m, static_m)
+
+
+def test_small_positive_ranges_are_accepted_and_kept_apart():
+    trigger = EventTrigger(0.5, 0.25, moving_speed=2.0)
+    assert (trigger.ship_range_m, trigger.static_range_m, trigger.moving_speed) == (0.5, 0.25, 2.0)
+    assert trigger.states == [] and trigger.transitions == [] and trigger.et == 0.0
+
+
+def test_moving_speed_decides_which_range_applies():
+    """At 5 nm, between eps1 = 4.5 nm and eps2 = 6 nm: only an obstacle counted static triggers
+    (default threshold 0.1 m/s)."""
+    at_5nm = lambda speed: np.array([[5 * NM, 0.0, 0.0, speed, 100.0]])  # noqa: E731
+    for speed, moving_speed, expected in ((0.05, None, 1.0), (0.5, None, 0.0), (0.5, 1.0, 1.0), (0.15, 0.2, 1.0)):
+        trigger = EventTrigger(4.5 * NM, 6.0 * NM, **({} if moving_speed is None else {"moving_speed": moving_speed}))
+        assert trigger.update(0.0, (0.0, 0.0), (1.0, 0.0), (20 * NM, 0.0), at_5nm(speed)) == expected
+        if expected:
+            assert trigger.transitions[0].kind == "static"
+
+
+def test_states_follow_the_number_of_obstacles():
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM)
+    far = [50 * NM, 50 * NM, 0.0, 0.0, 100.0]
+    near = [1 * NM, 0.0, 0.0, 0.0, 100.0]
+    trigger.update(0.0, (0, 0), (1, 0), (20 * NM, 0), np.array([far, near]))
+    assert trigger.states == ["clear", "triggered"]
+    trigger.update(1.0, (0, 0), (1, 0), (20 * NM, 0), np.array([far, near, far]))
+    assert trigger.states == ["clear", "triggered", "clear"]
+    trigger.update(2.0, (0, 0), (1, 0), (20 * NM, 0), np.array([near]))
+    assert trigger.states == ["triggered"]
+    assert trigger.update(3.0, (0, 0), (1, 0), (20 * NM, 0), np.array([far])) == 0.0
+    assert trigger.states == ["clear"]
+
+
+def test_a_passed_obstacle_at_a_constant_range_stays_passed():
+    """Re-triggering needs the range to close (rate < 0), not merely to stop opening."""
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM)
+    goal = (20 * NM, 0.0)
+    obstacle = np.array([[0.0, 0.0, 0.0, 0.0, 100.0]])  # static, at the origin
+    trigger.update(0.0, (-1 * NM, 0.0), (5.0, 0.0), goal, obstacle)  # ahead, closing: triggered
+    trigger.update(1.0, (1 * NM, 0.0), (5.0, 0.0), goal, obstacle)  # behind, opening: passed
+    assert trigger.states == ["passed"]
+    # the ship now sails across the line of sight: range rate exactly zero, obstacle not behind
+    state = trigger.update(2.0, (0.0, 1 * NM), (5.0, 0.0), (0.0, -2 * NM), obstacle)
+    assert state == 0.0 and trigger.states == ["passed"]
+    # closing again while ahead: triggered again with that cause
+    assert trigger.update(3.0, (0.0, 1 * NM), (0.0, -5.0), (0.0, -2 * NM), obstacle) == 1.0
+    last = trigger.transitions[-1]
+    assert (last.time, last.obstacle, last.kind, last.cause, last.state, last.et) == (
+        3.0, 0, "static", "ahead and closing again", "triggered", 1.0)
+    assert last.range_m == pytest.approx(1 * NM)
+    assert last.as_dict() == {"time": 3.0, "obstacle": 0, "kind": "static", "range_m": last.range_m,
+                              "cause": "ahead and closing again", "state": "triggered", "et": 1.0}
