@@ -121,7 +121,8 @@ def handle_signals(grace_s: float = GRACE_S) -> Iterator[None]:
     finally:
         for number, handler in previous.items():
             signal.signal(number, handler)
-        _state.installed = False
+        _state.acknowledged.set()  # the watchdog of a handled request stands down
+        _state.reset()  # the request belonged to this block: later runs in this process start clean
 
 
 def _on_signal(number: int, _frame) -> None:

@@ -153,3 +153,16 @@ def test_an_interrupt_a_participant_swallowed_still_stops_the_run(write_scenario
     # the swallower steps last: the step of t = 5 s completes, the next is not begun
     assert report.summary["simulation"]["steps_done"] == 6
     assert [p.name for p in (tmp_path / "swallow").iterdir()] == [report.folder.name]
+
+
+def test_a_handled_interrupt_does_not_stop_the_next_run_in_the_process(write_scenario, tmp_path):
+    from orchestrator import interrupts
+    from orchestrator.run import run_scenario
+
+    path = write_scenario(STUBBORN_SCENARIO.replace("Stubborn", "Swallower").replace('name = "stubborn"',
+                                                                                    'name = "swallow"'))
+    with interrupts.handle_signals():
+        assert run_scenario(path, tmp_path, progress=False).status == "interrupted"
+    assert interrupts.stop_requested() is None
+    calm = write_scenario(STUBBORN_SCENARIO.replace("at_s = 5.0", "at_s = 1.0e9"), "calm.toml")
+    assert run_scenario(calm, tmp_path, progress=False).status == "finished"
