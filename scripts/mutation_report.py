@@ -50,7 +50,22 @@ MODULES = {
 }
 
 #: Survivors explained by hand: mutant name -> reason (names are those of ``mutmut results``).
-EXPLAINED: dict[str, str] = {}
+_NO_ROWS = "an empty (0, k) array: no row is read, the column count does not matter"
+_FLOAT = ("the dtype only changes for integer input, and every use combines it with a float array "
+          "(numpy promotes), so the results are the same floats")
+_SIGN = "only the sign of the range rate is used, and the divisor is positive either way"
+_TRIGGER = "rhnc.trigger.x\u01c1EventTrigger\u01c1update__mutmut_"
+EXPLAINED: dict[str, str] = {
+    f"{_TRIGGER}6": _NO_ROWS, f"{_TRIGGER}18": _NO_ROWS,
+    **{f"{_TRIGGER}{n}": _FLOAT for n in (10, 12, 28, 30, 33, 35, 39, 41)},
+    f"{_TRIGGER}14": "obstacle rows have 5 columns, so an array of size 1 cannot occur",
+    f"{_TRIGGER}21": "extending the state list by zero entries changes nothing",
+    f"{_TRIGGER}25": "deleting the states past the last one deletes nothing",
+    f"{_TRIGGER}62": _SIGN, f"{_TRIGGER}71": _SIGN,
+    f"{_TRIGGER}75": ("differs only when |offset . to_goal| < 1 m^2, i.e. the obstacle abeam to within a "
+                      "millimetre per kilometre of range: below the resolution of any position"),
+    f"{_TRIGGER}78": "the default cause is never recorded: a transition always sets its own",
+}
 
 LOG_CALLS = {"debug", "info", "warning", "error", "exception", "critical"}
 

@@ -74,6 +74,7 @@ def test_moving_speed_decides_which_range_applies():
         assert trigger.update(0.0, (0.0, 0.0), (1.0, 0.0), (20 * NM, 0.0), at_5nm(speed)) == expected
         if expected:
             assert trigger.transitions[0].kind == "static"
+            assert trigger.transitions[0].cause == "within warning range"
 
 
 def test_states_follow_the_number_of_obstacles():
@@ -109,3 +110,64 @@ def test_a_passed_obstacle_at_a_constant_range_stays_passed():
     assert last.range_m == pytest.approx(1 * NM)
     assert last.as_dict() == {"time": 3.0, "obstacle": 0, "kind": "static", "range_m": last.range_m,
                               "cause": "ahead and closing again", "state": "triggered", "et": 1.0}
+
+
+def states_after(updates, ranges=(4.5 * NM, 6.0 * NM)):
+    """Run ``updates`` = [(position, velocity, goal, obstacle row)] from t = 0; the states after each."""
+    trigger = EventTrigger(*ranges)
+    seen = []
+    for k, (position, velocity, goal, row) in enumerate(updates):
+        trigger.update(float(k), position, velocity, goal, np.array([row]))
+        seen.append(trigger.states[0])
+    return seen
+
+
+STATIC_AT_ORIGIN = [0.0, 0.0, 0.0, 0.0, 100.0]
+
+
+def test_release_and_retrigger_at_their_boundaries():
+    east, goal = (5.0, 0.0), (20 * NM, 0.0)
+    approach = ((-1 * NM, 0.0), east, goal, STATIC_AT_ORIGIN)  # ahead, closing: triggered
+    # behind but the range neither opens nor closes: stays triggered
+    assert states_after([approach, ((1 * NM, 0.0), (0.0, 5.0), goal, STATIC_AT_ORIGIN)]) == ["triggered"] * 2
+    # behind and opening slowly (0.5 m/s): released
+    assert states_after([approach, ((1 * NM, 0.0), (0.5, 0.0), goal, STATIC_AT_ORIGIN)]) == ["triggered", "passed"]
+    # exactly abeam (neither ahead nor behind) with the range opening: not yet passed
+    abeam = ((0.0, -1 * NM), (5.0, -1.0), (20 * NM, -1 * NM), STATIC_AT_ORIGIN)
+    assert states_after([approach, abeam]) == ["triggered", "triggered"]
+    # passed, then still behind but closing (sailing back towards it): stays passed
+    back = ((1 * NM, 0.0), (-5.0, 0.0), goal, STATIC_AT_ORIGIN)
+    assert states_after([approach, ((1 * NM, 0.0), east, goal, STATIC_AT_ORIGIN), back]) == [
+        "triggered", "passed", "passed"]
+
+
+def test_behind_is_measured_from_the_ship_towards_the_goal():
+    """With the ship west of a goal at the origin, an obstacle further west is behind it."""
+    goal, east = (0.0, 0.0), (5.0, 0.0)
+    row = [-11 * NM, 0.5 * NM, 0.0, 0.0, 100.0]
+    assert states_after([((-10 * NM, 0.0), east, goal, row)] * 2) == ["triggered", "passed"]
+
+
+def test_an_obstacle_exactly_at_the_warning_range_triggers():
+    assert states_after([((0.0, 0.0), (5.0, 0.0), (20 * NM, 0.0), [6 * NM, 0.0, 0.0, 0.0, 100.0])]) == ["triggered"]
+    assert states_after([((0.0, 0.0), (5.0, 0.0), (20 * NM, 0.0), [6.01 * NM, 0.0, 0.0, 0.0, 100.0])]) == ["clear"]
+
+
+def test_an_obstacle_moving_exactly_at_the_threshold_counts_static():
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM, moving_speed=0.5)
+    assert trigger.update(0.0, (0, 0), (1, 0), (20 * NM, 0), np.array([[5 * NM, 0.0, 0.5, 0.0, 1.0]])) == 1.0
+    assert trigger.transitions[0].kind == "static"
+
+
+def test_a_target_moving_along_x_is_a_ship_and_its_range_rate_uses_both_components():
+    # target on the x axis moving along x only: eps1 applies (a ship) and it triggers; behind
+    # the ship but overtaking it (closing at 1 m/s) it stays triggered; moving away, released
+    goal = (20 * NM, 0.0)
+    updates = [((0.0, 0.0), (5.0, 0.0), goal, [4 * NM, 0.0, 6.0, 0.0, 100.0]),
+               ((5 * NM, 0.0), (5.0, 0.0), goal, [4 * NM, 0.0, 6.0, 0.0, 100.0]),
+               ((5 * NM, 0.0), (5.0, 0.0), goal, [4 * NM, 0.0, -2.0, 0.0, 100.0])]
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM)
+    for k, (position, velocity, goal_, row) in enumerate(updates):
+        trigger.update(float(k), position, velocity, goal_, np.array([row]))
+    assert [t.kind for t in trigger.transitions] == ["ship", "ship"]
+    assert [(t.time, t.state) for t in trigger.transitions] == [(0.0, "triggered"), (2.0, "passed")]
