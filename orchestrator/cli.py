@@ -177,7 +177,13 @@ def _batch(args) -> int:
 def _compare(args) -> int:
     from orchestrator.compare import run_comparison
 
+    from orchestrator import interrupts
+
     folder = run_comparison(args.comparison, args.results, progress=not args.no_progress)
+    if interrupts.stop_requested():  # its runs stopped as interrupted: the table is incomplete
+        print(f"interrupted: results in {folder}")
+        print(f"error: {interrupts.reason()}", file=sys.stderr)
+        return EXIT_INTERRUPTED
     print(f"finished: results in {folder}")
     print((folder / "table.md").read_text())
     return 0

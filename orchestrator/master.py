@@ -172,9 +172,8 @@ class CoSimulation:
 
         try:
             with interrupts.reporting_position(position):
-                for participant in self.participants:
+                for participant in self.participants:  # set up completely: the record starts at t0
                     current[1] = participant.name
-                    self._check_stop()
                     inputs = {port: bus[key] for port, key in inbound[participant.name] if key in bus}
                     outputs = participant.setup(sim.start_s, inputs)
                     self._publish(participant, sim.start_s, outputs, bus, recorder)

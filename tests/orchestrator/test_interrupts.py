@@ -166,3 +166,23 @@ def test_a_handled_interrupt_does_not_stop_the_next_run_in_the_process(write_sce
     assert interrupts.stop_requested() is None
     calm = write_scenario(STUBBORN_SCENARIO.replace("at_s = 5.0", "at_s = 1.0e9"), "calm.toml")
     assert run_scenario(calm, tmp_path, progress=False).status == "finished"
+
+
+def test_an_interrupted_comparison_exits_130_and_stops_its_later_runs(write_scenario, tmp_path, capsys):
+    from orchestrator.cli import main
+
+    turning = (HERE.parents[1] / "scenarios" / "turning_circle.toml").read_text()
+    write_scenario(turning + '[participants.hang]\ntype = "python"\nclass = "sample_participants:Swallower"\n'
+                   "[participants.hang.options]\nat_s = 50.0\n", "first.toml")
+    write_scenario(turning, "second.toml")
+    comparison = write_scenario('name = "pair"\nanalysis = "none"\nmetrics = ["x"]\n'
+                                '[[runs]]\nlabel = "A"\nscenario = "first.toml"\n'
+                                '[[runs]]\nlabel = "B"\nscenario = "second.toml"\n', "pair.toml")
+    assert main(["compare", str(comparison), "--results", str(tmp_path / "results"), "--no-progress"]) == 130
+    captured = capsys.readouterr()
+    assert "error: interrupted by the user (Ctrl-C)" in captured.err
+    folder = Path(captured.out.split("results in ")[1].split()[0])
+    summaries = [json.loads(p.read_text()) for p in sorted(folder.glob("runs/*/*/summary.json"))]
+    assert [s["status"] for s in summaries] == ["interrupted", "interrupted"]
+    steps = {s["scenario"].rsplit("/", 1)[-1]: s["simulation"]["steps_done"] for s in summaries}
+    assert steps == {"first.toml": 11, "second.toml": 0}  # stopped after t = 50 s; the second never stepped
