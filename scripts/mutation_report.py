@@ -55,6 +55,9 @@ _FLOAT = ("the dtype only changes for integer input, and every use combines it w
           "(numpy promotes), so the results are the same floats")
 _SIGN = "only the sign of the range rate is used, and the divisor is positive either way"
 _TRIGGER = "rhnc.trigger.x\u01c1EventTrigger\u01c1update__mutmut_"
+_VOYAGE = "rhnc.voyage.x_account_voyage__mutmut_"
+_NAN_TEXT = "float() reads 'NAN' as 'nan': the same NaN"
+_TRAPEZOID = "the trapezoid rule over fewer than two samples is 0.0, the value of the other branch"
 EXPLAINED: dict[str, str] = {
     f"{_TRIGGER}6": _NO_ROWS, f"{_TRIGGER}18": _NO_ROWS,
     **{f"{_TRIGGER}{n}": _FLOAT for n in (10, 12, 28, 30, 33, 35, 39, 41)},
@@ -65,6 +68,9 @@ EXPLAINED: dict[str, str] = {
     f"{_TRIGGER}75": ("differs only when |offset . to_goal| < 1 m^2, i.e. the obstacle abeam to within a "
                       "millimetre per kilometre of range: below the resolution of any position"),
     f"{_TRIGGER}78": "the default cause is never recorded: a transition always sets its own",
+    **{f"{_VOYAGE}{n}": _NAN_TEXT for n in (77, 119, 127)},
+    **{f"{_VOYAGE}{n}": _FLOAT for n in (7, 9)},
+    **{f"{_VOYAGE}{n}": _TRAPEZOID for n in (28, 34, 39, 45)},
 }
 
 LOG_CALLS = {"debug", "info", "warning", "error", "exception", "critical"}
