@@ -56,6 +56,10 @@ _FLOAT = ("the dtype only changes for integer input, and every use combines it w
 _SIGN = "only the sign of the range rate is used, and the divisor is positive either way"
 _TRIGGER = "rhnc.trigger.x\u01c1EventTrigger\u01c1update__mutmut_"
 _VOYAGE = "rhnc.voyage.x_account_voyage__mutmut_"
+_REFERENCE = "rhnc.reference.x_reference_states__mutmut_"
+_REST_END = ("an end row at rest means p2 - 4 p1 + 3 p0 = 0 to within the rest threshold (one-sided difference "
+             "zero), which makes velocity and acceleration at the neighbouring row parallel to that precision: the "
+             "neighbour's yaw rate is 0 (exactly for a ship stopped dead)")
 _NAN_TEXT = "float() reads 'NAN' as 'nan': the same NaN"
 _TRAPEZOID = "the trapezoid rule over fewer than two samples is 0.0, the value of the other branch"
 EXPLAINED: dict[str, str] = {
@@ -71,6 +75,12 @@ EXPLAINED: dict[str, str] = {
     **{f"{_VOYAGE}{n}": _NAN_TEXT for n in (77, 119, 127)},
     **{f"{_VOYAGE}{n}": _FLOAT for n in (7, 9)},
     **{f"{_VOYAGE}{n}": _TRAPEZOID for n in (28, 34, 39, 45)},
+    **{f"{_REFERENCE}{n}": _FLOAT for n in (5, 7)},
+    **{f"{_REFERENCE}{n}": ("the end accelerations feed only the end yaw rates, which are then replaced by "
+                            "their neighbours' (or 0 at rest)") for n in (84, 85, 86, 87, 89, 90, 91)},
+    **{f"{_REFERENCE}{n}": _REST_END for n in (143, 145, 151, 155)},
+    f"{_REFERENCE}112": ("np.all(None) is False: the hold loop then runs for an all-moving path too, and there "
+                         "it leaves every heading as it is"),
 }
 
 LOG_CALLS = {"debug", "info", "warning", "error", "exception", "critical"}
