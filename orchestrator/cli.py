@@ -1,4 +1,4 @@
-"""Command line: ``python -m orchestrator {run,validate,build,plan,compare,batch} ...``.
+"""Command line: ``python -m orchestrator {run,validate,build,export,plan,compare,batch} ...``.
 
 Known errors (bad scenario, missing FMU, failed model) print one line and exit non-zero:
 2 for bad input, 3 for a run that failed or missed its acceptance criteria, 130 for
@@ -33,12 +33,21 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     validate = sub.add_parser("validate", help="check a scenario and its FMUs without running it")
     validate.add_argument("scenario", help="scenario TOML file")
-    build = sub.add_parser("build", help="compile the FMUs in models/ into fmus/")
+    build = sub.add_parser("build", help="compile the FMUs in models/ into fmus/ (FMI 2.0) or fmus/fmi3/")
     build.add_argument("models", nargs="*", help="model names (default: all)")
+    build.add_argument("--fmi-version", choices=("2.0", "3.0", "all"), default="2.0",
+                       help="FMI standard of the FMUs (default 2.0; 'all' builds both)")
     compare = sub.add_parser("compare", help="run several scenarios and tabulate them (e.g. Table 3)")
     compare.add_argument("comparison", help="comparison TOML file")
     compare.add_argument("--results", default="results", help="results folder (default: ./results)")
     compare.add_argument("--no-progress", action="store_true", help="no progress bar")
+    export = sub.add_parser("export", help="pack Python participants of a scenario as FMI 2.0 FMUs, "
+                                           "or the whole scenario as an OSP system (--osp)")
+    export.add_argument("scenario", help="scenario TOML file")
+    export.add_argument("participants", nargs="*", help="names of the participants to export (e.g. ctrl nav)")
+    export.add_argument("--out", default="fmus/exported", help="folder for the FMUs (default: fmus/exported)")
+    export.add_argument("--osp", action="store_true",
+                        help="export every participant and write OspSystemStructure.xml for OSP's libcosim")
     plan = sub.add_parser("plan", help="run an offline planning experiment (e.g. Experiment 1)")
     plan.add_argument("scenario", help="offline planning TOML file")
     plan.add_argument("--results", default="results", help="results folder (default: ./results)")
@@ -134,8 +143,10 @@ def _build(args) -> int:
     from orchestrator import fmu_build
 
     names = args.models or fmu_build.model_names()
-    for name in names:
-        print(fmu_build.build_fmu(name))
+    versions = fmu_build.FMI_VERSIONS if args.fmi_version == "all" else (args.fmi_version,)
+    for version in versions:
+        for name in names:
+            print(fmu_build.build_fmu(name, fmi_version=version))
     return 0
 
 
@@ -189,8 +200,25 @@ def _compare(args) -> int:
     return 0
 
 
+def _export(args) -> int:
+    from orchestrator.errors import ScenarioError
+    from orchestrator.export import export_participant
+    from orchestrator.osp_export import export_osp_system
+
+    if args.osp:
+        if args.participants:
+            raise ScenarioError("export --osp exports every participant; name none")
+        print(export_osp_system(args.scenario, args.out))
+        return 0
+    if not args.participants:
+        raise ScenarioError("export: name the participants to export, or give --osp for the whole scenario")
+    for name in args.participants:
+        print(export_participant(args.scenario, name, args.out))
+    return 0
+
+
 _COMMANDS = {"run": _run, "validate": _validate, "build": _build, "plan": _plan, "batch": _batch,
-             "compare": _compare}
+             "compare": _compare, "export": _export}
 
 
 def console_main() -> None:

@@ -1,4 +1,9 @@
-"""Build the C models under ``models/`` into FMI 2.0 co-simulation FMUs under ``fmus/``.
+"""Build the C models under ``models/`` into FMI 2.0 and 3.0 co-simulation FMUs under ``fmus/``.
+
+From the same C sources: ``fmus/<Name>.fmu`` (FMI 2.0, the default) and
+``fmus/fmi3/<Name>.fmu`` (FMI 3.0). The shared layer's core (``fmu_core.c``) is compiled
+with ``fmi2_api.c`` or ``fmi3_api.c``; the FMI 3.0 description is derived from the
+model's FMI 2.0 one (:mod:`orchestrator.model_description`).
 
 Each model folder ``models/<Name>/`` holds ``config.h``, ``model.c`` and a
 ``modelDescription.xml`` whose parameter start values are ``@name@`` placeholders; the
@@ -32,10 +37,15 @@ FMUS_DIR = Path(__file__).resolve().parent.parent / "fmus"
 COMMON = "common"
 PARAMETER_SETS = Path("KCS") / "parameter_sets.toml"
 DEFAULTS_HEADER = "kcs_parameter_defaults.h"
+BOUNDS_HEADER = "model_bounds.h"
+RESOURCES = "resources"
 HASH_PREFIX = "rhnc-source-sha256="
 # Bump when the build recipe itself changes, so existing FMUs are rebuilt.
-RECIPE_VERSION = "1"
+RECIPE_VERSION = "2"
 SOURCE_SUFFIXES = (".c", ".h")
+FMI_VERSIONS = ("2.0", "3.0")
+#: The FMI API file of the shared layer per version; the other version's is left out.
+API_SOURCES = {"2.0": "fmi2_api.c", "3.0": "fmi3_api.c"}
 
 
 def model_names(models_dir: Path = MODELS_DIR) -> list[str]:
@@ -53,28 +63,46 @@ def _check_name(name: str, models_dir: Path) -> Path:
     return Path(models_dir) / name
 
 
-def _sources(name: str, models_dir: Path) -> list[Path]:
-    """C sources and headers of one model: its folder's and the shared layer's."""
+def _check_version(fmi_version: str) -> str:
+    if fmi_version not in FMI_VERSIONS:
+        raise FmuError(f"unknown FMI version {fmi_version!r} (valid: {', '.join(FMI_VERSIONS)})")
+    return fmi_version
+
+
+def _sources(name: str, models_dir: Path, fmi_version: str = "2.0") -> list[Path]:
+    """C sources and headers of one model for one FMI version: its folder's and the shared layer's."""
+    other_apis = {api for version, api in API_SOURCES.items() if version != fmi_version}
     files = []
     for folder in (Path(models_dir) / COMMON, Path(models_dir) / name):
-        files += sorted(p for p in folder.iterdir() if p.suffix in SOURCE_SUFFIXES)
+        files += sorted(p for p in folder.iterdir() if p.suffix in SOURCE_SUFFIXES and p.name not in other_apis)
     return files
 
 
-def _inputs(name: str, models_dir: Path) -> list[Path]:
+def _resources(name: str, models_dir: Path) -> list[Path]:
+    """Files shipped in the FMU's ``resources/``: the model folder's ``resources/`` (e.g. a default grid)."""
+    folder = Path(models_dir) / name / RESOURCES
+    return sorted(p for p in folder.rglob("*") if p.is_file()) if folder.is_dir() else []
+
+
+def _inputs(name: str, models_dir: Path, fmi_version: str = "2.0") -> list[Path]:
     """Every file whose content determines the FMU."""
     models_dir = Path(models_dir)
-    return _sources(name, models_dir) + [
+    return _sources(name, models_dir, fmi_version) + _resources(name, models_dir) + [
         models_dir / name / "modelDescription.xml",
         models_dir / PARAMETER_SETS,
     ]
 
 
-def source_hash(name: str, models_dir: Path = MODELS_DIR) -> str:
-    """SHA-256 over the recipe version and the relative path and content of every input."""
+def fmu_path(name: str, out_dir: Path = FMUS_DIR, fmi_version: str = "2.0") -> Path:
+    """Where the FMU of a model is built: ``<out_dir>/<name>.fmu`` or ``<out_dir>/fmi3/<name>.fmu``."""
+    return Path(out_dir) / (f"{name}.fmu" if _check_version(fmi_version) == "2.0" else f"fmi3/{name}.fmu")
+
+
+def source_hash(name: str, models_dir: Path = MODELS_DIR, fmi_version: str = "2.0") -> str:
+    """SHA-256 over the recipe and FMI versions and the relative path and content of every input."""
     models_dir = Path(models_dir)
-    digest = hashlib.sha256(RECIPE_VERSION.encode())
-    for path in _inputs(name, models_dir):
+    digest = hashlib.sha256(f"{RECIPE_VERSION} {_check_version(fmi_version)}".encode())
+    for path in _inputs(name, models_dir, fmi_version):
         digest.update(str(path.relative_to(models_dir)).encode() + b"\0")
         digest.update(path.read_bytes() + b"\0")
     return digest.hexdigest()
@@ -143,8 +171,9 @@ def _first_error(output: str) -> str:
     return lines[0] if lines else "no compiler output"
 
 
-def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR) -> Path:
-    """Compile one model into ``out_dir/<name>.fmu``.
+def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR,
+              fmi_version: str = "2.0") -> Path:
+    """Compile one model into ``out_dir/<name>.fmu`` (FMI 2.0) or ``out_dir/fmi3/<name>.fmu``.
 
     Parameters
     ----------
@@ -154,6 +183,8 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR
         Folder receiving the FMU (created if missing).
     models_dir : Path
         The ``models/`` tree to build from.
+    fmi_version : {"2.0", "3.0"}
+        The FMI standard of the FMU.
 
     Returns
     -------
@@ -166,24 +197,35 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR
         Unknown model name, unreadable parameter set, or a compilation error (the message
         names the model and the compiler's first error line).
     """
-    from fmpy import platform, sharedLibraryExtension
+    from fmpy import platform, platform_tuple, sharedLibraryExtension
+
+    from orchestrator import model_description
 
     models_dir = Path(models_dir)
     model_dir = _check_name(name, models_dir)
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    fmu = fmu_path(name, out_dir, fmi_version)
+    fmu.parent.mkdir(parents=True, exist_ok=True)
     parameters = _default_parameters(models_dir)
-    description = _model_description(name, models_dir, parameters)
-    sources = _sources(name, models_dir)
-    digest = source_hash(name, models_dir)
+    sources = _sources(name, models_dir, fmi_version)
+    c_files = [p.name for p in sources if p.suffix == ".c"]
+    description = model_description.finish_fmi2(
+        _model_description(name, models_dir, parameters), c_files, _product_version())
+    bounds_text = model_description.bounds_header(description)
+    extra_sources = {}
+    if fmi_version == "3.0":
+        description = model_description.to_fmi3(description, c_files, _product_version())
+        extra_sources["buildDescription.xml"] = model_description.build_description_fmi3(name, c_files)
+    digest = source_hash(name, models_dir, fmi_version)
 
     with tempfile.TemporaryDirectory(prefix=f"fmu_build_{name}_") as tmp:
         tmp = Path(tmp)
         header = tmp / DEFAULTS_HEADER
         header.write_text(_defaults_header(parameters), encoding="utf-8")
+        bounds = tmp / BOUNDS_HEADER
+        bounds.write_text(bounds_text, encoding="utf-8")
         library = tmp / f"{name}{sharedLibraryExtension}"
         command = [
-            _compiler(), "-O2", "-shared", "-fPIC", "-Wall",
+            _compiler(), "-O2", "-shared", "-fPIC", "-fvisibility=hidden", "-Wall",
             f"-I{tmp}", f"-I{model_dir}", f"-I{models_dir / COMMON}", f"-I{_fmi_headers()}",
             *[str(p) for p in sources if p.suffix == ".c"],
             "-o", str(library), "-lm",
@@ -195,18 +237,22 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR
         if result.stderr.strip():
             log.warning("compiler warnings for %s:\n%s", name, result.stderr.strip())
 
-        fmu = out_dir / f"{name}.fmu"
         # a staging file per process: two runs building the same FMU at once never mix files
-        partial = out_dir / f".{name}.fmu.{os.getpid()}.partial"
+        partial = fmu.parent / f".{name}.fmu.{os.getpid()}.partial"
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
             z.writestr("modelDescription.xml", description)
-            z.write(library, f"binaries/{platform}/{library.name}")
+            binary_folder = platform if fmi_version == "2.0" else platform_tuple
+            z.write(library, f"binaries/{binary_folder}/{library.name}")
             names = set()
-            for path in [*sources, header]:
+            for path in [*sources, header, bounds]:
                 if path.name in names:
                     raise FmuError(f"building model {name} failed: two sources named {path.name}")
                 names.add(path.name)
                 z.write(path, f"sources/{path.name}")
+            for file_name, text in extra_sources.items():
+                z.writestr(f"sources/{file_name}", text)
+            for path in _resources(name, models_dir):
+                z.write(path, f"resources/{path.relative_to(model_dir / RESOURCES).as_posix()}")
             z.comment = (HASH_PREFIX + digest).encode()
         partial.replace(fmu)
     log.info("built %s", fmu)
@@ -222,20 +268,33 @@ def _stored_hash(fmu: Path) -> str | None:
     return comment[len(HASH_PREFIX):] if comment.startswith(HASH_PREFIX) else None
 
 
-def ensure_built(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR) -> Path:
-    """Return ``out_dir/<name>.fmu``, rebuilding it when missing or built from other sources.
+def ensure_built(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR,
+                 fmi_version: str = "2.0") -> Path:
+    """Return the model's FMU, rebuilding it when missing or built from other sources.
 
     The comparison is by content: the SHA-256 of the model's sources, the shared layer,
     its modelDescription.xml and parameter_sets.toml, stored in the FMU's zip comment.
     """
     _check_name(name, models_dir)
-    fmu = Path(out_dir) / f"{name}.fmu"
-    if fmu.is_file() and _stored_hash(fmu) == source_hash(name, models_dir):
+    fmu = fmu_path(name, out_dir, fmi_version)
+    if fmu.is_file() and _stored_hash(fmu) == source_hash(name, models_dir, fmi_version):
         log.debug("%s is up to date", fmu)
         return fmu
-    return build_fmu(name, out_dir, models_dir)
+    return build_fmu(name, out_dir, models_dir, fmi_version)
 
 
-def build_all(out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR) -> list[Path]:
-    """Build every model of ``models_dir`` into ``out_dir``; returns the FMUs written."""
-    return [build_fmu(name, out_dir, models_dir) for name in model_names(models_dir)]
+def build_all(out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR,
+              fmi_versions: tuple[str, ...] = ("2.0",)) -> list[Path]:
+    """Build every model of ``models_dir`` into ``out_dir`` for each FMI version; the FMUs written."""
+    return [build_fmu(name, out_dir, models_dir, version)
+            for version in fmi_versions for name in model_names(models_dir)]
+
+
+def _product_version() -> str:
+    """This package's version, written into every modelDescription."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("rhnc-cosim")
+    except PackageNotFoundError:  # running from a source tree that is not installed
+        return "0+unknown"

@@ -14,12 +14,12 @@ import shutil
 import tempfile
 import tomllib
 from collections.abc import Mapping
-from ctypes import byref
 from pathlib import Path
 
 from fmpy.fmi1 import FMICallException
 
 from orchestrator.errors import FmuError, ModelError, ScenarioError
+from orchestrator.fmi_slave import REAL_TYPES, SUPPORTED_VERSIONS, FmiSlave
 from orchestrator.participant import Participant, Value
 from orchestrator.scenario import ParticipantSpec, VariableMapping
 
@@ -33,8 +33,8 @@ CANONICAL_PLANT_PORTS = {
 }
 
 
-def resolve_fmu(reference: str, scenario_dir: Path, where: str) -> Path:
-    """Path of the FMU a scenario names: a built-in model (built on demand) or a file."""
+def resolve_fmu(reference: str, scenario_dir: Path, where: str, fmi_version: str = "2.0") -> Path:
+    """Path of the FMU a scenario names: a built-in model (built on demand for ``fmi_version``) or a file."""
     from orchestrator import fmu_build
 
     if not reference.endswith(".fmu") and "/" not in reference and "\\" not in reference:
@@ -43,7 +43,7 @@ def resolve_fmu(reference: str, scenario_dir: Path, where: str) -> Path:
                 f"{where}.fmu: no built-in model '{reference}' (valid: {', '.join(fmu_build.model_names())},"
                 " or a path to an .fmu file)"
             )
-        return fmu_build.ensure_built(reference)
+        return fmu_build.ensure_built(reference, fmi_version=fmi_version)
     path = Path(reference)
     path = path if path.is_absolute() else scenario_dir / path
     if not path.is_file():
@@ -68,7 +68,7 @@ def read_parameter_set(fmu_reference: str, set_name: str, where: str) -> dict:
 
 
 class FmuParticipant(Participant):
-    """A co-simulation FMU stepped with ``fmpy.fmi2.FMU2Slave``.
+    """A co-simulation FMU (FMI 2.0 or 3.0) stepped through :class:`orchestrator.fmi_slave.FmiSlave`.
 
     Parameters
     ----------
@@ -97,8 +97,8 @@ class FmuParticipant(Participant):
             self.model_description = read_model_description(str(self.fmu_path))
         except Exception as exc:  # fmpy raises plain exceptions for broken archives/XML
             raise FmuError(f"{where}.fmu: {self.fmu_path} is not a valid FMU: {exc}") from exc
-        if self.model_description.fmiVersion != "2.0" or self.model_description.coSimulation is None:
-            raise FmuError(f"{where}.fmu: {self.fmu_path} is not an FMI 2.0 co-simulation FMU")
+        if self.model_description.fmiVersion not in SUPPORTED_VERSIONS or self.model_description.coSimulation is None:
+            raise FmuError(f"{where}.fmu: {self.fmu_path} is not an FMI 2.0 or 3.0 co-simulation FMU")
         self.variables = {v.name: v for v in self.model_description.modelVariables}
         self.parameters = self._parameter_values(spec, string_substitutions or {})
         self._inputs: dict[str, VariableMapping] = {}
@@ -111,7 +111,6 @@ class FmuParticipant(Participant):
         self._slave = None
         self._unzip_dir = None
         self._messages: list[str] = []
-        self._callbacks = None
 
     # -- ports -------------------------------------------------------------------------
     @property
@@ -141,12 +140,12 @@ class FmuParticipant(Participant):
                     f"{self.where}.mapping.{port}: '{port}' is a plant {expected} but FMU variable "
                     f"'{target.variable}' is an {variable.causality}"
                 )
-            if variable.type != "Real":
+            if variable.type not in REAL_TYPES:
                 raise FmuError(f"{self.where}.mapping.{port}: variable '{target.variable}' is not Real")
             (self._inputs if variable.causality == "input" else self._outputs)[port] = target
             mapped_variables.add(target.variable)
         for variable in self.model_description.modelVariables:
-            if variable.name in mapped_variables or variable.type != "Real":
+            if variable.name in mapped_variables or variable.type not in REAL_TYPES:
                 continue
             if variable.causality == "input":
                 self._inputs.setdefault(variable.name, VariableMapping(variable.name))
@@ -181,28 +180,21 @@ class FmuParticipant(Participant):
     # -- lifecycle -----------------------------------------------------------------------
     def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         from fmpy import extract
-        from fmpy.fmi2 import FMU2Slave
 
         self._unzip_dir = tempfile.mkdtemp(prefix=f"fmu-{self.name}-")
         extract(str(self.fmu_path), self._unzip_dir)
-        self._slave = FMU2Slave(
-            guid=self.model_description.guid,
-            unzipDirectory=self._unzip_dir,
-            modelIdentifier=self.model_description.coSimulation.modelIdentifier,
-            instanceName=self.name,
-        )
-        self._slave.instantiate(callbacks=self._make_callbacks(), loggingOn=False)
-        self._call("fmi2SetupExperiment", self._slave.setupExperiment, startTime=start_time)
-        self._call("fmi2EnterInitializationMode", self._slave.enterInitializationMode)
+        self._slave = FmiSlave(self.model_description, self._unzip_dir, self.name, self._on_message)
+        self._slave.instantiate()
+        self._call("EnterInitializationMode", self._slave.enter_initialization, start_time)
         for name, value in self.parameters.items():
             self._set_variable(name, value)
         self._set_inputs(inputs)
-        self._call("fmi2ExitInitializationMode", self._slave.exitInitializationMode)
+        self._call("ExitInitializationMode", self._slave.exit_initialization)
         return self._read_outputs(start_time)
 
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         self._set_inputs(inputs)
-        self._call("fmi2DoStep", self._slave.doStep, time, step_size)
+        self._call("DoStep", self._slave.do_step, time, step_size)
         return self._read_outputs(time + step_size)
 
     def terminate(self) -> None:
@@ -210,63 +202,46 @@ class FmuParticipant(Participant):
             try:
                 self._slave.terminate()
             except Exception:  # a failed FMU may refuse terminate; freeing it is what matters
-                log.debug("%s: fmi2Terminate failed", self.name, exc_info=True)
+                log.debug("%s: %s failed", self.name, self._slave.name("Terminate"), exc_info=True)
             try:
-                self._slave.freeInstance()
+                self._slave.free()
             except Exception:
-                log.debug("%s: fmi2FreeInstance failed", self.name, exc_info=True)
+                log.debug("%s: %s failed", self.name, self._slave.name("FreeInstance"), exc_info=True)
             self._slave = None
         if self._unzip_dir is not None:
             shutil.rmtree(self._unzip_dir, ignore_errors=True)
             self._unzip_dir = None
 
     # -- helpers ---------------------------------------------------------------------------
-    def _make_callbacks(self):
-        from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-        from fmpy import calloc, free
-
-        def logger(_component, _instance, status, category, message):
-            text = message.decode("utf-8", "replace") if message else ""
-            # errors are raised with this text (ModelError); warnings are only logged
-            level = logging.WARNING if status in (1, 2) else logging.DEBUG
-            log.log(level, "%s [%s]: %s", self.name, (category or b"").decode(), text)
-            if status >= 1:
-                self._messages.append(text)
-
-        callbacks = fmi2CallbackFunctions()
-        callbacks.logger = fmi2CallbackLoggerTYPE(logger)
-        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        try:
-            from fmpy.logging import addLoggerProxy
-
-            addLoggerProxy(byref(callbacks))  # formats the FMU's printf-style messages
-        except Exception:
-            log.debug("fmpy logger proxy unavailable; FMU messages stay unformatted", exc_info=True)
-        self._callbacks = callbacks  # keep the ctypes objects alive
-        return callbacks
+    def _on_message(self, status: int, category: str, text: str) -> None:
+        # errors are raised with this text (ModelError); warnings are only logged
+        level = logging.WARNING if status in (1, 2) else logging.DEBUG
+        log.log(level, "%s [%s]: %s", self.name, category, text)
+        if status >= 1:
+            self._messages.append(text)
 
     def _call(self, function: str, call, *args, **kwargs):
+        """Call the FMU; ``function`` is the name without its ``fmi2``/``fmi3`` prefix."""
         if self._messages:
             self._messages.clear()
         try:
             return call(*args, **kwargs)
         except FMICallException as exc:
             detail = self._messages[-1] if self._messages else str(exc)
-            raise ModelError(f"{self.name} ({self.fmu_path.name}): {function} failed: {detail}") from exc
+            raise ModelError(
+                f"{self.name} ({self.fmu_path.name}): {self._slave.name(function)} failed: {detail}") from exc
 
     def _set_variable(self, name: str, value) -> None:
         variable = self.variables[name]
         refs = [variable.valueReference]
-        if variable.type == "Real":
-            self._call("fmi2SetReal", self._slave.setReal, vr=refs, value=[float(value)])
-        elif variable.type in ("Integer", "Enumeration"):
-            self._call("fmi2SetInteger", self._slave.setInteger, vr=refs, value=[int(value)])
+        if variable.type in REAL_TYPES:
+            self._call("SetReal", self._slave.set_reals, refs, [float(value)])
+        elif variable.type in ("Integer", "Enumeration", "Int32"):
+            self._call("SetInteger", self._slave.set_integers, refs, [int(value)])
         elif variable.type == "Boolean":
-            self._call("fmi2SetBoolean", self._slave.setBoolean, vr=refs, value=[bool(value)])
+            self._call("SetBoolean", self._slave.set_booleans, refs, [bool(value)])
         else:
-            self._call("fmi2SetString", self._slave.setString, vr=refs, value=[str(value)])
+            self._call("SetString", self._slave.set_strings, refs, [str(value)])
 
     def _set_inputs(self, inputs: Mapping[str, Value]) -> None:
         if not inputs:
@@ -278,12 +253,12 @@ class FmuParticipant(Participant):
                 raise ModelError(f"{self.name}: input '{port}' received a non-finite value ({number})")
             refs.append(self._input_refs[port])
             values.append(number / self._inputs[port].scale)
-        self._call("fmi2SetReal", self._slave.setReal, refs, values)
+        self._call("SetReal", self._slave.set_reals, refs, values)
 
     def _read_outputs(self, time: float) -> dict[str, Value]:
         if not self._output_refs:
             return {}
-        values = self._call("fmi2GetReal", self._slave.getReal, self._output_refs)
+        values = self._call("GetReal", self._slave.get_reals, self._output_refs)
         outputs = {}
         for port, value, scale in zip(self._output_ports, values, self._output_scales):
             if not math.isfinite(value):

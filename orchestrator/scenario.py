@@ -18,9 +18,14 @@ from orchestrator.participant import is_finite_number
 from orchestrator.errors import ScenarioError
 
 TOP_LEVEL_KEYS = ("connections", "simulation", "metocean", "participants", "outputs", "acceptance")
-SIMULATION_KEYS = ("name", "start_s", "stop_s", "steps", "dt_s", "stop_when")
+SIMULATION_KEYS = ("name", "start_s", "stop_s", "steps", "dt_s", "stop_when", "exchange")
+#: Exchange orders: participants due at a communication point step one after another, each
+#: seeing the outputs of those before it ("gauss-seidel"), or all from the values published
+#: before the point ("jacobi", as masters that step FMUs in parallel do, e.g. libcosim).
+EXCHANGE_ORDERS = ("gauss-seidel", "jacobi")
 STOP_OPERATORS = ("<=", ">=", "<", ">")
-FMU_PARTICIPANT_KEYS = ("fmu", "every", "parameter_set", "parameters", "mapping")
+FMU_PARTICIPANT_KEYS = ("fmu", "fmi_version", "every", "parameter_set", "parameters", "mapping")
+FMI_VERSIONS = ("2.0", "3.0")
 PYTHON_PARTICIPANT_KEYS = ("type", "class", "every", "options")
 OUTPUT_KEYS = ("format", "analyses", "figures", "options")
 OUTPUT_FORMATS = ("parquet", "csv")
@@ -44,6 +49,7 @@ class ParticipantSpec:
     parameter_set: str | None = None
     parameters: dict[str, Any] = field(default_factory=dict)
     mapping: dict[str, VariableMapping] = field(default_factory=dict)
+    fmi_version: str = "2.0"   # of a built-in model; an FMU file's own description decides
     type: str | None = None
     class_path: str | None = None
     options: dict[str, Any] = field(default_factory=dict)
@@ -90,6 +96,7 @@ class SimulationSpec:
     stop_s: float
     dt_s: float
     stop_when: tuple[StopCondition, ...] = ()
+    exchange: str = "gauss-seidel"
 
     @property
     def steps(self) -> int:
@@ -288,8 +295,12 @@ def _simulation(table: dict, path: Path) -> SimulationSpec:
             raise ScenarioError(
                 f"{where}: 'simulation.stop_s' - 'start_s' must be a positive whole number of 'dt_s' steps"
             )
+    exchange = table.get("exchange", "gauss-seidel")
+    if exchange not in EXCHANGE_ORDERS:
+        raise ScenarioError(f"{where}: 'simulation.exchange' must be one of {', '.join(EXCHANGE_ORDERS)}, "
+                            f"got {exchange!r}")
     return SimulationSpec(name=name, start_s=start, stop_s=stop, dt_s=dt,
-                          stop_when=_stop_conditions(table.get("stop_when", []), where))
+                          stop_when=_stop_conditions(table.get("stop_when", []), where), exchange=exchange)
 
 
 def _stop_conditions(entries, where: str) -> tuple[StopCondition, ...]:
@@ -357,6 +368,9 @@ def _fmu_participant(name: str, body: dict, every: int, where: str, prefix: str)
     fmu = body["fmu"]
     if not isinstance(fmu, str) or not fmu:
         raise ScenarioError(f"{where}: '{prefix}fmu' must be a model name or a path to an .fmu")
+    fmi_version = body.get("fmi_version", "2.0")
+    if fmi_version not in FMI_VERSIONS:
+        raise ScenarioError(f"{where}: '{prefix}fmi_version' must be one of {', '.join(FMI_VERSIONS)}, got {fmi_version!r}")
     parameter_set = body.get("parameter_set")
     if parameter_set is not None and not isinstance(parameter_set, str):
         raise ScenarioError(f"{where}: '{prefix}parameter_set' must be a string")
@@ -382,7 +396,7 @@ def _fmu_participant(name: str, body: dict, every: int, where: str, prefix: str)
         else:
             raise ScenarioError(f"{where}: '{key}' must be a variable name or a table")
     return ParticipantSpec(name=name, every=every, fmu=fmu, parameter_set=parameter_set,
-                           parameters=parameters, mapping=mapping)
+                           parameters=parameters, mapping=mapping, fmi_version=fmi_version)
 
 
 def _connections(entries, participants, where: str) -> tuple[Connection, ...]:

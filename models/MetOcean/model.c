@@ -79,19 +79,21 @@ static int read_header(FILE *f, MetOceanGrid *g, int timed) {
     return 1;
 }
 
-/* Reads comp->data.grid_file; logs the file name and the reason on failure. */
+/* Reads comp->data.grid_file (a relative name is taken in the FMU's resources folder); logs
+ * the file name and the reason on failure. */
 static fmi2Status load_grid(ModelInstance *comp) {
-    const char *path = comp->data.grid_file;
+    char path[GRID_FILE_MAX + 4096];
     unsigned char magic[MAGIC_BYTES], extra;
     MetOceanGrid *g;
     size_t count;
     FILE *f;
     int timed;
 
-    if (!path[0]) {
+    if (!comp->data.grid_file[0]) {
         log_error(comp, "grid_file (value reference %u) is not set", (unsigned)vr_grid_file);
         return fmi2Error;
     }
+    if (!resolve_resource(comp, comp->data.grid_file, path, sizeof path)) return fmi2Error;
     f = fopen(path, "rb");
     if (!f) {
         log_error(comp, "grid_file \"%s\" cannot be opened (missing or unreadable)", path);
@@ -230,7 +232,7 @@ void model_set_start_values(ModelInstance *comp) {
     ModelData *d = &comp->data;
     d->x = d->y = 0.0;
     for (int f = 0; f < N_FIELDS; f++) d->fields[f] = 0.0;
-    d->grid_file[0] = '\0';
+    strcpy(d->grid_file, DEFAULT_GRID_FILE); /* shipped in the FMU's resources */
     d->grid = NULL;
 }
 
@@ -245,7 +247,7 @@ fmi2Status model_get_real(ModelInstance *comp, fmi2ValueReference vr, fmi2Real *
     if (vr == vr_x) { *value = d->x; return fmi2OK; }
     if (vr == vr_y) { *value = d->y; return fmi2OK; }
     /* outputs are direct feedthrough: recompute from the current inputs at the FMU's time */
-    if (evaluate(comp, comp->time, "fmi2GetReal") != fmi2OK) return fmi2Error;
+    if (evaluate(comp, comp->time, "reading an output") != fmi2OK) return fmi2Error;
     switch (vr) {
     case vr_wind_speed: *value = hypot(w[FIELD_WIND_NORTH], w[FIELD_WIND_EAST]); break;
     case vr_wind_direction:
@@ -276,7 +278,7 @@ fmi2Status model_get_string(ModelInstance *comp, fmi2ValueReference vr, fmi2Stri
 
 fmi2Status model_set_string(ModelInstance *comp, fmi2ValueReference vr, fmi2String value) {
     if (strlen(value) >= GRID_FILE_MAX) {
-        log_error(comp, "fmi2SetString: grid_file (value reference %u) is longer than %d bytes",
+        log_error(comp, "grid_file (value reference %u) is longer than %d bytes",
                   (unsigned)vr, GRID_FILE_MAX - 1);
         return fmi2Error;
     }
@@ -286,7 +288,7 @@ fmi2Status model_set_string(ModelInstance *comp, fmi2ValueReference vr, fmi2Stri
 }
 
 fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
-    return evaluate(comp, t + h, "fmi2DoStep"); /* the outputs at the end of the step */
+    return evaluate(comp, t + h, "step"); /* the outputs at the end of the step */
 }
 
 void model_free_resources(ModelInstance *comp) { free_grid(comp); }

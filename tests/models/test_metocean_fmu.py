@@ -115,7 +115,7 @@ def test_output_read_outside_the_grid_is_an_error(fmus, open_slave, grid):
     slave.set({"x": 0.0, "y": 1999.0})
     with pytest.raises(FMICallException):
         slave.get("hs")
-    assert "fmi2GetReal: point x = 0.000 m, y = 1999.000 m is outside" in slave.errors()
+    assert "reading an output: point x = 0.000 m, y = 1999.000 m is outside" in slave.errors()
 
 
 def test_missing_grid_file_fails_initialisation_naming_it(fmus, open_slave, tmp_path):
@@ -216,3 +216,37 @@ def test_times_out_of_order_fail_initialisation_naming_the_file(fmus, open_slave
     with pytest.raises(FMICallException):
         slave.initialize({"grid_file": str(bad)})
     assert f'grid_file "{bad}": time 2 (600 s) is not finite or not after the one before' in slave.errors()
+
+
+def test_default_grid_in_resources_runs_the_default_experiment(fmus):
+    """With no grid_file the FMU reads the paper's weather from its resources (5 nm grid)."""
+    from fmpy import simulate_fmu
+
+    from rhnc.metocean import NM, MetOceanField
+
+    point = (40.0 * NM, 55.0 * NM)
+    result = simulate_fmu(str(fmus["MetOcean"]), stop_time=60.0, output_interval=60.0,
+                          start_values={"x": point[0], "y": point[1]}, output=["hs", "wind_speed"])
+    expected = MetOceanField.generate_paper_default(resolution_nm=5.0).sample(*point)
+    assert result["hs"][-1] == pytest.approx(float(expected["hs"]), rel=1e-12)
+    assert result["wind_speed"][-1] == pytest.approx(float(expected["wind_speed"]), rel=1e-12)
+
+
+def test_shipped_default_grid_is_the_generators_output():
+    """models/MetOcean/resources/default.grid is not stale: the generator writes the same bytes."""
+    import tempfile
+    from pathlib import Path
+
+    from orchestrator.fmu_build import MODELS_DIR
+    from rhnc.metocean import MetOceanField
+
+    with tempfile.TemporaryDirectory() as tmp:
+        fresh = MetOceanField.generate_paper_default(resolution_nm=5.0).write_fmu_grid(Path(tmp) / "g")
+        assert fresh.read_bytes() == (MODELS_DIR / "MetOcean" / "resources" / "default.grid").read_bytes()
+
+
+def test_a_relative_grid_name_is_taken_in_the_resources_folder(fmus, open_slave):
+    slave = open_slave(fmus["MetOcean"])
+    with pytest.raises(FMICallException):
+        slave.initialize({"grid_file": "no_such.grid"})
+    assert "resources/no_such.grid\" cannot be opened" in slave.errors()

@@ -10,6 +10,7 @@ import re
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -37,6 +38,11 @@ course_deg = 30.0
 speed_kn = 16.0
 turn_radius_nm = 2.0
 horizon_steps = 40
+[participants.beacon]
+type = "python"
+class = "sample_participants:Beacon"
+[participants.beacon.options]
+from_s = 100.0
 [participants.ctrl]
 type = "control"
 [participants.ctrl.options]
@@ -44,11 +50,6 @@ horizon_steps = 40
 solver = "ipopt"
 [participants.ship]
 fmu = "KCS"
-[participants.beacon]
-type = "python"
-class = "sample_participants:Beacon"
-[participants.beacon.options]
-from_s = 100.0
 [participants.ship.parameters]
 y0 = 300.0
 u0 = 8.0
@@ -105,7 +106,8 @@ def published_summary(group: Path) -> dict:
 @pytest.mark.parametrize("number", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_during_nmpc_solves_stops_the_run_within_the_step(tmp_path, number):
     process, group = start_run(tmp_path, NMPC_SCENARIO, "long_nmpc")
-    wait_for_line(process, "beacon: t = 100 s")  # after the first steps: now inside the next NMPC solve
+    wait_for_line(process, "beacon: t = 100 s")  # after the first steps; the NMPC solves next
+    time.sleep(0.05)  # let the beacon's step return: the process is then inside the NMPC's solve
     process.send_signal(number)
     out, err = process.communicate(timeout=120)
     assert process.returncode == 130, err
