@@ -55,7 +55,7 @@ def test_no_obstacles_means_normal_state():
 
 @pytest.mark.parametrize("ship_m, static_m", [(0.0, 1.0), (1.0, 0.0), (-1.0, 1.0), (1.0, -1.0)])
 def test_warning_ranges_must_be_positive(ship_m, static_m):
-    with pytest.raises(ValueError, match="warning ranges must be positive"):
+    with pytest.raises(ValueError, match="^warning ranges must be positive$"):
         EventTrigger(ship_m, static_m)
 
 
