@@ -79,6 +79,12 @@ EXPLAINED: dict[str, str] = {
     **{f"{_REFERENCE}{n}": ("the end accelerations feed only the end yaw rates, which are then replaced by "
                             "their neighbours' (or 0 at rest)") for n in (84, 85, 86, 87, 89, 90, 91)},
     **{f"{_REFERENCE}{n}": _REST_END for n in (143, 145, 151, 155)},
+    **{f"rhnc.energy.x_{name}__mutmut_{n}": _FLOAT for name, numbers in (
+        ("speed_through_water", (15, 17)), ("frictional_coefficient", (9, 11)), ("wave_speed", (9, 11)),
+        ("power_components", (4, 6, 9, 11, 18, 20, 23, 25)), ("fuel_rate_t_h", (5, 7))) for n in numbers},
+    **{f"rhnc.energy.x_power_components__mutmut_{n}": ("np.broadcast(along_wind, None) has the shape of "
+                                                        "along_wind, which wind_speed shares (both come from the "
+                                                        "same wind arrays)") for n in (48, 50)},
     f"{_REFERENCE}112": ("np.all(None) is False: the hold loop then runs for an all-moving path too, and there "
                          "it leaves every heading as it is"),
 }
