@@ -72,13 +72,14 @@ def main(argv=None) -> int:
     _configure_logging(args.verbose)
     try:
         with interrupts.handle_signals():
-            return _COMMANDS[args.command](args)
+            try:
+                return _COMMANDS[args.command](args)
+            except KeyboardInterrupt:  # stopped before or between runs (set-up, building)
+                print(f"error: {interrupts.reason()}", file=sys.stderr)
+                return EXIT_INTERRUPTED
     except ToolchainError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return exc.exit_code
-    except KeyboardInterrupt:
-        print(f"error: {interrupts.reason()}", file=sys.stderr)
-        return EXIT_INTERRUPTED
 
 
 #: Loggers of this toolchain; ``-v`` shows their debug lines, not those of the libraries.

@@ -17,7 +17,12 @@ the NMPC applies its fallback and the run would go on.  So the command line inst
   process with exit code 130;
 * while results are being written (:func:`deferred`), a signal is only recorded: the
   files are completed first, then the command exits 130;
-* a second signal ends the process at once (exit 130), after the emergency writers.
+* a second signal ends the process at once (exit 130), after the emergency writers;
+* last resort: a native call that holds the interpreter lock (a library building or
+  solving without checking for signals) keeps both the master and the watchdog thread
+  from running, so the first signal also arms a real-time timer whose SIGALRM, left at its
+  default action, ends the process after ``2 * grace_s`` unless the stop was acknowledged
+  (exit by SIGALRM, no status written: nothing in Python can run at that point).
 """
 
 from __future__ import annotations
@@ -54,6 +59,7 @@ class _State:
         self.grace_s = GRACE_S
         self.emergency: list[Callable[[str], None]] = []
         self.where: Callable[[], str] | None = None
+        self.alarm_armed = False
 
 
 _state = _State()
@@ -72,8 +78,15 @@ def reason() -> str:
 
 
 def acknowledge() -> None:
-    """The master has stopped: the watchdog stands down."""
+    """The master has stopped: the watchdog and the last-resort timer stand down."""
     _state.acknowledged.set()
+    _disarm_alarm()
+
+
+def _disarm_alarm() -> None:
+    if _state.alarm_armed:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        _state.alarm_armed = False
 
 
 @contextlib.contextmanager
@@ -122,6 +135,7 @@ def handle_signals(grace_s: float = GRACE_S) -> Iterator[None]:
         for number, handler in previous.items():
             signal.signal(number, handler)
         _state.acknowledged.set()  # the watchdog of a handled request stands down
+        _disarm_alarm()
         _state.reset()  # the request belonged to this block: later runs in this process start clean
 
 
@@ -142,6 +156,10 @@ def _on_signal(number: int, _frame) -> None:
         return  # results are being written: let them complete
     watchdog = threading.Thread(target=_watch, name="rhnc-stop-watchdog", daemon=True)
     watchdog.start()
+    if hasattr(signal, "setitimer"):
+        signal.signal(signal.SIGALRM, signal.SIG_DFL)
+        signal.setitimer(signal.ITIMER_REAL, 2.0 * _state.grace_s)
+        _state.alarm_armed = True
     raise KeyboardInterrupt
 
 

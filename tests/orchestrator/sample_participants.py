@@ -166,3 +166,35 @@ class Swallower(Participant):
             except KeyboardInterrupt:
                 pass  # swallowed: the caller never sees it
         return {"ok": 1.0}
+
+
+class Hog(Participant):
+    """From ``at_s`` on, a native call that holds the interpreter lock and is restarted after
+    every signal (like a library build that never checks for signals)."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        participant = cls(name)
+        participant.at = options.get("at_s", 0.0)
+        return participant
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["ok"])
+
+    def setup(self, start_time, inputs):
+        return {"ok": 1.0}
+
+    def step(self, time, step_size, inputs):
+        import ctypes
+
+        libc = ctypes.PyDLL(None)  # PyDLL: the call keeps the interpreter lock
+        said = False
+        while time >= self.at:
+            try:
+                if not said:
+                    said = True
+                    print("hog: blocking", flush=True)
+                libc.sleep(1000)
+            except KeyboardInterrupt:
+                pass
+        return {"ok": 1.0}

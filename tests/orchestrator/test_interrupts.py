@@ -188,3 +188,14 @@ def test_an_interrupted_comparison_exits_130_and_stops_its_later_runs(write_scen
     assert [s["status"] for s in summaries] == ["interrupted", "interrupted"]
     steps = {s["scenario"].rsplit("/", 1)[-1]: s["simulation"]["steps_done"] for s in summaries}
     assert steps == {"first.toml": 11, "second.toml": 0}  # stopped after t = 50 s; the second never stepped
+
+
+@pytest.mark.slow
+def test_a_native_call_holding_the_interpreter_lock_is_ended_by_the_last_resort_timer(tmp_path):
+    """Neither the master nor the watchdog thread can run: SIGALRM at its default action ends it."""
+    process, group = start_run(tmp_path, STUBBORN_SCENARIO.replace("Stubborn", "Hog"), "stubborn")
+    wait_for_line(process, "hog: blocking")
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=60)
+    assert process.returncode == -signal.SIGALRM, err
+    assert "SIGINT received while stepping participant 'hang' at t = 5 s" in err
