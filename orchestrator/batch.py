@@ -208,7 +208,9 @@ def check_against_scenario(spec: BatchSpec, runs: list[RunSpec]) -> None:
             continue
         for key, value in run.overrides.items():
             if fails({key: value}, build=run.index == 0) is not None:
-                table = "set" if key in spec.fixed else "grid" if key in spec.grid else "monte_carlo"
+                situation = bool(spec.situations) and key in spec.situations[0].overrides
+                table = ("set" if key in spec.fixed else "grid" if key in spec.grid
+                         else "situations" if situation else "monte_carlo")
                 raise ScenarioError(f"{spec.path}: '{table}.\"{key}\"' (run {run.index}, value {_short(value)}): "
                                     f"the scenario does not accept it: {problem}")
         raise ScenarioError(f"{spec.path}: run {run.index}: the scenario does not accept its overrides: {problem}")

@@ -24,7 +24,8 @@ from orchestrator.participant import is_finite_number
 from orchestrator.errors import ScenarioError
 from orchestrator.scenario import read_toml
 
-BATCH_TOP_KEYS = ("batch", "set", "grid", "monte_carlo", "acceptance", "report")
+BATCH_TOP_KEYS = ("batch", "set", "grid", "monte_carlo", "situations", "acceptance", "report")
+SITUATION_KEYS = ("files", "radius_nm", "origin_nm", "route_nm", "plant", "traffic")
 BATCH_KEYS = ("name", "scenario", "description")
 MONTE_CARLO_KEYS = ("seed", "runs", "own_ship", "encounters", "obstacles", "targets_key", "obstacles_key",
                     "uniform", "normal", "choice", "scale")
@@ -90,6 +91,14 @@ class MonteCarloSpec:
 
 
 @dataclass(frozen=True)
+class SituationRun:
+    """One traffic-situation file of ``[situations]``: its overrides and table parameters."""
+
+    overrides: dict[str, Any]
+    parameters: dict[str, Any]
+
+
+@dataclass(frozen=True)
 class Criterion:
     """``[[acceptance]]``: ``metric op value`` or ``metric op ref``, paths into summary.json."""
 
@@ -127,6 +136,7 @@ class BatchSpec:
     acceptance: tuple[Criterion, ...]
     report_columns: tuple[str, ...]
     description: str = ""
+    situations: tuple[SituationRun, ...] = ()
     _runs: list = field(default_factory=list, repr=False, compare=False)
 
     def runs(self) -> list[RunSpec]:
@@ -185,8 +195,12 @@ def load_batch(path) -> BatchSpec:
     monte_carlo = None
     if "monte_carlo" in data:
         monte_carlo = _monte_carlo(_table(data, "monte_carlo", where, "monte_carlo", True), where, scenario_data)
+    situations: tuple[SituationRun, ...] = ()
+    if "situations" in data:
+        situations = _situations(_table(data, "situations", where, "situations", True), path, scenario_data)
     keys = [("set", k) for k in fixed] + [("grid", k) for k in grid] + (
-        [("monte_carlo", k) for k in _drawn_keys(monte_carlo)] if monte_carlo else [])
+        [("monte_carlo", k) for k in _drawn_keys(monte_carlo)] if monte_carlo else []) + (
+        [("situations", k) for k in situations[0].overrides] if situations else [])
     _check_keys(keys, where)
     acceptance = parse_acceptance(data.get("acceptance", []), where)
     report = _table(data, "report", where, "report", required=False)
@@ -197,7 +211,7 @@ def load_batch(path) -> BatchSpec:
     return BatchSpec(path=path.resolve(), name=name, scenario=scenario,
                      scenario_sha256=hashlib.sha256(scenario.read_bytes()).hexdigest(), fixed=fixed, grid=grid,
                      monte_carlo=monte_carlo, acceptance=acceptance, report_columns=tuple(columns),
-                     description=description)
+                     description=description, situations=situations)
 
 
 # -- expansion ------------------------------------------------------------------------------
@@ -205,17 +219,21 @@ def _expand(spec: BatchSpec) -> list[RunSpec]:
     keys = list(spec.grid)
     points = list(itertools.product(*(spec.grid[k] for k in keys))) or [()]
     draws = [_draw(spec.monte_carlo, i) for i in range(spec.monte_carlo.runs)] if spec.monte_carlo else [({}, {})]
+    situations = [(s.overrides, s.parameters) for s in spec.situations] or [({}, {})]
     runs, seen = [], {}
-    for point in points:
-        for draw_overrides, draw_parameters in draws:
-            overrides = {**spec.fixed, **dict(zip(keys, point)), **draw_overrides}
-            parameters = {**dict(zip(keys, point)), **draw_parameters}
-            identifier = run_id(spec.scenario_sha256, overrides)
-            if identifier in seen:
-                raise ScenarioError(f"{spec.path}: runs {seen[identifier]} and {len(runs)} are identical "
-                                    f"(same overrides); vary the grid or the draws")
-            seen[identifier] = len(runs)
-            runs.append(RunSpec(identifier, len(runs), overrides, parameters))
+    for point, (situation_overrides, situation_parameters), (draw_overrides, draw_parameters) in itertools.product(
+            points, situations, draws):
+        overrides = {**spec.fixed, **dict(zip(keys, point)), **situation_overrides, **draw_overrides}
+        parameters = {**dict(zip(keys, point)), **situation_parameters, **draw_parameters}
+        # two situation files may hold the same geometry (Imazu's problems 5 and 8): the
+        # file's name keeps their runs apart
+        hashed = {**overrides, "<situation>": situation_parameters["situation"]} if situation_parameters else overrides
+        identifier = run_id(spec.scenario_sha256, hashed)
+        if identifier in seen:
+            raise ScenarioError(f"{spec.path}: runs {seen[identifier]} and {len(runs)} are identical "
+                                f"(same overrides); vary the grid or the draws")
+        seen[identifier] = len(runs)
+        runs.append(RunSpec(identifier, len(runs), overrides, parameters))
     return runs
 
 
@@ -347,6 +365,51 @@ def _monte_carlo(table: dict, where: str, scenario_data: dict) -> MonteCarloSpec
         scale[key] = (_range(value, where, f'monte_carlo.scale."{key}"'), base)
     return MonteCarloSpec(seed=seed, runs=runs, own_ship=own, encounters=encounter_specs, obstacles=obstacles,
                           uniform=uniform, normal=normal, choice=choice, scale=scale, **keys)
+
+
+def _situations(table: dict, path: Path, scenario_data: dict) -> tuple[SituationRun, ...]:
+    """``[situations]``: one run per maritime-schema traffic-situation file (DNV trafficgen).
+
+    ``files`` is a folder (every ``*.json`` in it, sorted) or one file, relative to the batch
+    file; each becomes the overrides of :func:`rhnc.traffic_situation.scenario_overrides`.
+    """
+    from rhnc.traffic_situation import load_traffic_situation, scenario_overrides
+
+    where, prefix = str(path), "situations."
+    _reject_unknown(table, SITUATION_KEYS, where, prefix)
+    files = table.get("files")
+    if not isinstance(files, str) or not files:
+        raise ScenarioError(f"{where}: '{prefix}files' must name a folder of traffic-situation JSON files or one file")
+    location = (path.parent / files).resolve()
+    if location.is_dir():
+        found = sorted(location.glob("*.json"))
+        if not found:
+            raise ScenarioError(f"{where}: '{prefix}files': no *.json files in {location}")
+    elif location.is_file():
+        found = [location]
+    else:
+        raise ScenarioError(f"{where}: '{prefix}files': not found: {location}")
+    radius = table.get("radius_nm")
+    if not is_finite_number(radius) or radius < 0:
+        raise ScenarioError(f"{where}: '{prefix}radius_nm' (each target's hazard radius R_i) must be a number >= 0, "
+                            f"got {radius!r}")
+    origin = _pair(table, "origin_nm", where, prefix) if "origin_nm" in table else (0.0, 0.0)
+    route = table.get("route_nm", 15.0)
+    if not is_finite_number(route) or route <= 0:
+        raise ScenarioError(f"{where}: '{prefix}route_nm' must be a positive number, got {route!r}")
+    names = {}
+    for key in ("plant", "traffic"):
+        names[key] = table.get(key, "ship" if key == "plant" else "traffic")
+        if not isinstance(names[key], str) or not names[key]:
+            raise ScenarioError(f"{where}: '{prefix}{key}' must name a participant of the base scenario")
+    runs = []
+    for file in found:
+        situation = load_traffic_situation(file, origin)
+        overrides = scenario_overrides(situation, scenario_data, float(radius), float(route), **names)
+        parameters = {"situation": file.name, "situation.title": situation.title,
+                      "situation.targets": len(situation.targets)}
+        runs.append(SituationRun(overrides, parameters))
+    return tuple(runs)
 
 
 def _encounter(entry: dict, where: str, prefix: str, own) -> EncounterSpec:

@@ -17,7 +17,12 @@ def _pyplot():
 
 
 def track_figure(frame, scenario, cosim, out_dir) -> list[str]:
-    """The ship's track over the met-ocean wind speed (when the run has a field)."""
+    """The ship's track over the met-ocean wind speed (when the run has a field).
+
+    Time marks every few minutes along every track; each obstacle drawn (with its hazard
+    circle) where it was when the own ship came closest to it, and the closest-approach
+    segment marked with its range and time.
+    """
     from orchestrator.analyses import find_plant
 
     plant = find_plant(cosim)
@@ -37,11 +42,15 @@ def track_figure(frame, scenario, cosim, out_dir) -> list[str]:
     _draw_reference(ax, frame, scenario)
     ax.plot(frame[f"{plant}.y"] / NM, frame[f"{plant}.x"] / NM, color="tab:red", lw=2, label=f"{plant} track")
     ax.plot(frame[f"{plant}.y"].iloc[0] / NM, frame[f"{plant}.x"].iloc[0] / NM, "o", color="tab:red")
-    _draw_obstacles(ax, frame)
+    _draw_encounters(ax, frame, plant)
     ax.set_xlabel("east [nm]")
     ax.set_ylabel("north [nm]")
-    if field is not None:  # the map is the frame; traffic beyond it is not drawn
+    if field is not None:  # the map is the frame (traffic beyond it is not drawn) ...
         x_min, x_max, y_min, y_max = (v / NM for v in field.extent)
+        if _obstacle_columns(frame) is not None:  # ... or, with traffic, the encounter within it
+            north, east = _encounter_extent_nm(frame, plant)
+            x_min, x_max = max(x_min, north[0]), min(x_max, north[1])
+            y_min, y_max = max(y_min, east[0]), min(y_max, east[1])
         ax.set_xlim(y_min, y_max)
         ax.set_ylim(x_min, x_max)
         ax.set_aspect("equal")
@@ -64,19 +73,109 @@ def _draw_reference(ax, frame, scenario) -> None:
             lw=1, label="reference")
 
 
-def _draw_obstacles(ax, frame) -> None:
-    """Obstacle circles from an ``obstacles`` array output (columns x, y, vx, vy, radius)."""
+def _obstacle_columns(frame) -> tuple[str, int] | None:
     columns = [c for c in frame.columns if c.endswith("]") and ".obstacles[" in c]
     if not columns:
-        return
+        return None
     prefix = columns[0].split("[")[0]
-    count = 1 + max(int(c.split("[")[1].split(",")[0]) for c in columns)
+    return prefix, 1 + max(int(c.split("[")[1].split(",")[0]) for c in columns)
+
+
+def _draw_obstacles(ax, frame) -> None:
+    """Obstacle circles where each obstacle is at the frame's last row, and the tracks so far."""
+    found = _obstacle_columns(frame)
+    if found is None:
+        return
+    prefix, count = found
     for i in range(count):
         x, y, radius = (frame[f"{prefix}[{i},{k}]"].to_numpy() for k in (0, 1, 4))
         ax.plot(y / NM, x / NM, ":", color="grey", lw=1)
-        for index in (0, len(x) // 2, len(x) - 1):
-            circle = _circle(x[index], y[index], radius[index])
-            ax.plot(circle[1] / NM, circle[0] / NM, color="black", lw=1)
+        circle = _circle(x[-1], y[-1], radius[-1])
+        ax.plot(circle[1] / NM, circle[0] / NM, color="black", lw=1)
+
+
+def _encounter_extent_nm(frame, plant, margin_nm: float = 1.5):
+    """(north, east) ranges [nm] holding the own track and each obstacle's circle at its CPA."""
+    own_x, own_y = frame[f"{plant}.x"].to_numpy(), frame[f"{plant}.y"].to_numpy()
+    north = [own_x.min(), own_x.max()]
+    east = [own_y.min(), own_y.max()]
+    prefix, _ = _obstacle_columns(frame)
+    for i, k, _ in closest_approach_rows(frame, plant):
+        x, y, radius = (frame[f"{prefix}[{i},{c}]"].to_numpy() for c in (0, 1, 4))
+        north = [min(north[0], x[k] - radius[k]), max(north[1], x[k] + radius[k])]
+        east = [min(east[0], y[k] - radius[k]), max(east[1], y[k] + radius[k])]
+    margin = margin_nm * NM
+    return ((north[0] - margin) / NM, (north[1] + margin) / NM), ((east[0] - margin) / NM, (east[1] + margin) / NM)
+
+
+def time_mark_interval_min(duration_s: float) -> float:
+    """A round interval [min] giving about 4-12 time marks over ``duration_s``."""
+    for minutes in (1, 2, 5, 10, 15, 30, 60, 120):
+        if duration_s / (60.0 * minutes) <= 12:
+            return float(minutes)
+    return 240.0
+
+
+def _draw_time_marks(ax, t, x, y, interval_min: float, color, label_marks: bool) -> None:
+    marks = np.arange(t[0], t[-1] + 1e-9, interval_min * 60.0)[1:]
+    if marks.size == 0:
+        return
+    mx, my = np.interp(marks, t, x), np.interp(marks, t, y)
+    ax.plot(my / NM, mx / NM, "|", color=color, ms=7, mew=1.5)
+    if label_marks:
+        for mark, north, east in zip(marks, mx, my):
+            ax.annotate(f"{mark / 60.0:.0f}'", (east / NM, north / NM), textcoords="offset points", xytext=(4, 2),
+                        fontsize=7, color=color)
+
+
+def closest_approach_rows(frame, plant) -> list[tuple[int, int, float]]:
+    """Per obstacle of the recorded ``obstacles`` output: (obstacle, sample, range [m]) where
+    the own ship came closest to it."""
+    found = _obstacle_columns(frame)
+    if found is None:
+        return []
+    prefix, count = found
+    own_x, own_y = frame[f"{plant}.x"].to_numpy(), frame[f"{plant}.y"].to_numpy()
+    rows = []
+    for i in range(count):
+        distance = np.hypot(frame[f"{prefix}[{i},0]"].to_numpy() - own_x, frame[f"{prefix}[{i},1]"].to_numpy() - own_y)
+        k = int(np.argmin(distance))
+        rows.append((i, k, float(distance[k])))
+    return rows
+
+
+def _draw_encounters(ax, frame, plant) -> None:
+    """Tracks with time marks; each obstacle drawn where it was at the own ship's closest approach.
+
+    The hazard circle sits at the obstacle's position at the moment the own ship came
+    closest to it, the own ship's position then is marked on its track, and the segment
+    joining the two is the CPA (labelled with its range and time).  Time marks (minutes
+    since the start) on every track let positions at the same instant be matched.
+    """
+    t = frame["time_s"].to_numpy()
+    own_x, own_y = frame[f"{plant}.x"].to_numpy(), frame[f"{plant}.y"].to_numpy()
+    interval = time_mark_interval_min(t[-1] - t[0])
+    _draw_time_marks(ax, t, own_x, own_y, interval, "tab:red", True)
+    found = _obstacle_columns(frame)
+    if found is None:
+        return
+    prefix, count = found
+    for i, k, distance in closest_approach_rows(frame, plant):
+        x, y, vx, vy, radius = (frame[f"{prefix}[{i},{c}]"].to_numpy() for c in range(5))
+        moving = bool(np.any(np.hypot(vx, vy) > 0.1))
+        if moving:
+            ax.plot(y / NM, x / NM, "-.", color="dimgrey", lw=1,
+                    label=f"target tracks (marks every {interval:g} min)" if i == 0 else None)
+            _draw_time_marks(ax, t, x, y, interval, "grey", False)
+            ax.plot(y[k] / NM, x[k] / NM, "^", color="black", ms=5)
+        circle = _circle(x[k], y[k], radius[k])
+        ax.plot(circle[1] / NM, circle[0] / NM, color="black", lw=1)
+        ax.plot([own_y[k] / NM, y[k] / NM], [own_x[k] / NM, x[k] / NM], "--", color="tab:orange", lw=1.2,
+                label="closest approach (circles drawn then)" if i == 0 else None)
+        ax.plot(own_y[k] / NM, own_x[k] / NM, "o", color="tab:orange", ms=4)
+        ax.annotate(f"{'T' if moving else 'O'}{i + 1}: {distance / NM:.2f} nm at {t[k] / 60.0:.1f}'",
+                    ((own_y[k] + y[k]) / (2 * NM), (own_x[k] + x[k]) / (2 * NM)), textcoords="offset points",
+                    xytext=(5, -10), fontsize=8, color="tab:orange")
 
 
 def _circle(x, y, radius):
@@ -102,39 +201,68 @@ def manoeuvre_figure(frame, plant, figures, path, title) -> None:
     plt.close(fig)
 
 
-def zigzag_figure(frame, plant, moment_column, path) -> None:
+def zigzag_figure(frame, plant, steering_column, path, kind: str = "yaw moment") -> None:
+    """Heading change and what steered: the rudder angle [deg] (command and, when the plant
+    reports it, the actual angle) or the yaw moment scaled to +-10."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(8, 4))
     t = frame["time_s"] / 60
     psi = np.degrees(np.unwrap(frame[f"{plant}.psi"].to_numpy()))
     ax.plot(t, psi - psi[0], label="heading change [deg]")
-    moment = frame[moment_column].to_numpy()
-    scale = np.max(np.abs(moment)) or 1.0
-    ax.plot(t, 10 * moment / scale, "--", label="yaw moment (scaled to +-10)")
+    steering = frame[steering_column].to_numpy()
+    if kind == "rudder":
+        ax.plot(t, np.degrees(steering), "--", label=f"{steering_column} [deg]")
+        if f"{plant}.rudder_angle" in frame.columns and steering_column != f"{plant}.rudder_angle":
+            ax.plot(t, np.degrees(frame[f"{plant}.rudder_angle"]), ":", label="rudder angle (plant) [deg]")
+        title = "Zig-zag (rudder)"
+    else:
+        scale = np.max(np.abs(steering)) or 1.0
+        ax.plot(t, 10 * steering / scale, "--", label="yaw moment (scaled to +-10)")
+        title = "Zig-zag 10/10 (yaw moment)"
     ax.set_xlabel("time [min]")
     ax.set_ylabel("deg")
     ax.legend()
     ax.grid(True, alpha=0.3)
-    ax.set_title("Zig-zag 10/10 (yaw moment)")
+    ax.set_title(title)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
 
 
 def controls_figure(frame, scenario, cosim, out_dir) -> list[str]:
-    """Surge force and yaw moment applied to the plant over time, with their bounds."""
-    from orchestrator.analyses import driver_column, find_plant
+    """Surge force and yaw moment demanded (and achieved, behind an allocation) over time,
+    with their bounds; below them the plant's rudder angle and propeller revolutions when it
+    reports them (an actuator-level plant)."""
+    from orchestrator.analyses import find_plant, tau_column
 
     plant = find_plant(cosim)
     if plant is None:
         return []
     parameters = getattr(cosim.participant(plant), "parameters", {})
+    actuators = [(name, unit, scale) for name, unit, scale in
+                 (("rudder_angle", "deg", 180.0 / np.pi), ("propeller_rps", "1/s", 1.0))
+                 if f"{plant}.{name}" in frame.columns]
+    ports = [(port, unit) for port, unit in (("tau_u", "MN"), ("tau_r", "MN m"))
+             if tau_column(scenario, port) in frame.columns]
+    if not ports and not actuators:
+        return []
     plt = _pyplot()
-    fig, axes = plt.subplots(2, 1, figsize=(8, 5), sharex=True)
+    rows = len(ports) + len(actuators)
+    fig, axes = plt.subplots(rows, 1, figsize=(8, 2.5 * rows), sharex=True, squeeze=False)
+    axes = axes[:, 0]
     t = frame["time_s"] / 60.0
-    for ax, port, unit, scale in ((axes[0], "tau_u", "MN", 1e-6), (axes[1], "tau_r", "MN m", 1e-6)):
-        column = driver_column(scenario, plant, port)
-        ax.step(t, frame[column] * scale, where="post", label=column)
+    for ax, (name, unit, scale) in zip(axes[len(ports):], actuators):
+        ax.plot(t, frame[f"{plant}.{name}"] * scale, label=f"{plant}.{name}")
+        ax.set_ylabel(f"{name} [{unit}]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    for ax, (port, unit) in zip(axes, ports):
+        scale = 1e-6
+        column = tau_column(scenario, port)
+        ax.step(t, frame[column] * scale, where="post", label=f"{column} (demanded)")
+        achieved = next((c for c in frame.columns if c.endswith(f".{port}_achieved")), None)
+        if achieved is not None:
+            ax.plot(t, frame[achieved] * scale, lw=1, label=f"{achieved}")
         bound = parameters.get(f"{port}_max")
         if bound is not None:
             for sign in (1, -1):
@@ -142,7 +270,7 @@ def controls_figure(frame, scenario, cosim, out_dir) -> list[str]:
         ax.set_ylabel(f"{port} [{unit}]")
         ax.grid(True, alpha=0.3)
         ax.legend(loc="upper right", fontsize=8)
-    axes[1].set_xlabel("time [min]")
+    axes[-1].set_xlabel("time [min]")
     fig.suptitle(f"{scenario.simulation.name}: control history")
     fig.tight_layout()
     fig.savefig(out_dir / "controls.png", dpi=120)

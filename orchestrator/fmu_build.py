@@ -8,9 +8,13 @@ model's FMI 2.0 one (:mod:`orchestrator.model_description`).
 Each model folder ``models/<Name>/`` holds ``config.h``, ``model.c`` and a
 ``modelDescription.xml`` whose parameter start values are ``@name@`` placeholders; the
 shared FMI layer lives in ``models/common/``. At build time the ``[default]`` set of
-``models/KCS/parameter_sets.toml`` (the single source of the plant's parameters) fills those
-placeholders and is written as the C header ``kcs_parameter_defaults.h``, so the C start
-values and the XML can never disagree with the TOML. The FMU carries its ``sources/`` and
+``models/KCS/parameter_sets.toml`` (the single source of the 3-DOF plant's parameters) is
+written as the C header ``kcs_parameter_defaults.h``; a model with a parameter set file of
+its own (``models/<Name>/parameter_sets.toml``, e.g. ``KCSMMG``) also gets
+``model_parameter_defaults.h`` from it.  The model's own set (else the KCS set) fills the
+placeholders, so the C start values and the XML can never disagree with the TOML.  The
+particulars in those sets (length, beam, windage areas, ...) must equal the ship's
+``ships/KCS.toml`` (:mod:`rhnc.ships`), or the build is refused. The FMU carries its ``sources/`` and
 the SHA-256 of every input file in the zip comment, which ``ensure_built`` compares.
 """
 
@@ -37,6 +41,8 @@ FMUS_DIR = Path(__file__).resolve().parent.parent / "fmus"
 COMMON = "common"
 PARAMETER_SETS = Path("KCS") / "parameter_sets.toml"
 DEFAULTS_HEADER = "kcs_parameter_defaults.h"
+MODEL_DEFAULTS_HEADER = "model_parameter_defaults.h"
+SHIP = "KCS"
 BOUNDS_HEADER = "model_bounds.h"
 RESOURCES = "resources"
 HASH_PREFIX = "rhnc-source-sha256="
@@ -78,6 +84,12 @@ def _sources(name: str, models_dir: Path, fmi_version: str = "2.0") -> list[Path
     return files
 
 
+def _own_parameter_sets(name: str, models_dir: Path) -> Path | None:
+    """The model's own parameter set file, when it has one besides the KCS set."""
+    path = Path(models_dir) / name / "parameter_sets.toml"
+    return path if name != "KCS" and path.is_file() else None
+
+
 def _resources(name: str, models_dir: Path) -> list[Path]:
     """Files shipped in the FMU's ``resources/``: the model folder's ``resources/`` (e.g. a default grid)."""
     folder = Path(models_dir) / name / RESOURCES
@@ -86,10 +98,15 @@ def _resources(name: str, models_dir: Path) -> list[Path]:
 
 def _inputs(name: str, models_dir: Path, fmi_version: str = "2.0") -> list[Path]:
     """Every file whose content determines the FMU."""
+    from rhnc.ships import ship_file
+
     models_dir = Path(models_dir)
+    own = _own_parameter_sets(name, models_dir)
     return _sources(name, models_dir, fmi_version) + _resources(name, models_dir) + [
         models_dir / name / "modelDescription.xml",
         models_dir / PARAMETER_SETS,
+        *([own] if own else []),
+        ship_file(SHIP),
     ]
 
 
@@ -103,47 +120,60 @@ def source_hash(name: str, models_dir: Path = MODELS_DIR, fmi_version: str = "2.
     models_dir = Path(models_dir)
     digest = hashlib.sha256(f"{RECIPE_VERSION} {_check_version(fmi_version)}".encode())
     for path in _inputs(name, models_dir, fmi_version):
-        digest.update(str(path.relative_to(models_dir)).encode() + b"\0")
+        relative = path.relative_to(models_dir) if path.is_relative_to(models_dir) else Path(path.parent.name, path.name)
+        digest.update(str(relative).encode() + b"\0")
         digest.update(path.read_bytes() + b"\0")
     return digest.hexdigest()
 
 
-def _default_parameters(models_dir: Path) -> dict[str, float]:
-    path = Path(models_dir) / PARAMETER_SETS
+def _default_parameters(models_dir: Path, path: Path | None = None) -> dict[str, float]:
+    """The ``[default]`` set of ``path`` (the KCS set by default), checked against the ship's
+    particulars."""
+    from orchestrator.errors import ScenarioError
+    from rhnc.ships import check_parameter_set, load_ship
+
+    path = Path(path) if path is not None else Path(models_dir) / PARAMETER_SETS
     try:
         with path.open("rb") as f:
             default = tomllib.load(f)["default"]
     except (OSError, tomllib.TOMLDecodeError, KeyError) as exc:
         raise FmuError(f"cannot read the [default] parameter set of {path}: {exc}") from exc
-    values = {k: v for k, v in default.items() if k != "description"}
+    values = {k: v for k, v in default.items() if k not in ("description", "plant_fmu", "plant_guid")}
     for key, value in values.items():
         if not isinstance(value, (int, float)) or isinstance(value, bool):
             raise FmuError(f"{path}: [default] {key} = {value!r} is not a number")
+    try:
+        check_parameter_set(values, load_ship(SHIP), f"{path}: [default]")
+    except ScenarioError as exc:
+        raise FmuError(str(exc)) from None
     return {k: float(v) for k, v in values.items()}
 
 
-def _defaults_header(parameters: dict[str, float]) -> str:
+def _defaults_header(parameters: dict[str, float], prefix: str = "KCS",
+                     source: str = "models/KCS/parameter_sets.toml") -> str:
+    guard = f"{prefix}_PARAMETER_DEFAULTS_H"
     lines = [
-        "/* Generated by orchestrator/fmu_build.py from models/KCS/parameter_sets.toml",
+        f"/* Generated by orchestrator/fmu_build.py from {source}",
         " * ([default] set). Do not edit, do not commit. */",
-        "#ifndef KCS_PARAMETER_DEFAULTS_H",
-        "#define KCS_PARAMETER_DEFAULTS_H",
+        f"#ifndef {guard}",
+        f"#define {guard}",
     ]
-    lines += [f"#define KCS_DEFAULT_{k} ({v!r})" for k, v in parameters.items()]
+    lines += [f"#define {prefix}_DEFAULT_{k} ({v!r})" for k, v in parameters.items()]
     lines += ["#endif", ""]
     return "\n".join(lines)
 
 
-def _model_description(name: str, models_dir: Path, parameters: dict[str, float]) -> str:
+def _model_description(name: str, models_dir: Path, parameters: dict[str, float],
+                       parameter_file: Path | None = None) -> str:
     path = Path(models_dir) / name / "modelDescription.xml"
+    parameter_file = parameter_file or Path(models_dir) / PARAMETER_SETS
     text = path.read_text(encoding="utf-8")
 
     def substitute(match: re.Match) -> str:
         key = match.group(1)
         if key not in parameters:
             raise FmuError(
-                f"{path}: start value @{key}@ has no entry in the [default] set of "
-                f"{Path(models_dir) / PARAMETER_SETS}"
+                f"{path}: start value @{key}@ has no entry in the [default] set of {parameter_file}"
             )
         return repr(parameters[key])
 
@@ -206,10 +236,12 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR
     fmu = fmu_path(name, out_dir, fmi_version)
     fmu.parent.mkdir(parents=True, exist_ok=True)
     parameters = _default_parameters(models_dir)
+    own = _own_parameter_sets(name, models_dir)
+    own_parameters = _default_parameters(models_dir, own) if own else None
     sources = _sources(name, models_dir, fmi_version)
     c_files = [p.name for p in sources if p.suffix == ".c"]
     description = model_description.finish_fmi2(
-        _model_description(name, models_dir, parameters), c_files, _product_version())
+        _model_description(name, models_dir, own_parameters or parameters, own), c_files, _product_version())
     bounds_text = model_description.bounds_header(description)
     extra_sources = {}
     if fmi_version == "3.0":
@@ -221,6 +253,12 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR
         tmp = Path(tmp)
         header = tmp / DEFAULTS_HEADER
         header.write_text(_defaults_header(parameters), encoding="utf-8")
+        headers = [header]
+        if own_parameters is not None:
+            model_header = tmp / MODEL_DEFAULTS_HEADER
+            model_header.write_text(_defaults_header(own_parameters, "MODEL", f"models/{name}/parameter_sets.toml"),
+                                    encoding="utf-8")
+            headers.append(model_header)
         bounds = tmp / BOUNDS_HEADER
         bounds.write_text(bounds_text, encoding="utf-8")
         library = tmp / f"{name}{sharedLibraryExtension}"
@@ -244,7 +282,7 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR
             binary_folder = platform if fmi_version == "2.0" else platform_tuple
             z.write(library, f"binaries/{binary_folder}/{library.name}")
             names = set()
-            for path in [*sources, header, bounds]:
+            for path in [*sources, *headers, bounds]:
                 if path.name in names:
                     raise FmuError(f"building model {name} failed: two sources named {path.name}")
                 names.add(path.name)
@@ -273,7 +311,8 @@ def ensure_built(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_
     """Return the model's FMU, rebuilding it when missing or built from other sources.
 
     The comparison is by content: the SHA-256 of the model's sources, the shared layer,
-    its modelDescription.xml and parameter_sets.toml, stored in the FMU's zip comment.
+    its modelDescription.xml, the parameter sets and the ship's particulars, stored in the
+    FMU's zip comment.
     """
     _check_name(name, models_dir)
     fmu = fmu_path(name, out_dir, fmi_version)

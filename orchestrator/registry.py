@@ -8,9 +8,11 @@ Each entry maps a type name to ``"module:Class"``; the class provides
 
 PARTICIPANT_TYPES = {
     "scripted_tau": "orchestrator.scripted:ScriptedTau",
+    "scripted_rudder": "orchestrator.scripted:ScriptedRudder",
     "navigation": "rhnc.navigation_participant:NavigationParticipant",
     "control": "rhnc.control_participant:ControlParticipant",
     "traffic": "rhnc.traffic:TrafficParticipant",
     "reference_path": "rhnc.reference_participant:ReferencePathParticipant",
     "goal": "rhnc.goal:GoalMonitor",
+    "allocation": "rhnc.allocation:AllocationParticipant",
 }

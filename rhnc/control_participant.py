@@ -5,7 +5,11 @@ Inputs: ``x, y, psi, u, v, r`` (floats, SI), ``reference`` ((M, 7): t, x, y, psi
 Outputs: ``tau_u`` [N], ``tau_r`` [N·m], ``prediction`` ((N_c+1, 7), absolute time
 column), and per-solve telemetry ``solve_time_s``, ``iterations``, ``solver_ok``,
 ``fallback``, ``cost``, ``constraint_violation``, ``collision_slack`` (> 0 when the soft
-collision constraints had to give way).
+collision constraints had to give way), ``timed_out`` (1 when the wall-time limit stopped
+the solve), ``disturbance`` ((5,): the observer's current north, east [m/s], w_u, w_v [N],
+w_r [N·m]), ``encounter_class`` ((max_obstacles,): per obstacle row the index into
+:data:`rhnc.colregs.ENCOUNTER_CLASSES`, -1 unclassified or no such row) and
+``domain_active`` ((max_obstacles,): 1 when the row's collision constraint was on).
 """
 
 from __future__ import annotations
@@ -13,6 +17,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Mapping, Sequence
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -24,6 +29,7 @@ from rhnc.ship_model import STATE_NAMES, load_parameter_set
 
 LOG = logging.getLogger(__name__)
 NM = 1852.0
+KNOT = NM / 3600.0
 
 OPTIONS = (
     "parameter_set",
@@ -40,6 +46,16 @@ OPTIONS = (
     "speed_scale_mps",
     "et_default",
     "collision_slack_weight",
+    "wall_time_limit_s",
+    "cpu_time_limit_s",
+    "max_speed_kn",
+    "colregs",
+    "clearance_margin_nm",
+    "clearance_margin_growth_kn",
+    "stand_on_action_tcpa_s",
+    "stand_on_action_range_factor",
+    "disturbance_observer",
+    "observer_gain",
 )
 WEIGHT_KEYS = ("q", "r", "r_rate")
 
@@ -103,6 +119,28 @@ class ControlParticipant(Participant):
     collision_slack_weight : float or false
         Weight of the soft collision constraints' slack (default 1e4, see
         :class:`rhnc.nmpc.NMPCSettings`); ``false`` makes them hard.
+    cpu_time_limit_s : float or false
+        Processor-time limit of each solver attempt [s] (default 2; the shifted previous
+        plan is applied when it is hit; processor time, so the load of the machine does not
+        change the outcome); ``false``: none.
+    wall_time_limit_s : float or false
+        Hard wall-time limit of one control step's solves [s] (default 20); ``false``: none
+        (both false: iteration limit only).
+    max_speed_kn : float
+        Upper bound of the surge speed, also caps the reference (default 24, the KCS's
+        service speed).
+    colregs : bool
+        Collision domains shaped by encounter class and role, Rules 8 and 13-17 (default
+        false: the paper's circles R + R_i; see :mod:`rhnc.nmpc_colregs`).
+    clearance_margin_nm, clearance_margin_growth_kn : float
+        Margin added to R + R_i [nm] and its growth with prediction time [kn = nm/h]
+        (default 0, 0): tightening against disturbances and model error.
+    stand_on_action_tcpa_s, stand_on_action_range_factor : float
+        Rule 17: when a stand-on ship stops standing on (defaults 600 s, 2).
+    disturbance_observer : bool
+        Offset-free NMPC: estimate current and loads and predict with them (default false).
+    observer_gain : float
+        The observer's correction per step, in (0, 1] (default 0.5).
     """
 
     def __init__(self, name: str, controller: NMPCController, et_default: float) -> None:
@@ -115,6 +153,8 @@ class ControlParticipant(Participant):
         self._solve_times: list[float] = []
         self._steps = 0
         self._slack_steps = 0
+        self._timeouts = 0
+        self._speeds: list[float] = []
 
     @classmethod
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "ControlParticipant":
@@ -148,6 +188,23 @@ class ControlParticipant(Participant):
         for key in ("length_scale_m", "speed_scale_mps"):
             if key in options:
                 kwargs[key] = _number(options, key, where, None)
+        for key in ("cpu_time_limit_s", "wall_time_limit_s"):  # false: no such limit
+            if key in options:
+                kwargs[key] = None if options[key] is False else _number(options, key, where, None)
+        if "max_speed_kn" in options:
+            kwargs["max_speed_mps"] = _number(options, "max_speed_kn", where, None) * KNOT
+        for key in ("colregs", "disturbance_observer"):
+            if key in options:
+                if not isinstance(options[key], bool):
+                    raise ScenarioError(f"{where}: option '{key}' must be true or false, got {options[key]!r}")
+                kwargs[key] = options[key]
+        for key, target, scale in (("clearance_margin_nm", "clearance_margin_m", NM),
+                                   ("clearance_margin_growth_kn", "clearance_margin_growth_mps", KNOT),
+                                   ("stand_on_action_tcpa_s", "stand_on_action_tcpa_s", 1.0),
+                                   ("stand_on_action_range_factor", "stand_on_action_range_factor", 1.0),
+                                   ("observer_gain", "observer_gain", 1.0)):
+            if key in options:
+                kwargs[target] = _number(options, key, where, None) * scale
         if "collision_slack_weight" in options:  # false: hard collision constraints
             value = options["collision_slack_weight"]
             kwargs["collision_slack_weight"] = None if value is False else _number(
@@ -180,6 +237,7 @@ class ControlParticipant(Participant):
         return (
             "tau_u", "tau_r", "prediction", "solve_time_s", "iterations",
             "solver_ok", "fallback", "cost", "constraint_violation", "collision_slack",
+            "timed_out", "disturbance", "encounter_class", "domain_active",
         )
 
     def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
@@ -187,7 +245,14 @@ class ControlParticipant(Participant):
         self.controller.reset()
         self._tau = np.zeros(2)
         self._slack_steps = 0
-        return self._outputs(self._tau, self._prediction, 0.0, 0, True, False, 0.0, 0.0, 0.0)
+        self._timeouts = 0
+        self._speeds: list[float] = []
+        slots = self.controller.settings.max_obstacles
+        idle = SimpleNamespace(solve_time_s=0.0, iterations=0, success=True, fallback=False, cost=0.0,
+                               constraint_violation=0.0, collision_slack=0.0, timed_out=False,
+                               disturbance=np.zeros(5), encounter_classes=np.full(slots, -1.0),
+                               domain_active=np.zeros(slots))
+        return self._outputs(self._tau, self._prediction, idle)
 
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         """Solve the NMPC at ``time`` from the measured state; return tau held over the step."""
@@ -212,27 +277,38 @@ class ControlParticipant(Participant):
         if solution.fallback:
             LOG.warning("%s: NMPC failed at t = %.1f s (%s), fallback applied", self.name, time, solution.status)
         self._slack_steps += int(solution.collision_slack > 0.0)
+        self._timeouts += int(solution.timed_out)
+        self._speeds.append(float(state[3]))
         prediction = np.column_stack([horizon, solution.states])
-        return self._outputs(
-            solution.tau, prediction, solution.solve_time_s, solution.iterations,
-            solution.success, solution.fallback, solution.cost, solution.constraint_violation,
-            solution.collision_slack,
-        )
+        return self._outputs(solution.tau, prediction, solution)
 
-    def _outputs(self, tau, prediction, solve_time, iterations, ok, fallback, cost, violation,
-                 slack) -> dict[str, Value]:
+    def _outputs(self, tau, prediction, solution) -> dict[str, Value]:
+        slots = self.controller.settings.max_obstacles
+        classes = np.full(slots, -1.0)
+        active = np.zeros(slots)
+        n = min(slots, len(solution.encounter_classes))
+        classes[:n] = solution.encounter_classes[:n]
+        active[:n] = solution.domain_active[:n]
         return {
             "tau_u": float(tau[0]),
             "tau_r": float(tau[1]),
             "prediction": prediction,
-            "solve_time_s": float(solve_time),
-            "iterations": float(iterations),
-            "solver_ok": 1.0 if ok else 0.0,
-            "fallback": 1.0 if fallback else 0.0,
-            "cost": float(cost),
-            "constraint_violation": float(violation),
-            "collision_slack": float(slack),
+            "solve_time_s": float(solution.solve_time_s),
+            "iterations": float(solution.iterations),
+            "solver_ok": 1.0 if solution.success else 0.0,
+            "fallback": 1.0 if solution.fallback else 0.0,
+            "cost": float(solution.cost),
+            "constraint_violation": float(solution.constraint_violation),
+            "collision_slack": float(solution.collision_slack),
+            "timed_out": 1.0 if solution.timed_out else 0.0,
+            "disturbance": np.asarray(solution.disturbance, dtype=float).copy(),
+            "encounter_class": classes,
+            "domain_active": active,
         }
+
+    def terminate(self) -> None:
+        """Stop the solver's worker process."""
+        self.controller.close()
 
     def summary(self) -> dict[str, Any]:
         """Solve-time median/max [s], solves, fallbacks and solver failures."""
@@ -245,6 +321,9 @@ class ControlParticipant(Participant):
             "fallback_count": self.controller.fallback_count,
             "failure_count": self.controller.failure_count,
             "relaxed_clearance_steps": self._slack_steps,
+            "timeout_count": self._timeouts,
+            "stand_on_actions": self.controller.domains.stand_on_actions,
+            "max_speed_kn": float(max(self._speeds)) / KNOT if self._speeds else None,
         }
 
 

@@ -1,8 +1,9 @@
-"""Trajectory-tracking NMPC with collision constraints (spec section 5, paper Eq. 20-23).
+"""Trajectory-tracking NMPC with collision constraints (paper Eq. 20-23), time-bounded.
 
-The optimal-control problem is built once as a CasADi ``nlpsol`` with parameters (reference,
-previous input, terminal weight, obstacles) and re-solved every control interval with new
-parameter values and a warm start from the shifted previous solution.
+The optimal-control problem (:mod:`rhnc.nmpc_problem`) is built once as a CasADi
+``nlpsol`` with parameters (reference, previous input, terminal weight, disturbance
+estimate, obstacle domains) and re-solved every control interval with new parameter values
+and a warm start from the shifted previous solution (:mod:`rhnc.nmpc_warm_start`).
 
 Scaling (so that the paper's Q = diag(0.1, 0.1, 10, 1, 1, 1), R = R1 = diag(0.01, 0.01)
 keep a meaning at full scale): errors and inputs are made dimensionless the way naval
@@ -23,33 +24,35 @@ stops in front of a 2 nm obstacle on its track instead of passing it (seen in tr
 The decision variables are the same scaled quantities, with positions measured from the
 ship's position at the solve, which keeps the solver's numbers of order one.
 
-Terminal weight P: the solution of the discrete algebraic Riccati equation of the scaled
-model linearised about straight motion at the reference speed (python-control ``dare``,
-Q and R as above), expressed in the reference's along-/cross-track frame and rotated to
-the reference heading at the horizon's end; cached per reference speed (0.25 m/s bins).
+Terminal weight P: the DARE solution about straight motion at the reference speed
+(:mod:`rhnc.nmpc_terminal`).
 
-Below ``MIN_TERMINAL_SPEED_MPS`` (a reference that stops at its destination) P is taken
-at that speed: about zero speed the linearised model is not stabilisable.
+Collision constraints (only while ET = 1) at every RK4 substep of every interval, one
+circle per obstacle (:mod:`rhnc.nmpc_problem`); the circles are the paper's R + R_i, or,
+with ``colregs``, shaped by each target's encounter class and the own ship's role
+(:mod:`rhnc.nmpc_colregs`), widened by a margin that grows with the prediction time.
 
-Collision constraints (only while ET = 1): for every obstacle i and at every RK4 substep
-of every interval (not only at the shooting nodes)
+When the problem with hard constraints has no solution (an obstacle noticed too late),
+the step is solved again with one slack per stage relaxing them at a heavy L1 + L2 cost
+(``collision_slack_weight``): the plan that violates the clearance least, reported in the
+telemetry as ``collision_slack``.
 
-    |p - c_i(t)|² / (R + R_i)² >= 1 + (d_s / (2 (R + R_i)))²,
+Speed bound: u <= ``max_speed_mps`` at every node after the first (the KCS's service
+speed, 24 kn, unless the scenario says otherwise), and the reference speed is capped at
+the same value; a ship measured faster is allowed to slow down at its deceleration limit.
 
-with c_i(t) the obstacle predicted at constant velocity and d_s the distance that own ship
-and obstacle can close in one substep.  The right-hand side is the radius inflated so that
-the straight chord between two admissible substep points cannot enter the circle
-``R + R_i``.  Obstacle slots are fixed (``max_obstacles``); unused or switched-off slots
-get an "active" parameter of 0, which turns their constraint into ``1 >= 0``.
+Time limits: every solve is limited to ``max_iterations``, to ``cpu_time_limit_s`` of
+processor time per attempt and to ``wall_time_limit_s`` (both attempts together,
+:mod:`rhnc.solver_watchdog`).  A prediction from the measured state
+that is not finite (a state far outside the model's range) skips the solver.
 
-When the problem with these hard constraints has no solution (an obstacle noticed too
-late), the step is solved again with one slack per stage relaxing them at a heavy L1 + L2
-cost (``collision_slack_weight``): the plan that violates the clearance least, reported in
-the telemetry as ``collision_slack``.
+Failures: when neither attempt reports success, or the time limit stops the solve, the
+controller applies the previous plan shifted by one interval (its next input and
+predicted states) and flags the step; when no previous plan is left it holds the
+previous surge force with zero yaw moment.
 
-Failures: when neither attempt reports success, the controller applies the previous plan
-shifted by one interval (its next input and predicted states) and flags the step; when no
-previous plan is left it holds the previous surge force with zero yaw moment.
+Offset-free tracking: with ``disturbance_observer`` on, the current and body-frame loads
+estimated by :mod:`rhnc.disturbance_observer` enter the prediction model as parameters.
 """
 
 from __future__ import annotations
@@ -57,27 +60,37 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
-import time
-from collections.abc import Sequence
 
 import casadi as ca
 import numpy as np
 
 from orchestrator.interrupts import stop_requested
-from rhnc.ship_model import ShipParameters, rk4_function
+from rhnc.colregs import ENCOUNTER_CLASSES
+from rhnc.disturbance_observer import DisturbanceObserver, trimmed_reference
+from rhnc.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport, DomainSettings
+from rhnc.nmpc_problem import DISTURBANCE_SIZE, OBSTACLE_FIELDS, build_problem, solver_options
+from rhnc.nmpc_terminal import MIN_TERMINAL_SPEED_MPS, TerminalWeight
+from rhnc.nmpc_warm_start import PlanMemory, push_guess_clear
+from rhnc.ship_model import ShipParameters
+from rhnc.solver_watchdog import WALL_TIME_STATUS, BoundedSolver
 
 LOG = logging.getLogger(__name__)
 
+__all__ = ["KNOT", "OBSTACLE_FIELDS", "MIN_TERMINAL_SPEED_MPS", "SOLVERS", "NMPCSettings", "NMPCSolution",
+           "NMPCController", "reference_inputs", "wrap_angle", "ENCOUNTER_CLASSES"]
+
 KNOT = 1852.0 / 3600.0
-#: Parameters per obstacle slot: cx, cy [L], vx, vy [L/s], (R + R_i) [L], inflation [-], active.
-OBSTACLE_FIELDS = 7
-#: collision slack (scaled clearance, |p - c|^2 / (R + R_i)^2 - 1) below which a plan counts as
-#: keeping R + R_i: the solver's tolerance, about 0.05 % of the distance
+#: collision slack (scaled clearance, |p - c|^2 / rho^2 - 1) below which a plan counts as
+#: keeping its clearance: the solver's tolerance, about 0.05 % of the distance
 SLACK_TOLERANCE = 1e-3
-#: lowest speed [m/s] about which the terminal weight P is linearised
-MIN_TERMINAL_SPEED_MPS = 1.0
+#: the KCS's service speed [m/s]: the default speed bound
+SERVICE_SPEED_MPS = 24.0 * KNOT
+#: deceleration [m/s²] assumed when a ship measured above the speed bound slows down
+SLOW_DOWN_MPS2 = 0.02
 
 SOLVERS = ("ipopt", "fatrop", "sqpmethod")
+#: cost and constraint violation reported when a solve left no finite iterate (stopped, NaN)
+UNKNOWN = -1.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -95,7 +108,15 @@ class NMPCSettings:
     solver : str
         ``"ipopt"``, ``"fatrop"`` or ``"sqpmethod"``.
     max_iterations : int
-        Iteration limit of the NLP solver.
+        Iteration limit of the NLP solver (each attempt).
+    cpu_time_limit_s : float or None
+        Limit of the processor time of each solver attempt [s] (Linux, see
+        :mod:`rhnc.solver_watchdog`): set far above the normal solve (tens of ms) so that
+        it stops runaways only; processor time, not wall time, so that the verdict does not
+        depend on the machine's load.
+    wall_time_limit_s : float or None
+        Hard wall-time limit of one control step's solves [s], whatever the load.  Both
+        None: iteration limit only, solves in this process.
     max_obstacles : int
         Obstacle slots in the problem; the nearest ones are used when more are given.
     own_radius_m : float
@@ -117,6 +138,18 @@ class NMPCSettings:
         the plan that violates the clearance least, instead of a fallback that ignores the
         obstacle.  (The L1 term is an exact penalty: were the hard problem feasible, the
         soft one would give the same plan.)  None: no slacks and no second attempt.
+    max_speed_mps : float
+        Upper bound of the surge speed u [m/s] (and cap of the reference speed).
+    colregs : bool
+        Collision domains shaped by encounter class and role (:mod:`rhnc.nmpc_colregs`).
+    clearance_margin_m, clearance_margin_growth_mps : float
+        Margin added to R + R_i [m] and its growth per second of prediction [m/s].
+    stand_on_action_tcpa_s, stand_on_action_range_factor : float
+        When a stand-on ship acts (Rule 17), see :class:`rhnc.nmpc_colregs.DomainSettings`.
+    disturbance_observer : bool
+        Estimate current and body-frame loads and predict with them (offset-free).
+    observer_gain : float
+        Fraction of the observer's correction applied per step, in (0, 1].
     """
 
     horizon_steps: int = 15
@@ -124,6 +157,8 @@ class NMPCSettings:
     substeps: int = 4
     solver: str = "fatrop"
     max_iterations: int = 200
+    cpu_time_limit_s: float | None = 2.0
+    wall_time_limit_s: float | None = 20.0
     max_obstacles: int = 4
     own_radius_m: float = 0.0
     q: tuple[float, ...] = (0.1, 0.1, 10.0, 1.0, 1.0, 1.0)
@@ -133,6 +168,14 @@ class NMPCSettings:
     speed_scale_mps: float = 1.0
     terminal_weight: bool = True
     collision_slack_weight: float | None = 1.0e4
+    max_speed_mps: float = SERVICE_SPEED_MPS
+    colregs: bool = False
+    clearance_margin_m: float = 0.0
+    clearance_margin_growth_mps: float = 0.0
+    stand_on_action_tcpa_s: float = 600.0
+    stand_on_action_range_factor: float = 2.0
+    disturbance_observer: bool = False
+    observer_gain: float = 0.5
 
     def __post_init__(self) -> None:
         if self.horizon_steps < 1:
@@ -149,6 +192,27 @@ class NMPCSettings:
             raise ValueError("weights must be >= 0")
         if self.collision_slack_weight is not None and not self.collision_slack_weight > 0.0:
             raise ValueError(f"collision_slack_weight must be > 0 or None, got {self.collision_slack_weight}")
+        for name in ("cpu_time_limit_s", "wall_time_limit_s"):
+            value = getattr(self, name)
+            if value is not None and not value > 0.0:
+                raise ValueError(f"{name} must be > 0 or None, got {value}")
+        if not self.max_speed_mps > 0.0:
+            raise ValueError(f"max_speed_mps must be > 0, got {self.max_speed_mps}")
+        for name in ("clearance_margin_m", "clearance_margin_growth_mps", "stand_on_action_tcpa_s",
+                     "stand_on_action_range_factor"):
+            if getattr(self, name) < 0.0:
+                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
+        if not 0.0 < self.observer_gain <= 1.0:
+            raise ValueError(f"observer_gain must be in (0, 1], got {self.observer_gain}")
+
+    def domain_settings(self) -> DomainSettings:
+        """The collision-domain part of the settings."""
+        return DomainSettings(
+            own_radius_m=self.own_radius_m, colregs=self.colregs, clearance_margin_m=self.clearance_margin_m,
+            clearance_margin_growth_mps=self.clearance_margin_growth_mps,
+            stand_on_action_tcpa_s=self.stand_on_action_tcpa_s,
+            stand_on_action_range_factor=self.stand_on_action_range_factor,
+        )
 
 
 @dataclasses.dataclass
@@ -164,22 +228,33 @@ class NMPCSolution:
     inputs : numpy.ndarray
         (N, 2) planned inputs in SI.
     solve_time_s : float
-        Wall time of the NLP solver call [s].
+        Wall time of the NLP solver calls [s].
     iterations : int
         Solver iterations.
     status : str
-        Solver's return status.
+        Solver's return status (``wall_time_exceeded`` when stopped at the time limit).
     success : bool
         Solver reported success.
     fallback : bool
         The applied input came from the fallback, not from this solve.
     cost : float
-        Optimal (or last) objective value (scaled, dimensionless).
+        Optimal (or last) objective value (scaled, dimensionless); -1 when the solve left
+        no finite iterate (stopped at the time limit, NaN).
     constraint_violation : float
-        Largest violation of the NLP's constraints and bounds at the returned point (scaled).
+        Largest violation of the NLP's constraints and bounds at the returned point
+        (scaled); -1 when unknown, as for the cost.
     collision_slack : float
-        Largest collision slack sigma of the plan (0: every clearance R + R_i is kept;
-        > 0: the soft constraints had to give way, see ``collision_slack_weight``).
+        Largest collision slack sigma of the plan (0: every clearance is kept; > 0: the
+        soft constraints had to give way, see ``collision_slack_weight``).
+    timed_out : bool
+        The wall-time limit stopped a solve of this step.
+    disturbance : numpy.ndarray
+        Disturbance estimate used by the prediction (5,): current north, east [m/s],
+        w_u, w_v [N], w_r [N m]; zeros with the observer off.
+    encounter_classes : numpy.ndarray
+        Per obstacle row: index into ``ENCOUNTER_CLASSES`` (-1: not classified).
+    domain_active : numpy.ndarray
+        Per obstacle row: 1 when its collision constraint was on.
     """
 
     tau: np.ndarray
@@ -193,6 +268,10 @@ class NMPCSolution:
     cost: float
     constraint_violation: float
     collision_slack: float = 0.0
+    timed_out: bool = False
+    disturbance: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(DISTURBANCE_SIZE))
+    encounter_classes: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    domain_active: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
 
 
 def wrap_angle(angle):
@@ -225,7 +304,7 @@ class NMPCController:
     params : ShipParameters
         Prediction model (same set as the plant, without disturbances).
     settings : NMPCSettings
-        Horizon, interval, solver, weights, scaling.
+        Horizon, interval, solver, weights, scaling, domains, limits.
     """
 
     def __init__(self, params: ShipParameters, settings: NMPCSettings | None = None) -> None:
@@ -238,268 +317,43 @@ class NMPCController:
         #: SI value = scaled value * state_scale (positions relative to the solve's origin).
         self.state_scale = np.array([L, L, 1.0, U, U, U / L])
         self.input_scale = params.tau_max.copy()
-        self._terminal_cache: dict[float, np.ndarray] = {}
-        self._build()
-        self._previous: NMPCSolution | None = None
-        self._previous_time: float | None = None
-        self.fallback_count = 0
-        self.failure_count = 0
-
-    # ------------------------------------------------------------------ problem build
-
-    def _scaled_step(self) -> ca.Function:
-        """F_s(z, w) -> (z_next, Z_sub): RK4 of the scaled model (translation invariant)."""
-        s = self.settings
-        F = rk4_function(self.params, s.control_interval_s, s.substeps, with_substeps=True)
-        z = ca.SX.sym("z", 6)
-        w = ca.SX.sym("w", 2)
-        sx = ca.DM(self.state_scale)
-        x_next, x_sub = F(z * sx, w * ca.DM(self.input_scale))
-        z_sub = x_sub / ca.repmat(sx, 1, s.substeps)
-        return ca.Function("F_scaled", [z, w], [x_next / sx, z_sub])
-
-    def _build(self) -> None:
-        s = self.settings
-        N, S, M = s.horizon_steps, s.substeps, s.max_obstacles
-        dt = s.control_interval_s
-        h = dt / S
-        Fs = self._scaled_step()
-        self._F_scaled = Fs
-
-        Z = [ca.SX.sym(f"z{k}", 6) for k in range(N + 1)]
-        W = [ca.SX.sym(f"w{k}", 2) for k in range(N)]
-        soft = s.collision_slack_weight is not None
-        SIGMA = [ca.SX.sym(f"sigma{k}", 1 if soft else 0) for k in range(N)]
-        ref = ca.SX.sym("ref", 6, N + 1)
-        w_d = ca.SX.sym("w_d", 2, N)
-        w_prev = ca.SX.sym("w_prev", 2)
-        P = ca.SX.sym("P", 6, 6)
-        obs = ca.SX.sym("obs", OBSTACLE_FIELDS, M)
-        Q = ca.DM(s.q)
-        R = ca.DM(s.r)
-        R1 = ca.DM(s.r_rate)
-
-        def stage_state_cost(z, zr):
-            e = z - zr
-            heading = 2.0 * (1.0 - ca.cos(e[2]))
-            return (
-                Q[0] * e[0] ** 2 + Q[1] * e[1] ** 2 + Q[2] * heading
-                + Q[3] * e[3] ** 2 + Q[4] * e[4] ** 2 + Q[5] * e[5] ** 2
-            )
-
-        cost = 0
-        g, lbg, ubg, equality = [], [], [], []
-        for k in range(N):
-            Z_next, Z_sub = Fs(Z[k], W[k])
-            if k > 0:
-                cost += stage_state_cost(Z[k], ref[:, k])
-            dw = W[k] - w_d[:, k]
-            cost += ca.sum1(R * dw**2)
-            dw_rate = W[k] - (W[k - 1] if k > 0 else w_prev)
-            cost += ca.sum1(R1 * dw_rate**2)
-            relax = 0
-            if soft:
-                cost += s.collision_slack_weight * (SIGMA[k][0] + SIGMA[k][0] ** 2)
-                relax = SIGMA[k][0]
-            # dynamics of stage k first, then its path constraints (fatrop's structure)
-            g.append(Z[k + 1] - Z_next)
-            lbg += [0.0] * 6
-            ubg += [0.0] * 6
-            equality += [True] * 6
-            for j in range(S):
-                t_sub = k * dt + (j + 1) * h
-                for i in range(M):
-                    cx, cy, vx, vy, rsum, inflation, active = (obs[f, i] for f in range(OBSTACLE_FIELDS))
-                    dx = Z_sub[0, j] - (cx + vx * t_sub)
-                    dy = Z_sub[1, j] - (cy + vy * t_sub)
-                    clearance = (dx**2 + dy**2) / rsum**2 - 1.0 - inflation
-                    g.append(active * clearance + (1.0 - active) + relax)
-                    lbg.append(0.0)
-                    ubg.append(ca.inf)
-                    equality.append(False)
-        # terminal cost in the reference's along/cross-track frame
-        eN = Z[N] - ref[:, N]
-        c, sn = ca.cos(ref[2, N]), ca.sin(ref[2, N])
-        e_path = ca.vertcat(
-            c * eN[0] + sn * eN[1],
-            -sn * eN[0] + c * eN[1],
-            ca.atan2(ca.sin(eN[2]), ca.cos(eN[2])),
-            eN[3],
-            eN[4],
-            eN[5],
-        )
-        cost += ca.mtimes([e_path.T, P, e_path])
-
-        decision = []
-        for k in range(N):
-            decision += [Z[k], W[k], SIGMA[k]]
-        decision.append(Z[N])
-        n_sigma = 1 if soft else 0
-        self._nx = 6 * (N + 1) + (2 + n_sigma) * N
-        parameters = ca.vertcat(ca.vec(ref), ca.vec(w_d), w_prev, ca.vec(P), ca.vec(obs))
-        nlp = {"x": ca.vertcat(*decision), "f": cost, "g": ca.vertcat(*g), "p": parameters}
-        self._lbg = np.array(lbg, dtype=float)
-        self._ubg = np.array(ubg, dtype=float)
-        self._solver = ca.nlpsol("rhnc_nmpc", s.solver, nlp, self._solver_options(equality))
+        self.problem = build_problem(params, s.horizon_steps, s.control_interval_s, s.substeps, s.max_obstacles,
+                                     s.q, s.r, s.r_rate, s.collision_slack_weight, self.state_scale,
+                                     self.input_scale)
+        self._F_scaled = self.problem.step
+        self.terminal_weight = TerminalWeight(self.problem.step, params, s.q, s.r, U, self.input_scale,
+                                              s.terminal_weight)
+        options = solver_options(s.solver, self.problem.equality, s.max_iterations, s.wall_time_limit_s,
+                                 s.cpu_time_limit_s)
+        nlp = self.problem.nlp
+        hard = ca.nlpsol("rhnc_nmpc", s.solver, nlp, options)
         # The second, relaxed attempt gets a solver of its own, built on first need: a solver
         # keeps state between calls (fatrop), and a failed hard attempt left in it spoils the
         # relaxed one started from the same guess (seen: 162 iterations and failure, against
         # 59 and success from a fresh solver).
-        self._relaxed_solver = None
-        self._relaxed_build = (nlp, self._solver_options(equality))
-        # index helpers into the stacked decision vector (z_k then w_k per stage)
-        stride = 8 + n_sigma
-        self._z_index = np.array([[k * stride + i for i in range(6)] for k in range(N + 1)])
-        self._w_index = np.array([[k * stride + 6 + i for i in range(2)] for k in range(N)])
-        self._sigma_index = np.array([k * stride + 8 for k in range(N)]) if soft else np.zeros(0, dtype=int)
+        self.solvers = BoundedSolver({"hard": hard},
+                                     {"relaxed": lambda: ca.nlpsol("rhnc_nmpc_relaxed", s.solver, nlp, options)},
+                                     s.wall_time_limit_s, s.cpu_time_limit_s)
+        self.domains = CollisionDomains(s.domain_settings(), s.max_obstacles)
+        self.observer = (DisturbanceObserver(params, self.state_scale, s.observer_gain)
+                         if s.disturbance_observer else None)
+        self.memory = PlanMemory(s.horizon_steps, s.control_interval_s, self._rollout)
+        self.fallback_count = 0
+        self.failure_count = 0
+        self.timeout_count = 0
 
-    def _solver_options(self, equality: Sequence[bool]) -> dict:
-        s = self.settings
-        common = {"expand": True, "print_time": False, "error_on_fail": False}
-        if s.solver == "ipopt":
-            return {
-                **common,
-                "ipopt": {
-                    "print_level": 0,
-                    "sb": "yes",
-                    "max_iter": s.max_iterations,
-                    "tol": 1e-6,
-                    "mu_strategy": "adaptive",
-                    "warm_start_init_point": "no",
-                },
-            }
-        if s.solver == "fatrop":
-            return {
-                **common,
-                "structure_detection": "auto",
-                "equality": list(equality),
-                "debug": False,
-                "fatrop": {"print_level": 0, "max_iter": s.max_iterations, "tol": 1e-6, "mu_init": 1e-1},
-            }
-        return {
-            **common,
-            "qpsol": "qrqp",
-            "qpsol_options": {"print_iter": False, "print_header": False, "print_info": False, "error_on_fail": False},
-            "max_iter": s.max_iterations,
-            "print_header": False,
-            "print_iteration": False,
-            "print_status": False,
-            "convexify_strategy": "regularize",
-            "tol_pr": 1e-6,
-            "tol_du": 1e-6,
-        }
-
-    # ------------------------------------------------------------------ terminal weight
-
-    def terminal_weight(self, speed_mps: float) -> np.ndarray:
-        """DARE terminal weight P (6 x 6, scaled, path frame) about straight motion at ``speed_mps``."""
-        s = self.settings
-        if not s.terminal_weight:
-            return np.diag(s.q)
-        # Below ~1 m/s the linearised model loses stabilisability (the cross-track position
-        # is reached only through sway, which is unactuated at u = 0) and the DARE has no
-        # solution: a stopping or stopped reference takes P of slow straight motion.
-        key = round(max(speed_mps, MIN_TERMINAL_SPEED_MPS) * 4.0) / 4.0
-        if key not in self._terminal_cache:
-            z0 = np.array([0.0, 0.0, 0.0, key / self.speed_scale, 0.0, 0.0])
-            w0 = self.params.equilibrium_tau(key) / self.input_scale
-            z = ca.SX.sym("z", 6)
-            w = ca.SX.sym("w", 2)
-            z_next = self._F_scaled(z, w)[0]
-            jac = ca.Function("linearised_step", [z, w], [ca.jacobian(z_next, z), ca.jacobian(z_next, w)])
-            A, B = (np.array(m) for m in jac(z0, w0))
-            import control  # python-control: 1.5 s to import, needed only here
-
-            P, _, _ = control.dare(A, B, np.diag(s.q), np.diag(s.r))
-            self._terminal_cache[key] = 0.5 * (P + P.T)
-        return self._terminal_cache[key]
-
-    # ------------------------------------------------------------------ solving
+    # ------------------------------------------------------------------ state handling
 
     def reset(self) -> None:
-        """Forget the previous plan (warm start and fallback)."""
-        self._previous = None
-        self._previous_time = None
+        """Forget the previous plan (warm start and fallback), encounter classes and estimate."""
+        self.memory.reset()
+        self.domains.reset()
+        if self.observer is not None:
+            self.observer.reset()
 
-    def _obstacle_parameters(self, obstacles: np.ndarray | None, origin: np.ndarray, speed: float, et: bool) -> np.ndarray:
-        s = self.settings
-        L = self.length_scale
-        h = s.control_interval_s / s.substeps
-        slots = np.zeros((OBSTACLE_FIELDS, s.max_obstacles))
-        slots[4, :] = 1.0  # harmless radius for inactive slots
-        if not et or obstacles is None or len(obstacles) == 0:
-            return slots
-        obstacles = np.atleast_2d(np.asarray(obstacles, dtype=float))
-        distance = np.hypot(obstacles[:, 0] - origin[0], obstacles[:, 1] - origin[1]) - obstacles[:, 4]
-        order = np.argsort(distance)
-        if len(order) > s.max_obstacles:
-            LOG.warning("%d obstacles given, NMPC uses the %d nearest", len(order), s.max_obstacles)
-            order = order[: s.max_obstacles]
-        for slot, i in enumerate(order):
-            x, y, vx, vy, radius = obstacles[i]
-            rsum = s.own_radius_m + radius
-            if rsum <= 0.0:
-                continue
-            closing = speed + math.hypot(vx, vy)
-            inflation = (closing * h / (2.0 * rsum)) ** 2
-            slots[:, slot] = [(x - origin[0]) / L, (y - origin[1]) / L, vx / L, vy / L, rsum / L, inflation, 1.0]
-        return slots
-
-    def _initial_guess(self, time_s: float, state: np.ndarray, ref_scaled: np.ndarray, w_d: np.ndarray, origin: np.ndarray) -> np.ndarray:
-        """Shifted previous solution (re-based on this origin) or the reference itself."""
-        N = self.settings.horizon_steps
-        guess = np.zeros(self._nx)
-        prev = self._previous
-        shift = None
-        if prev is not None and self._previous_time is not None:
-            shift = int(round((time_s - self._previous_time) / self.settings.control_interval_s))
-        if prev is not None and shift is not None and 0 <= shift <= N:
-            states = np.vstack([prev.states[shift:], np.repeat(prev.states[-1:], shift, axis=0)])
-            inputs = np.vstack([prev.inputs[shift:], np.repeat(prev.inputs[-1:], shift, axis=0)]) if shift < N else np.repeat(prev.inputs[-1:], N, axis=0)
-            if shift > 0:  # extend the tail by rolling the last state forward
-                F = self._F_scaled
-                for k in range(N + 1 - shift, N + 1):
-                    z_prev = self._to_scaled(states[k - 1], states[k - 1])
-                    z_next = np.array(F(z_prev, inputs[k - 1] / self.input_scale)[0]).ravel()
-                    states[k] = self._from_scaled(z_next[None, :], states[k - 1])[0]
-            z = (states - np.r_[origin, 0, 0, 0, 0]) / self.state_scale
-            w = inputs / self.input_scale
-        else:
-            z = ref_scaled.T.copy()
-            w = w_d.T.copy()
-        z[0] = self._to_scaled(state, origin)
-        guess[self._z_index.ravel()] = z.ravel()
-        guess[self._w_index.ravel()] = np.clip(w, -1.0, 1.0).ravel()
-        return guess
-
-    def _push_guess_to_starboard(self, guess: np.ndarray, obs: np.ndarray, ref_scaled: np.ndarray) -> None:
-        """Move initial-guess nodes that lie inside an active obstacle sideways out of it.
-
-        The shift is perpendicular to the reference course, to the side the node already
-        lies on, and to starboard when it lies (nearly) on the obstacle's centre line.  A
-        straight reference through the middle of an obstacle is a symmetric problem whose
-        "stop in front of it" plan is a stationary point; starting the solver from a
-        detour picks the starboard pass that COLREG Rules 8 and 14 prefer.
-        """
-        dt = self.settings.control_interval_s
-        for i in np.flatnonzero(obs[6] > 0.5):
-            cx, cy, vx, vy, rsum, inflation, _ = obs[:, i]
-            r_push = 1.1 * rsum * math.sqrt(1.0 + inflation)
-            for k in range(1, self.settings.horizon_steps + 1):
-                ix, iy = self._z_index[k, 0], self._z_index[k, 1]
-                dx = guess[ix] - (cx + vx * k * dt)
-                dy = guess[iy] - (cy + vy * k * dt)
-                if dx * dx + dy * dy >= r_push * r_push:
-                    continue
-                course = ref_scaled[2, k]
-                along_x, along_y = math.cos(course), math.sin(course)
-                starboard_x, starboard_y = -along_y, along_x
-                along = dx * along_x + dy * along_y
-                lateral = dx * starboard_x + dy * starboard_y
-                side = -1.0 if lateral < -0.1 * rsum else 1.0
-                new_lateral = side * math.sqrt(max(r_push * r_push - along * along, 0.0))
-                guess[ix] += (new_lateral - lateral) * starboard_x
-                guess[iy] += (new_lateral - lateral) * starboard_y
+    def close(self) -> None:
+        """Stop the solver's worker process (also done when the controller is collected)."""
+        self.solvers.close()
 
     def _to_scaled(self, state: np.ndarray, origin: np.ndarray) -> np.ndarray:
         shifted = np.asarray(state, dtype=float) - np.r_[origin[:2], 0, 0, 0, 0]
@@ -507,6 +361,29 @@ class NMPCController:
 
     def _from_scaled(self, z: np.ndarray, origin: np.ndarray) -> np.ndarray:
         return z * self.state_scale + np.r_[origin[:2], 0, 0, 0, 0]
+
+    def _rollout(self, state: np.ndarray, inputs: np.ndarray, disturbance: np.ndarray | None = None) -> np.ndarray:
+        """States (n+1, 6) [SI] from ``state`` under ``inputs`` (n, 2) [SI] with the prediction model."""
+        d = np.zeros(DISTURBANCE_SIZE) if disturbance is None else disturbance
+        origin = np.asarray(state[:2], dtype=float)
+        z = self._to_scaled(state, origin)
+        rows = [z]
+        for w in np.asarray(inputs) / self.input_scale:
+            z = np.array(self._F_scaled(z, w, d)[0]).ravel()
+            rows.append(z)
+        return self._from_scaled(np.array(rows), origin)
+
+    def _obstacle_parameters(self, obstacles: np.ndarray | None, origin: np.ndarray, speed: float, et: bool,
+                             state: np.ndarray | None = None) -> np.ndarray:
+        """Slot parameters of the obstacles (see :mod:`rhnc.nmpc_problem`) for a solve at ``origin``."""
+        if state is None:
+            state = np.r_[origin, 0.0, speed, 0.0, 0.0]
+        slots, _ = self.domains.parameters(obstacles, state, origin, speed,
+                                           self.settings.control_interval_s / self.settings.substeps,
+                                           self.length_scale, et)
+        return slots
+
+    # ------------------------------------------------------------------ solving
 
     def solve(
         self,
@@ -537,7 +414,7 @@ class NMPCController:
         Returns
         -------
         NMPCSolution
-            Applied input, prediction and telemetry; on solver failure the fallback.
+            Applied input, prediction and telemetry; on failure or time-out the fallback.
         """
         s = self.settings
         N = s.horizon_steps
@@ -549,109 +426,154 @@ class NMPCController:
         # same heading, nearest turn: the warm start must not begin a full circle away
         reference = reference.copy()
         reference[:, 2] -= 2.0 * np.pi * np.round((reference[0, 2] - state[2]) / (2.0 * np.pi))
+        reference[:, 3] = np.minimum(reference[:, 3], s.max_speed_mps)
+        disturbance = np.zeros(DISTURBANCE_SIZE)
+        if self.observer is not None:
+            # offset-free: predict with the estimate, and ask for the drift angle and the
+            # force that hold the reference against it
+            disturbance = self.observer.update(time_s, state)
+            reference, tau_d = trimmed_reference(reference, disturbance, s.control_interval_s, self.params)
+            reference[:, 3] = np.minimum(reference[:, 3], s.max_speed_mps)
+        else:
+            tau_d = reference_inputs(reference, s.control_interval_s, self.params)
         ref_scaled = ((reference - np.r_[origin, 0, 0, 0, 0]) / self.state_scale).T
-        w_d = (reference_inputs(reference, s.control_interval_s, self.params) / self.input_scale).T
+        w_d = (tau_d / self.input_scale).T
         if previous_tau is None:
-            previous_tau = self._previous.tau if self._previous is not None else self.params.equilibrium_tau(state[3])
+            previous_tau = self.memory.inputs[0] if self.memory.inputs is not None else self.params.equilibrium_tau(state[3])
         w_prev = np.clip(np.asarray(previous_tau, dtype=float) / self.input_scale, -1.0, 1.0)
         speed_ref = float(np.mean(np.hypot(reference[:, 3], reference[:, 4])))
         P = self.terminal_weight(speed_ref)
-        obs = self._obstacle_parameters(obstacles, origin, max(speed_ref, math.hypot(state[3], state[4])) * 1.25, et)
-        p = np.concatenate([ref_scaled.ravel(order="F"), w_d.ravel(order="F"), w_prev, P.ravel(order="F"), obs.ravel(order="F")])
+        closing = max(speed_ref, math.hypot(state[3], state[4])) * 1.25
+        slots, report = self.domains.parameters(obstacles, state, origin, closing,
+                                                s.control_interval_s / s.substeps, self.length_scale, et)
+        p = self.problem.parameters(ref_scaled, w_d, w_prev, P, disturbance, slots)
+        lbx, ubx = self._bounds(state, origin)
+        if report.no_port_turn:  # Rules 14, 15, 17(c): no alteration to port
+            allowance = math.radians(PORT_ALLOWANCE_DEG)
+            lbx[self.problem.z_index[1:, 2]] = np.minimum(ref_scaled[2, 1:] - allowance, state[2])
+        x0 = self._initial_guess(time_s, state, ref_scaled, w_d, origin, slots, disturbance)
 
-        lbx = np.full(self._nx, -np.inf)
-        ubx = np.full(self._nx, np.inf)
-        lbx[self._w_index.ravel()] = -1.0
-        ubx[self._w_index.ravel()] = 1.0
-        lbx[self._z_index[1:, 3]] = 0.0  # u >= 0: no sailing backwards
-        lbx[self._sigma_index] = 0.0  # collision slacks
-        z0 = self._to_scaled(state, origin)
-        lbx[self._z_index[0]] = z0
-        ubx[self._z_index[0]] = z0
-        x0 = self._initial_guess(time_s, state, ref_scaled, w_d, origin)
-        self._push_guess_to_starboard(x0, obs, ref_scaled)
-
+        if not np.all(np.isfinite(x0)):
+            # a state far outside the model's range: the prediction itself overflows, and the
+            # solver would iterate on NaN (seen: fatrop running for minutes); skip it
+            LOG.warning("NMPC at t = %.1f s: prediction from the measured state is not finite; fallback", time_s)
+            return self._fail(time_s, state, previous_tau, 0.0, 0, "prediction_not_finite", UNKNOWN, UNKNOWN,
+                              False, disturbance, report)
         # First the hard problem (slacks fixed at zero: the paper's constraints); only when it
         # fails, the soft one (slacks free): the plan that violates the clearance least.
-        elapsed, iterations = 0.0, 0
-        for relaxed in ((False, True) if self._sigma_index.size else (False,)):
+        problem = self.problem
+        elapsed, iterations, timed_out = 0.0, 0, False
+        budget = s.wall_time_limit_s
+        for relaxed in ((False, True) if problem.sigma_index.size else (False,)):
             if relaxed and stop_requested():  # Ctrl-C aborted the first attempt: no second one
                 raise KeyboardInterrupt
-            ubx[self._sigma_index] = np.inf if relaxed else 0.0
-            start = time.perf_counter()
-            solver = self._relaxed() if relaxed else self._solver
-            result = solver(x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=self._lbg, ubg=self._ubg)
-            elapsed += time.perf_counter() - start
-            stats = solver.stats()
-            x_opt = np.array(result["x"]).ravel()
-            iterations += int(stats.get("iter_count", -1))
-            success = bool(stats.get("success", False)) and np.all(np.isfinite(x_opt))
-            if success:
+            ubx[problem.sigma_index] = np.inf if relaxed else 0.0
+            if budget is not None:
+                self.solvers.wall_time_s = max(budget - elapsed, 1e-3)
+            outcome = self.solvers.solve("relaxed" if relaxed else "hard", x0=x0, p=p, lbx=lbx, ubx=ubx,
+                                         lbg=problem.lbg, ubg=problem.ubg)
+            elapsed += outcome.wall_time_s
+            iterations += max(outcome.iterations, 0)
+            success = outcome.success and bool(np.all(np.isfinite(outcome.x)))
+            if success or outcome.timed_out:
+                timed_out = outcome.timed_out
                 break
-        g_opt = np.array(result["g"]).ravel()
-        violation = float(
-            max(
-                np.max(np.maximum(self._lbg - g_opt, 0.0), initial=0.0),
-                np.max(np.maximum(g_opt - self._ubg, 0.0), initial=0.0),
-                np.max(np.maximum(lbx - x_opt, 0.0), initial=0.0),
-                np.max(np.maximum(x_opt - ubx, 0.0), initial=0.0),
-            )
-        )
-        status = str(stats.get("return_status", "unknown"))
-        if self.settings.solver == "fatrop":  # fatrop reports an integer code
-            status = "Solve_Succeeded" if stats.get("success", False) else f"fatrop_return_code_{status}"
-        cost = float(result["f"])
-        slack = float(np.max(x_opt[self._sigma_index], initial=0.0))
+        x_opt, g_opt = outcome.x, outcome.g
+        status = outcome.status
+        if s.solver == "fatrop" and not timed_out:  # fatrop reports an integer code
+            status = "Solve_Succeeded" if outcome.success else f"fatrop_return_code_{status}"
+        if not success:
+            finite = bool(np.all(np.isfinite(x_opt)) and np.all(np.isfinite(g_opt)) and np.isfinite(outcome.f))
+            violation = self._violation(x_opt, g_opt, lbx, ubx) if finite else UNKNOWN
+            return self._fail(time_s, state, previous_tau, elapsed, iterations, status,
+                              outcome.f if finite else UNKNOWN, violation, timed_out, disturbance, report)
+        violation = self._violation(x_opt, g_opt, lbx, ubx)
+        slack = float(np.max(x_opt[problem.sigma_index], initial=0.0))
         slack = slack if slack > SLACK_TOLERANCE else 0.0
-        if success and slack > 0.0:
-            LOG.warning("NMPC at t = %.1f s: collision clearance relaxed (slack %.3g): no plan keeps R + R_i",
+        if slack > 0.0:
+            LOG.warning("NMPC at t = %.1f s: collision clearance relaxed (slack %.3g): no plan keeps it",
                         time_s, slack)
-        states = self._from_scaled(x_opt[self._z_index], origin)
+        states = self._from_scaled(x_opt[problem.z_index], origin)
         # the solver meets the bounds |w| <= 1 only to its tolerance: never apply more than tau_max
-        inputs = np.clip(x_opt[self._w_index], -1.0, 1.0) * self.input_scale
-        if success:
-            solution = NMPCSolution(inputs[0].copy(), states, inputs, elapsed, iterations, status, True, False, cost,
-                                    violation, slack)
-            self._previous, self._previous_time = solution, time_s
-            return solution
-        self.failure_count += 1
-        self.fallback_count += 1
-        solution = self._fallback(time_s, state, previous_tau, elapsed, iterations, status, cost, violation)
-        LOG.info("NMPC solve at t = %.1f s failed (%s); fallback applied", time_s, status)
+        inputs = np.clip(x_opt[problem.w_index], -1.0, 1.0) * self.input_scale
+        solution = NMPCSolution(inputs[0].copy(), states, inputs, elapsed, iterations, status, True, False,
+                                outcome.f, violation, slack, False, disturbance, report.class_codes,
+                                report.active)
+        self.memory.store(time_s, states, inputs)
+        if self.observer is not None:
+            self.observer.applied(solution.tau)
         return solution
 
-    def _relaxed(self):
-        """The solver of the relaxed (soft-constraint) attempt, built on first use."""
-        if self._relaxed_solver is None:
-            nlp, options = self._relaxed_build
-            self._relaxed_solver = ca.nlpsol("rhnc_nmpc_relaxed", self.settings.solver, nlp, options)
-        return self._relaxed_solver
-
-    def _fallback(self, time_s, state, previous_tau, elapsed, iterations, status, cost, violation) -> NMPCSolution:
-        """Shifted previous plan, or hold the surge force with zero yaw moment."""
+    def _bounds(self, state: np.ndarray, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         s = self.settings
-        N = s.horizon_steps
-        prev = self._previous
-        shift = None
-        if prev is not None and self._previous_time is not None:
-            shift = int(round((time_s - self._previous_time) / s.control_interval_s))
-        if prev is not None and shift is not None and 0 <= shift < N:
-            inputs = np.vstack([prev.inputs[shift:], np.repeat(prev.inputs[-1:], shift, axis=0)])
-        else:
-            hold = np.array([float(np.asarray(previous_tau)[0]), 0.0])
-            inputs = np.repeat(hold[None, :], N, axis=0)
-        inputs = np.clip(inputs, -self.params.tau_max, self.params.tau_max)
-        states = self._rollout(state, inputs)
-        # keep the shifted plan (not the failed iterate) as the next warm start / fallback
-        self._previous = NMPCSolution(inputs[0].copy(), states, inputs, elapsed, iterations, status, False, True, cost, violation)
-        self._previous_time = time_s
-        return dataclasses.replace(self._previous)
+        problem = self.problem
+        lbx = np.full(problem.size, -np.inf)
+        ubx = np.full(problem.size, np.inf)
+        lbx[problem.w_index.ravel()] = -1.0
+        ubx[problem.w_index.ravel()] = 1.0
+        lbx[problem.z_index[1:, 3]] = 0.0  # u >= 0: no sailing backwards
+        # u <= max speed; a ship measured faster may take its deceleration limit to get there
+        k = np.arange(1, s.horizon_steps + 1)
+        u_max = np.maximum(s.max_speed_mps, state[3] - SLOW_DOWN_MPS2 * k * s.control_interval_s)
+        ubx[problem.z_index[1:, 3]] = u_max / self.speed_scale
+        lbx[problem.sigma_index] = 0.0  # collision slacks
+        z0 = self._to_scaled(state, origin)
+        lbx[problem.z_index[0]] = z0
+        ubx[problem.z_index[0]] = z0
+        return lbx, ubx
 
-    def _rollout(self, state: np.ndarray, inputs: np.ndarray) -> np.ndarray:
-        origin = np.asarray(state[:2], dtype=float)
-        z = self._to_scaled(state, origin)
-        rows = [z]
-        for w in inputs / self.input_scale:
-            z = np.array(self._F_scaled(z, w)[0]).ravel()
-            rows.append(z)
-        return self._from_scaled(np.array(rows), origin)
+    def _initial_guess(self, time_s, state, ref_scaled, w_d, origin, slots, disturbance) -> np.ndarray:
+        """Shifted previous solution (re-based on this origin) or the reference, pushed clear of the domains."""
+        problem = self.problem
+        guess = np.zeros(problem.size)
+        shifted = self.memory.shifted(time_s)
+        if shifted is not None:
+            states, inputs = shifted
+            z = (states - np.r_[origin, 0, 0, 0, 0]) / self.state_scale
+            w = inputs / self.input_scale
+        else:
+            z = ref_scaled.T.copy()
+            w = w_d.T.copy()
+        z[0] = self._to_scaled(state, origin)
+        push_guess_clear(z, slots, ref_scaled, self.settings.control_interval_s)
+        guess[problem.z_index.ravel()] = z.ravel()
+        guess[problem.w_index.ravel()] = np.clip(w, -1.0, 1.0).ravel()
+        # the first interval from the measured state: a non-finite value here means the
+        # model cannot predict from this state at all
+        z1 = np.array(self._F_scaled(z[0], np.clip(w[0], -1.0, 1.0), disturbance)[0]).ravel()
+        if not np.all(np.isfinite(z1)):
+            guess[:] = np.nan
+        return guess
+
+    def _violation(self, x_opt, g_opt, lbx, ubx) -> float:
+        problem = self.problem
+        return float(max(
+            np.max(np.maximum(problem.lbg - g_opt, 0.0), initial=0.0),
+            np.max(np.maximum(g_opt - problem.ubg, 0.0), initial=0.0),
+            np.max(np.maximum(lbx - x_opt, 0.0), initial=0.0),
+            np.max(np.maximum(x_opt - ubx, 0.0), initial=0.0),
+        ))
+
+    def _fail(self, time_s, state, previous_tau, elapsed, iterations, status, cost, violation, timed_out,
+              disturbance, report: DomainReport) -> NMPCSolution:
+        """Apply the fallback: the shifted previous plan, or hold the surge force with zero yaw moment."""
+        self.failure_count += 1
+        self.fallback_count += 1
+        self.timeout_count += int(timed_out)
+        inputs = self.memory.fallback_inputs(time_s, previous_tau, self.params.tau_max)
+        try:
+            with np.errstate(all="ignore"):
+                states = self._rollout(state, inputs, disturbance)
+        except RuntimeError:
+            states = np.full((len(inputs) + 1, 6), np.nan)
+        # keep the shifted plan (not the failed iterate) as the next warm start / fallback
+        if np.all(np.isfinite(states)):
+            self.memory.store(time_s, states, inputs)
+        else:
+            self.memory.reset()
+            states = np.vstack([state, np.repeat(state[None, :], len(inputs), axis=0)])
+        if self.observer is not None:
+            self.observer.applied(inputs[0])
+        LOG.info("NMPC solve at t = %.1f s failed (%s); fallback applied", time_s, status)
+        return NMPCSolution(inputs[0].copy(), states, inputs, elapsed, iterations, status, False, True, cost,
+                            violation, 0.0, timed_out, disturbance, report.class_codes, report.active)

@@ -77,7 +77,8 @@ def rates_along_track(speed_through_water, heading, wind_north, wind_east, hs,
 
 
 def account_voyage(time_s, x, y, speed_through_water, heading, wind_north, wind_east, hs,
-                   params: EnergyParameters = EnergyParameters(), cii_year: int = 2026) -> VoyageAccount:
+                   params: EnergyParameters = EnergyParameters(), cii_year: int = 2026,
+                   brake_power_w=None) -> VoyageAccount:
     """Cost, CO2, distance and CII of a sailed track.
 
     Parameters
@@ -95,11 +96,19 @@ def account_voyage(time_s, x, y, speed_through_water, heading, wind_north, wind_
     params : EnergyParameters
     cii_year : int
         Year whose reduction factor Z sets the required CII.
+    brake_power_w : array_like, optional
+        Brake power at each sample [W] when it is known (from a plant that reports the
+        power delivered to its propeller); otherwise the energy model computes it from the
+        speed, heading and weather.
     """
     if cii_year not in REDUCTION_FACTOR_PERCENT:
         raise ValueError(f"cii_year {cii_year}: reduction factor known for {sorted(REDUCTION_FACTOR_PERCENT)}")
     t = np.asarray(time_s, dtype=float)
-    ec, em = rates_along_track(speed_through_water, heading, wind_north, wind_east, hs, params)
+    if brake_power_w is None:
+        ec, em = rates_along_track(speed_through_water, heading, wind_north, wind_east, hs, params)
+    else:
+        power = np.maximum(np.asarray(brake_power_w, dtype=float), 0.0)
+        ec, em = cost_rate(power, params), emission_rate(power, params)
     hours = t / 3600.0
     cost = float(np.trapezoid(ec, hours)) if t.size > 1 else 0.0
     co2_kg = float(np.trapezoid(em, hours)) if t.size > 1 else 0.0

@@ -7,7 +7,8 @@ a new test (rerun the script) or explained:
 
 * automatically, when the mutated line only feeds the text of a log message (``LOG.info``,
   ``log.warning``, ...): the message's wording is not behaviour;
-* by hand, in :data:`EXPLAINED` (mutant name -> why it is equivalent or out of reach).
+* by hand, in :data:`EXPLAINED_RULES`, matched on the mutated line itself (so the
+  explanation follows the code, not mutmut's numbering, which moves when a module changes).
 
 Run (slow: about a mutant a second on an idle core; the NMPC and master take longest)::
 
@@ -49,45 +50,53 @@ MODULES = {
     "fmu_participant": ("orchestrator/fmu_participant.py", ["tests/orchestrator/test_fmu_participant.py"]),
 }
 
-#: Survivors explained by hand: mutant name -> reason (names are those of ``mutmut results``).
 _NO_ROWS = "an empty (0, k) array: no row is read, the column count does not matter"
-_FLOAT = ("the dtype only changes for integer input, and every use combines it with a float array "
-          "(numpy promotes), so the results are the same floats")
+_FLOAT = ("the dtype only changes for integer input, and every use combines it with a float array or "
+          "constant (numpy promotes), so the results are the same floats")
 _SIGN = "only the sign of the range rate is used, and the divisor is positive either way"
-_TRIGGER = "rhnc.trigger.x\u01c1EventTrigger\u01c1update__mutmut_"
-_VOYAGE = "rhnc.voyage.x_account_voyage__mutmut_"
-_REFERENCE = "rhnc.reference.x_reference_states__mutmut_"
+_TRAPEZOID = "the trapezoid rule over fewer than two samples is 0.0, the value of the other branch"
 _REST_END = ("an end row at rest means p2 - 4 p1 + 3 p0 = 0 to within the rest threshold (one-sided difference "
              "zero), which makes velocity and acceleration at the neighbouring row parallel to that precision: the "
              "neighbour's yaw rate is 0 (exactly for a ship stopped dead)")
-_NAN_TEXT = "float() reads 'NAN' as 'nan': the same NaN"
-_TRAPEZOID = "the trapezoid rule over fewer than two samples is 0.0, the value of the other branch"
-EXPLAINED: dict[str, str] = {
-    f"{_TRIGGER}6": _NO_ROWS, f"{_TRIGGER}18": _NO_ROWS,
-    **{f"{_TRIGGER}{n}": _FLOAT for n in (10, 12, 28, 30, 33, 35, 39, 41)},
-    f"{_TRIGGER}14": "obstacle rows have 5 columns, so an array of size 1 cannot occur",
-    f"{_TRIGGER}21": "extending the state list by zero entries changes nothing",
-    f"{_TRIGGER}25": "deleting the states past the last one deletes nothing",
-    f"{_TRIGGER}62": _SIGN, f"{_TRIGGER}71": _SIGN,
-    f"{_TRIGGER}75": ("differs only when |offset . to_goal| < 1 m^2, i.e. the obstacle abeam to within a "
-                      "millimetre per kilometre of range: below the resolution of any position"),
-    f"{_TRIGGER}78": "the default cause is never recorded: a transition always sets its own",
-    **{f"{_VOYAGE}{n}": _NAN_TEXT for n in (77, 119, 127)},
-    **{f"{_VOYAGE}{n}": _FLOAT for n in (7, 9)},
-    **{f"{_VOYAGE}{n}": _TRAPEZOID for n in (28, 34, 39, 45)},
-    **{f"{_REFERENCE}{n}": _FLOAT for n in (5, 7)},
-    **{f"{_REFERENCE}{n}": ("the end accelerations feed only the end yaw rates, which are then replaced by "
-                            "their neighbours' (or 0 at rest)") for n in (84, 85, 86, 87, 89, 90, 91)},
-    **{f"{_REFERENCE}{n}": _REST_END for n in (143, 145, 151, 155)},
-    **{f"rhnc.energy.x_{name}__mutmut_{n}": _FLOAT for name, numbers in (
-        ("speed_through_water", (15, 17)), ("frictional_coefficient", (9, 11)), ("wave_speed", (9, 11)),
-        ("power_components", (4, 6, 9, 11, 18, 20, 23, 25)), ("fuel_rate_t_h", (5, 7))) for n in numbers},
-    **{f"rhnc.energy.x_power_components__mutmut_{n}": ("np.broadcast(along_wind, None) has the shape of "
-                                                        "along_wind, which wind_speed shares (both come from the "
-                                                        "same wind arrays)") for n in (48, 50)},
-    f"{_REFERENCE}112": ("np.all(None) is False: the hold loop then runs for an all-moving path too, and there "
-                         "it leaves every heading as it is"),
-}
+
+#: Survivors explained by hand, matched on the mutation itself (not on mutmut's numbering, which
+#: moves when the module changes): (source file, text of the original line, text of the mutated
+#: line, both as regular expressions searched in the stripped lines) -> why it is equivalent.
+EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
+    *[(source, r"dtype=float", r"asarray\([^()]*,\s*(dtype=None)?\s*\)", _FLOAT)
+      for source in ("rhnc/trigger.py", "rhnc/voyage.py", "rhnc/reference.py", "rhnc/energy.py")],
+    ("", r'float\("nan"\)', r'float\("NAN"\)', "float() reads 'NAN' as 'nan': the same NaN"),
+    ("rhnc/trigger.py", r"np\.zeros\(\(0, 5\)\)", r"np\.zeros\(\(0, 6\)\)", _NO_ROWS),
+    ("rhnc/trigger.py", r"obstacles\.size == 0", r"obstacles\.size == 1",
+     "obstacle rows have 5 columns, so an array of size 1 cannot occur"),
+    ("rhnc/trigger.py", r"if n > len\(self\.states\)", r"if n >= len\(self\.states\)",
+     "extending the state list by zero entries changes nothing"),
+    ("rhnc/trigger.py", r"elif n < len\(self\.states\)", r"elif n <= len\(self\.states\)",
+     "deleting the states past the last one deletes nothing"),
+    ("rhnc/trigger.py", r"/ max\(distance, 1e-9\)", r"\* max\(distance, 1e-9\)|max\(distance, 1\.000000001\)", _SIGN),
+    ("rhnc/voyage.py", r"np\.trapezoid\(e[cm], hours\)\) if t\.size > 1",
+     r"if \(t\.size > 1\) or True|if t\.size >= 1", _TRAPEZOID),
+    ("rhnc/reference.py", r"acceleration\[(0|-1)\] = acceleration", r"acceleration\[",
+     "the end accelerations feed only the end yaw rates, which are then replaced by their neighbours' (or 0 at rest)"),
+    ("rhnc/reference.py", r"yaw_rate\[0\] = yaw_rate\[1\] if moving\[0\]",
+     r"if \(moving\[0\]\) or True|if moving\[1\]", _REST_END),
+    ("rhnc/reference.py", r"yaw_rate\[-1\] = yaw_rate\[-2\] if moving\[-1\]",
+     r"if \(moving\[-1\]\) or True|if moving\[-2\]", _REST_END),
+    ("rhnc/reference.py", r"if not np\.all\(moving\)", r"np\.all\(None\)",
+     "np.all(None) is False: the hold loop then runs for an all-moving path too, and there it leaves every heading"),
+    ("rhnc/energy.py", r"np\.broadcast\(along_wind, wind_speed\)", r"np\.broadcast\(along_wind, (None)?\)",
+     "np.broadcast(along_wind, None) has the shape of along_wind, which wind_speed shares"),
+]
+
+
+def explained_by_rule(source: str, removed: list[str], added: list[str]) -> str:
+    for where, original, mutated, why in EXPLAINED_RULES:
+        if where and where != source:
+            continue
+        if any(re.search(original, r) for r in removed) and any(re.search(mutated, a) for a in added):
+            return why
+    return ""
+
 
 LOG_CALLS = {"debug", "info", "warning", "error", "exception", "critical"}
 
@@ -131,13 +140,12 @@ def log_message_lines(source: str) -> set[str]:
     return found
 
 
-def explain(name: str, diff: str, in_log_calls: set[str]) -> str:
-    if name in EXPLAINED:
-        return EXPLAINED[name]
+def explain(source: str, diff: str, in_log_calls: set[str]) -> str:
     removed = [line[1:].strip() for line in diff.splitlines() if line.startswith("-") and not line.startswith("---")]
+    added = [line[1:].strip() for line in diff.splitlines() if line.startswith("+") and not line.startswith("+++")]
     if removed and all(line in in_log_calls for line in removed):
         return "only the text or arguments of a log message change (wording, not behaviour)"
-    return ""
+    return explained_by_rule(source, removed, added)
 
 
 def run_module(key: str, children: int) -> Verdicts:
@@ -170,7 +178,7 @@ def run_module(key: str, children: int) -> Verdicts:
                 diff = subprocess.run([sys.executable, "-m", "mutmut", "show", name], cwd=work,
                                       capture_output=True, text=True).stdout
                 diff = "\n".join(l for l in diff.splitlines() if l.startswith(("-", "+")) and not l.startswith(("---", "+++")))
-                survivors.append((name, diff, explain(name, diff, in_log_calls)))
+                survivors.append((name, diff, explain(source, diff, in_log_calls)))
     return Verdicts(key, source, counts, survivors, time.perf_counter() - started)
 
 

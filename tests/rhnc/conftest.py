@@ -44,23 +44,6 @@ def tracking_scenario(tmp_path):
 
 
 
-class _RecordingSolver:
-    """Stands in for a CasADi NLP solver: passes every call through, keeps the raw inputs."""
-
-    def __init__(self, solver, controller, plans):
-        self._solver, self._controller, self._plans = solver, controller, plans
-
-    def __call__(self, **kwargs):
-        result = self._solver(**kwargs)
-        if self._solver.stats().get("success", False):
-            x = np.array(result["x"]).ravel()
-            self._plans.append(x[self._controller._w_index].copy())
-        return result
-
-    def stats(self):
-        return self._solver.stats()
-
-
 class RawInputs:
     """The input plans successful NLP solves returned, in units of tau_max, before any clip.
 
@@ -73,11 +56,19 @@ class RawInputs:
         self.plans: list[np.ndarray] = []
 
     def attach(self, controller):
-        """Record the solves of an already built controller (both attempts)."""
-        solver = controller._solver
-        if isinstance(solver, _RecordingSolver):  # a module-scoped controller seen before
-            solver = solver._solver
-        controller._solver = _RecordingSolver(solver, controller, self.plans)
+        """Record the solves (both attempts) of an already built controller."""
+        solvers = controller.solvers
+        solve = getattr(solvers, "_unrecorded_solve", solvers.solve)  # a module-scoped controller seen before
+        plans = self.plans
+
+        def recording(name, **arguments):
+            outcome = solve(name, **arguments)
+            if outcome.success and outcome.x is not None:
+                plans.append(np.asarray(outcome.x).ravel()[controller.problem.w_index].copy())
+            return outcome
+
+        solvers._unrecorded_solve = solve
+        solvers.solve = recording
         return controller
 
     def largest(self) -> float:
@@ -93,15 +84,10 @@ def raw_nmpc_inputs(monkeypatch):
 
     raw = RawInputs()
     original_init = NMPCController.__init__
-    original_relaxed = NMPCController._relaxed
 
     def init(self, *args, **kwargs):
         original_init(self, *args, **kwargs)
         raw.attach(self)
 
-    def relaxed(self):
-        return _RecordingSolver(original_relaxed(self), self, raw.plans)
-
     monkeypatch.setattr(NMPCController, "__init__", init)
-    monkeypatch.setattr(NMPCController, "_relaxed", relaxed)
     return raw

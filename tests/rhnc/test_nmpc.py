@@ -181,8 +181,12 @@ def _linearised_scaled_step(controller, speed_mps, delta=1e-6):
     z0 = np.array([0.0, 0.0, 0.0, speed_mps / controller.speed_scale, 0.0, 0.0])
     w0 = controller.params.equilibrium_tau(speed_mps) / controller.input_scale
 
+    from rhnc.nmpc_problem import DISTURBANCE_SIZE
+
+    calm = np.zeros(DISTURBANCE_SIZE)  # no disturbance estimate
+
     def step(z, w):
-        return np.array(controller._F_scaled(z, w)[0]).ravel()
+        return np.array(controller._F_scaled(z, w, calm)[0]).ravel()
 
     A = np.column_stack([(step(z0 + delta * e, w0) - step(z0 - delta * e, w0)) / (2 * delta) for e in np.eye(6)])
     B = np.column_stack([(step(z0, w0 + delta * e) - step(z0, w0 - delta * e)) / (2 * delta) for e in np.eye(2)])

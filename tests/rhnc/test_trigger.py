@@ -22,15 +22,16 @@ def test_static_obstacle_triggers_at_eps2_and_releases_when_passed():
     # first sample within 6 nm: x = 14.1 nm (range 5.99 nm)
     assert on.time == 141 and on.range_m == pytest.approx(np.hypot(5.9, 1) * NM)
     assert on.range_m <= 6 * NM < np.hypot(6.0, 1) * NM
-    # released as soon as the obstacle is behind (x > 20 nm) with the range opening
+    # released once the range opens (x > 20 nm) *and* exceeds the 3 nm domain:
+    # x = 22.9 nm, range hypot(2.9, 1) = 3.07 nm (x = 22.8 nm: 2.97 nm, still inside)
     assert off.state == "passed" and off.et == 0.0 and off.cause.startswith("passed")
-    assert off.time == 201
-    assert sum(history) == 201 - 141
+    assert off.time == 229 and off.range_m > 3 * NM
+    assert sum(history) == 229 - 141
     # and the obstacle is clear once beyond 6 nm again (x = 26.0 nm: range 6.08 nm)
     assert clear.state == "clear" and clear.cause == "beyond warning range" and clear.time == 260
 
 
-def test_ship_uses_eps1_and_releases_beyond_range_if_never_behind():
+def test_ship_uses_eps1_and_is_released_after_its_cpa():
     trigger = EventTrigger(4.5 * NM, 6.0 * NM)
     goal = (100 * NM, 0.0)
     # own ship at rest-ish heading north; a target crosses ahead from west to east, 3 nm ahead
@@ -38,11 +39,13 @@ def test_ship_uses_eps1_and_releases_beyond_range_if_never_behind():
         target_y = (-8 + 0.1 * k) * NM
         obstacle = np.array([[3 * NM, target_y, 0.0, 0.1 * NM, 500.0]])
         trigger.update(float(k), (0.0, 0.0), (0.01, 0.0), goal, obstacle)
-    on, off = trigger.transitions
+    on, off, clear = trigger.transitions
     assert on.kind == "ship" and on.state == "triggered"
     assert on.range_m <= 4.5 * NM
     assert np.hypot(3, -8 + 0.1 * (on.time - 1)) > 4.5  # previous sample was outside eps1
-    assert off.state == "clear" and off.cause == "beyond warning range" and off.range_m > 4.5 * NM
+    # released right after its CPA (target abeam to port of the goal line at k = 80)
+    assert off.state == "passed" and 80 < off.time <= 82
+    assert clear.state == "clear" and clear.cause == "beyond warning range" and clear.range_m > 4.5 * NM
     assert trigger.et == 0.0
 
 
@@ -77,41 +80,6 @@ def test_moving_speed_decides_which_range_applies():
             assert trigger.transitions[0].cause == "within warning range"
 
 
-def test_states_follow_the_number_of_obstacles():
-    trigger = EventTrigger(4.5 * NM, 6.0 * NM)
-    far = [50 * NM, 50 * NM, 0.0, 0.0, 100.0]
-    near = [1 * NM, 0.0, 0.0, 0.0, 100.0]
-    trigger.update(0.0, (0, 0), (1, 0), (20 * NM, 0), np.array([far, near]))
-    assert trigger.states == ["clear", "triggered"]
-    trigger.update(1.0, (0, 0), (1, 0), (20 * NM, 0), np.array([far, near, far]))
-    assert trigger.states == ["clear", "triggered", "clear"]
-    trigger.update(2.0, (0, 0), (1, 0), (20 * NM, 0), np.array([near]))
-    assert trigger.states == ["triggered"]
-    assert trigger.update(3.0, (0, 0), (1, 0), (20 * NM, 0), np.array([far])) == 0.0
-    assert trigger.states == ["clear"]
-
-
-def test_a_passed_obstacle_at_a_constant_range_stays_passed():
-    """Re-triggering needs the range to close (rate < 0), not merely to stop opening."""
-    trigger = EventTrigger(4.5 * NM, 6.0 * NM)
-    goal = (20 * NM, 0.0)
-    obstacle = np.array([[0.0, 0.0, 0.0, 0.0, 100.0]])  # static, at the origin
-    trigger.update(0.0, (-1 * NM, 0.0), (5.0, 0.0), goal, obstacle)  # ahead, closing: triggered
-    trigger.update(1.0, (1 * NM, 0.0), (5.0, 0.0), goal, obstacle)  # behind, opening: passed
-    assert trigger.states == ["passed"]
-    # the ship now sails across the line of sight: range rate exactly zero, obstacle not behind
-    state = trigger.update(2.0, (0.0, 1 * NM), (5.0, 0.0), (0.0, -2 * NM), obstacle)
-    assert state == 0.0 and trigger.states == ["passed"]
-    # closing again while ahead: triggered again with that cause
-    assert trigger.update(3.0, (0.0, 1 * NM), (0.0, -5.0), (0.0, -2 * NM), obstacle) == 1.0
-    last = trigger.transitions[-1]
-    assert (last.time, last.obstacle, last.kind, last.cause, last.state, last.et) == (
-        3.0, 0, "static", "ahead and closing again", "triggered", 1.0)
-    assert last.range_m == pytest.approx(1 * NM)
-    assert last.as_dict() == {"time": 3.0, "obstacle": 0, "kind": "static", "range_m": last.range_m,
-                              "cause": "ahead and closing again", "state": "triggered", "et": 1.0}
-
-
 def states_after(updates, ranges=(4.5 * NM, 6.0 * NM)):
     """Run ``updates`` = [(position, velocity, goal, obstacle row)] from t = 0; the states after each."""
     trigger = EventTrigger(*ranges)
@@ -123,22 +91,6 @@ def states_after(updates, ranges=(4.5 * NM, 6.0 * NM)):
 
 
 STATIC_AT_ORIGIN = [0.0, 0.0, 0.0, 0.0, 100.0]
-
-
-def test_release_and_retrigger_at_their_boundaries():
-    east, goal = (5.0, 0.0), (20 * NM, 0.0)
-    approach = ((-1 * NM, 0.0), east, goal, STATIC_AT_ORIGIN)  # ahead, closing: triggered
-    # behind but the range neither opens nor closes: stays triggered
-    assert states_after([approach, ((1 * NM, 0.0), (0.0, 5.0), goal, STATIC_AT_ORIGIN)]) == ["triggered"] * 2
-    # behind and opening slowly (0.5 m/s): released
-    assert states_after([approach, ((1 * NM, 0.0), (0.5, 0.0), goal, STATIC_AT_ORIGIN)]) == ["triggered", "passed"]
-    # exactly abeam (neither ahead nor behind) with the range opening: not yet passed
-    abeam = ((0.0, -1 * NM), (5.0, -1.0), (20 * NM, -1 * NM), STATIC_AT_ORIGIN)
-    assert states_after([approach, abeam]) == ["triggered", "triggered"]
-    # passed, then still behind but closing (sailing back towards it): stays passed
-    back = ((1 * NM, 0.0), (-5.0, 0.0), goal, STATIC_AT_ORIGIN)
-    assert states_after([approach, ((1 * NM, 0.0), east, goal, STATIC_AT_ORIGIN), back]) == [
-        "triggered", "passed", "passed"]
 
 
 def test_behind_is_measured_from_the_ship_towards_the_goal():
@@ -171,3 +123,80 @@ def test_a_target_moving_along_x_is_a_ship_and_its_range_rate_uses_both_componen
         trigger.update(float(k), position, velocity, goal_, np.array([row]))
     assert [t.kind for t in trigger.transitions] == ["ship", "ship"]
     assert [(t.time, t.state) for t in trigger.transitions] == [(0.0, "triggered"), (2.0, "passed")]
+
+
+KNOT = NM / 3600.0
+CHECK_S = 240.0  # the navigation's 4 min interval
+
+
+def _velocity(course_deg, speed_kn):
+    course = np.radians(course_deg)
+    return np.array([np.cos(course), np.sin(course)]) * speed_kn * KNOT
+
+
+def _converging_run(own_courses_deg, target_course_deg=347.5, bearing_deg=100.0):
+    """Own ship 18 kn from (0, 0) towards a goal 30 nm north, following a course per check;
+    a same-speed target starting 3 nm away, 10 deg abaft the starboard beam, converging
+    12.5 deg (its CPA 0.84 nm, 44 min ahead, if both held course)."""
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM)
+    goal = np.array([30 * NM, 0.0])
+    own = np.zeros(2)
+    target = 3 * NM * np.array([np.cos(np.radians(bearing_deg)), np.sin(np.radians(bearing_deg))])
+    target_velocity = _velocity(target_course_deg, 18.0)
+    ets, ranges = [], []
+    for k, course in enumerate(own_courses_deg):
+        own_velocity = _velocity(course, 18.0)
+        obstacle = np.array([[*target, *target_velocity, 1.0 * NM]])
+        ets.append(trigger.update(k * CHECK_S, own, own_velocity, goal, obstacle))
+        ranges.append(float(np.hypot(*(target - own))) / NM)
+        own = own + own_velocity * CHECK_S
+        target = target + target_velocity * CHECK_S
+    return trigger, ets, ranges
+
+
+def test_converging_same_speed_ship_is_not_released_while_the_own_ship_turns_away():
+    # the own ship swings 30 deg to port for one check: the range opens at that check and the
+    # target is behind relative to the goal, but on the way back to the route it closes again
+    courses = [0.0, 330.0, 330.0] + [0.0] * 12
+    trigger, ets, ranges = _converging_run(courses)
+    assert trigger.transitions[0].state == "triggered"
+    first_passed = next((t for t in trigger.transitions if t.state == "passed"), None)
+    # never released while the target can still close (its range keeps falling afterwards)
+    closest = int(np.argmin(ranges))
+    assert closest > 3 and ranges[closest] < 2.0
+    assert all(et == 1.0 for et in ets[: closest + 1])
+    assert first_passed is None or first_passed.time > closest * CHECK_S
+
+
+def test_passed_target_that_closes_again_is_rearmed():
+    # a target crossing ahead from port passes and opens; then it turns back towards our track
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM)
+    goal = (60 * NM, 0.0)
+    own_velocity = _velocity(0.0, 18.0)
+    own = np.zeros(2)
+    target = np.array([3.0 * NM, -1.5 * NM])
+    target_velocity = _velocity(90.0, 18.0)
+    states = []
+    for k in range(12):
+        if k == 3:  # the target alters towards the own ship's track ahead
+            target_velocity = _velocity(225.0, 18.0)
+        obstacle = np.array([[*target, *target_velocity, 0.5 * NM]])
+        trigger.update(k * CHECK_S, own, own_velocity, goal, obstacle)
+        states.append(trigger.states[0])
+        own = own + own_velocity * CHECK_S
+        target = target + target_velocity * CHECK_S
+    causes = [t.cause for t in trigger.transitions]
+    assert states[0] == "triggered"
+    assert states[2] == "passed"                       # released after its CPA ...
+    assert "closing again" in causes                   # ... and re-armed when it turns back
+    rearmed = next(t for t in trigger.transitions if t.cause == "closing again")
+    assert rearmed.time == 3 * CHECK_S and rearmed.et == 1.0
+
+
+def test_target_opening_inside_its_domain_is_not_released():
+    # a static obstacle whose 3 nm domain the ship is inside: opening, but not beyond the domain
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM)
+    obstacle = np.array([[0.0, 1.0 * NM, 0.0, 0.0, 3.0 * NM]])
+    for k in range(4):
+        trigger.update(float(k), (k * 0.5 * NM, 0.0), (0.5 * NM, 0.0), (50 * NM, 0.0), obstacle)
+    assert trigger.states == ["triggered"] and trigger.et == 1.0

@@ -140,3 +140,16 @@ def test_an_empty_track_is_an_empty_account():
     account = account_voyage(empty, empty, empty, empty, empty, empty, empty, empty)
     assert (account.cost_usd, account.co2_t, account.time_min, account.distance_nm) == (0.0, 0.0, 0.0, 0.0)
     assert account.cii_rating == "n/a"
+
+
+def test_a_reported_brake_power_replaces_the_energy_model():
+    t = np.array([0.0, 1800.0, 3600.0])
+    x, y = np.array([0.0, 9260.0, 18520.0]), np.zeros(3)
+    calm = np.zeros(3)
+    power = np.full(3, 6.0e6)  # W
+    account = account_voyage(t, x, y, np.full(3, 9.26), calm, calm, calm, calm, brake_power_w=power)
+    fuel_t = 6000.0 * 190e-6  # t over one hour
+    assert account.co2_t == pytest.approx(fuel_t * 3.114)
+    assert account.cost_usd == pytest.approx(fuel_t * 640 + 500)
+    modelled = account_voyage(t, x, y, np.full(3, 9.26), calm, calm, calm, calm)
+    assert modelled.co2_t != pytest.approx(account.co2_t)

@@ -1,0 +1,374 @@
+"""Judging a sailed encounter by the rules of the road (COLREG Rules 8 and 13-17).
+
+Works on the recorded tracks alone (no co-simulation needed), so constructed time series
+test every verdict.  Per target it reports
+
+* the encounter class and the own ship's role, decided at the onset of risk of collision
+  by :class:`rhnc.colregs.EncounterTracker` (the class the controller also uses), fed
+  with the own ship's course and speed over ground;
+* the closest point of approach: range and time, refined along the straight chords
+  between samples (both ships moving linearly over a sample interval);
+* the passing side: where the target lies from the own ship's heading at the CPA
+  (``port``: a port-to-port passing), and, in a crossing, whether the own ship
+  crossed ahead of or astern of the target (on crossing the target's course line; at the CPA if
+  the tracks never cross);
+* the first manoeuvre after the onset: the first time the heading departs from the
+  heading at the onset by ``manoeuvre_threshold_deg`` or more and stays beyond it for
+  ``manoeuvre_hold_s`` (a sustained alteration, not yaw in a seaway), and its side;
+* a verdict per rule, ``"pass"``, ``"fail"`` or ``"not applicable"``, with the reason.
+
+The verdicts (thresholds are :class:`JudgementSettings`):
+
+Rule 8 (action to avoid collision), applicable to a give-way vessel and to any vessel that
+manoeuvred: the alteration is large enough to be readily apparent (a heading change of at
+least ``apparent_course_change_deg`` before the CPA, or a speed reduction of at least
+``apparent_speed_reduction`` of the speed at onset), made at least
+``early_before_cpa_min`` before the CPA, and the ships pass at a safe distance (the
+separation R + R_i is kept).
+Rule 13 (overtaking): the overtaking vessel keeps out of the way: separation kept.
+Rule 14 (head-on): no alteration to port, and a port-to-port passing.
+Rule 15 (crossing, give-way): the own ship does not cross ahead of the target and keeps
+the separation.
+Rule 16 (action by the give-way vessel): an early alteration (as in Rule 8) and the
+separation kept ("keep well clear").
+Rule 17 (stand-on): keep course and speed; a manoeuvre is allowed only once the give-way
+vessel's action is clearly not enough, read here as: the CPA predicted at constant
+velocities is below the separation and less than ``stand_on_wait_min`` ahead, or the own
+ship is at that time giving way to another target (with several targets a stand-on ship
+may have to act for a third one); and in a crossing, no alteration to port for a vessel on
+the own port side (Rule 17(c)).
+
+The target ships in our scenarios do not manoeuvre, so a stand-on own ship is eventually
+required to act (Rule 17(b)); the verdict checks that it waited long enough and turned
+the right way.  The overall verdict is ``"pass"`` when every applicable rule passes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from rhnc.colregs import ROLE, EncounterTracker, cpa_tcpa, wrap_deg
+from rhnc.encounter import segment_min_distance
+
+NM = 1852.0
+PASS, FAIL, NOT_APPLICABLE = "pass", "fail", "not applicable"
+RULES = ("rule_8", "rule_13", "rule_14", "rule_15", "rule_16", "rule_17")
+GIVE_WAY_CLASSES = ("head_on", "crossing_give_way", "overtaking")
+STAND_ON_CLASSES = ("crossing_stand_on", "overtaken")
+
+
+@dataclasses.dataclass(frozen=True)
+class JudgementSettings:
+    """Thresholds of the verdicts (units in the names)."""
+
+    manoeuvre_threshold_deg: float = 5.0
+    manoeuvre_hold_s: float = 120.0
+    apparent_course_change_deg: float = 30.0
+    apparent_speed_reduction: float = 0.5
+    early_before_cpa_min: float = 5.0
+    stand_on_wait_min: float = 10.0
+    risk_cpa_nm: float = 2.0
+    risk_tcpa_min: float = 30.0
+
+    def __post_init__(self) -> None:
+        for field in dataclasses.fields(self):
+            value = getattr(self, field.name)
+            if not (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+                    and value >= 0):
+                raise ValueError(f"{field.name} must be a number >= 0, got {value!r}")
+
+
+def ground_velocity(t, x, y) -> tuple[np.ndarray, np.ndarray]:
+    """Velocity over ground (north, east) [m/s] at each sample, from the positions."""
+    t = np.asarray(t, dtype=float)
+    if t.size < 2:
+        return np.zeros_like(t), np.zeros_like(t)
+    return np.gradient(np.asarray(x, float), t), np.gradient(np.asarray(y, float), t)
+
+
+def closest_approach(t, own_xy: np.ndarray, target_xy: np.ndarray) -> tuple[float, float, float]:
+    """Range [m], time [s] and the fractional sample index of the closest approach.
+
+    The minimum over the samples is refined along the chords joining them.
+    """
+    t = np.asarray(t, dtype=float)
+    at_samples = np.hypot(*(own_xy - target_xy).T)
+    if t.size < 2:
+        return float(at_samples[0]), float(t[0]), 0.0
+    between, fraction = segment_min_distance(own_xy[:-1], own_xy[1:], target_xy[:-1], target_xy[1:])
+    k = int(np.argmin(between))
+    if at_samples.min() <= between[k]:
+        k_sample = int(np.argmin(at_samples))
+        return float(at_samples[k_sample]), float(t[k_sample]), float(k_sample)
+    return float(between[k]), float(t[k] + fraction[k] * (t[k + 1] - t[k])), k + float(fraction[k])
+
+
+def first_manoeuvre(t, heading_rad, start_index: int, end_time_s: float,
+                    settings: JudgementSettings) -> tuple[float | None, str | None]:
+    """Time [s] and side of the first sustained heading change after ``start_index``.
+
+    The heading must depart from its value at ``start_index`` by at least the threshold and
+    stay beyond it (on the same side) for ``manoeuvre_hold_s``; only changes that begin
+    before ``end_time_s`` count.
+    """
+    t = np.asarray(t, dtype=float)
+    change = wrap_deg(np.degrees(np.unwrap(heading_rad) - np.unwrap(heading_rad)[start_index]))
+    threshold = settings.manoeuvre_threshold_deg
+    for k in range(start_index, t.size):
+        if t[k] > end_time_s:
+            break
+        if abs(change[k]) < threshold:
+            continue
+        sign = np.sign(change[k])
+        window = (t >= t[k]) & (t <= t[k] + settings.manoeuvre_hold_s)
+        held = np.all(sign * change[window] >= threshold)
+        if held and t[-1] >= t[k] + settings.manoeuvre_hold_s:
+            return float(t[k]), "starboard" if sign > 0 else "port"
+    return None, None
+
+
+def crossed_ahead(own_xy: np.ndarray, target: np.ndarray, start: int, cpa_index: float) -> bool | None:
+    """Whether the own ship crossed ahead of a moving target's bow (None: static target).
+
+    Judged where the own ship crosses the target's course line (the first sign change of
+    its lateral offset from the line after ``start``); without a crossing, by its position
+    along the target's course at the CPA.
+    """
+    velocity = target[:, 2:4]
+    speed = np.hypot(*velocity.T)
+    if np.all(speed < 0.1):
+        return None
+    unit = velocity / np.maximum(speed, 1e-9)[:, None]
+    relative = own_xy - target[:, :2]
+    lateral = unit[:, 0] * relative[:, 1] - unit[:, 1] * relative[:, 0]
+    along = np.sum(unit * relative, axis=1)
+    sign = np.sign(lateral[start:])
+    changes = np.nonzero(sign[:-1] * sign[1:] < 0)[0]
+    if changes.size:
+        k = start + int(changes[0])
+        return bool(along[k] + along[k + 1] > 0.0)
+    k = min(int(round(cpa_index)), len(along) - 1)
+    return bool(along[k] > 0.0)
+
+
+def judge_target(t, own_xy, heading_rad, speed_mps, target: np.ndarray, encounter_class: str,
+                 onset_index: int | None, required_m: float, settings: JudgementSettings,
+                 give_way_onsets_s: tuple[float, ...] = ()) -> dict:
+    """Everything the ``colregs`` analysis reports for one target (see the module docstring).
+
+    Parameters
+    ----------
+    t : (n,) [s]; own_xy : (n, 2) [m]; heading_rad : (n,) [rad]; speed_mps : (n,) [m/s]
+    target : (n, 5)
+        The target at each sample: x, y, vx, vy, radius [m, m/s].
+    encounter_class : str
+        The class locked at the onset of risk ("none" when risk never arose).
+    onset_index : int or None
+        The sample of the onset of risk.
+    required_m : float
+        R + R_i [m].
+    give_way_onsets_s : tuple of float
+        Onsets [s] of the encounters with *other* targets in which the own ship gives way.
+        A stand-on manoeuvre made once one of those had begun answers that obligation, so
+        Rule 17's "wait until the give-way vessel's action is not enough" does not apply
+        to it (Rule 17(c) still does).
+    """
+    t = np.asarray(t, dtype=float)
+    cpa_m, cpa_time, cpa_index = closest_approach(t, own_xy, target[:, :2])
+    k = min(int(round(cpa_index)), t.size - 1)
+    offset = target[k, :2] - own_xy[k]
+    bearing = float(wrap_deg(math.degrees(math.atan2(offset[1], offset[0]) - heading_rad[k])))
+    result: dict = {
+        "encounter_class": encounter_class,
+        "role": ROLE[encounter_class],
+        "onset_s": None if onset_index is None else float(t[onset_index]),
+        "cpa_nm": cpa_m / NM,
+        "required_nm": required_m / NM,
+        "separation_kept": bool(cpa_m >= required_m - 1e-6),
+        "time_of_cpa_s": cpa_time,
+        "passing_side": "starboard" if bearing > 0 else "port",
+        "relative_bearing_at_cpa_deg": bearing,
+        "crossed": None,
+        "manoeuvre_time_s": None,
+        "manoeuvre_side": None,
+        "max_course_change_deg": 0.0,
+        "max_speed_reduction": 0.0,
+    }
+    if onset_index is None:
+        result.update({rule: NOT_APPLICABLE for rule in RULES})
+        result.update({"reasons": {}, "side_correct": None, "verdict": NOT_APPLICABLE})
+        return result
+    if encounter_class.startswith("crossing"):
+        ahead = crossed_ahead(own_xy, target, onset_index, cpa_index)
+        result["crossed"] = None if ahead is None else ("ahead" if ahead else "astern")
+    manoeuvre_time, side = first_manoeuvre(t, heading_rad, onset_index, cpa_time, settings)
+    result["manoeuvre_time_s"], result["manoeuvre_side"] = manoeuvre_time, side
+    before = (t >= t[onset_index]) & (t <= cpa_time)
+    unwrapped = np.unwrap(heading_rad)
+    change = np.degrees(unwrapped[before] - unwrapped[onset_index])
+    result["max_course_change_deg"] = float(np.max(np.abs(change))) if change.size else 0.0
+    speed0 = float(speed_mps[onset_index])
+    if speed0 > 0 and np.any(before):
+        result["max_speed_reduction"] = float(max(0.0, 1.0 - np.min(speed_mps[before]) / speed0))
+    verdicts, reasons = _verdicts(result, encounter_class, t, own_xy, speed_mps, target, settings,
+                                  give_way_onsets_s)
+    result.update(verdicts)
+    result["reasons"] = reasons
+    result["side_correct"] = _side_correct(result, encounter_class)
+    applicable = [v for v in verdicts.values() if v != NOT_APPLICABLE]
+    result["verdict"] = NOT_APPLICABLE if not applicable else (PASS if all(v == PASS for v in applicable) else FAIL)
+    return result
+
+
+def _side_correct(result: dict, encounter_class: str) -> bool | None:
+    """The COLREG side: port to port head-on, astern of a crossing ship we give way to."""
+    if encounter_class == "head_on":
+        return result["passing_side"] == "port"
+    if encounter_class == "crossing_give_way":
+        return result["crossed"] != "ahead"
+    if encounter_class == "crossing_stand_on":
+        return result["manoeuvre_side"] != "port"
+    return None
+
+
+def _verdicts(result, encounter_class, t, own_xy, speed_mps, target, settings,
+              give_way_onsets_s=()) -> tuple[dict, dict]:
+    verdicts = {rule: NOT_APPLICABLE for rule in RULES}
+    reasons: dict[str, str] = {}
+
+    def judge(rule: str, failures: list[str]) -> None:
+        verdicts[rule] = FAIL if failures else PASS
+        if failures:
+            reasons[rule] = "; ".join(failures)
+
+    kept = result["separation_kept"]
+    separation = [] if kept else [f"CPA {result['cpa_nm']:.2f} nm < required {result['required_nm']:.2f} nm"]
+    manoeuvred = result["manoeuvre_time_s"] is not None
+    early_s = settings.early_before_cpa_min * 60.0
+    early = manoeuvred and result["time_of_cpa_s"] - result["manoeuvre_time_s"] >= early_s
+    timing = [] if early else (["no alteration before the CPA"] if not manoeuvred else
+                               [f"alteration {(result['time_of_cpa_s'] - result['manoeuvre_time_s']) / 60:.1f} min "
+                                f"before the CPA (< {settings.early_before_cpa_min:g} min)"])
+    give_way = encounter_class in GIVE_WAY_CLASSES
+    if give_way or (manoeuvred and encounter_class != "static"):
+        large = (result["max_course_change_deg"] >= settings.apparent_course_change_deg
+                 or result["max_speed_reduction"] >= settings.apparent_speed_reduction)
+        size = [] if large else [f"alteration {result['max_course_change_deg']:.0f} deg, speed "
+                                 f"-{100 * result['max_speed_reduction']:.0f} %: not readily apparent"]
+        judge("rule_8", size + timing + separation)
+    if encounter_class == "overtaking":
+        judge("rule_13", separation)
+    if encounter_class == "head_on":
+        side = [] if result["passing_side"] == "port" else ["passed starboard to starboard"]
+        turn = ["altered to port"] if result["manoeuvre_side"] == "port" else []
+        judge("rule_14", turn + side)
+    if encounter_class == "crossing_give_way":
+        judge("rule_15", (["crossed ahead of the target"] if result["crossed"] == "ahead" else []) + separation)
+    if give_way:
+        judge("rule_16", timing + separation)
+    if encounter_class in STAND_ON_CLASSES:
+        failures = []
+        if manoeuvred:
+            k = int(np.searchsorted(t, result["manoeuvre_time_s"]))
+            own_velocity = np.gradient(own_xy, t, axis=0)[k]
+            cpa, tcpa = cpa_tcpa(own_xy[k], own_velocity, target[k, :2], target[k, 2:4])
+            giving_way = any(onset <= result["manoeuvre_time_s"] for onset in give_way_onsets_s)
+            if not giving_way and not (cpa < result["required_nm"] * NM
+                                       and 0.0 < tcpa <= settings.stand_on_wait_min * 60.0):
+                failures.append(f"altered course with predicted CPA {cpa / NM:.2f} nm in {tcpa / 60:.1f} min: "
+                                f"the give-way vessel's action could still suffice")
+            if encounter_class == "crossing_stand_on" and result["manoeuvre_side"] == "port":
+                failures.append("altered to port for a vessel on the port side (Rule 17(c))")
+        judge("rule_17", failures + separation)
+    return verdicts, reasons
+
+
+def judge_encounters(t, x, y, heading_rad, obstacles: np.ndarray, own_radius_m: float = 0.0,
+                     settings: JudgementSettings | None = None) -> dict:
+    """The ``colregs`` analysis of a run from its sampled tracks.
+
+    Parameters
+    ----------
+    t, x, y, heading_rad : (n,) arrays
+        Times [s], own positions [m] and heading [rad].
+    obstacles : (n, m, 5) array
+        Every obstacle at each sample: x, y, vx, vy, radius [m, m/s].
+    own_radius_m : float
+        Own hazard radius R [m].
+
+    Returns
+    -------
+    dict
+        ``targets`` (one dict per obstacle row), ``verdict`` (overall), ``side_correct``
+        (every target with a COLREG side passed on it, or None), and counts.
+    """
+    settings = settings or JudgementSettings()
+    t = np.asarray(t, dtype=float)
+    own_xy = np.column_stack([x, y]).astype(float)
+    heading = np.asarray(heading_rad, dtype=float)
+    obstacles = np.asarray(obstacles, dtype=float).reshape(t.size, -1, 5)
+    vx, vy = ground_velocity(t, x, y)
+    speed = np.hypot(vx, vy)
+    course = np.arctan2(vy, vx)
+    tracker = EncounterTracker(settings.risk_cpa_nm * NM, settings.risk_tcpa_min * 60.0,
+                               release_range_m=math.inf)
+    classes: dict[int, tuple[str, int]] = {}
+    for k in range(t.size):
+        encounters = tracker.update(own_xy[k], course[k], speed[k], obstacles[k])
+        for i, encounter in enumerate(encounters):
+            if i not in classes and encounter.encounter_class not in ("none",):
+                classes[i] = (encounter.encounter_class, k)
+    targets = []
+    for i in range(obstacles.shape[1]):
+        name, onset = classes.get(i, ("none", None))
+        required = own_radius_m + float(np.max(obstacles[:, i, 4]))
+        give_way_onsets = tuple(float(t[k]) for j, (other, k) in classes.items()
+                                if j != i and other in GIVE_WAY_CLASSES)
+        judged = judge_target(t, own_xy, heading, speed, obstacles[:, i], name, onset, required, settings,
+                              give_way_onsets)
+        targets.append({"obstacle": i, **judged})
+    verdicts = [target["verdict"] for target in targets if target["verdict"] != NOT_APPLICABLE]
+    sides = [target["side_correct"] for target in targets if target["side_correct"] is not None]
+    return {
+        "targets": targets,
+        "verdict": NOT_APPLICABLE if not verdicts else (PASS if all(v == PASS for v in verdicts) else FAIL),
+        "side_correct": None if not sides else bool(all(sides)),
+        "targets_failed": sum(1 for v in verdicts if v == FAIL),
+        "rules_failed": sorted({rule for target in targets for rule in RULES if target[rule] == FAIL}),
+    }
+
+
+def colregs_analysis(frame, scenario, cosim, out_dir, manoeuvre_threshold_deg: float = 5.0,
+                     manoeuvre_hold_s: float = 120.0, apparent_course_change_deg: float = 30.0,
+                     apparent_speed_reduction: float = 0.5, early_before_cpa_min: float = 5.0,
+                     stand_on_wait_min: float = 10.0, risk_cpa_nm: float = 2.0, risk_tcpa_min: float = 30.0) -> dict:
+    """The ``colregs`` analysis of a run: :func:`judge_encounters` on its recorded tracks.
+
+    The obstacles are the array output feeding any participant's ``obstacles`` input; the
+    own radius R is the controller's.  The keyword options are :class:`JudgementSettings`
+    (``[outputs.options.colregs]``).
+    """
+    from orchestrator.analyses import array_output, own_radius_m, plant_name
+
+    settings = JudgementSettings(manoeuvre_threshold_deg, manoeuvre_hold_s, apparent_course_change_deg,
+                                 apparent_speed_reduction, early_before_cpa_min, stand_on_wait_min,
+                                 risk_cpa_nm, risk_tcpa_min)
+    plant = plant_name(cosim)
+    sources = {c.target_port: f"{c.source}.{c.source_port}" for c in scenario.connections}
+    if "obstacles" not in sources:
+        return {"targets": [], "verdict": NOT_APPLICABLE, "side_correct": None, "targets_failed": 0,
+                "rules_failed": []}
+    return judge_encounters(frame["time_s"].to_numpy(), frame[f"{plant}.x"].to_numpy(),
+                            frame[f"{plant}.y"].to_numpy(), frame[f"{plant}.psi"].to_numpy(),
+                            array_output(frame, sources["obstacles"]), own_radius_m(cosim), settings)
+
+
+def _check_options(options) -> None:
+    """Refuse bad ``[outputs.options.colregs]`` values before a run (ValueError names the key)."""
+    JudgementSettings(**dict(options))
+
+
+colregs_analysis.check_options = _check_options

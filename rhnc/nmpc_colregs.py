@@ -1,0 +1,222 @@
+"""COLREG-aware collision domains for the NMPC (Rules 8 and 13-17), as problem parameters.
+
+Each obstacle becomes one slot of the collision constraint of :mod:`rhnc.nmpc_problem`:
+a circle that must stay clear of the own ship's predicted track.  With ``colregs`` off
+it is the paper's circle of radius R + R_i about the obstacle.  With ``colregs`` on, each
+target is classified by :class:`rhnc.colregs.EncounterTracker` (the same classes, with
+the same hysteresis, that the ``colregs`` analysis judges a run by) and its circle is
+shaped by the own ship's role:
+
+``head_on`` (Rule 14: both alter to starboard, pass port to port)
+    The circle's centre moves ``HEAD_ON_OFFSET`` (in units of the clearance rho) to the
+    target's starboard and slightly ahead of it, and the radius grows by the offset, so
+    the original circle of radius rho stays inside.  Passing on the target's port side
+    (after our turn to starboard) keeps the paper's clearance rho; passing on its
+    starboard side costs up to rho + 2 |offset| of detour.
+``crossing_give_way`` (Rules 15, 16: keep out of the way, do not cross ahead)
+    The centre moves ahead of the target (``GIVE_WAY_OFFSET``): crossing its bow needs a
+    much wider berth than passing under its stern.
+``overtaking`` (Rule 13: keep clear of the overtaken ship)
+    The centre moves a little ahead (``OVERTAKING_OFFSET``): pass clear, on either side.
+``crossing_stand_on``, ``overtaken`` (Rule 17: keep course and speed)
+    The constraint is off, so the NMPC tracks its reference unchanged, until the give-way
+    ship's action is clearly not enough: its predicted CPA (both ships at their present
+    velocities) lies inside rho and either the CPA is less than ``stand_on_action_tcpa_s``
+    away or the range is below ``stand_on_action_range_factor * rho``.  From then on the
+    symmetric circle is on (Rule 17(b): act to avoid collision) until the encounter ends.
+``static``, ``none``
+    The symmetric circle.
+
+No alteration to port (Rules 14, 15, 17(c)): while a head-on or crossing target whose
+way we give (or a stand-on target on our port side we have had to act for) is still
+approaching (TCPA > 0), the predicted heading may not fall more than
+``PORT_ALLOWANCE_DEG`` to port of the reference heading (nor further to port than the
+measured heading, if the ship is there already).  Without it the NMPC, whose
+horizon (5-15 min) sees the domain of a ship crossing from starboard come in from that
+side, first turned away from it to port and only later under its stern (seen in trials);
+the bound leaves turning to starboard or slowing down, which is what the rules ask.
+
+Why shifted circles rather than side constraints or ellipses: a circle that contains the
+paper's circle never admits a plan the paper's constraint forbids, so separation >= R + R_i
+still follows from feasibility; it keeps one smooth constraint per slot (no switching
+logic inside the NLP, no integer side choice); and together with the warm start pushed
+out of the domain on the far side from its centre (:mod:`rhnc.nmpc_warm_start`), the
+local solver starts on, and stays on, the side the rules ask for.  It is the familiar
+ship-domain picture (Fujii, Goodwin, Coldwell: larger ahead and to starboard).
+
+Clearance rho = R + R_i + ``clearance_margin_m``, and it grows by
+``clearance_margin_growth_mps`` per second of prediction: the margin that absorbs the
+prediction error of wind, waves, current and model error (constraint tightening).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+
+import numpy as np
+
+from rhnc.colregs import ENCOUNTER_CLASSES, EncounterTracker, cpa_tcpa
+from rhnc.nmpc_problem import OBSTACLE_FIELDS
+
+LOG = logging.getLogger(__name__)
+
+#: domain centre offsets (ahead, to starboard of the target) in units of the clearance rho
+HEAD_ON_OFFSET = (0.25, 0.5)
+GIVE_WAY_OFFSET = (0.5, 0.25)
+OVERTAKING_OFFSET = (0.25, 0.0)
+OFFSETS = {"head_on": HEAD_ON_OFFSET, "crossing_give_way": GIVE_WAY_OFFSET, "overtaking": OVERTAKING_OFFSET}
+STAND_ON_CLASSES = ("crossing_stand_on", "overtaken")
+#: classes under which the own ship must not alter to port while the target approaches
+STARBOARD_CLASSES = ("head_on", "crossing_give_way", "crossing_stand_on")
+#: how far to port of the reference heading the plan may go while that holds [deg]
+PORT_ALLOWANCE_DEG = 2.0
+
+
+@dataclasses.dataclass(frozen=True)
+class DomainSettings:
+    """How obstacles become collision domains.
+
+    Attributes
+    ----------
+    own_radius_m : float
+        R [m].
+    colregs : bool
+        Shape the domains by encounter class (else the paper's circles).
+    clearance_margin_m : float
+        Added to R + R_i [m].
+    clearance_margin_growth_mps : float
+        Growth of the margin per second of prediction [m/s].
+    stand_on_action_tcpa_s : float
+        Rule 17: a stand-on ship acts when the predicted CPA is inside rho and the CPA is
+        at most this far ahead [s] ...
+    stand_on_action_range_factor : float
+        ... or the range is below this many rho.
+    risk_cpa_m, risk_tcpa_s : float
+        Risk of collision for the classification (see :func:`rhnc.colregs.classify`).
+    """
+
+    own_radius_m: float = 0.0
+    colregs: bool = False
+    clearance_margin_m: float = 0.0
+    clearance_margin_growth_mps: float = 0.0
+    stand_on_action_tcpa_s: float = 600.0
+    stand_on_action_range_factor: float = 2.0
+    risk_cpa_m: float = 2.0 * 1852.0
+    risk_tcpa_s: float = 30.0 * 60.0
+
+
+@dataclasses.dataclass
+class DomainReport:
+    """Per obstacle row: its class code (index of ``ENCOUNTER_CLASSES``, -1 unclassified) and
+    whether its constraint is on in this solve."""
+
+    class_codes: np.ndarray
+    active: np.ndarray
+    no_port_turn: bool = False
+
+
+class CollisionDomains:
+    """Turn the obstacles seen at a solve into the NLP's slot parameters.
+
+    Parameters
+    ----------
+    settings : DomainSettings
+    max_obstacles : int
+        Slots of the problem; the nearest obstacles get them.
+    """
+
+    def __init__(self, settings: DomainSettings, max_obstacles: int) -> None:
+        self.settings = settings
+        self.max_obstacles = max_obstacles
+        self.tracker = EncounterTracker(settings.risk_cpa_m, settings.risk_tcpa_s)
+        self._acting: set[int] = set()
+        self.stand_on_actions = 0
+
+    def reset(self) -> None:
+        """Forget classes and Rule 17 decisions."""
+        self.tracker = EncounterTracker(self.settings.risk_cpa_m, self.settings.risk_tcpa_s)
+        self._acting = set()
+
+    def parameters(self, obstacles: np.ndarray | None, state: np.ndarray, origin: np.ndarray, closing_speed_mps: float,
+                   substep_s: float, length_scale_m: float, et: bool) -> tuple[np.ndarray, DomainReport]:
+        """Slot parameters (OBSTACLE_FIELDS x max_obstacles, scaled) and the per-row report.
+
+        Parameters
+        ----------
+        obstacles : (n, 5) array or None
+            x, y [m], vx, vy [m/s], radius [m] at the solve.
+        state : (6,) array
+            Measured own state [SI].
+        origin : (2,) array
+            Position the scaled problem is measured from [m].
+        closing_speed_mps : float
+            Own speed bound used for the chord inflation [m/s].
+        substep_s : float
+            Time between collision checks [s].
+        length_scale_m : float
+            L [m].
+        et : bool
+            Event trigger: constraints on.
+        """
+        s = self.settings
+        L = length_scale_m
+        slots = np.zeros((OBSTACLE_FIELDS, self.max_obstacles))
+        slots[6, :] = 1.0  # harmless radius for inactive slots
+        rows = np.zeros((0, 5)) if obstacles is None else np.atleast_2d(np.asarray(obstacles, dtype=float))
+        codes = np.full(len(rows), -1.0)
+        active_rows = np.zeros(len(rows))
+        if len(rows) == 0:
+            return slots, DomainReport(codes, active_rows)
+        own_course = float(state[2] + math.atan2(state[4], state[3]))
+        own_speed = float(math.hypot(state[3], state[4]))
+        classes = [None] * len(rows)
+        if s.colregs:
+            encounters = self.tracker.update(state[:2], own_course, own_speed, rows)
+            for index, encounter in enumerate(encounters):
+                classes[index] = encounter
+                codes[index] = ENCOUNTER_CLASSES.index(encounter.encounter_class)
+            self._acting &= set(self.tracker.locked)
+        if not et:
+            return slots, DomainReport(codes, active_rows)
+        distance = np.hypot(rows[:, 0] - origin[0], rows[:, 1] - origin[1]) - rows[:, 4]
+        order = np.argsort(distance)
+        if len(order) > self.max_obstacles:
+            LOG.warning("%d obstacles given, NMPC uses the %d nearest", len(order), self.max_obstacles)
+            order = order[: self.max_obstacles]
+        own_velocity = own_speed * np.array([math.cos(own_course), math.sin(own_course)])
+        no_port_turn = False
+        for slot, i in enumerate(order):
+            x, y, vx, vy, radius = rows[i]
+            rho = s.own_radius_m + radius + s.clearance_margin_m
+            if rho <= 0.0:
+                continue
+            offset = np.zeros(2)
+            encounter = classes[i]
+            name = encounter.encounter_class if encounter is not None else "static"
+            if name in STAND_ON_CLASSES and i not in self._acting:
+                cpa, tcpa = cpa_tcpa(state[:2], own_velocity, (x, y), (vx, vy))
+                late = 0.0 < tcpa <= s.stand_on_action_tcpa_s or encounter.range_m <= s.stand_on_action_range_factor * rho
+                if cpa < rho and late:
+                    LOG.info("Rule 17: target %d (%s) is not giving way enough (CPA %.0f m, TCPA %.0f s): acting",
+                             i, name, cpa, tcpa)
+                    self._acting.add(i)
+                    self.stand_on_actions += 1
+                else:
+                    continue  # keep course and speed: this target's constraint stays off
+            if name in OFFSETS:
+                speed = math.hypot(vx, vy)
+                ahead = np.array([vx, vy]) / speed
+                starboard = np.array([-ahead[1], ahead[0]])
+                forward, side = OFFSETS[name]
+                offset = rho * (forward * ahead + side * starboard)
+            domain_radius = rho + float(np.hypot(*offset))
+            closing = closing_speed_mps + math.hypot(vx, vy)
+            inflation = (closing * substep_s / (2.0 * domain_radius)) ** 2
+            slots[:, slot] = [(x - origin[0]) / L, (y - origin[1]) / L, vx / L, vy / L, offset[0] / L,
+                              offset[1] / L, domain_radius / L, s.clearance_margin_growth_mps / L, inflation, 1.0]
+            active_rows[i] = 1.0
+            if name in STARBOARD_CLASSES and encounter.tcpa_s > 0.0:
+                no_port_turn = True
+        return slots, DomainReport(codes, active_rows, no_port_turn)

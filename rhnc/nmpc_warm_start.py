@@ -1,0 +1,106 @@
+"""Warm start and fallback of the NMPC: the previous plan, shifted, and a guess clear of domains.
+
+The previous solution, shifted by the time since it was computed and extended by rolling
+the model forward with its last input, is both the next solve's initial guess and the plan
+applied when a solve fails or is stopped at its time limit (the "shifted previous plan").
+Without a previous plan the guess is the reference itself, and the fallback holds the last
+surge force with zero yaw moment.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+class PlanMemory:
+    """The last applied plan (SI states (N+1, 6) and inputs (N, 2)) and when it was made.
+
+    Parameters
+    ----------
+    horizon_steps : int
+        N.
+    control_interval_s : float
+        delta [s].
+    rollout : callable
+        ``rollout(state (6,), inputs (n, 2)) -> states (n+1, 6)`` [SI] with the prediction model.
+    """
+
+    def __init__(self, horizon_steps: int, control_interval_s: float, rollout) -> None:
+        self.horizon_steps = horizon_steps
+        self.control_interval_s = control_interval_s
+        self.rollout = rollout
+        self.states: np.ndarray | None = None
+        self.inputs: np.ndarray | None = None
+        self.time_s: float | None = None
+
+    def reset(self) -> None:
+        self.states = self.inputs = self.time_s = None
+
+    def store(self, time_s: float, states: np.ndarray, inputs: np.ndarray) -> None:
+        self.time_s, self.states, self.inputs = float(time_s), np.array(states), np.array(inputs)
+
+    def _shift(self, time_s: float) -> int | None:
+        if self.states is None or self.time_s is None:
+            return None
+        shift = int(round((time_s - self.time_s) / self.control_interval_s))
+        return shift if 0 <= shift <= self.horizon_steps else None
+
+    def shifted(self, time_s: float) -> tuple[np.ndarray, np.ndarray] | None:
+        """The previous plan advanced to ``time_s``: (states (N+1, 6), inputs (N, 2)) [SI], or None."""
+        shift = self._shift(time_s)
+        if shift is None:
+            return None
+        N = self.horizon_steps
+        inputs = np.vstack([self.inputs[shift:], np.repeat(self.inputs[-1:], shift, axis=0)])
+        kept = self.states[shift:]
+        tail = self.rollout(kept[-1], inputs[N - shift:]) if shift > 0 else kept[-1:]
+        states = np.vstack([kept, tail[1:]]) if shift > 0 else kept
+        return states, inputs
+
+    def fallback_inputs(self, time_s: float, previous_tau: np.ndarray, tau_max: np.ndarray) -> np.ndarray:
+        """Inputs (N, 2) of the fallback: the shifted plan, else hold the surge force, no yaw moment."""
+        shift = self._shift(time_s)
+        N = self.horizon_steps
+        if shift is not None and shift < N:
+            inputs = np.vstack([self.inputs[shift:], np.repeat(self.inputs[-1:], shift, axis=0)])
+        else:
+            hold = np.array([float(np.asarray(previous_tau)[0]), 0.0])
+            inputs = np.repeat(hold[None, :], N, axis=0)
+        return np.clip(inputs, -tau_max, tau_max)
+
+
+def push_guess_clear(z_guess: np.ndarray, slots: np.ndarray, ref_scaled: np.ndarray, control_interval_s: float) -> None:
+    """Move guessed positions that lie inside an active domain sideways out of it (in place).
+
+    ``z_guess`` holds the scaled states (N+1, 6); ``slots`` the obstacle parameters of
+    :mod:`rhnc.nmpc_problem`.  The shift is perpendicular to the reference course, to the
+    side of the domain's centre the node already lies on, and to starboard when it lies
+    (nearly) on the centre line.  A straight reference through the middle of an obstacle
+    is a symmetric problem whose "stop in front of it" plan is a stationary point;
+    starting the solver from a detour picks a side, and the local solver keeps it.  A
+    domain whose centre is moved to the target's starboard (head-on, crossing as the
+    give-way ship) always pushes to starboard: that is the alteration Rules 14-16 ask for
+    (port to port; astern of a ship crossing from starboard).
+    """
+    dt = control_interval_s
+    for i in np.flatnonzero(slots[9] > 0.5):
+        cx, cy, vx, vy, ox, oy, rho, growth, inflation, _ = slots[:, i]
+        give_way = ox * -vy + oy * vx > 1e-9 * rho * max(abs(vx) + abs(vy), 1e-12)
+        for k in range(1, len(z_guess)):
+            t = k * dt
+            r_push = 1.1 * (rho + growth * t) * math.sqrt(1.0 + inflation)
+            dx = z_guess[k, 0] - (cx + vx * t + ox)
+            dy = z_guess[k, 1] - (cy + vy * t + oy)
+            if dx * dx + dy * dy >= r_push * r_push:
+                continue
+            course = ref_scaled[2, k]
+            along_x, along_y = math.cos(course), math.sin(course)
+            starboard_x, starboard_y = -along_y, along_x
+            along = dx * along_x + dy * along_y
+            lateral = dx * starboard_x + dy * starboard_y
+            side = -1.0 if lateral < -0.1 * rho and not give_way else 1.0
+            new_lateral = side * math.sqrt(max(r_push * r_push - along * along, 0.0))
+            z_guess[k, 0] += (new_lateral - lateral) * starboard_x
+            z_guess[k, 1] += (new_lateral - lateral) * starboard_y

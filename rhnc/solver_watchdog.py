@@ -1,0 +1,223 @@
+"""Time limits for CasADi NLP solves: the solver runs in a forked worker that can be killed.
+
+fatrop has an iteration limit but no clock, and CasADi's iteration callback is not called
+by its interface; on a state outside the model's range (NaN in the dynamics) it was seen
+to loop inside one iteration for more than 11 minutes, where no iteration limit can stop
+it.  A thread cannot be stopped from outside either.  So the solver runs in a child
+process, forked from the controller after the problem is built (the child inherits the
+compiled solvers, nothing is rebuilt or pickled): each solve sends the numeric arguments
+through a pipe and waits for the answer under two limits,
+
+* ``cpu_time_s``: the processor time the worker spends on this solve (read from
+  ``/proc/<pid>/stat`` on Linux), so that the verdict does not depend on how many other
+  processes share the machine: on a loaded machine a solve of a few hundred ms of CPU
+  can take seconds of wall time, and a wall-clock limit would then cut normal solves;
+* ``wall_time_s``: a hard cap on the wall time, for a worker that gets no CPU at all
+  and for platforms without ``/proc``.
+
+When a limit is hit, the child is killed, the call reports ``wall_time_exceeded`` and
+the next call forks a fresh worker.  The pipe adds some 0.1-0.3 ms per solve.  Where
+``os.fork`` does not exist (Windows), or with both limits None, solves run in this
+process under the iteration limit only.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import multiprocessing
+import os
+import signal
+import time
+import weakref
+from collections.abc import Callable, Mapping
+
+import casadi as ca
+import numpy as np
+
+LOG = logging.getLogger(__name__)
+
+#: status reported when a solve was stopped at its time limit
+WALL_TIME_STATUS = "wall_time_exceeded"
+#: how often the parent checks the worker's processor time [s]
+POLL_S = 0.02
+_TICKS_PER_S = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
+
+
+def process_cpu_time_s(pid: int) -> float | None:
+    """User + system processor time [s] of process ``pid`` so far, or None without /proc."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as stream:
+            fields = stream.read().rsplit(b")", 1)[1].split()
+    except (OSError, IndexError):
+        return None
+    return (int(fields[11]) + int(fields[12])) / _TICKS_PER_S
+
+
+@dataclasses.dataclass
+class SolveOutcome:
+    """What one bounded solve returned.
+
+    Attributes
+    ----------
+    x, g : numpy.ndarray
+        Primal solution and constraint values (NaN when stopped).
+    f : float
+        Objective.
+    success : bool
+        The solver reported success.
+    iterations : int
+        Solver iterations (-1 when unknown).
+    status : str
+        Solver's return status, or ``WALL_TIME_STATUS``.
+    wall_time_s : float
+        Wall time of the call [s], pipe included.
+    timed_out : bool
+        Stopped at a time limit.
+    stopped_by : str
+        Which limit stopped it: ``"cpu"``, ``"wall"`` or ``""``.
+    """
+
+    x: np.ndarray
+    g: np.ndarray
+    f: float
+    success: bool
+    iterations: int
+    status: str
+    wall_time_s: float
+    timed_out: bool = False
+    stopped_by: str = ""
+
+
+def _outcome(solver: ca.Function, result: Mapping, elapsed: float) -> SolveOutcome:
+    stats = solver.stats()
+    return SolveOutcome(
+        x=np.array(result["x"]).ravel(), g=np.array(result["g"]).ravel(), f=float(result["f"]),
+        success=bool(stats.get("success", False)), iterations=int(stats.get("iter_count", -1)),
+        status=str(stats.get("return_status", "unknown")), wall_time_s=elapsed,
+    )
+
+
+def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, Callable[[], ca.Function]]) -> None:
+    """Child's loop: receive (solver name, arguments), solve, send the outcome."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+    while True:
+        try:
+            name, arguments = connection.recv()
+        except (EOFError, OSError):
+            return
+        if name not in solvers:
+            solvers[name] = factories[name]()
+        start = time.perf_counter()
+        result = solvers[name](**arguments)
+        outcome = _outcome(solvers[name], result, time.perf_counter() - start)
+        try:
+            connection.send(outcome)
+        except (BrokenPipeError, OSError):
+            return
+
+
+def _kill(pid: int) -> None:
+    try:
+        os.kill(pid, signal.SIGKILL)
+        os.waitpid(pid, 0)
+    except (ProcessLookupError, ChildProcessError):
+        pass
+
+
+class BoundedSolver:
+    """Named CasADi solvers called with a wall-time limit.
+
+    Parameters
+    ----------
+    solvers : mapping of str to casadi.Function
+        Solvers built already (a forked worker inherits them).
+    factories : mapping of str to callable
+        Builds the other solvers by name on first use (in the worker when there is one).
+    wall_time_s : float or None
+        Hard wall-time limit per call [s]; None with ``cpu_time_s`` None: no limits, solve
+        in this process.
+    cpu_time_s : float or None
+        Limit of the worker's processor time per call [s] (Linux; ignored elsewhere).
+    """
+
+    def __init__(self, solvers: Mapping[str, ca.Function], factories: Mapping[str, Callable[[], ca.Function]],
+                 wall_time_s: float | None, cpu_time_s: float | None = None) -> None:
+        self.factories = dict(factories)
+        self.wall_time_s = wall_time_s
+        self.cpu_time_s = cpu_time_s
+        self._solvers: dict[str, ca.Function] = dict(solvers)
+        self._pid: int | None = None
+        self._connection = None
+        self._finalizer = None
+        self.timeouts = 0
+        if (wall_time_s is not None or cpu_time_s is not None) and not hasattr(os, "fork"):
+            LOG.warning("no os.fork on this platform: NMPC solves are limited by iterations only")
+            self.wall_time_s = self.cpu_time_s = None
+
+    def solve(self, name: str, **arguments) -> SolveOutcome:
+        """Call solver ``name`` with nlpsol arguments (x0, p, lbx, ubx, lbg, ubg)."""
+        if self.wall_time_s is None and self.cpu_time_s is None:
+            if name not in self._solvers:
+                self._solvers[name] = self.factories[name]()
+            start = time.perf_counter()
+            result = self._solvers[name](**arguments)
+            return _outcome(self._solvers[name], result, time.perf_counter() - start)
+        arguments = {key: np.asarray(value, dtype=float) for key, value in arguments.items()}
+        start = time.perf_counter()
+        self._ensure_worker()
+        self._connection.send((name, arguments))
+        cpu_start = process_cpu_time_s(self._pid) if self.cpu_time_s is not None else None
+        wall_limit = math.inf if self.wall_time_s is None else self.wall_time_s
+        while not self._connection.poll(min(POLL_S, wall_limit)):
+            elapsed = time.perf_counter() - start
+            cpu = process_cpu_time_s(self._pid) if cpu_start is not None else None
+            over_cpu = cpu is not None and cpu - cpu_start > self.cpu_time_s
+            if elapsed > wall_limit or over_cpu:
+                self.timeouts += 1
+                LOG.warning("NMPC solve stopped at its time limit (%.3g s wall, %s s CPU)", elapsed,
+                            "?" if cpu is None else f"{cpu - cpu_start:.3g}")
+                self.close()
+                stopped = self._stopped(arguments, elapsed, WALL_TIME_STATUS)
+                stopped.stopped_by = "cpu" if over_cpu else "wall"
+                return stopped
+        try:
+            outcome = self._connection.recv()
+        except EOFError:  # the worker died (out of memory, a crash in the solver)
+            LOG.warning("NMPC solver worker died; starting a new one")
+            self.close()
+            return self._stopped(arguments, time.perf_counter() - start, "solver_worker_died")
+        outcome.wall_time_s = time.perf_counter() - start
+        return outcome
+
+    @staticmethod
+    def _stopped(arguments, elapsed: float, status: str) -> SolveOutcome:
+        n = len(np.atleast_1d(arguments.get("x0", [])))
+        ng = len(np.atleast_1d(arguments.get("lbg", [])))
+        return SolveOutcome(np.full(n, np.nan), np.full(ng, np.nan), float("nan"), False, -1, status, elapsed,
+                            timed_out=status == WALL_TIME_STATUS)
+
+    def _ensure_worker(self) -> None:
+        if self._pid is not None:
+            return
+        parent_end, child_end = multiprocessing.Pipe()
+        pid = os.fork()
+        if pid == 0:  # child
+            parent_end.close()
+            try:
+                _serve(child_end, dict(self._solvers), self.factories)
+            finally:
+                os._exit(0)
+        child_end.close()
+        self._pid, self._connection = pid, parent_end
+        self._finalizer = weakref.finalize(self, _kill, pid)
+
+    def close(self) -> None:
+        """Stop the worker (a new one starts on the next solve)."""
+        if self._finalizer is not None:
+            self._finalizer()
+            self._finalizer = None
+        if self._connection is not None:
+            self._connection.close()
+        self._pid, self._connection = None, None

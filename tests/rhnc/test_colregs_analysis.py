@@ -1,0 +1,245 @@
+"""Verdicts of the colregs analysis on constructed tracks (no co-simulation): one geometry per rule."""
+
+import math
+
+import numpy as np
+import pytest
+
+from rhnc.colregs_analysis import (FAIL, NOT_APPLICABLE, PASS, JudgementSettings, closest_approach,
+                                   first_manoeuvre, judge_encounters)
+
+NM = 1852.0
+KN = NM / 3600.0
+DT_S = 5.0
+
+
+def own_track(duration_min, turns=(), speed_kn=18.0, rate_deg_s=0.5, slow_down=None):
+    """Own ship from (0, 0) heading north; ``turns`` = [(time_min, new_course_deg), ...].
+
+    The heading moves towards the ordered course at ``rate_deg_s``; ``slow_down`` =
+    (time_min, speed_kn) changes the speed there.
+    """
+    t = np.arange(0.0, duration_min * 60.0 + DT_S / 2, DT_S)
+    heading = np.zeros_like(t)
+    x, y = np.zeros_like(t), np.zeros_like(t)
+    ordered, psi = 0.0, 0.0
+    speed = np.full_like(t, speed_kn * KN)
+    if slow_down is not None:
+        speed[t >= slow_down[0] * 60.0] = slow_down[1] * KN
+    for k in range(1, t.size):
+        for time_min, course in turns:
+            if t[k] >= time_min * 60.0:
+                ordered = course
+        step = np.clip(ordered - psi, -rate_deg_s * DT_S, rate_deg_s * DT_S)
+        psi += step
+        heading[k] = math.radians(psi)
+        x[k] = x[k - 1] + speed[k] * math.cos(heading[k]) * DT_S
+        y[k] = y[k - 1] + speed[k] * math.sin(heading[k]) * DT_S
+    return t, x, y, heading
+
+
+def target_states(t, start_nm, course_deg, speed_kn, radius_nm=1.0):
+    """(n, 1, 5) obstacle rows of a target sailing straight."""
+    velocity = speed_kn * KN * np.array([math.cos(math.radians(course_deg)), math.sin(math.radians(course_deg))])
+    rows = np.empty((t.size, 1, 5))
+    rows[:, 0, :2] = np.asarray(start_nm) * NM + np.outer(t, velocity)
+    rows[:, 0, 2:4] = velocity
+    rows[:, 0, 4] = radius_nm * NM
+    return rows
+
+
+def judge(track, target, **settings):
+    t, x, y, heading = track
+    return judge_encounters(t, x, y, heading, target, 0.0, JudgementSettings(**settings))["targets"][0]
+
+
+# -- head-on (Rule 14) --------------------------------------------------------------------
+def test_head_on_starboard_turn_passes_port_to_port():
+    track = own_track(20, turns=[(1.0, 45.0)])
+    result = judge(track, target_states(track[0], (7.0, 0.1), 180.0, 18.0))
+    assert result["encounter_class"] == "head_on" and result["role"] == "give_way"
+    assert result["manoeuvre_side"] == "starboard" and result["manoeuvre_time_s"] == pytest.approx(70.0, abs=10)
+    assert result["passing_side"] == "port" and result["separation_kept"]
+    assert result["rule_14"] == PASS and result["rule_8"] == PASS and result["rule_16"] == PASS
+    assert result["rule_15"] == NOT_APPLICABLE and result["rule_17"] == NOT_APPLICABLE
+    assert result["verdict"] == PASS and result["side_correct"] is True
+
+
+def test_head_on_port_turn_fails_rule_14():
+    track = own_track(20, turns=[(1.0, -45.0)])
+    result = judge(track, target_states(track[0], (7.0, 0.1), 180.0, 18.0))
+    assert result["manoeuvre_side"] == "port" and result["passing_side"] == "starboard"
+    assert result["separation_kept"]
+    assert result["rule_14"] == FAIL and "altered to port" in result["reasons"]["rule_14"]
+    assert result["rule_8"] == PASS  # large, early and clear: only the side is wrong
+    assert result["verdict"] == FAIL and result["side_correct"] is False
+
+
+def test_late_small_alteration_fails_rule_8_and_16():
+    # 10 deg to starboard one minute before the ships would meet
+    track = own_track(20, turns=[(10.5, 10.0)])
+    result = judge(track, target_states(track[0], (7.0, 0.1), 180.0, 18.0))
+    assert result["manoeuvre_time_s"] is not None and result["max_course_change_deg"] < 30.0
+    assert result["rule_8"] == FAIL and "not readily apparent" in result["reasons"]["rule_8"]
+    assert result["rule_16"] == FAIL and "before the CPA" in result["reasons"]["rule_16"]
+    assert not result["separation_kept"]
+
+
+def test_no_alteration_as_give_way_fails_rule_16():
+    track = own_track(20)
+    result = judge(track, target_states(track[0], (7.0, 0.5), 180.0, 18.0))
+    assert result["encounter_class"] == "head_on"
+    assert result["manoeuvre_time_s"] is None
+    assert result["rule_16"] == FAIL and "no alteration" in result["reasons"]["rule_16"]
+    assert result["rule_8"] == FAIL  # a give-way vessel is judged under Rule 8 even without acting
+
+
+# -- crossing, own ship gives way (Rules 15 and 16) ------------------------------------------
+def test_crossing_give_way_passing_astern_passes_rule_15():
+    # target from starboard, heading west, would meet us 4.5 nm ahead in 15 min
+    track = own_track(30, turns=[(2.0, 70.0)])
+    result = judge(track, target_states(track[0], (4.5, 4.5), 270.0, 18.0))
+    assert result["encounter_class"] == "crossing_give_way"
+    assert result["crossed"] == "astern" and result["separation_kept"]
+    assert result["rule_15"] == PASS and result["rule_16"] == PASS and result["rule_8"] == PASS
+    assert result["verdict"] == PASS and result["side_correct"] is True
+
+
+def test_crossing_give_way_crossing_ahead_fails_rule_15():
+    # a turn to port puts us across the target's bow
+    track = own_track(30, turns=[(2.0, -60.0)])
+    result = judge(track, target_states(track[0], (4.5, 4.5), 270.0, 18.0))
+    assert result["encounter_class"] == "crossing_give_way"
+    assert result["crossed"] == "ahead"
+    assert result["rule_15"] == FAIL and "crossed ahead" in result["reasons"]["rule_15"]
+    assert result["side_correct"] is False
+
+
+# -- overtaking (Rule 13) -----------------------------------------------------------------
+def test_overtaking_with_clearance_passes_rule_13():
+    track = own_track(40, turns=[(1.0, 35.0), (8.0, 0.0)])
+    result = judge(track, target_states(track[0], (2.0, 0.1), 0.0, 8.0))
+    assert result["encounter_class"] == "overtaking"
+    assert result["separation_kept"] and result["rule_13"] == PASS
+    assert result["rule_14"] == NOT_APPLICABLE and result["rule_15"] == NOT_APPLICABLE
+
+
+def test_overtaking_into_the_target_fails_rule_13():
+    track = own_track(40)
+    result = judge(track, target_states(track[0], (2.0, 0.1), 0.0, 8.0))
+    assert result["encounter_class"] == "overtaking"
+    assert result["rule_13"] == FAIL and "CPA" in result["reasons"]["rule_13"]
+
+
+# -- stand-on (Rule 17) -------------------------------------------------------------------
+def _stand_on_target(t):
+    # from port, heading east, 15 min from a collision 4.5 nm ahead
+    return target_states(t, (4.5, -4.5), 90.0, 18.0)
+
+
+def test_stand_on_keeping_course_then_acting_late_to_starboard_passes_rule_17():
+    track = own_track(30, turns=[(9.0, 80.0)])  # TCPA 6 min, predicted CPA ~0
+    result = judge(track, _stand_on_target(track[0]))
+    assert result["encounter_class"] == "crossing_stand_on" and result["role"] == "stand_on"
+    assert result["manoeuvre_side"] == "starboard"
+    assert result["rule_17"] == PASS, result["reasons"]
+    assert result["rule_15"] == NOT_APPLICABLE and result["rule_16"] == NOT_APPLICABLE
+
+
+def test_stand_on_acting_early_fails_rule_17():
+    track = own_track(30, turns=[(1.0, 80.0)])  # TCPA 14 min: too early to give up standing on
+    result = judge(track, _stand_on_target(track[0]))
+    assert result["rule_17"] == FAIL and "could still suffice" in result["reasons"]["rule_17"]
+
+
+def test_stand_on_turning_to_port_fails_rule_17c():
+    track = own_track(30, turns=[(9.0, -80.0)])
+    result = judge(track, _stand_on_target(track[0]))
+    assert result["rule_17"] == FAIL and "Rule 17(c)" in result["reasons"]["rule_17"]
+    assert result["side_correct"] is False
+
+
+def test_stand_on_manoeuvre_made_while_giving_way_to_another_target_is_allowed():
+    # a head-on ship ahead (we give way) and a ship crossing from port (we stand on): the early
+    # starboard turn answers the head-on encounter, so it breaks no stand-on obligation
+    track = own_track(30, turns=[(1.0, 45.0)])
+    t = track[0]
+    obstacles = np.concatenate([target_states(t, (7.0, 0.1), 180.0, 18.0), _stand_on_target(t)], axis=1)
+    head_on, stand_on = judge_encounters(*track, obstacles)["targets"]
+    assert head_on["encounter_class"] == "head_on" and stand_on["encounter_class"] == "crossing_stand_on"
+    assert stand_on["manoeuvre_time_s"] < 600.0
+    assert stand_on["rule_17"] == PASS, stand_on["reasons"]
+    alone = judge(track, _stand_on_target(t))  # the same turn with no one to give way to
+    assert alone["rule_17"] == FAIL
+
+
+def test_overtaken_ship_standing_on_passes_and_rule_8_does_not_apply():
+    track = own_track(40)
+    result = judge(track, target_states(track[0], (-2.0, 1.2), 0.0, 26.0))
+    assert result["encounter_class"] == "overtaken"
+    assert result["manoeuvre_time_s"] is None and result["rule_17"] == PASS
+    assert result["rule_8"] == NOT_APPLICABLE and result["verdict"] == PASS
+
+
+# -- no risk, static, several targets --------------------------------------------------------
+def test_no_risk_of_collision_makes_every_rule_not_applicable():
+    track = own_track(20)
+    result = judge(track, target_states(track[0], (3.0, 6.0), 0.0, 18.0))
+    assert result["encounter_class"] == "none" and result["onset_s"] is None
+    assert all(result[rule] == NOT_APPLICABLE for rule in ("rule_8", "rule_13", "rule_14", "rule_15",
+                                                             "rule_16", "rule_17"))
+    assert result["verdict"] == NOT_APPLICABLE
+
+
+def test_overall_verdict_and_side_over_two_targets():
+    track = own_track(30, turns=[(1.0, 45.0)])
+    t = track[0]
+    obstacles = np.concatenate([target_states(t, (7.0, 0.1), 180.0, 18.0),          # head-on: passed correctly
+                                target_states(t, (5.0, 0.0), 0.0, 0.0, 0.5)], axis=1)  # a static obstacle
+    summary = judge_encounters(*track, obstacles)
+    assert [target["encounter_class"] for target in summary["targets"]] == ["head_on", "static"]
+    assert summary["targets"][1]["verdict"] == NOT_APPLICABLE
+    assert summary["verdict"] == PASS and summary["side_correct"] is True and summary["rules_failed"] == []
+    port = own_track(30, turns=[(1.0, -45.0)])
+    summary = judge_encounters(*port, obstacles)
+    assert summary["verdict"] == FAIL and "rule_14" in summary["rules_failed"]
+
+
+# -- the measurements the verdicts rest on ------------------------------------------------------
+def test_closest_approach_is_refined_between_samples():
+    t = np.array([0.0, 10.0])
+    own = np.array([[0.0, 0.0], [100.0, 0.0]])
+    target = np.array([[100.0, 10.0], [0.0, 10.0]])
+    cpa, time, index = closest_approach(t, own, target)
+    assert cpa == pytest.approx(10.0) and time == pytest.approx(5.0) and index == pytest.approx(0.5)
+
+
+def test_yaw_oscillation_is_not_a_manoeuvre():
+    t = np.arange(0.0, 600.0, 5.0)
+    heading = np.radians(6.0 * np.sin(2 * np.pi * t / 60.0))  # +-6 deg with a 1 min period
+    assert first_manoeuvre(t, heading, 0, 600.0, JudgementSettings()) == (None, None)
+    steady = np.radians(np.where(t >= 100.0, 8.0, 0.0))
+    assert first_manoeuvre(t, steady, 0, 600.0, JudgementSettings()) == (100.0, "starboard")
+
+
+def test_bad_settings_are_refused():
+    with pytest.raises(ValueError, match="early_before_cpa_min"):
+        JudgementSettings(early_before_cpa_min=-1.0)
+
+
+def test_bad_analysis_option_is_refused_before_the_run(tmp_path, capsys):
+    from pathlib import Path
+
+    from orchestrator.cli import main
+
+    repo = Path(__file__).resolve().parents[2]
+    text = (repo / "scenarios" / "exp3b_head_on.toml").read_text()
+    text = text.replace('analyses = ["encounter"]', 'analyses = ["encounter", "colregs"]')
+    text += "\n[outputs.options.colregs]\nearly_before_cpa_min = -2.0\n"
+    scenario = tmp_path / "bad.toml"
+    scenario.write_text(text)
+    results = tmp_path / "results"
+    assert main(["run", str(scenario), "--results", str(results), "--no-progress"]) == 2
+    error = capsys.readouterr().err.strip().splitlines()
+    assert len(error) == 1 and "bad.toml: 'outputs.options.colregs': early_before_cpa_min must be" in error[0]
+    assert not results.exists() or not any(results.rglob("summary.json"))

@@ -1,0 +1,32 @@
+"""The encounter suites end to end: a situation file through a base scenario, judged by the colregs analysis."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from orchestrator.run import run_scenario
+from orchestrator.scenario import read_toml
+from rhnc.traffic_situation import load_traffic_situation, scenario_overrides
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+@pytest.mark.slow
+def test_imazu_head_on_through_the_nmpc_is_judged_from_its_tracks(tmp_path):
+    base = REPO / "scenarios" / "encounter_nmpc.toml"
+    situation = load_traffic_situation(REPO / "scenarios" / "situations" / "imazu" / "imazu_01.json")
+    overrides = scenario_overrides(situation, read_toml(base, "scenario")[0], radius_nm=1.0, route_nm=15.0)
+    overrides["simulation.steps"] = 240  # 20 min: the ships meet after 25 min if nobody acts
+    report = run_scenario(base, tmp_path, progress=False, overrides=overrides)
+    assert report.ok, report.reason
+    summary = json.loads((report.folder / "summary.json").read_text())
+    (target,) = summary["analyses"]["colregs"]["targets"]
+    (obstacle,) = summary["analyses"]["encounter"]["obstacles"]
+    assert target["encounter_class"] == "head_on" and target["onset_s"] == 0.0
+    # the CPA refined along the chords lies between the sampled minimum and the chord bound
+    assert obstacle["min_distance_between_samples_nm"] - 1e-9 <= target["cpa_nm"] <= obstacle["min_distance_nm"] + 1e-9
+    assert target["separation_kept"] == (obstacle["min_distance_nm"] >= 1.0 - 1e-6)
+    assert target["rule_14"] in ("pass", "fail") and target["rule_15"] == "not applicable"
+    assert summary["analyses"]["colregs"]["verdict"] == target["verdict"]
+    assert "track.png" in summary["figures"]

@@ -1,0 +1,200 @@
+"""COLREG-aware NMPC alone on a straight reference: head-on, crossing (give-way, stand-on), overtaking.
+
+Own ship northbound at 18 kn on the reference x = 18 kn * t, y = 0; one target with R_i = 1 nm
+(own R = 0) placed so that both ships would meet at (4.5 nm, 0) after 15 min.  The plant is
+the prediction model itself (numpy RK4 at 0.5 s), so what is tested is the controller's
+choice of manoeuvre, not its robustness.  Each test runs the paper's circle beside the
+COLREG domain where the difference is the point.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from rhnc.colregs import wrap_deg
+from rhnc.nmpc import NMPCController, NMPCSettings
+from rhnc.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainSettings
+from rhnc.nmpc_problem import OBSTACLE_FIELDS
+from rhnc.reference_participant import line_or_turn_reference
+from rhnc.ship_model import load_parameter_set, rk4_step
+
+NM = 1852.0
+KNOT = NM / 3600.0
+N = 15
+SPEED = 18 * KNOT
+MEETING_S = 900.0
+RADIUS = 1.0 * NM
+
+
+@pytest.fixture(scope="module")
+def kcs():
+    return load_parameter_set("default")
+
+
+def target_on_collision_course(course_deg, speed_kn, lateral_nm=0.0):
+    """Start position and velocity of a target meeting the own ship at MEETING_S (+ lateral offset)."""
+    velocity = speed_kn * KNOT * np.array([math.cos(math.radians(course_deg)), math.sin(math.radians(course_deg))])
+    meeting = np.array([SPEED * MEETING_S, lateral_nm * NM])
+    return meeting - velocity * MEETING_S, velocity
+
+
+def encounter(kcs, start, velocity, colregs, dt=20.0, duration_s=1800.0, give_way_at_s=None):
+    """Closed loop; returns own states and target positions every 0.5 s, and the controller."""
+    controller = NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=dt, colregs=colregs))
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    position, velocity = start.copy(), velocity.copy()
+    own, other = [state.copy()], [position.copy()]
+    for k in range(int(duration_s / dt)):
+        t = k * dt
+        if give_way_at_s is not None and t >= give_way_at_s:  # the target turns 60 deg to starboard, once
+            turn = math.radians(60.0)
+            velocity = np.array([[math.cos(turn), -math.sin(turn)], [math.sin(turn), math.cos(turn)]]) @ velocity
+            give_way_at_s = None
+        obstacles = np.array([[*position, *velocity, RADIUS]])
+        reference = line_or_turn_reference(t + dt * np.arange(N + 1), (0.0, 0.0), 0.0, SPEED)
+        solution = controller.solve(t, state, reference, obstacles, et=True)
+        assert not solution.fallback
+        for _ in range(int(dt / 0.5)):
+            state = rk4_step(state, solution.tau, 0.5, 1, kcs)
+            position = position + velocity * 0.5
+            own.append(state.copy())
+            other.append(position.copy())
+    controller.close()
+    return np.array(own), np.array(other), velocity, controller
+
+
+def at_closest_approach(own, other, target_velocity):
+    """Separation [m], relative bearing of the target [deg, + starboard] and aspect of the own ship."""
+    distance = np.hypot(own[:, 0] - other[:, 0], own[:, 1] - other[:, 1])
+    i = int(np.argmin(distance))
+    bearing = wrap_deg(math.degrees(math.atan2(other[i, 1] - own[i, 1], other[i, 0] - own[i, 0]) - own[i, 2]))
+    course = math.atan2(target_velocity[1], target_velocity[0])
+    aspect = wrap_deg(math.degrees(math.atan2(own[i, 1] - other[i, 1], own[i, 0] - other[i, 0]) - course))
+    return float(distance.min()), float(bearing), float(aspect)
+
+
+@pytest.mark.slow
+def test_head_on_slightly_to_starboard_passes_port_to_port(kcs):
+    start, velocity = target_on_collision_course(180.0, 12.0, lateral_nm=0.3)
+    own, other, velocity, _ = encounter(kcs, start, velocity, colregs=True)
+    separation, bearing, _ = at_closest_approach(own, other, velocity)
+    assert separation >= RADIUS
+    assert bearing < -45.0  # the target passes down our port side
+    before_cpa = int(np.argmin(np.hypot(*(own[:, :2] - other).T)))
+    assert np.degrees(own[:before_cpa, 2]).min() > -PORT_ALLOWANCE_DEG - 1.0  # and never turned to port
+    # the paper's circle takes the short way round: starboard to starboard
+    own, other, velocity, _ = encounter(kcs, start, velocity, colregs=False)
+    assert at_closest_approach(own, other, velocity)[1] > 45.0
+
+
+@pytest.mark.slow
+def test_crossing_from_starboard_turns_to_starboard_and_passes_astern(kcs):
+    start, velocity = target_on_collision_course(270.0, 15.0)  # from the east, heading west
+    own, other, velocity, controller = encounter(kcs, start, velocity, colregs=True)
+    separation, _, aspect = at_closest_approach(own, other, velocity)
+    assert separation >= RADIUS
+    assert abs(aspect) > 112.5  # at the CPA we are abaft the target's beam: under its stern
+    heading_deg = np.degrees(own[:, 2])
+    first_alteration = heading_deg[np.argmax(np.abs(heading_deg) > 5.0)]
+    assert first_alteration > 0.0  # the first real alteration is to starboard
+    before_cpa = int(np.argmin(np.hypot(*(own[:, :2] - other).T)))
+    assert heading_deg[:before_cpa].min() > -PORT_ALLOWANCE_DEG - 1.0
+    # the paper's circle turns to port and crosses ahead of it
+    own, other, velocity, _ = encounter(kcs, start, velocity, colregs=False)
+    assert abs(at_closest_approach(own, other, velocity)[2]) < 90.0
+
+
+@pytest.mark.slow
+def test_crossing_from_port_stands_on_while_the_target_gives_way(kcs):
+    # 40 s intervals: a 10 min horizon sees the conflict before the target acts at 4 min
+    start, velocity = target_on_collision_course(90.0, 15.0)  # from the west, heading east
+    own, other, velocity, controller = encounter(kcs, start, velocity, colregs=True, dt=40.0, give_way_at_s=240.0)
+    assert np.abs(np.degrees(own[:, 2])).max() < 0.5  # course kept
+    assert np.abs(own[:, 3] - SPEED).max() < 0.05  # and speed
+    assert controller.domains.stand_on_actions == 0
+    assert at_closest_approach(own, other, velocity)[0] >= RADIUS
+    # the paper's circle manoeuvres for a ship that is giving way anyway
+    own, _, _, _ = encounter(kcs, start, target_on_collision_course(90.0, 15.0)[1], colregs=False, dt=40.0,
+                             give_way_at_s=240.0)
+    assert np.abs(np.degrees(own[:, 2])).max() > 2.0
+
+
+@pytest.mark.slow
+def test_crossing_from_port_acts_when_the_target_does_not_give_way(kcs):
+    start, velocity = target_on_collision_course(90.0, 15.0)
+    own, other, velocity, controller = encounter(kcs, start, velocity, colregs=True)
+    assert controller.domains.stand_on_actions == 1  # Rule 17(b)
+    assert at_closest_approach(own, other, velocity)[0] >= RADIUS
+    heading_deg = np.degrees(own[:, 2])
+    assert heading_deg[np.argmax(np.abs(heading_deg) > 5.0)] > 0.0  # Rule 17(c): not to port
+
+
+@pytest.mark.slow
+def test_overtaking_passes_clear(kcs):
+    velocity = np.array([8.0 * KNOT, 0.0])
+    start = np.array([(SPEED - velocity[0]) * MEETING_S, 0.0])  # 2.5 nm ahead, same course
+    own, other, velocity, _ = encounter(kcs, start, velocity, colregs=True)
+    separation, bearing, _ = at_closest_approach(own, other, velocity)
+    assert separation >= RADIUS
+    assert own[-1, 0] > other[-1, 0] + 2.0 * NM  # got past it
+
+
+def rho_circle_clearance(slots, slot, points_m, length_m):
+    """Scaled clearance of points (m, relative to the solve origin) from one slot's domain at t = 0."""
+    cx, cy, _, _, ox, oy, radius, _, _, _ = slots[:, slot]
+    d = np.hypot(points_m[:, 0] / length_m - (cx + ox), points_m[:, 1] / length_m - (cy + oy))
+    return d / radius - 1.0
+
+
+@pytest.mark.parametrize("course_deg, bearing_deg, expected", [
+    (180.0, 0.0, "head_on"), (270.0, 45.0, "crossing_give_way"), (0.0, 0.0, "overtaking"),
+])
+def test_domains_contain_the_circle_and_grow_ahead_and_to_starboard(course_deg, bearing_deg, expected):
+    length = 230.0
+    domains = CollisionDomains(DomainSettings(colregs=True, clearance_margin_m=100.0), max_obstacles=2)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    target = 3.0 * NM * np.array([math.cos(math.radians(bearing_deg)), math.sin(math.radians(bearing_deg))])
+    velocity = 10 * KNOT * np.array([math.cos(math.radians(course_deg)), math.sin(math.radians(course_deg))])
+    slots, report = domains.parameters(np.array([[*target, *velocity, RADIUS]]), state, np.zeros(2), SPEED, 5.0,
+                                       length, et=True)
+    assert report.class_codes[0] >= 0 and report.active[0] == 1.0
+    from rhnc.colregs import ENCOUNTER_CLASSES
+
+    assert ENCOUNTER_CLASSES[int(report.class_codes[0])] == expected
+    rho = RADIUS + 100.0
+    angles = np.linspace(0.0, 2 * np.pi, 361)
+    circle = target + rho * np.column_stack([np.cos(angles), np.sin(angles)])
+    assert rho_circle_clearance(slots, 0, circle, length).max() <= 1e-9  # the circle R + R_i + margin is inside
+    ahead = velocity / np.hypot(*velocity)
+    starboard = np.array([-ahead[1], ahead[0]])
+    extent = {name: domain_extent(slots, 0, target, direction, length)
+              for name, direction in (("ahead", ahead), ("astern", -ahead), ("starboard", starboard),
+                                      ("port", -starboard))}
+    assert min(extent.values()) >= rho - 1e-6
+    assert extent["ahead"] > extent["astern"] + 0.4 * rho
+    if expected != "overtaking":
+        assert extent["starboard"] > extent["port"] + 0.4 * rho
+
+
+def domain_extent(slots, slot, target_m, direction, length_m):
+    """Distance [m] from the target to the domain's edge along a unit direction (t = 0)."""
+    cx, cy, _, _, ox, oy, radius, _, _, _ = slots[:, slot] * np.r_[length_m, length_m, 1, 1, length_m, length_m,
+                                                                    length_m, 1, 1, 1]
+    offset = np.array([cx + ox, cy + oy]) - target_m
+    along = float(offset @ direction)
+    return along + math.sqrt(along**2 - float(offset @ offset) + radius**2)
+
+
+def test_stand_on_target_has_no_constraint_until_its_action_is_not_enough():
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=1)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    start, velocity = target_on_collision_course(90.0, 15.0)
+    for t, expected_active in ((0.0, 0.0), (240.0, 0.0), (320.0, 1.0)):  # TCPA 900, 660, 580 s
+        own = state.copy()
+        own[0] = SPEED * t
+        slots, report = domains.parameters(np.array([[*(start + velocity * t), *velocity, RADIUS]]), own, own[:2],
+                                           SPEED, 5.0, 230.0, et=True)
+        assert report.active[0] == expected_active, t
+        assert slots[OBSTACLE_FIELDS - 1, 0] == expected_active
+    assert domains.stand_on_actions == 1
