@@ -155,10 +155,12 @@ def run_module(key: str, children: int) -> Verdicts:
         work = Path(tmp)
         archive = subprocess.run(["git", "archive", "HEAD"], cwd=REPO, capture_output=True, check=True).stdout
         subprocess.run(["tar", "-x", "-C", str(work)], input=archive, check=True)
+        # every top-level folder the code may read (packages, models, ships, scenarios, ...)
+        data_folders = sorted(p.name for p in work.iterdir() if p.is_dir() and p.name not in ("tests", ".ci"))
         config = (f"\n[tool.mutmut]\nsource_paths = [{json.dumps(source)}]\n"
                   f"pytest_add_cli_args_test_selection = {json.dumps(tests)}\n"
                   "pytest_add_cli_args = [\"-p\", \"no:cacheprovider\", \"-m\", \"not slow\"]\n"
-                  "also_copy = [\"orchestrator\", \"rhnc\", \"models\", \"scenarios\", \"batches\"]\n")
+                  f"also_copy = {json.dumps(data_folders)}\n")
         with open(work / "pyproject.toml", "a") as handle:
             handle.write(config)
         subprocess.run([sys.executable, "-m", "mutmut", "run", "--max-children", str(children)], cwd=work,
