@@ -153,3 +153,20 @@ def test_a_reported_brake_power_replaces_the_energy_model():
     assert account.cost_usd == pytest.approx(fuel_t * 640 + 500)
     modelled = account_voyage(t, x, y, np.full(3, 9.26), calm, calm, calm, calm)
     assert modelled.co2_t != pytest.approx(account.co2_t)
+
+
+def test_a_power_the_plant_reports_is_costed_with_the_parameters_given():
+    t = np.array([0.0, 3600.0])
+    x = np.array([0.0, 9.0 * 3600.0])
+    zeros = np.zeros(2)
+    params = EnergyParameters(fuel_price_usd_t=1280.0, specific_fuel_consumption_g_kwh=250.0)
+    reported = account_voyage(t, x, zeros, np.full(2, 9.0), zeros, zeros, zeros, zeros, params,
+                              brake_power_w=np.array([0.5, 0.5]))  # half a watt: as good as nothing
+    assert reported.cost_usd == pytest.approx(cost_rate(0.5, params))
+    assert reported.co2_t == pytest.approx(emission_rate(0.5, params) / 1000.0)
+    engine = account_voyage(t, x, zeros, np.full(2, 9.0), zeros, zeros, zeros, zeros, params,
+                            brake_power_w=np.full(2, 8.0e6))
+    assert engine.cost_usd == pytest.approx(cost_rate(8.0e6, params)) != pytest.approx(cost_rate(8.0e6))
+    negative = account_voyage(t, x, zeros, np.full(2, 9.0), zeros, zeros, zeros, zeros, params,
+                              brake_power_w=np.array([-1.0e6, -1.0e6]))  # a plant braking: no fuel credit
+    assert negative.cost_usd == pytest.approx(cost_rate(0.0, params))
