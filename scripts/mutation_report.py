@@ -86,6 +86,11 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      "np.all(None) is False: the hold loop then runs for an all-moving path too, and there it leaves every heading"),
     ("rhnc/energy.py", r"np\.broadcast\(along_wind, wind_speed\)", r"np\.broadcast\(along_wind, (None)?\)",
      "np.broadcast(along_wind, None) has the shape of along_wind, which wind_speed shares"),
+    ("rhnc/energy.py", r"kinematic_viscosity_m2_s, 1e5\)", r"kinematic_viscosity_m2_s, 100001\.0\)",
+     "moves the Reynolds-number floor (1e5, speeds below about 5 mm/s) by one: C_F changes by 1e-6 relative "
+     "where the still-water power is below a microwatt"),
+    ("rhnc/energy.py", r"where=wind_speed > 1e-9", r"where=wind_speed >= 1e-9",
+     "differs only for a wind of exactly 1e-9 m/s"),
 ]
 
 
