@@ -193,10 +193,12 @@ def voyage_analysis(frame, scenario, cosim, out_dir, goal_nm=None, arrival_radiu
     ``arrival_radius_nm`` of the goal (time spent waiting there is not sailing); the
     result says whether and when the ship arrived.  ``made_good_nm`` is the straight-line
     distance from the first to the last position of the voyage, the paper's "linear
-    mileage" in its Table 3, next to the distance sailed along the track.
+    mileage" in its Table 3, next to the distance sailed along the track;
+    ``mean_speed_made_good_kn`` divides it by the time taken, and
+    ``mean_speed_through_water_kn`` is the time-averaged ``hypot(u, v)`` of the plant.
     """
     from rhnc.energy import EnergyParameters
-    from rhnc.voyage import account_voyage
+    from rhnc.voyage import account_voyage, mean_speed_through_water_kn
 
     plant = plant_name(cosim)
     x, y = frame[f"{plant}.x"].to_numpy(), frame[f"{plant}.y"].to_numpy()
@@ -238,6 +240,11 @@ def voyage_analysis(frame, scenario, cosim, out_dir, goal_nm=None, arrival_radiu
                                else "energy model (speed, heading, weather)")
     made_good = float(np.hypot(x[end - 1] - x[0], y[end - 1] - y[0]) / 1852.0)
     result["made_good_nm"] = made_good
+    duration_h = account.time_min / 60.0
+    result["mean_speed_through_water_kn"] = mean_speed_through_water_kn(
+        frame["time_s"].to_numpy()[window], frame[f"{plant}.u"].to_numpy()[window],
+        frame[f"{plant}.v"].to_numpy()[window] if f"{plant}.v" in frame.columns else np.zeros(end))
+    result["mean_speed_made_good_kn"] = made_good / duration_h if duration_h > 0 else None
     result["cost_per_made_good_nm_usd"] = account.cost_usd / made_good if made_good > 0 else None
     result["co2_per_made_good_nm_kg"] = account.co2_t * 1000.0 / made_good if made_good > 0 else None
     result.update(arrival)

@@ -1,4 +1,4 @@
-"""Command line: ``python -m orchestrator {run,validate,build,export,plan,compare,batch} ...``.
+"""Command line: ``python -m orchestrator {run,validate,build,export,plan,compare,batch,identify} ...``.
 
 Known errors (bad scenario, missing FMU, failed model) print one line and exit non-zero:
 2 for bad input, 3 for a run that failed or missed its acceptance criteria, 130 for
@@ -37,7 +37,8 @@ def _parser() -> argparse.ArgumentParser:
     build.add_argument("models", nargs="*", help="model names (default: all)")
     build.add_argument("--fmi-version", choices=("2.0", "3.0", "all"), default="2.0",
                        help="FMI standard of the FMUs (default 2.0; 'all' builds both)")
-    compare = sub.add_parser("compare", help="run several scenarios and tabulate them (e.g. Table 3)")
+    compare = sub.add_parser("compare", help="run several scenarios side by side (Table 3; fair voyage comparisons "
+                             "at equal arrival time with [voyage], docs/compare-format.md)")
     compare.add_argument("comparison", help="comparison TOML file")
     compare.add_argument("--results", default="results", help="results folder (default: ./results)")
     compare.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -59,6 +60,16 @@ def _parser() -> argparse.ArgumentParser:
     batch.add_argument("--results", default="results", help="results folder (default: ./results)")
     batch.add_argument("--retry-failed", action="store_true", help="redo runs recorded as failed")
     batch.add_argument("--no-progress", action="store_true", help="no progress bar")
+    identify = sub.add_parser("identify", help="fit the NMPC's 3-DOF model on a scenario's plant FMU "
+                                               "(manoeuvres through its mapping) into a parameter-set file")
+    identify.add_argument("scenario", help="scenario TOML file whose plant FMU (and mapping) to identify")
+    identify.add_argument("--tau-u-max-N", type=float, default=None, help="largest surge force of the ship [N]")
+    identify.add_argument("--tau-r-max-Nm", type=float, default=None, help="largest yaw moment of the ship [N m]")
+    identify.add_argument("--speed-kn", type=float, default=18.0, help="service speed of the manoeuvres (default 18)")
+    identify.add_argument("--plant", default=None, help="participant name of the plant (default: the one ship FMU)")
+    identify.add_argument("--set", dest="set_name", default=None, help="name of the set (default: the FMU's model name)")
+    identify.add_argument("--out", default=None, help="also write the parameter-set file here")
+    identify.add_argument("--results", default="results", help="results folder (default: ./results)")
     return parser
 
 
@@ -201,6 +212,20 @@ def _compare(args) -> int:
     return 0
 
 
+def _identify(args) -> int:
+    from rhnc.identify_run import run_identify
+
+    report = run_identify(args.scenario, args.results, plant=args.plant, speed_kn=args.speed_kn,
+                          tau_u_max_N=args.tau_u_max_N, tau_r_max_Nm=args.tau_r_max_Nm,
+                          set_name=args.set_name, out=args.out)
+    held = report.report["open_loop_errors"][f"held_out: {report.report['held_out']}"]
+    print(f"finished: results in {report.folder}")
+    print(f"  parameter set '{report.report['set']}' in {report.parameter_file}")
+    print(f"  held-out {report.report['held_out']}: heading RMS {held['heading_rms_deg']:.2f} deg, "
+          f"speed RMS {held['speed_rms_kn']:.3f} kn")
+    return 0
+
+
 def _export(args) -> int:
     from orchestrator.errors import ScenarioError
     from orchestrator.export import export_participant
@@ -219,7 +244,7 @@ def _export(args) -> int:
 
 
 _COMMANDS = {"run": _run, "validate": _validate, "build": _build, "plan": _plan, "batch": _batch,
-             "compare": _compare, "export": _export}
+             "compare": _compare, "export": _export, "identify": _identify}
 
 
 def console_main() -> None:

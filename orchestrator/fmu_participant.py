@@ -1,9 +1,10 @@
 """FMI 2.0 co-simulation FMUs as participants, through FMPy's own classes.
 
 Ports are the FMU's input and output variables, or, where the scenario maps them,
-canonical names (``x``, ``tau_u``, ...) bound to vendor variables with a unit scale
-(``canonical = scale * fmu_value``).  The plant's canonical names have a fixed
-causality, so a mapping that binds ``tau_u`` to an FMU output is refused.
+canonical names (``x``, ``tau_u``, ...) bound to vendor variables and converted to SI
+(:mod:`orchestrator.port_mapping`: scale and offset, declared units, geodetic positions,
+polar vectors).  The plant's canonical names have a fixed causality, so a mapping that
+binds ``tau_u`` to an FMU output is refused.
 """
 
 from __future__ import annotations
@@ -21,16 +22,17 @@ from fmpy.fmi1 import FMICallException
 from orchestrator.errors import FmuError, ModelError, ScenarioError
 from orchestrator.fmi_slave import REAL_TYPES, SUPPORTED_VERSIONS, FmiSlave
 from orchestrator.participant import Participant, Value
-from orchestrator.scenario import ParticipantSpec, VariableMapping
+from orchestrator.plant_ports import PLANT_PORTS
+from orchestrator.port_mapping import bind_ports, initial_start_values
+from orchestrator.scenario import ParticipantSpec
 
 log = logging.getLogger(__name__)
 
-#: Canonical plant ports (spec section 1) and the causality each must have.
-CANONICAL_PLANT_PORTS = {
-    **{name: "output" for name in ("x", "y", "psi", "u", "v", "r", "sog", "cog")},
-    **{name: "input" for name in ("tau_u", "tau_r", "current_north", "current_east",
-                                  "wind_speed", "wind_direction", "hs")},
-}
+#: Keys of a parameter set that describe it rather than set an FMU parameter.
+SET_METADATA_KEYS = ("description", "plant_fmu", "plant_guid")
+
+#: Canonical plant ports and the causality each must have.
+CANONICAL_PLANT_PORTS = {name: port.causality for name, port in PLANT_PORTS.items()}
 
 
 def resolve_fmu(reference: str, scenario_dir: Path, where: str, fmi_version: str = "2.0") -> Path:
@@ -64,7 +66,7 @@ def read_parameter_set(fmu_reference: str, set_name: str, where: str) -> dict:
         raise ScenarioError(
             f"{where}.parameter_set: no set '{set_name}' in {file.name} (valid: {', '.join(sets)})"
         )
-    return {key: value for key, value in sets[set_name].items() if key != "description"}
+    return {key: value for key, value in sets[set_name].items() if key not in SET_METADATA_KEYS}
 
 
 class FmuParticipant(Participant):
@@ -100,14 +102,16 @@ class FmuParticipant(Participant):
         if self.model_description.fmiVersion not in SUPPORTED_VERSIONS or self.model_description.coSimulation is None:
             raise FmuError(f"{where}.fmu: {self.fmu_path} is not an FMI 2.0 or 3.0 co-simulation FMU")
         self.variables = {v.name: v for v in self.model_description.modelVariables}
+        self._input_bindings, self._output_bindings = bind_ports(
+            spec, self.variables, self.model_description, where, self.fmu_path.name)
         self.parameters = self._parameter_values(spec, string_substitutions or {})
-        self._inputs: dict[str, VariableMapping] = {}
-        self._outputs: dict[str, VariableMapping] = {}
-        self._bind_ports(spec.mapping)
-        self._input_refs = {port: self.variables[b.variable].valueReference for port, b in self._inputs.items()}
-        self._output_ports = list(self._outputs)
-        self._output_refs = [self.variables[self._outputs[p].variable].valueReference for p in self._output_ports]
-        self._output_scales = [self._outputs[p].scale for p in self._output_ports]
+        self.parameters.update(initial_start_values(spec, self._output_bindings, self.variables,
+                                                    self.model_description, where))
+        self._input_binding = {port: b for b in self._input_bindings for port in b.ports}
+        self._input_refs = {v: self.variables[v].valueReference for b in self._input_bindings for v in b.variables}
+        self._canonical_inputs: dict[str, float] = {}
+        self._output_variables = [v for b in self._output_bindings for v in b.variables]
+        self._output_refs = [self.variables[v].valueReference for v in self._output_variables]
         self._slave = None
         self._unzip_dir = None
         self._messages: list[str] = []
@@ -115,42 +119,16 @@ class FmuParticipant(Participant):
     # -- ports -------------------------------------------------------------------------
     @property
     def input_names(self):
-        return list(self._inputs)
+        return list(self._input_binding)
 
     @property
     def output_names(self):
-        return list(self._outputs)
+        return [port for b in self._output_bindings for port in b.ports]
 
-    def _bind_ports(self, mapping: Mapping[str, VariableMapping]) -> None:
-        mapped_variables = set()
-        for port, target in mapping.items():
-            variable = self.variables.get(target.variable)
-            if variable is None:
-                raise FmuError(
-                    f"{self.where}.mapping.{port}: FMU {self.fmu_path.name} has no variable '{target.variable}'"
-                )
-            if variable.causality not in ("input", "output"):
-                raise FmuError(
-                    f"{self.where}.mapping.{port}: variable '{target.variable}' has causality "
-                    f"'{variable.causality}'; only inputs and outputs can be mapped"
-                )
-            expected = CANONICAL_PLANT_PORTS.get(port)
-            if expected is not None and variable.causality != expected:
-                raise FmuError(
-                    f"{self.where}.mapping.{port}: '{port}' is a plant {expected} but FMU variable "
-                    f"'{target.variable}' is an {variable.causality}"
-                )
-            if variable.type not in REAL_TYPES:
-                raise FmuError(f"{self.where}.mapping.{port}: variable '{target.variable}' is not Real")
-            (self._inputs if variable.causality == "input" else self._outputs)[port] = target
-            mapped_variables.add(target.variable)
-        for variable in self.model_description.modelVariables:
-            if variable.name in mapped_variables or variable.type not in REAL_TYPES:
-                continue
-            if variable.causality == "input":
-                self._inputs.setdefault(variable.name, VariableMapping(variable.name))
-            elif variable.causality == "output":
-                self._outputs.setdefault(variable.name, VariableMapping(variable.name))
+    @property
+    def identity(self) -> dict[str, str]:
+        """The FMU's model name and GUID (what a prediction model may be declared for)."""
+        return {"model_name": self.model_description.modelName, "guid": self.model_description.guid}
 
     def _parameter_values(self, spec: ParticipantSpec, substitutions: Mapping[str, str]) -> dict:
         values = {}
@@ -246,25 +224,34 @@ class FmuParticipant(Participant):
     def _set_inputs(self, inputs: Mapping[str, Value]) -> None:
         if not inputs:
             return
-        refs, values = [], []
+        touched = []
         for port, value in inputs.items():
             number = float(value)
             if not math.isfinite(number):
                 raise ModelError(f"{self.name}: input '{port}' received a non-finite value ({number})")
-            refs.append(self._input_refs[port])
-            values.append(number / self._inputs[port].scale)
+            self._canonical_inputs[port] = number
+            binding = self._input_binding[port]
+            if binding not in touched:
+                touched.append(binding)
+        refs, values = [], []
+        for binding in touched:
+            for variable, value in binding.to_fmu(self._canonical_inputs).items():
+                refs.append(self._input_refs[variable])
+                values.append(value)
         self._call("SetReal", self._slave.set_reals, refs, values)
 
     def _read_outputs(self, time: float) -> dict[str, Value]:
         if not self._output_refs:
             return {}
         values = self._call("GetReal", self._slave.get_reals, self._output_refs)
-        outputs = {}
-        for port, value, scale in zip(self._output_ports, values, self._output_scales):
+        by_variable = {}
+        for variable, value in zip(self._output_variables, values):
             if not math.isfinite(value):
                 raise ModelError(
-                    f"{self.name} ({self.fmu_path.name}): output '{self._outputs[port].variable}' "
-                    f"is {value} at t = {time:g} s"
+                    f"{self.name} ({self.fmu_path.name}): output '{variable}' is {value} at t = {time:g} s"
                 )
-            outputs[port] = value * scale
+            by_variable[variable] = value
+        outputs = {}
+        for binding in self._output_bindings:
+            outputs.update(binding.to_canonical(by_variable))
         return outputs

@@ -80,6 +80,10 @@ class CoSimulation:
             self.every[spec.name] = spec.every
         self._check_connections()
         self._check_stop_conditions()
+        by_name = {p.name: p for p in self.participants}
+        for participant in self.participants:
+            participant.connected({c.target_port: by_name[c.source] for c in scenario.connections
+                                   if c.target == participant.name})
         # ports are fixed once a participant is built
         self._declared = {p.name: frozenset(p.output_names) for p in self.participants}
 

@@ -41,8 +41,14 @@ def export_osp_system(scenario_path, out_dir) -> Path:
 
     scenario_path = Path(scenario_path)
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
     scenario = load_scenario(scenario_path)
+    for spec in scenario.participants:
+        if spec.is_fmu and (spec.mapping or spec.initial):
+            # OSP connects FMU variables as they are: no unit conversion, projection or renaming
+            raise ScenarioError(f"{scenario_path}: participants.{spec.name}.mapping: an OSP system connects FMU "
+                                "variables directly; an FMU behind a mapping (names, units, geodetic, vectors, "
+                                "initial state) cannot be exported")
+    out_dir.mkdir(parents=True, exist_ok=True)
     if scenario.simulation.stop_when:
         log.warning("%s: libcosim has no stop condition; the OSP system runs to the scenario's stop time",
                     scenario_path)

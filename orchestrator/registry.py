@@ -16,3 +16,10 @@ PARTICIPANT_TYPES = {
     "goal": "rhnc.goal:GoalMonitor",
     "allocation": "rhnc.allocation:AllocationParticipant",
 }
+
+#: Comparison extensions: a table of that name in a comparison file hands the runs to
+#: ``"module:Class"`` (``from_table``, ``run_overrides``, ``evaluate``, ``summarise_sweep``;
+#: see :mod:`orchestrator.compare`), which adds its own runs, tables and figures.
+COMPARISON_EXTENSIONS = {
+    "voyage": "rhnc.voyage_comparison:VoyageComparison",
+}

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rhnc.energy import EnergyParameters, brake_power, cost_rate, emission_rate
-from rhnc.metocean import NM
+from rhnc.metocean import KNOT, NM
 
 CONTAINER_CII_A = 1984.0
 CONTAINER_CII_C = 0.489
@@ -74,6 +74,27 @@ def rates_along_track(speed_through_water, heading, wind_north, wind_east, hs,
     """EC [USD/h] and EM [kg/h] at each sample of a track."""
     power = brake_power(np.maximum(speed_through_water, 0.0), heading, wind_north, wind_east, hs, params)
     return cost_rate(power, params), emission_rate(power, params)
+
+
+def mean_speed_through_water_kn(time_s, surge_mps, sway_mps) -> float:
+    """Time-averaged speed through water [kn] of a sailed track.
+
+    The speed through water is the length of the ship's velocity relative to the water,
+    ``hypot(u, v)`` from the plant's surge and sway; its average over time (trapezoid rule
+    between samples) is the distance sailed through the water divided by the time taken.
+
+    Parameters
+    ----------
+    time_s : array_like
+        Sample times [s], increasing.
+    surge_mps, sway_mps : array_like
+        Surge u and sway v relative to the water [m/s].
+    """
+    t = np.asarray(time_s, dtype=float)
+    speed = np.hypot(np.asarray(surge_mps, dtype=float), np.asarray(sway_mps, dtype=float))
+    if t.size < 2 or t[-1] <= t[0]:
+        return float(speed[0] / KNOT) if speed.size else float("nan")
+    return float(np.trapezoid(speed, t) / (t[-1] - t[0]) / KNOT)
 
 
 def account_voyage(time_s, x, y, speed_through_water, heading, wind_north, wind_east, hs,

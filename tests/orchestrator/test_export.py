@@ -110,3 +110,12 @@ def test_osp_system_in_libcosim_gives_our_trajectory(name, fmus, steps_key, tmp_
     scale = np.maximum(np.abs(ours).max(axis=0), 1e-3)
     assert np.max(np.abs(theirs - ours) / scale) <= 1e-6
     assert np.hypot(*ours[-1, :2]) > 1000.0 and np.ptp(ours[:, 3]) > 0.01  # it sailed and the NMPC acted
+
+
+def test_an_fmu_behind_a_mapping_is_not_exported_as_an_osp_system(tmp_path, capsys):
+    """OSP would connect the canonical names to variables the vendor FMU does not have."""
+    scenario = REPO / "scenarios" / "own_ship" / "exp3b_s175_identified.toml"
+    out = tmp_path / "osp"
+    assert main(["export", str(scenario), "--osp", "--out", str(out)]) == 2
+    assert "participants.ship.mapping: an OSP system connects FMU variables directly" in capsys.readouterr().err
+    assert not out.exists()

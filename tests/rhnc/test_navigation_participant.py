@@ -23,7 +23,9 @@ def context(metocean):
 
 
 def build(metocean, **options):
-    return NavigationParticipant.from_options("nav", {"goal_nm": [100, 100], **options}, context(metocean))
+    """The paper's method unless ``method`` is given."""
+    return NavigationParticipant.from_options("nav", {"goal_nm": [100, 100], "method": "paper", **options},
+                                              context(metocean))
 
 
 def test_unknown_option_names_the_key_and_the_valid_ones(metocean):

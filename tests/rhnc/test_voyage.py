@@ -170,3 +170,16 @@ def test_a_power_the_plant_reports_is_costed_with_the_parameters_given():
     negative = account_voyage(t, x, zeros, np.full(2, 9.0), zeros, zeros, zeros, zeros, params,
                               brake_power_w=np.array([-1.0e6, -1.0e6]))  # a plant braking: no fuel credit
     assert negative.cost_usd == pytest.approx(cost_rate(0.0, params))
+
+
+def test_mean_speed_through_water_weights_by_time_and_counts_sway():
+    # 1 h at 10 kn then 1 h at 20 kn (surge only); sway 3-4-5 on top of it at the end
+    from rhnc.voyage import mean_speed_through_water_kn
+
+    t = np.array([0.0, 3600.0, 3600.0, 7200.0])
+    u = np.array([10.0, 10.0, 20.0, 20.0]) * KNOT
+    assert mean_speed_through_water_kn(t, u, np.zeros(4)) == pytest.approx(15.0)
+    t2 = np.array([0.0, 600.0, 3600.0])   # unequal spacing: a plain mean of samples would give 10/3 kn
+    assert mean_speed_through_water_kn(t2, np.array([0.0, 0.0, 10.0]) * KNOT, np.zeros(3)) == pytest.approx(
+        0.5 * 10.0 * 3000.0 / 3600.0)
+    assert mean_speed_through_water_kn([0.0, 10.0], [3.0, 3.0], [4.0, 4.0]) == pytest.approx(5.0 / KNOT)
