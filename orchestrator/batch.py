@@ -19,6 +19,7 @@ columns in :data:`NONDETERMINISTIC_COLUMNS`.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import json
 import logging
 import math
@@ -33,9 +34,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from orchestrator import acceptance
+from orchestrator import acceptance, interrupts
 from orchestrator.batch_spec import BatchSpec, RunSpec, load_batch
 from orchestrator.errors import ScenarioError, ToolchainError
+from orchestrator.results import stale_staging
 
 log = logging.getLogger(__name__)
 
@@ -115,30 +117,71 @@ def run_batch(path, results_root="results", workers: int | None = None, schedule
     check_against_scenario(spec, runs)
     root = Path(results_root) / spec.name
     (root / "runs").mkdir(parents=True, exist_ok=True)
-    _write_json_atomic(root / "batch.json", _manifest(spec, runs))
-    todo = pending_runs(root, runs, retry_failed)
-    tasks = [RunTask(str(spec.scenario), str(root.resolve()), run.run_id, run.overrides) for run in todo]
-    executor = DaskExecutor(scheduler) if scheduler else LocalPool(workers or os.cpu_count() or 1)
-    bar = _progress_bar(len(runs), len(runs) - len(todo), spec.name, progress)
-    interrupted, ran = False, 0
-    results = executor.run(tasks)
-    try:
-        for task, record in results:
-            ran += 1
-            if record["status"] == "worker_died":
-                write_failure(Path(task.batch_root), task, record["reason"])
+    with results_lock(root):
+        _write_json_atomic(root / "batch.json", _manifest(spec, runs))
+        todo = pending_runs(root, runs, retry_failed)
+        tasks = [RunTask(str(spec.scenario), str(root.resolve()), run.run_id, run.overrides) for run in todo]
+        executor = DaskExecutor(scheduler) if scheduler else LocalPool(workers or os.cpu_count() or 1)
+        bar = _progress_bar(len(runs), len(runs) - len(todo), spec.name, progress)
+        interrupted = False
+        results = executor.run(tasks)
+        try:
+            for task, record in results:
+                if record["status"] == "worker_died":
+                    write_failure(Path(task.batch_root), task, record["reason"])
+                if bar is not None:
+                    bar.update(1)
+        except KeyboardInterrupt:
+            interrupted = True
+            interrupts.acknowledge()  # the pool lets the running runs end and write their folders
+        finally:
+            with interrupts.deferred():
+                results.close()
             if bar is not None:
-                bar.update(1)
-    except KeyboardInterrupt:
-        interrupted = True
-    finally:
-        results.close()
-        if bar is not None:
-            bar.close()
-    table = batch_table(spec, root)
-    write_table(table, root)
-    write_overview(table, spec, root / "overview.png")
+                bar.close()
+        with interrupts.deferred():
+            # runs that published a folder during this batch, including those that ended
+            # (finished or interrupted) while the pool shut down after a Ctrl-C
+            ran = sum(_read_summary(root / "runs" / task.run_id) is not None for task in tasks)
+            table = batch_table(spec, root)
+            write_table(table, root)
+            write_overview(table, spec, root / "overview.png")
     return BatchReport(root, table, ran, len(runs) - len(todo), interrupted, wallclock.perf_counter() - started)
+
+
+LOCK_NAME = ".batch.lock"
+
+
+@contextlib.contextmanager
+def results_lock(root: Path) -> Iterator[None]:
+    """Hold the batch results folder ``root`` for this process (an OS lock, freed if it dies).
+
+    A second batch writing the same folder would clear the first one's staging folders and
+    mix their tables; it stops instead with a message naming the holder's process id.
+    """
+    import fcntl
+
+    lock_path = root / LOCK_NAME
+    handle = open(lock_path, "a+")
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        handle.seek(0)
+        holder = handle.read().strip() or "unknown"
+        handle.close()
+        raise BatchError(f"{root}: another batch is writing this results folder (process {holder}); "
+                         "wait for it to end, or give another --results folder") from None
+    try:
+        handle.seek(0)
+        handle.truncate()
+        handle.write(f"{os.getpid()}\n")
+        handle.flush()
+        yield
+    finally:
+        handle.seek(0)
+        handle.truncate()
+        fcntl.flock(handle, fcntl.LOCK_UN)
+        handle.close()
 
 
 # -- checks and resumption ------------------------------------------------------------------
@@ -178,7 +221,8 @@ def pending_runs(root: Path, runs: list[RunSpec], retry_failed: bool = False) ->
     todo = []
     for run in runs:
         folder = root / "runs" / run.run_id
-        shutil.rmtree(folder.parent / f".{run.run_id}.partial", ignore_errors=True)
+        for staging in stale_staging(folder.parent, run.run_id):
+            shutil.rmtree(staging, ignore_errors=True)
         summary = _read_summary(folder)
         if summary is not None and summary.get("status") != "interrupted" and not (
                 retry_failed and summary.get("status") == "failed"):
@@ -205,7 +249,8 @@ def execute_run(task: RunTask) -> dict[str, str]:
     from orchestrator.run import run_scenario
 
     # a worker that died while running this id left its staging folder behind
-    shutil.rmtree(Path(task.batch_root) / "runs" / f".{task.run_id}.partial", ignore_errors=True)
+    for staging in stale_staging(Path(task.batch_root) / "runs", task.run_id):
+        shutil.rmtree(staging, ignore_errors=True)
     try:
         report = run_scenario(task.scenario, task.batch_root, progress=False, run_id=task.run_id,
                               overrides=task.overrides, group="runs")
@@ -224,7 +269,8 @@ def write_failure(batch_root: Path, task: RunTask, reason: str) -> Path:
     """Publish a run folder holding only a ``summary.json`` with status ``failed`` and ``reason``."""
     from orchestrator.results import RunFolder
 
-    shutil.rmtree(batch_root / "runs" / f".{task.run_id}.partial", ignore_errors=True)
+    for staging in stale_staging(batch_root / "runs", task.run_id):
+        shutil.rmtree(staging, ignore_errors=True)
     folder = RunFolder(batch_root, "runs", task.run_id)
     folder.write_json("summary.json", {"scenario": task.scenario, "overrides": task.overrides,
                                        "run_id": task.run_id, "status": "failed", "reason": reason,
@@ -238,11 +284,9 @@ def _pool_worker_init() -> None:
 
 
 def _pool_execute(task: RunTask) -> dict[str, str]:
-    signal.signal(signal.SIGINT, signal.default_int_handler)
-    try:
+    # a running run stops on Ctrl-C as a single run does (status interrupted, folder kept)
+    with interrupts.handle_signals():
         return execute_run(task)
-    finally:
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 # -- executors ----------------------------------------------------------------------------------
@@ -299,6 +343,12 @@ class LocalPool:
         finally:
             # normal end, Ctrl-C or an error: never start another run; running ones end
             # (as 'interrupted' when they got the Ctrl-C too) and publish their folders
+            if interrupts.stop_requested():
+                interrupts.acknowledge()  # noticed: the running runs now end and write their folders
+            if interrupts.stop_requested() == "SIGTERM":  # sent to this process alone: pass it on
+                for process in list(getattr(pool, "_processes", {}).values()):
+                    with contextlib.suppress(OSError):
+                        os.kill(process.pid, signal.SIGINT)
             pool.shutdown(wait=True, cancel_futures=True)
 
 
@@ -334,6 +384,8 @@ class DaskExecutor:
                     record = {"status": "worker_died", "reason": f"the worker could not run it: {type(exc).__name__}: {exc}"}
                 yield task, record
         finally:
+            if interrupts.stop_requested():
+                interrupts.acknowledge()
             client.cancel(list(futures))
             client.close()
 

@@ -202,7 +202,7 @@ def load_batch(path) -> BatchSpec:
         [("monte_carlo", k) for k in _drawn_keys(monte_carlo)] if monte_carlo else []) + (
         [("situations", k) for k in situations[0].overrides] if situations else [])
     _check_keys(keys, where)
-    acceptance = _acceptance(data.get("acceptance", []), where)
+    acceptance = parse_acceptance(data.get("acceptance", []), where)
     report = _table(data, "report", where, "report", required=False)
     _reject_unknown(report, REPORT_KEYS, where, "report.")
     columns = report.get("columns", [])
@@ -453,7 +453,8 @@ def _obstacles(table: dict, where: str) -> ObstacleSpec:
     return ObstacleSpec(count=(count[0], count[1]), **spans)
 
 
-def _acceptance(entries, where: str) -> tuple[Criterion, ...]:
+def parse_acceptance(entries, where: str) -> tuple[Criterion, ...]:
+    """``[[acceptance]]`` entries of a batch or scenario file, checked; errors name file and key."""
     if not isinstance(entries, list) or not all(isinstance(e, dict) for e in entries):
         raise ScenarioError(f"{where}: 'acceptance' must be an array of tables ([[acceptance]])")
     criteria, names = [], set()

@@ -1,7 +1,8 @@
 """Command line: ``python -m orchestrator {run,validate,build,export,plan,compare,batch,identify} ...``.
 
 Known errors (bad scenario, missing FMU, failed model) print one line and exit non-zero:
-2 for bad input, 3 for a run that failed, 130 for Ctrl-C.
+2 for bad input, 3 for a run that failed or missed its acceptance criteria, 130 for
+Ctrl-C or SIGTERM (see :mod:`orchestrator.interrupts`).
 """
 
 from __future__ import annotations
@@ -16,6 +17,8 @@ log = logging.getLogger("orchestrator")
 
 EXIT_RUN_FAILED = 3
 EXIT_INTERRUPTED = 130
+#: Failed runs a batch lists on the console; the rest are counted and found in summary.csv.
+MAX_FAILURES_SHOWN = 20
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -74,17 +77,30 @@ def main(argv=None) -> int:
     """Entry point; returns the exit code."""
     from orchestrator.errors import ToolchainError
 
+    from orchestrator import interrupts
+
     args = _parser().parse_args(argv)
-    logging.basicConfig(level=logging.DEBUG if args.verbose else logging.WARNING,
-                        format="%(levelname)s %(name)s: %(message)s")
+    _configure_logging(args.verbose)
     try:
-        return _COMMANDS[args.command](args)
+        with interrupts.handle_signals():
+            try:
+                return _COMMANDS[args.command](args)
+            except KeyboardInterrupt:  # stopped before or between runs (set-up, building)
+                print(f"error: {interrupts.reason()}", file=sys.stderr)
+                return EXIT_INTERRUPTED
     except ToolchainError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return exc.exit_code
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+
+
+#: Loggers of this toolchain; ``-v`` shows their debug lines, not those of the libraries.
+OWN_LOGGERS = ("orchestrator", "rhnc")
+
+
+def _configure_logging(verbose: bool) -> None:
+    logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    for name in OWN_LOGGERS:
+        logging.getLogger(name).setLevel(logging.DEBUG if verbose else logging.NOTSET)
 
 
 def _run(args) -> int:
@@ -100,6 +116,10 @@ def _run(args) -> int:
     if not report.ok:
         print(f"error: {report.reason}", file=sys.stderr)
         return EXIT_RUN_FAILED
+    if not report.passed:
+        for line in report.failed_criteria:
+            print(f"error: acceptance criterion not met: {line}", file=sys.stderr)
+        return EXIT_RUN_FAILED
     return 0
 
 
@@ -107,8 +127,15 @@ def _key_lines(summary) -> list[str]:
     lines = [f"steps {summary['simulation']['steps_done']}/{summary['simulation']['steps_planned']}, "
              f"wall time {summary['wall_time_s']:.2f} s"]
     for name, figures in summary.get("analyses", {}).items():
-        shown = ", ".join(f"{k} {v:.4g}" for k, v in figures.items() if isinstance(v, (int, float)))
+        if figures.get("evaluated") is False:
+            lines.append(f"{name}: {figures.get('note', 'not evaluated')}")
+            continue
+        shown = ", ".join(f"{k} {v:.4g}" for k, v in figures.items()
+                          if isinstance(v, (int, float)) and not isinstance(v, bool))
         lines.append(f"{name}: {shown}")
+    criteria = summary.get("acceptance", {}).get("criteria", [])
+    if criteria:
+        lines.append(f"acceptance: {sum(c['passed'] for c in criteria)}/{len(criteria)} criteria met")
     return lines
 
 
@@ -158,8 +185,12 @@ def _batch(args) -> int:
     print(f"{report.passed}/{report.total} runs passed ({counts}); ran {report.ran}, "
           f"skipped {report.skipped} already done; wall time {report.wall_time_s:.1f} s")
     print(f"  table: {report.folder / 'summary.parquet'} (and .csv), overview: {report.folder / 'overview.png'}")
-    for _, row in table[~table["passed"]].head(5).iterrows():
+    failed = table[~table["passed"]]
+    for _, row in failed.head(MAX_FAILURES_SHOWN).iterrows():
         print(f"  {row['run_id']} {row['status']}: {row['reason'] or row['failed_criteria']}")
+    if len(failed) > MAX_FAILURES_SHOWN:
+        print(f"  ... and {len(failed) - MAX_FAILURES_SHOWN} more not passed: every one is in "
+              f"{report.folder / 'summary.csv'} (columns status, reason, failed_criteria)")
     if report.interrupted:
         print("interrupted: rerun the same command to finish the batch", file=sys.stderr)
         return EXIT_INTERRUPTED
@@ -169,7 +200,13 @@ def _batch(args) -> int:
 def _compare(args) -> int:
     from orchestrator.compare import run_comparison
 
+    from orchestrator import interrupts
+
     folder = run_comparison(args.comparison, args.results, progress=not args.no_progress)
+    if interrupts.stop_requested():  # its runs stopped as interrupted: the table is incomplete
+        print(f"interrupted: results in {folder}")
+        print(f"error: {interrupts.reason()}", file=sys.stderr)
+        return EXIT_INTERRUPTED
     print(f"finished: results in {folder}")
     print((folder / "table.md").read_text())
     return 0

@@ -275,7 +275,8 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR
         if result.stderr.strip():
             log.warning("compiler warnings for %s:\n%s", name, result.stderr.strip())
 
-        partial = fmu.parent / f".{name}.fmu.partial"
+        # a staging file per process: two runs building the same FMU at once never mix files
+        partial = fmu.parent / f".{name}.fmu.{os.getpid()}.partial"
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
             z.writestr("modelDescription.xml", description)
             binary_folder = platform if fmi_version == "2.0" else platform_tuple

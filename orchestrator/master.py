@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from orchestrator import interrupts
 from orchestrator.errors import ModelError, ScenarioError, ToolchainError
 from orchestrator.participant import BuildContext, Participant, Value
 from orchestrator.recorder import Recorder
@@ -154,11 +155,14 @@ class CoSimulation:
         """Set up, step and terminate every participant; never raises for a model failure.
 
         A failure inside the run (a model error, an FMU refusing a step, a participant
-        raising) ends the run with status ``failed`` and its reason; what was computed
-        until then stays in the recorder.
+        raising) ends the run with status ``failed`` and a reason naming the participant;
+        Ctrl-C or SIGTERM (see :mod:`orchestrator.interrupts`) end it with status
+        ``interrupted``, checked between participant steps.  What was computed until then
+        stays in the recorder.
         """
         sim = self.scenario.simulation
         recorder = Recorder(sim.start_s, sim.dt_s, sim.steps)
+        self.recorder, self.steps_done = recorder, 0
         bus: dict[tuple[str, str], Value] = {}
         # per participant: (its input port, the bus key that drives it)
         inbound = {p.name: [(c.target_port, (c.source, c.source_port)) for c in self.scenario.connections
@@ -166,57 +170,75 @@ class CoSimulation:
         status, reason, steps_done = "finished", "", 0
         started = wallclock.perf_counter()
         bar = _progress_bar(sim.steps, self.scenario.simulation.name, progress)
+        current = ["setting up", None, sim.start_s]  # phase, participant, time: for messages
+
+        def position() -> str:
+            phase, name, t = current
+            return f"{phase} participant '{name}' at t = {t:g} s" if name else phase
+
         jacobi = sim.exchange == "jacobi"
         # Jacobi: outputs of a step from t reach the bus at t + step_size, as an FMI master
         # that steps all FMUs at once hands them on: (release step, participant, outputs)
         pending: list[tuple[int, str, dict]] = []
         try:
-            for participant in self.participants:
-                seen = {} if jacobi else bus
-                inputs = {port: seen[key] for port, key in inbound[participant.name] if key in seen}
-                outputs = participant.setup(sim.start_s, inputs)
-                self._publish(participant, sim.start_s, outputs, bus, recorder)
-            for k in range(sim.steps):
-                t = sim.start_s + k * sim.dt_s
-                if pending:
-                    for _, name, outputs in [item for item in pending if item[0] <= k]:
-                        bus.update({(name, port): value for port, value in outputs.items()})
-                    pending = [item for item in pending if item[0] > k]
-                for participant in self.participants:
-                    every = self.every[participant.name]
-                    if k % every:
-                        continue
-                    step_size = min(every, sim.steps - k) * sim.dt_s
-                    inputs = {port: bus[key] for port, key in inbound[participant.name] if key in bus}
-                    outputs = participant.step(t, step_size, inputs)
-                    stamp = t + step_size if participant.outputs_at_step_end else t
-                    if jacobi:
-                        self._publish(participant, stamp, outputs, None, recorder)
-                        pending.append((k + every, participant.name, outputs))
-                    else:
-                        self._publish(participant, stamp, outputs, bus, recorder)
-                steps_done = k + 1
-                if bar is not None:
-                    bar.update(1)
-                if on_step is not None:
-                    on_step(k)
-                met = [c for c in sim.stop_when if (c.participant, c.port) in bus
-                       and c.holds(float(bus[(c.participant, c.port)]))]
-                if met:
-                    reason = f"stopped at t = {t + sim.dt_s:g} s: {met[0]}"
-                    break
+            with interrupts.reporting_position(position):
+                for participant in self.participants:  # set up completely: the record starts at t0
+                    current[1] = participant.name
+                    seen = {} if jacobi else bus
+                    inputs = {port: seen[key] for port, key in inbound[participant.name] if key in seen}
+                    outputs = participant.setup(sim.start_s, inputs)
+                    self._publish(participant, sim.start_s, outputs, bus, recorder)
+                current[0] = "stepping"
+                for k in range(sim.steps):
+                    t = sim.start_s + k * sim.dt_s
+                    current[2] = t
+                    if pending:
+                        for _, name, outputs in [item for item in pending if item[0] <= k]:
+                            bus.update({(name, port): value for port, value in outputs.items()})
+                        pending = [item for item in pending if item[0] > k]
+                    for participant in self.participants:
+                        every = self.every[participant.name]
+                        if k % every:
+                            continue
+                        current[1] = participant.name
+                        self._check_stop()
+                        step_size = min(every, sim.steps - k) * sim.dt_s
+                        inputs = {port: bus[key] for port, key in inbound[participant.name] if key in bus}
+                        outputs = participant.step(t, step_size, inputs)
+                        stamp = t + step_size if participant.outputs_at_step_end else t
+                        if jacobi:
+                            self._publish(participant, stamp, outputs, None, recorder)
+                            pending.append((k + every, participant.name, outputs))
+                        else:
+                            self._publish(participant, stamp, outputs, bus, recorder)
+                    steps_done = self.steps_done = k + 1
+                    if bar is not None:
+                        bar.update(1)
+                    if on_step is not None:
+                        on_step(k)
+                    met = [c for c in sim.stop_when if (c.participant, c.port) in bus
+                           and c.holds(float(bus[(c.participant, c.port)]))]
+                    if met:
+                        reason = f"stopped at t = {t + sim.dt_s:g} s: {met[0]}"
+                        break
+                current[1] = None
+                self._check_stop()
         except KeyboardInterrupt:
-            status, reason = "interrupted", "interrupted by the user (Ctrl-C)"
+            status, reason = "interrupted", interrupts.reason()
         except ToolchainError as exc:
-            status, reason = "failed", str(exc)
+            status, reason = "failed", _naming(str(exc), current[1])
         except Exception as exc:  # a participant's own bug must still leave the results
             log.debug("participant raised", exc_info=True)
-            status, reason = "failed", f"{type(exc).__name__}: {exc}"
+            status, reason = "failed", _naming(f"{type(exc).__name__}: {exc}", current[1])
         finally:
+            interrupts.acknowledge()
             if bar is not None:
                 bar.close()
             for participant in self.participants:
                 participant.terminate()
+        if status == "failed" and interrupts.stop_requested():
+            # a library turned the interrupt into an error of its own
+            status, reason = "interrupted", interrupts.reason()
         summaries, tables = {}, {}
         for participant in self.participants:
             try:
@@ -227,6 +249,12 @@ class CoSimulation:
                 summaries[participant.name] = {"error": f"{type(exc).__name__}: {exc}"}
         return RunOutcome(status, reason, steps_done, wallclock.perf_counter() - started, recorder, summaries,
                           tables)
+
+    @staticmethod
+    def _check_stop() -> None:
+        """End the run here when a stop was requested (even if a library swallowed the signal)."""
+        if interrupts.stop_requested():
+            raise KeyboardInterrupt
 
     def _publish(self, participant: Participant, stamp: float, outputs, bus, recorder) -> None:
         declared = self._declared[participant.name]
@@ -247,6 +275,13 @@ class CoSimulation:
             import shutil
 
             shutil.rmtree(self.work_dir, ignore_errors=True)
+
+
+def _naming(message: str, participant: str | None) -> str:
+    """``message`` prefixed with the participant that raised, unless it names it already."""
+    if participant is None or message.startswith((f"{participant}:", f"{participant} (")):
+        return message
+    return f"{participant}: {message}"
 
 
 def _finite(value) -> bool:

@@ -8,7 +8,10 @@
 * figures (``track.png`` and those of the scenario's analyses).
 
 Nothing is half-written: a crash while writing leaves only the staging folder
-``.<run-id>.partial``, never a run folder that looks complete.
+``.<run-id>.<process>-<token>.partial``, never a run folder that looks complete.  Each
+attempt stages in a folder of its own, so two processes writing the same run id never
+write into each other's files; the first to publish keeps the id, a later one gets
+``<run-id>-2`` (``-3``, ...).
 """
 
 from __future__ import annotations
@@ -16,7 +19,9 @@ from __future__ import annotations
 import datetime as dt
 import json
 import logging
+import os
 import platform
+import secrets
 import shutil
 from pathlib import Path
 from typing import Any
@@ -58,7 +63,7 @@ class RunFolder:
 
     def __init__(self, results_root: Path, scenario_name: str, run_id: str) -> None:
         self.final = Path(results_root) / scenario_name / run_id
-        self.staging = self.final.parent / f".{run_id}.partial"
+        self.staging = self.final.parent / f".{run_id}.{os.getpid()}-{secrets.token_hex(4)}.partial"
         self.staging.mkdir(parents=True, exist_ok=False)
 
     def path(self, name: str) -> Path:
@@ -71,12 +76,36 @@ class RunFolder:
         return target
 
     def publish(self) -> Path:
-        """Rename the staging folder to the run folder; returns the final path."""
-        self.staging.rename(self.final)
-        return self.final
+        """Rename the staging folder to the run folder; returns the final path.
+
+        When another process published the same run id first, this one is published as
+        ``<run-id>-2`` (``-3``, ...) and ``final`` is updated.
+        """
+        wanted = self.final
+        for attempt in range(1, 1000):
+            target = wanted if attempt == 1 else wanted.with_name(f"{wanted.name}-{attempt}")
+            if target.exists():
+                continue
+            try:
+                self.staging.rename(target)  # atomic; fails if another process took the name
+            except OSError:
+                if target.exists():
+                    continue
+                raise
+            if attempt > 1:
+                log.warning("run folder %s was published by another process: this run is in %s", wanted, target)
+            self.final = target
+            return target
+        raise OSError(f"no free run folder name next to {wanted}")
 
     def discard(self) -> None:
         shutil.rmtree(self.staging, ignore_errors=True)
+
+
+def stale_staging(parent: Path, run_id: str) -> list[Path]:
+    """Staging folders of ``run_id`` under ``parent`` (left by a crashed or killed attempt)."""
+    parent = Path(parent)
+    return sorted({*parent.glob(f".{run_id}.*.partial"), *parent.glob(f".{run_id}.partial")})
 
 
 def _json_default(value):

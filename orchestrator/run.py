@@ -10,6 +10,7 @@ from typing import Any
 
 import pandas as pd
 
+from orchestrator import acceptance, interrupts
 from orchestrator.errors import ToolchainError
 from orchestrator.master import CoSimulation
 from orchestrator.results import RunFolder, new_run_id, versions
@@ -29,7 +30,19 @@ class RunReport:
 
     @property
     def ok(self) -> bool:
+        """The run finished (its acceptance criteria are another matter: :attr:`passed`)."""
         return self.status == "finished"
+
+    @property
+    def failed_criteria(self) -> list[str]:
+        """``name: reason`` of each of the scenario's acceptance criteria not met."""
+        criteria = self.summary.get("acceptance", {}).get("criteria", [])
+        return [f"{c['name']}: {c['reason']}" for c in criteria if not c["passed"]]
+
+    @property
+    def passed(self) -> bool:
+        """Finished, and every acceptance criterion of the scenario met."""
+        return self.ok and not self.failed_criteria
 
 
 def run_scenario(path, results_root="results", progress: bool = True, run_id: str | None = None,
@@ -43,22 +56,42 @@ def run_scenario(path, results_root="results", progress: bool = True, run_id: st
     reported in the returned status; its results are written all the same.
     """
     scenario = load_scenario(path, overrides)
-    folder = RunFolder(Path(results_root), group or scenario.simulation.name,
-                       run_id or new_run_id(scenario.sha256))
+    # build first: input refused before the run leaves no folder behind
+    cosim = CoSimulation(scenario, work_dir=None)
     try:
-        cosim = CoSimulation(scenario, work_dir=None)
+        folder = RunFolder(Path(results_root), group or scenario.simulation.name,
+                           run_id or new_run_id(scenario.sha256))
     except BaseException:
-        folder.discard()
+        cosim.close()
         raise
     try:
-        outcome = cosim.run(progress=progress)
-        report = _write(scenario, cosim, outcome, folder, overrides)
+        with interrupts.emergency_writer(lambda why: _write_interrupted(scenario, cosim, folder, overrides, why)):
+            outcome = cosim.run(progress=progress)
+            with interrupts.deferred():
+                report = _write(scenario, cosim, outcome, folder, overrides)
     except BaseException:
         folder.discard()
         raise
     finally:
         cosim.close()
     return report
+
+
+def _write_interrupted(scenario: Scenario, cosim: CoSimulation, folder: RunFolder, overrides, why: str) -> None:
+    """What the watchdog keeps of a run whose participant did not return: status and time series."""
+    sim = scenario.simulation
+    recorder = getattr(cosim, "recorder", None)
+    if recorder is not None:
+        recorder.to_frame().to_csv(folder.path("timeseries.csv"), index=False)
+    folder.write_json("summary.json", {
+        "scenario": str(scenario.path), "scenario_name": sim.name, "scenario_sha256": scenario.sha256,
+        "overrides": dict(overrides or {}), "run_id": folder.final.name, "status": "interrupted",
+        "reason": why, "versions": versions(),
+        "simulation": {"start_s": sim.start_s, "stop_s": sim.stop_s, "dt_s": sim.dt_s,
+                       "steps_planned": sim.steps, "steps_done": getattr(cosim, "steps_done", 0)},
+        "timeseries": "timeseries.csv" if recorder is not None else None,
+        "analyses": {}, "participants": {}})
+    print(f"interrupted: results in {folder.publish()}", flush=True)
 
 
 def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, overrides) -> RunReport:
@@ -77,6 +110,9 @@ def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, 
     figures: dict[str, Any] = {}
     status, reason = outcome.status, outcome.reason
     for name in scenario.outputs.analyses:
+        if outcome.steps_done == 0:  # a verdict on an empty time series would claim too much
+            figures[name] = {"evaluated": False, "note": "not evaluated: the run made no steps"}
+            continue
         try:
             figures[name] = analyses.run_analysis(name, frame, scenario, cosim, folder.staging)
         except ToolchainError as exc:
@@ -84,7 +120,7 @@ def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, 
             if status == "finished":
                 status, reason = "failed", f"analysis '{name}': {exc}"
     figure_files, figure_errors = [], {}
-    for name in scenario.outputs.figures:
+    for name in scenario.outputs.figures if outcome.steps_done else ():
         try:
             figure_files += analyses.draw_figure(name, frame, scenario, cosim, folder.staging)
         except Exception as exc:  # a figure that cannot be drawn must not lose the results
@@ -112,6 +148,12 @@ def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, 
         "analyses": figures,
         "participants": outcome.participant_summaries,
     }
+    if scenario.acceptance:
+        verdicts = acceptance.evaluate(scenario.acceptance, summary)
+        summary["acceptance"] = {
+            "passed": all(v.passed for v in verdicts),
+            "criteria": [{"name": v.name, "criterion": c.describe(), "passed": v.passed, "value": v.value,
+                          "reason": v.reason} for v, c in zip(verdicts, scenario.acceptance)]}
     folder.write_json("summary.json", summary)
     final = folder.publish()
     return RunReport(final, status, reason, summary)

@@ -17,7 +17,7 @@ from typing import Any
 from orchestrator.participant import is_finite_number
 from orchestrator.errors import ScenarioError
 
-TOP_LEVEL_KEYS = ("connections", "simulation", "metocean", "participants", "outputs")
+TOP_LEVEL_KEYS = ("connections", "simulation", "metocean", "participants", "outputs", "acceptance")
 SIMULATION_KEYS = ("name", "start_s", "stop_s", "steps", "dt_s", "stop_when", "exchange")
 #: Exchange orders: participants due at a communication point step one after another, each
 #: seeing the outputs of those before it ("gauss-seidel"), or all from the values published
@@ -158,6 +158,8 @@ class Scenario:
     metocean: dict[str, Any] | None
     outputs: OutputSpec
     sha256: str
+    #: ``[[acceptance]]`` criteria checked on the run's summary.json after the run
+    acceptance: tuple = ()
 
     @property
     def directory(self) -> Path:
@@ -195,6 +197,7 @@ def load_scenario(path, overrides: Mapping[str, Any] | None = None) -> Scenario:
             apply_override(data, dotted, value, str(path))
         raw = raw + b"\n# overrides\n" + json.dumps(dict(overrides), sort_keys=True, default=str).encode()
     where = str(path)
+    _refuse_other_file_kinds(data, where)
     _reject_unknown(data, TOP_LEVEL_KEYS, where, "")
     simulation = _simulation(_table(data, "simulation", where, required=True), path)
     participants = _participants(_table(data, "participants", where, required=True), where)
@@ -203,6 +206,9 @@ def load_scenario(path, overrides: Mapping[str, Any] | None = None) -> Scenario:
     if metocean is not None and not isinstance(metocean, dict):
         raise ScenarioError(f"{where}: 'metocean' must be a table")
     outputs = _outputs(_table(data, "outputs", where, required=False), where)
+    from orchestrator.batch_spec import parse_acceptance  # batch files share the format
+
+    acceptance = parse_acceptance(data.get("acceptance", []), where)
     return Scenario(
         path=path.resolve(),
         simulation=simulation,
@@ -211,6 +217,7 @@ def load_scenario(path, overrides: Mapping[str, Any] | None = None) -> Scenario:
         metocean=metocean,
         outputs=outputs,
         sha256=hashlib.sha256(raw).hexdigest(),
+        acceptance=acceptance,
     )
 
 
@@ -259,6 +266,21 @@ def _table(data: dict, key: str, where: str, required: bool) -> dict:
     if not isinstance(value, dict):
         raise ScenarioError(f"{where}: '{key}' must be a table ([{key}])")
     return value
+
+
+#: Top-level keys that mark the other input files, their kind and the subcommand that reads them.
+OTHER_FILE_KINDS = (("batch", "a batch file", "batch"), ("runs", "a comparison file", "compare"),
+                    ("planner", "an offline planning file", "plan"), ("cases", "an offline planning file", "plan"))
+
+
+def _refuse_other_file_kinds(data: dict, where: str) -> None:
+    """A batch, comparison or planning file given where a scenario is read: name the right command."""
+    if "participants" in data or "simulation" in data:
+        return
+    for key, kind, command in OTHER_FILE_KINDS:
+        if key in data:
+            raise ScenarioError(f"{where}: {kind} (it has '{key}'), not a scenario: "
+                                f"use 'python -m orchestrator {command} {where}'")
 
 
 def _reject_unknown(table: dict, allowed, where: str, prefix: str) -> None:

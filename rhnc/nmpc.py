@@ -63,6 +63,7 @@ import math
 
 import numpy as np
 
+from orchestrator.interrupts import stop_requested
 from rhnc.colregs import ENCOUNTER_CLASSES
 from rhnc.disturbance_observer import DisturbanceObserver, trimmed_reference
 from rhnc.nmpc_codegen import NLPLibrary
@@ -478,6 +479,8 @@ class NMPCController:
         elapsed, cpu, iterations, timed_out = 0.0, 0.0, 0, False
         budget = s.wall_time_limit_s
         for relaxed in ((False, True) if problem.sigma_index.size else (False,)):
+            if relaxed and stop_requested():  # Ctrl-C aborted the first attempt: no second one
+                raise KeyboardInterrupt
             ubx[problem.sigma_index] = np.inf if relaxed else 0.0
             if budget is not None:
                 self.solvers.wall_time_s = max(budget - elapsed, 1e-3)

@@ -161,6 +161,20 @@ def test_saturates_inputs_at_the_bounds(fmus, open_slave):
     assert finals[0][3] > 0 and finals[0][5] < 0
 
 
+@pytest.mark.parametrize("value", [float("nan"), float("inf"), -float("inf")])
+def test_refuses_a_non_finite_input_naming_it(fmus, open_slave, value):
+    """The FMU's own check (fmi2SetReal), called directly: no master in front of it."""
+    slave = open_slave(fmus["KCS"])
+    slave.initialize({"u0": 9.0})
+    before = slave.get(*STATES)
+    with pytest.raises(FMICallException):
+        slave.fmu.setReal([slave.vr["tau_u"]], [value])
+    assert f"fmi2SetReal: tau_u (value reference {slave.vr['tau_u']}) = " in slave.errors()
+    assert "is not finite" in slave.errors()
+    slave.fmu.doStep(0.0, 10.0)  # the refused value was not stored: the step stays finite
+    assert np.all(np.isfinite(slave.get(*STATES))) and slave.get(*STATES) != before
+
+
 def test_state_round_trip_reproduces_the_continuation_exactly(fmus, open_slave):
     p = parameters()
     slave = open_slave(fmus["KCS"])

@@ -64,7 +64,31 @@ class Echo(Participant):
 
 
 class Crash(Participant):
-    """Raises a plain exception at a given time (a participant's own bug)."""
+    """Raises a plain exception at a given time, or in its set-up (a participant's own bug)."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        participant = cls(name)
+        participant.at = options.get("at_s", 0.0)
+        participant.in_setup = options.get("in_setup", False)
+        return participant
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["ok"])
+
+    def setup(self, start_time, inputs):
+        if self.in_setup:
+            raise np.linalg.LinAlgError("Failed to find a finite solution.")
+        return {"ok": 1.0}
+
+    def step(self, time, step_size, inputs):
+        if time >= self.at:
+            raise RuntimeError("boom")
+        return {"ok": 1.0}
+
+
+class Stubborn(Participant):
+    """From ``at_s`` on, a step that never returns and swallows KeyboardInterrupt (a hung library call)."""
 
     @classmethod
     def from_options(cls, name, options, context):
@@ -79,6 +103,98 @@ class Crash(Participant):
         return {"ok": 1.0}
 
     def step(self, time, step_size, inputs):
-        if time >= self.at:
-            raise RuntimeError("boom")
+        import time as wallclock
+
+        said = False
+        while time >= self.at:
+            try:
+                if not said:
+                    said = True
+                    print("stubborn: blocking", flush=True)
+                wallclock.sleep(3600.0)
+            except KeyboardInterrupt:
+                pass
+        return {"ok": 1.0}
+
+
+class Beacon(Participant):
+    """Prints ``beacon: t = <time> s`` on stdout at every step from ``from_s`` on (for tests that watch a run)."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        participant = cls(name)
+        participant.start = options.get("from_s", 0.0)
+        return participant
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["alive"])
+
+    def setup(self, start_time, inputs):
+        return {"alive": 1.0}
+
+    def step(self, time, step_size, inputs):
+        if time >= self.start:
+            print(f"beacon: t = {time:g} s", flush=True)
+        return {"alive": 1.0}
+
+
+class Swallower(Participant):
+    """At ``at_s`` signals its own process (SIGINT) and swallows the KeyboardInterrupt, as a
+    library that turns Ctrl-C into a failed call of its own does; then returns normally."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        participant = cls(name)
+        participant.at = options.get("at_s", 0.0)
+        return participant
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["ok"])
+
+    def setup(self, start_time, inputs):
+        return {"ok": 1.0}
+
+    def step(self, time, step_size, inputs):
+        import os
+        import signal
+        import time as wallclock
+
+        if time == self.at:
+            try:
+                os.kill(os.getpid(), signal.SIGINT)
+                wallclock.sleep(5.0)  # the handler runs here and raises
+            except KeyboardInterrupt:
+                pass  # swallowed: the caller never sees it
+        return {"ok": 1.0}
+
+
+class Hog(Participant):
+    """From ``at_s`` on, a native call that holds the interpreter lock and is restarted after
+    every signal (like a library build that never checks for signals)."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        participant = cls(name)
+        participant.at = options.get("at_s", 0.0)
+        return participant
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["ok"])
+
+    def setup(self, start_time, inputs):
+        return {"ok": 1.0}
+
+    def step(self, time, step_size, inputs):
+        import ctypes
+
+        libc = ctypes.PyDLL(None)  # PyDLL: the call keeps the interpreter lock
+        said = False
+        while time >= self.at:
+            try:
+                if not said:
+                    said = True
+                    print("hog: blocking", flush=True)
+                libc.sleep(1000)
+            except KeyboardInterrupt:
+                pass
         return {"ok": 1.0}

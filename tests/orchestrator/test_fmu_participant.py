@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from orchestrator.errors import FmuError, ScenarioError
+from orchestrator.errors import FmuError, ModelError, ScenarioError
 from orchestrator.master import CoSimulation
 from orchestrator.run import run_scenario
 from orchestrator.scenario import load_scenario
@@ -126,8 +126,22 @@ def test_a_diverging_model_fails_the_run_with_its_name(write_scenario, tmp_path)
     assert (report.folder / "summary.json").is_file()
 
 
-def test_non_finite_input_is_refused_before_reaching_the_fmu(write_scenario, tmp_path):
-    text = STRAIGHT.replace("tau_u_N = 7.7e5", "tau_u_N = 7.7e5").replace(
+def test_non_finite_input_is_refused_before_reaching_the_fmu(write_scenario):
+    """The FMU participant's own check, reached directly (the master's output check is upstream)."""
+    cosim = build(write_scenario, STRAIGHT)
+    ship = cosim.participant("ship")
+    try:
+        ship.setup(0.0, {"tau_u": 7.7e5, "tau_r": 0.0})
+        ship.step(0.0, 10.0, {"tau_u": 7.7e5, "tau_r": 0.0})
+        with pytest.raises(ModelError, match=r"^ship: input 'tau_u' received a non-finite value \(nan\)$"):
+            ship.step(10.0, 10.0, {"tau_u": float("nan"), "tau_r": 0.0})
+    finally:
+        ship.terminate()
+        cosim.close()
+
+
+def test_a_non_finite_output_upstream_fails_the_run_before_the_fmu(write_scenario, tmp_path):
+    text = STRAIGHT.replace(
         'type = "scripted_tau"', 'type = "python"\nclass = "sample_participants:Clock"').replace(
         "[participants.helm.options]\ntau_u_N = 7.7e5\ntau_r_steps = [[100.0, 1.0e8]]",
         "[participants.helm.options]\nnan_at_s = 50.0").replace(

@@ -119,7 +119,7 @@ def test_a_participant_exception_is_a_failed_run(write_scenario, tmp_path):
     text = scenario_text() + '\n[participants.crash]\ntype = "python"\nclass = "sample_participants:Crash"\n' \
         "[participants.crash.options]\nat_s = 2.0\n"
     report = run_scenario(write_scenario(text), tmp_path, progress=False)
-    assert (report.status, report.reason) == ("failed", "RuntimeError: boom")
+    assert (report.status, report.reason) == ("failed", "crash: RuntimeError: boom")  # names who raised
     assert report.summary["participants"]["clock"] == {"steps": 3}
 
 

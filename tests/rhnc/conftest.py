@@ -1,5 +1,6 @@
 import textwrap
 
+import numpy as np
 import pytest
 
 # A reference_path participant "ref" tracked by the NMPC "ctrl" on the KCS FMU "ship", every
@@ -40,3 +41,53 @@ def tracking_scenario(tmp_path):
         return path
 
     return write
+
+
+
+class RawInputs:
+    """The input plans successful NLP solves returned, in units of tau_max, before any clip.
+
+    The applied input is clipped to tau_max after the solve, so a bound check on the applied
+    input holds whatever bounds the optimiser was given; these plans show whether the
+    optimiser's own solution kept |w| <= 1.
+    """
+
+    def __init__(self):
+        self.plans: list[np.ndarray] = []
+
+    def attach(self, controller):
+        """Record the solves (both attempts) of an already built controller."""
+        solvers = controller.solvers
+        solve = getattr(solvers, "_unrecorded_solve", solvers.solve)  # a module-scoped controller seen before
+        plans = self.plans
+
+        def recording(name, **arguments):
+            outcome = solve(name, **arguments)
+            if outcome.success and outcome.x is not None:
+                plans.append(np.asarray(outcome.x).ravel()[controller.problem.w_index].copy())
+            return outcome
+
+        solvers._unrecorded_solve = solve
+        solvers.solve = recording
+        return controller
+
+    def largest(self) -> float:
+        """Largest |w| over the recorded plans (1 = the bound tau_max)."""
+        assert self.plans, "no successful NMPC solve was recorded"
+        return float(max(np.max(np.abs(w)) for w in self.plans))
+
+
+@pytest.fixture
+def raw_nmpc_inputs(monkeypatch):
+    """RawInputs of every NMPCController built (or attached) during the test."""
+    from rhnc.nmpc import NMPCController
+
+    raw = RawInputs()
+    original_init = NMPCController.__init__
+
+    def init(self, *args, **kwargs):
+        original_init(self, *args, **kwargs)
+        raw.attach(self)
+
+    monkeypatch.setattr(NMPCController, "__init__", init)
+    return raw

@@ -120,6 +120,62 @@ def test_overrides_reject_unknown_keys():
         EnergyParameters().with_overrides({"cargo_t": "lots"}, "s.toml: energy")
 
 
+def test_speed_through_water_takes_both_current_components_along_the_heading():
+    assert speed_through_water(5.0, math.pi / 2, 0.0, 1.0) == pytest.approx(4.0)  # eastbound, east set
+    assert speed_through_water(5.0, math.pi / 3, 1.0, 0.0) == pytest.approx(4.5)  # cos 60 deg of a north set
+
+
+def test_power_depends_on_the_wind_relative_to_the_heading_only():
+    turned = math.pi / 3
+    ahead = brake_power(V18, 0.0, 10.0, 0.0, 2.0)
+    rotated = brake_power(V18, turned, 10.0 * math.cos(turned), 10.0 * math.sin(turned), 2.0)
+    assert rotated == pytest.approx(ahead, rel=1e-12)
+
+
+def test_waves_without_wind_meet_the_ship_abeam_and_scale_with_speed():
+    slow = power_components(0.2, 0.0, 0.0, 0.0, 2.0)
+    slower = power_components(0.1, 0.0, 0.0, 0.0, 2.0)
+    assert np.all(np.isfinite([slow["added_wave"], slow["brake_power"]]))
+    assert slow["wave_encounter_speed"] == 0.0
+    assert slow["added_wave"] == pytest.approx(2.0 * slower["added_wave"])  # max(v + u_wave, 0) = v
+
+
+def test_a_ship_at_rest_in_calm_air_needs_only_its_auxiliary_power():
+    assert brake_power(0.0, 0.0, 0.0, 0.0, 0.0) == 0.0
+    assert brake_power(0.0, 0.0, 0.0, 0.0, 0.0, EnergyParameters(auxiliary_power_w=5.0e5)) == 5.0e5
+
+
+def test_small_waves_below_one_metre():
+    assert wave_speed(0.25) == pytest.approx(9.81 * 5 * 0.5 / (2 * math.pi))
+    assert wave_speed(-1.0) == 0.0
+
+
+def test_the_parameters_given_are_the_ones_used():
+    other = EnergyParameters(kinematic_viscosity_m2_s=2.0e-6, peak_period_coefficient=7.0,
+                             specific_fuel_consumption_g_kwh=250.0)
+    assert wave_speed(3.0, other) == pytest.approx(9.81 * 7 * math.sqrt(3) / (2 * math.pi))
+    assert frictional_coefficient(V18, other) != frictional_coefficient(V18)
+    args = (V18, 0.0, -8.0, 0.0, 3.0)  # head wind and sea
+    assert brake_power(*args, other) == power_components(*args, other)["brake_power"] != brake_power(*args)
+    from rhnc.energy import fuel_rate_t_h
+
+    power = 8.0e6
+    assert fuel_rate_t_h(power, other) == pytest.approx(8.0e3 * 250.0 * 1e-6)
+    assert cost_rate(power, other) == pytest.approx(2.0 * 640.0 + 12000.0 / 24.0)
+    assert emission_rate(power, other) == pytest.approx(2.0 * 3.114 * 1000.0)
+
+
+def test_an_unknown_parameter_lists_the_valid_names():
+    with pytest.raises(ScenarioError, match=r"\(valid: air_density_kg_m3, air_drag_coefficient, "):
+        EnergyParameters().with_overrides({"C_w": 0.1}, "s.toml: energy")
+
+
+@pytest.mark.parametrize("change", [{"kinematic_viscosity_m2_s": 2.0e-6}, {"peak_period_coefficient": 7.0}])
+def test_each_resistance_parameter_reaches_the_brake_power(change):
+    args = (V18, 0.0, -8.0, 0.0, 3.0)  # head wind and sea
+    assert brake_power(*args, EnergyParameters(**change)) != pytest.approx(brake_power(*args), rel=1e-9)
+
+
 def test_ship_constants_come_from_the_ship_particulars():
     from rhnc.ships import load_ship
 

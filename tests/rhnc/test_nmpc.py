@@ -45,7 +45,8 @@ def closed_loop(controller, kcs, reference_at, state, steps, obstacles=None, pla
     return np.array(trajectory), np.array(inputs), solutions
 
 
-def test_tracks_a_straight_line_from_a_lateral_offset(controller, kcs):
+def test_tracks_a_straight_line_from_a_lateral_offset(controller, kcs, raw_nmpc_inputs):
+    raw_nmpc_inputs.attach(controller)
     course = math.radians(45.0)
     speed = 18 * KNOT
 
@@ -59,12 +60,13 @@ def test_tracks_a_straight_line_from_a_lateral_offset(controller, kcs):
     after_transient = cross_track[int(500.0 / 0.5) :]  # after 500 s (25 control intervals)
     assert np.max(np.abs(after_transient)) < 0.05 * NM
     assert abs(cross_track[-1]) < 15.0
-    assert np.all(np.abs(inputs) <= kcs.tau_max * (1 + 1e-9))
+    assert raw_nmpc_inputs.largest() <= 1.0 + 1e-6  # the optimiser's own plans, before the clip
     assert trajectory[-1, 3] == pytest.approx(speed, rel=0.02)
     assert all(s.success and not s.fallback for s in solutions)
 
 
-def test_tracks_a_constant_radius_turn(controller, kcs):
+def test_tracks_a_constant_radius_turn(controller, kcs, raw_nmpc_inputs):
+    raw_nmpc_inputs.attach(controller)
     radius = 2.0 * NM  # starboard turn at 18 kn, well inside the ship's turning ability
     speed = 18 * KNOT
 
@@ -78,10 +80,10 @@ def test_tracks_a_constant_radius_turn(controller, kcs):
     radial_error = np.hypot(trajectory[:, 0] - centre[0], trajectory[:, 1] - centre[1]) - radius
     assert np.max(np.abs(radial_error[len(radial_error) // 3 :])) < 0.05 * NM
     assert trajectory[-1, 2] > 2.0  # really turned (> 115 deg)
-    assert np.all(np.abs(inputs) <= kcs.tau_max * (1 + 1e-9))
+    assert raw_nmpc_inputs.largest() <= 1.0 + 1e-6  # the optimiser's own plans, before the clip
 
 
-def test_passes_a_static_obstacle_on_the_track_outside_its_radius(kcs):
+def test_passes_a_static_obstacle_on_the_track_outside_its_radius(kcs, raw_nmpc_inputs):
     own_radius = 0.2 * NM
     controller = NMPCController(kcs, NMPCSettings(own_radius_m=own_radius))
     course, speed = math.radians(45.0), 18 * KNOT
@@ -98,7 +100,7 @@ def test_passes_a_static_obstacle_on_the_track_outside_its_radius(kcs):
     assert distance.min() < own_radius + 0.5 * NM + 0.1 * NM  # and it did pass close, not stop
     along = trajectory[-1, 0] * math.cos(course) + trajectory[-1, 1] * math.sin(course)
     assert along > 3.0 * NM  # got past the obstacle
-    assert np.all(np.abs(inputs) <= kcs.tau_max * (1 + 1e-9))
+    assert raw_nmpc_inputs.largest() <= 1.0 + 1e-6  # the optimiser's own plans, before the clip
     assert all(s.success for s in solutions)
 
 
@@ -149,24 +151,64 @@ def test_soft_constraints_give_the_least_violating_plan_instead_of_failing(contr
 
 
 def test_heading_error_is_wrapped(controller, kcs):
-    """A reference heading 2 pi away is the same heading: same input, no turn-around."""
-    course, speed = 0.5, 18 * KNOT
+    """A reference whose heading is wrapped into (-pi, pi] mid-horizon is the same reference.
+
+    A course just short of pi, turning to starboard through it: written with wrapped
+    headings, the reference jumps from about +pi to about -pi part-way along the horizon.
+    The second solve starts from the first one's optimum (same time, same previous input):
+    with the heading error wrapped in the stage and terminal costs, that plan is still
+    optimal and comes back unchanged; with a plain squared error each stage past the jump
+    would cost (2 pi)^2 and the solver would move away from it.
+    """
+    course, speed = math.pi - 0.02, 18 * KNOT
     state = np.array([0.0, 0.0, course, speed, 0.0, 0.0])
-    reference = line_or_turn_reference(DT * np.arange(N + 1), (0.0, 0.0), course, speed)
+    reference = line_or_turn_reference(DT * np.arange(N + 1), (0.0, 0.0), course, speed, 3.0 * NM)
+    assert reference[-1, 2] > math.pi  # the starboard turn (radius 3 nm) crosses pi
+    jumped = reference.copy()
+    jumped[:, 2] = np.pi - np.mod(np.pi - jumped[:, 2], 2.0 * np.pi)  # wrapped to (-pi, pi]
+    assert jumped[0, 2] > 3.0 and jumped[-1, 2] < -2.0  # the wrapped reference jumps by 2 pi
+    held = kcs.equilibrium_tau(speed)
     controller.reset()
-    plain = controller.solve(0.0, state, reference)
-    shifted = reference.copy()
-    shifted[:, 2] += 2 * math.pi
-    controller.reset()
-    wrapped = controller.solve(0.0, state, shifted)
-    np.testing.assert_allclose(wrapped.tau, plain.tau, rtol=1e-4, atol=1e-3 * kcs.tau_r_max)
+    plain = controller.solve(0.0, state, reference, previous_tau=held)
+    wrapped = controller.solve(0.0, state, jumped, previous_tau=held)  # warm start: plain's plan
+    assert plain.success and wrapped.success
+    assert wrapped.cost == pytest.approx(plain.cost, rel=1e-4)
+    np.testing.assert_allclose(wrapped.inputs / kcs.tau_max, plain.inputs / kcs.tau_max, atol=1e-3)
+
+
+def _linearised_scaled_step(controller, speed_mps, delta=1e-6):
+    """A, B of the controller's scaled one-interval map about straight motion, by central differences."""
+    z0 = np.array([0.0, 0.0, 0.0, speed_mps / controller.speed_scale, 0.0, 0.0])
+    w0 = controller.params.equilibrium_tau(speed_mps) / controller.input_scale
+
+    from rhnc.nmpc_problem import DISTURBANCE_SIZE
+
+    calm = np.zeros(DISTURBANCE_SIZE)  # no disturbance estimate
+
+    def step(z, w):
+        return np.array(controller._F_scaled(z, w, calm)[0]).ravel()
+
+    A = np.column_stack([(step(z0 + delta * e, w0) - step(z0 - delta * e, w0)) / (2 * delta) for e in np.eye(6)])
+    B = np.column_stack([(step(z0, w0 + delta * e) - step(z0, w0 - delta * e)) / (2 * delta) for e in np.eye(2)])
+    return A, B
 
 
 def test_terminal_weight_is_the_dare_solution(controller):
-    P = controller.terminal_weight(18 * KNOT)
+    """P solves the discrete Riccati equation of the scaled model linearised at the speed."""
+    speed = 9.25  # m/s, on a 0.25 m/s bin of the cache (about 18 kn)
+    P = controller.terminal_weight(speed)
+    A, B = _linearised_scaled_step(controller, speed)
+    Q, R = np.diag(controller.settings.q), np.diag(controller.settings.r)
+    gain_term = A.T @ P @ B @ np.linalg.solve(R + B.T @ P @ B, B.T @ P @ A)
+    residual = A.T @ P @ A - gain_term + Q - P
+    assert np.max(np.abs(residual)) < 1e-5 * np.max(np.abs(P))
     assert np.allclose(P, P.T)
     assert np.all(np.linalg.eigvalsh(P) > 0)
-    assert P[0, 0] > controller.settings.q[0]  # cost-to-go exceeds one stage's weight
+    # the weight follows the speed it is linearised at (a cached P of another speed is wrong)
+    slow = controller.terminal_weight(4.0)
+    A8, B8 = _linearised_scaled_step(controller, 4.0)
+    residual8 = A8.T @ slow @ A8 - A8.T @ slow @ B8 @ np.linalg.solve(R + B8.T @ slow @ B8, B8.T @ slow @ A8) + Q - slow
+    assert np.max(np.abs(residual8)) < 1e-5 * np.max(np.abs(slow))
 
 
 def test_interpolated_reference_holds_last_velocity():

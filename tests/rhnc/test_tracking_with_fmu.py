@@ -15,7 +15,7 @@ NM = 1852.0
     ("straight", "", 400.0),
     ("turn_2nm_starboard", "turn_radius_nm = 2.0", 200.0),
 ])
-def test_nmpc_tracks_reference_with_the_plant_fmu(tmp_path, tracking_scenario, case, turn, offset_m):
+def test_nmpc_tracks_reference_with_the_plant_fmu(tmp_path, tracking_scenario, case, turn, offset_m, raw_nmpc_inputs):
     reference = f"start_nm = [0.0, 0.0]\ncourse_deg = 30.0\nspeed_kn = 16.0\n{turn}"
     initial = f"y0 = {offset_m}\nu0 = 8.0\npsi0 = 0.5236"  # starts off the reference
     report = run_scenario(tracking_scenario(case, 90, reference, initial), tmp_path / "results", progress=False)
@@ -31,3 +31,4 @@ def test_nmpc_tracks_reference_with_the_plant_fmu(tmp_path, tracking_scenario, c
     assert report.summary["participants"]["ctrl"]["fallback_count"] == 0
     for port, bound in (("tau_u", 1.8e6), ("tau_r", 3.3e8)):
         assert np.max(np.abs(frame[f"ctrl.{port}"])) <= bound
+    assert raw_nmpc_inputs.largest() <= 1.0 + 1e-6  # the optimiser's own plans, before the clip

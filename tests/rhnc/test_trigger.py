@@ -56,6 +56,75 @@ def test_no_obstacles_means_normal_state():
     assert trigger.transitions == []
 
 
+@pytest.mark.parametrize("ship_m, static_m", [(0.0, 1.0), (1.0, 0.0), (-1.0, 1.0), (1.0, -1.0)])
+def test_warning_ranges_must_be_positive(ship_m, static_m):
+    with pytest.raises(ValueError, match="^warning ranges must be positive$"):
+        EventTrigger(ship_m, static_m)
+
+
+def test_small_positive_ranges_are_accepted_and_kept_apart():
+    trigger = EventTrigger(0.5, 0.25, moving_speed=2.0)
+    assert (trigger.ship_range_m, trigger.static_range_m, trigger.moving_speed) == (0.5, 0.25, 2.0)
+    assert trigger.states == [] and trigger.transitions == [] and trigger.et == 0.0
+
+
+def test_moving_speed_decides_which_range_applies():
+    """At 5 nm, between eps1 = 4.5 nm and eps2 = 6 nm: only an obstacle counted static triggers
+    (default threshold 0.1 m/s)."""
+    at_5nm = lambda speed: np.array([[5 * NM, 0.0, 0.0, speed, 100.0]])  # noqa: E731
+    for speed, moving_speed, expected in ((0.05, None, 1.0), (0.5, None, 0.0), (0.5, 1.0, 1.0), (0.15, 0.2, 1.0)):
+        trigger = EventTrigger(4.5 * NM, 6.0 * NM, **({} if moving_speed is None else {"moving_speed": moving_speed}))
+        assert trigger.update(0.0, (0.0, 0.0), (1.0, 0.0), (20 * NM, 0.0), at_5nm(speed)) == expected
+        if expected:
+            assert trigger.transitions[0].kind == "static"
+            assert trigger.transitions[0].cause == "within warning range"
+
+
+def states_after(updates, ranges=(4.5 * NM, 6.0 * NM)):
+    """Run ``updates`` = [(position, velocity, goal, obstacle row)] from t = 0; the states after each."""
+    trigger = EventTrigger(*ranges)
+    seen = []
+    for k, (position, velocity, goal, row) in enumerate(updates):
+        trigger.update(float(k), position, velocity, goal, np.array([row]))
+        seen.append(trigger.states[0])
+    return seen
+
+
+STATIC_AT_ORIGIN = [0.0, 0.0, 0.0, 0.0, 100.0]
+
+
+def test_behind_is_measured_from_the_ship_towards_the_goal():
+    """With the ship west of a goal at the origin, an obstacle further west is behind it."""
+    goal, east = (0.0, 0.0), (5.0, 0.0)
+    row = [-11 * NM, 0.5 * NM, 0.0, 0.0, 100.0]
+    assert states_after([((-10 * NM, 0.0), east, goal, row)] * 2) == ["triggered", "passed"]
+
+
+def test_an_obstacle_exactly_at_the_warning_range_triggers():
+    assert states_after([((0.0, 0.0), (5.0, 0.0), (20 * NM, 0.0), [6 * NM, 0.0, 0.0, 0.0, 100.0])]) == ["triggered"]
+    assert states_after([((0.0, 0.0), (5.0, 0.0), (20 * NM, 0.0), [6.01 * NM, 0.0, 0.0, 0.0, 100.0])]) == ["clear"]
+
+
+def test_an_obstacle_moving_exactly_at_the_threshold_counts_static():
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM, moving_speed=0.5)
+    assert trigger.update(0.0, (0, 0), (1, 0), (20 * NM, 0), np.array([[5 * NM, 0.0, 0.5, 0.0, 1.0]])) == 1.0
+    assert trigger.transitions[0].kind == "static"
+
+
+def test_a_target_moving_along_x_is_a_ship_and_its_range_rate_uses_both_components():
+    # target on the x axis moving along x only: eps1 applies (a ship) and it triggers; behind
+    # the ship but overtaking it (closing at 1 m/s) it stays triggered; moving away, released
+    goal = (20 * NM, 0.0)
+    updates = [((0.0, 0.0), (5.0, 0.0), goal, [4 * NM, 0.0, 6.0, 0.0, 100.0]),
+               ((5 * NM, 0.0), (5.0, 0.0), goal, [4 * NM, 0.0, 6.0, 0.0, 100.0]),
+               ((5 * NM, 0.0), (5.0, 0.0), goal, [4 * NM, 0.0, -2.0, 0.0, 100.0])]
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM)
+    for k, (position, velocity, goal_, row) in enumerate(updates):
+        trigger.update(float(k), position, velocity, goal_, np.array([row]))
+    assert [t.kind for t in trigger.transitions] == ["ship", "ship"]
+    assert [(t.time, t.state) for t in trigger.transitions] == [(0.0, "triggered"), (2.0, "passed")]
+
+
 KNOT = NM / 3600.0
 CHECK_S = 240.0  # the navigation's 4 min interval
 

@@ -56,6 +56,92 @@ def test_unknown_cii_year():
                        cii_year=2031)
 
 
+def test_rating_boundaries_belong_to_the_worse_letter():
+    assert [cii_rating(b, 1.0) for b in (0.83, 0.94, 1.07, 1.19)] == ["B", "C", "D", "E"]
+    assert cii_rating(0.9, 2.0) == "A"  # attained / required, not attained * required
+    assert cii_rating(2.0, 2.5) == "A" and cii_rating(2.5, 2.0) == "E"
+
+
+def test_no_distance_sailed_gives_no_per_mile_figures_and_no_rating():
+    t = np.array([0.0, 1800.0, 3600.0])
+    zeros = np.zeros(3)
+    account = account_voyage(t, zeros, zeros, zeros, zeros, zeros, zeros, zeros)
+    assert account.distance_nm == 0.0 and account.time_min == pytest.approx(60.0)
+    assert account.cost_usd == pytest.approx(cost_rate(brake_power(0.0, 0.0, 0.0, 0.0, 0.0)))  # running cost
+    assert np.isnan(account.cost_per_nm_usd) and np.isnan(account.co2_per_nm_kg) and np.isnan(account.cii_attained)
+    assert account.cii_rating == "n/a"
+    assert account.cii_reference == pytest.approx(cii_reference(40_000)) and account.cii_year == 2026
+
+
+def test_a_short_leg_below_one_mile_is_still_accounted():
+    t = np.array([0.0, 100.0])
+    x = np.array([0.0, 0.5 * NM])
+    u = np.full(2, 0.5 * NM / 100.0)
+    zeros = np.zeros(2)
+    account = account_voyage(t, x, zeros, u, zeros, zeros, zeros, zeros)
+    assert account.distance_nm == pytest.approx(0.5)
+    assert account.cost_per_nm_usd == pytest.approx(account.cost_usd / 0.5)
+    assert account.co2_per_nm_kg == pytest.approx(account.co2_t * 1000.0 / 0.5)
+    assert account.cii_attained == pytest.approx(account.co2_t * 1e6 / (40_000 * 0.5))
+    assert account.cii_rating in "ABCDE"
+
+
+def test_a_single_sample_costs_nothing():
+    one = np.array([0.0])
+    account = account_voyage(np.array([600.0]), one, one, np.array([9.0]), one, one, one, one)
+    assert (account.cost_usd, account.co2_t, account.time_min, account.distance_nm) == (0.0, 0.0, 0.0, 0.0)
+
+
+def test_time_is_measured_from_the_first_sample():
+    t = np.array([3600.0, 7200.0])
+    x = np.array([0.0, 10 * NM])
+    u = np.full(2, 10 * NM / 3600.0)
+    zeros = np.zeros(2)
+    assert account_voyage(t, x, zeros, u, zeros, zeros, zeros, zeros).time_min == pytest.approx(60.0)
+
+
+def test_a_ship_going_astern_is_costed_as_stopped():
+    t = np.array([0.0, 3600.0])
+    zeros = np.zeros(2)
+    astern = account_voyage(t, zeros, zeros, np.full(2, -2.0), zeros, zeros, zeros, zeros)
+    stopped = account_voyage(t, zeros, zeros, zeros, zeros, zeros, zeros, zeros)
+    assert astern.cost_usd == stopped.cost_usd and astern.co2_t == stopped.co2_t
+
+
+def test_the_energy_parameters_given_are_the_ones_used():
+    t = np.array([0.0, 3600.0])
+    x = np.array([0.0, 9.0 * 3600.0])
+    u = np.full(2, 9.0)
+    zeros = np.zeros(2)
+    costly = EnergyParameters(fuel_price_usd_t=1280.0, specific_fuel_consumption_g_kwh=250.0,
+                              deadweight_t=60_000.0)
+    base = account_voyage(t, x, zeros, u, zeros, zeros, zeros, zeros)
+    other = account_voyage(t, x, zeros, u, zeros, zeros, zeros, zeros, costly)
+    power = brake_power(9.0, 0.0, 0.0, 0.0, 0.0, costly)
+    assert other.cost_usd == pytest.approx(cost_rate(power, costly)) and other.cost_usd > base.cost_usd
+    assert other.co2_t == pytest.approx(emission_rate(power, costly) / 1000.0) and other.co2_t > base.co2_t
+    assert other.cii_reference == pytest.approx(cii_reference(60_000.0))
+
+
+def test_as_dict_rounds_floats_to_six_decimals_and_keeps_the_rest():
+    t = np.array([0.0, 3600.0])
+    x = np.array([0.0, 9.0 * 3600.0])
+    zeros = np.zeros(2)
+    account = account_voyage(t, x, zeros, np.full(2, 9.0), zeros, zeros, zeros, zeros, cii_year=2024)
+    values = account.as_dict()
+    assert values["cost_usd"] == round(account.cost_usd, 6) and values["cost_usd"] != account.cost_usd
+    assert values["cii_rating"] == account.cii_rating and values["cii_year"] == 2024
+    assert set(values) == {"cost_usd", "co2_t", "distance_nm", "time_min", "cost_per_nm_usd", "co2_per_nm_kg",
+                           "cii_attained", "cii_required", "cii_reference", "cii_rating", "cii_year"}
+
+
+def test_an_empty_track_is_an_empty_account():
+    empty = np.array([])
+    account = account_voyage(empty, empty, empty, empty, empty, empty, empty, empty)
+    assert (account.cost_usd, account.co2_t, account.time_min, account.distance_nm) == (0.0, 0.0, 0.0, 0.0)
+    assert account.cii_rating == "n/a"
+
+
 def test_a_reported_brake_power_replaces_the_energy_model():
     t = np.array([0.0, 1800.0, 3600.0])
     x, y = np.array([0.0, 9260.0, 18520.0]), np.zeros(3)
@@ -67,6 +153,23 @@ def test_a_reported_brake_power_replaces_the_energy_model():
     assert account.cost_usd == pytest.approx(fuel_t * 640 + 500)
     modelled = account_voyage(t, x, y, np.full(3, 9.26), calm, calm, calm, calm)
     assert modelled.co2_t != pytest.approx(account.co2_t)
+
+
+def test_a_power_the_plant_reports_is_costed_with_the_parameters_given():
+    t = np.array([0.0, 3600.0])
+    x = np.array([0.0, 9.0 * 3600.0])
+    zeros = np.zeros(2)
+    params = EnergyParameters(fuel_price_usd_t=1280.0, specific_fuel_consumption_g_kwh=250.0)
+    reported = account_voyage(t, x, zeros, np.full(2, 9.0), zeros, zeros, zeros, zeros, params,
+                              brake_power_w=np.array([0.5, 0.5]))  # half a watt: as good as nothing
+    assert reported.cost_usd == pytest.approx(cost_rate(0.5, params))
+    assert reported.co2_t == pytest.approx(emission_rate(0.5, params) / 1000.0)
+    engine = account_voyage(t, x, zeros, np.full(2, 9.0), zeros, zeros, zeros, zeros, params,
+                            brake_power_w=np.full(2, 8.0e6))
+    assert engine.cost_usd == pytest.approx(cost_rate(8.0e6, params)) != pytest.approx(cost_rate(8.0e6))
+    negative = account_voyage(t, x, zeros, np.full(2, 9.0), zeros, zeros, zeros, zeros, params,
+                              brake_power_w=np.array([-1.0e6, -1.0e6]))  # a plant braking: no fuel credit
+    assert negative.cost_usd == pytest.approx(cost_rate(0.0, params))
 
 
 def test_mean_speed_through_water_weights_by_time_and_counts_sway():

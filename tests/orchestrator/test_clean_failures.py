@@ -1,0 +1,119 @@
+"""Failing cleanly: no folder for refused input, the right subcommand named, the participant
+that raised named, no verdicts on a run without steps, only the toolchain's log lines, and
+batch consoles that list every failure and count what ran."""
+
+import json
+import os
+import re
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from orchestrator import cli
+from orchestrator.cli import main
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parents[1]
+
+
+def test_a_missing_fmu_leaves_no_results_folder(tmp_path, capsys):
+    path = tmp_path / "missing.toml"
+    path.write_text((REPO / "scenarios" / "turning_circle.toml").read_text().replace('fmu = "KCS"', 'fmu = "x.fmu"'))
+    assert main(["run", str(path), "--results", str(tmp_path / "results"), "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "participants.ship.fmu: FMU file not found" in err[0]
+    assert not (tmp_path / "results").exists()
+
+
+@pytest.mark.parametrize("command", ["run", "validate"])
+@pytest.mark.parametrize("file, kind, right", [
+    ("scenarios/exp1_cost_vs_emission.toml", "an offline planning file (it has 'planner')", "plan"),
+    ("scenarios/exp2_table3.toml", "a comparison file (it has 'runs')", "compare"),
+    ("batches/turning_grid.toml", "a batch file (it has 'batch')", "batch"),
+])
+def test_another_kind_of_file_names_the_subcommand_for_it(tmp_path, capsys, command, file, kind, right):
+    path = REPO / file
+    args = [command, str(path)] + (["--results", str(tmp_path), "--no-progress"] if command == "run" else [])
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"error: {path}: {kind}, not a scenario: use 'python -m orchestrator {right} {path}'"]
+    assert list(tmp_path.iterdir()) == []
+
+
+SETUP_FAILS = """
+[simulation]
+name = "setup_fails"
+steps = 10
+dt_s = 1.0
+[participants.clock]
+type = "python"
+class = "sample_participants:Clock"
+[participants.solver]
+type = "python"
+class = "sample_participants:Crash"
+[participants.solver.options]
+in_setup = true
+[outputs]
+analyses = ["turning_circle"]
+"""
+
+
+def test_a_set_up_failure_names_the_participant_and_evaluates_nothing(write_scenario, tmp_path, capsys):
+    path = write_scenario(SETUP_FAILS)
+    assert main(["run", str(path), "--results", str(tmp_path), "--no-progress"]) == 3
+    captured = capsys.readouterr()
+    assert "error: solver: LinAlgError: Failed to find a finite solution." in captured.err
+    assert "  turning_circle: not evaluated: the run made no steps" in captured.out
+    folder = Path(captured.out.split("results in ")[1].split()[0])
+    summary = json.loads((folder / "summary.json").read_text())
+    assert summary["status"] == "failed" and summary["simulation"]["steps_done"] == 0
+    assert summary["analyses"] == {"turning_circle": {"evaluated": False,
+                                                      "note": "not evaluated: the run made no steps"}}
+
+
+def test_verbose_shows_the_toolchains_log_lines_only(tmp_path):
+    result = subprocess.run(
+        [sys.executable, "-m", "orchestrator", "-v", "run", str(REPO / "scenarios" / "turning_circle.toml"),
+         "--results", str(tmp_path), "--no-progress"], capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    loggers = re.findall(r"^(?:DEBUG|INFO|WARNING|ERROR|CRITICAL) ([\w.]+):", result.stderr, flags=re.M)
+    assert loggers, result.stderr  # -v does show our debug lines
+    assert {name.split(".")[0] for name in loggers} <= {"orchestrator", "rhnc"}, sorted(set(loggers))
+
+
+@pytest.fixture
+def small_batch(tmp_path):
+    from test_batch import BATCH, SCENARIO
+
+    def write(text=BATCH):
+        (tmp_path / "short_turn.toml").write_text(SCENARIO)
+        path = tmp_path / "small.toml"
+        path.write_text(textwrap.dedent(text))
+        return path
+
+    return write
+
+
+def test_a_batch_console_counts_the_failures_it_does_not_list(small_batch, tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(cli, "MAX_FAILURES_SHOWN", 3)
+    results = tmp_path / "results"
+    assert main(["batch", str(small_batch()), "--results", str(results), "--no-progress", "--workers", "1"]) == 3
+    out = capsys.readouterr().out
+    assert len(re.findall(r"^  \w+ finished: fast enough", out, flags=re.M)) == 3
+    assert f"  ... and 1 more not passed: every one is in {results / 'small' / 'summary.csv'}" in out
+
+
+def test_an_interrupted_batch_counts_the_runs_that_ended_after_the_interrupt(small_batch, tmp_path, capsys):
+    """The first run sends Ctrl-C to the batch process; it still completes and is counted."""
+    from test_batch import BATCH
+
+    text = BATCH.replace("[grid]", "[set]\n\"participants.helm.options.interrupt_batch_at_s\" = 100.0\n\n[grid]")
+    results = tmp_path / "results"
+    assert main(["batch", str(small_batch(text)), "--results", str(results), "--no-progress", "--workers", "1"]) == 130
+    captured = capsys.readouterr()
+    assert captured.out.startswith("0/6 runs passed (")
+    assert "; ran 1, skipped 0 already done" in captured.out.splitlines()[0]
+    assert "interrupted: rerun the same command to finish the batch" in captured.err

@@ -1,0 +1,55 @@
+"""The README's numbers are those of a fresh run: the cheap experiments rerun here.
+
+``scripts/reproduce_readme.py`` writes ``docs/readme_numbers.json`` (and the README's
+figures) from fresh runs; the lead writes the README from that file.  This test reruns the
+manoeuvring trials and Experiments 3a/3b and checks the committed numbers within the
+script's stated tolerances, so a change in the code that moves a quoted number fails here
+until the numbers (and the README) are regenerated.
+"""
+
+import importlib.util
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def load_script():
+    spec = importlib.util.spec_from_file_location("reproduce_readme", REPO / "scripts" / "reproduce_readme.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # its dataclasses look their module up
+    spec.loader.exec_module(module)
+    return module
+
+
+#: kind of each checked number (see TOLERANCES in the script)
+KINDS = {
+    "advance_L": "geometry_L", "transfer_L": "geometry_L", "tactical_diameter_L": "geometry_L",
+    "steady_diameter_L": "geometry_L", "first_overshoot_deg": "angle_deg", "second_overshoot_deg": "angle_deg",
+    "min_distance_nm": "distance_nm", "required_nm": "distance_nm", "cross_track_end_nm": "distance_nm",
+    "tau_u_max_abs_MN": "force", "tau_r_max_abs_MNm": "force", "back_on_track_s": "time_s",
+    "fallback_count": "count", "solver_failures": "count",
+}
+
+
+@pytest.mark.slow
+def test_readme_numbers_match_a_fresh_run(tmp_path):
+    script = load_script()
+    committed = json.loads((REPO / "docs" / "readme_numbers.json").read_text())["experiments"]
+    cheap = [e.name for e in script.EXPERIMENTS if e.cheap]
+    assert cheap == ["turning_circle", "zigzag_10_10", "exp3a_static", "exp3b_head_on"]
+    fresh = script.reproduce(cheap, tmp_path / "results", tmp_path / "figures")
+    for name in cheap:
+        expected, measured = committed[name], fresh[name]
+        assert expected["command"] == measured["command"]
+        checked = [key for key in expected if key in KINDS]
+        assert checked, name
+        for key in checked:
+            rel, abs_ = script.TOLERANCES[KINDS[key]]
+            assert measured[key] == pytest.approx(expected[key], rel=rel, abs=abs_), f"{name}: {key}"
+    # every figure the README shows from these runs was drawn
+    assert sorted(p.name for p in (tmp_path / "figures").iterdir()) == sorted(
+        target for e in script.EXPERIMENTS if e.cheap for target in e.figures.values())
