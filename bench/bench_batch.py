@@ -4,7 +4,7 @@ Two kinds of batch: ``encounters`` (default), the first 20 drawn encounters of
 ``batches/encounters_50.toml`` (closed-loop NMPC runs of Experiment 3b, the batch runner's
 real use), and ``turning``, the turning circle at a 0.1 s step with a drawn surge force
 (short runs, where the pool's fixed costs weigh more).  The batch time includes starting
-the pool's worker processes and writing the table and overview.  Goal (issue 6): at least
+the pool's worker processes and writing the table and overview.  Goal: at least
 1.8x with 2 workers (on a machine with 2 idle cores).
 
     python bench/bench_batch.py [--kind encounters|turning] [--runs 20] [--dt 0.1]

@@ -2,7 +2,7 @@
 
 The raw loop does what any master must do per step: set the two inputs, doStep, read the
 plant's outputs.  The orchestrator adds the scripted helm participant, the connection
-lookup, the finiteness checks and the recorder.  Goal (issue 2): at most 3x the raw loop.
+lookup, the finiteness checks and the recorder.  Goal: at most 3x the raw loop.
 
     python bench/bench_orchestrator.py [--steps 20000]
 """

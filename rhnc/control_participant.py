@@ -99,7 +99,7 @@ def interpolate_reference(reference: np.ndarray, times: np.ndarray) -> np.ndarra
 
 
 class ControlParticipant(Participant):
-    """NMPC trajectory tracking with collision constraints (spec section 5).
+    """NMPC trajectory tracking with collision constraints (docs/method.md, control).
 
     Options
     -------

@@ -23,7 +23,7 @@ Ps = 4.96 MW and the bracket ``rho g (Hs/2)^2 B^2/L (v + u_wave)`` is 2.32 MW, s
 * C_w = 0.57e-3 gives Pw = 1.3 kW, Pw / Ps = 0.027 %;
 * C_w = 0.57e+3 gives Pw = 1.3 GW, Pw / Ps = 267 (an impossible brake power).
 
-Neither reading gives the spec's "order of 10 %"; 0.57e+3 is physically impossible and
+Neither reading gives the "order of 10 %" a naval architect would expect; 0.57e+3 is physically impossible and
 0.57e-3 is 2.6 orders of magnitude nearer on a log scale, so the default is
 **C_w = 0.57e-3**.  The wave effect of the model then lives mostly in K: at Hs = 3 m the
 sea-state branch 1/(eta (1 - r Hs)) exceeds the speed branch by 32 %, which is the size
@@ -92,7 +92,7 @@ SHIP = load_ship("KCS")
 class EnergyParameters:
     """Constants of the energy, cost and emission model (SI unless the name says).
 
-    Defaults: spec section 3 and the paper's Table 2 (KCS), plus the documented choices
+    Defaults: docs/method.md (energy model) and the paper's Table 2 (KCS), plus the documented choices
     of this module's header for the constants the paper leaves without values.
 
     Attributes

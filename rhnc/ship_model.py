@@ -1,4 +1,4 @@
-"""The one 3-DOF ship prediction model (spec section 1, paper Eq. 11 and 16) for NMPC and tests.
+"""The one 3-DOF ship prediction model (docs/method.md, ship model; paper Eq. 11 and 16) for NMPC and tests.
 
 State ``X = [x, y, psi, u, v, r]`` (m, m, rad, m/s, m/s, rad/s; x north, y east, psi
 clockwise from north), control ``tau = [tau_u, tau_r]`` (N, N·m).  The prediction model is
@@ -148,7 +148,7 @@ def load_parameter_set(
     ----------
     name : str
         Table name in ``models/KCS/parameter_sets.toml`` (``default``: full-scale KCS;
-        ``paper_table2``: the paper's Table 2, see spec 1a).
+        ``paper_table2``: the paper's Table 2, see docs/method.md).
     overrides : mapping, optional
         Key -> value replacing the set's value; keys must exist in the set or be dynamics keys.
     path : pathlib.Path

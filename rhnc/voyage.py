@@ -1,6 +1,6 @@
 """Voyage accounting: cost, CO2 and the IMO Carbon Intensity Indicator of a sailed track.
 
-The energy model (:mod:`rhnc.energy`, spec section 3) gives the cost rate EC [USD/h] and
+The energy model (:mod:`rhnc.energy`, docs/method.md) gives the cost rate EC [USD/h] and
 the emission rate EM [kg CO2/h] at each sample of the sailed trajectory from the ship's
 speed through water and heading and the local weather it met.  Totals integrate them with
 the trapezoid rule between samples, as the paper does for its Table 3.

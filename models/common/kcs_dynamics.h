@@ -1,4 +1,4 @@
-/* 3-DOF KCS plant dynamics (spec section 1, paper Eq. 11-12), shared by the KCS and
+/* 3-DOF KCS plant dynamics (docs/method.md, paper Eq. 11-12), shared by the KCS and
  * KCSVendorB FMUs so that both integrate the very same equations. SI units throughout.
  * Equations, parameter derivation and sources: models/KCS/readme.md.
  *
@@ -98,7 +98,7 @@ static inline void kcs_disturbance(const KcsParameters *p, const double X[KCS_NS
            - q_wave * p->wave_cn * p->lpp * p->lpp * sin(2.0 * gamma_w);
 }
 
-/* Right-hand side of spec section 1; tau in `in` is already saturated. */
+/* Right-hand side of the ship model (docs/method.md); tau in `in` is already saturated. */
 static inline void kcs_derivatives(const KcsParameters *p, const double X[KCS_NSTATES],
                                    const KcsInputs *in, double dX[KCS_NSTATES]) {
     const double m11 = p->m11, m22 = p->m22, m33 = p->m33;

@@ -1,5 +1,5 @@
 """KCS plant FMU: validation, trajectory against an independent solve_ivp integration of the
-spec's equations (section 1), input saturation, and FMU state round trips."""
+model's equations (docs/method.md), input saturation, and FMU state round trips."""
 
 from __future__ import annotations
 
@@ -236,7 +236,7 @@ def sway_yaw_poles(p, u0):
 
 
 def test_paper_table2_set_is_unstable_at_cruise_speed():
-    """Spec 1a: Table 2 is stable only below u0 = 0.25 m/s; the unstable pole is about
+    """Table 2 is stable only below u0 = 0.25 m/s; the unstable pole is about
     +17.7 1/s at u0 = 9 m/s (+18.2 1/s at exactly 18 kn = 9.26 m/s)."""
     p = parameters("paper_table2")
     assert max(sway_yaw_poles(p, 9.0).real) == pytest.approx(17.7, abs=0.05)

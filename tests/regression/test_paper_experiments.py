@@ -83,7 +83,7 @@ def test_shortened_experiment_matches_golden(name, tmp_path):
 
 
 def test_paper_geometry_of_experiment4_triggers_on_the_island_and_keeps_clear(tmp_path):
-    """Issue 5's safety criteria on the shortened run: trigger, release, separation."""
+    """The safety criteria on the shortened run: trigger, release, separation."""
     report = run_scenario(REPO / "scenarios" / "exp4_full.toml", tmp_path, progress=False,
                           overrides={"simulation.steps": 360})
     assert report.ok, report.reason  # a run that failed half-way still writes results

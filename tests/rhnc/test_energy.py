@@ -1,4 +1,4 @@
-"""Energy, cost and emission model against values computed by hand (spec section 3)."""
+"""Energy, cost and emission model against values computed by hand (docs/method.md)."""
 
 import math
 

@@ -1,4 +1,4 @@
-"""Experiment 3 through the orchestrator with the KCS FMU as plant (issue 4's acceptance)."""
+"""Experiment 3 through the orchestrator with the KCS FMU as plant (its acceptance criteria)."""
 
 import json
 from pathlib import Path
