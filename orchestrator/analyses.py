@@ -27,8 +27,8 @@ FIGURES = {
     "navigation_fields": "orchestrator.figures:navigation_fields_figure",
 }
 
-#: KCS length between perpendiculars [m], used when the plant FMU has no length parameter.
-KCS_LENGTH_M = 230.0
+#: The ship whose particulars (ships/<name>.toml) apply when the plant does not say.
+DEFAULT_SHIP = "KCS"
 
 
 def check_outputs(scenario) -> None:
@@ -102,6 +102,30 @@ def driver_column(scenario, target: str, port: str) -> str:
     raise ToolchainError(f"nothing drives {target}.{port}")
 
 
+def tau_column(scenario, port: str) -> str | None:
+    """Column of the output feeding a ``tau_u``/``tau_r`` input anywhere (the plant's, or an
+    allocation's in front of an actuator-level plant), or None when nothing demands tau."""
+    for connection in scenario.connections:
+        if connection.target_port == port:
+            return f"{connection.source}.{connection.source_port}"
+    return None
+
+
+def steering_column(frame, scenario, plant) -> tuple[str, str]:
+    """What steers the plant: (column, kind) with kind ``"rudder"`` (radians) or ``"yaw moment"``.
+
+    An actuator-level plant is steered by what drives its ``rudder_angle_cmd`` input (else
+    its reported ``rudder_angle``); a plant that takes tau by what drives ``tau_r``.
+    """
+    try:
+        return driver_column(scenario, plant, "rudder_angle_cmd"), "rudder"
+    except ToolchainError:
+        pass
+    if f"{plant}.rudder_angle" in frame.columns:
+        return f"{plant}.rudder_angle", "rudder"
+    return driver_column(scenario, plant, "tau_r"), "yaw moment"
+
+
 def _execute_time(frame, column) -> float:
     moving = np.nonzero(np.abs(frame[column].to_numpy()) > 0)[0]
     if moving.size == 0:
@@ -110,19 +134,24 @@ def _execute_time(frame, column) -> float:
 
 
 def _ship_length(cosim, plant) -> float:
+    """The plant's ``lpp`` parameter when the scenario sets it, else the ship's particulars."""
+    from rhnc.ships import load_ship
+
     parameters = getattr(cosim.participant(plant), "parameters", {})
-    return float(parameters.get("lpp", parameters.get("length_m", KCS_LENGTH_M)))
+    return float(parameters.get("lpp", parameters.get("length_m", load_ship(DEFAULT_SHIP).lpp_m)))
 
 
 def turning_circle_analysis(frame, scenario, cosim, out_dir) -> dict:
     from rhnc.manoeuvres import turning_circle
 
     plant = plant_name(cosim)
-    execute = _execute_time(frame, driver_column(scenario, plant, "tau_r"))
+    column, kind = steering_column(frame, scenario, plant)
+    execute = _execute_time(frame, column)
     cols = [frame[f"{plant}.{c}"].to_numpy() for c in ("x", "y", "psi")]
     figures = turning_circle(frame["time_s"].to_numpy(), *cols, execute_s=execute,
                              length_m=_ship_length(cosim, plant))
     figures["execute_s"] = execute
+    figures["steered_by"] = kind
     figures["approach_speed_kn"] = float(frame[f"{plant}.u"].iloc[int(np.searchsorted(frame["time_s"], execute))]
                                          / (1852 / 3600))
     from orchestrator.figures import manoeuvre_figure
@@ -135,14 +164,15 @@ def zigzag_analysis(frame, scenario, cosim, out_dir) -> dict:
     from rhnc.manoeuvres import zigzag
 
     plant = plant_name(cosim)
-    column = driver_column(scenario, plant, "tau_r")
+    column, kind = steering_column(frame, scenario, plant)
     execute = _execute_time(frame, column)
     figures = zigzag(frame["time_s"].to_numpy(), frame[f"{plant}.psi"].to_numpy(), frame[column].to_numpy(),
                      execute_s=execute)
     figures["execute_s"] = execute
+    figures["steered_by"] = kind
     from orchestrator.figures import zigzag_figure
 
-    zigzag_figure(frame, plant, column, out_dir / "zigzag.png")
+    zigzag_figure(frame, plant, column, out_dir / "zigzag.png", kind)
     return figures
 
 
@@ -152,17 +182,23 @@ def voyage_analysis(frame, scenario, cosim, out_dir, goal_nm=None, arrival_radiu
 
     The weather is what the plant met: the outputs of the participant driving the
     plant's ``hs`` input (the environment FMU), else the scenario's met-ocean field at the
-    ship's positions, else calm water.  The energy constants are the navigation
+    ship's positions and times, else calm water.  The energy constants are the navigation
     participant's (so a scenario's overrides apply), else the defaults.
+
+    The brake power is the plant's own when it reports ``delivered_power`` (an
+    actuator-level plant: delivered power / shaft efficiency + auxiliary power), else the
+    energy model's from speed, heading and weather; ``energy_source`` says which.
 
     With ``goal_nm = [north, east]`` the voyage ends on arrival, the first sample within
     ``arrival_radius_nm`` of the goal (time spent waiting there is not sailing); the
     result says whether and when the ship arrived.  ``made_good_nm`` is the straight-line
     distance from the first to the last position of the voyage, the paper's "linear
-    mileage" in its Table 3, next to the distance sailed along the track.
+    mileage" in its Table 3, next to the distance sailed along the track;
+    ``mean_speed_made_good_kn`` divides it by the time taken, and
+    ``mean_speed_through_water_kn`` is the time-averaged ``hypot(u, v)`` of the plant.
     """
     from rhnc.energy import EnergyParameters
-    from rhnc.voyage import account_voyage
+    from rhnc.voyage import account_voyage, mean_speed_through_water_kn
 
     plant = plant_name(cosim)
     x, y = frame[f"{plant}.x"].to_numpy(), frame[f"{plant}.y"].to_numpy()
@@ -171,7 +207,7 @@ def voyage_analysis(frame, scenario, cosim, out_dir, goal_nm=None, arrival_radiu
         weather = {name: frame[f"{environment}.{name}"].to_numpy() for name in ("wind_north", "wind_east", "hs")}
     except (ToolchainError, KeyError):
         if cosim.metocean is not None:
-            weather = cosim.metocean.sample(x, y)
+            weather = cosim.metocean.sample(x, y, t_s=frame["time_s"].to_numpy())
         else:
             weather = {name: np.zeros_like(x) for name in ("wind_north", "wind_east", "hs")}
     energy = next((p.energy for p in cosim.participants if isinstance(getattr(p, "energy", None), EnergyParameters)),
@@ -190,13 +226,25 @@ def voyage_analysis(frame, scenario, cosim, out_dir, goal_nm=None, arrival_radiu
         if inside.size:
             end = inside[0] + 1
     window = slice(0, end)
+    brake_power = None
+    if f"{plant}.delivered_power" in frame.columns:
+        brake_power = (frame[f"{plant}.delivered_power"].to_numpy()[window] / energy.shaft_efficiency
+                       + energy.auxiliary_power_w)
     account = account_voyage(frame["time_s"].to_numpy()[window], x[window], y[window],
                              frame[f"{plant}.u"].to_numpy()[window], frame[f"{plant}.psi"].to_numpy()[window],
                              np.asarray(weather["wind_north"])[window], np.asarray(weather["wind_east"])[window],
-                             np.asarray(weather["hs"])[window], energy, cii_year=cii_year)
+                             np.asarray(weather["hs"])[window], energy, cii_year=cii_year,
+                             brake_power_w=brake_power)
     result = account.as_dict()
+    result["energy_source"] = ("plant delivered_power" if brake_power is not None
+                               else "energy model (speed, heading, weather)")
     made_good = float(np.hypot(x[end - 1] - x[0], y[end - 1] - y[0]) / 1852.0)
     result["made_good_nm"] = made_good
+    duration_h = account.time_min / 60.0
+    result["mean_speed_through_water_kn"] = mean_speed_through_water_kn(
+        frame["time_s"].to_numpy()[window], frame[f"{plant}.u"].to_numpy()[window],
+        frame[f"{plant}.v"].to_numpy()[window] if f"{plant}.v" in frame.columns else np.zeros(end))
+    result["mean_speed_made_good_kn"] = made_good / duration_h if duration_h > 0 else None
     result["cost_per_made_good_nm_usd"] = account.cost_usd / made_good if made_good > 0 else None
     result["co2_per_made_good_nm_kg"] = account.co2_t * 1000.0 / made_good if made_good > 0 else None
     result.update(arrival)
@@ -252,12 +300,22 @@ def encounter_analysis(frame, scenario, cosim, out_dir) -> dict:
     else:
         passed_at = float(t[0])
     for port in ("tau_u", "tau_r"):
-        column = driver_column(scenario, plant, port)
+        column = tau_column(scenario, port)
+        if column is None or column not in frame.columns:
+            continue  # steered at actuator level by a script: no tau demanded
         bound = getattr(cosim.participant(plant), "parameters", {}).get(f"{port}_max")
         peak = float(np.max(np.abs(frame[column].to_numpy())))
         result[f"{port}_max_abs"] = peak
         if bound is not None:
             result[f"{port}_within_bound"] = bool(peak <= float(bound) * (1 + 1e-9))
+        # an allocation between the NMPC and an actuator-level plant reports what it achieved
+        achieved = next((c for c in frame.columns if c.endswith(f".{port}_achieved")), None)
+        if achieved is not None:
+            result[f"{port}_achieved_max_abs"] = float(np.max(np.abs(frame[achieved].to_numpy())))
+    for output, key, scale in (("rudder_angle", "rudder_max_abs_deg", 180.0 / np.pi),
+                               ("propeller_rps", "propeller_rps_max", 1.0)):
+        if f"{plant}.{output}" in frame.columns:  # what the plant's actuators did
+            result[key] = float(np.max(np.abs(frame[f"{plant}.{output}"].to_numpy())) * scale)
     if "reference" in sources:
         reference = reference_at_times(array_output(frame, sources["reference"]), t)
         cross = cross_track_error(x, y, reference[:, 0], reference[:, 1], reference[:, 2])

@@ -1,4 +1,4 @@
-"""Command line: ``python -m orchestrator {run,validate,build,plan,compare,batch} ...``.
+"""Command line: ``python -m orchestrator {run,validate,build,export,plan,compare,batch,identify} ...``.
 
 Known errors (bad scenario, missing FMU, failed model) print one line and exit non-zero:
 2 for bad input, 3 for a run that failed, 130 for Ctrl-C.
@@ -30,12 +30,22 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     validate = sub.add_parser("validate", help="check a scenario and its FMUs without running it")
     validate.add_argument("scenario", help="scenario TOML file")
-    build = sub.add_parser("build", help="compile the FMUs in models/ into fmus/")
+    build = sub.add_parser("build", help="compile the FMUs in models/ into fmus/ (FMI 2.0) or fmus/fmi3/")
     build.add_argument("models", nargs="*", help="model names (default: all)")
-    compare = sub.add_parser("compare", help="run several scenarios and tabulate them (e.g. Table 3)")
+    build.add_argument("--fmi-version", choices=("2.0", "3.0", "all"), default="2.0",
+                       help="FMI standard of the FMUs (default 2.0; 'all' builds both)")
+    compare = sub.add_parser("compare", help="run several scenarios side by side (Table 3; fair voyage comparisons "
+                             "at equal arrival time with [voyage], docs/compare-format.md)")
     compare.add_argument("comparison", help="comparison TOML file")
     compare.add_argument("--results", default="results", help="results folder (default: ./results)")
     compare.add_argument("--no-progress", action="store_true", help="no progress bar")
+    export = sub.add_parser("export", help="pack Python participants of a scenario as FMI 2.0 FMUs, "
+                                           "or the whole scenario as an OSP system (--osp)")
+    export.add_argument("scenario", help="scenario TOML file")
+    export.add_argument("participants", nargs="*", help="names of the participants to export (e.g. ctrl nav)")
+    export.add_argument("--out", default="fmus/exported", help="folder for the FMUs (default: fmus/exported)")
+    export.add_argument("--osp", action="store_true",
+                        help="export every participant and write OspSystemStructure.xml for OSP's libcosim")
     plan = sub.add_parser("plan", help="run an offline planning experiment (e.g. Experiment 1)")
     plan.add_argument("scenario", help="offline planning TOML file")
     plan.add_argument("--results", default="results", help="results folder (default: ./results)")
@@ -47,6 +57,16 @@ def _parser() -> argparse.ArgumentParser:
     batch.add_argument("--results", default="results", help="results folder (default: ./results)")
     batch.add_argument("--retry-failed", action="store_true", help="redo runs recorded as failed")
     batch.add_argument("--no-progress", action="store_true", help="no progress bar")
+    identify = sub.add_parser("identify", help="fit the NMPC's 3-DOF model on a scenario's plant FMU "
+                                               "(manoeuvres through its mapping) into a parameter-set file")
+    identify.add_argument("scenario", help="scenario TOML file whose plant FMU (and mapping) to identify")
+    identify.add_argument("--tau-u-max-N", type=float, default=None, help="largest surge force of the ship [N]")
+    identify.add_argument("--tau-r-max-Nm", type=float, default=None, help="largest yaw moment of the ship [N m]")
+    identify.add_argument("--speed-kn", type=float, default=18.0, help="service speed of the manoeuvres (default 18)")
+    identify.add_argument("--plant", default=None, help="participant name of the plant (default: the one ship FMU)")
+    identify.add_argument("--set", dest="set_name", default=None, help="name of the set (default: the FMU's model name)")
+    identify.add_argument("--out", default=None, help="also write the parameter-set file here")
+    identify.add_argument("--results", default="results", help="results folder (default: ./results)")
     return parser
 
 
@@ -108,8 +128,10 @@ def _build(args) -> int:
     from orchestrator import fmu_build
 
     names = args.models or fmu_build.model_names()
-    for name in names:
-        print(fmu_build.build_fmu(name))
+    versions = fmu_build.FMI_VERSIONS if args.fmi_version == "all" else (args.fmi_version,)
+    for version in versions:
+        for name in names:
+            print(fmu_build.build_fmu(name, fmi_version=version))
     return 0
 
 
@@ -153,8 +175,39 @@ def _compare(args) -> int:
     return 0
 
 
+def _identify(args) -> int:
+    from rhnc.identify_run import run_identify
+
+    report = run_identify(args.scenario, args.results, plant=args.plant, speed_kn=args.speed_kn,
+                          tau_u_max_N=args.tau_u_max_N, tau_r_max_Nm=args.tau_r_max_Nm,
+                          set_name=args.set_name, out=args.out)
+    held = report.report["open_loop_errors"][f"held_out: {report.report['held_out']}"]
+    print(f"finished: results in {report.folder}")
+    print(f"  parameter set '{report.report['set']}' in {report.parameter_file}")
+    print(f"  held-out {report.report['held_out']}: heading RMS {held['heading_rms_deg']:.2f} deg, "
+          f"speed RMS {held['speed_rms_kn']:.3f} kn")
+    return 0
+
+
+def _export(args) -> int:
+    from orchestrator.errors import ScenarioError
+    from orchestrator.export import export_participant
+    from orchestrator.osp_export import export_osp_system
+
+    if args.osp:
+        if args.participants:
+            raise ScenarioError("export --osp exports every participant; name none")
+        print(export_osp_system(args.scenario, args.out))
+        return 0
+    if not args.participants:
+        raise ScenarioError("export: name the participants to export, or give --osp for the whole scenario")
+    for name in args.participants:
+        print(export_participant(args.scenario, name, args.out))
+    return 0
+
+
 _COMMANDS = {"run": _run, "validate": _validate, "build": _build, "plan": _plan, "batch": _batch,
-             "compare": _compare}
+             "compare": _compare, "export": _export, "identify": _identify}
 
 
 def console_main() -> None:

@@ -7,46 +7,106 @@ A comparison file (TOML), e.g. ``scenarios/exp2_table3.toml`` for the paper's Ta
     metrics = ["cost_usd", "co2_t", "cost_per_nm_usd", "co2_per_nm_kg"]
     baseline = "Offline-SPNC"                    # relative changes are taken against it
 
+    [set]                                        # dotted-key overrides applied to every run
+    "metocean" = { generator = "storm_off_route" }           # replaces the whole table
+
+    [sweep]                                      # optional: the whole comparison once per value
+    key = "metocean.member"
+    range = [0, 29]                              # or values = [...]
+
     [[runs]]
     label = "RHNC"
     scenario = "exp2_rhnc.toml"                  # relative to this file
+    set = { "participants.nav.options.k3" = 8.0 }   # this run's own overrides, optional
     paper = { cost_usd = 10473, co2_t = 31.264 } # published values, optional
     figures = { "navigation_fields.png" = "figure10_fields.png" }   # copied, renamed
 
 ``python -m orchestrator compare FILE`` runs every scenario into
-``results/<name>/<run-id>/runs/``, then writes ``table.csv`` and ``table.md`` (ours and the
-paper's value of each metric per run, and each run's change against the baseline),
-``tracks.png`` (all tracks over the met-ocean field) and the copied figures.
+``results/<name>/<run-id>/runs/<label>/``, then writes ``table.csv`` and ``table.md`` (ours
+and the paper's value of each metric per run, and each run's change against the
+baseline), ``tracks.png`` (all tracks over the met-ocean field) and the copied figures.
+With ``[sweep]`` each value gets such a folder under ``members/`` and the top folder holds
+the sweep's table.
+
+A table named in :data:`orchestrator.registry.COMPARISON_EXTENSIONS` (``[voyage]``) hands
+the runs to a domain extension, which may set further overrides on every run, run more
+scenarios through the same machinery and add its own tables (``docs/compare-format.md``).
+The engine here knows nothing of what the extension measures.
 """
 
 from __future__ import annotations
 
+import copy
+import hashlib
+import importlib
+import json
 import logging
 import math
+import re
 import shutil
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
 from orchestrator.errors import ScenarioError
+from orchestrator.registry import COMPARISON_EXTENSIONS
 from orchestrator.scenario import read_toml
 
 log = logging.getLogger(__name__)
 
-KEYS = ("name", "analysis", "metrics", "baseline", "runs")
-RUN_KEYS = ("label", "scenario", "paper", "figures")
+KEYS = ("name", "analysis", "metrics", "baseline", "runs", "set", "sweep")
+RUN_KEYS = ("label", "scenario", "set", "paper", "figures")
+SWEEP_KEYS = ("key", "values", "range")
+
+
+@dataclass
+class Section:
+    """What an extension adds to a comparison's output.
+
+    ``markdown`` is appended to ``table.md``; each table in ``tables`` is written as
+    ``<name>.csv``; ``summary`` goes into ``summary.json`` under the extension's name;
+    ``flags`` are warnings printed under the tables and kept in ``summary.json``.
+    """
+
+    markdown: str = ""
+    tables: dict[str, pd.DataFrame] = field(default_factory=dict)
+    summary: dict[str, Any] = field(default_factory=dict)
+    flags: list[str] = field(default_factory=list)
+
+
+class ScenarioRunner:
+    """Runs a scenario of the comparison into ``<folder>/runs/<label>/<run-id>/``.
+
+    Extensions call it for the runs they add, so every run of a comparison goes through
+    :func:`orchestrator.run.run_scenario` with the same results layout.
+    """
+
+    def __init__(self, runs_dir: Path, progress: bool) -> None:
+        self.runs_dir = Path(runs_dir)
+        self.progress = progress
+
+    def __call__(self, scenario: Path, overrides: dict[str, Any], label: str):
+        from orchestrator.run import run_scenario
+
+        return run_scenario(scenario, self.runs_dir, progress=self.progress, overrides=copy.deepcopy(overrides),
+                            group=slug(label))
 
 
 def load_comparison(path: Path) -> dict[str, Any]:
     """Read and check a comparison file; errors name the file and the key."""
+    path = Path(path)
     data, _ = read_toml(path, "comparison")
+    allowed = KEYS + tuple(COMPARISON_EXTENSIONS)
     for key in data:
-        if key not in KEYS:
-            raise ScenarioError(f"{path}: unknown key '{key}' (valid: {', '.join(KEYS)})")
+        if key not in allowed:
+            raise ScenarioError(f"{path}: unknown key '{key}' (valid: {', '.join(allowed)})")
     for key in ("name", "analysis"):
         if not isinstance(data.get(key), str):
             raise ScenarioError(f"{path}: '{key}' must be a string")
+    if not data["name"] or any(c in data["name"] for c in "/\\"):
+        raise ScenarioError(f"{path}: 'name' must be a non-empty string without slashes")
     metrics = data.get("metrics")
     if not isinstance(metrics, list) or not metrics or not all(isinstance(m, str) for m in metrics):
         raise ScenarioError(f"{path}: 'metrics' must be a non-empty list of names")
@@ -61,50 +121,187 @@ def load_comparison(path: Path) -> dict[str, Any]:
                 raise ScenarioError(f"{where}: unknown key '{key}' (valid: {', '.join(RUN_KEYS)})")
         if not isinstance(run.get("label"), str) or not isinstance(run.get("scenario"), str):
             raise ScenarioError(f"{where}: 'label' and 'scenario' must be strings")
+        if run["label"] in labels:
+            raise ScenarioError(f"{where}.label: '{run['label']}' is used twice")
         scenario = path.parent / run["scenario"]
         if not scenario.is_file():
             raise ScenarioError(f"{where}.scenario: scenario file not found: {scenario}")
+        run["set"] = _overrides(run.get("set", {}), f"{where}.set")
         for key in run.get("paper", {}):
             if key not in metrics:
                 raise ScenarioError(f"{where}.paper: '{key}' is not one of the metrics")
         labels.append(run["label"])
     if "baseline" in data and data["baseline"] not in labels:
         raise ScenarioError(f"{path}: baseline '{data['baseline']}' is not a run label ({', '.join(labels)})")
+    data["set"] = _overrides(data.get("set", {}), f"{path}: set")
+    if "sweep" in data:
+        data["sweep"] = _sweep(data["sweep"], path)
     return data
 
 
+def load_extensions(spec: dict[str, Any], path: Path) -> dict[str, Any]:
+    """Build the extensions the comparison names; each checks its table and every run."""
+    extensions = {}
+    for name, target in COMPARISON_EXTENSIONS.items():
+        if name not in spec:
+            continue
+        table = spec[name]
+        if not isinstance(table, dict):
+            raise ScenarioError(f"{path}: '{name}' must be a table ([{name}])")
+        module, _, attribute = target.partition(":")
+        extension_class = getattr(importlib.import_module(module), attribute)
+        extensions[name] = extension_class.from_table(table, Path(path), spec)
+    return extensions
+
+
 def run_comparison(path, results_root="results", progress: bool = True) -> Path:
-    """Run the comparison in ``path``; return the folder with the table and figures."""
+    """Run the comparison in ``path``; return the folder with the table and figures.
+
+    Every input error (the comparison file, an extension's table, a run's scenario with
+    the overrides applied) is raised before the first run starts.
+    """
     from orchestrator.results import RunFolder, new_run_id
-    from orchestrator.run import run_scenario
 
     path = Path(path)
     spec = load_comparison(path)
+    extensions = load_extensions(spec, path)
+    members = [None] if "sweep" not in spec else spec["sweep"]["values"]
+    member_overrides = [_member_overrides(spec, value) for value in members]
+    for overrides in member_overrides:
+        _check_runs(spec, extensions, path, overrides)
     folder = RunFolder(Path(results_root), spec["name"], new_run_id(_digest(path)))
     try:
-        reports = {}
-        for run in spec["runs"]:
-            report = run_scenario(path.parent / run["scenario"], folder.staging / "runs", progress=progress)
-            reports[run["label"]] = report
-            for source, target in run.get("figures", {}).items():
-                if (report.folder / source).is_file():
-                    shutil.copyfile(report.folder / source, folder.path(target))
-        table = comparison_table(spec, {label: r.summary for label, r in reports.items()})
-        table.to_csv(folder.path("table.csv"), index=False)
-        folder.path("table.md").write_text(markdown_table(table) + "\n")
-        _tracks_figure(spec, reports, folder.path("tracks.png"))
-        failed = {label: r.reason for label, r in reports.items() if not r.ok}
-        folder.write_json("summary.json", {
-            "comparison": str(path.resolve()),
-            "runs": {label: str(r.folder.relative_to(folder.staging)) for label, r in reports.items()},
-            "status": "failed" if failed else "finished",
-            "failed_runs": failed,
-            "table": table.to_dict(orient="records"),
-        })
+        if "sweep" not in spec:
+            sections, summary = _compare_once(spec, extensions, path, member_overrides[0], folder.staging, progress)
+            summary["comparison"] = str(path.resolve())
+            folder.write_json("summary.json", summary)
+        else:
+            key = spec["sweep"]["key"]
+            per_member = {name: [] for name in extensions}
+            statuses = {}
+            for value, overrides in zip(members, member_overrides):
+                log.info("comparison %s: %s = %s", spec["name"], key, value)
+                target = folder.path("members") / slug(f"{key}={value}")
+                target.mkdir(parents=True)
+                sections, summary = _compare_once(spec, extensions, path, overrides, target, progress)
+                (target / "summary.json").write_text(json.dumps(summary, indent=2, default=str) + "\n")
+                statuses[str(value)] = summary["status"]
+                for name in extensions:
+                    per_member[name].append((value, sections[name]))
+            markdown = [f"# {spec['name']}: sweep over {key} ({len(members)} values)", ""]
+            sweep_summary: dict[str, Any] = {"comparison": str(path.resolve()), "sweep_key": key,
+                                             "members": statuses,
+                                             "status": "finished" if all(
+                                                 s == "finished" for s in statuses.values()) else "failed"}
+            for name, extension in extensions.items():
+                section = extension.summarise_sweep(key, per_member[name], folder.staging)
+                _write_section(section, folder.staging)
+                markdown.append(section.markdown)
+                sweep_summary[name] = section.summary
+            folder.path("table.md").write_text("\n".join(markdown) + "\n")
+            folder.write_json("summary.json", sweep_summary)
     except BaseException:
         folder.discard()
         raise
     return folder.publish()
+
+
+def _compare_once(spec, extensions, path: Path, overrides: dict, out_dir: Path, progress: bool):
+    """One pass over the runs (and the extensions' runs) into ``out_dir``."""
+    runner = ScenarioRunner(out_dir / "runs", progress)
+    reports = {}
+    for i, run in enumerate(spec["runs"]):
+        scenario = path.parent / run["scenario"]
+        report = runner(scenario, _run_overrides(run, extensions, scenario, overrides, f"{path}: runs[{i}]"),
+                        run["label"])
+        reports[run["label"]] = report
+        for source, target in run.get("figures", {}).items():
+            if (report.folder / source).is_file():
+                shutil.copyfile(report.folder / source, out_dir / target)
+    table = comparison_table(spec, {label: r.summary for label, r in reports.items()})
+    table.to_csv(out_dir / "table.csv", index=False)
+    markdown = [f"# {spec['name']}", "", markdown_table(table), ""]
+    sections, flags = {}, []
+    for name, extension in extensions.items():
+        section = extension.evaluate(reports, runner, overrides, out_dir)
+        _write_section(section, out_dir)
+        sections[name] = section
+        flags += section.flags
+        markdown.append(section.markdown)
+    (out_dir / "table.md").write_text("\n".join(markdown) + "\n")
+    _tracks_figure(spec, reports, out_dir / "tracks.png")
+    failed = {label: r.reason for label, r in reports.items() if not r.ok}
+    summary = {
+        "runs": {label: str(r.folder.relative_to(out_dir)) for label, r in reports.items()},
+        "overrides": overrides,
+        "status": "failed" if failed else "finished",
+        "failed_runs": failed,
+        "flags": flags,
+        "table": table.to_dict(orient="records"),
+    }
+    summary.update({name: section.summary for name, section in sections.items()})
+    return sections, summary
+
+
+def _check_runs(spec, extensions, path: Path, overrides: dict) -> None:
+    """Load every run's scenario with its overrides, so bad input stops before any run."""
+    from orchestrator.scenario import load_scenario
+
+    for i, run in enumerate(spec["runs"]):
+        scenario = path.parent / run["scenario"]
+        load_scenario(scenario, _run_overrides(run, extensions, scenario, overrides, f"{path}: runs[{i}]"))
+
+
+def _run_overrides(run, extensions, scenario: Path, overrides: dict, where: str) -> dict[str, Any]:
+    """The comparison's overrides, then the run's own ``set``, then the extensions'."""
+    merged = copy.deepcopy({**overrides, **run["set"]})
+    for extension in extensions.values():
+        merged.update(extension.run_overrides(scenario, merged, where))
+    return merged
+
+
+def _member_overrides(spec, value) -> dict[str, Any]:
+    overrides = copy.deepcopy(spec["set"])
+    if value is not None:
+        overrides[spec["sweep"]["key"]] = value
+    return overrides
+
+
+def _write_section(section: Section, out_dir: Path) -> None:
+    for name, frame in section.tables.items():
+        frame.to_csv(out_dir / f"{name}.csv", index=False)
+
+
+def _overrides(table, where: str) -> dict[str, Any]:
+    if not isinstance(table, dict):
+        raise ScenarioError(f"{where}: expected a table of dotted-key overrides")
+    for key in table:
+        if not key or not all(key.split(".")):
+            raise ScenarioError(f"{where}: key '{key}' is not a dotted key path")
+    return dict(table)
+
+
+def _sweep(table, path: Path) -> dict[str, Any]:
+    if not isinstance(table, dict):
+        raise ScenarioError(f"{path}: 'sweep' must be a table ([sweep])")
+    for key in table:
+        if key not in SWEEP_KEYS:
+            raise ScenarioError(f"{path}: unknown key 'sweep.{key}' (valid: {', '.join(SWEEP_KEYS)})")
+    if not isinstance(table.get("key"), str) or not table["key"]:
+        raise ScenarioError(f"{path}: 'sweep.key' must be a dotted scenario key, e.g. \"metocean.member\"")
+    if ("values" in table) == ("range" in table):
+        raise ScenarioError(f"{path}: give exactly one of 'sweep.values' or 'sweep.range'")
+    if "range" in table:
+        bounds = table["range"]
+        if (not isinstance(bounds, list) or len(bounds) != 2
+                or not all(isinstance(b, int) and not isinstance(b, bool) for b in bounds) or bounds[1] < bounds[0]):
+            raise ScenarioError(f"{path}: 'sweep.range' must be [first, last] integers with first <= last")
+        values = list(range(bounds[0], bounds[1] + 1))
+    else:
+        values = table["values"]
+        if not isinstance(values, list) or not values:
+            raise ScenarioError(f"{path}: 'sweep.values' must be a non-empty list")
+    return {"key": table["key"], "values": values}
 
 
 def comparison_table(spec: dict, summaries: dict[str, dict]) -> pd.DataFrame:
@@ -132,12 +329,17 @@ def comparison_table(spec: dict, summaries: dict[str, dict]) -> pd.DataFrame:
 
 
 def markdown_table(table: pd.DataFrame) -> str:
-    header = "| " + " | ".join(table.columns) + " |"
+    header = "| " + " | ".join(str(c) for c in table.columns) + " |"
     rule = "|" + "|".join("---" for _ in table.columns) + "|"
     lines = [header, rule]
     for _, row in table.iterrows():
         lines.append("| " + " | ".join(_format(v) for v in row) + " |")
     return "\n".join(lines)
+
+
+def slug(text: str) -> str:
+    """A folder name for a label: letters, digits, ``-``, ``_``, ``=`` and ``.``."""
+    return re.sub(r"[^A-Za-z0-9_.=-]+", "_", str(text)).strip("_") or "run"
 
 
 def _change(value, reference):
@@ -149,14 +351,14 @@ def _change(value, reference):
 def _format(value) -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return "-"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
     if isinstance(value, float):
         return f"{value:,.2f}" if abs(value) < 1e5 else f"{value:,.0f}"
     return str(value)
 
 
 def _digest(path: Path) -> str:
-    import hashlib
-
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
@@ -171,7 +373,7 @@ def _tracks_figure(spec, reports, target: Path) -> None:
     fig, ax = plt.subplots(figsize=(7, 6))
     first = next(iter(reports.values())).folder / "metocean.nc"
     if first.is_file():
-        field = MetOceanField.from_netcdf(first)
+        field = MetOceanField.from_netcdf(first).snapshot(0.0)  # at departure when it varies in time
         mesh = ax.pcolormesh(field.y / NM, field.x / NM, field.wind_speed, shading="auto", cmap="viridis")
         fig.colorbar(mesh, ax=ax, label="wind speed [m/s]")
     for (label, report), colour in zip(reports.items(), ("tab:red", "white", "tab:orange", "tab:cyan")):

@@ -34,8 +34,11 @@ def track_figure(frame, scenario, cosim, out_dir) -> list[str]:
     fig, ax = plt.subplots(figsize=(7, 6))
     field = cosim.metocean
     if field is not None:
-        mesh = ax.pcolormesh(field.y / NM, field.x / NM, field.wind_speed, shading="auto", cmap="viridis")
-        fig.colorbar(mesh, ax=ax, label="wind speed [m/s]")
+        departure_s = float(frame["time_s"].iloc[0])
+        mesh = ax.pcolormesh(field.y / NM, field.x / NM, field.snapshot(departure_s).wind_speed, shading="auto",
+                             cmap="viridis")
+        fig.colorbar(mesh, ax=ax, label="wind speed at departure [m/s]" if field.is_time_varying
+                     else "wind speed [m/s]")
     _draw_reference(ax, frame, scenario)
     ax.plot(frame[f"{plant}.y"] / NM, frame[f"{plant}.x"] / NM, color="tab:red", lw=2, label=f"{plant} track")
     ax.plot(frame[f"{plant}.y"].iloc[0] / NM, frame[f"{plant}.x"].iloc[0] / NM, "o", color="tab:red")
@@ -203,39 +206,68 @@ def manoeuvre_figure(frame, plant, figures, path, title) -> None:
     plt.close(fig)
 
 
-def zigzag_figure(frame, plant, moment_column, path) -> None:
+def zigzag_figure(frame, plant, steering_column, path, kind: str = "yaw moment") -> None:
+    """Heading change and what steered: the rudder angle [deg] (command and, when the plant
+    reports it, the actual angle) or the yaw moment scaled to +-10."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(8, 4))
     t = frame["time_s"] / 60
     psi = np.degrees(np.unwrap(frame[f"{plant}.psi"].to_numpy()))
     ax.plot(t, psi - psi[0], label="heading change [deg]")
-    moment = frame[moment_column].to_numpy()
-    scale = np.max(np.abs(moment)) or 1.0
-    ax.plot(t, 10 * moment / scale, "--", label="yaw moment (scaled to +-10)")
+    steering = frame[steering_column].to_numpy()
+    if kind == "rudder":
+        ax.plot(t, np.degrees(steering), "--", label=f"{steering_column} [deg]")
+        if f"{plant}.rudder_angle" in frame.columns and steering_column != f"{plant}.rudder_angle":
+            ax.plot(t, np.degrees(frame[f"{plant}.rudder_angle"]), ":", label="rudder angle (plant) [deg]")
+        title = "Zig-zag (rudder)"
+    else:
+        scale = np.max(np.abs(steering)) or 1.0
+        ax.plot(t, 10 * steering / scale, "--", label="yaw moment (scaled to +-10)")
+        title = "Zig-zag 10/10 (yaw moment)"
     ax.set_xlabel("time [min]")
     ax.set_ylabel("deg")
     ax.legend()
     ax.grid(True, alpha=0.3)
-    ax.set_title("Zig-zag 10/10 (yaw moment)")
+    ax.set_title(title)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
 
 
 def controls_figure(frame, scenario, cosim, out_dir) -> list[str]:
-    """Surge force and yaw moment applied to the plant over time, with their bounds."""
-    from orchestrator.analyses import driver_column, find_plant
+    """Surge force and yaw moment demanded (and achieved, behind an allocation) over time,
+    with their bounds; below them the plant's rudder angle and propeller revolutions when it
+    reports them (an actuator-level plant)."""
+    from orchestrator.analyses import find_plant, tau_column
 
     plant = find_plant(cosim)
     if plant is None:
         return []
     parameters = getattr(cosim.participant(plant), "parameters", {})
+    actuators = [(name, unit, scale) for name, unit, scale in
+                 (("rudder_angle", "deg", 180.0 / np.pi), ("propeller_rps", "1/s", 1.0))
+                 if f"{plant}.{name}" in frame.columns]
+    ports = [(port, unit) for port, unit in (("tau_u", "MN"), ("tau_r", "MN m"))
+             if tau_column(scenario, port) in frame.columns]
+    if not ports and not actuators:
+        return []
     plt = _pyplot()
-    fig, axes = plt.subplots(2, 1, figsize=(8, 5), sharex=True)
+    rows = len(ports) + len(actuators)
+    fig, axes = plt.subplots(rows, 1, figsize=(8, 2.5 * rows), sharex=True, squeeze=False)
+    axes = axes[:, 0]
     t = frame["time_s"] / 60.0
-    for ax, port, unit, scale in ((axes[0], "tau_u", "MN", 1e-6), (axes[1], "tau_r", "MN m", 1e-6)):
-        column = driver_column(scenario, plant, port)
-        ax.step(t, frame[column] * scale, where="post", label=column)
+    for ax, (name, unit, scale) in zip(axes[len(ports):], actuators):
+        ax.plot(t, frame[f"{plant}.{name}"] * scale, label=f"{plant}.{name}")
+        ax.set_ylabel(f"{name} [{unit}]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    for ax, (port, unit) in zip(axes, ports):
+        scale = 1e-6
+        column = tau_column(scenario, port)
+        ax.step(t, frame[column] * scale, where="post", label=f"{column} (demanded)")
+        achieved = next((c for c in frame.columns if c.endswith(f".{port}_achieved")), None)
+        if achieved is not None:
+            ax.plot(t, frame[achieved] * scale, lw=1, label=f"{achieved}")
         bound = parameters.get(f"{port}_max")
         if bound is not None:
             for sign in (1, -1):
@@ -243,7 +275,7 @@ def controls_figure(frame, scenario, cosim, out_dir) -> list[str]:
         ax.set_ylabel(f"{port} [{unit}]")
         ax.grid(True, alpha=0.3)
         ax.legend(loc="upper right", fontsize=8)
-    axes[1].set_xlabel("time [min]")
+    axes[-1].set_xlabel("time [min]")
     fig.suptitle(f"{scenario.simulation.name}: control history")
     fig.tight_layout()
     fig.savefig(out_dir / "controls.png", dpi=120)
@@ -255,7 +287,8 @@ def navigation_fields_figure(frame, scenario, cosim, out_dir, panels: int = 6) -
     """The superposed field U and the track at six instants (the paper's Fig. 10 and 17).
 
     For each instant the navigation participant's field is rebuilt from the ship's
-    position then (as the navigation did at that planning instant); the panel shows U (or
+    position (and, when it varies in time, the weather) then, as the navigation did at that
+    planning instant; the panel shows U (or
     G alone while the event trigger was on), the track sailed so far and the local plan.
     """
     from orchestrator.analyses import plant_name
@@ -277,6 +310,11 @@ def navigation_fields_figure(frame, scenario, cosim, out_dir, panels: int = 6) -
         row = min(row, len(frame) - 1)
         x, y = frame[f"{plant}.x"].iloc[row], frame[f"{plant}.y"].iloc[row]
         avoidance = bool(frame.get(f"{navigation.name}.et", np.zeros(len(frame))).iloc[row] > 0.5)
+        if navigation.metocean.is_time_varying:  # the weather the navigation planned in then
+            from rhnc.fields import resample_weather
+
+            field.set_weather(resample_weather(navigation.metocean, navigation.resolution_nm,
+                                               t_s=float(frame["time_s"].iloc[row])))
         field.update((x, y), navigation.speed)
         mesh = ax.pcolormesh(y_nm, x_nm, field.potential(avoidance), shading="auto", cmap="viridis")
         ax.plot(frame[f"{plant}.y"].iloc[: row + 1] / NM, frame[f"{plant}.x"].iloc[: row + 1] / NM,

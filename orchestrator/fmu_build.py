@@ -1,11 +1,20 @@
-"""Build the C models under ``models/`` into FMI 2.0 co-simulation FMUs under ``fmus/``.
+"""Build the C models under ``models/`` into FMI 2.0 and 3.0 co-simulation FMUs under ``fmus/``.
+
+From the same C sources: ``fmus/<Name>.fmu`` (FMI 2.0, the default) and
+``fmus/fmi3/<Name>.fmu`` (FMI 3.0). The shared layer's core (``fmu_core.c``) is compiled
+with ``fmi2_api.c`` or ``fmi3_api.c``; the FMI 3.0 description is derived from the
+model's FMI 2.0 one (:mod:`orchestrator.model_description`).
 
 Each model folder ``models/<Name>/`` holds ``config.h``, ``model.c`` and a
 ``modelDescription.xml`` whose parameter start values are ``@name@`` placeholders; the
 shared FMI layer lives in ``models/common/``. At build time the ``[default]`` set of
-``models/KCS/parameter_sets.toml`` (the single source of the plant's parameters) fills those
-placeholders and is written as the C header ``kcs_parameter_defaults.h``, so the C start
-values and the XML can never disagree with the TOML. The FMU carries its ``sources/`` and
+``models/KCS/parameter_sets.toml`` (the single source of the 3-DOF plant's parameters) is
+written as the C header ``kcs_parameter_defaults.h``; a model with a parameter set file of
+its own (``models/<Name>/parameter_sets.toml``, e.g. ``KCSMMG``) also gets
+``model_parameter_defaults.h`` from it.  The model's own set (else the KCS set) fills the
+placeholders, so the C start values and the XML can never disagree with the TOML.  The
+particulars in those sets (length, beam, windage areas, ...) must equal the ship's
+``ships/KCS.toml`` (:mod:`rhnc.ships`), or the build is refused. The FMU carries its ``sources/`` and
 the SHA-256 of every input file in the zip comment, which ``ensure_built`` compares.
 """
 
@@ -32,10 +41,17 @@ FMUS_DIR = Path(__file__).resolve().parent.parent / "fmus"
 COMMON = "common"
 PARAMETER_SETS = Path("KCS") / "parameter_sets.toml"
 DEFAULTS_HEADER = "kcs_parameter_defaults.h"
+MODEL_DEFAULTS_HEADER = "model_parameter_defaults.h"
+SHIP = "KCS"
+BOUNDS_HEADER = "model_bounds.h"
+RESOURCES = "resources"
 HASH_PREFIX = "rhnc-source-sha256="
 # Bump when the build recipe itself changes, so existing FMUs are rebuilt.
-RECIPE_VERSION = "1"
+RECIPE_VERSION = "2"
 SOURCE_SUFFIXES = (".c", ".h")
+FMI_VERSIONS = ("2.0", "3.0")
+#: The FMI API file of the shared layer per version; the other version's is left out.
+API_SOURCES = {"2.0": "fmi2_api.c", "3.0": "fmi3_api.c"}
 
 
 def model_names(models_dir: Path = MODELS_DIR) -> list[str]:
@@ -53,69 +69,111 @@ def _check_name(name: str, models_dir: Path) -> Path:
     return Path(models_dir) / name
 
 
-def _sources(name: str, models_dir: Path) -> list[Path]:
-    """C sources and headers of one model: its folder's and the shared layer's."""
+def _check_version(fmi_version: str) -> str:
+    if fmi_version not in FMI_VERSIONS:
+        raise FmuError(f"unknown FMI version {fmi_version!r} (valid: {', '.join(FMI_VERSIONS)})")
+    return fmi_version
+
+
+def _sources(name: str, models_dir: Path, fmi_version: str = "2.0") -> list[Path]:
+    """C sources and headers of one model for one FMI version: its folder's and the shared layer's."""
+    other_apis = {api for version, api in API_SOURCES.items() if version != fmi_version}
     files = []
     for folder in (Path(models_dir) / COMMON, Path(models_dir) / name):
-        files += sorted(p for p in folder.iterdir() if p.suffix in SOURCE_SUFFIXES)
+        files += sorted(p for p in folder.iterdir() if p.suffix in SOURCE_SUFFIXES and p.name not in other_apis)
     return files
 
 
-def _inputs(name: str, models_dir: Path) -> list[Path]:
+def _own_parameter_sets(name: str, models_dir: Path) -> Path | None:
+    """The model's own parameter set file, when it has one besides the KCS set."""
+    path = Path(models_dir) / name / "parameter_sets.toml"
+    return path if name != "KCS" and path.is_file() else None
+
+
+def _resources(name: str, models_dir: Path) -> list[Path]:
+    """Files shipped in the FMU's ``resources/``: the model folder's ``resources/`` (e.g. a default grid)."""
+    folder = Path(models_dir) / name / RESOURCES
+    return sorted(p for p in folder.rglob("*") if p.is_file()) if folder.is_dir() else []
+
+
+def _inputs(name: str, models_dir: Path, fmi_version: str = "2.0") -> list[Path]:
     """Every file whose content determines the FMU."""
+    from rhnc.ships import ship_file
+
     models_dir = Path(models_dir)
-    return _sources(name, models_dir) + [
+    own = _own_parameter_sets(name, models_dir)
+    return _sources(name, models_dir, fmi_version) + _resources(name, models_dir) + [
         models_dir / name / "modelDescription.xml",
         models_dir / PARAMETER_SETS,
+        *([own] if own else []),
+        ship_file(SHIP),
     ]
 
 
-def source_hash(name: str, models_dir: Path = MODELS_DIR) -> str:
-    """SHA-256 over the recipe version and the relative path and content of every input."""
+def fmu_path(name: str, out_dir: Path = FMUS_DIR, fmi_version: str = "2.0") -> Path:
+    """Where the FMU of a model is built: ``<out_dir>/<name>.fmu`` or ``<out_dir>/fmi3/<name>.fmu``."""
+    return Path(out_dir) / (f"{name}.fmu" if _check_version(fmi_version) == "2.0" else f"fmi3/{name}.fmu")
+
+
+def source_hash(name: str, models_dir: Path = MODELS_DIR, fmi_version: str = "2.0") -> str:
+    """SHA-256 over the recipe and FMI versions and the relative path and content of every input."""
     models_dir = Path(models_dir)
-    digest = hashlib.sha256(RECIPE_VERSION.encode())
-    for path in _inputs(name, models_dir):
-        digest.update(str(path.relative_to(models_dir)).encode() + b"\0")
+    digest = hashlib.sha256(f"{RECIPE_VERSION} {_check_version(fmi_version)}".encode())
+    for path in _inputs(name, models_dir, fmi_version):
+        relative = path.relative_to(models_dir) if path.is_relative_to(models_dir) else Path(path.parent.name, path.name)
+        digest.update(str(relative).encode() + b"\0")
         digest.update(path.read_bytes() + b"\0")
     return digest.hexdigest()
 
 
-def _default_parameters(models_dir: Path) -> dict[str, float]:
-    path = Path(models_dir) / PARAMETER_SETS
+def _default_parameters(models_dir: Path, path: Path | None = None) -> dict[str, float]:
+    """The ``[default]`` set of ``path`` (the KCS set by default), checked against the ship's
+    particulars."""
+    from orchestrator.errors import ScenarioError
+    from rhnc.ships import check_parameter_set, load_ship
+
+    path = Path(path) if path is not None else Path(models_dir) / PARAMETER_SETS
     try:
         with path.open("rb") as f:
             default = tomllib.load(f)["default"]
     except (OSError, tomllib.TOMLDecodeError, KeyError) as exc:
         raise FmuError(f"cannot read the [default] parameter set of {path}: {exc}") from exc
-    values = {k: v for k, v in default.items() if k != "description"}
+    values = {k: v for k, v in default.items() if k not in ("description", "plant_fmu", "plant_guid")}
     for key, value in values.items():
         if not isinstance(value, (int, float)) or isinstance(value, bool):
             raise FmuError(f"{path}: [default] {key} = {value!r} is not a number")
+    try:
+        check_parameter_set(values, load_ship(SHIP), f"{path}: [default]")
+    except ScenarioError as exc:
+        raise FmuError(str(exc)) from None
     return {k: float(v) for k, v in values.items()}
 
 
-def _defaults_header(parameters: dict[str, float]) -> str:
+def _defaults_header(parameters: dict[str, float], prefix: str = "KCS",
+                     source: str = "models/KCS/parameter_sets.toml") -> str:
+    guard = f"{prefix}_PARAMETER_DEFAULTS_H"
     lines = [
-        "/* Generated by orchestrator/fmu_build.py from models/KCS/parameter_sets.toml",
+        f"/* Generated by orchestrator/fmu_build.py from {source}",
         " * ([default] set). Do not edit, do not commit. */",
-        "#ifndef KCS_PARAMETER_DEFAULTS_H",
-        "#define KCS_PARAMETER_DEFAULTS_H",
+        f"#ifndef {guard}",
+        f"#define {guard}",
     ]
-    lines += [f"#define KCS_DEFAULT_{k} ({v!r})" for k, v in parameters.items()]
+    lines += [f"#define {prefix}_DEFAULT_{k} ({v!r})" for k, v in parameters.items()]
     lines += ["#endif", ""]
     return "\n".join(lines)
 
 
-def _model_description(name: str, models_dir: Path, parameters: dict[str, float]) -> str:
+def _model_description(name: str, models_dir: Path, parameters: dict[str, float],
+                       parameter_file: Path | None = None) -> str:
     path = Path(models_dir) / name / "modelDescription.xml"
+    parameter_file = parameter_file or Path(models_dir) / PARAMETER_SETS
     text = path.read_text(encoding="utf-8")
 
     def substitute(match: re.Match) -> str:
         key = match.group(1)
         if key not in parameters:
             raise FmuError(
-                f"{path}: start value @{key}@ has no entry in the [default] set of "
-                f"{Path(models_dir) / PARAMETER_SETS}"
+                f"{path}: start value @{key}@ has no entry in the [default] set of {parameter_file}"
             )
         return repr(parameters[key])
 
@@ -143,8 +201,9 @@ def _first_error(output: str) -> str:
     return lines[0] if lines else "no compiler output"
 
 
-def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR) -> Path:
-    """Compile one model into ``out_dir/<name>.fmu``.
+def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR,
+              fmi_version: str = "2.0") -> Path:
+    """Compile one model into ``out_dir/<name>.fmu`` (FMI 2.0) or ``out_dir/fmi3/<name>.fmu``.
 
     Parameters
     ----------
@@ -154,6 +213,8 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR
         Folder receiving the FMU (created if missing).
     models_dir : Path
         The ``models/`` tree to build from.
+    fmi_version : {"2.0", "3.0"}
+        The FMI standard of the FMU.
 
     Returns
     -------
@@ -166,24 +227,43 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR
         Unknown model name, unreadable parameter set, or a compilation error (the message
         names the model and the compiler's first error line).
     """
-    from fmpy import platform, sharedLibraryExtension
+    from fmpy import platform, platform_tuple, sharedLibraryExtension
+
+    from orchestrator import model_description
 
     models_dir = Path(models_dir)
     model_dir = _check_name(name, models_dir)
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    fmu = fmu_path(name, out_dir, fmi_version)
+    fmu.parent.mkdir(parents=True, exist_ok=True)
     parameters = _default_parameters(models_dir)
-    description = _model_description(name, models_dir, parameters)
-    sources = _sources(name, models_dir)
-    digest = source_hash(name, models_dir)
+    own = _own_parameter_sets(name, models_dir)
+    own_parameters = _default_parameters(models_dir, own) if own else None
+    sources = _sources(name, models_dir, fmi_version)
+    c_files = [p.name for p in sources if p.suffix == ".c"]
+    description = model_description.finish_fmi2(
+        _model_description(name, models_dir, own_parameters or parameters, own), c_files, _product_version())
+    bounds_text = model_description.bounds_header(description)
+    extra_sources = {}
+    if fmi_version == "3.0":
+        description = model_description.to_fmi3(description, c_files, _product_version())
+        extra_sources["buildDescription.xml"] = model_description.build_description_fmi3(name, c_files)
+    digest = source_hash(name, models_dir, fmi_version)
 
     with tempfile.TemporaryDirectory(prefix=f"fmu_build_{name}_") as tmp:
         tmp = Path(tmp)
         header = tmp / DEFAULTS_HEADER
         header.write_text(_defaults_header(parameters), encoding="utf-8")
+        headers = [header]
+        if own_parameters is not None:
+            model_header = tmp / MODEL_DEFAULTS_HEADER
+            model_header.write_text(_defaults_header(own_parameters, "MODEL", f"models/{name}/parameter_sets.toml"),
+                                    encoding="utf-8")
+            headers.append(model_header)
+        bounds = tmp / BOUNDS_HEADER
+        bounds.write_text(bounds_text, encoding="utf-8")
         library = tmp / f"{name}{sharedLibraryExtension}"
         command = [
-            _compiler(), "-O2", "-shared", "-fPIC", "-Wall",
+            _compiler(), "-O2", "-shared", "-fPIC", "-fvisibility=hidden", "-Wall",
             f"-I{tmp}", f"-I{model_dir}", f"-I{models_dir / COMMON}", f"-I{_fmi_headers()}",
             *[str(p) for p in sources if p.suffix == ".c"],
             "-o", str(library), "-lm",
@@ -195,17 +275,21 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR
         if result.stderr.strip():
             log.warning("compiler warnings for %s:\n%s", name, result.stderr.strip())
 
-        fmu = out_dir / f"{name}.fmu"
-        partial = out_dir / f".{name}.fmu.partial"
+        partial = fmu.parent / f".{name}.fmu.partial"
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
             z.writestr("modelDescription.xml", description)
-            z.write(library, f"binaries/{platform}/{library.name}")
+            binary_folder = platform if fmi_version == "2.0" else platform_tuple
+            z.write(library, f"binaries/{binary_folder}/{library.name}")
             names = set()
-            for path in [*sources, header]:
+            for path in [*sources, *headers, bounds]:
                 if path.name in names:
                     raise FmuError(f"building model {name} failed: two sources named {path.name}")
                 names.add(path.name)
                 z.write(path, f"sources/{path.name}")
+            for file_name, text in extra_sources.items():
+                z.writestr(f"sources/{file_name}", text)
+            for path in _resources(name, models_dir):
+                z.write(path, f"resources/{path.relative_to(model_dir / RESOURCES).as_posix()}")
             z.comment = (HASH_PREFIX + digest).encode()
         partial.replace(fmu)
     log.info("built %s", fmu)
@@ -221,20 +305,34 @@ def _stored_hash(fmu: Path) -> str | None:
     return comment[len(HASH_PREFIX):] if comment.startswith(HASH_PREFIX) else None
 
 
-def ensure_built(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR) -> Path:
-    """Return ``out_dir/<name>.fmu``, rebuilding it when missing or built from other sources.
+def ensure_built(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR,
+                 fmi_version: str = "2.0") -> Path:
+    """Return the model's FMU, rebuilding it when missing or built from other sources.
 
     The comparison is by content: the SHA-256 of the model's sources, the shared layer,
-    its modelDescription.xml and parameter_sets.toml, stored in the FMU's zip comment.
+    its modelDescription.xml, the parameter sets and the ship's particulars, stored in the
+    FMU's zip comment.
     """
     _check_name(name, models_dir)
-    fmu = Path(out_dir) / f"{name}.fmu"
-    if fmu.is_file() and _stored_hash(fmu) == source_hash(name, models_dir):
+    fmu = fmu_path(name, out_dir, fmi_version)
+    if fmu.is_file() and _stored_hash(fmu) == source_hash(name, models_dir, fmi_version):
         log.debug("%s is up to date", fmu)
         return fmu
-    return build_fmu(name, out_dir, models_dir)
+    return build_fmu(name, out_dir, models_dir, fmi_version)
 
 
-def build_all(out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR) -> list[Path]:
-    """Build every model of ``models_dir`` into ``out_dir``; returns the FMUs written."""
-    return [build_fmu(name, out_dir, models_dir) for name in model_names(models_dir)]
+def build_all(out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR,
+              fmi_versions: tuple[str, ...] = ("2.0",)) -> list[Path]:
+    """Build every model of ``models_dir`` into ``out_dir`` for each FMI version; the FMUs written."""
+    return [build_fmu(name, out_dir, models_dir, version)
+            for version in fmi_versions for name in model_names(models_dir)]
+
+
+def _product_version() -> str:
+    """This package's version, written into every modelDescription."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("rhnc-cosim")
+    except PackageNotFoundError:  # running from a source tree that is not installed
+        return "0+unknown"

@@ -1,9 +1,10 @@
 """FMI 2.0 co-simulation FMUs as participants, through FMPy's own classes.
 
 Ports are the FMU's input and output variables, or, where the scenario maps them,
-canonical names (``x``, ``tau_u``, ...) bound to vendor variables with a unit scale
-(``canonical = scale * fmu_value``).  The plant's canonical names have a fixed
-causality, so a mapping that binds ``tau_u`` to an FMU output is refused.
+canonical names (``x``, ``tau_u``, ...) bound to vendor variables and converted to SI
+(:mod:`orchestrator.port_mapping`: scale and offset, declared units, geodetic positions,
+polar vectors).  The plant's canonical names have a fixed causality, so a mapping that
+binds ``tau_u`` to an FMU output is refused.
 """
 
 from __future__ import annotations
@@ -14,27 +15,28 @@ import shutil
 import tempfile
 import tomllib
 from collections.abc import Mapping
-from ctypes import byref
 from pathlib import Path
 
 from fmpy.fmi1 import FMICallException
 
 from orchestrator.errors import FmuError, ModelError, ScenarioError
+from orchestrator.fmi_slave import REAL_TYPES, SUPPORTED_VERSIONS, FmiSlave
 from orchestrator.participant import Participant, Value
-from orchestrator.scenario import ParticipantSpec, VariableMapping
+from orchestrator.plant_ports import PLANT_PORTS
+from orchestrator.port_mapping import bind_ports, initial_start_values
+from orchestrator.scenario import ParticipantSpec
 
 log = logging.getLogger(__name__)
 
-#: Canonical plant ports (spec section 1) and the causality each must have.
-CANONICAL_PLANT_PORTS = {
-    **{name: "output" for name in ("x", "y", "psi", "u", "v", "r", "sog", "cog")},
-    **{name: "input" for name in ("tau_u", "tau_r", "current_north", "current_east",
-                                  "wind_speed", "wind_direction", "hs")},
-}
+#: Keys of a parameter set that describe it rather than set an FMU parameter.
+SET_METADATA_KEYS = ("description", "plant_fmu", "plant_guid")
+
+#: Canonical plant ports and the causality each must have.
+CANONICAL_PLANT_PORTS = {name: port.causality for name, port in PLANT_PORTS.items()}
 
 
-def resolve_fmu(reference: str, scenario_dir: Path, where: str) -> Path:
-    """Path of the FMU a scenario names: a built-in model (built on demand) or a file."""
+def resolve_fmu(reference: str, scenario_dir: Path, where: str, fmi_version: str = "2.0") -> Path:
+    """Path of the FMU a scenario names: a built-in model (built on demand for ``fmi_version``) or a file."""
     from orchestrator import fmu_build
 
     if not reference.endswith(".fmu") and "/" not in reference and "\\" not in reference:
@@ -43,7 +45,7 @@ def resolve_fmu(reference: str, scenario_dir: Path, where: str) -> Path:
                 f"{where}.fmu: no built-in model '{reference}' (valid: {', '.join(fmu_build.model_names())},"
                 " or a path to an .fmu file)"
             )
-        return fmu_build.ensure_built(reference)
+        return fmu_build.ensure_built(reference, fmi_version=fmi_version)
     path = Path(reference)
     path = path if path.is_absolute() else scenario_dir / path
     if not path.is_file():
@@ -64,11 +66,11 @@ def read_parameter_set(fmu_reference: str, set_name: str, where: str) -> dict:
         raise ScenarioError(
             f"{where}.parameter_set: no set '{set_name}' in {file.name} (valid: {', '.join(sets)})"
         )
-    return {key: value for key, value in sets[set_name].items() if key != "description"}
+    return {key: value for key, value in sets[set_name].items() if key not in SET_METADATA_KEYS}
 
 
 class FmuParticipant(Participant):
-    """A co-simulation FMU stepped with ``fmpy.fmi2.FMU2Slave``.
+    """A co-simulation FMU (FMI 2.0 or 3.0) stepped through :class:`orchestrator.fmi_slave.FmiSlave`.
 
     Parameters
     ----------
@@ -97,61 +99,36 @@ class FmuParticipant(Participant):
             self.model_description = read_model_description(str(self.fmu_path))
         except Exception as exc:  # fmpy raises plain exceptions for broken archives/XML
             raise FmuError(f"{where}.fmu: {self.fmu_path} is not a valid FMU: {exc}") from exc
-        if self.model_description.fmiVersion != "2.0" or self.model_description.coSimulation is None:
-            raise FmuError(f"{where}.fmu: {self.fmu_path} is not an FMI 2.0 co-simulation FMU")
+        if self.model_description.fmiVersion not in SUPPORTED_VERSIONS or self.model_description.coSimulation is None:
+            raise FmuError(f"{where}.fmu: {self.fmu_path} is not an FMI 2.0 or 3.0 co-simulation FMU")
         self.variables = {v.name: v for v in self.model_description.modelVariables}
+        self._input_bindings, self._output_bindings = bind_ports(
+            spec, self.variables, self.model_description, where, self.fmu_path.name)
         self.parameters = self._parameter_values(spec, string_substitutions or {})
-        self._inputs: dict[str, VariableMapping] = {}
-        self._outputs: dict[str, VariableMapping] = {}
-        self._bind_ports(spec.mapping)
-        self._input_refs = {port: self.variables[b.variable].valueReference for port, b in self._inputs.items()}
-        self._output_ports = list(self._outputs)
-        self._output_refs = [self.variables[self._outputs[p].variable].valueReference for p in self._output_ports]
-        self._output_scales = [self._outputs[p].scale for p in self._output_ports]
+        self.parameters.update(initial_start_values(spec, self._output_bindings, self.variables,
+                                                    self.model_description, where))
+        self._input_binding = {port: b for b in self._input_bindings for port in b.ports}
+        self._input_refs = {v: self.variables[v].valueReference for b in self._input_bindings for v in b.variables}
+        self._canonical_inputs: dict[str, float] = {}
+        self._output_variables = [v for b in self._output_bindings for v in b.variables]
+        self._output_refs = [self.variables[v].valueReference for v in self._output_variables]
         self._slave = None
         self._unzip_dir = None
         self._messages: list[str] = []
-        self._callbacks = None
 
     # -- ports -------------------------------------------------------------------------
     @property
     def input_names(self):
-        return list(self._inputs)
+        return list(self._input_binding)
 
     @property
     def output_names(self):
-        return list(self._outputs)
+        return [port for b in self._output_bindings for port in b.ports]
 
-    def _bind_ports(self, mapping: Mapping[str, VariableMapping]) -> None:
-        mapped_variables = set()
-        for port, target in mapping.items():
-            variable = self.variables.get(target.variable)
-            if variable is None:
-                raise FmuError(
-                    f"{self.where}.mapping.{port}: FMU {self.fmu_path.name} has no variable '{target.variable}'"
-                )
-            if variable.causality not in ("input", "output"):
-                raise FmuError(
-                    f"{self.where}.mapping.{port}: variable '{target.variable}' has causality "
-                    f"'{variable.causality}'; only inputs and outputs can be mapped"
-                )
-            expected = CANONICAL_PLANT_PORTS.get(port)
-            if expected is not None and variable.causality != expected:
-                raise FmuError(
-                    f"{self.where}.mapping.{port}: '{port}' is a plant {expected} but FMU variable "
-                    f"'{target.variable}' is an {variable.causality}"
-                )
-            if variable.type != "Real":
-                raise FmuError(f"{self.where}.mapping.{port}: variable '{target.variable}' is not Real")
-            (self._inputs if variable.causality == "input" else self._outputs)[port] = target
-            mapped_variables.add(target.variable)
-        for variable in self.model_description.modelVariables:
-            if variable.name in mapped_variables or variable.type != "Real":
-                continue
-            if variable.causality == "input":
-                self._inputs.setdefault(variable.name, VariableMapping(variable.name))
-            elif variable.causality == "output":
-                self._outputs.setdefault(variable.name, VariableMapping(variable.name))
+    @property
+    def identity(self) -> dict[str, str]:
+        """The FMU's model name and GUID (what a prediction model may be declared for)."""
+        return {"model_name": self.model_description.modelName, "guid": self.model_description.guid}
 
     def _parameter_values(self, spec: ParticipantSpec, substitutions: Mapping[str, str]) -> dict:
         values = {}
@@ -181,28 +158,21 @@ class FmuParticipant(Participant):
     # -- lifecycle -----------------------------------------------------------------------
     def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         from fmpy import extract
-        from fmpy.fmi2 import FMU2Slave
 
         self._unzip_dir = tempfile.mkdtemp(prefix=f"fmu-{self.name}-")
         extract(str(self.fmu_path), self._unzip_dir)
-        self._slave = FMU2Slave(
-            guid=self.model_description.guid,
-            unzipDirectory=self._unzip_dir,
-            modelIdentifier=self.model_description.coSimulation.modelIdentifier,
-            instanceName=self.name,
-        )
-        self._slave.instantiate(callbacks=self._make_callbacks(), loggingOn=False)
-        self._call("fmi2SetupExperiment", self._slave.setupExperiment, startTime=start_time)
-        self._call("fmi2EnterInitializationMode", self._slave.enterInitializationMode)
+        self._slave = FmiSlave(self.model_description, self._unzip_dir, self.name, self._on_message)
+        self._slave.instantiate()
+        self._call("EnterInitializationMode", self._slave.enter_initialization, start_time)
         for name, value in self.parameters.items():
             self._set_variable(name, value)
         self._set_inputs(inputs)
-        self._call("fmi2ExitInitializationMode", self._slave.exitInitializationMode)
+        self._call("ExitInitializationMode", self._slave.exit_initialization)
         return self._read_outputs(start_time)
 
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         self._set_inputs(inputs)
-        self._call("fmi2DoStep", self._slave.doStep, time, step_size)
+        self._call("DoStep", self._slave.do_step, time, step_size)
         return self._read_outputs(time + step_size)
 
     def terminate(self) -> None:
@@ -210,86 +180,78 @@ class FmuParticipant(Participant):
             try:
                 self._slave.terminate()
             except Exception:  # a failed FMU may refuse terminate; freeing it is what matters
-                log.debug("%s: fmi2Terminate failed", self.name, exc_info=True)
+                log.debug("%s: %s failed", self.name, self._slave.name("Terminate"), exc_info=True)
             try:
-                self._slave.freeInstance()
+                self._slave.free()
             except Exception:
-                log.debug("%s: fmi2FreeInstance failed", self.name, exc_info=True)
+                log.debug("%s: %s failed", self.name, self._slave.name("FreeInstance"), exc_info=True)
             self._slave = None
         if self._unzip_dir is not None:
             shutil.rmtree(self._unzip_dir, ignore_errors=True)
             self._unzip_dir = None
 
     # -- helpers ---------------------------------------------------------------------------
-    def _make_callbacks(self):
-        from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-        from fmpy import calloc, free
-
-        def logger(_component, _instance, status, category, message):
-            text = message.decode("utf-8", "replace") if message else ""
-            # errors are raised with this text (ModelError); warnings are only logged
-            level = logging.WARNING if status in (1, 2) else logging.DEBUG
-            log.log(level, "%s [%s]: %s", self.name, (category or b"").decode(), text)
-            if status >= 1:
-                self._messages.append(text)
-
-        callbacks = fmi2CallbackFunctions()
-        callbacks.logger = fmi2CallbackLoggerTYPE(logger)
-        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        try:
-            from fmpy.logging import addLoggerProxy
-
-            addLoggerProxy(byref(callbacks))  # formats the FMU's printf-style messages
-        except Exception:
-            log.debug("fmpy logger proxy unavailable; FMU messages stay unformatted", exc_info=True)
-        self._callbacks = callbacks  # keep the ctypes objects alive
-        return callbacks
+    def _on_message(self, status: int, category: str, text: str) -> None:
+        # errors are raised with this text (ModelError); warnings are only logged
+        level = logging.WARNING if status in (1, 2) else logging.DEBUG
+        log.log(level, "%s [%s]: %s", self.name, category, text)
+        if status >= 1:
+            self._messages.append(text)
 
     def _call(self, function: str, call, *args, **kwargs):
+        """Call the FMU; ``function`` is the name without its ``fmi2``/``fmi3`` prefix."""
         if self._messages:
             self._messages.clear()
         try:
             return call(*args, **kwargs)
         except FMICallException as exc:
             detail = self._messages[-1] if self._messages else str(exc)
-            raise ModelError(f"{self.name} ({self.fmu_path.name}): {function} failed: {detail}") from exc
+            raise ModelError(
+                f"{self.name} ({self.fmu_path.name}): {self._slave.name(function)} failed: {detail}") from exc
 
     def _set_variable(self, name: str, value) -> None:
         variable = self.variables[name]
         refs = [variable.valueReference]
-        if variable.type == "Real":
-            self._call("fmi2SetReal", self._slave.setReal, vr=refs, value=[float(value)])
-        elif variable.type in ("Integer", "Enumeration"):
-            self._call("fmi2SetInteger", self._slave.setInteger, vr=refs, value=[int(value)])
+        if variable.type in REAL_TYPES:
+            self._call("SetReal", self._slave.set_reals, refs, [float(value)])
+        elif variable.type in ("Integer", "Enumeration", "Int32"):
+            self._call("SetInteger", self._slave.set_integers, refs, [int(value)])
         elif variable.type == "Boolean":
-            self._call("fmi2SetBoolean", self._slave.setBoolean, vr=refs, value=[bool(value)])
+            self._call("SetBoolean", self._slave.set_booleans, refs, [bool(value)])
         else:
-            self._call("fmi2SetString", self._slave.setString, vr=refs, value=[str(value)])
+            self._call("SetString", self._slave.set_strings, refs, [str(value)])
 
     def _set_inputs(self, inputs: Mapping[str, Value]) -> None:
         if not inputs:
             return
-        refs, values = [], []
+        touched = []
         for port, value in inputs.items():
             number = float(value)
             if not math.isfinite(number):
                 raise ModelError(f"{self.name}: input '{port}' received a non-finite value ({number})")
-            refs.append(self._input_refs[port])
-            values.append(number / self._inputs[port].scale)
-        self._call("fmi2SetReal", self._slave.setReal, refs, values)
+            self._canonical_inputs[port] = number
+            binding = self._input_binding[port]
+            if binding not in touched:
+                touched.append(binding)
+        refs, values = [], []
+        for binding in touched:
+            for variable, value in binding.to_fmu(self._canonical_inputs).items():
+                refs.append(self._input_refs[variable])
+                values.append(value)
+        self._call("SetReal", self._slave.set_reals, refs, values)
 
     def _read_outputs(self, time: float) -> dict[str, Value]:
         if not self._output_refs:
             return {}
-        values = self._call("fmi2GetReal", self._slave.getReal, self._output_refs)
-        outputs = {}
-        for port, value, scale in zip(self._output_ports, values, self._output_scales):
+        values = self._call("GetReal", self._slave.get_reals, self._output_refs)
+        by_variable = {}
+        for variable, value in zip(self._output_variables, values):
             if not math.isfinite(value):
                 raise ModelError(
-                    f"{self.name} ({self.fmu_path.name}): output '{self._outputs[port].variable}' "
-                    f"is {value} at t = {time:g} s"
+                    f"{self.name} ({self.fmu_path.name}): output '{variable}' is {value} at t = {time:g} s"
                 )
-            outputs[port] = value * scale
+            by_variable[variable] = value
+        outputs = {}
+        for binding in self._output_bindings:
+            outputs.update(binding.to_canonical(by_variable))
         return outputs

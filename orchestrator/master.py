@@ -2,7 +2,9 @@
 
 Exchange order (documented in ``docs/scenario-format.md``): at every communication
 point the participants due there step in declaration order (Gauss-Seidel); each sees
-the latest outputs of all others.  A participant declared with ``every = m`` steps
+the latest outputs of all others. With ``[simulation] exchange = "jacobi"`` the master
+hands on data as one that steps all FMUs at once (OSP's libcosim): set-ups see no other
+outputs, and the outputs of a step from ``t`` reach the others at ``t + step_size``.  A participant declared with ``every = m`` steps
 every m macro steps with a step of ``m * dt_s`` and holds its outputs in between.
 """
 
@@ -77,6 +79,10 @@ class CoSimulation:
             self.every[spec.name] = spec.every
         self._check_connections()
         self._check_stop_conditions()
+        by_name = {p.name: p for p in self.participants}
+        for participant in self.participants:
+            participant.connected({c.target_port: by_name[c.source] for c in scenario.connections
+                                   if c.target == participant.name})
         # ports are fixed once a participant is built
         self._declared = {p.name: frozenset(p.output_names) for p in self.participants}
 
@@ -86,7 +92,7 @@ class CoSimulation:
         if spec.is_fmu:
             from orchestrator.fmu_participant import FmuParticipant, resolve_fmu
 
-            path = resolve_fmu(spec.fmu, self.scenario.directory, where)
+            path = resolve_fmu(spec.fmu, self.scenario.directory, where, spec.fmi_version)
             return FmuParticipant(spec, path, where, substitutions)
         if spec.type == "python":
             target = spec.class_path
@@ -160,13 +166,22 @@ class CoSimulation:
         status, reason, steps_done = "finished", "", 0
         started = wallclock.perf_counter()
         bar = _progress_bar(sim.steps, self.scenario.simulation.name, progress)
+        jacobi = sim.exchange == "jacobi"
+        # Jacobi: outputs of a step from t reach the bus at t + step_size, as an FMI master
+        # that steps all FMUs at once hands them on: (release step, participant, outputs)
+        pending: list[tuple[int, str, dict]] = []
         try:
             for participant in self.participants:
-                inputs = {port: bus[key] for port, key in inbound[participant.name] if key in bus}
+                seen = {} if jacobi else bus
+                inputs = {port: seen[key] for port, key in inbound[participant.name] if key in seen}
                 outputs = participant.setup(sim.start_s, inputs)
                 self._publish(participant, sim.start_s, outputs, bus, recorder)
             for k in range(sim.steps):
                 t = sim.start_s + k * sim.dt_s
+                if pending:
+                    for _, name, outputs in [item for item in pending if item[0] <= k]:
+                        bus.update({(name, port): value for port, value in outputs.items()})
+                    pending = [item for item in pending if item[0] > k]
                 for participant in self.participants:
                     every = self.every[participant.name]
                     if k % every:
@@ -175,7 +190,11 @@ class CoSimulation:
                     inputs = {port: bus[key] for port, key in inbound[participant.name] if key in bus}
                     outputs = participant.step(t, step_size, inputs)
                     stamp = t + step_size if participant.outputs_at_step_end else t
-                    self._publish(participant, stamp, outputs, bus, recorder)
+                    if jacobi:
+                        self._publish(participant, stamp, outputs, None, recorder)
+                        pending.append((k + every, participant.name, outputs))
+                    else:
+                        self._publish(participant, stamp, outputs, bus, recorder)
                 steps_done = k + 1
                 if bar is not None:
                     bar.update(1)
@@ -218,7 +237,8 @@ class CoSimulation:
                 raise ModelError(f"{name}: returned an undeclared output '{port}'")
             if not checked and not _finite(value):
                 raise ModelError(f"{name}: output '{port}' is not finite at t = {stamp:g} s")
-            bus[(name, port)] = value
+            if bus is not None:
+                bus[(name, port)] = value
         recorder.add(name, stamp, outputs)
 
     def close(self) -> None:

@@ -72,6 +72,14 @@ class Participant(abc.ABC):
     def terminate(self) -> None:
         """Release resources; called once, also after a failed run."""
 
+    def connected(self, sources: Mapping[str, "Participant"]) -> None:
+        """Told once, after every connection is checked, which participant drives each input.
+
+        ``sources`` maps this participant's connected input ports to the participants
+        whose outputs feed them.  Only for checks (e.g. whether a controller's model was made
+        for the plant it steers); participants still exchange values only through ports.
+        """
+
     def summary(self) -> dict[str, Any]:
         """Key figures for ``summary.json`` (JSON-serialisable), gathered after the run."""
         return {}

@@ -18,9 +18,19 @@ from orchestrator.participant import is_finite_number
 from orchestrator.errors import ScenarioError
 
 TOP_LEVEL_KEYS = ("connections", "simulation", "metocean", "participants", "outputs")
-SIMULATION_KEYS = ("name", "start_s", "stop_s", "steps", "dt_s", "stop_when")
+SIMULATION_KEYS = ("name", "start_s", "stop_s", "steps", "dt_s", "stop_when", "exchange")
+#: Exchange orders: participants due at a communication point step one after another, each
+#: seeing the outputs of those before it ("gauss-seidel"), or all from the values published
+#: before the point ("jacobi", as masters that step FMUs in parallel do, e.g. libcosim).
+EXCHANGE_ORDERS = ("gauss-seidel", "jacobi")
 STOP_OPERATORS = ("<=", ">=", "<", ">")
-FMU_PARTICIPANT_KEYS = ("fmu", "every", "parameter_set", "parameters", "mapping")
+FMU_PARTICIPANT_KEYS = ("fmu", "fmi_version", "every", "parameter_set", "parameters", "mapping", "geodetic",
+                        "initial")
+MAPPING_KEYS = ("variable", "scale", "offset", "unit", "geodetic", "start")
+VECTOR_MAPPING_KEYS = ("speed", "direction", "direction_is", "north", "east", "units")
+GEODETIC_ROLES = ("latitude", "longitude")
+DIRECTION_SENSES = ("towards", "from")
+FMI_VERSIONS = ("2.0", "3.0")
 PYTHON_PARTICIPANT_KEYS = ("type", "class", "every", "options")
 OUTPUT_KEYS = ("format", "analyses", "figures", "options")
 OUTPUT_FORMATS = ("parquet", "csv")
@@ -28,10 +38,37 @@ OUTPUT_FORMATS = ("parquet", "csv")
 
 @dataclass(frozen=True)
 class VariableMapping:
-    """A canonical port bound to an FMU variable: ``canonical = scale * fmu_value``."""
+    """A port bound to an FMU variable: ``canonical = scale * fmu_value + offset``.
+
+    Without ``scale`` and ``offset`` the conversion follows from the unit the FMU declares
+    for the variable (or ``unit``, for a variable that declares none); ``geodetic`` marks a
+    latitude or longitude projected to north/east metres; ``start`` names the FMU parameter
+    holding the port's initial value (see :mod:`orchestrator.port_mapping`).
+    """
 
     variable: str
-    scale: float = 1.0
+    scale: float | None = None
+    offset: float | None = None
+    unit: str | None = None
+    geodetic: str | None = None
+    start: str | None = None
+
+
+@dataclass(frozen=True)
+class VectorMapping:
+    """A vector input (``current``, ``wind``) the FMU takes as speed + direction or north + east.
+
+    ``direction_is`` says whether the direction is where the flow goes (``towards``: a
+    current's set) or where it comes from (``from``: a wind); ``units`` may state the unit
+    of a part (``speed``, ``direction``, ``north``, ``east``) the FMU declares none for.
+    """
+
+    speed: str | None = None
+    direction: str | None = None
+    direction_is: str = "towards"
+    north: str | None = None
+    east: str | None = None
+    units: dict[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -43,7 +80,10 @@ class ParticipantSpec:
     fmu: str | None = None
     parameter_set: str | None = None
     parameters: dict[str, Any] = field(default_factory=dict)
-    mapping: dict[str, VariableMapping] = field(default_factory=dict)
+    mapping: dict[str, VariableMapping | VectorMapping] = field(default_factory=dict)
+    geodetic_origin_deg: tuple[float, float] | None = None
+    initial: dict[str, float] = field(default_factory=dict)
+    fmi_version: str = "2.0"   # of a built-in model; an FMU file's own description decides
     type: str | None = None
     class_path: str | None = None
     options: dict[str, Any] = field(default_factory=dict)
@@ -90,6 +130,7 @@ class SimulationSpec:
     stop_s: float
     dt_s: float
     stop_when: tuple[StopCondition, ...] = ()
+    exchange: str = "gauss-seidel"
 
     @property
     def steps(self) -> int:
@@ -266,8 +307,12 @@ def _simulation(table: dict, path: Path) -> SimulationSpec:
             raise ScenarioError(
                 f"{where}: 'simulation.stop_s' - 'start_s' must be a positive whole number of 'dt_s' steps"
             )
+    exchange = table.get("exchange", "gauss-seidel")
+    if exchange not in EXCHANGE_ORDERS:
+        raise ScenarioError(f"{where}: 'simulation.exchange' must be one of {', '.join(EXCHANGE_ORDERS)}, "
+                            f"got {exchange!r}")
     return SimulationSpec(name=name, start_s=start, stop_s=stop, dt_s=dt,
-                          stop_when=_stop_conditions(table.get("stop_when", []), where))
+                          stop_when=_stop_conditions(table.get("stop_when", []), where), exchange=exchange)
 
 
 def _stop_conditions(entries, where: str) -> tuple[StopCondition, ...]:
@@ -335,6 +380,9 @@ def _fmu_participant(name: str, body: dict, every: int, where: str, prefix: str)
     fmu = body["fmu"]
     if not isinstance(fmu, str) or not fmu:
         raise ScenarioError(f"{where}: '{prefix}fmu' must be a model name or a path to an .fmu")
+    fmi_version = body.get("fmi_version", "2.0")
+    if fmi_version not in FMI_VERSIONS:
+        raise ScenarioError(f"{where}: '{prefix}fmi_version' must be one of {', '.join(FMI_VERSIONS)}, got {fmi_version!r}")
     parameter_set = body.get("parameter_set")
     if parameter_set is not None and not isinstance(parameter_set, str):
         raise ScenarioError(f"{where}: '{prefix}parameter_set' must be a string")
@@ -344,23 +392,76 @@ def _fmu_participant(name: str, body: dict, every: int, where: str, prefix: str)
     for key, value in parameters.items():
         if not isinstance(value, (int, float, bool, str)):
             raise ScenarioError(f"{where}: '{prefix}parameters.{key}' must be a number, boolean or string")
-    mapping = {}
-    for port, target in body.get("mapping", {}).items():
-        key = f"{prefix}mapping.{port}"
-        if isinstance(target, str):
-            mapping[port] = VariableMapping(target)
-        elif isinstance(target, dict):
-            unknown = set(target) - {"variable", "scale"}
-            if unknown or not isinstance(target.get("variable"), str):
-                raise ScenarioError(f"{where}: '{key}' must be \"variable\" or {{ variable = \"...\", scale = 1.0 }}")
-            scale = _number(target, "scale", where, key + ".", default=1.0)
-            if scale == 0:
-                raise ScenarioError(f"{where}: '{key}.scale' must not be zero")
-            mapping[port] = VariableMapping(target["variable"], scale)
-        else:
-            raise ScenarioError(f"{where}: '{key}' must be a variable name or a table")
+    mapping_table = body.get("mapping", {})
+    if not isinstance(mapping_table, dict):
+        raise ScenarioError(f"{where}: '{prefix}mapping' must be a table")
+    mapping = {port: _mapping_entry(target, where, f"{prefix}mapping.{port}")
+               for port, target in mapping_table.items()}
+    origin = None
+    geodetic = body.get("geodetic")
+    if geodetic is not None:
+        if not isinstance(geodetic, dict):
+            raise ScenarioError(f"{where}: '{prefix}geodetic' must be a table with origin_deg = [lat, lon]")
+        _reject_unknown(geodetic, ("origin_deg",), where, prefix + "geodetic.")
+        value = geodetic.get("origin_deg")
+        if (not isinstance(value, list) or len(value) != 2 or not all(is_finite_number(v) for v in value)
+                or not -90.0 < value[0] < 90.0 or not -180.0 <= value[1] <= 180.0):
+            raise ScenarioError(f"{where}: '{prefix}geodetic.origin_deg' must be [latitude, longitude] in degrees")
+        origin = (float(value[0]), float(value[1]))
+    initial = body.get("initial", {})
+    if not isinstance(initial, dict):
+        raise ScenarioError(f"{where}: '{prefix}initial' must be a table")
+    from orchestrator.plant_ports import INITIAL_KEYS
+
+    _reject_unknown(initial, INITIAL_KEYS, where, prefix + "initial.")
+    for key, value in initial.items():
+        if not is_finite_number(value):
+            raise ScenarioError(f"{where}: '{prefix}initial.{key}' must be a finite number, got {value!r}")
     return ParticipantSpec(name=name, every=every, fmu=fmu, parameter_set=parameter_set,
-                           parameters=parameters, mapping=mapping)
+                           parameters=parameters, mapping=mapping, geodetic_origin_deg=origin,
+                           fmi_version=fmi_version,
+                           initial={k: float(v) for k, v in initial.items()})
+
+
+def _mapping_entry(target, where: str, key: str) -> VariableMapping | VectorMapping:
+    """One ``mapping.<port>`` entry: a variable name, a variable table or a vector table."""
+    if isinstance(target, str):
+        return VariableMapping(target)
+    if not isinstance(target, dict):
+        raise ScenarioError(f"{where}: '{key}' must be a variable name or a table")
+    if "variable" not in target and not set(target) & {"speed", "direction", "north", "east"}:
+        raise ScenarioError(f"{where}: '{key}' must be \"variable\", {{ variable = \"...\", scale = 1.0, ... }} "
+                            "or a vector { speed = ..., direction = ... } / { north = ..., east = ... }")
+    if "variable" not in target:
+        _reject_unknown(target, VECTOR_MAPPING_KEYS, where, key + ".")
+        polar = "speed" in target or "direction" in target
+        cartesian = "north" in target or "east" in target
+        names = ("speed", "direction") if polar else ("north", "east")
+        if polar == cartesian or not all(isinstance(target.get(n), str) for n in names):
+            raise ScenarioError(f"{where}: '{key}' needs variable = \"...\", or a vector: speed and direction, "
+                                "or north and east")
+        sense = target.get("direction_is", "towards")
+        if sense not in DIRECTION_SENSES:
+            raise ScenarioError(f"{where}: '{key}.direction_is' must be one of {', '.join(DIRECTION_SENSES)}")
+        units = target.get("units", {})
+        if not isinstance(units, dict) or not all(k in names and isinstance(v, str) for k, v in units.items()):
+            raise ScenarioError(f"{where}: '{key}.units' must map {' and '.join(names)} to unit names")
+        return VectorMapping(speed=target.get("speed"), direction=target.get("direction"), direction_is=sense,
+                             north=target.get("north"), east=target.get("east"), units=dict(units))
+    _reject_unknown(target, MAPPING_KEYS, where, key + ".")
+    if not isinstance(target["variable"], str) or not target["variable"]:
+        raise ScenarioError(f"{where}: '{key}.variable' must be an FMU variable name")
+    scale = _number(target, "scale", where, key + ".") if "scale" in target else None
+    if scale == 0:
+        raise ScenarioError(f"{where}: '{key}.scale' must not be zero")
+    offset = _number(target, "offset", where, key + ".") if "offset" in target else None
+    for text in ("unit", "start"):
+        if text in target and (not isinstance(target[text], str) or not target[text]):
+            raise ScenarioError(f"{where}: '{key}.{text}' must be a non-empty string")
+    role = target.get("geodetic")
+    if role is not None and role not in GEODETIC_ROLES:
+        raise ScenarioError(f"{where}: '{key}.geodetic' must be one of {', '.join(GEODETIC_ROLES)}, got {role!r}")
+    return VariableMapping(target["variable"], scale, offset, target.get("unit"), role, target.get("start"))
 
 
 def _connections(entries, participants, where: str) -> tuple[Connection, ...]:

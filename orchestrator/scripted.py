@@ -103,3 +103,47 @@ def _number(options, key, where, default=None) -> float:
     if not is_finite_number(value):
         raise ScenarioError(f"{where}.{key}: must be a finite number, got {value!r}")
     return float(value)
+
+
+RUDDER_OPTIONS = ("mode", "propeller_rps", "rudder_steps", "rudder_deg", "angle_deg", "execute_s")
+
+
+class ScriptedRudder(ScriptedTau):
+    """Open-loop rudder angle and propeller revolutions, for plants at actuator level.
+
+    Options: ``propeller_rps`` (constant revolutions [1/s]); ``rudder_steps``, a list of
+    ``[time_s, angle_deg]`` (``mode = "steps"``, positive to starboard); or
+    ``mode = "zigzag"`` with ``rudder_deg``, ``angle_deg`` and ``execute_s``: the IMO zig-zag,
+    +rudder until the heading has changed by +angle, then -rudder until -angle, and so on.
+    Outputs ``rudder_angle_cmd`` [rad] and ``propeller_rps_cmd`` [1/s].
+    """
+
+    @classmethod
+    def from_options(cls, name: str, options: Mapping, context: BuildContext) -> "ScriptedRudder":
+        where = context.where + ".options"
+        reject_unknown_options(options, RUDDER_OPTIONS, where)
+        mode = options.get("mode", "steps")
+        rps = _number(options, "propeller_rps", where)
+        if mode == "steps":
+            steps = options.get("rudder_steps", [])
+            if not isinstance(steps, list) or not all(
+                isinstance(s, list) and len(s) == 2 and all(is_finite_number(v) for v in s) for s in steps
+            ):
+                raise ScenarioError(f"{where}.rudder_steps: must be a list of [time_s, angle_deg] pairs")
+            return cls(name, rps, steps=[(float(t), math.radians(v)) for t, v in steps])
+        if mode == "zigzag":
+            zigzag = (_number(options, "execute_s", where, 0.0), math.radians(_number(options, "rudder_deg", where)),
+                      math.radians(_number(options, "angle_deg", where, 10.0)))
+            return cls(name, rps, zigzag=zigzag)
+        raise ScenarioError(f"{where}.mode: must be 'steps' or 'zigzag', got {mode!r}")
+
+    @property
+    def output_names(self):
+        return ["rudder_angle_cmd", "propeller_rps_cmd"]
+
+    def setup(self, start_time, inputs):
+        self._sign, self._psi_execute = 1.0, None
+        return {"rudder_angle_cmd": self._yaw_moment(start_time, inputs), "propeller_rps_cmd": self.tau_u}
+
+    def step(self, time, step_size, inputs):
+        return {"rudder_angle_cmd": self._yaw_moment(time, inputs), "propeller_rps_cmd": self.tau_u}

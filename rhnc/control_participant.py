@@ -10,6 +10,11 @@ the solve), ``disturbance`` ((5,): the observer's current north, east [m/s], w_u
 w_r [N·m]), ``encounter_class`` ((max_obstacles,): per obstacle row the index into
 :data:`rhnc.colregs.ENCOUNTER_CLASSES`, -1 unclassified or no such row) and
 ``domain_active`` ((max_obstacles,): 1 when the row's collision constraint was on).
+
+The prediction model should be the plant's: a parameter set names the plants it is for
+(``plant_fmu``: model names, ``plant_guid``: the GUID it was identified on).  When the
+FMU feeding the measured state is neither, the run logs a warning and the summary's
+``model_check`` says so (see :meth:`ControlParticipant.connected`).
 """
 
 from __future__ import annotations
@@ -18,6 +23,7 @@ import logging
 import math
 from collections.abc import Mapping, Sequence
 from types import SimpleNamespace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -25,7 +31,7 @@ import numpy as np
 from orchestrator.errors import ModelError, ScenarioError
 from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
 from rhnc.nmpc import SOLVERS, NMPCController, NMPCSettings
-from rhnc.ship_model import STATE_NAMES, load_parameter_set
+from rhnc.ship_model import PARAMETER_SETS_FILE, STATE_NAMES, available_parameter_sets, load_parameter_set
 
 LOG = logging.getLogger(__name__)
 NM = 1852.0
@@ -33,6 +39,8 @@ KNOT = NM / 3600.0
 
 OPTIONS = (
     "parameter_set",
+    "model_file",
+    "model_set",
     "parameter_overrides",
     "horizon_steps",
     "control_interval_s",
@@ -96,8 +104,14 @@ class ControlParticipant(Participant):
     -------
     parameter_set : str
         Set of ``models/KCS/parameter_sets.toml`` for the prediction model (default ``default``).
+    model_file, model_set : str
+        Instead of ``parameter_set``: a parameter-set file (relative to the scenario; e.g.
+        one written by ``python -m orchestrator identify``) and the set in it (default:
+        its only set).
     parameter_overrides : table
-        Single parameter values replacing the set's (same keys as the plant's).
+        Single coefficients replacing the set's, by key (``m11``, ``d33``, ``tau_r_max``, ...:
+        the keys of the set, units as in ``models/KCS/parameter_sets.toml``).  A model
+        changed this way is still checked against the plant by the set's ``plant_fmu``.
     horizon_steps : int
         N_c (default 15).
     control_interval_s : float
@@ -145,6 +159,8 @@ class ControlParticipant(Participant):
 
     def __init__(self, name: str, controller: NMPCController, et_default: float) -> None:
         super().__init__(name)
+        self.model_check: dict[str, Any] = {"set": controller.params.name, "check": "plant not seen"}
+        self._tau_r_history: list[float] = []
         self.controller = controller
         self.et_default = et_default
         n = controller.settings.horizon_steps
@@ -161,16 +177,10 @@ class ControlParticipant(Participant):
         """Build from scenario options (see class docstring); errors name the key."""
         where = context.where
         reject_unknown_options(options, OPTIONS, where)
-        set_name = options.get("parameter_set", "default")
-        if not isinstance(set_name, str):
-            raise ScenarioError(f"{where}: option 'parameter_set' must be a string")
         overrides = options.get("parameter_overrides", {})
         if not isinstance(overrides, Mapping):
             raise ScenarioError(f"{where}: option 'parameter_overrides' must be a table")
-        try:
-            params = load_parameter_set(set_name, overrides)
-        except ScenarioError as error:
-            raise ScenarioError(f"{where}: {error}") from None
+        params = _prediction_model(options, overrides, context)
         kwargs: dict[str, Any] = {
             "control_interval_s": _number(options, "control_interval_s", where, context.step_size),
             "own_radius_m": _number(options, "own_radius_nm", where, 0.0) * NM,
@@ -272,6 +282,7 @@ class ControlParticipant(Participant):
         et = float(inputs.get("et", self.et_default)) > 0.5
         solution = self.controller.solve(time, state, reference, obstacles, et, previous_tau=self._tau)
         self._tau = solution.tau
+        self._tau_r_history.append(float(solution.tau[1]))
         self._steps += 1
         self._solve_times.append(solution.solve_time_s)
         if solution.fallback:
@@ -324,7 +335,87 @@ class ControlParticipant(Participant):
             "timeout_count": self._timeouts,
             "stand_on_actions": self.controller.domains.stand_on_actions,
             "max_speed_kn": float(max(self._speeds)) / KNOT if self._speeds else None,
+            "tau_r_sign_changes_per_100_solves": tau_r_sign_changes_per_100(
+                self._tau_r_history, self.controller.params.tau_r_max),
+            "model_check": self.model_check,
         }
+
+    def connected(self, sources: Mapping[str, Participant]) -> None:
+        """Check the prediction model against the plant feeding the measured state.
+
+        ``check``: ``identified`` (the set's ``plant_guid`` is the FMU's GUID),
+        ``declared`` (the FMU's model name is in the set's ``plant_fmu``), or
+        ``neither identified on nor declared for this plant`` with a logged warning.
+        """
+        plant = sources.get("x")
+        identity = getattr(plant, "identity", None)
+        if identity is None:
+            return
+        extras = self.controller.params.extras
+        declared = extras.get("plant_fmu", ())
+        declared = [declared] if isinstance(declared, str) else list(declared)
+        check = "neither identified on nor declared for this plant"
+        if extras.get("plant_guid") == identity["guid"]:
+            check = "identified"
+        elif identity["model_name"] in declared:
+            check = "declared"
+        self.model_check = {"set": self.controller.params.name, "plant": identity["model_name"],
+                            "plant_guid": identity["guid"], "check": check}
+        if check.startswith("neither"):
+            LOG.warning("%s: the NMPC's prediction model '%s' was neither identified on nor declared for the "
+                        "plant FMU %s (%s); fit one with: python -m orchestrator identify <scenario>",
+                        self.name, self.controller.params.name, identity["model_name"], identity["guid"])
+
+
+def tau_r_sign_changes_per_100(tau_r: Sequence[float], tau_r_max: float, deadband: float = 0.01) -> float | None:
+    """Sign changes of the commanded yaw moment per 100 solves (chattering measure).
+
+    Values within ``deadband`` * ``tau_r_max`` of zero carry no sign; a change is counted
+    when a value's sign differs from the last signed one.  None without solves.
+    """
+    if not tau_r:
+        return None
+    changes, last = 0, 0.0
+    for value in tau_r:
+        if abs(value) <= deadband * tau_r_max:
+            continue
+        sign = math.copysign(1.0, value)
+        changes += int(last != 0.0 and sign != last)
+        last = sign
+    return 100.0 * changes / len(tau_r)
+
+
+def _prediction_model(options: Mapping[str, Any], overrides: Mapping[str, Any], context: BuildContext):
+    """The NMPC's model: ``parameter_set`` of the KCS file, or ``model_set`` of ``model_file``."""
+    where = context.where
+    if "model_file" in options:
+        if "parameter_set" in options:
+            raise ScenarioError(f"{where}: give either option 'parameter_set' or 'model_file', not both")
+        file = options["model_file"]
+        if not isinstance(file, str) or not file:
+            raise ScenarioError(f"{where}: option 'model_file' must be a path to a parameter-set TOML file")
+        path = Path(file) if Path(file).is_absolute() else Path(context.scenario_dir) / file
+        if not path.is_file():
+            raise ScenarioError(f"{where}: option 'model_file': {path} not found "
+                                "(write one with python -m orchestrator identify)")
+        set_name = options.get("model_set")
+        if set_name is None:
+            sets = available_parameter_sets(path)
+            if len(sets) != 1:
+                raise ScenarioError(f"{where}: option 'model_set' must name one of {', '.join(sets)} in {path}")
+            set_name = next(iter(sets))
+    else:
+        if "model_set" in options:
+            raise ScenarioError(f"{where}: option 'model_set' needs 'model_file'")
+        path = PARAMETER_SETS_FILE
+        set_name = options.get("parameter_set", "default")
+    if not isinstance(set_name, str):
+        raise ScenarioError(f"{where}: option '{'model_set' if 'model_file' in options else 'parameter_set'}' "
+                            "must be a string")
+    try:
+        return load_parameter_set(set_name, overrides, path=path)
+    except ScenarioError as error:
+        raise ScenarioError(f"{where}: {error}") from None
 
 
 def _number(options: Mapping[str, Any], key: str, where: str, default: float | None) -> float | None:

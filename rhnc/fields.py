@@ -93,16 +93,20 @@ class PlanningWeather:
         return float(self.x[0]), float(self.x[-1]), float(self.y[0]), float(self.y[-1])
 
 
-def resample_weather(metocean, resolution_nm: float = 1.0) -> PlanningWeather:
+def resample_weather(metocean, resolution_nm: float = 1.0, t_s: float | None = None) -> PlanningWeather:
     """Sample a :class:`rhnc.metocean.MetOceanField` bilinearly onto a planning grid.
 
     Parameters
     ----------
     metocean : MetOceanField
-        Anything with axes ``x``, ``y`` [m] and ``sample(x, y) -> dict``.
+        Anything with axes ``x``, ``y`` [m] and ``sample(x, y, t_s) -> dict``.
     resolution_nm : float
         Node spacing of the planning grid [nm].  The grid starts at the met-ocean grid's
         south-west node and stops at the last node inside its extent.
+    t_s : float, optional
+        Time [s, simulation clock] at which a time-varying field is taken (linear between
+        its time steps; the two steps are combined first, then resampled in space, which
+        equals sampling at ``t_s`` to rounding); a static field ignores it.
     """
     if resolution_nm <= 0:
         raise ValueError("planning resolution must be positive")
@@ -112,7 +116,9 @@ def resample_weather(metocean, resolution_nm: float = 1.0) -> PlanningWeather:
     if x.size < 2 or y.size < 2:
         raise ValueError(f"planning resolution {resolution_nm} nm leaves fewer than 2 nodes on the map")
     xx, yy = np.meshgrid(x, y, indexing="ij")
-    sampled = metocean.sample(xx, yy)
+    if getattr(metocean, "is_time_varying", False) and t_s is not None:
+        metocean = metocean.snapshot(t_s)  # one spatial pass instead of one per time step
+    sampled = metocean.sample(xx, yy, t_s=t_s)
     return PlanningWeather(x=x, y=y, **{name: np.asarray(sampled[name], dtype=float) for name in WEATHER_NAMES})
 
 
@@ -211,6 +217,14 @@ class SuperpositionField:
         self._g_min = self._g_span = 0.0
 
     # -- rebuilding -------------------------------------------------------------------
+    def set_weather(self, weather: PlanningWeather) -> None:
+        """Replace the weather (same planning grid); EC and EM are rebuilt at the next update."""
+        if (weather.x.size, weather.y.size) != self.shape:
+            raise ValueError(f"new planning weather has {weather.x.size} x {weather.y.size} nodes, "
+                             f"the field {self.shape[0]} x {self.shape[1]}")
+        self.weather = weather
+        self._speed = None
+
     def update(self, start: Sequence[float], speed: float) -> None:
         """Rebuild the fields for a planning start ``start`` (x, y) [m] and ``speed`` [m/s]."""
         if not speed > 0:

@@ -1,8 +1,9 @@
 """Standard manoeuvre figures from a sailed trajectory: turning circle and zig-zag.
 
 Definitions follow ITTC 7.5-04-02-01 and IMO MSC.137(76): advance and transfer at 90 deg
-heading change, tactical diameter at 180 deg, overshoot angles of the zig-zag.  Here the
-"rudder" is the yaw moment tau_r of the 3-DOF model (the model has no rudder angle).
+heading change, tactical diameter at 180 deg, overshoot angles of the zig-zag.  The
+steering signal is the rudder angle of an actuator-level plant (``KCSMMG``) or, for a plant
+that takes forces, the yaw moment tau_r standing in for it; only its sign changes matter.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ def turning_circle(t, x, y, psi, execute_s: float, length_m: float) -> dict:
     t, x, y, psi : array_like
         Time [s], north and east position [m], heading [rad] samples.
     execute_s : float
-        Time the yaw moment is applied [s].
+        Time the rudder (or yaw moment) is applied [s].
     length_m : float
         Ship length for the non-dimensional figures [m].
 
@@ -55,16 +56,17 @@ def turning_circle(t, x, y, psi, execute_s: float, length_m: float) -> dict:
     return out
 
 
-def zigzag(t, psi, tau_r, execute_s: float) -> dict:
+def zigzag(t, psi, steering, execute_s: float) -> dict:
     """Zig-zag figures: overshoot angles [deg] and the time to the first heading check.
 
-    The overshoot is the heading change beyond the value at which the yaw moment was
-    reversed, measured at the extreme heading that follows.
+    ``steering`` is the rudder angle command (or the yaw moment) at each sample.  The
+    overshoot is the heading change beyond the value at which the steering was reversed,
+    measured at the extreme heading that follows.
     """
-    t, psi, tau_r = (np.asarray(a, dtype=float) for a in (t, psi, tau_r))
+    t, psi, steering = (np.asarray(a, dtype=float) for a in (t, psi, steering))
     start = int(np.searchsorted(t, execute_s - 1e-9))
     change = np.degrees(np.unwrap(psi[start:]) - np.unwrap(psi[start:])[0])
-    moment = tau_r[start:]
+    moment = steering[start:]
     switches = np.nonzero(np.sign(moment[1:]) != np.sign(moment[:-1]))[0] + 1
     overshoots = []
     for n, index in enumerate(switches):

@@ -1,7 +1,9 @@
-"""Met-ocean fields over the map: one data source per scenario for the FMU and the planner.
+"""Met-ocean fields over the map and in time: one data source per scenario for the FMU and the planner.
 
-The field lives on a regular grid in a local plane, x north and y east in metres
-(spec section 0).  Five gridded quantities are kept, all interpolated bilinearly:
+The field lives on a regular grid in a local plane, x north and y east in metres, and
+optionally on a time axis ``times_s`` [s on the simulation clock: t = 0 is the moment the
+scenario's clock reads 0, the departure of every shipped scenario].  Five gridded
+quantities are kept:
 
 =================  =========  ==============================================
 name               unit       meaning
@@ -13,19 +15,21 @@ name               unit       meaning
 ``current_east``   m/s        surface current towards east
 =================  =========  ==============================================
 
+Interpolation (:meth:`MetOceanField.sample`): bilinear in space within each time step,
+then linear in time between the two time steps around ``t_s``, held constant before the
+first and after the last time.  A static field has a single time step and ignores time.
+The MetOcean FMU evaluates the same formula at its own simulation time, so FMU and planner
+agree to rounding (``models/MetOcean/readme.md``).
+
 Sources
 -------
-* ``generate_paper_default``: the paper's synthetic weather (Section 6.1.1, spec section
-  2): wind speed by a bicubic spline through control points, a constant wind direction,
-  Hs from the fetch-limited JONSWAP relation capped at the fully developed
-  Pierson-Moskowitz value, and a constant current.
-* ``from_netcdf``: a NetCDF file with CF names as ERA5 and CMEMS write them (``u10``,
-  ``v10``, ``swh``, ``uo``, ``vo``, or their ``standard_name``), on either a
-  ``northing``/``easting`` grid in metres (what ``to_netcdf`` writes) or a
-  ``latitude``/``longitude`` grid, projected to the local plane about an origin.
+* generators (:mod:`rhnc.weather_generators`, one registry, ``[metocean] generator =
+  "<name>"``): the paper's synthetic weather and the storm sets of ``docs/weather.md``;
+* ``from_netcdf``: a NetCDF file with CF names as ERA5 and CMEMS write them, every time
+  step of it (:mod:`rhnc.metocean_netcdf`).
 
-The environment FMU reads the same grid through ``write_fmu_grid`` (binary format in
-``models/MetOcean/readme.md``), so FMU and planner see identical values.
+The environment FMU reads the same grid through ``write_fmu_grid`` (binary format
+``MOGRID2``, described in ``models/MetOcean/readme.md``).
 """
 
 from __future__ import annotations
@@ -49,20 +53,8 @@ EARTH_RADIUS = 6_371_000.0  #: m, mean radius for the local projection
 
 FIELDS = ("wind_north", "wind_east", "hs", "current_north", "current_east")
 
-#: CF variable names (ERA5/CMEMS short names first, then standard_name) per field.
-CF_NAMES = {
-    "wind_north": ("v10", "northward_wind"),
-    "wind_east": ("u10", "eastward_wind"),
-    "hs": ("swh", "VHM0", "sea_surface_wave_significant_height"),
-    "current_north": ("vo", "northward_sea_water_velocity"),
-    "current_east": ("uo", "eastward_sea_water_velocity"),
-}
-_OUTPUT_NAMES = {"wind_north": "v10", "wind_east": "u10", "hs": "swh",
-                 "current_north": "vo", "current_east": "uo"}
-_STANDARD_NAMES = {"wind_north": "northward_wind", "wind_east": "eastward_wind",
-                   "hs": "sea_surface_wave_significant_height",
-                   "current_north": "northward_sea_water_velocity",
-                   "current_east": "eastward_sea_water_velocity"}
+#: Magic of the FMU grid file with a time axis (the FMU still reads the static MOGRID1).
+FMU_GRID_MAGIC = b"MOGRID2\n"
 
 #: Default wind-speed control points [m/s] of the paper-style weather, a 5 x 5 lattice
 #: spanning the map (rows: north from south to north, columns: east from west to east).
@@ -78,19 +70,26 @@ DEFAULT_WIND_CONTROL_POINTS = (
 
 
 class MetOceanField:
-    """Gridded met-ocean quantities on a regular local grid (x north, y east, metres).
+    """Gridded met-ocean quantities on a regular local grid (x north, y east, metres), in time.
 
     Parameters
     ----------
     x, y : ndarray
         Strictly increasing, evenly spaced node coordinates [m] (north, east).
     fields : mapping
-        One (nx, ny) array per name in :data:`FIELDS`.
+        One array per name in :data:`FIELDS`: (nx, ny) for a static field, or
+        (nt, nx, ny) with one slice per entry of ``times_s``.
     source : str
         Human-readable provenance, written into results.
+    times_s : array_like, optional
+        Strictly increasing times [s, simulation clock] of the slices; omitted: a static
+        field (one slice, valid at all times).
+    start_time : str, optional
+        Calendar time (ISO 8601) of t = 0, kept so that NetCDF round trips keep dates.
     """
 
-    def __init__(self, x: np.ndarray, y: np.ndarray, fields: Mapping[str, np.ndarray], source: str = ""):
+    def __init__(self, x: np.ndarray, y: np.ndarray, fields: Mapping[str, np.ndarray], source: str = "",
+                 times_s=None, start_time: str | None = None):
         self.x = np.asarray(x, dtype=float)
         self.y = np.asarray(y, dtype=float)
         for axis_name, axis in (("x (north)", self.x), ("y (east)", self.y)):
@@ -99,27 +98,44 @@ class MetOceanField:
             steps = np.diff(axis)
             if np.any(steps <= 0) or not np.allclose(steps, steps[0], rtol=1e-6, atol=1e-6):
                 raise ValueError(f"met-ocean grid axis {axis_name} must be evenly spaced and increasing")
-        shape = (self.x.size, self.y.size)
+        self.times_s = np.array([0.0]) if times_s is None else np.asarray(times_s, dtype=float).reshape(-1)
+        if self.times_s.size < 1 or not np.all(np.isfinite(self.times_s)) or np.any(np.diff(self.times_s) <= 0):
+            raise ValueError("met-ocean times must be finite and strictly increasing")
+        shape = (self.times_s.size, self.x.size, self.y.size)
         self._fields = {}
         for name in FIELDS:
             values = np.asarray(fields[name], dtype=float)
+            if values.ndim == 2 and times_s is None:
+                values = values[None]
             if values.shape != shape:
-                raise ValueError(f"met-ocean field {name} has shape {values.shape}, grid is {shape}")
+                raise ValueError(f"met-ocean field {name} has shape {values.shape}, grid is "
+                                 f"{shape if times_s is not None else shape[1:]} (times, north, east)")
             if not np.all(np.isfinite(values)):
                 raise ValueError(f"met-ocean field {name} holds NaN or infinite values")
             self._fields[name] = values
         self.source = source
+        self.start_time = start_time
 
     # -- gridded quantities -------------------------------------------------------
-    wind_north = property(lambda self: self._fields["wind_north"])
-    wind_east = property(lambda self: self._fields["wind_east"])
-    hs = property(lambda self: self._fields["hs"])
-    current_north = property(lambda self: self._fields["current_north"])
-    current_east = property(lambda self: self._fields["current_east"])
+    def _grid(self, name: str) -> np.ndarray:
+        """(nx, ny) for a static field, (nt, nx, ny) for a time-varying one."""
+        values = self._fields[name]
+        return values if self.is_time_varying else values[0]
+
+    wind_north = property(lambda self: self._grid("wind_north"))
+    wind_east = property(lambda self: self._grid("wind_east"))
+    hs = property(lambda self: self._grid("hs"))
+    current_north = property(lambda self: self._grid("current_north"))
+    current_east = property(lambda self: self._grid("current_east"))
+
+    @property
+    def is_time_varying(self) -> bool:
+        """True when the field has more than one time step."""
+        return self.times_s.size > 1
 
     @property
     def wind_speed(self) -> np.ndarray:
-        """Wind speed [m/s] at the nodes."""
+        """Wind speed [m/s] at the nodes (per time step when time-varying)."""
         return np.hypot(self.wind_north, self.wind_east)
 
     @property
@@ -149,16 +165,38 @@ class MetOceanField:
                 & (y >= y_min - tolerance) & (y <= y_max + tolerance))
 
     # -- interpolation --------------------------------------------------------------
-    def sample(self, x, y) -> dict[str, np.ndarray]:
-        """Bilinear interpolation of every field at points (x, y) [m].
+    def time_weights(self, t_s) -> tuple[np.ndarray, np.ndarray]:
+        """Slice index k and weight w [-] so that a value at ``t_s`` is (1 - w) F[k] + w F[k + 1].
 
+        ``t_s`` [s] is held at the first time before it and at the last time after it;
+        exactly at a node time the weight is 0 (or 1 at the last node), so node values
+        are returned exactly.  A static field gives k = 0, w = 0.
+        """
+        t = np.asarray(t_s, dtype=float)
+        if not self.is_time_varying:
+            return np.zeros(t.shape, dtype=int), np.zeros(t.shape)
+        if not np.all(np.isfinite(t)):
+            raise ValueError("met-ocean sample time must be finite")
+        times = self.times_s
+        held = np.clip(t, times[0], times[-1])
+        k = np.clip(np.searchsorted(times, held, side="right") - 1, 0, times.size - 2)
+        w = (held - times[k]) / (times[k + 1] - times[k])
+        return k, w
+
+    def sample(self, x, y, t_s=None) -> dict[str, np.ndarray]:
+        """Interpolate every field at points (x, y) [m] and times ``t_s`` [s].
+
+        Bilinear in space in each time step, linear in time between the two time steps
+        around ``t_s`` (see :meth:`time_weights`).  ``t_s`` is a scalar or an array
+        broadcasting with ``x``; a static field ignores it, a time-varying field needs it.
         Returns the five gridded fields plus ``wind_speed`` and ``wind_direction``
         computed from the interpolated wind components (as the FMU does).
 
         Raises
         ------
         ValueError
-            If a point lies outside the grid (no extrapolation).
+            If a point lies outside the grid (no extrapolation), or a time-varying field
+            is sampled without a time.
         """
         x = np.asarray(x, dtype=float)
         y = np.asarray(y, dtype=float)
@@ -171,221 +209,128 @@ class MetOceanField:
                 f"point x={float(px):.1f} m, y={float(py):.1f} m lies outside the met-ocean grid "
                 f"(x {x_min:.1f}..{x_max:.1f} m, y {y_min:.1f}..{y_max:.1f} m)"
             )
+        if self.is_time_varying and t_s is None:
+            raise ValueError(f"the met-ocean field varies in time ({self.times_s.size} steps): "
+                             "sample it at a time t_s")
         fx = np.clip((x - self.x[0]) / self.dx, 0.0, self.x.size - 1.0)
         fy = np.clip((y - self.y[0]) / self.dy, 0.0, self.y.size - 1.0)
         i = np.minimum(np.floor(fx).astype(int), self.x.size - 2)
         j = np.minimum(np.floor(fy).astype(int), self.y.size - 2)
         tx = fx - i
         ty = fy - j
+
+        def bilinear(grid):
+            return ((1 - tx) * (1 - ty) * grid[i, j] + tx * (1 - ty) * grid[i + 1, j]
+                    + (1 - tx) * ty * grid[i, j + 1] + tx * ty * grid[i + 1, j + 1])
+
         out = {}
-        for name, grid in self._fields.items():
-            out[name] = ((1 - tx) * (1 - ty) * grid[i, j] + tx * (1 - ty) * grid[i + 1, j]
-                         + (1 - tx) * ty * grid[i, j + 1] + tx * ty * grid[i + 1, j + 1])
+        if not self.is_time_varying:
+            for name, stack in self._fields.items():
+                out[name] = bilinear(stack[0])
+        else:
+            k, w = self.time_weights(t_s)
+            k, w, i, j, tx, ty = np.broadcast_arrays(k, w, i, j, tx, ty)
+            for name, stack in self._fields.items():
+                before = ((1 - tx) * (1 - ty) * stack[k, i, j] + tx * (1 - ty) * stack[k, i + 1, j]
+                          + (1 - tx) * ty * stack[k, i, j + 1] + tx * ty * stack[k, i + 1, j + 1])
+                after = ((1 - tx) * (1 - ty) * stack[k + 1, i, j] + tx * (1 - ty) * stack[k + 1, i + 1, j]
+                         + (1 - tx) * ty * stack[k + 1, i, j + 1] + tx * ty * stack[k + 1, i + 1, j + 1])
+                out[name] = (1 - w) * before + w * after
         out["wind_speed"] = np.hypot(out["wind_north"], out["wind_east"])
         out["wind_direction"] = wind_from_direction(out["wind_north"], out["wind_east"])
         return out
 
+    def snapshot(self, t_s: float) -> "MetOceanField":
+        """The static field at time ``t_s`` [s], linear between time steps (for static planners)."""
+        if not self.is_time_varying:
+            return self
+        k, w = self.time_weights(float(t_s))
+        k, w = int(k), float(w)
+        fields = {name: (1 - w) * stack[k] + w * stack[k + 1] for name, stack in self._fields.items()}
+        return MetOceanField(self.x, self.y, fields, source=f"{self.source} at t = {float(t_s):g} s")
+
     # -- sources ---------------------------------------------------------------------
     @classmethod
-    def generate_paper_default(
-        cls,
-        x_range_nm=(0.0, 100.0),
-        y_range_nm=(0.0, 100.0),
-        resolution_nm: float = 1.0,
-        wind_control_points_ms=DEFAULT_WIND_CONTROL_POINTS,
-        wind_from_deg: float = 45.0,
-        fetch_km: float = 100.0,
-        current_kn: float = 0.5,
-        current_towards_deg: float = 135.0,
-    ) -> "MetOceanField":
-        """The paper's synthetic weather (Section 6.1.1; spec section 2).
+    def generate_paper_default(cls, **options) -> "MetOceanField":
+        """The paper's synthetic weather; see :func:`rhnc.weather_generators.paper_default`."""
+        from rhnc.weather_generators import paper_default
 
-        Parameters
-        ----------
-        x_range_nm, y_range_nm : (float, float)
-            Map extent north and east [nm].
-        resolution_nm : float
-            Grid spacing [nm].
-        wind_control_points_ms : 2-D sequence
-            Wind speed [m/s] at an evenly spaced lattice of control points spanning the
-            map (rows south to north, columns west to east), at least 4 x 4 for the
-            bicubic spline.
-        wind_from_deg : float
-            Direction the wind comes from [deg, clockwise from north], uniform.
-        fetch_km : float
-            Fetch for the fetch-limited wave height [km].
-        current_kn, current_towards_deg : float
-            Uniform current speed [kn] and the direction it sets towards [deg].
-        """
-        from scipy.interpolate import RectBivariateSpline
-
-        control = np.asarray(wind_control_points_ms, dtype=float)
-        if control.ndim != 2 or min(control.shape) < 4:
-            raise ValueError("wind_control_points_ms needs a 2-D lattice of at least 4 x 4 values")
-        if resolution_nm <= 0:
-            raise ValueError("resolution_nm must be positive")
-        x = _axis(x_range_nm, resolution_nm)
-        y = _axis(y_range_nm, resolution_nm)
-        cx = np.linspace(x[0], x[-1], control.shape[0])
-        cy = np.linspace(y[0], y[-1], control.shape[1])
-        speed = np.clip(RectBivariateSpline(cx, cy, control, kx=3, ky=3)(x, y), 0.0, None)
-        towards = np.radians(wind_from_deg) + np.pi
-        hs = fetch_limited_hs(speed, fetch_km * 1000.0)
-        current = current_kn * KNOT
-        set_rad = np.radians(current_towards_deg)
-        shape = speed.shape
-        fields = {
-            "wind_north": speed * np.cos(towards),
-            "wind_east": speed * np.sin(towards),
-            "hs": hs,
-            "current_north": np.full(shape, current * np.cos(set_rad)),
-            "current_east": np.full(shape, current * np.sin(set_rad)),
-        }
-        return cls(x, y, fields, source="generated: paper_default")
+        return paper_default(**options)
 
     @classmethod
     def from_netcdf(cls, path, origin_deg=None, resolution_nm: float | None = None,
-                    time_index: int = 0) -> "MetOceanField":
-        """Load a NetCDF file with CF names (ERA5/CMEMS style) through xarray.
+                    time_index: int | None = None, start_time: str | None = None) -> "MetOceanField":
+        """Load a NetCDF file with CF names (ERA5/CMEMS style), every time step of it.
 
-        Parameters
-        ----------
-        path : path-like
-            The NetCDF file.
-        origin_deg : (lat, lon), optional
-            For a latitude/longitude grid: the point that becomes x = y = 0 of the local
-            plane (default: the south-west corner of the data).
-        resolution_nm : float, optional
-            For a latitude/longitude grid: spacing of the local grid [nm] (default: the
-            data's own spacing in latitude, in nm).
-        time_index : int
-            Which time to take when the data have a ``time`` dimension.
-
-        Missing variables are an error, except the current, which defaults to zero
-        (ERA5 carries no current) with a warning.  NaN (land in ocean products)
-        becomes zero.
+        See :func:`rhnc.metocean_netcdf.read_netcdf` for the options.
         """
-        import xarray as xr
+        from rhnc.metocean_netcdf import read_netcdf
 
-        path = Path(path)
-        if not path.is_file():
-            raise FileNotFoundError(f"met-ocean file not found: {path}")
-        with xr.open_dataset(path) as ds:
-            ds = ds.load()
-        for time_dim in ("time", "valid_time"):
-            if time_dim in ds.dims:
-                ds = ds.isel({time_dim: time_index})
-        for extra in [d for d in ds.dims if d not in ("northing", "easting", "latitude", "longitude", "lat", "lon")]:
-            ds = ds.isel({extra: 0})
-        arrays = {name: _find_variable(ds, name, path) for name in FIELDS}
-        if "northing" in ds.dims and "easting" in ds.dims:
-            x = ds["northing"].values.astype(float)
-            y = ds["easting"].values.astype(float)
-            fields = {name: _as_grid(arr, ("northing", "easting"), x.size, y.size)
-                      for name, arr in arrays.items()}
-            return cls(x, y, fields, source=f"file: {path}")
-        lat_name = "latitude" if "latitude" in ds.dims else "lat"
-        lon_name = "longitude" if "longitude" in ds.dims else "lon"
-        if lat_name not in ds.dims or lon_name not in ds.dims:
-            raise ValueError(f"{path}: expected dimensions northing/easting [m] or latitude/longitude")
-        lat = ds[lat_name].values.astype(float)
-        lon = ds[lon_name].values.astype(float)
-        order_lat = np.argsort(lat)
-        order_lon = np.argsort(lon)
-        lat, lon = lat[order_lat], lon[order_lon]
-        lat0, lon0 = origin_deg if origin_deg is not None else (lat[0], lon[0])
-        north = np.radians(lat - lat0) * EARTH_RADIUS
-        east = np.radians(lon - lon0) * EARTH_RADIUS * np.cos(np.radians(lat0))
-        step = resolution_nm * NM if resolution_nm else float(np.min(np.diff(north)))
-        # cover the data's whole extent with a spacing no coarser than `step`
-        x = np.linspace(north[0], north[-1], int(np.ceil((north[-1] - north[0]) / step - 1e-9)) + 1)
-        y = np.linspace(east[0], east[-1], int(np.ceil((east[-1] - east[0]) / step - 1e-9)) + 1)
-        from scipy.interpolate import RegularGridInterpolator
-
-        xx, yy = np.meshgrid(x, y, indexing="ij")
-        fields = {}
-        for name, arr in arrays.items():
-            grid = _as_grid(arr, (lat_name, lon_name), lat.size, lon.size)[np.ix_(order_lat, order_lon)]
-            fields[name] = RegularGridInterpolator((north, east), grid)((xx, yy))
-        return cls(x, y, fields, source=f"file: {path} (origin {lat0:.4f}N {lon0:.4f}E)")
+        return read_netcdf(path, origin_deg=origin_deg, resolution_nm=resolution_nm,
+                           time_index=time_index, start_time=start_time)
 
     @classmethod
     def from_scenario_table(cls, table: Mapping[str, Any], scenario_dir: Path, where: str) -> "MetOceanField":
         """Build the field a scenario's ``[metocean]`` table describes.
 
-        ``generator = "paper_default"`` with the keyword options of
-        :meth:`generate_paper_default`, or ``file = "path.nc"`` with the options of
-        :meth:`from_netcdf`.  Errors name ``where`` (file and table) and the key.
+        ``generator = "<name>"`` with that generator's keys (registry and keys:
+        :func:`rhnc.weather_generators.list_generators`), or ``file = "path.nc"`` with the
+        options of :meth:`from_netcdf`.  Errors name ``where`` (file and table) and the key.
         """
+        from rhnc.weather_generators import build_generated, checked_option
+
         table = dict(table)
         if ("generator" in table) == ("file" in table):
             raise ScenarioError(f"{where}: give exactly one of 'generator' or 'file'")
         if "generator" in table:
-            generator = table.pop("generator")
-            if generator != "paper_default":
-                raise ScenarioError(f"{where}.generator: unknown generator '{generator}' (valid: paper_default)")
-            builder, allowed = cls.generate_paper_default, _GENERATOR_KEYS
-        else:
-            file = Path(table.pop("file"))
-            file = file if file.is_absolute() else scenario_dir / file
-            if not file.is_file():
-                raise ScenarioError(f"{where}.file: met-ocean file not found: {file}")
-            if "origin_deg" in table:
-                table["origin_deg"] = tuple(table["origin_deg"])
-
-            def builder(**options):
-                return cls.from_netcdf(file, **options)
-
-            allowed = _FILE_KEYS
+            return build_generated(table.pop("generator"), table, where)
+        file = Path(table.pop("file"))
+        file = file if file.is_absolute() else scenario_dir / file
+        if not file.is_file():
+            raise ScenarioError(f"{where}.file: met-ocean file not found: {file}")
         for key in table:
-            if key not in allowed:
-                raise ScenarioError(f"{where}: unknown key '{key}' (valid: {', '.join(sorted(allowed))})")
+            if key not in _FILE_KEYS:
+                raise ScenarioError(f"{where}: unknown key '{key}' (valid: {', '.join(sorted(_FILE_KEYS))})")
+            table[key] = checked_option(table[key], _FILE_KEYS[key], f"{where}.{key}")
         try:
-            return builder(**table)
+            return cls.from_netcdf(file, **table)
         except (ValueError, TypeError, KeyError) as exc:
             raise ScenarioError(f"{where}: {exc}") from exc
 
     # -- writers -------------------------------------------------------------------
     def to_dataset(self):
         """The field as an ``xarray.Dataset`` with CF-style names and attributes."""
-        import xarray as xr
+        from rhnc.metocean_netcdf import to_dataset
 
-        coords = {
-            "northing": ("northing", self.x, {"standard_name": "projection_y_coordinate", "units": "m",
-                                              "long_name": "distance north of the map origin"}),
-            "easting": ("easting", self.y, {"standard_name": "projection_x_coordinate", "units": "m",
-                                            "long_name": "distance east of the map origin"}),
-        }
-        units = {"hs": "m"}
-        data = {
-            _OUTPUT_NAMES[name]: (("northing", "easting"), self._fields[name],
-                                  {"standard_name": _STANDARD_NAMES[name], "units": units.get(name, "m s-1")})
-            for name in FIELDS
-        }
-        return xr.Dataset(data, coords=coords, attrs={"Conventions": "CF-1.8", "source": self.source,
-                                                      "title": "RHNC met-ocean field"})
+        return to_dataset(self)
 
     def to_netcdf(self, path) -> Path:
-        """Write the field as NetCDF (readable again by :meth:`from_netcdf`)."""
+        """Write the field as NetCDF (readable again by :meth:`from_netcdf`, every time step)."""
         path = Path(path)
         self.to_dataset().to_netcdf(path, engine="netcdf4")
         return path
 
     def write_fmu_grid(self, path) -> Path:
-        """Write the binary grid the MetOcean FMU reads (format: models/MetOcean/readme.md)."""
+        """Write the binary grid the MetOcean FMU reads (``MOGRID2``, models/MetOcean/readme.md).
+
+        Header: magic, int32 nx, ny, nt, float64 x0, dx, y0, dy [m]; then the nt times
+        [s]; then per time step the five fields of nx * ny float64 (row-major [i * ny + j]).
+        """
         path = Path(path)
-        header = b"MOGRID1\n" + struct.pack("<ii", self.x.size, self.y.size)
+        nt = self.times_s.size
+        header = FMU_GRID_MAGIC + struct.pack("<iii", self.x.size, self.y.size, nt)
         header += struct.pack("<dddd", self.x[0], self.dx, self.y[0], self.dy)
-        body = b"".join(np.ascontiguousarray(self._fields[name], dtype="<f8").tobytes() for name in FIELDS)
+        header += np.ascontiguousarray(self.times_s, dtype="<f8").tobytes()
+        body = b"".join(np.ascontiguousarray(self._fields[name][k], dtype="<f8").tobytes()
+                        for k in range(nt) for name in FIELDS)
         tmp = path.with_suffix(path.suffix + ".tmp")
         tmp.write_bytes(header + body)
         tmp.replace(path)
         return path
 
 
-_GENERATOR_KEYS = ("x_range_nm", "y_range_nm", "resolution_nm", "wind_control_points_ms",
-                   "wind_from_deg", "fetch_km", "current_kn", "current_towards_deg")
-_FILE_KEYS = ("origin_deg", "resolution_nm", "time_index")
+#: Keys of a ``[metocean] file = ...`` table and their kinds (see rhnc.weather_generators.checked_option).
+_FILE_KEYS = {"origin_deg": "point", "resolution_nm": "number", "time_index": "integer", "start_time": "text"}
 
 
 def wind_from_direction(wind_north, wind_east):
@@ -397,7 +342,7 @@ def fetch_limited_hs(wind_speed, fetch_m: float):
     """Significant wave height [m] for a wind speed [m/s] over a fetch [m].
 
     Fetch-limited JONSWAP growth, ``g Hs / U^2 = 0.0016 (g F / U^2)^(1/2)``, capped at the
-    fully developed Pierson-Moskowitz sea, ``Hs = 0.21 U^2 / g`` (spec section 2).
+    fully developed Pierson-Moskowitz sea, ``Hs = 0.21 U^2 / g``.
     """
     u = np.asarray(wind_speed, dtype=float)
     limited = 0.0016 * u * np.sqrt(fetch_m / GRAVITY)
@@ -405,30 +350,12 @@ def fetch_limited_hs(wind_speed, fetch_m: float):
     return np.minimum(limited, developed)
 
 
-def _axis(range_nm, resolution_nm) -> np.ndarray:
+def map_axis(range_nm, resolution_nm) -> np.ndarray:
+    """Evenly spaced nodes [m] over ``range_nm`` (start, stop) [nm] at ``resolution_nm`` [nm]."""
     start, stop = (float(v) for v in range_nm)
     if stop <= start:
         raise ValueError(f"range {list(range_nm)} nm must increase")
+    if not resolution_nm > 0:
+        raise ValueError("resolution_nm must be positive")
     count = int(round((stop - start) / resolution_nm)) + 1
     return np.linspace(start, stop, max(count, 2)) * NM
-
-
-def _find_variable(ds, name, path):
-    for candidate in CF_NAMES[name]:
-        if candidate in ds.data_vars:
-            return ds[candidate]
-    for var in ds.data_vars.values():
-        if var.attrs.get("standard_name") in CF_NAMES[name]:
-            return var
-    if name.startswith("current"):
-        log.warning("%s: no %s variable (%s); assuming zero current", path, name, "/".join(CF_NAMES[name]))
-        any_var = next(iter(ds.data_vars.values()))
-        return any_var * 0.0
-    raise ValueError(f"{path}: no variable for {name} (looked for {', '.join(CF_NAMES[name])})")
-
-
-def _as_grid(arr, dims, n0, n1) -> np.ndarray:
-    values = arr.transpose(*dims).values.astype(float) if set(dims) <= set(arr.dims) else None
-    if values is None or values.shape != (n0, n1):
-        raise ValueError(f"variable {arr.name} must have dimensions {dims}")
-    return np.nan_to_num(values, nan=0.0)

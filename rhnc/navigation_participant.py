@@ -1,6 +1,16 @@
 """The navigation module as a co-simulation participant: fields, trigger, local path, reference.
 
-At every navigation instant t (every ``delta`` = the participant's step size) it
+Two methods, selected per scenario by the option ``method``:
+
+* ``"routing"`` (the default): a receding-horizon route search with the energy cost of
+  each step on the course it is sailed, weights in US dollars (fuel and hours), and a
+  speed plan for a requested arrival time (:mod:`rhnc.route_navigation`,
+  docs/navigation.md);
+* ``"paper"``: the paper's potential fields and gradient descent (Algorithm 1), below.
+
+Both take the planning start from Interface I and update the event trigger in the same
+way.  With ``method = "paper"``, at every navigation instant t (every ``delta`` = the
+participant's step size) it
 
 1. takes the planning start: the controller's predicted state at t, interpolated in time
    from its ``prediction`` input (Interface I, Eq. 24), or the measured state
@@ -11,8 +21,26 @@ At every navigation instant t (every ``delta`` = the participant's step size) it
    ``alpha = v_s delta`` (Algorithm 1), descending G alone while ET = 1;
 4. turns the path into reference states (Eq. 19) timed t + k delta.
 
+Goal: once the goal lies within the horizon (N_L alpha) of the planning start, the path
+runs straight to it and stops there (both methods): near the goal the bearing the energy
+fields assume swings round, and the paper's descent would run along the map edge.
+
+When the met-ocean field varies in time, the planning weather is resampled at each
+navigation instant t (the fields then see the weather of that instant, held over the
+horizon).
+
 Planning speed v_s is the option ``speed_kn`` (over ground), used both for the step
 length and for the fields, so the reference asks for a constant service speed.
+
+With ``method = "routing"`` the route from the planning start follows the cheapest route
+to the goal over the map; the reference points are placed along it at the planned speed
+through water: ``speed_kn``, or, with ``arrival_time_min``, the remaining route length
+over the remaining time (less the current along the route), bounded by ``max_speed_kn``.
+In the collision-avoidance state (ET = 1) the route is kept (the NMPC's constraints do
+the avoiding).
+
+Interface I: a prediction whose states are all zero is the control participant's
+placeholder published at set-up, not a prediction, and is not taken as the start.
 
 Options (``[participants.<name>.options]``)
 -------------------------------------------
@@ -27,6 +55,10 @@ eps_ship_nm, eps_static_nm : float     warning ranges [nm] (4.5, 6)
 start_from : str            "prediction" (default) or "measured"
 start_nm : [x, y]           start used at set-up when the ship's position is not yet
                             known there (the ship is declared after the navigation)
+method : str                "routing" (default) or "paper"
+arrival_time_min : float    routing: requested arrival time after t = 0 [min] (none:
+                            constant speed_kn through water)
+max_speed_kn : float        routing: upper bound of the planned speed [kn] (24)
 """
 
 from __future__ import annotations
@@ -44,12 +76,20 @@ from rhnc.fields import FieldWeights, GuidanceParameters, SuperpositionField, be
 from rhnc.metocean import KNOT, NM
 from rhnc.planner import plan_local_path
 from rhnc.reference import reference_states
+from rhnc.route_navigation import SPEED_STEP_MPS, RecedingRoutePlanner, calm_water_time_price_usd_h
+from rhnc.weather_routing import PRICE_MULTIPLES, RoutingProblem, optimal_route, straight_route, time_price_usd_h
 from rhnc.trigger import TRIGGERED, EventTrigger
 
 log = logging.getLogger(__name__)
 
 OPTIONS = ("goal_nm", "speed_kn", "horizon_steps", "k1", "k2", "k3", "guidance_eps", "guidance_c_rad",
-           "resolution_nm", "energy", "eps_ship_nm", "eps_static_nm", "start_from", "start_nm")
+           "resolution_nm", "energy", "eps_ship_nm", "eps_static_nm", "start_from", "start_nm", "method",
+           "arrival_time_min", "max_speed_kn")
+METHODS = ("paper", "routing")
+ROUTING_ONLY = ("arrival_time_min", "max_speed_kn")
+PAPER_ONLY = ("k1", "k2", "k3", "guidance_eps", "guidance_c_rad")
+#: Lowest planned speed through water of the routing method [m/s] (2 kn).
+MIN_PLANNED_SPEED_MPS = 2.0 * KNOT
 
 
 def _number(options: Mapping[str, Any], key: str, default: float, where: str, positive: bool = False) -> float:
@@ -85,7 +125,8 @@ class NavigationParticipant(Participant):
                  horizon_steps: int, weights: FieldWeights, guidance: GuidanceParameters,
                  resolution_nm: float, energy: EnergyParameters, ship_range_m: float,
                  static_range_m: float, start_from: str = "prediction",
-                 start: tuple[float, float] | None = None) -> None:
+                 start: tuple[float, float] | None = None, method: str = "paper",
+                 arrival_s: float | None = None, max_speed: float = 24.0 * KNOT) -> None:
         super().__init__(name)
         self.metocean = metocean
         self.delta = float(delta)
@@ -95,11 +136,21 @@ class NavigationParticipant(Participant):
         self.energy = energy
         self.start_from = start_from
         self.start = start
-        self.weather = resample_weather(metocean, resolution_nm)
-        self.field = SuperpositionField(self.weather, goal, energy, guidance, weights)
+        self.resolution_nm = float(resolution_nm)
+        self.method = method
+        self.arrival_s = arrival_s
+        self.max_speed = float(max_speed)
         self.trigger = EventTrigger(ship_range_m, static_range_m)
         self.counts = {"plans": 0, "avoidance_plans": 0, "prediction_starts": 0, "measured_starts": 0,
                        "flat_steps": 0, "border_steps": 0}
+        if method == "paper":
+            self.weather = resample_weather(metocean, resolution_nm, t_s=0.0)
+            self.field = SuperpositionField(self.weather, goal, energy, guidance, weights)
+        else:
+            self.route_planner = RecedingRoutePlanner(metocean, goal, energy, resolution_nm)
+            self._route = None
+            self._price_scale = None
+            self._planned_speed = self.speed
         self._reached_goal = False
 
     # -- construction from a scenario ---------------------------------------------------
@@ -126,6 +177,15 @@ class NavigationParticipant(Participant):
         if not isinstance(energy_table, Mapping):
             raise ScenarioError(f"{where}.energy: expected a table of energy parameters")
         energy = EnergyParameters().with_overrides(energy_table, f"{where}.energy")
+        method = options.get("method", "routing")
+        if method not in METHODS:
+            raise ScenarioError(f"{where}.method: '{method}' is not valid (valid: {', '.join(METHODS)})")
+        for key in ROUTING_ONLY if method == "paper" else PAPER_ONLY:
+            if key in options:
+                raise ScenarioError(f"{where}.{key}: applies to method "
+                                    f"'{'routing' if method == 'paper' else 'paper'}' only (method is '{method}')")
+        arrival_s = (_number(options, "arrival_time_min", 0.0, where, positive=True) * 60.0
+                     if "arrival_time_min" in options else None)
         weights = FieldWeights(k1=_number(options, "k1", 1.0, where), k2=_number(options, "k2", 1.0, where),
                                k3=_number(options, "k3", 16.0, where))
         guidance = GuidanceParameters(eps=_number(options, "guidance_eps", 1.0, where, positive=True),
@@ -137,7 +197,8 @@ class NavigationParticipant(Participant):
                        _number(options, "resolution_nm", 1.0, where, positive=True), energy,
                        _number(options, "eps_ship_nm", 4.5, where, positive=True) * NM,
                        _number(options, "eps_static_nm", 6.0, where, positive=True) * NM,
-                       start_from, start)
+                       start_from, start, method, arrival_s,
+                       _number(options, "max_speed_kn", 24.0, where, positive=True) * KNOT)
         except ValueError as exc:
             raise ScenarioError(f"{where}: {exc}") from exc
 
@@ -148,7 +209,8 @@ class NavigationParticipant(Participant):
 
     @property
     def output_names(self):
-        return ("reference", "et", "ec_rate", "em_rate", "goal_distance_m")
+        names = ("reference", "et", "ec_rate", "em_rate", "goal_distance_m")
+        return names if self.method == "paper" else names + ("planned_speed_mps",)
 
     # -- lifecycle ------------------------------------------------------------------------
     def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
@@ -171,8 +233,11 @@ class NavigationParticipant(Participant):
 
     def summary(self) -> dict[str, Any]:
         transitions = [t.as_dict() for t in self.trigger.transitions]
+        extra = {} if self.method == "paper" else {"route_searches": self.route_planner.searches}
         return {
             **self.counts,
+            **extra,
+            "method": self.method,
             "goal_reached_in_plan": self._reached_goal,
             "et_transitions": transitions,
             "et_activations": sum(1 for t in transitions if t["state"] == TRIGGERED),
@@ -184,31 +249,36 @@ class NavigationParticipant(Participant):
 
     # -- one planning instant -------------------------------------------------------------
     def _planning_start(self, time: float, measured: Mapping[str, Value],
-                        inputs: Mapping[str, Value]) -> tuple[float, float, float]:
-        """(x, y, psi) at ``time``: Interface I from the prediction, or the measurement."""
+                        inputs: Mapping[str, Value]) -> tuple[float, float, float, float]:
+        """(x, y, psi, u) at ``time``: Interface I from the prediction, or the measurement.
+
+        A prediction is used when it covers ``time`` and is not the all-zero placeholder
+        the control participant publishes at set-up."""
         prediction = inputs.get("prediction")
         if self.start_from == "prediction" and prediction is not None:
             table = np.asarray(prediction, dtype=float)
             if (table.ndim == 2 and table.shape[1] == 7 and table.shape[0] >= 1
-                    and np.all(np.isfinite(table[:, :4]))
+                    and np.all(np.isfinite(table[:, :5]))
+                    and np.any(table[:, 1:] != 0.0)
                     and table[0, 0] - 1e-6 <= time <= table[-1, 0] + 1e-6):
                 self.counts["prediction_starts"] += 1
                 if table.shape[0] == 1:
-                    return float(table[0, 1]), float(table[0, 2]), float(table[0, 3])
+                    return float(table[0, 1]), float(table[0, 2]), float(table[0, 3]), float(table[0, 4])
                 psi = np.unwrap(table[:, 3])
                 return (float(np.interp(time, table[:, 0], table[:, 1])),
                         float(np.interp(time, table[:, 0], table[:, 2])),
-                        float(np.interp(time, table[:, 0], psi)))
+                        float(np.interp(time, table[:, 0], psi)),
+                        float(np.interp(time, table[:, 0], table[:, 4])))
         self.counts["measured_starts"] += 1
         psi = measured.get("psi")
         if psi is None:
             psi = bearing(float(measured["x"]), float(measured["y"]), *self.goal)
-        return float(measured["x"]), float(measured["y"]), float(psi)
+        return float(measured["x"]), float(measured["y"]), float(psi), float(measured.get("u", self.speed))
 
-    def _local_rates(self, x: float, y: float, psi: float, u: float) -> tuple[float, float]:
-        """EC [USD/h] and EM [kg/h] at the ship, speed through water u, in the local weather."""
+    def _local_rates(self, x: float, y: float, psi: float, u: float, time: float) -> tuple[float, float]:
+        """EC [USD/h] and EM [kg/h] at the ship, speed through water u, in the weather at ``time``."""
         x_min, x_max, y_min, y_max = self.metocean.extent
-        local = self.metocean.sample(min(max(x, x_min), x_max), min(max(y, y_min), y_max))
+        local = self.metocean.sample(min(max(x, x_min), x_max), min(max(y, y_min), y_max), t_s=time)
         power = brake_power(max(u, 0.0), psi, local["wind_north"], local["wind_east"], local["hs"], self.energy)
         return float(cost_rate(power, self.energy)), float(emission_rate(power, self.energy))
 
@@ -218,24 +288,101 @@ class NavigationParticipant(Participant):
         u = float(measured.get("u", self.speed))
         velocity = (u * np.cos(psi), u * np.sin(psi))
         et = self.trigger.update(time, (x, y), velocity, self.goal, inputs.get("obstacles"))
-        start_x, start_y, start_psi = self._planning_start(time, measured, inputs)
+        start_x, start_y, start_psi, start_u = self._planning_start(time, measured, inputs)
+        if self.method == "routing":
+            return self._plan_route(time, (x, y, psi, u), (start_x, start_y, start_psi, start_u), et)
+        if self.metocean.is_time_varying:  # plan in the weather of this instant
+            self.weather = resample_weather(self.metocean, self.resolution_nm, t_s=time)
+            self.field.set_weather(self.weather)
         self.field.update((start_x, start_y), self.speed)
         path = plan_local_path(self.field, (start_x, start_y), self.speed * self.delta,
-                               self.horizon_steps, avoidance=et > 0.5)
+                               self.horizon_steps, avoidance=et > 0.5, final_approach=True)
         self.counts["plans"] += 1
         self.counts["avoidance_plans"] += int(et > 0.5)
         self.counts["flat_steps"] += path.flat_steps
         self.counts["border_steps"] += path.border_steps
         self._reached_goal = path.reached_goal
         reference = reference_states(path.points, self.delta, start_time=time, initial_heading=start_psi)
-        ec, em = self._local_rates(x, y, psi, u)
+        return self._outputs(time, reference, et, (x, y, psi, u))
+
+    def _outputs(self, time: float, reference: np.ndarray, et: float, ship: tuple[float, float, float, float],
+                 **extra: float) -> dict[str, Value]:
+        x, y, psi, u = ship
+        ec, em = self._local_rates(x, y, psi, u, time)
         outputs = {
             "reference": reference,
             "et": et,
             "ec_rate": ec,
             "em_rate": em,
             "goal_distance_m": float(np.hypot(self.goal[0] - x, self.goal[1] - y)),
+            **extra,
         }
         if not np.all(np.isfinite(reference)) or not np.isfinite(ec) or not np.isfinite(em):
             raise ModelError(f"participant '{self.name}': non-finite reference or energy rate at t={time:.0f} s")
         return outputs
+
+    # -- the routing method ----------------------------------------------------------------
+    def planned_speed(self, time: float, route: np.ndarray) -> float:
+        """Speed through water [m/s] for this instant: ``speed_kn``, or the length of
+        ``route`` (start to goal) over the remaining time less the current along it, within
+        the bounds."""
+        if self.arrival_s is None:
+            return self.speed
+        remaining_m = float(np.sum(np.hypot(*np.diff(route, axis=0).T)))
+        remaining_s = self.arrival_s - time
+        if remaining_s <= 0.0:
+            return self.max_speed
+        wanted = remaining_m / remaining_s - self.route_planner.mean_current_along_mps(route, time)
+        return float(min(max(wanted, MIN_PLANNED_SPEED_MPS), self.max_speed))
+
+    def _calibrate_time_price(self, time: float, point: np.ndarray) -> float:
+        """Price of an hour at fixed arrival, as a multiple of the calm-water shadow price.
+
+        The shadow price along a route (v dF/dv - F) only estimates what an hour is worth
+        on the best route, so once, at the first plan, the whole passage is routed at the
+        requested arrival time (:func:`rhnc.weather_routing.optimal_route`, which tries
+        several prices) and the price that found the best route is kept, scaled with the
+        calm-water price as the planned speed changes.  When the straight route wins, the
+        highest price tried is kept (it keeps the route straightest)."""
+        problem = RoutingProblem(tuple(point), tuple(self.goal), self.metocean, self.energy,
+                                 resolution_nm=self.resolution_nm, departure_s=time)
+        try:
+            best = optimal_route(problem, arrival_s=self.arrival_s, refine=False)
+        except ValueError as exc:
+            log.warning("participant '%s': no route arrives at %.0f s (%s); pricing hours by the "
+                        "calm-water shadow price", self.name, self.arrival_s, exc)
+            return 1.0
+        price = best.time_price_usd_h
+        if not np.isfinite(price):
+            price = max(PRICE_MULTIPLES) * time_price_usd_h(problem, straight_route(problem, arrival_s=self.arrival_s))
+        return price / max(calm_water_time_price_usd_h(best.speed_through_water_mps, self.energy), 1e-9)
+
+    def _plan_route(self, time: float, ship: tuple[float, float, float, float],
+                    start: tuple[float, float, float, float], et: float) -> dict[str, Value]:
+        start_x, start_y, start_psi, start_u = start
+        x_min, x_max, y_min, y_max = self.metocean.extent
+        point = np.array([min(max(start_x, x_min), x_max), min(max(start_y, y_min), y_max)])
+        planner = self.route_planner
+        # the route is searched at the previous instant's speed and price (the route hardly
+        # depends on them), then the speed is planned for the route found
+        if self._route is None:
+            self._planned_speed = self.planned_speed(time, np.vstack([point, self.goal]))
+        if self.arrival_s is None:
+            price = self.energy.running_cost_usd_day / 24.0
+        else:  # hours are fixed: each costs the fuel of the speed-up that saves it
+            if self._price_scale is None:
+                self._price_scale = self._calibrate_time_price(time, point)
+            price = self._price_scale * calm_water_time_price_usd_h(
+                round(self._planned_speed / SPEED_STEP_MPS) * SPEED_STEP_MPS, self.energy)
+        route = planner.route(time, point, self._planned_speed, price,
+                              planner.horizon_m(max(self._planned_speed, self.max_speed), self.delta,
+                                                self.horizon_steps))
+        speed = self.planned_speed(time, route)
+        plan = planner.timed_plan(route, time, start_u, speed, self.delta, self.horizon_steps)
+        self._route = plan.route
+        self._planned_speed = speed
+        self.counts["plans"] += 1
+        self.counts["avoidance_plans"] += int(et > 0.5)
+        self._reached_goal = plan.reached_goal
+        reference = reference_states(plan.points, self.delta, start_time=time, initial_heading=start_psi)
+        return self._outputs(time, reference, et, ship, planned_speed_mps=speed)

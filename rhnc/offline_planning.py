@@ -173,7 +173,7 @@ def run_offline_planning(scenario_path: Path, results_root: Path) -> Path:
     for label in ("start", "goal"):
         if not bool(metocean.contains(*settings[label])):
             raise ScenarioError(f"{scenario_path}: planner.{label}_nm lies outside the met-ocean map")
-    weather = resample_weather(metocean, settings["resolution_nm"])
+    weather = resample_weather(metocean, settings["resolution_nm"], t_s=0.0)  # planned before departure
     delta = settings["step_m"] / settings["speed"]
 
     results = []

@@ -7,7 +7,8 @@ the negative normalised gradient of U (or of G alone in the collision-avoidance 
 (:meth:`rhnc.fields.SuperpositionField.gradient_at`), so the path is not snapped to the
 grid.
 
-Four guards the paper does not spell out:
+Four guards the paper does not spell out (and a fifth on request, ``final_approach``: the
+goal within the horizon is approached in a straight line):
 
 * **Goal.**  When the goal is within one step, the step ends on the goal and the
   remaining points stay there (the reference then stops: zero speed), instead of
@@ -84,7 +85,8 @@ def _project_direction(position: np.ndarray, direction: np.ndarray, step: float,
 
 def plan_local_path(field: SuperpositionField, start: Sequence[float], step_length: float,
                     horizon_steps: int, avoidance: bool = False,
-                    flat_gradient_per_m: float = 1e-9, reversal_cosine: float = -0.5) -> PlannedPath:
+                    flat_gradient_per_m: float = 1e-9, reversal_cosine: float = -0.5,
+                    final_approach: bool = False) -> PlannedPath:
     """Plan N_L steps down the field (Algorithm 1).
 
     Parameters
@@ -104,6 +106,10 @@ def plan_local_path(field: SuperpositionField, start: Sequence[float], step_leng
     reversal_cosine : float
         A step whose direction has a cosine below this with the previous step's marks a
         local minimum (default -0.5: a turn of more than 120 degrees).
+    final_approach : bool
+        When the goal lies within the horizon (``horizon_steps * step_length``) of the
+        start, the path runs straight to it (near the goal the bearing that the energy
+        fields assume swings, and the descent would run along the map edge).
 
     Returns
     -------
@@ -124,6 +130,13 @@ def plan_local_path(field: SuperpositionField, start: Sequence[float], step_leng
         position = np.clip(position, low, high)
     points = np.empty((horizon_steps + 1, 2))
     points[0] = position
+    to_goal = float(np.hypot(*(goal - position)))
+    if final_approach and to_goal <= horizon_steps * step_length:
+        along = np.minimum(step_length * np.arange(horizon_steps + 1), to_goal)
+        direction = (goal - position) / to_goal if to_goal > 0 else np.zeros(2)
+        points = position + along[:, None] * direction
+        points[along >= to_goal] = goal
+        return PlannedPath(points=points, reached_goal=True, flat_steps=0, border_steps=0)
     flat_steps = border_steps = 0
     reached = False
     trapped_at = None

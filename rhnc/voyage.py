@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rhnc.energy import EnergyParameters, brake_power, cost_rate, emission_rate
-from rhnc.metocean import NM
+from rhnc.metocean import KNOT, NM
 
 CONTAINER_CII_A = 1984.0
 CONTAINER_CII_C = 0.489
@@ -76,8 +76,30 @@ def rates_along_track(speed_through_water, heading, wind_north, wind_east, hs,
     return cost_rate(power, params), emission_rate(power, params)
 
 
+def mean_speed_through_water_kn(time_s, surge_mps, sway_mps) -> float:
+    """Time-averaged speed through water [kn] of a sailed track.
+
+    The speed through water is the length of the ship's velocity relative to the water,
+    ``hypot(u, v)`` from the plant's surge and sway; its average over time (trapezoid rule
+    between samples) is the distance sailed through the water divided by the time taken.
+
+    Parameters
+    ----------
+    time_s : array_like
+        Sample times [s], increasing.
+    surge_mps, sway_mps : array_like
+        Surge u and sway v relative to the water [m/s].
+    """
+    t = np.asarray(time_s, dtype=float)
+    speed = np.hypot(np.asarray(surge_mps, dtype=float), np.asarray(sway_mps, dtype=float))
+    if t.size < 2 or t[-1] <= t[0]:
+        return float(speed[0] / KNOT) if speed.size else float("nan")
+    return float(np.trapezoid(speed, t) / (t[-1] - t[0]) / KNOT)
+
+
 def account_voyage(time_s, x, y, speed_through_water, heading, wind_north, wind_east, hs,
-                   params: EnergyParameters = EnergyParameters(), cii_year: int = 2026) -> VoyageAccount:
+                   params: EnergyParameters = EnergyParameters(), cii_year: int = 2026,
+                   brake_power_w=None) -> VoyageAccount:
     """Cost, CO2, distance and CII of a sailed track.
 
     Parameters
@@ -95,11 +117,19 @@ def account_voyage(time_s, x, y, speed_through_water, heading, wind_north, wind_
     params : EnergyParameters
     cii_year : int
         Year whose reduction factor Z sets the required CII.
+    brake_power_w : array_like, optional
+        Brake power at each sample [W] when it is known (from a plant that reports the
+        power delivered to its propeller); otherwise the energy model computes it from the
+        speed, heading and weather.
     """
     if cii_year not in REDUCTION_FACTOR_PERCENT:
         raise ValueError(f"cii_year {cii_year}: reduction factor known for {sorted(REDUCTION_FACTOR_PERCENT)}")
     t = np.asarray(time_s, dtype=float)
-    ec, em = rates_along_track(speed_through_water, heading, wind_north, wind_east, hs, params)
+    if brake_power_w is None:
+        ec, em = rates_along_track(speed_through_water, heading, wind_north, wind_east, hs, params)
+    else:
+        power = np.maximum(np.asarray(brake_power_w, dtype=float), 0.0)
+        ec, em = cost_rate(power, params), emission_rate(power, params)
     hours = t / 3600.0
     cost = float(np.trapezoid(ec, hours)) if t.size > 1 else 0.0
     co2_kg = float(np.trapezoid(em, hours)) if t.size > 1 else 0.0

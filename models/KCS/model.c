@@ -51,7 +51,7 @@ fmi2Status model_exit_initialization(ModelInstance *comp) {
     const char *bad = kcs_invalid_parameter(&d->p);
     int i;
     if (bad) {
-        log_error(comp, "fmi2ExitInitializationMode: parameter %s has an invalid value", bad);
+        log_error(comp, "parameter %s has an invalid value", bad);
         return fmi2Error;
     }
     for (i = 0; i < KCS_NSTATES; i++) d->X[i] = d->X0[i];

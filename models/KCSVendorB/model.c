@@ -57,7 +57,7 @@ fmi2Status model_exit_initialization(ModelInstance *comp) {
     ModelData *d = &comp->data;
     const char *bad = kcs_invalid_parameter(&d->p);
     if (bad) {
-        log_error(comp, "fmi2ExitInitializationMode: parameter %s has an invalid value", bad);
+        log_error(comp, "parameter %s has an invalid value", bad);
         return fmi2Error;
     }
     for (int i = 0; i < KCS_NSTATES; i++) d->X[i] = d->X0[i];

@@ -1,9 +1,13 @@
-/* Interface between the shared FMI 2.0 co-simulation layer (fmi2_common.c) and one model.
+/* Interface between the shared FMI co-simulation layer and one model.
  *
  * A model folder supplies config.h (MODEL_IDENTIFIER, INSTANTIATION_TOKEN, the ValueReference
  * enum with N_VARIABLES last, the ModelData struct, MODEL_CAN_GET_SET_STATE, MODEL_HAS_STRINGS)
  * and model.c implementing the hooks declared below plus the variable table. Everything about
- * the FMI state machine, argument checks, logging and FMU state lives in fmi2_common.c.
+ * the FMI state machine, argument checks, logging and FMU state lives in fmu_core.c; the thin
+ * fmi2_api.c and fmi3_api.c map it onto FMI 2.0 and FMI 3.0 (one of them per build).
+ *
+ * Status values: the hooks return the FMI 2.0 status enum (fmi2OK .. fmi2Pending), whose
+ * values FMI 3.0's fmi3Status shares (OK 0, Warning 1, Discard 2, Error 3, Fatal 4).
  */
 #ifndef FMU_MODEL_H
 #define FMU_MODEL_H
@@ -47,15 +51,30 @@ typedef struct {
     Variability variability;
 } ModelVariable;
 
+/* A declared range of a Real variable; the table model_bounds[] is generated at build time
+ * from the min/max attributes of modelDescription.xml (model_bounds.h). */
+typedef struct {
+    fmi2ValueReference vr;
+    double min;
+    double max;
+} VariableBounds;
+
 /* The variable table, indexed by value reference (model_variables[vr].vr == vr). */
 extern const ModelVariable model_variables[N_VARIABLES];
 
+struct ModelInstance;
+/* Delivers one formatted log message to the importer (set by the FMI 2 or FMI 3 API). */
+typedef void (*LogEmitter)(struct ModelInstance *comp, fmi2Status status, const char *category,
+                           const char *message);
+
 typedef struct ModelInstance {
     char *instanceName;
-    fmi2CallbackLogger logger;
+    char *resourcePath;        /* the FMU's resources folder, ending in '/' ("" if unknown) */
+    LogEmitter emit;
+    void *importerLogger;      /* the FMI version's logger callback, called by emit */
+    void *importerEnvironment; /* fmi2ComponentEnvironment / fmi3InstanceEnvironment */
     fmi2CallbackAllocateMemory allocateMemory;
     fmi2CallbackFreeMemory freeMemory;
-    fmi2ComponentEnvironment componentEnvironment;
     fmi2Boolean loggingOn;
     ModelState state;
     double time;      /* s, current communication point */
@@ -63,6 +82,10 @@ typedef struct ModelInstance {
     bool stopTimeDefined;
     ModelData data;
 } ModelInstance;
+
+/* Resolve a file name against the FMU's resources folder unless it is absolute; writes at
+ * most size bytes into out and returns false (logged) when the result does not fit. */
+bool resolve_resource(ModelInstance *comp, const char *name, char *out, size_t size);
 
 /* Logging through the environment's logger callback; errors are always logged. */
 void log_error(ModelInstance *comp, const char *format, ...);

@@ -15,12 +15,12 @@ static inline fmi2Status kcs_set_checked(ModelInstance *comp, fmi2ValueReference
                                          double si_value) {
     const char *name = model_variables[vr].name;
     if (strcmp(name, "h_int") == 0 && !(si_value > 0.0)) {
-        log_error(comp, "fmi2SetReal: h_int (value reference %u) = %g must be positive", (unsigned)vr,
+        log_error(comp, "h_int (value reference %u) = %g must be positive", (unsigned)vr,
                   si_value);
         return fmi2Error;
     }
     if ((strcmp(name, "tau_u_max") == 0 || strcmp(name, "tau_r_max") == 0) && si_value < 0.0) {
-        log_error(comp, "fmi2SetReal: %s (value reference %u) = %g must not be negative", name,
+        log_error(comp, "%s (value reference %u) = %g must not be negative", name,
                   (unsigned)vr, si_value);
         return fmi2Error;
     }
@@ -32,7 +32,7 @@ static inline fmi2Status kcs_set_checked(ModelInstance *comp, fmi2ValueReference
 static inline fmi2Status kcs_step(ModelInstance *comp, const KcsParameters *p, double X[KCS_NSTATES],
                                   const KcsInputs *in, double t, double h) {
     if (kcs_integrate(p, X, in, h) != 0) {
-        log_error(comp, "fmi2DoStep: the state became non-finite in the step from t = %g s", t);
+        log_error(comp, "the state became non-finite in the step from t = %g s", t);
         return fmi2Error;
     }
     return fmi2OK;

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import shutil
 import zipfile
 
@@ -36,9 +37,13 @@ def test_fmu_carries_binary_and_sources(fmus):
         names = set(z.namelist())
         description = z.read("modelDescription.xml").decode()
     assert f"binaries/{platform}/KCS{sharedLibraryExtension}" in names
-    assert {"sources/fmi2_common.c", "sources/model.c", "sources/config.h",
+    assert {"sources/fmu_core.c", "sources/fmi2_api.c", "sources/model.c", "sources/config.h",
             "sources/kcs_dynamics.h", "sources/kcs_parameter_defaults.h"} <= names
+    assert "sources/fmi3_api.c" not in names  # the other standard's API is left out
     assert "@" not in description  # every start value placeholder was filled
+    # the description lists exactly the C files compiled into it
+    listed = set(re.findall(r'<File name="([^"]+)"', description))
+    assert listed == {"fmu_core.c", "fmi2_api.c", "model.c"}
 
 
 def test_ensure_built_rebuilds_only_after_a_source_change(models_copy, tmp_path):

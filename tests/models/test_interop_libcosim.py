@@ -77,3 +77,32 @@ def test_metocean_in_libcosim_returns_the_planners_values(fmus, tmp_path):
     theirs = observer.last_real_values(env, [vr[name] for name in names])
     expected = field.sample(*point)
     np.testing.assert_allclose(theirs, [float(expected[name]) for name in names], rtol=1e-12, atol=1e-12)
+
+
+def test_metocean_in_libcosim_follows_the_moving_storm_in_time(fmus, tmp_path):
+    from fmpy import read_model_description
+
+    from rhnc.metocean import NM
+    from rhnc.weather_generators import moving_storm
+
+    field = moving_storm(resolution_nm=5.0, duration_h=3.0)
+    grid = field.write_fmu_grid(tmp_path / "storm.grid")
+    fmu = fmus["MetOcean"]
+    vr = {v.name: v.valueReference for v in read_model_description(str(fmu)).modelVariables}
+    names = ("wind_speed", "hs", "wind_north", "wind_east")
+    point = (41.3 * NM, 52.8 * NM)
+    for stop_s in (1800, 5400, 4 * 3600):  # between steps, between other steps, after the last
+        log_output_level(CosimLogLevel.WARNING)
+        execution = CosimExecution.from_step_size(int(60 * NANO))
+        env = execution.add_local_slave(CosimLocalSlave(fmu_path=str(fmu), instance_name="env"))
+        assert execution.string_initial_value(env, vr["grid_file"], str(grid))
+        assert execution.real_initial_value(env, vr["x"], point[0])
+        assert execution.real_initial_value(env, vr["y"], point[1])
+        observer = CosimObserver.create_last_value()
+        assert execution.add_observer(observer)
+        assert execution.simulate_until(int(stop_s * NANO))
+        theirs = observer.last_real_values(env, [vr[name] for name in names])
+        expected = field.sample(*point, t_s=float(stop_s))
+        np.testing.assert_allclose(theirs, [float(expected[name]) for name in names], rtol=1e-12, atol=1e-12)
+        # not the first step's value: the wind has turned as the storm moved
+        assert abs(theirs[3] - float(field.sample(*point, t_s=0.0)["wind_east"])) > 1.0

@@ -205,8 +205,11 @@ def test_refuses_fixed_parameter_after_initialisation_naming_it(fmus, open_slave
         slave.set({"m11": 1.0})
     assert "fixed parameter m11 (value reference" in slave.errors()
     with pytest.raises(FMICallException):
-        slave.set({"h_int": -1.0})
-    assert "h_int" in slave.errors() and "must be positive" in slave.errors()
+        slave.set({"h_int": 0.0})  # inside the declared range [0, inf), refused by the model
+    assert "h_int (value reference 43) = 0 must be positive" in slave.errors()
+    with pytest.raises(FMICallException):
+        slave.set({"h_int": -1.0})  # outside the declared range, refused by the shared layer
+    assert "fmi2SetReal: h_int (value reference 43) = -1 is outside its range [0, inf]" in slave.errors()
 
 
 def sway_yaw_poles(p, u0):

@@ -1,4 +1,4 @@
-"""MetOcean FMU: MOGRID1 reading, exact node values, bilinear interpolation, errors."""
+"""MetOcean FMU: MOGRID1 and MOGRID2 reading, exact node values, bilinear and time interpolation, errors."""
 
 from __future__ import annotations
 
@@ -115,7 +115,7 @@ def test_output_read_outside_the_grid_is_an_error(fmus, open_slave, grid):
     slave.set({"x": 0.0, "y": 1999.0})
     with pytest.raises(FMICallException):
         slave.get("hs")
-    assert "fmi2GetReal: point x = 0.000 m, y = 1999.000 m is outside" in slave.errors()
+    assert "reading an output: point x = 0.000 m, y = 1999.000 m is outside" in slave.errors()
 
 
 def test_missing_grid_file_fails_initialisation_naming_it(fmus, open_slave, tmp_path):
@@ -134,3 +134,119 @@ def test_corrupt_grid_file_fails_initialisation_naming_it(fmus, open_slave, grid
     with pytest.raises(FMICallException):
         slave.initialize({"grid_file": str(truncated)})
     assert f'grid_file "{truncated}" is truncated' in slave.errors()
+
+
+# -- MOGRID2: the time axis --------------------------------------------------------------
+def write_grid2(path: Path, x0, dx, y0, dy, times, fields: dict[str, np.ndarray]) -> Path:
+    """Minimal MOGRID2 writer (written independently of rhnc/metocean.py): fields (nt, nx, ny)."""
+    nt, nx, ny = fields["hs"].shape
+    with path.open("wb") as f:
+        f.write(b"MOGRID2\n")
+        f.write(struct.pack("<iii", nx, ny, nt))
+        f.write(struct.pack("<dddd", x0, dx, y0, dy))
+        f.write(np.asarray(times, dtype="<f8").tobytes())
+        for k in range(nt):
+            for name in FIELDS:
+                f.write(np.ascontiguousarray(fields[name][k], dtype="<f8").tobytes())
+    return path
+
+
+@pytest.fixture
+def timed_grid(tmp_path):
+    rng = np.random.default_rng(3)
+    times = [0.0, 600.0, 1500.0]
+    fields = {name: rng.uniform(-10, 10, (3, 4, 3)) for name in FIELDS}
+    path = write_grid2(tmp_path / "timed.mogrid", 0.0, 100.0, 0.0, 50.0, times, fields)
+    return path, times, fields
+
+
+def test_time_steps_exact_linear_between_and_held_outside(fmus, open_slave, timed_grid):
+    path, times, fields = timed_grid
+    slave = open_slave(fmus["MetOcean"])
+    slave.initialize({"grid_file": str(path), "x": 200.0, "y": 50.0}, start_time=-300.0)  # node (2, 1)
+    node = {name: fields[name][:, 2, 1] for name in FIELDS}
+    t, h = -300.0, 150.0
+    while t < 2000.0:
+        slave.fmu.doStep(t, h)
+        t += h
+        values = dict(zip(FIELDS, slave.get(*FIELDS)))
+        held = min(max(t, times[0]), times[-1])
+        for name in FIELDS:
+            want = np.interp(held, times, node[name])
+            if held in times:  # exactly the stored value at a time step
+                assert values[name] == node[name][times.index(held)], (name, t)
+            else:
+                assert values[name] == pytest.approx(want, rel=1e-13, abs=1e-13), (name, t)
+
+
+def test_fmu_and_sample_agree_along_a_sailed_track_in_a_moving_storm(fmus, open_slave, tmp_path):
+    """The planner's sample and the FMU give the same weather at the places and times sailed."""
+    from rhnc.metocean import KNOT, NM
+    from rhnc.weather_generators import moving_storm
+
+    field = moving_storm(resolution_nm=2.0, duration_h=6.0)
+    assert field.is_time_varying
+    grid = field.write_fmu_grid(tmp_path / "storm.grid")
+    slave = open_slave(fmus["MetOcean"])
+    slave.initialize({"grid_file": str(grid)}, start_time=-700.0)  # before the first step: held
+    speed = 18.0 * KNOT
+    t, h, compared, changing = -700.0, 700.0, 0, []
+    while t + h <= 7.5 * 3600.0:  # beyond the last step (6 h): held
+        end = t + h
+        along = speed * max(end, 0.0)
+        x, y = along / np.sqrt(2), along / np.sqrt(2) + 1.5 * NM * (1 - np.cos(end / 3000.0))  # weaving
+        slave.set({"x": x, "y": y})
+        slave.fmu.doStep(t, h)
+        t = end
+        got = dict(zip(OUTPUTS, slave.get(*OUTPUTS)))
+        want = field.sample(x, y, t_s=t)
+        for name in FIELDS + ["wind_speed"]:
+            assert got[name] == pytest.approx(float(want[name]), rel=1e-12, abs=1e-12), (name, t)
+        assert np.mod(got["wind_direction"], 2 * np.pi) == pytest.approx(float(want["wind_direction"]), abs=1e-12)
+        # the weather at this place an hour later differs: time matters along this track
+        changing.append(abs(float(field.sample(x, y, t_s=t + 3600.0)["hs"] - want["hs"])))
+        compared += 1
+    assert compared >= 35 and max(changing) > 0.3
+
+
+def test_times_out_of_order_fail_initialisation_naming_the_file(fmus, open_slave, timed_grid, tmp_path):
+    _, _, fields = timed_grid
+    bad = write_grid2(tmp_path / "bad.mogrid", 0.0, 100.0, 0.0, 50.0, [0.0, 600.0, 600.0], fields)
+    slave = open_slave(fmus["MetOcean"])
+    with pytest.raises(FMICallException):
+        slave.initialize({"grid_file": str(bad)})
+    assert f'grid_file "{bad}": time 2 (600 s) is not finite or not after the one before' in slave.errors()
+
+
+def test_default_grid_in_resources_runs_the_default_experiment(fmus):
+    """With no grid_file the FMU reads the paper's weather from its resources (5 nm grid)."""
+    from fmpy import simulate_fmu
+
+    from rhnc.metocean import NM, MetOceanField
+
+    point = (40.0 * NM, 55.0 * NM)
+    result = simulate_fmu(str(fmus["MetOcean"]), stop_time=60.0, output_interval=60.0,
+                          start_values={"x": point[0], "y": point[1]}, output=["hs", "wind_speed"])
+    expected = MetOceanField.generate_paper_default(resolution_nm=5.0).sample(*point)
+    assert result["hs"][-1] == pytest.approx(float(expected["hs"]), rel=1e-12)
+    assert result["wind_speed"][-1] == pytest.approx(float(expected["wind_speed"]), rel=1e-12)
+
+
+def test_shipped_default_grid_is_the_generators_output():
+    """models/MetOcean/resources/default.grid is not stale: the generator writes the same bytes."""
+    import tempfile
+    from pathlib import Path
+
+    from orchestrator.fmu_build import MODELS_DIR
+    from rhnc.metocean import MetOceanField
+
+    with tempfile.TemporaryDirectory() as tmp:
+        fresh = MetOceanField.generate_paper_default(resolution_nm=5.0).write_fmu_grid(Path(tmp) / "g")
+        assert fresh.read_bytes() == (MODELS_DIR / "MetOcean" / "resources" / "default.grid").read_bytes()
+
+
+def test_a_relative_grid_name_is_taken_in_the_resources_folder(fmus, open_slave):
+    slave = open_slave(fmus["MetOcean"])
+    with pytest.raises(FMICallException):
+        slave.initialize({"grid_file": "no_such.grid"})
+    assert "resources/no_such.grid\" cannot be opened" in slave.errors()

@@ -29,12 +29,12 @@ def test_bad_scenario_is_one_line_and_exit_2(tmp_path, capsys):
     bad.write_text("[simulation]\ndt_s = 1.0\nsteps = 2\nwarp = 9\n[participants.a]\ntype = 'scripted_tau'\n")
     assert main(["run", str(bad), "--results", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == [f"error: {bad}: unknown key 'simulation.warp' (valid: name, start_s, stop_s, steps, dt_s, stop_when)"]
+    assert err == [f"error: {bad}: unknown key 'simulation.warp' (valid: name, start_s, stop_s, steps, dt_s, stop_when, exchange)"]
     assert not (tmp_path / "bad").exists()  # nothing written for a scenario that never ran
 
 
 def test_failed_run_exits_3(tmp_path, capsys):
-    scenario = (REPO / "scenarios" / "turning_circle.toml").read_text().replace("u0 = 9.26", "u0 = 9.26\nd11 = -1.0e9")
+    scenario = (REPO / "scenarios" / "turning_circle.toml").read_text().replace("u0 = 9.26", "u0 = 9.26\nm11 = 1.0")
     path = tmp_path / "diverge.toml"
     path.write_text(scenario)
     assert main(["run", str(path), "--results", str(tmp_path), "--no-progress"]) == 3

@@ -74,6 +74,7 @@ def test_table_leaves_missing_figures_empty():
     ('colour = "red"', r"compare.toml: runs\[1\]: unknown key 'colour'"),
     ('[[runs]]\nlabel = "x"\nscenario = "none.toml"', r"runs\[2\].scenario: scenario file not found"),
     ('[[runs]]\nlabel = "x"\nscenario = "slow.toml"\npaper = { speed = 1 }', r"runs\[2\].paper: 'speed' is not one of"),
+    ('[[runs]]\nlabel = "x"\nscenario = "slow.toml"\nset = 3', r"runs\[2\].set: expected a table"),
 ])
 def test_comparison_file_errors(tmp_path, extra, message):
     with pytest.raises(ScenarioError, match=message):
@@ -85,3 +86,31 @@ def test_unknown_baseline_and_cli_exit_code(tmp_path, capsys):
     path.write_text(path.read_text().replace('baseline = "slow"', 'baseline = "medium"'))
     assert main(["compare", str(path)]) == 2
     assert "baseline 'medium' is not a run label (slow, fast)" in capsys.readouterr().err
+
+
+def test_sweep_runs_the_comparison_once_per_value(tmp_path):
+    from orchestrator.compare import run_comparison
+
+    extra = '[sweep]\nkey = "participants.helm.options.tau_u_N"\nvalues = [5.0e5, 9.0e5]'
+    path = write(tmp_path)
+    path.write_text(path.read_text().replace('baseline = "slow"', 'baseline = "slow"\n' + extra))
+    folder = run_comparison(path, tmp_path / "results", progress=False)
+    members = sorted(p.name for p in (folder / "members").iterdir())
+    assert members == ["participants.helm.options.tau_u_N=500000.0", "participants.helm.options.tau_u_N=900000.0"]
+    distances = [pd.read_csv(folder / "members" / m / "table.csv").set_index("metric").loc["distance_nm", "slow (ours)"]
+                 for m in members]
+    assert distances[1] > distances[0]   # the swept surge force reached the runs
+    summary = (folder / "summary.json").read_text()
+    assert '"sweep_key": "participants.helm.options.tau_u_N"' in summary
+
+
+@pytest.mark.parametrize("extra, message", [
+    ('[set]\n"a..b" = 1', r"compare.toml: set: key 'a..b' is not a dotted key path"),
+    ('[sweep]\nkey = "simulation.dt_s"', r"give exactly one of 'sweep.values' or 'sweep.range'"),
+    ('[sweep]\nkey = "simulation.dt_s"\nvalues = [1.0]\nstep = 2', r"unknown key 'sweep.step'"),
+])
+def test_set_and_sweep_errors(tmp_path, extra, message):
+    path = write(tmp_path)
+    path.write_text(path.read_text().replace('baseline = "slow"', 'baseline = "slow"\n' + extra))
+    with pytest.raises(ScenarioError, match=message):
+        load_comparison(path)

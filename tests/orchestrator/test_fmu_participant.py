@@ -113,15 +113,15 @@ def test_an_invalid_parameter_value_is_refused_by_the_fmu(write_scenario, tmp_pa
     report = run_scenario(write_scenario(text), tmp_path, progress=False)
     assert report.status == "failed"
     assert report.reason == ("ship (KCS.fmu): fmi2ExitInitializationMode failed: "
-                             "fmi2ExitInitializationMode: parameter m11 has an invalid value")
+                             "parameter m11 has an invalid value")
     assert report.summary["simulation"]["steps_done"] == 0
 
 
 def test_a_diverging_model_fails_the_run_with_its_name(write_scenario, tmp_path):
-    text = STRAIGHT.replace("u0 = 9.0", "u0 = 9.0\nd11 = -1.0e9")  # negative damping: blows up
+    text = STRAIGHT.replace("u0 = 9.0", "u0 = 9.0\nm11 = 1.0")  # stiff: d11/m11 far beyond what RK4 at h_int can integrate
     report = run_scenario(write_scenario(text), tmp_path, progress=False)
     assert report.status == "failed"
-    assert report.reason == ("ship (KCS.fmu): fmi2DoStep failed: fmi2DoStep: "
+    assert report.reason == ("ship (KCS.fmu): fmi2DoStep failed: "
                              "the state became non-finite in the step from t = 0 s")
     assert (report.folder / "summary.json").is_file()
 

@@ -57,6 +57,30 @@ def test_an_earlier_participant_sees_the_previous_steps_outputs(write_scenario):
     assert cosim.participant("echo").seen[:3] == [(0.0, 0.0), (1.0, 1.0), (2.0, 2.0)]
 
 
+def jacobi(text):
+    return text.replace("dt_s = 1.0", 'dt_s = 1.0\nexchange = "jacobi"')
+
+
+def test_jacobi_every_participant_sees_the_outputs_published_before_the_point(write_scenario):
+    # declared first or second, echo sees clock's count of the previous step (set-up: none)
+    for order in (("clock", "echo"), ("echo", "clock")):
+        cosim, outcome = run(write_scenario, jacobi(scenario_text(order)))
+        assert outcome.status == "finished"
+        assert cosim.participant("echo").seen[:3] == [(0.0, 0.0), (1.0, 1.0), (2.0, 2.0)]
+
+
+def test_jacobi_outputs_of_a_longer_step_arrive_at_its_end(write_scenario):
+    cosim, outcome = run(write_scenario, jacobi(scenario_text(("clock", "echo"), every=(3, 1))))
+    seen = dict(cosim.participant("echo").seen)
+    # clock steps at 0, 3, 6: its count from the step at 0 reaches echo at 3, not at 1
+    assert [seen[t] for t in (0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0)] == [0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 2.0]
+
+
+def test_an_unknown_exchange_order_is_refused_naming_the_key(write_scenario):
+    with pytest.raises(ScenarioError, match=r"'simulation.exchange' must be one of gauss-seidel, jacobi, got 'random'"):
+        load_scenario(write_scenario(scenario_text().replace("dt_s = 1.0", 'dt_s = 1.0\nexchange = "random"')))
+
+
 def test_multi_rate_steps_and_hold(write_scenario):
     cosim, outcome = run(write_scenario, scenario_text(("clock", "echo"), every=(3, 1)))
     clock = cosim.participant("clock")

@@ -17,14 +17,14 @@ NORTH = 0.0
 #   C_F = 0.075 / 7.2245^2 = 1.4369e-3
 #   Ps  = 1025 * 1.4369e-3 * 9424 * 9.26^3 / 2 * (32000 * 0.5 / 40000 + 0.5)
 #       = 5.5107e6 * 0.9 = 4.9596e6 W
-#   Pa (no wind) = 0.1 * 1.225 * 2200.43 * 9.26^3 / 2 = 1.0702e5 W
+#   Pa (no wind) = 0.1 * 1.225 * 1000 * 9.26^3 / 2 = 4.8634e4 W   (A: frontal area, ships/KCS.toml)
 #   K  = 1 / (0.65 * (0.7 + 0.3 * 18/24)) = 1 / (0.65 * 0.925) = 1.66320
-#   P  = 1.66320 * (4.9596e6 + 1.0702e5) = 8.4268e6 W
-#   fuel = 8426.8 kW * 190 g/kWh = 1.60109 t/h
-#   EC = 1.60109 * 640 + 12000 / 24 = 1524.70 USD/h,  EM = 1.60109 * 3114 = 4985.8 kg/h
+#   P  = 1.66320 * (4.9596e6 + 4.8634e4) = 8.3297e6 W
+#   fuel = 8329.7 kW * 190 g/kWh = 1.58264 t/h
+#   EC = 1.58264 * 640 + 12000 / 24 = 1512.89 USD/h,  EM = 1.58264 * 3114 = 4928.3 kg/h
 CALM_PS = 4.9596e6
-CALM_PA = 1.0702e5
-CALM_P = 8.4268e6
+CALM_PA = 4.8634e4
+CALM_P = 8.3297e6
 
 
 def test_frictional_coefficient_ittc57_at_18_knots():
@@ -38,23 +38,23 @@ def test_calm_water_at_18_knots():
     assert parts["wind"] == pytest.approx(CALM_PA, rel=1e-4)
     assert parts["propulsion_factor"] == pytest.approx(1.66320, rel=1e-5)
     assert parts["brake_power"] == pytest.approx(CALM_P, rel=1e-4)
-    assert cost_rate(CALM_P) == pytest.approx(1524.70, rel=1e-4)
-    assert emission_rate(CALM_P) == pytest.approx(4985.8, rel=1e-4)
+    assert cost_rate(CALM_P) == pytest.approx(1512.89, rel=1e-4)
+    assert emission_rate(CALM_P) == pytest.approx(4928.3, rel=1e-4)
 
 
 def test_head_seas_hs_3m():
     # Waves travel with the wind: a 1 m/s wind from ahead (towards south) for a ship heading north.
     # Tp = 5 sqrt(3) = 8.660 s, c = 9.81 * 8.660 / (2 pi) = 13.521 m/s (head seas: u_wave = +13.521)
     # Pw = 0.57e-3 * 1025 * 9.81 * 1.5^2 * 32.2^2 / 230 * (9.26 + 13.521) = 1324.4 W
-    # Pa = 0.1 * 1.225 * 2200.43 * (9.26 + 1)^3 / 2 = 1.4556e5 W
+    # Pa = 0.1 * 1.225 * 1000 * (9.26 + 1)^3 / 2 = 6.6153e4 W
     # K  = max(1.66320, 1 / (0.65 * (1 - 0.3))) = 2.19780
-    # P  = 2.19780 * (4.9596e6 + 1324.4 + 1.4556e5) = 1.12230e7 W
+    # P  = 2.19780 * (4.9596e6 + 1324.4 + 6.6153e4) = 1.10485e7 W
     parts = power_components(V18, NORTH, -1.0, 0.0, 3.0)
     assert parts["wave_encounter_speed"] == pytest.approx(13.521, rel=1e-4)
     assert parts["added_wave"] == pytest.approx(1324.4, rel=1e-4)
-    assert parts["wind"] == pytest.approx(1.4556e5, rel=1e-4)
+    assert parts["wind"] == pytest.approx(6.6153e4, rel=1e-4)
     assert parts["propulsion_factor"] == pytest.approx(2.19780, rel=1e-5)
-    assert parts["brake_power"] == pytest.approx(1.12230e7, rel=1e-4)
+    assert parts["brake_power"] == pytest.approx(1.10485e7, rel=1e-4)
 
 
 def test_c_w_reading_gives_the_smaller_of_two_implausible_ratios():
@@ -74,12 +74,12 @@ def test_c_w_reading_gives_the_smaller_of_two_implausible_ratios():
 
 
 def test_head_wind_20_m_s():
-    # Pa = 0.1 * 1.225 * 2200.43 * (9.26 + 20)^3 / 2 = 3.37627e6 W
-    # P  = 1.66320 * (4.9596e6 + 3.37627e6) = 1.38642e7 W
+    # Pa = 0.1 * 1.225 * 1000 * (9.26 + 20)^3 / 2 = 1.53437e6 W
+    # P  = 1.66320 * (4.9596e6 + 1.53437e6) = 1.08008e7 W
     parts = power_components(V18, NORTH, -20.0, 0.0, 0.0)
     assert parts["head_wind"] == pytest.approx(20.0)
-    assert parts["wind"] == pytest.approx(3.37627e6, rel=1e-4)
-    assert parts["brake_power"] == pytest.approx(1.38642e7, rel=1e-4)
+    assert parts["wind"] == pytest.approx(1.53437e6, rel=1e-4)
+    assert parts["brake_power"] == pytest.approx(1.08008e7, rel=1e-4)
     # the same wind from astern helps
     assert brake_power(V18, NORTH, 20.0, 0.0, 0.0) < CALM_P
 
@@ -118,3 +118,13 @@ def test_overrides_reject_unknown_keys():
         EnergyParameters().with_overrides({"C_w": 0.1}, "s.toml: energy")
     with pytest.raises(ScenarioError, match=r"energy.cargo_t: expected a finite number"):
         EnergyParameters().with_overrides({"cargo_t": "lots"}, "s.toml: energy")
+
+
+def test_ship_constants_come_from_the_ship_particulars():
+    from rhnc.ships import load_ship
+
+    ship, params = load_ship("KCS"), EnergyParameters()
+    assert params.wind_area_m2 == ship.wind_area_frontal_m2  # head-wind resistance: frontal area
+    assert (params.length_m, params.beam_m, params.wetted_surface_m2, params.deadweight_t) == (
+        ship.lpp_m, ship.beam_m, ship.wetted_surface_m2, ship.deadweight_t)
+    assert params.design_speed_m_s == pytest.approx(24 * 1852 / 3600)

@@ -155,3 +155,25 @@ def test_normalised_cost_and_emission_fields_coincide():
     field = SuperpositionField(weather(hs=patch(3, (20, 30), 5)), (45 * NM, 40 * NM))
     field.update((2 * NM, 3 * NM), SPEED)
     assert np.allclose(normalise(field.ec), normalise(field.em), atol=1e-12)
+
+
+def test_final_approach_runs_straight_to_a_goal_within_the_horizon():
+    from rhnc.fields import SuperpositionField, resample_weather
+    from rhnc.metocean import MetOceanField
+    from rhnc.planner import plan_local_path
+
+    weather = resample_weather(MetOceanField.generate_paper_default(resolution_nm=1.0), 1.0)
+    goal = (100 * 1852.0, 100 * 1852.0)
+    field = SuperpositionField(weather, goal)
+    start = (95 * 1852.0, 88 * 1852.0)
+    field.update(start, 9.26)
+    path = plan_local_path(field, start, 2222.4, 16, final_approach=True)
+    direction = np.subtract(goal, start) / np.hypot(*np.subtract(goal, start))
+    rel = path.points - start
+    assert np.max(np.abs(rel[:, 0] * direction[1] - rel[:, 1] * direction[0])) < 1e-6
+    assert path.reached_goal and np.allclose(path.points[-1], goal)
+    np.testing.assert_allclose(np.hypot(*np.diff(path.points[:6], axis=0).T), 2222.4)
+    # without it (the default, as in the paper), the descent does not head straight there
+    plain = plan_local_path(field, start, 2222.4, 16)
+    rel = plain.points - start
+    assert np.max(np.abs(rel[:, 0] * direction[1] - rel[:, 1] * direction[0])) > 100.0

@@ -57,15 +57,20 @@ def test_era5_style_latitude_longitude_file(tmp_path):
     lat = np.linspace(51.0, 50.0, 11)  # ERA5 stores latitude north to south
     lon = np.linspace(-5.0, -3.0, 21)
     shape = (2, lat.size, lon.size)
-    u10 = np.broadcast_to(np.linspace(0, 10, lon.size), shape)  # wind towards east, growing eastward
+    u10 = np.broadcast_to(np.linspace(0, 10, lon.size), shape) * np.array([1.0, 2.0])[:, None, None]
     ds = xr.Dataset(
-        {"u10": (("time", "latitude", "longitude"), u10),
+        {"u10": (("time", "latitude", "longitude"), u10),  # towards east, growing eastward, doubling in 1 h
          "v10": (("time", "latitude", "longitude"), np.zeros(shape)),
          "swh": (("time", "latitude", "longitude"), np.full(shape, 2.0))},
-        coords={"latitude": lat, "longitude": lon, "time": [0, 1]},
+        coords={"latitude": lat, "longitude": lon,
+                "time": ("time", [1067868, 1067869], {"units": "hours since 1900-01-01 00:00:00.0"})},
     )
     ds.to_netcdf(tmp_path / "era5.nc")
-    field = MetOceanField.from_netcdf(tmp_path / "era5.nc")
+    everything = MetOceanField.from_netcdf(tmp_path / "era5.nc")
+    np.testing.assert_array_equal(everything.times_s, [0.0, 3600.0])  # every time step, since the first
+    np.testing.assert_allclose(everything.wind_speed[1], 2 * everything.wind_speed[0])
+    field = MetOceanField.from_netcdf(tmp_path / "era5.nc", time_index=0)
+    assert not field.is_time_varying
     assert field.x[0] == 0.0 and field.y[0] == 0.0
     assert field.x[-1] == pytest.approx(np.radians(1.0) * 6_371_000, rel=0.01)
     np.testing.assert_allclose(field.wind_direction[:, 1:], 1.5 * np.pi)  # from the west (calm at y = 0)
@@ -92,8 +97,11 @@ def test_scenario_table_errors_name_the_key(tmp_path):
         MetOceanField.from_scenario_table({"generator": "paper_default", "wind_kn": 3}, tmp_path, where)
     with pytest.raises(ScenarioError, match=r"metocean.file: met-ocean file not found: .*none.nc"):
         MetOceanField.from_scenario_table({"file": "none.nc"}, tmp_path, where)
-    with pytest.raises(ScenarioError, match=r"metocean: wind_control_points_ms needs a 2-D lattice"):
+    with pytest.raises(ScenarioError, match=r"metocean.wind_control_points_ms: expected a 2-D list of numbers"):
         MetOceanField.from_scenario_table({"generator": "paper_default", "wind_control_points_ms": [1, 2]},
+                                          tmp_path, where)
+    with pytest.raises(ScenarioError, match=r"metocean: wind_control_points_ms needs a 2-D lattice"):
+        MetOceanField.from_scenario_table({"generator": "paper_default", "wind_control_points_ms": [[1, 2]]},
                                           tmp_path, where)
 
 

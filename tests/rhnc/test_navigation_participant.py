@@ -23,7 +23,9 @@ def context(metocean):
 
 
 def build(metocean, **options):
-    return NavigationParticipant.from_options("nav", {"goal_nm": [100, 100], **options}, context(metocean))
+    """The paper's method unless ``method`` is given."""
+    return NavigationParticipant.from_options("nav", {"goal_nm": [100, 100], "method": "paper", **options},
+                                              context(metocean))
 
 
 def test_unknown_option_names_the_key_and_the_valid_ones(metocean):
@@ -85,3 +87,31 @@ def test_setup_without_position_needs_start(metocean):
     nav = build(metocean)
     with pytest.raises(ScenarioError, match="start_nm"):
         nav.setup(0.0, {})
+
+
+def test_plans_in_the_weather_of_each_planning_instant():
+    """With a moving storm the fields and the local rates use the weather at the plan's time."""
+    from rhnc.energy import EnergyParameters, brake_power, cost_rate
+    from rhnc.fields import resample_weather
+    from rhnc.weather_generators import moving_storm
+
+    field = moving_storm(resolution_nm=2.0, duration_h=6.0)
+    nav = build(field, start_nm=[0, 0], resolution_nm=2.0, start_from="measured")
+    nav.setup(0.0, {})
+    state = {"x": 40.0 * NM, "y": 45.0 * NM, "psi": np.pi / 4, "u": 9.0}
+    for t in (3600.0, 3.5 * 3600.0):
+        out = nav.step(t, DELTA, state)
+        expected = resample_weather(field, 2.0, t_s=t)
+        np.testing.assert_allclose(nav.field.weather.hs, expected.hs, rtol=1e-12)
+        np.testing.assert_allclose(nav.field.ec, energy_at(expected, nav), rtol=1e-12)
+        local = field.sample(state["x"], state["y"], t_s=t)
+        power = brake_power(9.0, np.pi / 4, local["wind_north"], local["wind_east"], local["hs"], EnergyParameters())
+        assert out["ec_rate"] == pytest.approx(float(cost_rate(power, EnergyParameters())), rel=1e-12)
+    early = resample_weather(field, 2.0, t_s=3600.0)
+    assert np.max(np.abs(nav.field.weather.hs - early.hs)) > 0.5  # the storm did move meanwhile
+
+
+def energy_at(weather, nav):
+    from rhnc.fields import energy_rate_fields
+
+    return energy_rate_fields(weather, nav.goal, nav.speed, nav.energy)[0]

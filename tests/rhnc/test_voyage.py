@@ -54,3 +54,29 @@ def test_unknown_cii_year():
     with pytest.raises(ValueError, match=r"cii_year 2031: reduction factor known for \[2023, 2024, 2025, 2026\]"):
         account_voyage([0.0, 1.0], [0.0, 1.0], [0.0, 0.0], [1.0, 1.0], [0.0, 0.0], [0, 0], [0, 0], [0, 0],
                        cii_year=2031)
+
+
+def test_a_reported_brake_power_replaces_the_energy_model():
+    t = np.array([0.0, 1800.0, 3600.0])
+    x, y = np.array([0.0, 9260.0, 18520.0]), np.zeros(3)
+    calm = np.zeros(3)
+    power = np.full(3, 6.0e6)  # W
+    account = account_voyage(t, x, y, np.full(3, 9.26), calm, calm, calm, calm, brake_power_w=power)
+    fuel_t = 6000.0 * 190e-6  # t over one hour
+    assert account.co2_t == pytest.approx(fuel_t * 3.114)
+    assert account.cost_usd == pytest.approx(fuel_t * 640 + 500)
+    modelled = account_voyage(t, x, y, np.full(3, 9.26), calm, calm, calm, calm)
+    assert modelled.co2_t != pytest.approx(account.co2_t)
+
+
+def test_mean_speed_through_water_weights_by_time_and_counts_sway():
+    # 1 h at 10 kn then 1 h at 20 kn (surge only); sway 3-4-5 on top of it at the end
+    from rhnc.voyage import mean_speed_through_water_kn
+
+    t = np.array([0.0, 3600.0, 3600.0, 7200.0])
+    u = np.array([10.0, 10.0, 20.0, 20.0]) * KNOT
+    assert mean_speed_through_water_kn(t, u, np.zeros(4)) == pytest.approx(15.0)
+    t2 = np.array([0.0, 600.0, 3600.0])   # unequal spacing: a plain mean of samples would give 10/3 kn
+    assert mean_speed_through_water_kn(t2, np.array([0.0, 0.0, 10.0]) * KNOT, np.zeros(3)) == pytest.approx(
+        0.5 * 10.0 * 3000.0 / 3600.0)
+    assert mean_speed_through_water_kn([0.0, 10.0], [3.0, 3.0], [4.0, 4.0]) == pytest.approx(5.0 / KNOT)

@@ -1,0 +1,265 @@
+"""Export a Python participant of a scenario as an FMI 2.0 co-simulation FMU (``export``).
+
+``python -m orchestrator export S.toml NAME`` packs the participant ``NAME`` (navigation,
+NMPC, traffic, reference path, goal, or a user's ``type = "python"`` class) with its
+options, as the scenario configures it, into ``NAME.fmu``, so that another FMI master
+(OSP's libcosim, for instance) can run our autonomy against its own ship.
+
+Route taken: a Python-backed FMU built with PythonFMU (the FMU's binary is PythonFMU's
+small C wrapper, which starts the Python interpreter and calls the slave class in
+``resources/``). The alternative, a C wrapper of our own embedding Python, would duplicate
+that wrapper; a pure C port of the NMPC would duplicate CasADi. What runs the FMU needs: a
+shared-library CPython (3.11 or newer) with this package installed (``pip install
+rhnc-cosim``: CasADi, NumPy, SciPy, ...), the same as for running a scenario.
+
+Interface of the FMU. Every input and output port of the participant is an FMI Real
+variable; an array port of shape (n, m) becomes n * m scalar variables named
+``port[i,j]`` (0-based, the time-series columns' convention). The shapes are those the
+ports have in the scenario: the export runs the scenario for a few macro steps to see
+them (the obstacle list, for example, has one row per obstacle of the scenario's traffic).
+The FMU's communication step is the participant's (``every`` times ``dt_s``); it holds its
+outputs between steps.
+
+Timing. As in our master, the participant decides at ``t`` from its inputs at ``t``; an FMI
+master reads the outputs after ``doStep(t, h)``. Under a master that steps all FMUs
+together (Jacobi, as libcosim does) a decision made at ``t`` reaches the ship in the step
+from ``t + h``: run the reference scenario with ``[simulation] exchange = "jacobi"`` to
+compare like with like.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import shutil
+import tempfile
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from orchestrator.errors import ScenarioError
+from orchestrator.participant import Participant
+
+log = logging.getLogger(__name__)
+
+SLAVE_TEMPLATE = Path(__file__).with_name("exported_participant.py")
+#: Folder of the FMU's resources with export.json, the met-ocean field and the option files.
+BUNDLE = "participant"
+PROBE_STEPS_PER_PARTICIPANT_STEP = 2
+
+
+class _ShapeProbe(Participant):
+    """Forwards to a participant and records the shape of every port value it sees."""
+
+    def __init__(self, inner: Participant) -> None:
+        super().__init__(inner.name)
+        self.inner = inner
+        self.outputs_at_step_end = inner.outputs_at_step_end
+        self.shapes: dict[str, dict[str, list[int]]] = {"inputs": {}, "outputs": {}}
+
+    @property
+    def input_names(self):
+        return self.inner.input_names
+
+    @property
+    def output_names(self):
+        return self.inner.output_names
+
+    def _record(self, kind: str, values) -> None:
+        for port, value in values.items():
+            self.shapes[kind][port] = list(np.shape(value))
+
+    def setup(self, start_time, inputs):
+        self._record("inputs", inputs)
+        outputs = self.inner.setup(start_time, inputs)
+        self._record("outputs", outputs)
+        return outputs
+
+    def step(self, time, step_size, inputs):
+        self._record("inputs", inputs)
+        outputs = self.inner.step(time, step_size, inputs)
+        self._record("outputs", outputs)
+        return outputs
+
+    def terminate(self):
+        self.inner.terminate()
+
+
+def export_participant(scenario_path, participant: str, out_dir=".") -> Path:
+    """Write ``<out_dir>/<participant>.fmu``; return its path.
+
+    Raises
+    ------
+    ScenarioError
+        The scenario has no such participant, it is an FMU already, or a port stays
+        unconnected and unseen in the probe run (its shape is unknown).
+    """
+    from orchestrator.master import CoSimulation
+    from orchestrator.scenario import load_scenario
+
+    scenario_path = Path(scenario_path)
+    scenario = load_scenario(scenario_path)
+    specs = {spec.name: spec for spec in scenario.participants}
+    if participant not in specs:
+        raise ScenarioError(f"{scenario_path}: no participant '{participant}' (participants: {', '.join(specs)})")
+    spec = specs[participant]
+    if spec.is_fmu:
+        raise ScenarioError(f"{scenario_path}: participants.{participant} is an FMU already ({spec.fmu})")
+    _check_json(spec.options, f"{scenario_path}: participants.{participant}.options")
+    probe_steps = min(scenario.simulation.steps,
+                      PROBE_STEPS_PER_PARTICIPANT_STEP * max(s.every for s in scenario.participants))
+    probe_scenario = replace(scenario, simulation=replace(
+        scenario.simulation, stop_s=scenario.simulation.start_s + probe_steps * scenario.simulation.dt_s,
+        stop_when=()))
+    cosim = CoSimulation(probe_scenario)
+    try:
+        index = [p.name for p in cosim.participants].index(participant)
+        probe = _ShapeProbe(cosim.participants[index])
+        cosim.participants[index] = probe
+        outcome = cosim.run(progress=False)
+        if outcome.status != "finished":
+            raise ScenarioError(f"{scenario_path}: the probe run for the export failed: {outcome.reason}")
+        layout = _layout(probe, scenario_path)
+        with tempfile.TemporaryDirectory(prefix=f"export-{participant}-") as tmp:
+            tmp = Path(tmp)
+            bundle = tmp / BUNDLE
+            bundle.mkdir()
+            _resources(spec, scenario, cosim, bundle)
+            description = {
+                "participant": participant,
+                "target": _target(spec),
+                "options": spec.options,
+                "step_size_s": spec.every * scenario.simulation.dt_s,
+                "start_s": scenario.simulation.start_s,
+                "stop_s": scenario.simulation.stop_s,
+                "metocean": "metocean.nc" if cosim.metocean is not None else None,
+                "inputs": layout["inputs"],
+                "outputs": layout["outputs"],
+                "scenario": scenario_path.name,
+            }
+            (bundle / "export.json").write_text(json.dumps(description, indent=1))
+            script = tmp / f"{participant}.py"
+            script.write_text(SLAVE_TEMPLATE.read_text().replace("class ExportedParticipant(",
+                                                                 f"class {participant}("))
+            return _build(script, [bundle], Path(out_dir), participant)
+    finally:
+        cosim.close()
+
+
+def _build(script: Path, files: list[Path], out_dir: Path, participant: str) -> Path:
+    from pythonfmu.builder import FmuBuilder
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    target = out_dir / f"{participant}.fmu"
+    partial = out_dir / f".{participant}.fmu.partial"
+    built = FmuBuilder.build_FMU(script, dest=partial.with_suffix(".fmu"), project_files=files,
+                                 needsExecutionTool="true", canGetAndSetFMUstate="false",
+                                 canSerializeFMUstate="false")
+    _complete_model_structure(Path(built), target)
+    Path(built).unlink()
+    log.info("exported %s", target)
+    return target
+
+
+def _complete_model_structure(source: Path, target: Path) -> None:
+    """Copy the FMU, listing every output among the InitialUnknowns (PythonFMU leaves them out,
+    which FMI 2.0 requires for outputs computed at initialisation)."""
+    import xml.etree.ElementTree as ET
+    import zipfile
+
+    with zipfile.ZipFile(source) as old, zipfile.ZipFile(target, "w", zipfile.ZIP_DEFLATED) as new:
+        for item in old.infolist():
+            data = old.read(item.filename)
+            if item.filename == "modelDescription.xml":
+                root = ET.fromstring(data)
+                variables = root.find("ModelVariables").findall("ScalarVariable")
+                structure = root.find("ModelStructure")
+                initial = structure.find("InitialUnknowns")
+                if initial is None:
+                    initial = ET.SubElement(structure, "InitialUnknowns")
+                for index, variable in enumerate(variables, start=1):
+                    if variable.get("causality") == "output":
+                        ET.SubElement(initial, "Unknown", {"index": str(index)})
+                ET.indent(root)
+                data = b'<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root)
+            new.writestr(item, data)
+
+
+def _target(spec) -> str:
+    from orchestrator.registry import PARTICIPANT_TYPES
+
+    return spec.class_path if spec.type == "python" else PARTICIPANT_TYPES[spec.type]
+
+
+def _layout(probe: _ShapeProbe, scenario_path: Path) -> dict[str, list[dict[str, Any]]]:
+    layout: dict[str, list[dict[str, Any]]] = {"inputs": [], "outputs": []}
+    for kind, names in (("inputs", probe.input_names), ("outputs", probe.output_names)):
+        for port in names:
+            shape = probe.shapes[kind].get(port)
+            if shape is None:
+                if kind == "inputs":
+                    continue  # unconnected in the scenario: the FMU does not offer it
+                raise ScenarioError(
+                    f"{scenario_path}: participants.{probe.name}: output '{port}' was never produced "
+                    "in the probe run, so its size is unknown")
+            layout[kind].append({"port": port, "shape": shape})
+    return layout
+
+
+def _resources(spec, scenario, cosim, folder: Path) -> None:
+    """Files the participant reads: the met-ocean field and files its options name by a
+    path relative to the scenario (copied to the same relative path)."""
+    if cosim.metocean is not None:
+        cosim.metocean.to_netcdf(folder / "metocean.nc")
+    for value in _strings(spec.options):
+        if not value or Path(value).is_absolute() or ".." in Path(value).parts:
+            continue
+        candidate = scenario.directory / value
+        if candidate.is_file():
+            copy = folder / value
+            copy.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(candidate, copy)
+
+
+def _strings(value):
+    if isinstance(value, str):
+        yield value
+    elif isinstance(value, dict):
+        for item in value.values():
+            yield from _strings(item)
+    elif isinstance(value, list):
+        for item in value:
+            yield from _strings(item)
+
+
+def _check_json(options, where: str) -> None:
+    try:
+        json.dumps(options, allow_nan=False)
+    except (TypeError, ValueError) as exc:
+        raise ScenarioError(f"{where}: the options cannot be written into the FMU: {exc}") from exc
+    for value in _numbers(options):
+        if not math.isfinite(value):
+            raise ScenarioError(f"{where}: non-finite option value {value}")
+
+
+def _numbers(value):
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        yield float(value)
+    elif isinstance(value, dict):
+        for item in value.values():
+            yield from _numbers(item)
+    elif isinstance(value, list):
+        for item in value:
+            yield from _numbers(item)
+
+
+def exported_layout(fmu) -> dict[str, list[dict[str, Any]]]:
+    """The ports (name and shape) of an exported participant FMU, from its ``export.json``."""
+    import zipfile
+
+    with zipfile.ZipFile(fmu) as archive:
+        description = json.loads(archive.read(f"resources/{BUNDLE}/export.json"))
+    return {"inputs": description["inputs"], "outputs": description["outputs"]}

@@ -1,0 +1,152 @@
+"""``python -m orchestrator identify S.toml``: identify the NMPC's model on the scenario's plant.
+
+Writes ``results/identify/<set>/<run-id>/`` with ``parameter_sets.toml`` (the fitted set,
+ready for the control participant's ``model_file``/``model_set``), ``fit_report.json``
+(coefficients, residuals, R², open-loop errors per manoeuvre and on the held-out one),
+``fit_report.md`` and one figure per manoeuvre; with ``out`` also a copy of the
+parameter-set file there.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+
+from orchestrator.errors import ScenarioError
+from orchestrator.results import RunFolder, new_run_id, versions
+from orchestrator.scenario import ParticipantSpec, load_scenario
+from rhnc.identification import (COEFFICIENTS, KNOT, VALIDATION_MANOEUVRE, PlantRunner, check_bounds,
+                                 identify_model, parameter_set_toml, write_figures)
+from rhnc.ship_model import STATE_NAMES, load_parameter_set
+
+LOG = logging.getLogger(__name__)
+START_PORTS = ("x", "y", "psi", "u", "v", "r")
+
+
+@dataclass
+class IdentifyReport:
+    folder: Path
+    parameter_file: Path
+    report: dict
+
+
+def find_plant_spec(scenario, name: str | None) -> ParticipantSpec:
+    """The FMU participant to identify: ``name``, or the one FMU whose ports are the ship's."""
+    fmus = [spec for spec in scenario.participants if spec.is_fmu]
+    if name is not None:
+        for spec in fmus:
+            if spec.name == name:
+                return spec
+        raise ScenarioError(f"{scenario.path}: --plant {name}: no FMU participant of that name "
+                            f"(FMU participants: {', '.join(s.name for s in fmus) or 'none'})")
+    ships = [spec for spec in fmus if {"x", "psi", "tau_u"} <= set(spec.mapping) | _own_names(spec, scenario)]
+    if len(ships) != 1:
+        raise ScenarioError(f"{scenario.path}: cannot tell the plant FMU ({len(ships)} candidates); name it with --plant")
+    return ships[0]
+
+
+def _own_names(spec, scenario) -> set[str]:
+    """Ports an FMU has under the canonical names without a mapping (read from the FMU)."""
+    from fmpy import read_model_description
+
+    from orchestrator.fmu_participant import resolve_fmu
+
+    path = resolve_fmu(spec.fmu, scenario.directory, f"{scenario.path}: participants.{spec.name}")
+    return {v.name for v in read_model_description(str(path)).modelVariables}
+
+
+def run_identify(scenario_path, results_root="results", plant: str | None = None, speed_kn: float = 18.0,
+                 tau_u_max_N: float | None = None, tau_r_max_Nm: float | None = None,
+                 set_name: str | None = None, out: Path | None = None) -> IdentifyReport:
+    """Identify the prediction model on the scenario's plant FMU and write the results.
+
+    Raises
+    ------
+    ScenarioError
+        Bad scenario, no unique plant, missing bounds, a plant without start parameters
+        for the initial state.
+    ToolchainError
+        The plant cannot be identified (see :func:`rhnc.identification.identify_model`).
+    """
+    from orchestrator.fmu_participant import FmuParticipant, resolve_fmu
+
+    tau_u_max, tau_r_max = check_bounds(tau_u_max_N, tau_r_max_Nm)
+    if not (speed_kn > 0):
+        raise ScenarioError(f"identify: --speed-kn must be positive, got {speed_kn}")
+    scenario = load_scenario(scenario_path)
+    spec = find_plant_spec(scenario, plant)
+    where = f"{scenario.path}: participants.{spec.name}"
+    path = resolve_fmu(spec.fmu, scenario.directory, where)
+    probe = FmuParticipant(spec, path, where)
+    identity = probe.identity
+    # the manoeuvres set their own initial state: drop the scenario's start values
+    starts = set()
+    for port in START_PORTS:
+        entry = spec.mapping.get(port)
+        starts.add(getattr(entry, "start", None) or f"{port}0")
+    parameters = {k: v for k, v in spec.parameters.items() if k not in starts}
+
+    def build(initial):
+        manoeuvre_spec = dataclasses.replace(spec, parameters=parameters, initial=initial)
+        return FmuParticipant(manoeuvre_spec, path, where)
+
+    missing = [port for port in (*STATE_NAMES, "tau_u", "tau_r") if port not in probe.output_names + probe.input_names]
+    if missing:
+        raise ScenarioError(f"{where}: identify needs the plant ports {', '.join(missing)} (map them)")
+    name = set_name or identity["model_name"]
+    kcs = load_parameter_set("default")
+    fit = identify_model(PlantRunner(build, speed_kn * KNOT), tau_u_max, tau_r_max, name, reference=kcs)
+    source = Path(scenario_path).as_posix()
+    toml_text = parameter_set_toml(fit, identity, source)
+    folder = RunFolder(Path(results_root), f"identify/{name}", new_run_id(scenario.sha256))
+    try:
+        folder.path("parameter_sets.toml").write_text(toml_text)
+        figures = write_figures(fit, folder.staging)
+        report = {
+            "scenario": str(scenario.path),
+            "plant": {"participant": spec.name, "fmu": str(path), **identity},
+            "speed_kn": speed_kn,
+            "trim_tau_u_N": fit.trim_tau_u,
+            "set": name,
+            "coefficients": {k: getattr(fit.parameters, k) for k in COEFFICIENTS},
+            "bounds": {"tau_u_max_N": tau_u_max, "tau_r_max_Nm": tau_r_max},
+            "residual_rms": fit.residual_rms,
+            "r_squared": fit.r_squared,
+            "open_loop_errors": fit.validation,
+            "held_out": VALIDATION_MANOEUVRE,
+            "figures": figures,
+            "versions": versions(),
+        }
+        folder.write_json("fit_report.json", report)
+        folder.path("fit_report.md").write_text(_markdown(report))
+        final = folder.publish()
+    except BaseException:
+        folder.discard()
+        raise
+    parameter_file = final / "parameter_sets.toml"
+    if out is not None:
+        out = Path(out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(toml_text)
+        parameter_file = out
+    return IdentifyReport(final, parameter_file, report)
+
+
+def _markdown(report: dict) -> str:
+    lines = [f"# Identification of {report['set']} on {report['plant']['model_name']}", "",
+             f"Plant `{report['plant']['participant']}` of `{report['scenario']}`, from {report['speed_kn']} kn, "
+             f"weather off; surge force at trim {report['trim_tau_u_N']:.4g} N.", "",
+             "| coefficient | value |", "|---|---|"]
+    lines += [f"| {k} | {v:.6g} |" for k, v in report["coefficients"].items()]
+    lines += [f"| {k} | {v:.6g} |" for k, v in report["bounds"].items()]
+    lines += ["", "Equation residuals (RMS) and R²: " + ", ".join(
+        f"{k} {v:.4g}" for k, v in report["residual_rms"].items()) + "; " + ", ".join(
+        f"{k} {v:.4f}" for k, v in report["r_squared"].items() if v is not None), "",
+        "| manoeuvre (open loop) | heading RMS [deg] | heading max [deg] | speed RMS [kn] | yaw rate RMS [deg/min] | position at end [m] |",
+        "|---|---|---|---|---|---|"]
+    for name, e in report["open_loop_errors"].items():
+        lines.append(f"| {name} | {e['heading_rms_deg']:.2f} | {e['heading_max_deg']:.2f} | {e['speed_rms_kn']:.3f} | "
+                     f"{e['yaw_rate_rms_deg_min']:.2f} | {e['position_end_m']:.0f} |")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,198 @@
+"""Met-ocean NetCDF in and out: CF names as ERA5 and CMEMS write them, every time step.
+
+Reading (:func:`read_netcdf`): the five fields of :mod:`rhnc.metocean` under their short
+names (``u10``, ``v10``, ``swh``, ``uo``, ``vo``) or CF standard names, on a
+``northing``/``easting`` grid in metres (what :func:`to_dataset` writes) or on a
+``latitude``/``longitude`` grid projected to the local plane about an origin.  A ``time``
+or ``valid_time`` dimension is read whole: its CF-decoded dates become seconds since
+``start_time`` (an ISO 8601 date, the calendar time of the simulation's t = 0), else since
+the file's ``time_origin`` attribute (written by :func:`to_dataset`), else since the
+file's first time.  ``time_index`` takes one time step only (a static field).
+
+Writing (:func:`to_dataset`): a static field without a time dimension (as before time
+was supported); a time-varying one with a ``time`` coordinate in seconds since its
+``time_origin``, so that a round trip returns the same ``times_s``.
+"""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import numpy as np
+
+from rhnc.metocean import EARTH_RADIUS, FIELDS, NM, MetOceanField
+
+log = logging.getLogger(__name__)
+
+#: CF variable names (ERA5/CMEMS short names first, then standard_name) per field.
+CF_NAMES = {
+    "wind_north": ("v10", "northward_wind"),
+    "wind_east": ("u10", "eastward_wind"),
+    "hs": ("swh", "VHM0", "sea_surface_wave_significant_height"),
+    "current_north": ("vo", "northward_sea_water_velocity"),
+    "current_east": ("uo", "eastward_sea_water_velocity"),
+}
+_OUTPUT_NAMES = {"wind_north": "v10", "wind_east": "u10", "hs": "swh",
+                 "current_north": "vo", "current_east": "uo"}
+_STANDARD_NAMES = {"wind_north": "northward_wind", "wind_east": "eastward_wind",
+                   "hs": "sea_surface_wave_significant_height",
+                   "current_north": "northward_sea_water_velocity",
+                   "current_east": "eastward_sea_water_velocity"}
+TIME_DIMS = ("time", "valid_time")
+#: Calendar time written for t = 0 when a time-varying field carries no start_time.
+DEFAULT_TIME_ORIGIN = "1970-01-01T00:00:00"
+
+
+def read_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
+                time_index: int | None = None, start_time: str | None = None) -> MetOceanField:
+    """Load a NetCDF file with CF names (ERA5/CMEMS style) through xarray.
+
+    Parameters
+    ----------
+    path : path-like
+        The NetCDF file.
+    origin_deg : (lat, lon), optional
+        For a latitude/longitude grid: the point that becomes x = y = 0 of the local
+        plane (default: the south-west corner of the data).
+    resolution_nm : float, optional
+        For a latitude/longitude grid: spacing of the local grid [nm] (default: the
+        data's own spacing in latitude, in nm).
+    time_index : int, optional
+        Take only this time step (a static field).  Default: every time step.
+    start_time : str, optional
+        ISO 8601 calendar time of the simulation's t = 0 (default: the file's
+        ``time_origin`` attribute, else its first time).
+
+    Missing variables are an error, except the current, which defaults to zero
+    (ERA5 carries no current) with a warning.  NaN (land in ocean products)
+    becomes zero.
+    """
+    import xarray as xr
+
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"met-ocean file not found: {path}")
+    if resolution_nm is not None and not resolution_nm > 0:
+        raise ValueError(f"resolution_nm must be positive, got {resolution_nm}")
+    with xr.open_dataset(path) as ds:
+        ds = ds.load()
+    time_dim = next((d for d in TIME_DIMS if d in ds.dims), None)
+    times_s, zero = None, None
+    if time_dim is not None and time_index is not None:
+        if isinstance(time_index, bool) or not isinstance(time_index, int) or not (
+                -ds.sizes[time_dim] <= time_index < ds.sizes[time_dim]):
+            raise ValueError(f"time_index {time_index!r} is not one of the file's {ds.sizes[time_dim]} time steps")
+        ds = ds.isel({time_dim: time_index})
+        time_dim = None
+    elif time_dim is not None and ds.sizes[time_dim] == 1:
+        ds = ds.isel({time_dim: 0})
+        time_dim = None
+    elif time_dim is not None:
+        ds = ds.sortby(time_dim)
+        times_s, zero = _seconds(ds[time_dim].values, start_time or ds.attrs.get("time_origin"), path, time_dim)
+    for extra in [d for d in ds.dims if d not in ("northing", "easting", "latitude", "longitude", "lat", "lon",
+                                                  time_dim)]:
+        ds = ds.isel({extra: 0})
+    arrays = {name: _find_variable(ds, name, path) for name in FIELDS}
+    lead = (time_dim,) if time_dim else ()
+    nt = (ds.sizes[time_dim],) if time_dim else ()
+    keep = {"times_s": times_s, "start_time": zero}
+    if "northing" in ds.dims and "easting" in ds.dims:
+        x = ds["northing"].values.astype(float)
+        y = ds["easting"].values.astype(float)
+        fields = {name: _as_grid(arr, lead + ("northing", "easting"), nt + (x.size, y.size))
+                  for name, arr in arrays.items()}
+        return MetOceanField(x, y, fields, source=f"file: {path}", **keep)
+    lat_name = "latitude" if "latitude" in ds.dims else "lat"
+    lon_name = "longitude" if "longitude" in ds.dims else "lon"
+    if lat_name not in ds.dims or lon_name not in ds.dims:
+        raise ValueError(f"{path}: expected dimensions northing/easting [m] or latitude/longitude")
+    lat = ds[lat_name].values.astype(float)
+    lon = ds[lon_name].values.astype(float)
+    order_lat = np.argsort(lat)
+    order_lon = np.argsort(lon)
+    lat, lon = lat[order_lat], lon[order_lon]
+    lat0, lon0 = origin_deg if origin_deg is not None else (lat[0], lon[0])
+    north = np.radians(lat - lat0) * EARTH_RADIUS
+    east = np.radians(lon - lon0) * EARTH_RADIUS * np.cos(np.radians(lat0))
+    step = resolution_nm * NM if resolution_nm else float(np.min(np.diff(north)))
+    # cover the data's whole extent with a spacing no coarser than `step`
+    x = np.linspace(north[0], north[-1], int(np.ceil((north[-1] - north[0]) / step - 1e-9)) + 1)
+    y = np.linspace(east[0], east[-1], int(np.ceil((east[-1] - east[0]) / step - 1e-9)) + 1)
+    from scipy.interpolate import RegularGridInterpolator
+
+    xx, yy = np.meshgrid(x, y, indexing="ij")
+    fields = {}
+    for name, arr in arrays.items():
+        grid = _as_grid(arr, lead + (lat_name, lon_name), nt + (lat.size, lon.size))
+        grid = grid[..., order_lat, :][..., order_lon]
+        slices = grid if time_dim else grid[None]
+        projected = np.stack([RegularGridInterpolator((north, east), s)((xx, yy)) for s in slices])
+        fields[name] = projected if time_dim else projected[0]
+    return MetOceanField(x, y, fields, source=f"file: {path} (origin {lat0:.4f}N {lon0:.4f}E)", **keep)
+
+
+def to_dataset(field: MetOceanField):
+    """The field as an ``xarray.Dataset`` with CF-style names and attributes."""
+    import xarray as xr
+
+    coords = {
+        "northing": ("northing", field.x, {"standard_name": "projection_y_coordinate", "units": "m",
+                                           "long_name": "distance north of the map origin"}),
+        "easting": ("easting", field.y, {"standard_name": "projection_x_coordinate", "units": "m",
+                                         "long_name": "distance east of the map origin"}),
+    }
+    attrs = {"Conventions": "CF-1.8", "source": field.source, "title": "RHNC met-ocean field"}
+    dims = ("northing", "easting")
+    if field.is_time_varying:
+        origin = np.datetime64(field.start_time or DEFAULT_TIME_ORIGIN, "ns")
+        offsets = np.round(field.times_s * 1e9).astype("int64").astype("timedelta64[ns]")
+        coords["time"] = ("time", origin + offsets, {"standard_name": "time"})
+        attrs["time_origin"] = str(origin.astype("datetime64[s]"))
+        dims = ("time",) + dims
+    units = {"hs": "m"}
+    data = {
+        _OUTPUT_NAMES[name]: (dims, getattr(field, name),
+                              {"standard_name": _STANDARD_NAMES[name], "units": units.get(name, "m s-1")})
+        for name in FIELDS
+    }
+    dataset = xr.Dataset(data, coords=coords, attrs=attrs)
+    if field.is_time_varying:
+        dataset["time"].encoding.update({"units": f"seconds since {attrs['time_origin']}", "dtype": "float64"})
+    return dataset
+
+
+def _seconds(times, origin, path, time_dim) -> tuple[np.ndarray, str]:
+    """Seconds [s] of CF-decoded ``times`` since ``origin`` (ISO 8601), else since the first
+    time; and that zero as an ISO 8601 string."""
+    if not np.issubdtype(np.asarray(times).dtype, np.datetime64):
+        raise ValueError(f"{path}: the '{time_dim}' coordinate is not a CF time (no 'units = \"<unit> since "
+                         "<date>\"' attribute); give time_index to read one time step")
+    times = np.asarray(times).astype("datetime64[ns]")
+    try:
+        zero = np.datetime64(origin, "ns") if origin is not None else times[0]
+    except ValueError as exc:
+        raise ValueError(f"start_time '{origin}' is not an ISO 8601 date") from exc
+    return (times - zero).astype("timedelta64[ns]").astype("int64") / 1e9, str(zero)
+
+
+def _find_variable(ds, name, path):
+    for candidate in CF_NAMES[name]:
+        if candidate in ds.data_vars:
+            return ds[candidate]
+    for var in ds.data_vars.values():
+        if var.attrs.get("standard_name") in CF_NAMES[name]:
+            return var
+    if name.startswith("current"):
+        log.warning("%s: no %s variable (%s); assuming zero current", path, name, "/".join(CF_NAMES[name]))
+        any_var = next(iter(ds.data_vars.values()))
+        return any_var * 0.0
+    raise ValueError(f"{path}: no variable for {name} (looked for {', '.join(CF_NAMES[name])})")
+
+
+def _as_grid(arr, dims, shape) -> np.ndarray:
+    values = arr.transpose(*dims).values.astype(float) if set(dims) <= set(arr.dims) else None
+    if values is None or values.shape != tuple(shape):
+        raise ValueError(f"variable {arr.name} must have dimensions {dims}")
+    return np.nan_to_num(values, nan=0.0)

@@ -1,0 +1,391 @@
+"""Optimal weather routing: the cheapest route through the met-ocean field, the baseline a
+weather-routing user would hold a navigation system against.
+
+Two questions are answered, both for a ship keeping a constant speed through water:
+
+* **fixed speed** (``speed_mps``): the route that minimises the passage's cost EC (fuel
+  plus running cost C_c / 24 per hour) at that speed through water; a detour is paid for
+  by its fuel and by the hours it adds;
+* **fixed arrival time** (``arrival_s``): the route and the one constant speed through
+  water that arrive at that time at least cost.  The running cost is then the same for
+  every candidate, so the cheapest is the one burning least fuel.
+
+The cost of any candidate comes from the project's energy model with the course of each
+leg (:func:`rhnc.track_cost.cost_of_track`).  The search (:mod:`rhnc.route_search`) runs
+Dijkstra's algorithm on a grid at ``resolution_nm`` with 32 headings; an edge weighs the
+trapezoid of the cost rate at its two ends (heading = the edge's course) over its
+duration.  At fixed arrival time each hour counts at a multiple of the shadow price of
+time along the straight route, lambda = v dF/dv - F (F the fuel cost rate): what one hour
+less at sea would cost in extra fuel for the speed-up it forces; as that is only an
+estimate of the price along the best route, several multiples are searched.  Each route
+found is shortened where straight segments cost no more
+(:func:`rhnc.route_search.shortcut_path`), timed at constant speed (for a fixed arrival
+time, at the speed that arrives on time) and costed; the cheapest one's turning points
+are then moved sideways while the cost falls.  The straight (or shortest obstacle-free)
+route is always a candidate, so the optimum is never dearer than it.
+
+Time-dependent weather: node times come from the previous search (first from the
+distance to the start at the planned speed); the weights are re-evaluated with the
+weather at those times and the search repeated.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+
+import numpy as np
+from scipy.optimize import brentq
+
+from rhnc.energy import EnergyParameters, brake_power, fuel_rate_t_h
+from rhnc.metocean import MetOceanField, NM
+from rhnc.offline_route import shortest_route
+from rhnc.route_search import (IMPASSABLE, GridGraph, build_grid_graph, segment_clearance, shortcut_path,
+                               shortest_path_tree, times_along_tree)
+from rhnc.track_cost import constant_speed_times, cost_of_track, densify, is_time_varying, sample_weather
+
+log = logging.getLogger(__name__)
+
+__all__ = ["RoutingProblem", "RouteResult", "RouteSearch", "optimal_route", "straight_route", "cost_of_track",
+           "time_price_usd_h"]
+
+#: Bracket of the speed through water solved for a fixed arrival time [m/s].
+SPEED_BRACKET_MPS = (0.5, 30.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class RoutingProblem:
+    """A passage to route.
+
+    Attributes
+    ----------
+    start_m, goal_m : (north, east) [m]
+    metocean : MetOceanField
+        Weather and current over the map; the search grid spans its extent.
+    energy : EnergyParameters
+    resolution_nm : float
+        Spacing of the search grid [nm].
+    avoid : tuple of (north_m, east_m, radius_m)
+        Circles the route must not enter.
+    departure_s : float
+        Time of departure [s] (the clock of a time-varying field).
+    reach : int
+        Longest move of the search grid in grid steps (3: 32 headings).
+    """
+
+    start_m: tuple[float, float]
+    goal_m: tuple[float, float]
+    metocean: MetOceanField
+    energy: EnergyParameters = EnergyParameters()
+    resolution_nm: float = 0.5
+    avoid: tuple[tuple[float, float, float], ...] = ()
+    departure_s: float = 0.0
+    reach: int = 3
+
+
+@dataclasses.dataclass(frozen=True)
+class RouteResult:
+    """A timed route and what it costs.
+
+    Attributes
+    ----------
+    waypoints_m : ndarray (n, 2)
+        North, east [m]; no leg is longer than ``resolution_nm / 2``.
+    times_s : ndarray (n,)
+        Absolute times at the waypoints [s].
+    speed_through_water_mps : float
+        The constant speed through water [m/s].
+    duration_s, distance_nm, cost_usd, co2_t, fuel_t : float
+        From :func:`rhnc.track_cost.cost_of_track`.
+    method : str
+        ``"optimal"`` or ``"straight"``.
+    time_price_usd_h : float
+        The price of an hour [USD/h] with which the search found this route (NaN for the
+        straight route).
+    """
+
+    waypoints_m: np.ndarray
+    times_s: np.ndarray
+    speed_through_water_mps: float
+    duration_s: float
+    distance_nm: float
+    cost_usd: float
+    co2_t: float
+    fuel_t: float
+    method: str = "optimal"
+    time_price_usd_h: float = float("nan")
+
+    @property
+    def arrival_s(self) -> float:
+        return float(self.times_s[-1])
+
+
+def _check(problem: RoutingProblem, speed_mps, arrival_s) -> None:
+    if (speed_mps is None) == (arrival_s is None):
+        raise ValueError("give exactly one of speed_mps and arrival_s")
+    if speed_mps is not None and not speed_mps > 0:
+        raise ValueError(f"speed_mps must be positive, got {speed_mps!r}")
+    if arrival_s is not None and not arrival_s > problem.departure_s:
+        raise ValueError(f"arrival_s {arrival_s!r} must be after the departure {problem.departure_s!r} s")
+    if not problem.resolution_nm > 0:
+        raise ValueError(f"resolution_nm must be positive, got {problem.resolution_nm!r}")
+    for name, point in (("start", problem.start_m), ("goal", problem.goal_m)):
+        if not bool(problem.metocean.contains(point[0], point[1])):
+            raise ValueError(f"the {name} ({point[0]:.0f}, {point[1]:.0f}) m lies outside the met-ocean map")
+        for k, (cx, cy, radius) in enumerate(problem.avoid):
+            if np.hypot(point[0] - cx, point[1] - cy) < radius:
+                raise ValueError(f"the {name} lies inside avoided circle {k}")
+
+
+def _result(problem: RoutingProblem, polyline: np.ndarray, speed_mps: float, method: str) -> RouteResult:
+    points = densify(polyline, problem.resolution_nm * NM / 2.0)
+    times = constant_speed_times(problem.metocean, points, speed_mps, problem.departure_s)
+    account = cost_of_track(problem.metocean, problem.energy, points, times)
+    return RouteResult(waypoints_m=points, times_s=times, speed_through_water_mps=float(speed_mps),
+                       duration_s=account["duration_s"], distance_nm=account["distance_nm"],
+                       cost_usd=account["cost_usd"], co2_t=account["co2_t"], fuel_t=account["fuel_t"],
+                       method=method)
+
+
+def _speed_for_arrival(problem: RoutingProblem, polyline: np.ndarray, arrival_s: float) -> float:
+    """Constant speed through water [m/s] that sails ``polyline`` to arrive at ``arrival_s``."""
+    points = densify(polyline, problem.resolution_nm * NM / 2.0)
+    if is_time_varying(problem.metocean):
+        def late_s(speed):
+            return constant_speed_times(problem.metocean, points, speed, problem.departure_s)[-1] - arrival_s
+    else:  # the current along each leg does not depend on the time: sample it once
+        legs = np.diff(points, axis=0)
+        length = np.hypot(*legs.T)
+        course = np.arctan2(legs[:, 1], legs[:, 0])
+        weather = problem.metocean.sample(points[:, 0], points[:, 1])
+        along = np.cos(course) * weather["current_north"][:-1] + np.sin(course) * weather["current_east"][:-1]
+        along = 0.5 * (along + np.cos(course) * weather["current_north"][1:]
+                       + np.sin(course) * weather["current_east"][1:])
+        moving = length > 0
+
+        def late_s(speed):
+            return problem.departure_s + float(np.sum(length[moving] / np.maximum(
+                speed + along[moving], 1e-3))) - arrival_s
+
+    low, high = SPEED_BRACKET_MPS
+    if late_s(high) > 0:
+        raise ValueError(f"arrival at {arrival_s:.0f} s needs more than {high:.0f} m/s through water")
+    if late_s(low) < 0:
+        raise ValueError(f"arrival at {arrival_s:.0f} s needs less than {low:.1f} m/s through water")
+    return float(brentq(late_s, low, high, xtol=1e-6, rtol=1e-10))
+
+
+def straight_route(problem: RoutingProblem, *, speed_mps: float | None = None,
+                   arrival_s: float | None = None) -> RouteResult:
+    """The shortest obstacle-free route (the straight line without obstacles) at a constant
+    speed through water: ``speed_mps``, or the speed that arrives at ``arrival_s``."""
+    _check(problem, speed_mps, arrival_s)
+    polyline = shortest_route(problem.start_m, problem.goal_m, problem.avoid)
+    if arrival_s is not None:
+        speed_mps = _speed_for_arrival(problem, polyline, arrival_s)
+    return _result(problem, polyline, speed_mps, "straight")
+
+
+class RouteSearch:
+    """The search grid of one problem and the weights of its edges at a speed and a price of time.
+
+    The objective of a route at constant speed through water v is the integral over the
+    passage of ``F + lambda``: F the fuel cost rate [USD/h] with the course sailed,
+    lambda the price of an hour [USD/h] (the running cost C_c / 24 at fixed speed, the
+    shadow price of time at fixed arrival).
+    """
+
+    def __init__(self, problem: RoutingProblem):
+        self.problem = problem
+        x_min, x_max, y_min, y_max = problem.metocean.extent
+        step = problem.resolution_nm * NM
+        x = np.linspace(x_min, x_max, int(round((x_max - x_min) / step)) + 1)
+        y = np.linspace(y_min, y_max, int(round((y_max - y_min) / step)) + 1)
+        self.graph: GridGraph = build_grid_graph(x, y, problem.reach, problem.avoid)
+        self.nodes = self.graph.node_points()
+        self.source = self.graph.nearest_free_node(problem.start_m)
+        self.target = self.graph.nearest_free_node(problem.goal_m)
+        moves = len(self.graph.moves)
+        self._source_move = self.graph.source * moves + self.graph.move
+        self._target_move = self.graph.target * moves + self.graph.move
+        self._edge_length = self.graph.move_length_m[self.graph.move]
+        self.static_weather = None if is_time_varying(problem.metocean) else problem.metocean.sample(
+            self.nodes[:, 0], self.nodes[:, 1])
+
+    def weights(self, speed_mps: float, time_price_usd_h: float, node_times_s: np.ndarray | None):
+        """Edge weights [USD] and durations [s] at constant speed through water."""
+        p = self.problem
+        weather = self.static_weather
+        if weather is None:
+            weather = sample_weather(p.metocean, self.nodes[:, 0], self.nodes[:, 1], node_times_s)
+        heading = self.graph.heading_rad[None, :]
+        along = weather["current_north"][:, None] * np.cos(heading) + weather["current_east"][:, None] * np.sin(heading)
+        over_ground = speed_mps + along
+        power = brake_power(speed_mps, heading, weather["wind_north"][:, None], weather["wind_east"][:, None],
+                            weather["hs"][:, None], p.energy)
+        rate = fuel_rate_t_h(power, p.energy) * p.energy.fuel_price_usd_t + time_price_usd_h
+        over_ground = over_ground.ravel()
+        rate = rate.ravel()
+        edge_speed = 0.5 * (over_ground[self._source_move] + over_ground[self._target_move])
+        passable = edge_speed > 1e-3
+        duration = np.where(passable, self._edge_length / np.maximum(edge_speed, 1e-3), IMPASSABLE)
+        weight = np.where(passable, (rate[self._source_move] + rate[self._target_move]) * (duration / 7200.0),
+                          IMPASSABLE)
+        return weight, duration
+
+    def route(self, speed_mps: float, time_price_usd_h: float, passes: int) -> np.ndarray:
+        """Cheapest polyline start -> goal on the grid, shortened where straight segments pay."""
+        p = self.problem
+        times = None
+        if is_time_varying(p.metocean):
+            distance = np.hypot(self.nodes[:, 0] - p.start_m[0], self.nodes[:, 1] - p.start_m[1])
+            times = p.departure_s + distance / speed_mps
+        for _ in range(passes if times is not None else 1):
+            weight, duration = self.weights(speed_mps, time_price_usd_h, times)
+            tree = shortest_path_tree(self.graph, weight, self.source)
+            if times is not None:
+                times = times_along_tree(tree, duration, self.graph, p.departure_s)
+        path = self.nodes[tree.path_to(self.target)]
+        polyline = np.vstack([np.asarray(p.start_m, dtype=float), path, np.asarray(p.goal_m, dtype=float)])
+        keep = np.concatenate([[True], np.hypot(*np.diff(polyline, axis=0).T) > 1e-6])
+        polyline = polyline[keep]
+        if len(polyline) < 2:
+            return np.vstack([polyline, polyline])
+        vertex_times = constant_speed_times(p.metocean, polyline, speed_mps, p.departure_s)
+        kept = shortcut_path(len(polyline), lambda i, js: self.segment_costs(
+            polyline[i], polyline[js], vertex_times[i], speed_mps, time_price_usd_h))
+        return polyline[kept]
+
+    def segment_costs(self, a: np.ndarray, ends: np.ndarray, start_s: float, speed_mps: float,
+                      time_price_usd_h: float) -> np.ndarray:
+        """Objective [USD] of straight segments from ``a`` to each of ``ends`` at constant speed."""
+        p = self.problem
+        legs = ends - a
+        length = np.hypot(*legs.T)
+        spacing = p.resolution_nm * NM / 2.0
+        pieces = np.maximum(np.ceil(length / spacing).astype(int), 1)
+        owner = np.repeat(np.arange(len(ends)), pieces + 1)
+        first = np.concatenate([[0], np.cumsum(pieces + 1)[:-1]])
+        fraction = (np.arange(owner.size) - first[owner]) / pieces[owner]
+        points = a + fraction[:, None] * legs[owner]
+        heading = np.arctan2(legs[:, 1], legs[:, 0])[owner]
+        weather = sample_weather(p.metocean, points[:, 0], points[:, 1],
+                                 start_s + fraction * length[owner] / speed_mps)
+        along = weather["current_north"] * np.cos(heading) + weather["current_east"] * np.sin(heading)
+        over_ground = speed_mps + along
+        power = brake_power(speed_mps, heading, weather["wind_north"], weather["wind_east"], weather["hs"], p.energy)
+        rate = fuel_rate_t_h(power, p.energy) * p.energy.fuel_price_usd_t + time_price_usd_h
+        same = owner[1:] == owner[:-1]
+        sub_speed = 0.5 * (over_ground[1:] + over_ground[:-1])
+        sub_length = (length / pieces)[owner[:-1]]
+        blocked = same & (sub_speed <= 1e-3)
+        hours = np.where(same & ~blocked, sub_length / np.maximum(sub_speed, 1e-3), 0.0) / 3600.0
+        cost = np.bincount(owner[:-1], weights=0.5 * (rate[1:] + rate[:-1]) * hours, minlength=len(ends))
+        cost[np.bincount(owner[:-1], weights=blocked, minlength=len(ends)) > 0] = np.inf
+        for cx, cy, radius in p.avoid:
+            cost[segment_clearance(np.broadcast_to(a, ends.shape), ends, (cx, cy)) < radius] = np.inf
+        return cost
+
+
+def time_price_usd_h(problem: RoutingProblem, route: RouteResult) -> float:
+    """Shadow price of time at fixed arrival [USD/h]: v dF/dv - F averaged along ``route``
+    (F the fuel cost rate at the route's courses and weather, v its speed through water)."""
+    points = route.waypoints_m
+    legs = np.diff(points, axis=0)
+    heading = np.arctan2(legs[:, 1], legs[:, 0])
+    weather = sample_weather(problem.metocean, points[:-1, 0], points[:-1, 1], route.times_s[:-1])
+    v = route.speed_through_water_mps
+    rates = [fuel_rate_t_h(brake_power(speed, heading, weather["wind_north"], weather["wind_east"], weather["hs"],
+                                       problem.energy), problem.energy) * problem.energy.fuel_price_usd_t
+             for speed in (v * 0.99, v, v * 1.01)]
+    derivative = (rates[2] - rates[0]) / (0.02 * v)
+    return float(max(np.mean(v * derivative - rates[1]), 0.0))
+
+
+#: Multiples of the shadow price of time (along the straight route) tried at fixed arrival.
+PRICE_MULTIPLES = (0.2, 0.3, 0.45, 0.65, 1.0, 1.4)
+
+
+def optimal_route(problem: RoutingProblem, *, speed_mps: float | None = None,
+                  arrival_s: float | None = None, price_multiples=PRICE_MULTIPLES, time_passes: int = 2,
+                  refine: bool = True) -> RouteResult:
+    """The cheapest route at a constant speed through water.
+
+    Parameters
+    ----------
+    problem : RoutingProblem
+    speed_mps : float, optional
+        Fixed speed through water [m/s]: minimise EC (fuel plus running cost).
+    arrival_s : float, optional
+        Fixed arrival time [s]: minimise the cost over routes and the one constant speed
+        through water that arrives then.  Give exactly one of the two.
+    price_multiples : sequence of float
+        Fixed arrival time: the searches price an hour at these multiples of the shadow
+        price of time along the straight route (it is only an estimate of the price along
+        the best route); each route found gets its own arrival speed and the cheapest wins.
+    time_passes : int
+        Time-varying weather: searches per price with node times from the previous one.
+    refine : bool
+        Move the turning points of the best route sideways while that lowers the cost.
+
+    Returns
+    -------
+    RouteResult
+        Never dearer than :func:`straight_route` with the same argument.
+    """
+    _check(problem, speed_mps, arrival_s)
+    search = RouteSearch(problem)
+    straight = straight_route(problem, speed_mps=speed_mps, arrival_s=arrival_s)
+
+    def evaluate(polyline):
+        speed = speed_mps if speed_mps is not None else _speed_for_arrival(problem, polyline, arrival_s)
+        return _result(problem, polyline, speed, "optimal")
+
+    if speed_mps is not None:
+        prices = [problem.energy.running_cost_usd_day / 24.0]
+    else:
+        base_price = time_price_usd_h(problem, straight)
+        prices = [base_price * multiple for multiple in price_multiples]
+    best, best_polyline, best_price = straight, None, float("nan")
+    for price in prices:
+        polyline = search.route(straight.speed_through_water_mps, price, time_passes)
+        result = evaluate(polyline)
+        if result.cost_usd < best.cost_usd:
+            best, best_polyline, best_price = result, polyline, price
+    if refine and best_polyline is not None and len(best_polyline) > 2:
+        best = _refine(problem, best_polyline, best, evaluate)
+    if best is straight:
+        best = dataclasses.replace(straight, method="optimal")
+    return dataclasses.replace(best, time_price_usd_h=best_price)
+
+
+def _refine(problem: RoutingProblem, polyline: np.ndarray, best: RouteResult, evaluate,
+            max_evaluations: int = 200) -> RouteResult:
+    """Move each turning point (and a new one midway along each leg) across the route by
+    halving steps (4 grid steps down to a quarter) while the cost falls, at most ``max_evaluations`` candidates; points that
+    would enter an avoided circle stay."""
+    # a turning point between each pair lets a straight leg bend
+    polyline = np.vstack([np.column_stack([polyline[:-1], 0.5 * (polyline[:-1] + polyline[1:])]).reshape(-1, 2),
+                          polyline[-1]])
+    step = 4.0 * problem.resolution_nm * NM
+    x_min, x_max, y_min, y_max = problem.metocean.extent
+    evaluations = 0
+    while step >= 0.25 * problem.resolution_nm * NM and evaluations < max_evaluations:
+        improved = False
+        for k in range(1, len(polyline) - 1):
+            chord = polyline[k + 1] - polyline[k - 1]
+            normal = np.array([-chord[1], chord[0]]) / max(np.hypot(*chord), 1e-9)
+            for sign in (1.0, -1.0):
+                moved = polyline.copy()
+                moved[k] = np.clip(polyline[k] + sign * step * normal, (x_min, y_min), (x_max, y_max))
+                if any(np.min(segment_clearance(moved[:-1], moved[1:], (cx, cy))) < radius
+                       for cx, cy, radius in problem.avoid):
+                    continue
+                result = evaluate(moved)
+                evaluations += 1
+                if result.cost_usd < best.cost_usd:
+                    best, polyline, improved = result, moved, True
+                    break
+        if not improved:
+            step /= 2.0
+    return best

@@ -1,0 +1,253 @@
+"""Mapping a third-party plant's variables onto the canonical ports: units, offsets,
+geodetic positions, polar vectors, initial conditions, and every mapping mistake refused
+with one line (exit 2)."""
+
+import math
+import shutil
+import zipfile
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from orchestrator import fmu_build
+from orchestrator.cli import main
+from orchestrator.errors import ScenarioError
+from orchestrator.fmu_participant import FmuParticipant, resolve_fmu
+from orchestrator.port_mapping import VectorBinding
+from orchestrator.run import run_scenario
+from orchestrator.scenario import load_scenario
+from orchestrator.units import resolve_unit
+
+KNOT = 1852 / 3600
+NM = 1852.0
+
+S175_MAPPING = """
+[participants.ship.geodetic]
+origin_deg = [35.0, 140.0]
+[participants.ship.mapping]
+x = { variable = "lat", geodetic = "latitude", start = "start_lat" }
+y = { variable = "lon", geodetic = "longitude", start = "start_lon" }
+psi = { variable = "heading", start = "start_heading" }
+u = { variable = "stw", start = "start_stw" }
+v = "sway_speed"
+r = "rot"
+sog = "sog"
+cog = "cog"
+tau_u = "propeller_thrust"
+tau_r = "rudder_moment"
+current = { speed = "current_drift", direction = "current_set", direction_is = "towards" }
+wind = { speed = "wind_speed_true", direction = "wind_from", direction_is = "from" }
+hs = "wave_height"
+"""
+
+
+def s175_scenario(initial="", mapping=S175_MAPPING, extra_ship="", fmu='"S175"', helm="tau_u_N = 4.7e5"):
+    return f"""
+connections = ["helm.tau_u -> ship.tau_u", "helm.tau_r -> ship.tau_r"]
+[simulation]
+stop_s = 600.0
+dt_s = 10.0
+[participants.helm]
+type = "scripted_tau"
+[participants.helm.options]
+{helm}
+[participants.ship]
+fmu = {fmu}
+{extra_ship}
+[participants.ship.initial]
+{initial}
+{mapping}
+"""
+
+
+def build(path, name="ship"):
+    scenario = load_scenario(path)
+    spec = scenario.participant(name)
+    where = f"{path}: participants.{name}"
+    return FmuParticipant(spec, resolve_fmu(spec.fmu, scenario.directory, where), where)
+
+
+def test_units_are_read_from_the_model_description_and_pint():
+    assert resolve_unit("kn").factor == pytest.approx(KNOT)
+    rot = resolve_unit("deg/min")
+    assert rot.factor == pytest.approx(math.pi / 180 / 60) and rot.dimension[-1] == 1
+    assert resolve_unit("kN.m").factor == 1000.0
+    assert resolve_unit("kg.m2").dimension[:3] == (1, 2, 0)
+
+
+def test_initial_state_in_canonical_units_through_the_geodetic_mapping(write_scenario):
+    ship = build(write_scenario(s175_scenario("x_nm = 3.0\ny_nm = -2.0\npsi_deg = 270.0\nu_kn = 18.0")))
+    assert ship.parameters["start_heading"] == pytest.approx(270.0)
+    assert ship.parameters["start_stw"] == pytest.approx(18.0)
+    assert ship.parameters["start_lat"] == pytest.approx(35.0 + 3.0 / 60.0, abs=0.01)  # 1 nm ~ 1' of latitude
+    try:
+        out = ship.setup(0.0, {})
+        assert out["x"] == pytest.approx(3 * NM, abs=1e-6)
+        assert out["y"] == pytest.approx(-2 * NM, abs=1e-6)
+        assert out["psi"] == pytest.approx(-math.pi / 2)
+        assert out["u"] == pytest.approx(18 * KNOT)
+        # 10 min due west at 18 kn: the projected distance is the FMU's own to 1 m; the
+        # parallel sailed bends 3 m north of the grid line (meridian convergence)
+        for k in range(60):
+            out = ship.step(10.0 * k, 10.0, {"tau_u": 4.7e5, "tau_r": 0.0})
+        sailed = math.hypot(out["x"] - 3 * NM, out["y"] + 2 * NM)
+        assert sailed == pytest.approx(1000 * math.hypot(out["north_km"], out["east_km"]), abs=1.0)
+        assert out["y"] + 2 * NM == pytest.approx(1000 * out["east_km"], abs=1.0)
+        assert 0.0 < out["x"] - 3 * NM < 5.0
+        assert out["y"] + 2 * NM < -5000.0
+    finally:
+        ship.terminate()
+
+
+def test_current_given_as_set_and_drift_and_compass_course_wrapped(write_scenario):
+    ship = build(write_scenario(s175_scenario("psi_deg = 0.0\nu_kn = 10.0")))
+    try:
+        ship.setup(0.0, {})
+        out = ship.step(0.0, 1.0, {"current_north": 0.0, "current_east": -0.5, "tau_u": 0.0})
+        assert ship.parameters["start_stw"] == pytest.approx(10.0)
+        # a current setting west (270 deg) pushes the ship to port: course over ground negative
+        # (to 1e-4: the apparent wind of the current turns the ship a little)
+        assert out["cog"] == pytest.approx(math.atan2(-0.5, out["u"]), abs=1e-4)
+        assert out["sog"] == pytest.approx(math.hypot(out["u"], 0.5), rel=1e-4)
+    finally:
+        ship.terminate()
+
+
+def test_vector_binding_forms():
+    to_fmu = VectorBinding(("wind_speed", "wind_direction"), "polar_from", ("wn", "we"), "cartesian",
+                           ((1.0, 0.0), (1.0, 0.0))).to_fmu
+    wind = to_fmu({"wind_speed": 10.0, "wind_direction": math.pi / 2})   # from the east: blows west
+    assert wind["wn"] == pytest.approx(0.0, abs=1e-12) and wind["we"] == pytest.approx(-10.0)
+    to_fmu = VectorBinding(("current_north", "current_east"), "cartesian", ("drift", "set"), "polar_towards",
+                           ((KNOT, 0.0), (math.pi / 180, 0.0))).to_fmu
+    current = to_fmu({"current_north": -0.5 * KNOT, "current_east": 0.0})   # setting south
+    assert current["drift"] == pytest.approx(0.5) and current["set"] == pytest.approx(180.0)
+
+
+def test_vendor_b_by_declared_units_alone_matches_the_kcs(tmp_path):
+    """No scale anywhere: the declared units do the conversions, [initial] the start values."""
+    frames = []
+    for fmu, mapping, initial in (
+        ("KCS", "", "x_nm = 1.0\npsi_deg = 30.0\nu_kn = 18.0"),
+        ("KCSVendorB", """[participants.ship.mapping]
+x = { variable = "north_m", start = "north0_m" }
+y = "east_m"
+psi = { variable = "heading_deg", start = "heading0_deg" }
+u = { variable = "surge_speed_kn", start = "surge0_kn" }
+v = "sway_speed_kn"
+r = "yaw_rate_deg_s"
+tau_u = "thrust_kN"
+tau_r = "yaw_moment_kNm"
+""", "x_nm = 1.0\npsi_deg = 30.0\nu_kn = 18.0"),
+    ):
+        path = tmp_path / f"{fmu}.toml"
+        text = s175_scenario(initial, mapping=mapping, fmu=f'"{fmu}"',
+                             helm="tau_u_N = 7.7e5\ntau_r_steps = [[100.0, 1.5e8]]")
+        path.write_text(text.replace("stop_s = 600.0", "stop_s = 400.0"))
+        report = run_scenario(path, tmp_path / "results", progress=False)
+        assert report.ok, report.reason
+        frames.append(pd.read_parquet(report.folder / "timeseries.parquet"))
+    for port in ("x", "y", "psi", "u", "v", "r"):
+        np.testing.assert_allclose(frames[1][f"ship.{port}"], frames[0][f"ship.{port}"], rtol=1e-9, atol=1e-9)
+    assert frames[0]["ship.x"].iloc[0] == pytest.approx(NM)
+
+
+def test_offset_after_the_declared_unit(write_scenario):
+    mapping = S175_MAPPING.replace('x = { variable = "lat", geodetic = "latitude", start = "start_lat" }',
+                                   'x = { variable = "north_km", offset = 5000.0 }')
+    mapping = mapping.replace('y = { variable = "lon", geodetic = "longitude", start = "start_lon" }', 'y = "east_km"')
+    ship = build(write_scenario(s175_scenario("u_kn = 18.0", mapping=mapping)))
+    try:
+        assert ship.setup(0.0, {})["x"] == pytest.approx(5000.0)
+        out = ship.step(0.0, 100.0, {"tau_u": 4.7e5})
+        # km converted to m, then the offset: 100 s north at a little under 18 kn
+        assert out["x"] - 5000.0 == pytest.approx(18 * KNOT * 100, rel=0.02)
+    finally:
+        ship.terminate()
+
+
+@pytest.fixture
+def s175_without_heading_unit(tmp_path):
+    """A copy of the S175 FMU whose heading declares no unit (as some vendors ship them)."""
+    source = fmu_build.ensure_built("S175")
+    target = tmp_path / "S175_nounit.fmu"
+    with zipfile.ZipFile(source) as zin, zipfile.ZipFile(target, "w") as zout:
+        for item in zin.infolist():
+            data = zin.read(item.filename)
+            if item.filename == "modelDescription.xml":
+                text = data.decode()
+                start = text.index('name="heading"')
+                end = text.index("</ScalarVariable>", start)
+                text = text[:start] + text[start:end].replace('declaredType="Bearing"', "") + text[end:]
+                data = text.encode()
+            zout.writestr(item, data)
+    return target
+
+
+MISTAKES = {
+    "unit of another dimension": (
+        lambda m: m.replace('psi = { variable = "heading", start = "start_heading" }', 'psi = "stw"')
+        .replace('u = { variable = "stw", start = "start_stw" }', 'u = "sog"').replace('sog = "sog"\n', ""),
+        "", r"mapping\.psi: port 'psi' is in rad but FMU variable 'stw' is in 'kn'"),
+    "one variable to two ports": (
+        lambda m: m.replace('v = "sway_speed"', 'v = "stw"'), "",
+        r"mapping\.v: FMU variable 'stw' already feeds port 'u'"),
+    "geodetic without an origin": (
+        lambda m: m.replace("[participants.ship.geodetic]\norigin_deg = [35.0, 140.0]\n", ""), "",
+        r"geodetic: give origin_deg"),
+    "initial value without a start parameter": (
+        lambda m: m, "v_kn = 1.0", r"initial: 'v' has no start parameter in the FMU"),
+    "unknown unit": (
+        lambda m: m.replace('v = "sway_speed"', 'v = { variable = "sway_speed", unit = "furlongs/fortnite" }'), "",
+        r"mapping\.v: FMU variable 'sway_speed': unknown unit 'furlongs/fortnite'"),
+    "unknown initial key": (lambda m: m, "u_mph = 3.0", r"unknown key 'participants\.ship\.initial\.u_mph'"),
+    "a port mapped twice": (
+        lambda m: m.replace('hs = "wave_height"', 'current_north = { variable = "wave_height", unit = "kn" }'), "",
+        r"mapping: port 'current_north' is mapped twice"),
+}
+
+
+@pytest.mark.parametrize("mistake", list(MISTAKES))
+def test_mapping_mistakes_are_one_line_and_exit_2(mistake, write_scenario, capsys):
+    edit, initial, message = MISTAKES[mistake]
+    path = write_scenario(s175_scenario(initial or "u_kn = 18.0", mapping=edit(S175_MAPPING)))
+    with pytest.raises(ScenarioError, match=message):
+        build(path)
+    assert main(["validate", str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(path) in err[0]
+
+
+def test_angle_without_unit_or_scale_is_refused(s175_without_heading_unit, write_scenario, capsys):
+    """The case that once ran to "finished": a heading in degrees taken for radians."""
+    path = write_scenario(s175_scenario("u_kn = 18.0", fmu=f'"{s175_without_heading_unit}"'))
+    with pytest.raises(ScenarioError, match=r"mapping\.psi: port 'psi' is an angle \(rad\) and FMU variable "
+                                            r"'heading' declares no unit"):
+        build(path)
+    assert main(["run", str(path), "--results", str(path.parent / "results"), "--no-progress"]) == 2
+    assert not (path.parent / "results").exists() or not any((path.parent / "results").rglob("summary.json"))
+    # stating the unit in the mapping fixes it
+    fixed = S175_MAPPING.replace('psi = { variable = "heading", start = "start_heading" }',
+                                 'psi = { variable = "heading", unit = "deg", start = "start_heading" }')
+    path.write_text(s175_scenario("u_kn = 18.0\npsi_deg = 90.0", mapping=fixed, fmu=f'"{s175_without_heading_unit}"'))
+    ship = build(path)
+    try:
+        assert ship.setup(0.0, {})["psi"] == pytest.approx(math.pi / 2)
+    finally:
+        ship.terminate()
+
+
+def test_initial_state_given_twice_is_refused(write_scenario):
+    path = write_scenario(s175_scenario("u_kn = 18.0", mapping="", fmu='"KCS"',
+                                        extra_ship="[participants.ship.parameters]\nu0 = 9.26"))
+    with pytest.raises(ScenarioError, match=r"parameters\.u0: the initial state is already given in \[initial\]"):
+        build(path)
+
+
+def test_unmapped_ports_keep_working(tmp_path):
+    shutil.copy(fmu_build.ensure_built("KCS"), tmp_path / "k.fmu")
+    path = tmp_path / "s.toml"
+    path.write_text(s175_scenario("u_kn = 18.0", mapping="", fmu='"k.fmu"'))
+    ship = build(path)
+    assert {"x", "psi", "tau_u", "wind_direction"} <= set(ship.output_names) | set(ship.input_names)

@@ -1,0 +1,76 @@
+"""The equal-arrival speed search against arrival functions solvable by hand."""
+
+import math
+
+import pytest
+
+from rhnc.equal_arrival import match_arrival_time
+
+DISTANCE_NM = 140.9
+
+
+def voyage(lag_s=300.0, step_s=60.0, slowest_arriving_kn=0.0):
+    """Arrival on a macro-step grid of a ship that lags its reference by ``lag_s``."""
+    runs = []
+
+    def arrival_of(speed_kn):
+        runs.append(speed_kn)
+        if speed_kn < slowest_arriving_kn:
+            return None, "did not arrive"
+        arrival = lag_s + DISTANCE_NM / speed_kn * 3600.0 + 40.0 * math.sin(speed_kn)
+        return math.ceil(arrival / step_s) * step_s, f"run at {speed_kn:.3f} kn"
+
+    return arrival_of, runs
+
+
+def test_secant_lands_on_the_target_step_in_a_few_runs():
+    arrival_of, runs = voyage()
+    target = 29_160.0
+    result = match_arrival_time(arrival_of, target, tolerance_s=60.0, first_speed_kn=DISTANCE_NM / (target / 3600))
+    assert result.matched
+    assert abs(result.best.arrival_s - target) <= 30.0   # the same 60 s sample, not merely the next
+    assert len(runs) <= 4
+    assert result.best.run == f"run at {result.best.speed_kn:.3f} kn"
+
+
+def test_a_run_that_does_not_arrive_counts_as_too_slow():
+    arrival_of, runs = voyage(slowest_arriving_kn=15.0)
+    result = match_arrival_time(arrival_of, 29_160.0, tolerance_s=60.0, first_speed_kn=10.0)
+    assert result.trials[0].arrival_s is None
+    assert result.matched and result.best.speed_kn > 15.0
+
+
+def test_unreachable_target_is_reported_not_matched():
+    # arrival does not depend on the speed (a ship that cannot keep up): no trial gets there
+    result = match_arrival_time(lambda v: (40_000.0, None), 29_160.0, tolerance_s=60.0, first_speed_kn=17.0,
+                                max_trials=5)
+    assert not result.matched
+    assert 1 <= len(result.trials) <= 5
+    assert result.best.arrival_s == 40_000.0
+
+
+def test_speed_stays_within_bounds():
+    arrival_of, runs = voyage()
+    match_arrival_time(arrival_of, 10_000.0, tolerance_s=60.0, first_speed_kn=50.0, speed_bounds_kn=(2.0, 30.0))
+    assert all(2.0 <= v <= 30.0 for v in runs)
+
+
+@pytest.mark.parametrize("target_s", [20_000.0, 29_160.0, 40_000.0])
+def test_matches_across_targets(target_s):
+    arrival_of, _ = voyage()
+    result = match_arrival_time(arrival_of, target_s, tolerance_s=60.0, first_speed_kn=DISTANCE_NM / (target_s / 3600))
+    assert result.matched
+
+
+@pytest.mark.parametrize("target_s", [29_700.0, 30_000.0])
+def test_target_inside_a_jump_is_bracketed_and_reported(target_s):
+    # arrival jumps by 15 min at 17.5 kn (say, a turn the slower ship misses): no speed
+    # arrives at the target; once trials lie on both sides the search must stay between
+    # them and close in on the jump instead of wandering
+    def arrival_of(speed_kn):
+        arrival = 300.0 + DISTANCE_NM / speed_kn * 3600.0 + (900.0 if speed_kn < 17.5 else 0.0)
+        return math.ceil(arrival / 60.0) * 60.0, None
+
+    result = match_arrival_time(arrival_of, target_s, tolerance_s=60.0, first_speed_kn=17.0)
+    assert not result.matched
+    assert all(abs(t.speed_kn - 17.5) < 0.1 for t in result.trials[-3:])

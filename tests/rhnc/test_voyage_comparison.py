@@ -1,0 +1,272 @@
+"""The fair voyage comparison: equal-arrival baselines, the headline, flags, sweeps and input errors."""
+
+import json
+import textwrap
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from orchestrator.cli import main
+from orchestrator.compare import Section, load_comparison, load_extensions, run_comparison
+from orchestrator.errors import ScenarioError
+from rhnc.equal_arrival import ArrivalTrial, EqualArrival
+from rhnc.voyage_comparison import SailedVoyage
+from rhnc.voyage_comparison_tables import evaluation_section, sweep_section
+
+# A 4 nm passage north, the NMPC tracking a waypoint reference on the KCS every 20 s, in a
+# small paper-style weather field sampled by the MetOcean FMU.
+SCENARIO = """
+connections = [
+  "ship.x -> goal.x", "ship.y -> goal.y",
+  "route.reference -> ctrl.reference",
+  "ship.x -> ctrl.x", "ship.y -> ctrl.y", "ship.psi -> ctrl.psi",
+  "ship.u -> ctrl.u", "ship.v -> ctrl.v", "ship.r -> ctrl.r",
+  "ctrl.tau_u -> ship.tau_u", "ctrl.tau_r -> ship.tau_r",
+  "env.current_north -> ship.current_north", "env.current_east -> ship.current_east",
+  "env.wind_speed -> ship.wind_speed", "env.wind_direction -> ship.wind_direction", "env.hs -> ship.hs",
+  "ship.x -> env.x", "ship.y -> env.y",
+]
+[simulation]
+steps = 30
+dt_s = 20.0
+[metocean]
+generator = "paper_default"
+x_range_nm = [-1.0, 5.0]
+y_range_nm = [-3.0, 3.0]
+resolution_nm = 0.25
+[participants.route]
+type = "reference_path"
+[participants.route.options]
+waypoints_nm = {waypoints}
+speed_kn = {speed}
+[participants.ctrl]
+type = "control"
+[participants.ctrl.options]
+horizon_steps = 10
+[participants.goal]
+type = "goal"
+[participants.goal.options]
+goal_nm = [4.0, 0.0]
+[participants.ship]
+fmu = "KCS"
+[participants.ship.parameters]
+u0 = 9.26
+[participants.env]
+fmu = "MetOcean"
+[participants.env.parameters]
+grid_file = "${{metocean.grid}}"
+[outputs]
+analyses = ["voyage"]
+figures = []
+"""
+
+COMPARISON = """
+name = "fair"
+analysis = "voyage"
+metrics = ["cost_usd", "time_min", "mean_speed_through_water_kn"]
+{top}
+[voyage]
+start_nm = [0.0, 0.0]
+goal_nm = [4.0, 0.0]
+max_duration_h = 1.0
+{voyage}
+[voyage.equal_arrival]
+scenario = "straight.toml"
+{equal}
+[[runs]]
+label = "detour"
+scenario = "detour.toml"
+[[runs]]
+label = "straight"
+scenario = "straight.toml"
+"""
+
+
+def write(tmp_path: Path, top="", voyage="", equal="") -> Path:
+    (tmp_path / "straight.toml").write_text(textwrap.dedent(SCENARIO.format(
+        waypoints="[[0.0, 0.0], [4.0, 0.0]]", speed=18.0)))
+    (tmp_path / "detour.toml").write_text(textwrap.dedent(SCENARIO.format(
+        waypoints="[[0.0, 0.0], [2.0, 0.6], [4.0, 0.0]]", speed=16.5)))
+    path = tmp_path / "compare.toml"
+    path.write_text(textwrap.dedent(COMPARISON.format(top=top, voyage=voyage, equal=equal)))
+    return path
+
+
+HEADLINE_COLUMNS = ["system", "arrival [min]", "cost [USD]", "baseline cost [USD]", "saving cost [%]", "CO2 [t]",
+                    "baseline CO2 [t]", "saving CO2 [%]", "baseline speed [kn]", "baseline arrival [min]",
+                    "available cost [%]", "share cost [%]"]
+
+
+@pytest.mark.slow
+def test_equal_arrival_baseline_arrives_within_one_macro_step(tmp_path, capsys):
+    # only the detour gets a baseline; the straight run sails faster without one: flagged
+    path = write(tmp_path, voyage='[voyage.optimal_route]\nresolution_nm = 0.5', equal='systems = ["detour"]')
+    assert main(["compare", str(path), "--results", str(tmp_path / "results"), "--no-progress"]) == 0
+    folder = next((tmp_path / "results" / "fair").iterdir())
+    headline = pd.read_csv(folder / "voyage_headline.csv").set_index("system")
+    assert set(HEADLINE_COLUMNS[1:]) <= set(headline.columns)
+    detour = headline.loc["detour"]
+    assert abs(detour["baseline arrival [min]"] - detour["arrival [min]"]) <= 20.0 / 60.0 + 1e-9
+    # the straight line is shorter than the detour: it arrives as late at a lower speed, and cheaper
+    assert detour["baseline speed [kn]"] < 16.5
+    assert detour["saving cost [%]"] < 0
+    runs = pd.read_csv(folder / "voyage_runs.csv").set_index("voyage")
+    assert runs.loc["detour", "arrived"] and runs.loc["detour equal-arrival baseline", "arrived"]
+    assert runs.loc["optimal route at detour's arrival", "cost [USD]"] <= runs.loc[
+        "straight route at detour's arrival", "cost [USD]"] + 1e-6
+    # a costed route arrives when the system did
+    assert runs.loc["straight route at detour's arrival", "arrival [min]"] == pytest.approx(detour["arrival [min]"])
+    # the weather's own available saving: straight line at the baseline scenario's 18 kn through water
+    nominal = json.loads((folder / "summary.json").read_text())["voyage"]["nominal"]
+    assert nominal["speed_kn"] == 18.0
+    assert 4.0 / 18.6 * 60 < nominal["arrival_min"] < 4.0 / 17.4 * 60   # 4 nm at 18 kn, +- the 0.5 kn current
+    assert nominal["optimal_cost_usd"] <= nominal["straight_cost_usd"] + 1e-6
+    out = capsys.readouterr().out
+    assert "Headline: the passage at equal arrival time" in out
+    assert "**FLAG**: mean speeds through water differ" in out and "straight has no equal-arrival baseline" in out
+
+
+def voyage(label, speed_kn, arrival_s=3600.0, cost=100.0, co2=1.0, arrived=True):
+    return SailedVoyage(label=label, status="finished", arrived=arrived, arrival_s=arrival_s if arrived else None,
+                        cost_usd=cost, co2_t=co2, mean_speed_through_water_kn=speed_kn, distance_nm=18.0,
+                        made_good_nm=18.0, track_m=np.zeros((2, 2)))
+
+
+def matched(system, speed_kn=17.0, cost=100.0, co2=1.0):
+    result = EqualArrival(system.arrival_s, 60.0)
+    result.trials.append(ArrivalTrial(speed_kn, system.arrival_s,
+                                      voyage(f"{system.label} equal-arrival baseline", speed_kn, system.arrival_s,
+                                             cost, co2)))
+    return result
+
+
+COMPARISON_STUB = SimpleNamespace(straight_distance_nm=18.0, published={}, equal_arrival=None)
+
+
+@pytest.mark.parametrize("speeds, with_baselines, flagged", [
+    ((17.5, 18.0), False, True),     # 2.9 % apart, no baseline: flagged
+    ((17.95, 18.0), False, False),   # 0.28 % apart: comparable as they are
+    ((17.5, 18.0), True, False),     # apart, but each has its equal-arrival baseline
+])
+def test_mean_speed_flag(tmp_path, speeds, with_baselines, flagged):
+    systems = {"RHNC": voyage("RHNC", speeds[0]), "Offline-SPNC": voyage("Offline-SPNC", speeds[1])}
+    baselines = {label: matched(s) for label, s in systems.items()} if with_baselines else {}
+    section = evaluation_section(COMPARISON_STUB, systems, baselines, {}, tmp_path)
+    speed_flags = [f for f in section.flags if f.startswith("mean speeds through water differ")]
+    assert bool(speed_flags) == flagged
+    assert ("**FLAG**: mean speeds" in section.markdown) == flagged
+
+
+def test_share_of_available_saving_and_headline(tmp_path):
+    system = voyage("RHNC", 17.5, cost=95.0, co2=0.9)
+    routes = {"RHNC": {"straight": SimpleNamespace(cost_usd=100.0, co2_t=1.0, duration_s=3600.0, distance_nm=18.0,
+                                                   speed_through_water_mps=9.0),
+                       "optimal": SimpleNamespace(cost_usd=90.0, co2_t=0.8, duration_s=3600.0, distance_nm=18.5,
+                                                  speed_through_water_mps=9.2)}}
+    section = evaluation_section(COMPARISON_STUB, {"RHNC": system}, {"RHNC": matched(system)}, routes, tmp_path)
+    figures = section.summary["systems"]["RHNC"]
+    assert figures["saving_cost_percent"] == pytest.approx(5.0)
+    assert figures["available_cost_percent"] == pytest.approx(10.0)
+    assert figures["share_cost_percent"] == pytest.approx(50.0)
+    assert figures["share_co2_percent"] == pytest.approx(100.0 * 10.0 / 20.0)
+    assert list(section.tables["voyage_headline"].columns[:len(HEADLINE_COLUMNS)]) != []
+    assert set(HEADLINE_COLUMNS) <= set(section.tables["voyage_headline"].columns)
+
+
+def test_run_that_does_not_arrive_is_left_out_of_the_headline(tmp_path):
+    systems = {"RHNC": voyage("RHNC", 17.5, arrived=False), "Offline-SPNC": voyage("Offline-SPNC", 18.0)}
+    section = evaluation_section(COMPARISON_STUB, systems, {"Offline-SPNC": matched(systems["Offline-SPNC"])}, {},
+                                 tmp_path)
+    assert list(section.tables["voyage_headline"]["system"]) == ["Offline-SPNC"]
+    assert "RHNC did not arrive: left out of the headline" in section.flags
+    failed = SailedVoyage(**{**systems["RHNC"].__dict__, "status": "failed", "reason": "left the map"})
+    section = evaluation_section(COMPARISON_STUB, {"RHNC": failed}, {}, {}, tmp_path)
+    assert "RHNC did not arrive (the run failed: left the map): left out of the headline" in section.flags
+
+
+def test_sweep_puts_the_available_saving_first_and_gives_the_distribution(tmp_path):
+    members = []
+    # the last member offers less than the 0.5 % a share needs, the one before did not arrive
+    for member, (available, share) in enumerate([(2.0, 10.0), (4.0, 30.0), (1.0, 50.0), (0.3, -500.0), (None, None)]):
+        figures = {"arrived": available is not None, "arrival_min": 480.0}
+        if available is not None:
+            figures.update(available_cost_percent=available, saving_cost_percent=available * share / 100)
+        nominal = {"available_cost_percent": 1.5 * member, "arrival_min": 471.0}
+        members.append((member, Section(summary={"systems": {"RHNC": figures}, "nominal": nominal})))
+    section = sweep_section("metocean.member", members, tmp_path)
+    table = section.tables["voyage_sweep"]
+    assert list(table.columns[:2]) == ["metocean.member", "available cost saving at the nominal speed [%]"]
+    assert table.columns[3] == "RHNC available cost saving [%]"
+    assert list(table["available cost saving at the nominal speed [%]"]) == pytest.approx([0.0, 1.5, 3.0, 4.5, 6.0])
+    assert list(table["RHNC share cost [%]"].iloc[:3]) == pytest.approx([10.0, 30.0, 50.0])
+    stats = section.summary["distribution"]["RHNC"]["share cost [%]"]
+    assert stats["median"] == pytest.approx(30.0) and stats["count"] == 3
+    assert section.summary["distribution"]["RHNC"]["arrived"] == 4
+    assert (tmp_path / "voyage_sweep.png").is_file()
+
+
+@pytest.mark.parametrize("top, voyage_extra, equal, message", [
+    ("", "colour = 1", "", r"compare.toml: voyage: unknown key 'colour'"),
+    ("", "", 'systems = ["RHNC"]', r"voyage.equal_arrival.systems: 'RHNC' is not a run label \(detour, straight\)"),
+    ("", "", 'scenario = "none.toml"', None),
+    ("", "", "max_trials = 0", r"voyage.equal_arrival.max_trials: expected a positive integer, got 0"),
+    ("", "[voyage.optimal_route]\nresolution_nm = -1", "", r"voyage.optimal_route.resolution_nm: expected a positive"),
+    ("", "[voyage.optimal_route]\navoid = [{ center_nm = [1, 1] }]", "",
+     r"voyage.optimal_route.avoid\[0\].radius_nm: expected a positive number"),
+    ('[sweep]\nkey = "metocean.member"\nrange = [3, 1]', "", "", r"'sweep.range' must be \[first, last\]"),
+])
+def test_comparison_file_errors(tmp_path, top, voyage_extra, equal, message):
+    path = write(tmp_path, top=top, voyage=voyage_extra, equal=equal)
+    if message is None:   # a second 'scenario' key is a TOML error naming the key
+        with pytest.raises(ScenarioError, match=r"compare.toml: not valid TOML"):
+            load_extensions(load_comparison(path), path)
+        return
+    with pytest.raises(ScenarioError, match=message):
+        load_extensions(load_comparison(path), path)
+
+
+def test_goal_that_differs_from_a_run_is_refused_before_any_run(tmp_path):
+    path = write(tmp_path)
+    path.write_text(path.read_text().replace("goal_nm = [4.0, 0.0]", "goal_nm = [5.0, 0.0]"))
+    with pytest.raises(ScenarioError, match=r"detour.toml: participants.goal.options.goal_nm \[4.0, 0.0\] is not "
+                                            r"the comparison's voyage.goal_nm \[5.0, 0.0\]"):
+        run_comparison(path, tmp_path / "results", progress=False)
+    assert not (tmp_path / "results" / "fair").exists() or not any((tmp_path / "results" / "fair").iterdir())
+
+
+def test_bad_voyage_table_exits_2_from_the_cli(tmp_path, capsys):
+    path = write(tmp_path, voyage="arrival_radius_nm = 0")
+    assert main(["compare", str(path), "--results", str(tmp_path / "results")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "voyage.arrival_radius_nm: expected a positive number, got 0" in err
+
+
+def test_routing_failure_is_flagged_not_fatal(tmp_path):
+    system = voyage("RHNC", 17.5)
+    routes = {"RHNC": {"routing_error": "arrival at 600 s needs more than 30 m/s through water"}}
+    section = evaluation_section(COMPARISON_STUB, {"RHNC": system}, {"RHNC": matched(system)}, routes, tmp_path)
+    assert section.summary["systems"]["RHNC"].get("share_cost_percent") is None
+    assert any(f.startswith("no optimal route at RHNC's arrival time (arrival at 600 s") for f in section.flags)
+
+
+def test_run_from_another_start_is_flagged(tmp_path):
+    systems = {"RHNC": voyage("RHNC", 17.5)}
+    systems["RHNC"].track_m[:] = [[1852.0, 0.0], [3704.0, 0.0]]
+    comparison = SimpleNamespace(straight_distance_nm=18.0, published={}, equal_arrival=None, start_m=np.zeros(2))
+    section = evaluation_section(comparison, systems, {}, {}, tmp_path)
+    assert "RHNC started 1.00 nm from voyage.start_nm: not the same passage" in section.flags
+    systems["RHNC"].track_m[0] = [10.0, 0.0]
+    assert not evaluation_section(comparison, systems, {}, {}, tmp_path).flags
+
+
+def test_run_that_failed_after_arriving_counts_and_is_flagged(tmp_path):
+    arrived_then_failed = SailedVoyage(**{**voyage("RHNC", 17.5).__dict__, "status": "failed",
+                                          "reason": "left the map"})
+    section = evaluation_section(COMPARISON_STUB, {"RHNC": arrived_then_failed},
+                                 {"RHNC": matched(arrived_then_failed)}, {}, tmp_path)
+    assert list(section.tables["voyage_headline"]["system"]) == ["RHNC"]
+    assert ("RHNC arrived at 60 min, then the run ended 'failed' (left the map): its totals up to arrival are used"
+            in section.flags)

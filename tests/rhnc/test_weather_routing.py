@@ -1,0 +1,197 @@
+"""Optimal weather routing on hand-solvable cases."""
+
+import numpy as np
+import pytest
+
+from rhnc.energy import EnergyParameters
+from rhnc.metocean import KNOT, NM
+from rhnc.route_search import segment_clearance
+from rhnc.track_cost import constant_speed_times, cost_of_track
+from rhnc.weather_routing import RouteSearch, RoutingProblem, optimal_route, straight_route
+from weather_fixtures import storm_field, switched_field
+
+SPEED = 18 * KNOT
+
+
+def offset_from_line_nm(points, a, b):
+    """Signed distance [nm] of points from the line a-b (positive to the left)."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    d = (b - a) / np.hypot(*(b - a))
+    rel = np.asarray(points) - a
+    return (rel[:, 0] * d[1] - rel[:, 1] * d[0]) / NM
+
+
+@pytest.mark.parametrize("start_nm, goal_nm", [((0, 0), (20, 20)), ((2, 15), (19, 4)), ((1, 1), (19, 7))])
+def test_uniform_weather_gives_the_straight_line(start_nm, goal_nm):
+    field = storm_field(base_wind_ms=8.0, wind_from_deg=20.0, current_ms=(0.2, -0.1))
+    problem = RoutingProblem(tuple(np.multiply(start_nm, NM)), tuple(np.multiply(goal_nm, NM)), field)
+    straight = straight_route(problem, speed_mps=SPEED)
+    for kwargs in ({"speed_mps": SPEED}, {"arrival_s": straight.arrival_s}):
+        route = optimal_route(problem, **kwargs)
+        offsets = offset_from_line_nm(route.waypoints_m, problem.start_m, problem.goal_m)
+        assert np.max(np.abs(offsets)) < 1e-6
+        assert route.cost_usd == pytest.approx(straight.cost_usd, rel=1e-7)
+
+
+def test_a_storm_on_the_line_is_passed_around():
+    # a strong storm centred on the diagonal, slightly to its east: the cheap side is west
+    field = storm_field(storms=[(10.0, 10.6, 2.5, 20.0)])
+    problem = RoutingProblem((0.0, 0.0), (20 * NM, 20 * NM), field)
+    straight = straight_route(problem, speed_mps=SPEED)
+    route = optimal_route(problem, speed_mps=SPEED)
+    offsets = offset_from_line_nm(route.waypoints_m, problem.start_m, problem.goal_m)
+    assert np.max(offsets) > 2.0  # left of the line = north-west, away from the storm
+    assert np.min(offsets) > -0.5
+    assert route.cost_usd < 0.97 * straight.cost_usd
+    assert route.distance_nm > straight.distance_nm
+    # the hours count at the running cost: the fuel-only optimum sails further and costs more
+    search = RouteSearch(problem)
+    for hourly_usd in (0.0, 4 * problem.energy.running_cost_usd_day / 24.0):
+        other = search.route(SPEED, hourly_usd, passes=1)
+        other_times = constant_speed_times(field, other, SPEED)
+        assert route.cost_usd < 0.999 * cost_of_track(field, problem.energy, other, other_times)["cost_usd"]
+    # and at the straight line's arrival time, with the speed that arrives then
+    timed = optimal_route(problem, arrival_s=straight.arrival_s)
+    assert abs(timed.arrival_s - straight.arrival_s) < 1.0
+    assert timed.speed_through_water_mps > SPEED
+    assert np.max(offset_from_line_nm(timed.waypoints_m, problem.start_m, problem.goal_m)) > 1.0
+    assert timed.cost_usd < 0.98 * straight.cost_usd
+
+
+def test_an_avoided_circle_is_never_entered():
+    field = storm_field(base_wind_ms=6.0)
+    island = (10 * NM, 10 * NM, 2 * NM)
+    problem = RoutingProblem((0.0, 0.0), (20 * NM, 20 * NM), field, avoid=(island,))
+    route = optimal_route(problem, speed_mps=SPEED)
+    clearance = segment_clearance(route.waypoints_m[:-1], route.waypoints_m[1:], island[:2])
+    assert np.min(clearance) >= island[2] * (1 - 1e-9)
+    # in uniform weather the cheapest way around is the shortest: the tangent path
+    d, r = np.hypot(10, 10), 2.0
+    tangent_nm = 2 * np.sqrt(d**2 - r**2) + r * (np.pi - 2 * np.arccos(r / d))
+    assert tangent_nm <= route.distance_nm <= 1.01 * tangent_nm
+    assert straight_route(problem, speed_mps=SPEED).distance_nm <= 1.005 * tangent_nm
+
+
+def test_the_arrival_time_is_met_and_later_is_cheaper_in_fuel():
+    field = storm_field(storms=[(12.0, 8.0, 3.0, 12.0)])
+    problem = RoutingProblem((0.0, 0.0), (20 * NM, 20 * NM), field, departure_s=600.0)
+    results = []
+    for hours in (1.6, 2.0):
+        arrival = 600.0 + hours * 3600.0
+        route = optimal_route(problem, arrival_s=arrival)
+        assert route.times_s[0] == 600.0
+        assert abs(route.arrival_s - arrival) < 1.0
+        results.append(route)
+    assert results[1].fuel_t < results[0].fuel_t
+
+
+def test_the_reported_cost_is_the_cost_of_the_returned_track():
+    field = storm_field(storms=[(6.0, 14.0, 3.0, 15.0)], current_ms=(0.3, 0.2))
+    problem = RoutingProblem((0.0, 0.0), (18 * NM, 20 * NM), field)
+    route = optimal_route(problem, speed_mps=15 * KNOT)
+    account = cost_of_track(field, problem.energy, route.waypoints_m, route.times_s)
+    assert route.cost_usd == pytest.approx(account["cost_usd"], rel=1e-12)
+    assert account["mean_speed_through_water_kn"] == pytest.approx(15.0, rel=2e-3)
+
+
+def offset_profile_nm(route, problem, stations_nm):
+    """Offset from the start-goal line [nm] at stations along it [nm]."""
+    a, b = np.asarray(problem.start_m), np.asarray(problem.goal_m)
+    along = (route.waypoints_m - a) @ ((b - a) / np.hypot(*(b - a))) / NM
+    return np.interp(stations_nm, along, offset_from_line_nm(route.waypoints_m, a, b))
+
+
+def test_a_storm_changes_the_route_only_where_the_ship_is_while_it_blows():
+    # two storms on the diagonal, a quarter and three quarters of the way.  In the
+    # time-varying fields one of them blows only while the ship is elsewhere.
+    early_storm, late_storm = (5.0, 5.4, 1.5, 20.0), (15.0, 15.4, 1.5, 20.0)
+    calm = storm_field()
+    both = storm_field(storms=[early_storm, late_storm])
+    start, goal = (0.0, 0.0), (20 * NM, 20 * NM)
+    passage_s = straight_route(RoutingProblem(start, goal, both), speed_mps=SPEED).arrival_s
+    stations = np.linspace(0.5, 27.5, 55)
+
+    def profile(field):
+        problem = RoutingProblem(start, goal, field)
+        route = optimal_route(problem, speed_mps=SPEED)
+        assert route.cost_usd == pytest.approx(
+            cost_of_track(field, problem.energy, route.waypoints_m, route.times_s)["cost_usd"], rel=1e-12)
+        return offset_profile_nm(route, problem, stations)
+
+    static_both = profile(both)
+    static_late = profile(storm_field(storms=[late_storm]))
+    static_early = profile(storm_field(storms=[early_storm]))
+    # storms from half way on: the early one blows only after the ship has passed it
+    blowing_late = profile(switched_field(calm, both, switch_s=0.5 * passage_s))
+    # storms until half way: the late one has gone before the ship gets there
+    blowing_early = profile(switched_field(both, calm, switch_s=0.5 * passage_s))
+    assert np.max(np.abs(blowing_late - static_late)) < 0.3
+    assert np.max(np.abs(blowing_early - static_early)) < 0.3
+    assert np.max(np.abs(static_both - static_late)) > 0.8
+    assert np.max(np.abs(static_both - static_early)) > 0.8
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({}, "exactly one of speed_mps and arrival_s"),
+    ({"speed_mps": 9.0, "arrival_s": 3600.0}, "exactly one of speed_mps and arrival_s"),
+    ({"speed_mps": -1.0}, "speed_mps must be positive"),
+    ({"arrival_s": -5.0}, "must be after the departure"),
+    ({"arrival_s": 60.0}, "needs more than 30 m/s"),
+])
+def test_bad_arguments(kwargs, message):
+    problem = RoutingProblem((0.0, 0.0), (20 * NM, 20 * NM), storm_field())
+    with pytest.raises(ValueError, match=message):
+        optimal_route(problem, **kwargs)
+
+
+def test_start_outside_the_map_or_inside_an_avoided_circle():
+    field = storm_field()
+    with pytest.raises(ValueError, match="the start .* lies outside the met-ocean map"):
+        optimal_route(RoutingProblem((-NM, 0.0), (20 * NM, 20 * NM), field), speed_mps=SPEED)
+    with pytest.raises(ValueError, match="the goal lies inside avoided circle 0"):
+        straight_route(RoutingProblem((0.0, 0.0), (20 * NM, 20 * NM), field, avoid=((20 * NM, 19 * NM, 2 * NM),)),
+                       speed_mps=SPEED)
+
+
+@pytest.mark.parametrize("goal_nm", [(20, 20), (19, 7), (3, 18)])
+def test_the_search_itself_gives_the_straight_line_in_uniform_weather(goal_nm):
+    # the graph alone zig-zags between its 32 headings; the shortening must straighten it
+    field = storm_field(base_wind_ms=8.0, wind_from_deg=200.0)
+    problem = RoutingProblem((NM, 0.0), tuple(np.multiply(goal_nm, NM)), field)
+    polyline = RouteSearch(problem).route(SPEED, 500.0, passes=1)
+    np.testing.assert_allclose(polyline, [problem.start_m, problem.goal_m], atol=1e-6)
+
+
+def test_edge_weights_are_the_energy_model_cost_of_the_edge_sailed_on_its_course():
+    # uniform wind from the north: every edge's weight is exactly the cost of sailing it,
+    # and a northbound edge (head wind) costs more than a southbound one of the same length
+    field = storm_field(base_wind_ms=15.0, wind_from_deg=0.0, current_ms=(0.3, 0.1))
+    problem = RoutingProblem((0.0, 0.0), (20 * NM, 20 * NM), field)
+    search = RouteSearch(problem)
+    hourly = problem.energy.running_cost_usd_day / 24.0
+    weight, duration = search.weights(SPEED, hourly, None)
+    graph = search.graph
+    centre = graph.nearest_free_node((10 * NM, 10 * NM))
+    costs = {}
+    for edge in range(graph.indptr[centre], graph.indptr[centre + 1]):
+        track = search.nodes[[graph.source[edge], graph.target[edge]]]
+        times = constant_speed_times(field, track, SPEED)
+        assert duration[edge] == pytest.approx(times[-1], rel=1e-12)
+        assert weight[edge] == pytest.approx(cost_of_track(field, problem.energy, track, times)["cost_usd"], rel=1e-9)
+        costs[tuple(graph.moves[graph.move[edge]])] = weight[edge]
+    assert len(costs) == 32
+    # head wind on the KCS's 1000 m2 frontal area: about 5.6 % dearer, although the current
+    # (0.3 m/s north) shortens the northbound edge; a course-blind cost would make it cheaper
+    assert costs[(1, 0)] > 1.03 * costs[(-1, 0)]
+
+
+def test_a_detour_does_not_pay_when_time_is_dear_enough():
+    # the storm of the detour test, but each hour at sea costs 50 times the default
+    field = storm_field(storms=[(10.0, 10.6, 2.5, 20.0)])
+    energy = EnergyParameters(running_cost_usd_day=600_000.0)
+    problem = RoutingProblem((0.0, 0.0), (20 * NM, 20 * NM), field, energy=energy)
+    polyline = RouteSearch(problem).route(SPEED, energy.running_cost_usd_day / 24.0, passes=1)
+    offsets = offset_from_line_nm(polyline, problem.start_m, problem.goal_m)
+    assert np.max(np.abs(offsets)) < 0.5
+    route = optimal_route(problem, speed_mps=SPEED)
+    assert route.distance_nm == pytest.approx(straight_route(problem, speed_mps=SPEED).distance_nm, rel=2e-3)
