@@ -83,7 +83,7 @@ def do_mpc_times(reference_controller: NMPCController, states: np.ndarray):
     ref = model.set_variable("_tvp", "ref", shape=(6, 1))
     w_d = model.set_variable("_tvp", "w_d", shape=(2, 1))
     obs = model.set_variable("_tvp", "obs", shape=(OBSTACLE_FIELDS * s.max_obstacles, 1))
-    z_next, z_sub = c._F_scaled(z, w)
+    z_next, z_sub = c._F_scaled(z, w, ca.DM.zeros(5))  # no disturbance estimate
     model.set_rhs("z", z_next)
     q = s.q
     e = z - ref
@@ -100,11 +100,13 @@ def do_mpc_times(reference_controller: NMPCController, states: np.ndarray):
     clearances = []
     for j in range(s.substeps):
         for i in range(s.max_obstacles):
-            cx, cy, vx, vy, rsum, inflation, active = (obs[OBSTACLE_FIELDS * i + f] for f in range(OBSTACLE_FIELDS))
+            cx, cy, vx, vy, ox, oy, rho, growth, inflation, active = (
+                obs[OBSTACLE_FIELDS * i + f] for f in range(OBSTACLE_FIELDS))
             t_sub = (j + 1) * h
-            dx = z_sub[0, j] - (cx + vx * t_sub)
-            dy = z_sub[1, j] - (cy + vy * t_sub)
-            clearances.append(-(active * ((dx**2 + dy**2) / rsum**2 - 1.0 - inflation) + (1.0 - active)))
+            dx = z_sub[0, j] - (cx + vx * t_sub + ox)
+            dy = z_sub[1, j] - (cy + vy * t_sub + oy)
+            radius = rho + growth * t_sub
+            clearances.append(-(active * ((dx**2 + dy**2) / radius**2 - 1.0 - inflation) + (1.0 - active)))
     model.set_expression("collision", ca.vertcat(*clearances))
     model.setup()
 

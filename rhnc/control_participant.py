@@ -22,8 +22,8 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Mapping, Sequence
-from types import SimpleNamespace
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -171,6 +171,7 @@ class ControlParticipant(Participant):
         self._slack_steps = 0
         self._timeouts = 0
         self._speeds: list[float] = []
+        self._cpu_times: list[float] = []
 
     @classmethod
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "ControlParticipant":
@@ -247,7 +248,7 @@ class ControlParticipant(Participant):
         return (
             "tau_u", "tau_r", "prediction", "solve_time_s", "iterations",
             "solver_ok", "fallback", "cost", "constraint_violation", "collision_slack",
-            "timed_out", "disturbance", "encounter_class", "domain_active",
+            "timed_out", "disturbance", "encounter_class", "domain_active", "solve_cpu_time_s",
         )
 
     def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
@@ -256,10 +257,11 @@ class ControlParticipant(Participant):
         self._tau = np.zeros(2)
         self._slack_steps = 0
         self._timeouts = 0
-        self._speeds: list[float] = []
+        self._speeds = []
+        self._cpu_times = []
         slots = self.controller.settings.max_obstacles
-        idle = SimpleNamespace(solve_time_s=0.0, iterations=0, success=True, fallback=False, cost=0.0,
-                               constraint_violation=0.0, collision_slack=0.0, timed_out=False,
+        idle = SimpleNamespace(solve_time_s=0.0, solve_cpu_time_s=0.0, iterations=0, success=True, fallback=False,
+                               cost=0.0, constraint_violation=0.0, collision_slack=0.0, timed_out=False,
                                disturbance=np.zeros(5), encounter_classes=np.full(slots, -1.0),
                                domain_active=np.zeros(slots))
         return self._outputs(self._tau, self._prediction, idle)
@@ -285,6 +287,7 @@ class ControlParticipant(Participant):
         self._tau_r_history.append(float(solution.tau[1]))
         self._steps += 1
         self._solve_times.append(solution.solve_time_s)
+        self._cpu_times.append(solution.solve_cpu_time_s)
         if solution.fallback:
             LOG.warning("%s: NMPC failed at t = %.1f s (%s), fallback applied", self.name, time, solution.status)
         self._slack_steps += int(solution.collision_slack > 0.0)
@@ -312,6 +315,7 @@ class ControlParticipant(Participant):
             "constraint_violation": float(solution.constraint_violation),
             "collision_slack": float(solution.collision_slack),
             "timed_out": 1.0 if solution.timed_out else 0.0,
+            "solve_cpu_time_s": float(solution.solve_cpu_time_s),
             "disturbance": np.asarray(solution.disturbance, dtype=float).copy(),
             "encounter_class": classes,
             "domain_active": active,
@@ -333,6 +337,8 @@ class ControlParticipant(Participant):
             "failure_count": self.controller.failure_count,
             "relaxed_clearance_steps": self._slack_steps,
             "timeout_count": self._timeouts,
+            "solve_cpu_time_median_s": float(np.median(self._cpu_times)) if self._cpu_times else None,
+            "solve_cpu_time_max_s": float(np.max(self._cpu_times)) if self._cpu_times else None,
             "stand_on_actions": self.controller.domains.stand_on_actions,
             "max_speed_kn": float(max(self._speeds)) / KNOT if self._speeds else None,
             "tau_r_sign_changes_per_100_solves": tau_r_sign_changes_per_100(

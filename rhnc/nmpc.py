@@ -254,6 +254,9 @@ class NMPCSolution:
         Per obstacle row: index into ``ENCOUNTER_CLASSES`` (-1: not classified).
     domain_active : numpy.ndarray
         Per obstacle row: 1 when its collision constraint was on.
+    solve_cpu_time_s : float
+        Processor time of the solver calls [s]: the solve's cost whatever else the machine
+        runs (``solve_time_s`` is wall time, pipe to the worker included).
     """
 
     tau: np.ndarray
@@ -271,6 +274,7 @@ class NMPCSolution:
     disturbance: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(DISTURBANCE_SIZE))
     encounter_classes: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     domain_active: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    solve_cpu_time_s: float = 0.0
 
 
 def wrap_angle(angle):
@@ -325,14 +329,16 @@ class NMPCController:
         options = solver_options(s.solver, self.problem.equality, s.max_iterations, s.wall_time_limit_s,
                                  s.cpu_time_limit_s)
         nlp = self.problem.nlp
-        hard = ca.nlpsol("rhnc_nmpc", s.solver, nlp, options)
-        # The second, relaxed attempt gets a solver of its own, built on first need: a solver
-        # keeps state between calls (fatrop), and a failed hard attempt left in it spoils the
-        # relaxed one started from the same guess (seen: 162 iterations and failure, against
-        # 59 and success from a fresh solver).
-        self.solvers = BoundedSolver({"hard": hard},
-                                     {"relaxed": lambda: ca.nlpsol("rhnc_nmpc_relaxed", s.solver, nlp, options)},
-                                     s.wall_time_limit_s, s.cpu_time_limit_s)
+        solvers = {"hard": ca.nlpsol("rhnc_nmpc", s.solver, nlp, options)}
+        # The second, relaxed attempt gets a solver of its own: a solver keeps state between
+        # calls (fatrop), and a failed hard attempt left in it spoils the relaxed one started
+        # from the same guess (seen: 162 iterations and failure, against 59 and success from a
+        # fresh solver).  Built here, before the worker is forked, rather than on first need:
+        # building it costs about 0.5 s of processor time, which inside a control step showed
+        # up as an 8 s solve on a loaded machine.
+        if self.problem.sigma_index.size:
+            solvers["relaxed"] = ca.nlpsol("rhnc_nmpc_relaxed", s.solver, nlp, options)
+        self.solvers = BoundedSolver(solvers, {}, s.wall_time_limit_s, s.cpu_time_limit_s)
         self.domains = CollisionDomains(s.domain_settings(), s.max_obstacles)
         self.observer = (DisturbanceObserver(params, self.state_scale, s.observer_gain)
                          if s.disturbance_observer else None)
@@ -461,7 +467,7 @@ class NMPCController:
         # First the hard problem (slacks fixed at zero: the paper's constraints); only when it
         # fails, the soft one (slacks free): the plan that violates the clearance least.
         problem = self.problem
-        elapsed, iterations, timed_out = 0.0, 0, False
+        elapsed, cpu, iterations, timed_out = 0.0, 0.0, 0, False
         budget = s.wall_time_limit_s
         for relaxed in ((False, True) if problem.sigma_index.size else (False,)):
             ubx[problem.sigma_index] = np.inf if relaxed else 0.0
@@ -470,6 +476,7 @@ class NMPCController:
             outcome = self.solvers.solve("relaxed" if relaxed else "hard", x0=x0, p=p, lbx=lbx, ubx=ubx,
                                          lbg=problem.lbg, ubg=problem.ubg)
             elapsed += outcome.wall_time_s
+            cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
             iterations += max(outcome.iterations, 0)
             success = outcome.success and bool(np.all(np.isfinite(outcome.x)))
             if success or outcome.timed_out:
@@ -482,8 +489,10 @@ class NMPCController:
         if not success:
             finite = bool(np.all(np.isfinite(x_opt)) and np.all(np.isfinite(g_opt)) and np.isfinite(outcome.f))
             violation = self._violation(x_opt, g_opt, lbx, ubx) if finite else UNKNOWN
-            return self._fail(time_s, state, previous_tau, elapsed, iterations, status,
-                              outcome.f if finite else UNKNOWN, violation, timed_out, disturbance, report)
+            failed = self._fail(time_s, state, previous_tau, elapsed, iterations, status,
+                                outcome.f if finite else UNKNOWN, violation, timed_out, disturbance, report)
+            failed.solve_cpu_time_s = cpu
+            return failed
         violation = self._violation(x_opt, g_opt, lbx, ubx)
         slack = float(np.max(x_opt[problem.sigma_index], initial=0.0))
         slack = slack if slack > SLACK_TOLERANCE else 0.0
@@ -496,6 +505,7 @@ class NMPCController:
         solution = NMPCSolution(inputs[0].copy(), states, inputs, elapsed, iterations, status, True, False,
                                 outcome.f, violation, slack, False, disturbance, report.class_codes,
                                 report.active)
+        solution.solve_cpu_time_s = cpu
         self.memory.store(time_s, states, inputs)
         if self.observer is not None:
             self.observer.applied(solution.tau)

@@ -28,13 +28,16 @@ shaped by the own ship's role:
     The symmetric circle.
 
 No alteration to port (Rules 14, 15, 17(c)): while a head-on or crossing target whose
-way we give (or a stand-on target on our port side we have had to act for) is still
-approaching (TCPA > 0), the predicted heading may not fall more than
+way we give, or a crossing target on our port side that gives way to us (whether we
+stand on or have had to act), is still approaching (TCPA > 0), the predicted heading may not fall more than
 ``PORT_ALLOWANCE_DEG`` to port of the reference heading (nor further to port than the
 measured heading, if the ship is there already).  Without it the NMPC, whose
 horizon (5-15 min) sees the domain of a ship crossing from starboard come in from that
 side, first turned away from it to port and only later under its stern (seen in trials);
-the bound leaves turning to starboard or slowing down, which is what the rules ask.
+the bound leaves turning to starboard or slowing down, which is what the rules ask.  For
+a stand-on crossing target the bound holds before we act too: avoiding a second ship
+must not take us to port across the bow of a ship on our port side (seen in a
+two-target trial).
 
 Why shifted circles rather than side constraints or ellipses: a circle that contains the
 paper's circle never admits a plan the paper's constraint forbids, so separation >= R + R_i
@@ -195,6 +198,8 @@ class CollisionDomains:
             offset = np.zeros(2)
             encounter = classes[i]
             name = encounter.encounter_class if encounter is not None else "static"
+            if name in STARBOARD_CLASSES and encounter.tcpa_s > 0.0:
+                no_port_turn = True
             if name in STAND_ON_CLASSES and i not in self._acting:
                 cpa, tcpa = cpa_tcpa(state[:2], own_velocity, (x, y), (vx, vy))
                 late = 0.0 < tcpa <= s.stand_on_action_tcpa_s or encounter.range_m <= s.stand_on_action_range_factor * rho
@@ -217,6 +222,4 @@ class CollisionDomains:
             slots[:, slot] = [(x - origin[0]) / L, (y - origin[1]) / L, vx / L, vy / L, offset[0] / L,
                               offset[1] / L, domain_radius / L, s.clearance_margin_growth_mps / L, inflation, 1.0]
             active_rows[i] = 1.0
-            if name in STARBOARD_CLASSES and encounter.tcpa_s > 0.0:
-                no_port_turn = True
         return slots, DomainReport(codes, active_rows, no_port_turn)

@@ -77,6 +77,8 @@ class SolveOutcome:
         Stopped at a time limit.
     stopped_by : str
         Which limit stopped it: ``"cpu"``, ``"wall"`` or ``""``.
+    cpu_time_s : float
+        Processor time of the solver call [s] (in the process that ran it).
     """
 
     x: np.ndarray
@@ -88,15 +90,22 @@ class SolveOutcome:
     wall_time_s: float
     timed_out: bool = False
     stopped_by: str = ""
+    cpu_time_s: float = float("nan")
 
 
-def _outcome(solver: ca.Function, result: Mapping, elapsed: float) -> SolveOutcome:
+def _outcome(solver: ca.Function, result: Mapping, elapsed: float, cpu: float) -> SolveOutcome:
     stats = solver.stats()
     return SolveOutcome(
         x=np.array(result["x"]).ravel(), g=np.array(result["g"]).ravel(), f=float(result["f"]),
         success=bool(stats.get("success", False)), iterations=int(stats.get("iter_count", -1)),
-        status=str(stats.get("return_status", "unknown")), wall_time_s=elapsed,
+        status=str(stats.get("return_status", "unknown")), wall_time_s=elapsed, cpu_time_s=cpu,
     )
+
+
+def _timed_call(solver, arguments) -> SolveOutcome:
+    start, cpu_start = time.perf_counter(), time.process_time()
+    result = solver(**arguments)
+    return _outcome(solver, result, time.perf_counter() - start, time.process_time() - cpu_start)
 
 
 def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, Callable[[], ca.Function]]) -> None:
@@ -109,9 +118,7 @@ def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, 
             return
         if name not in solvers:
             solvers[name] = factories[name]()
-        start = time.perf_counter()
-        result = solvers[name](**arguments)
-        outcome = _outcome(solvers[name], result, time.perf_counter() - start)
+        outcome = _timed_call(solvers[name], arguments)
         try:
             connection.send(outcome)
         except (BrokenPipeError, OSError):
@@ -161,9 +168,7 @@ class BoundedSolver:
         if self.wall_time_s is None and self.cpu_time_s is None:
             if name not in self._solvers:
                 self._solvers[name] = self.factories[name]()
-            start = time.perf_counter()
-            result = self._solvers[name](**arguments)
-            return _outcome(self._solvers[name], result, time.perf_counter() - start)
+            return _timed_call(self._solvers[name], arguments)
         arguments = {key: np.asarray(value, dtype=float) for key, value in arguments.items()}
         start = time.perf_counter()
         self._ensure_worker()

@@ -198,3 +198,17 @@ def test_stand_on_target_has_no_constraint_until_its_action_is_not_enough():
         assert report.active[0] == expected_active, t
         assert slots[OBSTACLE_FIELDS - 1, 0] == expected_active
     assert domains.stand_on_actions == 1
+
+
+def test_no_port_turn_for_a_crossing_target_on_the_port_side_even_while_standing_on():
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    start, velocity = target_on_collision_course(90.0, 15.0)  # from port, gives way to us
+    _, report = domains.parameters(np.array([[*start, *velocity, RADIUS]]), state, np.zeros(2), SPEED, 5.0, 230.0,
+                                   et=True)
+    assert report.active[0] == 0.0  # standing on: its constraint is off ...
+    assert report.no_port_turn  # ... and yet no turn to port across its bow (Rule 17(c))
+    overtaken = np.array([[1.0 * NM, 0.0, 8 * KNOT, 0.0, RADIUS]])  # a slower ship ahead only
+    _, report = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2).parameters(
+        overtaken, state, np.zeros(2), SPEED, 5.0, 230.0, et=True)
+    assert not report.no_port_turn

@@ -185,3 +185,23 @@ def test_participant_rejects_bad_new_options():
         ControlParticipant.from_options("ctrl", {"wall_time_limit_s": "1s"}, context())
     with pytest.raises(ScenarioError, match=r"participants.ctrl: observer_gain must be in \(0, 1\]"):
         ControlParticipant.from_options("ctrl", {"observer_gain": 2.0}, context())
+
+
+def test_participant_reports_classes_domains_and_estimate(kcs):
+    from rhnc.colregs import ENCOUNTER_CLASSES
+
+    ctrl = ControlParticipant.from_options("ctrl", {"horizon_steps": 10, "colregs": True, "max_obstacles": 3,
+                                                    "disturbance_observer": True, "et_default": 1.0}, context())
+    first = ctrl.setup(0.0, {})
+    assert first["encounter_class"].shape == (3,) and first["disturbance"].shape == (5,)
+    times = np.arange(0.0, 600.0, 20.0)
+    reference = np.column_stack([times, line_or_turn_reference(times, (0, 0), 0.0, 18 * KNOT)])
+    head_on = np.array([[4.0 * NM, 0.1 * NM, -12 * KNOT, 0.0, NM]])
+    state = {"x": 0.0, "y": 0.0, "psi": 0.0, "u": 18 * KNOT, "v": 0.0, "r": 0.0}
+    out = ctrl.step(0.0, 20.0, {**state, "reference": reference, "obstacles": head_on})
+    np.testing.assert_array_equal(out["encounter_class"], [ENCOUNTER_CLASSES.index("head_on"), -1, -1])
+    np.testing.assert_array_equal(out["domain_active"], [1.0, 0.0, 0.0])
+    assert out["timed_out"] == 0.0 and out["solve_cpu_time_s"] > 0.0
+    summary = ctrl.summary()
+    assert summary["timeout_count"] == 0 and summary["max_speed_kn"] == pytest.approx(18.0)
+    ctrl.terminate()
