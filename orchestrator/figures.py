@@ -57,7 +57,7 @@ def track_figure(frame, scenario, cosim, out_dir) -> list[str]:
     else:
         ax.set_aspect("equal", adjustable="datalim")
     ax.set_title(f"{scenario.simulation.name}: track")
-    ax.legend(loc="best")
+    ax.legend(loc="best", fontsize=8, framealpha=0.8)
     fig.tight_layout()
     fig.savefig(out_dir / "track.png", dpi=120)
     plt.close(fig)
@@ -105,7 +105,12 @@ def _encounter_extent_nm(frame, plant, margin_nm: float = 1.5):
         north = [min(north[0], x[k] - radius[k]), max(north[1], x[k] + radius[k])]
         east = [min(east[0], y[k] - radius[k]), max(east[1], y[k] + radius[k])]
     margin = margin_nm * NM
-    return ((north[0] - margin) / NM, (north[1] + margin) / NM), ((east[0] - margin) / NM, (east[1] + margin) / NM)
+    north, east = [north[0] - margin, north[1] + margin], [east[0] - margin, east[1] + margin]
+    # a square frame: a long narrow track would otherwise leave no room for the legend
+    half = max(north[1] - north[0], east[1] - east[0]) / 2.0
+    centre_north, centre_east = sum(north) / 2.0, sum(east) / 2.0
+    return (((centre_north - half) / NM, (centre_north + half) / NM),
+            ((centre_east - half) / NM, (centre_east + half) / NM))
 
 
 def time_mark_interval_min(duration_s: float) -> float:
