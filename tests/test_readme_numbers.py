@@ -53,3 +53,27 @@ def test_readme_numbers_match_a_fresh_run(tmp_path):
     # every figure the README shows from these runs was drawn
     assert sorted(p.name for p in (tmp_path / "figures").iterdir()) == sorted(
         target for e in script.EXPERIMENTS if e.cheap for target in e.figures.values())
+
+
+def test_readme_quotes_the_committed_numbers():
+    """The README's key figures are the ones in docs/readme_numbers.json (regenerated together)."""
+    numbers = json.loads((REPO / "docs" / "readme_numbers.json").read_text())["experiments"]
+    readme = (REPO / "README.md").read_text()
+    turning, zigzag = numbers["turning_circle"], numbers["zigzag_10_10"]
+    exp3a, exp3b, exp4 = numbers["exp3a_static"], numbers["exp3b_head_on"], numbers["exp4_full"]
+    rhnc = numbers["exp2_table3"]["RHNC"]["voyage"]
+    spnc = numbers["exp2_table3"]["Offline-SPNC"]["voyage"]
+    quoted = [
+        f"| advance | {turning['advance_L']:.2f} L |",
+        f"| tactical diameter | {turning['tactical_diameter_L']:.2f} L",
+        f"| first overshoot | {zigzag['first_overshoot_deg']:.1f}° |",
+        f"{exp3a['tau_u_max_abs_MN']:.2f} MN (bound 1.8), {exp3a['tau_r_max_abs_MNm']:.0f} MN m",
+        f"within 0.2 nm after {exp3a['back_on_track_s']:.0f} s",
+        f"(after {exp3b['back_on_track_s']:.0f} s)",
+        f"minimum separation {exp4['min_distance_nm'][1]:.2f} nm against",
+        f"| EC per nm made good [USD] | {rhnc['cost_per_made_good_nm_usd']:.2f} | 80.74 | "
+        f"{spnc['cost_per_made_good_nm_usd']:.2f} |",
+        f"| time [min] | {rhnc['time_min']:.0f} (arrived)",
+    ]
+    for text in quoted:
+        assert text in readme, text
