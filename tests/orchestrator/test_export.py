@@ -119,3 +119,12 @@ def test_an_fmu_behind_a_mapping_is_not_exported_as_an_osp_system(tmp_path, caps
     assert main(["export", str(scenario), "--osp", "--out", str(out)]) == 2
     assert "participants.ship.mapping: an OSP system connects FMU variables directly" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_an_option_json_cannot_hold_is_refused_before_anything_is_built(short_exp3b, tmp_path):
+    bad = tmp_path / "nan_option.toml"
+    bad.write_text(short_exp3b.read_text().replace("et_default = 1.0", "et_default = nan"))
+    with pytest.raises(ScenarioError, match=r"participants\.ctrl\.options: the options cannot be written into the FMU: "
+                                             r"Out of range float values"):
+        export_participant(bad, "ctrl", tmp_path)
+    assert not list(tmp_path.glob("*.fmu"))
