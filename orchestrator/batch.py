@@ -271,6 +271,12 @@ def write_failure(batch_root: Path, task: RunTask, reason: str) -> Path:
 
     for staging in stale_staging(batch_root / "runs", task.run_id):
         shutil.rmtree(staging, ignore_errors=True)
+    # an earlier attempt of this run cut short (e.g. its worker stopped by the broken pool's
+    # shutdown) is stale, as pending_runs treats it on a resume: this record replaces it
+    earlier = batch_root / "runs" / task.run_id
+    summary = _read_summary(earlier)
+    if summary is not None and summary.get("status") == "interrupted":
+        shutil.rmtree(earlier, ignore_errors=True)
     folder = RunFolder(batch_root, "runs", task.run_id)
     folder.write_json("summary.json", {"scenario": task.scenario, "overrides": task.overrides,
                                        "run_id": task.run_id, "status": "failed", "reason": reason,
