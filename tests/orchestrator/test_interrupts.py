@@ -17,8 +17,10 @@ import pytest
 
 HERE = Path(__file__).resolve().parent
 
-# NMPC-heavy tracking run: a 40-interval IPOPT problem solved every 20 s step, far more steps
-# than the test waits for; almost all of its time is spent inside CasADi solves.
+# NMPC-heavy tracking run: a 120-interval IPOPT problem solved every 20 s step, far more steps
+# than the test waits for; almost all of its time is spent inside CasADi solves (the test reads
+# the beacon's line from a pipe and may read it late, so the other participants' share of a
+# step must be negligible for the signal to land in the NMPC's step).
 NMPC_SCENARIO = """
 connections = [
   "ref.reference -> ctrl.reference",
@@ -37,7 +39,7 @@ start_nm = [0.0, 0.0]
 course_deg = 30.0
 speed_kn = 16.0
 turn_radius_nm = 2.0
-horizon_steps = 40
+horizon_steps = 120
 [participants.beacon]
 type = "python"
 class = "sample_participants:Beacon"
@@ -46,7 +48,7 @@ from_s = 100.0
 [participants.ctrl]
 type = "control"
 [participants.ctrl.options]
-horizon_steps = 40
+horizon_steps = 120
 solver = "ipopt"
 [participants.ship]
 fmu = "KCS"
