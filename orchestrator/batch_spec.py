@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from orchestrator import encounters
+from orchestrator.plugins import LazyModule
 from orchestrator.participant import is_finite_number
 from orchestrator.errors import ScenarioError
 from orchestrator.scenario import read_toml
@@ -27,6 +27,7 @@ from orchestrator.scenario import read_toml
 BATCH_TOP_KEYS = ("batch", "set", "grid", "monte_carlo", "situations", "acceptance", "report")
 SITUATION_KEYS = ("files", "radius_nm", "origin_nm", "route_nm", "plant", "traffic")
 BATCH_KEYS = ("name", "scenario", "description")
+encounters = LazyModule("batch", "encounters")  # target placement, registered by the ship domain
 MONTE_CARLO_KEYS = ("seed", "runs", "own_ship", "encounters", "obstacles", "targets_key", "obstacles_key",
                     "uniform", "normal", "choice", "scale")
 OWN_SHIP_KEYS = ("start_nm", "course_deg", "speed_kn")
@@ -371,9 +372,10 @@ def _situations(table: dict, path: Path, scenario_data: dict) -> tuple[Situation
     """``[situations]``: one run per maritime-schema traffic-situation file (DNV trafficgen).
 
     ``files`` is a folder (every ``*.json`` in it, sorted) or one file, relative to the batch
-    file; each becomes the overrides of :func:`rhnc.traffic_situation.scenario_overrides`.
+    file; each becomes the overrides of the ``scenario_overrides`` of the registered ``situations`` module.
     """
-    from rhnc.traffic_situation import load_traffic_situation, scenario_overrides
+    situations = LazyModule("batch", "situations")
+    load_traffic_situation, scenario_overrides = situations.load_traffic_situation, situations.scenario_overrides
 
     where, prefix = str(path), "situations."
     _reject_unknown(table, SITUATION_KEYS, where, prefix)

@@ -24,11 +24,13 @@ A comparison file (TOML), e.g. ``scenarios/exp2_table3.toml`` for the paper's Ta
 ``python -m orchestrator compare FILE`` runs every scenario into
 ``results/<name>/<run-id>/runs/<label>/``, then writes ``table.csv`` and ``table.md`` (ours
 and the paper's value of each metric per run, and each run's change against the
-baseline), ``tracks.png`` (all tracks over the met-ocean field) and the copied figures.
+baseline), the figures of every registered comparison figure (entry-point group
+``rhnc_cosim.comparison_figures``: the ship domain draws ``tracks.png``, all tracks over the
+met-ocean field) and the copied figures.
 With ``[sweep]`` each value gets such a folder under ``members/`` and the top folder holds
 the sweep's table.
 
-A table named in :data:`orchestrator.registry.COMPARISON_EXTENSIONS` (``[voyage]``) hands
+A table named in the entry-point group ``rhnc_cosim.comparisons`` (``[voyage]``) hands
 the runs to a domain extension, which may set further overrides on every run, run more
 scenarios through the same machinery and add its own tables (``docs/compare-format.md``).
 The engine here knows nothing of what the extension measures.
@@ -38,7 +40,6 @@ from __future__ import annotations
 
 import copy
 import hashlib
-import importlib
 import json
 import logging
 import math
@@ -51,7 +52,7 @@ from typing import Any
 import pandas as pd
 
 from orchestrator.errors import ScenarioError
-from orchestrator.registry import COMPARISON_EXTENSIONS
+from orchestrator import plugins
 from orchestrator.scenario import read_toml
 
 log = logging.getLogger(__name__)
@@ -98,7 +99,7 @@ def load_comparison(path: Path) -> dict[str, Any]:
     """Read and check a comparison file; errors name the file and the key."""
     path = Path(path)
     data, _ = read_toml(path, "comparison")
-    allowed = KEYS + tuple(COMPARISON_EXTENSIONS)
+    allowed = KEYS + tuple(plugins.names("comparisons"))
     for key in data:
         if key not in allowed:
             raise ScenarioError(f"{path}: unknown key '{key}' (valid: {', '.join(allowed)})")
@@ -142,14 +143,13 @@ def load_comparison(path: Path) -> dict[str, Any]:
 def load_extensions(spec: dict[str, Any], path: Path) -> dict[str, Any]:
     """Build the extensions the comparison names; each checks its table and every run."""
     extensions = {}
-    for name, target in COMPARISON_EXTENSIONS.items():
+    for name, registration in plugins.registrations("comparisons").items():
         if name not in spec:
             continue
         table = spec[name]
         if not isinstance(table, dict):
             raise ScenarioError(f"{path}: '{name}' must be a table ([{name}])")
-        module, _, attribute = target.partition(":")
-        extension_class = getattr(importlib.import_module(module), attribute)
+        extension_class = registration.load()
         extensions[name] = extension_class.from_table(table, Path(path), spec)
     return extensions
 
@@ -229,7 +229,8 @@ def _compare_once(spec, extensions, path: Path, overrides: dict, out_dir: Path, 
         flags += section.flags
         markdown.append(section.markdown)
     (out_dir / "table.md").write_text("\n".join(markdown) + "\n")
-    _tracks_figure(spec, reports, out_dir / "tracks.png")
+    for draw in plugins.load_all("comparison_figures").values():
+        draw(spec, reports, out_dir)
     failed = {label: r.reason for label, r in reports.items() if not r.ok}
     summary = {
         "runs": {label: str(r.folder.relative_to(out_dir)) for label, r in reports.items()},
@@ -360,32 +361,3 @@ def _format(value) -> str:
 
 def _digest(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def _tracks_figure(spec, reports, target: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from rhnc.metocean import NM, MetOceanField
-
-    fig, ax = plt.subplots(figsize=(7, 6))
-    first = next(iter(reports.values())).folder / "metocean.nc"
-    if first.is_file():
-        field = MetOceanField.from_netcdf(first).snapshot(0.0)  # at departure when it varies in time
-        mesh = ax.pcolormesh(field.y / NM, field.x / NM, field.wind_speed, shading="auto", cmap="viridis")
-        fig.colorbar(mesh, ax=ax, label="wind speed [m/s]")
-    for (label, report), colour in zip(reports.items(), ("tab:red", "white", "tab:orange", "tab:cyan")):
-        frame = pd.read_parquet(report.folder / "timeseries.parquet") if (
-            report.folder / "timeseries.parquet").is_file() else pd.read_csv(report.folder / "timeseries.csv")
-        plant = next(c[:-2] for c in frame.columns if c.endswith(".x") and f"{c[:-2]}.psi" in frame.columns)
-        ax.plot(frame[f"{plant}.y"] / NM, frame[f"{plant}.x"] / NM, color=colour, lw=2, label=label)
-    ax.set_xlabel("east [nm]")
-    ax.set_ylabel("north [nm]")
-    ax.set_aspect("equal")
-    ax.legend(loc="lower right")
-    ax.set_title(f"{spec['name']}: tracks")
-    fig.tight_layout()
-    fig.savefig(target, dpi=120)
-    plt.close(fig)

@@ -12,10 +12,16 @@ shared FMI layer lives in ``models/common/``. At build time the ``[default]`` se
 written as the C header ``kcs_parameter_defaults.h``; a model with a parameter set file of
 its own (``models/<Name>/parameter_sets.toml``, e.g. ``KCSMMG``) also gets
 ``model_parameter_defaults.h`` from it.  The model's own set (else the KCS set) fills the
-placeholders, so the C start values and the XML can never disagree with the TOML.  The
-particulars in those sets (length, beam, windage areas, ...) must equal the ship's
-``ships/KCS.toml`` (:mod:`rhnc.ships`), or the build is refused. The FMU carries its ``sources/`` and
-the SHA-256 of every input file in the zip comment, which ``ensure_built`` compares.
+placeholders, so the C start values and the XML can never disagree with the TOML.  The FMU
+carries its ``sources/`` and the SHA-256 of every input file in the zip comment, which
+``ensure_built`` compares.
+
+The models folder is a *model library* registered in the entry-point group
+``rhnc_cosim.model_libraries`` (:mod:`orchestrator.plugins`): an object with ``models_dir``
+(the folder), ``extra_inputs(name)`` (further files whose content determines the FMU) and
+``check_parameter_set(values, where)`` (refusing a ``[default]`` set with a ``ScenarioError``).
+The ship domain's library checks the particulars in those sets (length, beam, windage
+areas, ...) against the ship's ``ships/KCS.toml``, so a set that disagrees is never built.
 """
 
 from __future__ import annotations
@@ -35,14 +41,12 @@ from orchestrator.errors import FmuError
 
 log = logging.getLogger(__name__)
 
-MODELS_DIR = Path(__file__).resolve().parent.parent / "models"
 FMUS_DIR = Path(__file__).resolve().parent.parent / "fmus"
 
 COMMON = "common"
 PARAMETER_SETS = Path("KCS") / "parameter_sets.toml"
 DEFAULTS_HEADER = "kcs_parameter_defaults.h"
 MODEL_DEFAULTS_HEADER = "model_parameter_defaults.h"
-SHIP = "KCS"
 BOUNDS_HEADER = "model_bounds.h"
 RESOURCES = "resources"
 HASH_PREFIX = "rhnc-source-sha256="
@@ -54,8 +58,36 @@ FMI_VERSIONS = ("2.0", "3.0")
 API_SOURCES = {"2.0": "fmi2_api.c", "3.0": "fmi3_api.c"}
 
 
-def model_names(models_dir: Path = MODELS_DIR) -> list[str]:
+def model_library():
+    """The registered model library (the first by name), or None when no package registers one."""
+    from orchestrator import plugins
+
+    libraries = plugins.names("model_libraries")
+    return plugins.load("model_libraries", libraries[0]) if libraries else None
+
+
+def __getattr__(name: str):
+    if name == "MODELS_DIR":  # the registered library's folder, looked up when asked for
+        library = model_library()
+        return Path(library.models_dir) if library is not None else None
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def _models_dir(models_dir: Path | None) -> Path:
+    if models_dir is not None:
+        return Path(models_dir)
+    library = model_library()
+    if library is None:
+        raise FmuError("no built-in models: no installed package registers a model library "
+                       "(entry-point group rhnc_cosim.model_libraries)")
+    return Path(library.models_dir)
+
+
+def model_names(models_dir: Path | None = None) -> list[str]:
     """Names of the buildable models: folders of ``models_dir`` with a ``model.c``."""
+    if models_dir is None and model_library() is None:
+        return []
+    models_dir = _models_dir(models_dir)
     return sorted(
         p.name for p in Path(models_dir).iterdir()
         if p.is_dir() and p.name != COMMON and (p / "model.c").is_file()
@@ -98,15 +130,14 @@ def _resources(name: str, models_dir: Path) -> list[Path]:
 
 def _inputs(name: str, models_dir: Path, fmi_version: str = "2.0") -> list[Path]:
     """Every file whose content determines the FMU."""
-    from rhnc.ships import ship_file
-
     models_dir = Path(models_dir)
     own = _own_parameter_sets(name, models_dir)
+    library = model_library()  # its inputs and checks hold for a copy of its folder too
     return _sources(name, models_dir, fmi_version) + _resources(name, models_dir) + [
         models_dir / name / "modelDescription.xml",
         models_dir / PARAMETER_SETS,
         *([own] if own else []),
-        ship_file(SHIP),
+        *(library.extra_inputs(name) if library is not None else []),
     ]
 
 
@@ -115,9 +146,9 @@ def fmu_path(name: str, out_dir: Path = FMUS_DIR, fmi_version: str = "2.0") -> P
     return Path(out_dir) / (f"{name}.fmu" if _check_version(fmi_version) == "2.0" else f"fmi3/{name}.fmu")
 
 
-def source_hash(name: str, models_dir: Path = MODELS_DIR, fmi_version: str = "2.0") -> str:
+def source_hash(name: str, models_dir: Path | None = None, fmi_version: str = "2.0") -> str:
     """SHA-256 over the recipe and FMI versions and the relative path and content of every input."""
-    models_dir = Path(models_dir)
+    models_dir = _models_dir(models_dir)
     digest = hashlib.sha256(f"{RECIPE_VERSION} {_check_version(fmi_version)}".encode())
     for path in _inputs(name, models_dir, fmi_version):
         relative = path.relative_to(models_dir) if path.is_relative_to(models_dir) else Path(path.parent.name, path.name)
@@ -130,7 +161,6 @@ def _default_parameters(models_dir: Path, path: Path | None = None) -> dict[str,
     """The ``[default]`` set of ``path`` (the KCS set by default), checked against the ship's
     particulars."""
     from orchestrator.errors import ScenarioError
-    from rhnc.ships import check_parameter_set, load_ship
 
     path = Path(path) if path is not None else Path(models_dir) / PARAMETER_SETS
     try:
@@ -142,8 +172,10 @@ def _default_parameters(models_dir: Path, path: Path | None = None) -> dict[str,
     for key, value in values.items():
         if not isinstance(value, (int, float)) or isinstance(value, bool):
             raise FmuError(f"{path}: [default] {key} = {value!r} is not a number")
+    library = model_library()
     try:
-        check_parameter_set(values, load_ship(SHIP), f"{path}: [default]")
+        if library is not None:
+            library.check_parameter_set(values, f"{path}: [default]")
     except ScenarioError as exc:
         raise FmuError(str(exc)) from None
     return {k: float(v) for k, v in values.items()}
@@ -201,7 +233,7 @@ def _first_error(output: str) -> str:
     return lines[0] if lines else "no compiler output"
 
 
-def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR,
+def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path | None = None,
               fmi_version: str = "2.0") -> Path:
     """Compile one model into ``out_dir/<name>.fmu`` (FMI 2.0) or ``out_dir/fmi3/<name>.fmu``.
 
@@ -211,8 +243,8 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR
         Model folder name under ``models_dir`` (see ``model_names``).
     out_dir : Path
         Folder receiving the FMU (created if missing).
-    models_dir : Path
-        The ``models/`` tree to build from.
+    models_dir : Path, optional
+        The ``models/`` tree to build from (default: the registered model library's).
     fmi_version : {"2.0", "3.0"}
         The FMI standard of the FMU.
 
@@ -231,7 +263,7 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR
 
     from orchestrator import model_description
 
-    models_dir = Path(models_dir)
+    models_dir = _models_dir(models_dir)
     model_dir = _check_name(name, models_dir)
     fmu = fmu_path(name, out_dir, fmi_version)
     fmu.parent.mkdir(parents=True, exist_ok=True)
@@ -306,7 +338,7 @@ def _stored_hash(fmu: Path) -> str | None:
     return comment[len(HASH_PREFIX):] if comment.startswith(HASH_PREFIX) else None
 
 
-def ensure_built(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR,
+def ensure_built(name: str, out_dir: Path = FMUS_DIR, models_dir: Path | None = None,
                  fmi_version: str = "2.0") -> Path:
     """Return the model's FMU, rebuilding it when missing or built from other sources.
 
@@ -314,6 +346,7 @@ def ensure_built(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_
     its modelDescription.xml, the parameter sets and the ship's particulars, stored in the
     FMU's zip comment.
     """
+    models_dir = _models_dir(models_dir)
     _check_name(name, models_dir)
     fmu = fmu_path(name, out_dir, fmi_version)
     if fmu.is_file() and _stored_hash(fmu) == source_hash(name, models_dir, fmi_version):
@@ -322,9 +355,10 @@ def ensure_built(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_
     return build_fmu(name, out_dir, models_dir, fmi_version)
 
 
-def build_all(out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR,
+def build_all(out_dir: Path = FMUS_DIR, models_dir: Path | None = None,
               fmi_versions: tuple[str, ...] = ("2.0",)) -> list[Path]:
     """Build every model of ``models_dir`` into ``out_dir`` for each FMI version; the FMUs written."""
+    models_dir = _models_dir(models_dir)
     return [build_fmu(name, out_dir, models_dir, version)
             for version in fmi_versions for name in model_names(models_dir)]
 

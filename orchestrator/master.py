@@ -22,11 +22,10 @@ from typing import Any
 
 import numpy as np
 
-from orchestrator import interrupts
+from orchestrator import interrupts, plugins
 from orchestrator.errors import ModelError, ScenarioError, ToolchainError
 from orchestrator.participant import BuildContext, Participant, Value
 from orchestrator.recorder import Recorder
-from orchestrator.registry import PARTICIPANT_TYPES
 from orchestrator.scenario import Scenario
 
 log = logging.getLogger(__name__)
@@ -55,6 +54,11 @@ class CoSimulation:
     work_dir : Path, optional
         Where derived inputs (the FMU's met-ocean grid) are written; a temporary
         folder by default.
+
+    A scenario's domain table (``[metocean]``) is built by the class registered under its
+    name in the entry-point group ``rhnc_cosim.scenario_tables``; the object is handed to
+    every Python participant (``context.metocean``) and the files it writes replace their
+    placeholders in FMU parameters.
     """
 
     def __init__(self, scenario: Scenario, work_dir: Path | None = None) -> None:
@@ -67,12 +71,9 @@ class CoSimulation:
         self.metocean = None
         substitutions = {}
         if scenario.metocean is not None:
-            from rhnc.metocean import MetOceanField
-
-            self.metocean = MetOceanField.from_scenario_table(
-                scenario.metocean, scenario.directory, f"{scenario.path}: metocean")
-            grid = self.metocean.write_fmu_grid(self.work_dir / "metocean.grid")
-            substitutions["metocean.grid"] = str(grid)
+            self.metocean = build_scenario_table("metocean", scenario.metocean, scenario.directory,
+                                                 f"{scenario.path}: metocean")
+            substitutions.update(self.metocean.write_fmu_files(self.work_dir))
         self.participants: list[Participant] = []
         self.every: dict[str, int] = {}
         for spec in scenario.participants:
@@ -95,15 +96,7 @@ class CoSimulation:
 
             path = resolve_fmu(spec.fmu, self.scenario.directory, where, spec.fmi_version)
             return FmuParticipant(spec, path, where, substitutions)
-        if spec.type == "python":
-            target = spec.class_path
-        elif spec.type in PARTICIPANT_TYPES:
-            target = PARTICIPANT_TYPES[spec.type]
-        else:
-            raise ScenarioError(
-                f"{where}.type: unknown participant type '{spec.type}' "
-                f"(valid: {', '.join(sorted(PARTICIPANT_TYPES))}, python)"
-            )
+        target = participant_target(spec, where)
         cls = _import_class(target, f"{where}.class")
         context = BuildContext(
             where=where,
@@ -290,6 +283,30 @@ def _finite(value) -> bool:
     if isinstance(value, np.ndarray):
         return bool(np.all(np.isfinite(value)))
     return math.isfinite(float(value))
+
+
+def participant_target(spec, where: str) -> str:
+    """``module:Class`` of a Python participant: its ``class`` for ``type = "python"``, else the
+    entry registered under its type in ``rhnc_cosim.participants``."""
+    if spec.type == "python":
+        return spec.class_path
+    types = plugins.names("participants")
+    if spec.type not in types:
+        raise ScenarioError(
+            f"{where}.type: unknown participant type '{spec.type}' "
+            f"(valid: {', '.join(sorted(types))}, python)"
+        )
+    return plugins.target("participants", spec.type)
+
+
+def build_scenario_table(name: str, table: dict, scenario_dir: Path, where: str):
+    """The object a registered package builds from a scenario's top-level table ``name``."""
+    try:
+        handler = plugins.load("scenario_tables", name)
+    except KeyError:
+        raise ScenarioError(f"{where}: no installed package handles a [{name}] table (entry-point group "
+                            f"{plugins.GROUPS['scenario_tables']})") from None
+    return handler.from_scenario_table(table, scenario_dir, where)
 
 
 def _import_class(target: str, where: str):

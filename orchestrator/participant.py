@@ -124,8 +124,10 @@ class BuildContext:
         This participant's communication step [s] (``every`` times the macro step).
     start_time, stop_time : float
         Simulation interval [s].
-    metocean : rhnc.metocean.MetOceanField or None
-        The scenario's one met-ocean source (same data the environment FMU reads).
+    metocean : object or None
+        What the package registered for the scenario's ``[metocean]`` table built from it
+        (``rhnc_cosim.scenario_tables``): the one met-ocean source, the same data the
+        environment FMU reads.
     """
 
     def __init__(self, where, scenario_dir, step_size, start_time, stop_time, metocean=None):

@@ -351,7 +351,8 @@ def colregs_analysis(frame, scenario, cosim, out_dir, manoeuvre_threshold_deg: f
     own radius R is the controller's.  The keyword options are :class:`JudgementSettings`
     (``[outputs.options.colregs]``).
     """
-    from orchestrator.analyses import array_output, own_radius_m, plant_name
+    from orchestrator.analyses import array_output
+    from rhnc.cosim.plant import own_radius_m, plant_name
 
     settings = JudgementSettings(manoeuvre_threshold_deg, manoeuvre_hold_s, apparent_course_change_deg,
                                  apparent_speed_reduction, early_before_cpa_min, stand_on_wait_min,

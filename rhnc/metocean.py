@@ -310,6 +310,14 @@ class MetOceanField:
         self.to_dataset().to_netcdf(path, engine="netcdf4")
         return path
 
+    def write_fmu_files(self, work_dir) -> dict[str, str]:
+        """Write what the environment FMU reads into ``work_dir``: ``{placeholder: path}``.
+
+        The co-simulation master substitutes each path for its placeholder in FMU
+        parameters (``grid_file = "metocean.grid"``).
+        """
+        return {"metocean.grid": str(self.write_fmu_grid(Path(work_dir) / "metocean.grid"))}
+
     def write_fmu_grid(self, path) -> Path:
         """Write the binary grid the MetOcean FMU reads (``MOGRID2``, models/MetOcean/readme.md).
 
