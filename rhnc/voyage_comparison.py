@@ -22,7 +22,7 @@ speed from the comparison:
   the routing model at one constant speed through water (the baseline's mean), which
   isolates the route from the speed;
 * each run's mean speed through water; runs whose mean speeds differ by more than
-  :data:`SPEED_SPREAD_LIMIT_PERCENT` without an equal-arrival baseline beside each are
+  :data:`rhnc.voyage_comparison_tables.SPEED_SPREAD_LIMIT_PERCENT` without an equal-arrival baseline beside each are
   flagged in the table.
 
 Tables, figures and the sweep summary are built in :mod:`rhnc.voyage_comparison_tables`.
@@ -47,20 +47,13 @@ from orchestrator.participant import is_finite_number
 from orchestrator.scenario import load_scenario
 from rhnc.equal_arrival import EqualArrival, match_arrival_time
 from rhnc.metocean import KNOT, NM
+from rhnc.voyage_comparison_tables import evaluation_section, sweep_section
 
 log = logging.getLogger(__name__)
 
 VOYAGE_KEYS = ("start_nm", "goal_nm", "arrival_radius_nm", "max_duration_h", "equal_arrival", "optimal_route")
 EQUAL_ARRIVAL_KEYS = ("scenario", "speed_key", "systems", "max_trials")
 OPTIMAL_ROUTE_KEYS = ("resolution_nm", "avoid")
-#: Runs whose mean speeds through water differ by more than this are not comparable
-#: without an equal-arrival baseline [%].
-SPEED_SPREAD_LIMIT_PERCENT = 0.5
-#: Below this available saving [% of the straight route's cost] no share is given: the
-#: baseline arrives in the same macro step as the system, up to half a step (30 s of an 8 h
-#: passage) apart, and with fuel rising with about the cube of speed that alone moves a
-#: total by a few tenths of a percent, so a share of a smaller saving measures noise.
-MIN_AVAILABLE_SAVING_PERCENT = 0.5
 
 
 @dataclass(frozen=True)
@@ -189,8 +182,6 @@ class VoyageComparison:
     def evaluate(self, reports: Mapping[str, Any], runner: ScenarioRunner, overrides: Mapping[str, Any],
                  out_dir: Path) -> Section:
         """Equal-arrival baselines, route costs and the tables for one set of runs."""
-        from rhnc.voyage_comparison_tables import evaluation_section
-
         systems = {label: read_voyage(label, report) for label, report in reports.items()}
         baselines: dict[str, EqualArrival] = {}
         if self.equal_arrival is not None:
@@ -243,8 +234,6 @@ class VoyageComparison:
 
     def summarise_sweep(self, key: str, members: list[tuple[Any, Section]], out_dir: Path) -> Section:
         """The distribution, over a sweep's members, of each system's share of the available saving."""
-        from rhnc.voyage_comparison_tables import sweep_section
-
         return sweep_section(key, members, out_dir)
 
     # -- baselines and route costs ------------------------------------------------------------

@@ -32,12 +32,18 @@ from orchestrator.compare import Section, markdown_table
 
 #: A run whose first sample lies further than this from the comparison's start is flagged [m].
 START_TOLERANCE_M = 0.05 * 1852.0
+#: Runs whose mean speeds through water differ by more than this are not comparable
+#: without an equal-arrival baseline [%].
+SPEED_SPREAD_LIMIT_PERCENT = 0.5
+#: Below this available saving [% of the straight route's cost] no share is given: the
+#: baseline arrives in the same macro step as the system, up to half a step (30 s of an 8 h
+#: passage) apart, and with fuel rising with about the cube of speed that alone moves a
+#: total by a few tenths of a percent, so a share of a smaller saving measures noise.
+MIN_AVAILABLE_SAVING_PERCENT = 0.5
 
 
 def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) -> Section:
     """Build the tables and flags of one comparison (see the module docstring)."""
-    from rhnc.voyage_comparison import MIN_AVAILABLE_SAVING_PERCENT, SPEED_SPREAD_LIMIT_PERCENT
-
     straight_nm = comparison.straight_distance_nm
     rows = []
     for label, system in systems.items():
@@ -116,8 +122,6 @@ def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) ->
 
 def sweep_section(key: str, members: list[tuple[Any, Section]], out_dir: Path) -> Section:
     """Per-member table, distribution of each system's share, and a figure."""
-    from rhnc.voyage_comparison import MIN_AVAILABLE_SAVING_PERCENT
-
     rows = []
     for value, section in members:
         row: dict[str, Any] = {key: value}
