@@ -27,7 +27,7 @@ import numpy as np
 
 from orchestrator.participant import BuildContext
 from rhnc import weather_generators
-from rhnc.metocean import KNOT, NM
+from orchestrator.geometry import KNOT, NM
 from rhnc.navigation_participant import NavigationParticipant
 from rhnc.track_cost import cost_of_track
 from rhnc.weather_routing import RoutingProblem, optimal_route, straight_route

@@ -24,9 +24,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from orchestrator.geometry import NM
+
 REPO = Path(__file__).resolve().parents[1]
 OWN = REPO / "scenarios" / "own_ship"
-NM = 1852.0
 
 
 def reference_error_m(frame: pd.DataFrame) -> np.ndarray:

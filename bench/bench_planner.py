@@ -19,7 +19,8 @@ import time
 import numpy as np
 
 from rhnc.fields import SuperpositionField, resample_weather
-from rhnc.metocean import KNOT, NM, MetOceanField
+from orchestrator.geometry import KNOT, NM
+from rhnc.metocean import MetOceanField
 from rhnc.planner import plan_local_path
 
 

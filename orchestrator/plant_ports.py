@@ -7,8 +7,9 @@ the port's unit by :mod:`orchestrator.port_mapping`.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
+
+from orchestrator.geometry import DEG, KNOT, NM
 
 #: Order of the exponents of a dimension: the seven SI base units and the radian, as in the
 #: ``BaseUnit`` element of an FMI 2.0 modelDescription.
@@ -82,9 +83,6 @@ VECTOR_PORTS = {
     "wind": ("polar_from", "wind_speed", "wind_direction"),
 }
 
-KNOT = 1852.0 / 3600.0
-NM = 1852.0
-DEG = math.pi / 180.0
 
 #: ``[participants.<plant>.initial]`` keys: the canonical port they set and the factor
 #: to the port's SI unit.

@@ -50,10 +50,11 @@ import math
 
 import numpy as np
 
+from orchestrator.geometry import NM
+
 from rhnc.colregs import ROLE, EncounterTracker, cpa_tcpa, wrap_deg
 from rhnc.encounter import segment_min_distance
 
-NM = 1852.0
 PASS, FAIL, NOT_APPLICABLE = "pass", "fail", "not applicable"
 RULES = ("rule_8", "rule_13", "rule_14", "rule_15", "rule_16", "rule_17")
 GIVE_WAY_CLASSES = ("head_on", "crossing_give_way", "overtaking")

@@ -29,13 +29,12 @@ from typing import Any
 import numpy as np
 
 from orchestrator.errors import ModelError, ScenarioError
+from orchestrator.geometry import KNOT, NM
 from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
 from rhnc.nmpc import SOLVERS, NMPCController, NMPCSettings
 from rhnc.ship_model import PARAMETER_SETS_FILE, STATE_NAMES, available_parameter_sets, load_parameter_set
 
 LOG = logging.getLogger(__name__)
-NM = 1852.0
-KNOT = NM / 3600.0
 
 OPTIONS = (
     "parameter_set",

@@ -37,8 +37,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from orchestrator.geometry import wrap_angle
+
 from rhnc.energy import EnergyParameters, cost_rate, emission_rate, brake_power, speed_through_water
-from rhnc.metocean import NM
+from orchestrator.geometry import NM
 
 WEATHER_NAMES = ("wind_north", "wind_east", "hs", "current_north", "current_east")
 
@@ -125,12 +127,6 @@ def resample_weather(metocean, resolution_nm: float = 1.0, t_s: float | None = N
 def bearing(from_x, from_y, to_x, to_y):
     """Bearing [rad, clockwise from north, in (-pi, pi]] from one point to another."""
     return np.arctan2(np.asarray(to_y) - from_y, np.asarray(to_x) - from_x)
-
-
-def wrap_angle(angle):
-    """Wrap angles to (-pi, pi]."""
-    wrapped = np.mod(np.asarray(angle, dtype=float) + np.pi, 2.0 * np.pi) - np.pi
-    return np.where(wrapped == -np.pi, np.pi, wrapped)
 
 
 def energy_rate_fields(weather: PlanningWeather, goal: Sequence[float], speed: float,

@@ -8,7 +8,7 @@ from typing import Any
 
 from orchestrator.errors import ModelError, ScenarioError
 from orchestrator.participant import BuildContext, Participant, Value, reject_unknown_options
-from rhnc.metocean import NM
+from orchestrator.geometry import NM
 
 OPTIONS = ("goal_nm", "arrival_radius_nm")
 

@@ -39,10 +39,10 @@ from pathlib import Path
 import numpy as np
 
 from orchestrator.errors import ScenarioError, ToolchainError
+from orchestrator.geometry import KNOT
 from rhnc.ship_model import DYNAMICS_KEYS, STATE_NAMES, ShipParameters, rk4_step
 
 LOG = logging.getLogger(__name__)
-KNOT = 1852.0 / 3600.0
 COEFFICIENTS = ("m11", "m22", "m33", "d11", "d22", "d33", "d23", "d32")
 WEATHER_PORTS = ("current_north", "current_east", "wind_speed", "wind_direction", "hs")
 FIT_MANOEUVRES = ("speed_steps", "turn_starboard", "turn_port", "zigzag_10")

@@ -43,13 +43,11 @@ from typing import Any
 import numpy as np
 
 from orchestrator.errors import ScenarioError
+from orchestrator.geometry import NM
 
 log = logging.getLogger(__name__)
 
-NM = 1852.0  #: metres per nautical mile
-KNOT = NM / 3600.0  #: m/s per knot
 GRAVITY = 9.81  #: m/s^2
-EARTH_RADIUS = 6_371_000.0  #: m, mean radius for the local projection
 
 FIELDS = ("wind_north", "wind_east", "hs", "current_north", "current_east")
 

@@ -21,7 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rhnc.metocean import EARTH_RADIUS, FIELDS, NM, MetOceanField
+from orchestrator.geometry import NM, local_north_east_m
+from rhnc.metocean import FIELDS, MetOceanField
 
 log = logging.getLogger(__name__)
 
@@ -114,8 +115,7 @@ def read_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
     order_lon = np.argsort(lon)
     lat, lon = lat[order_lat], lon[order_lon]
     lat0, lon0 = origin_deg if origin_deg is not None else (lat[0], lon[0])
-    north = np.radians(lat - lat0) * EARTH_RADIUS
-    east = np.radians(lon - lon0) * EARTH_RADIUS * np.cos(np.radians(lat0))
+    north, east = local_north_east_m(lat, lon, lat0, lon0)
     step = resolution_nm * NM if resolution_nm else float(np.min(np.diff(north)))
     # cover the data's whole extent with a spacing no coarser than `step`
     x = np.linspace(north[0], north[-1], int(np.ceil((north[-1] - north[0]) / step - 1e-9)) + 1)

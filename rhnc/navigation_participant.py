@@ -73,7 +73,7 @@ from orchestrator.errors import ModelError, ScenarioError
 from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
 from rhnc.energy import EnergyParameters, brake_power, cost_rate, emission_rate
 from rhnc.fields import FieldWeights, GuidanceParameters, SuperpositionField, bearing, resample_weather
-from rhnc.metocean import KNOT, NM
+from orchestrator.geometry import KNOT, NM
 from rhnc.planner import plan_local_path
 from rhnc.reference import reference_states
 from rhnc.route_navigation import SPEED_STEP_MPS, RecedingRoutePlanner, calm_water_time_price_usd_h

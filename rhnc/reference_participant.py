@@ -16,10 +16,9 @@ from typing import Any
 import numpy as np
 
 from orchestrator.errors import ScenarioError
+from orchestrator.geometry import KNOT, NM
 from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
 
-NM = 1852.0
-KNOT = NM / 3600.0
 
 
 def line_or_turn_reference(

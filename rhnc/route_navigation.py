@@ -38,7 +38,7 @@ import logging
 import numpy as np
 
 from rhnc.energy import EnergyParameters, brake_power, fuel_rate_t_h
-from rhnc.metocean import KNOT, NM
+from orchestrator.geometry import KNOT, NM
 from rhnc.route_search import cost_to_go_tree, shortcut_path
 from rhnc.track_cost import constant_speed_times, densify, is_time_varying, sample_weather
 from rhnc.weather_routing import RouteSearch, RoutingProblem

@@ -17,9 +17,9 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from orchestrator.errors import ScenarioError
+from orchestrator.geometry import KNOT
 
 SHIPS_DIR = Path(__file__).resolve().parents[1] / "ships"
-KNOT = 1852.0 / 3600.0
 
 #: Plant-FMU parameter name -> particulars attribute.
 PLANT_PARAMETERS = {

@@ -15,10 +15,9 @@ from typing import Any
 import numpy as np
 
 from orchestrator.errors import ScenarioError
+from orchestrator.geometry import KNOT, NM
 from orchestrator.participant import BuildContext, Participant, Value, reject_unknown_options
 
-NM = 1852.0
-KNOT = NM / 3600.0
 
 TARGET_KEYS = ("start_nm", "velocity_kn", "waypoints_nm", "speed_kn", "radius_nm")
 STATIC_KEYS = ("center_nm", "radius_nm")

@@ -46,7 +46,7 @@ from orchestrator.errors import ScenarioError
 from orchestrator.participant import is_finite_number
 from orchestrator.scenario import load_scenario
 from rhnc.equal_arrival import EqualArrival, match_arrival_time
-from rhnc.metocean import KNOT, NM
+from orchestrator.geometry import KNOT, NM
 from rhnc.voyage_comparison_tables import evaluation_section, sweep_section
 
 log = logging.getLogger(__name__)

@@ -29,9 +29,10 @@ import numpy as np
 import pandas as pd
 
 from orchestrator.compare import Section, markdown_table
+from orchestrator.geometry import KNOT, NM
 
 #: A run whose first sample lies further than this from the comparison's start is flagged [m].
-START_TOLERANCE_M = 0.05 * 1852.0
+START_TOLERANCE_M = 0.05 * NM
 #: Runs whose mean speeds through water differ by more than this are not comparable
 #: without an equal-arrival baseline [%].
 SPEED_SPREAD_LIMIT_PERCENT = 0.5
@@ -203,7 +204,7 @@ def _published_row(label: str, paper: dict[str, Any]) -> dict[str, Any]:
 
 
 def _route_row(label: str, kind: str, route, made_good_nm: float) -> dict[str, Any]:
-    mean_kn = float(route.speed_through_water_mps) / (1852.0 / 3600.0)
+    mean_kn = float(route.speed_through_water_mps) / KNOT
     return {
         "voyage": label, "kind": kind, "arrived": True, "arrival [min]": route.duration_s / 60.0,
         "mean speed through water [kn]": mean_kn,
@@ -236,7 +237,7 @@ def _flags(systems, baselines, routes, limit_percent: float, start_m=None) -> li
         runs = list(systems.values()) + [e.best.run for e in baselines.values() if e.best is not None]
         for run in runs:
             if len(run.track_m) and np.hypot(*(run.track_m[0] - start_m)) > START_TOLERANCE_M:
-                offset_nm = np.hypot(*(run.track_m[0] - start_m)) / 1852.0
+                offset_nm = np.hypot(*(run.track_m[0] - start_m)) / NM
                 flags.append(f"{run.label} started {offset_nm:.2f} nm from voyage.start_nm: not the same passage")
     speeds = {label: s.mean_speed_through_water_kn for label, s in systems.items()
               if math.isfinite(s.mean_speed_through_water_kn)}

@@ -30,7 +30,8 @@ import numpy as np
 
 from orchestrator.errors import ScenarioError
 from orchestrator.participant import is_finite_number
-from rhnc.metocean import DEFAULT_WIND_CONTROL_POINTS, KNOT, NM, MetOceanField, fetch_limited_hs, map_axis
+from orchestrator.geometry import KNOT, NM
+from rhnc.metocean import DEFAULT_WIND_CONTROL_POINTS, MetOceanField, fetch_limited_hs, map_axis
 
 #: Draws of the storm set, fixed on 2026-11-22 before any routing result (docs/weather.md).
 STORM_SET_DRAWS = {

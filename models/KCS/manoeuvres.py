@@ -18,8 +18,8 @@ from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
 from orchestrator.fmu_build import MODELS_DIR, ensure_built
+from orchestrator.geometry import KNOT
 
-KNOT = 1852.0 / 3600.0
 APPROACH_SPEED = 18 * KNOT  # m/s
 
 

@@ -11,6 +11,7 @@ import numpy as np
 
 from orchestrator.analyses import array_output, driver_column
 from orchestrator.errors import ScenarioError, ToolchainError
+from orchestrator.geometry import KNOT, NM
 from rhnc.cosim.plant import own_radius_m, plant_name, steering_column, tau_column
 
 #: The ship whose particulars (ships/<name>.toml) apply when the plant does not say.
@@ -44,7 +45,7 @@ def turning_circle_analysis(frame, scenario, cosim, out_dir) -> dict:
     figures["execute_s"] = execute
     figures["steered_by"] = kind
     figures["approach_speed_kn"] = float(frame[f"{plant}.u"].iloc[int(np.searchsorted(frame["time_s"], execute))]
-                                         / (1852 / 3600))
+                                         / KNOT)
     from rhnc.cosim.figures import manoeuvre_figure
 
     manoeuvre_figure(frame, plant, figures, out_dir / "turning_circle.png", "Turning circle")
@@ -107,13 +108,13 @@ def voyage_analysis(frame, scenario, cosim, out_dir, goal_nm=None, arrival_radiu
     arrival = {}
     if goal_nm is not None:
         try:
-            goal = np.asarray(goal_nm, dtype=float).reshape(2) * 1852.0
+            goal = np.asarray(goal_nm, dtype=float).reshape(2) * NM
         except (TypeError, ValueError) as exc:
             raise ScenarioError(f"{scenario.path}: 'outputs.options.voyage.goal_nm' must be [north, east]") from exc
-        inside = np.nonzero(np.hypot(x - goal[0], y - goal[1]) <= arrival_radius_nm * 1852.0)[0]
+        inside = np.nonzero(np.hypot(x - goal[0], y - goal[1]) <= arrival_radius_nm * NM)[0]
         arrival["arrived"] = bool(inside.size)
         arrival["arrival_time_min"] = float(frame["time_s"].iloc[inside[0]] / 60.0) if inside.size else None
-        arrival["goal_distance_end_nm"] = float(np.hypot(x[-1] - goal[0], y[-1] - goal[1]) / 1852.0)
+        arrival["goal_distance_end_nm"] = float(np.hypot(x[-1] - goal[0], y[-1] - goal[1]) / NM)
         if inside.size:
             end = inside[0] + 1
     window = slice(0, end)
@@ -129,7 +130,7 @@ def voyage_analysis(frame, scenario, cosim, out_dir, goal_nm=None, arrival_radiu
     result = account.as_dict()
     result["energy_source"] = ("plant delivered_power" if brake_power is not None
                                else "energy model (speed, heading, weather)")
-    made_good = float(np.hypot(x[end - 1] - x[0], y[end - 1] - y[0]) / 1852.0)
+    made_good = float(np.hypot(x[end - 1] - x[0], y[end - 1] - y[0]) / NM)
     result["made_good_nm"] = made_good
     duration_h = account.time_min / 60.0
     result["mean_speed_through_water_kn"] = mean_speed_through_water_kn(
@@ -188,8 +189,8 @@ def encounter_analysis(frame, scenario, cosim, out_dir) -> dict:
         reference = reference_at_times(array_output(frame, sources["reference"]), t)
         cross = cross_track_error(x, y, reference[:, 0], reference[:, 1], reference[:, 2])
         after = t >= passed_at
-        result["cross_track_end_nm"] = float(abs(cross[-1]) / 1852.0)
-        result["cross_track_max_after_passing_nm"] = float(np.max(np.abs(cross[after])) / 1852.0)
-        result["back_on_track_s"] = time_back_on_track(t, cross, passed_at, 0.2 * 1852.0)
+        result["cross_track_end_nm"] = float(abs(cross[-1]) / NM)
+        result["cross_track_max_after_passing_nm"] = float(np.max(np.abs(cross[after])) / NM)
+        result["back_on_track_s"] = time_back_on_track(t, cross, passed_at, 0.2 * NM)
         result["passed_at_s"] = passed_at
     return result

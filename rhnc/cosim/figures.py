@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-NM = 1852.0
+from orchestrator.geometry import NM
 
 
 def _pyplot():

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from rhnc.fields import (SuperpositionField, guidance_field, normalise, resample_weather, wrap_angle)
-from rhnc.metocean import KNOT, NM, MetOceanField
+from orchestrator.geometry import KNOT, NM
+from rhnc.metocean import MetOceanField
 from rhnc.planner import plan_local_path
 
 SPEED = 18 * KNOT

@@ -5,7 +5,7 @@ import pytest
 from orchestrator.errors import ScenarioError
 from orchestrator.participant import BuildContext
 from rhnc.goal import GoalMonitor
-from rhnc.metocean import NM
+from orchestrator.geometry import NM
 
 
 def context():

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from rhnc.metocean import NM
+from orchestrator.geometry import NM
 from rhnc.trigger import EventTrigger
 
 
