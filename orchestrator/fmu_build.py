@@ -16,6 +16,10 @@ placeholders, so the C start values and the XML can never disagree with the TOML
 carries its ``sources/`` and the SHA-256 of every input file in the zip comment, which
 ``ensure_built`` compares.
 
+In a source checkout the FMUs go into its ``fmus/``; an installed toolchain (the models are
+package data) builds them into the per-user cache, ``<user cache>/rhnc-cosim/fmus/<source
+hash>/`` (``platformdirs``; ``XDG_CACHE_HOME`` on Linux moves it), built once per source.
+
 The models folder is a *model library* registered in the entry-point group
 ``rhnc_cosim.model_libraries`` (:mod:`orchestrator.plugins`): an object with ``models_dir``
 (the folder), ``extra_inputs(name)`` (further files whose content determines the FMU) and
@@ -41,7 +45,19 @@ from orchestrator.errors import FmuError
 
 log = logging.getLogger(__name__)
 
-FMUS_DIR = Path(__file__).resolve().parent.parent / "fmus"
+
+def _checkout_fmus() -> Path | None:
+    from orchestrator.plugins import source_checkout
+
+    root = source_checkout()
+    return root / "fmus" if root is not None else None
+
+
+#: Where built-in FMUs go in a source checkout: its ``fmus/`` folder.  An installed toolchain
+#: (None here) builds them into the per-user cache instead (:func:`default_fmu_dir`).
+FMUS_DIR = _checkout_fmus()
+#: Name of the per-user cache folder (``platformdirs.user_cache_dir``).
+CACHE_NAME = "rhnc-cosim"
 
 COMMON = "common"
 PARAMETER_SETS = Path("KCS") / "parameter_sets.toml"
@@ -141,8 +157,21 @@ def _inputs(name: str, models_dir: Path, fmi_version: str = "2.0") -> list[Path]
     ]
 
 
-def fmu_path(name: str, out_dir: Path = FMUS_DIR, fmi_version: str = "2.0") -> Path:
+def default_fmu_dir(name: str, models_dir: Path | None = None, fmi_version: str = "2.0") -> Path:
+    """Where a built-in model's FMU goes unless told: the checkout's ``fmus/``, or else
+    ``<user cache>/rhnc-cosim/fmus/<source hash>/`` so that FMUs of other sources (another
+    installed version) never overwrite each other and an unchanged source is built once."""
+    if FMUS_DIR is not None:
+        return Path(FMUS_DIR)
+    from platformdirs import user_cache_dir
+
+    return Path(user_cache_dir(CACHE_NAME)) / "fmus" / source_hash(name, models_dir, fmi_version)[:16]
+
+
+def fmu_path(name: str, out_dir: Path | None = None, fmi_version: str = "2.0") -> Path:
     """Where the FMU of a model is built: ``<out_dir>/<name>.fmu`` or ``<out_dir>/fmi3/<name>.fmu``."""
+    if out_dir is None:
+        out_dir = default_fmu_dir(name, None, fmi_version)
     return Path(out_dir) / (f"{name}.fmu" if _check_version(fmi_version) == "2.0" else f"fmi3/{name}.fmu")
 
 
@@ -233,7 +262,7 @@ def _first_error(output: str) -> str:
     return lines[0] if lines else "no compiler output"
 
 
-def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path | None = None,
+def build_fmu(name: str, out_dir: Path | None = None, models_dir: Path | None = None,
               fmi_version: str = "2.0") -> Path:
     """Compile one model into ``out_dir/<name>.fmu`` (FMI 2.0) or ``out_dir/fmi3/<name>.fmu``.
 
@@ -241,8 +270,8 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path | None = Non
     ----------
     name : str
         Model folder name under ``models_dir`` (see ``model_names``).
-    out_dir : Path
-        Folder receiving the FMU (created if missing).
+    out_dir : Path, optional
+        Folder receiving the FMU (created if missing); default :func:`default_fmu_dir`.
     models_dir : Path, optional
         The ``models/`` tree to build from (default: the registered model library's).
     fmi_version : {"2.0", "3.0"}
@@ -265,6 +294,7 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path | None = Non
 
     models_dir = _models_dir(models_dir)
     model_dir = _check_name(name, models_dir)
+    out_dir = default_fmu_dir(name, models_dir, fmi_version) if out_dir is None else out_dir
     fmu = fmu_path(name, out_dir, fmi_version)
     fmu.parent.mkdir(parents=True, exist_ok=True)
     parameters = _default_parameters(models_dir)
@@ -338,7 +368,7 @@ def _stored_hash(fmu: Path) -> str | None:
     return comment[len(HASH_PREFIX):] if comment.startswith(HASH_PREFIX) else None
 
 
-def ensure_built(name: str, out_dir: Path = FMUS_DIR, models_dir: Path | None = None,
+def ensure_built(name: str, out_dir: Path | None = None, models_dir: Path | None = None,
                  fmi_version: str = "2.0") -> Path:
     """Return the model's FMU, rebuilding it when missing or built from other sources.
 
@@ -348,6 +378,7 @@ def ensure_built(name: str, out_dir: Path = FMUS_DIR, models_dir: Path | None = 
     """
     models_dir = _models_dir(models_dir)
     _check_name(name, models_dir)
+    out_dir = default_fmu_dir(name, models_dir, fmi_version) if out_dir is None else out_dir
     fmu = fmu_path(name, out_dir, fmi_version)
     if fmu.is_file() and _stored_hash(fmu) == source_hash(name, models_dir, fmi_version):
         log.debug("%s is up to date", fmu)
@@ -355,7 +386,7 @@ def ensure_built(name: str, out_dir: Path = FMUS_DIR, models_dir: Path | None = 
     return build_fmu(name, out_dir, models_dir, fmi_version)
 
 
-def build_all(out_dir: Path = FMUS_DIR, models_dir: Path | None = None,
+def build_all(out_dir: Path | None = None, models_dir: Path | None = None,
               fmi_versions: tuple[str, ...] = ("2.0",)) -> list[Path]:
     """Build every model of ``models_dir`` into ``out_dir`` for each FMI version; the FMUs written."""
     models_dir = _models_dir(models_dir)

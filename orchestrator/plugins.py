@@ -97,6 +97,12 @@ class Registration:
         return value
 
 
+def source_checkout() -> Path | None:
+    """The root of the source checkout this package is imported from, or None when installed."""
+    pyproject = _source_pyproject()
+    return pyproject.parent if pyproject is not None else None
+
+
 def _source_pyproject() -> Path | None:
     """This package's checkout's ``pyproject.toml`` when the package is imported from one."""
     candidate = Path(__file__).resolve().parent.parent / "pyproject.toml"

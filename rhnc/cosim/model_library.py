@@ -13,14 +13,25 @@ from pathlib import Path
 
 from rhnc.ships import check_parameter_set, load_ship, ship_file
 
+
 #: The ship whose particulars the built-in plant models carry.
 SHIP = "KCS"
+
+
+def _packaged_or_source(name: str) -> Path:
+    """``rhnc/cosim/<name>`` of an installed package, else ``<name>/`` of the source checkout."""
+    packaged = Path(__file__).resolve().parent / name
+    return packaged if packaged.is_dir() else Path(__file__).resolve().parents[2] / name
+
+
+#: The C models: package data once installed (pyproject.toml maps ``models/`` there).
+MODELS_DIR = _packaged_or_source("models")
 
 
 class ShipModelLibrary:
     """The built-in models: the 3-DOF and MMG KCS, the S175 test ship, the met-ocean field."""
 
-    models_dir = Path(__file__).resolve().parents[2] / "models"
+    models_dir = MODELS_DIR
 
     @staticmethod
     def extra_inputs(name: str) -> list[Path]:
