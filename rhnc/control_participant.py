@@ -22,51 +22,19 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 
-from orchestrator.errors import ModelError, ScenarioError
-from orchestrator.geometry import KNOT, NM
-from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
-from rhnc.nmpc import SOLVERS, NMPCController, NMPCSettings
-from rhnc.ship_model import PARAMETER_SETS_FILE, STATE_NAMES, available_parameter_sets, load_parameter_set
+from orchestrator.errors import ModelError
+from orchestrator.geometry import KNOT
+from orchestrator.participant import BuildContext, Participant, Value
+from rhnc.control_options import controller_from_options
+from rhnc.nmpc import NMPCController
+from rhnc.ship_model import STATE_NAMES
 
 LOG = logging.getLogger(__name__)
-
-OPTIONS = (
-    "parameter_set",
-    "model_file",
-    "model_set",
-    "parameter_overrides",
-    "horizon_steps",
-    "control_interval_s",
-    "substeps",
-    "own_radius_nm",
-    "solver",
-    "max_iterations",
-    "max_obstacles",
-    "weights",
-    "length_scale_m",
-    "speed_scale_mps",
-    "et_default",
-    "collision_slack_weight",
-    "wall_time_limit_s",
-    "cpu_time_limit_s",
-    "max_speed_kn",
-    "colregs",
-    "clearance_margin_nm",
-    "clearance_margin_growth_kn",
-    "stand_on_action_tcpa_s",
-    "stand_on_action_range_factor",
-    "disturbance_observer",
-    "observer_gain",
-    "codegen",
-)
-WEIGHT_KEYS = ("q", "r", "r_rate")
-
 
 def interpolate_reference(reference: np.ndarray, times: np.ndarray) -> np.ndarray:
     """Reference states (len(times), 6) at ``times`` [s] from an (M, 7) timed reference.
@@ -178,68 +146,8 @@ class ControlParticipant(Participant):
 
     @classmethod
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "ControlParticipant":
-        """Build from scenario options (see class docstring); errors name the key."""
-        where = context.where
-        reject_unknown_options(options, OPTIONS, where)
-        overrides = options.get("parameter_overrides", {})
-        if not isinstance(overrides, Mapping):
-            raise ScenarioError(f"{where}: option 'parameter_overrides' must be a table")
-        params = _prediction_model(options, overrides, context)
-        kwargs: dict[str, Any] = {
-            "control_interval_s": _number(options, "control_interval_s", where, context.step_size),
-            "own_radius_m": _number(options, "own_radius_nm", where, 0.0) * NM,
-        }
-        for key in ("horizon_steps", "substeps", "max_iterations", "max_obstacles"):
-            if key in options:
-                value = options[key]
-                if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                    raise ScenarioError(f"{where}: option '{key}' must be an integer >= 1, got {value!r}")
-                kwargs[key] = value
-        if "solver" in options:
-            if options["solver"] not in SOLVERS:
-                raise ScenarioError(f"{where}: option 'solver' must be one of {', '.join(SOLVERS)}, got {options['solver']!r}")
-            kwargs["solver"] = options["solver"]
-        for key in ("length_scale_m", "speed_scale_mps"):
-            if key in options:
-                kwargs[key] = _number(options, key, where, None)
-        for key in ("cpu_time_limit_s", "wall_time_limit_s"):  # false: no such limit
-            if key in options:
-                kwargs[key] = None if options[key] is False else _number(options, key, where, None)
-        if "max_speed_kn" in options:
-            kwargs["max_speed_mps"] = _number(options, "max_speed_kn", where, None) * KNOT
-        for key in ("colregs", "disturbance_observer", "codegen"):
-            if key in options:
-                if not isinstance(options[key], bool):
-                    raise ScenarioError(f"{where}: option '{key}' must be true or false, got {options[key]!r}")
-                kwargs[key] = options[key]
-        for key, target, scale in (("clearance_margin_nm", "clearance_margin_m", NM),
-                                   ("clearance_margin_growth_kn", "clearance_margin_growth_mps", KNOT),
-                                   ("stand_on_action_tcpa_s", "stand_on_action_tcpa_s", 1.0),
-                                   ("stand_on_action_range_factor", "stand_on_action_range_factor", 1.0),
-                                   ("observer_gain", "observer_gain", 1.0)):
-            if key in options:
-                kwargs[target] = _number(options, key, where, None) * scale
-        if "collision_slack_weight" in options:  # false: hard collision constraints
-            value = options["collision_slack_weight"]
-            kwargs["collision_slack_weight"] = None if value is False else _number(
-                options, "collision_slack_weight", where, None)
-        weights = options.get("weights", {})
-        if not isinstance(weights, Mapping):
-            raise ScenarioError(f"{where}: option 'weights' must be a table with keys {', '.join(WEIGHT_KEYS)}")
-        reject_unknown_options(weights, WEIGHT_KEYS, f"{where}.weights")
-        for key, size in zip(WEIGHT_KEYS, (6, 2, 2)):
-            if key in weights:
-                values = weights[key]
-                if not isinstance(values, list) or len(values) != size or not all(
-                    isinstance(v, (int, float)) and not isinstance(v, bool) and v >= 0 for v in values
-                ):
-                    raise ScenarioError(f"{where}.weights: '{key}' must be a list of {size} numbers >= 0")
-                kwargs[key] = tuple(float(v) for v in values)
-        try:
-            settings = NMPCSettings(**kwargs)
-        except ValueError as error:
-            raise ScenarioError(f"{where}: {error}") from None
-        et_default = _number(options, "et_default", where, 0.0)
+        """Build from scenario options (see :mod:`rhnc.control_options`); errors name the key."""
+        params, settings, et_default = controller_from_options(options, context)
         return cls(name, NMPCController(params, settings), et_default)
 
     @property
@@ -393,45 +301,3 @@ def tau_r_sign_changes_per_100(tau_r: Sequence[float], tau_r_max: float, deadban
         changes += int(last != 0.0 and sign != last)
         last = sign
     return 100.0 * changes / len(tau_r)
-
-
-def _prediction_model(options: Mapping[str, Any], overrides: Mapping[str, Any], context: BuildContext):
-    """The NMPC's model: ``parameter_set`` of the KCS file, or ``model_set`` of ``model_file``."""
-    where = context.where
-    if "model_file" in options:
-        if "parameter_set" in options:
-            raise ScenarioError(f"{where}: give either option 'parameter_set' or 'model_file', not both")
-        file = options["model_file"]
-        if not isinstance(file, str) or not file:
-            raise ScenarioError(f"{where}: option 'model_file' must be a path to a parameter-set TOML file")
-        path = Path(file) if Path(file).is_absolute() else Path(context.scenario_dir) / file
-        if not path.is_file():
-            raise ScenarioError(f"{where}: option 'model_file': {path} not found "
-                                "(write one with python -m orchestrator identify)")
-        set_name = options.get("model_set")
-        if set_name is None:
-            sets = available_parameter_sets(path)
-            if len(sets) != 1:
-                raise ScenarioError(f"{where}: option 'model_set' must name one of {', '.join(sets)} in {path}")
-            set_name = next(iter(sets))
-    else:
-        if "model_set" in options:
-            raise ScenarioError(f"{where}: option 'model_set' needs 'model_file'")
-        path = PARAMETER_SETS_FILE
-        set_name = options.get("parameter_set", "default")
-    if not isinstance(set_name, str):
-        raise ScenarioError(f"{where}: option '{'model_set' if 'model_file' in options else 'parameter_set'}' "
-                            "must be a string")
-    try:
-        return load_parameter_set(set_name, overrides, path=path)
-    except ScenarioError as error:
-        raise ScenarioError(f"{where}: {error}") from None
-
-
-def _number(options: Mapping[str, Any], key: str, where: str, default: float | None) -> float | None:
-    if key not in options:
-        return default
-    value = options[key]
-    if not is_finite_number(value):
-        raise ScenarioError(f"{where}: option '{key}' must be a finite number, got {value!r}")
-    return float(value)
