@@ -15,10 +15,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from orchestrator.errors import ScenarioError
+from orchestrator.geometry import KNOT
 from orchestrator.results import RunFolder, new_run_id, versions
 from orchestrator.scenario import ParticipantSpec, load_scenario
-from rhnc.identification import (COEFFICIENTS, KNOT, VALIDATION_MANOEUVRE, PlantRunner, check_bounds,
-                                 identify_model, parameter_set_toml, write_figures)
+from rhnc.identification import COEFFICIENTS, VALIDATION_MANOEUVRE, PlantRunner, check_bounds, identify_model
+from rhnc.identification_report import parameter_set_toml, write_figures
 from rhnc.ship_model import STATE_NAMES, load_parameter_set
 
 LOG = logging.getLogger(__name__)
