@@ -50,11 +50,14 @@ def test_wheel_install_runs_a_scenario_outside_the_tree(tmp_path):
     scenario = outside / "turning.toml"
     scenario.write_text((REPO / "scenarios" / "turning_circle.toml").read_text().replace(
         "stop_s = 1800.0", "stop_s = 600.0"))
-    where = subprocess.run([str(python), "-c", "import orchestrator, rhnc, rhnc.ships as s; "
-                            "print(orchestrator.__file__); print(rhnc.__file__); print(s.SHIPS_DIR)"],
+    # every data file the domain reads at import resolves inside the installed package
+    where = subprocess.run([str(python), "-c", "import orchestrator, rhnc, rhnc.ships as s, rhnc.ship_model as m, "
+                            "rhnc.allocation as a, rhnc.cosim.model_library as lib; "
+                            "print(orchestrator.__file__); print(rhnc.__file__); print(s.SHIPS_DIR / 'KCS.toml'); "
+                            "print(m.PARAMETER_SETS_FILE); print(a.PARAMETER_SETS_FILE); print(lib.MODELS_DIR)"],
                            capture_output=True, text=True, cwd=outside, env=environment, check=True)
     for line in where.stdout.splitlines():
-        assert Path(line).is_relative_to(env_dir), where.stdout
+        assert Path(line).is_relative_to(env_dir) and Path(line).exists(), where.stdout
 
     done = subprocess.run([str(python), "-m", "orchestrator", "run", "turning.toml", "--no-progress"],
                           capture_output=True, text=True, cwd=outside, env=environment, timeout=900)
