@@ -29,6 +29,9 @@ OPTIONS = ("mode", "tau_u_N", "tau_r_steps", "tau_r_Nm", "angle_deg", "execute_s
 class ScriptedTau(Participant):
     """Open-loop tau = [surge force, yaw moment] from a script."""
 
+    #: Option keys (the schema docs/participants.md is checked against).
+    OPTIONS = OPTIONS
+
     def __init__(self, name: str, tau_u: float, steps=(), zigzag=None) -> None:
         super().__init__(name)
         self.tau_u = tau_u
@@ -117,6 +120,8 @@ class ScriptedRudder(ScriptedTau):
     +rudder until the heading has changed by +angle, then -rudder until -angle, and so on.
     Outputs ``rudder_angle_cmd`` [rad] and ``propeller_rps_cmd`` [1/s].
     """
+
+    OPTIONS = RUDDER_OPTIONS
 
     @classmethod
     def from_options(cls, name: str, options: Mapping, context: BuildContext) -> "ScriptedRudder":

@@ -138,6 +138,8 @@ class AllocationParticipant(Participant):
     could give within their ranges and rates this step).
     """
 
+    OPTIONS = OPTIONS
+
     def __init__(self, name: str, coefficients: Mapping[str, float], step_s: float) -> None:
         super().__init__(name)
         self.model = ForceModel(coefficients)

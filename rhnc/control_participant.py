@@ -30,7 +30,7 @@ import numpy as np
 from orchestrator.errors import ModelError
 from orchestrator.geometry import KNOT
 from orchestrator.participant import BuildContext, Participant, Value
-from rhnc.control_options import controller_from_options
+from rhnc.control_options import OPTIONS, controller_from_options
 from rhnc.nmpc import NMPCController
 from rhnc.ship_model import STATE_NAMES
 
@@ -127,6 +127,8 @@ class ControlParticipant(Participant):
         Compile the NLP to C once per machine and reuse it (default false; see
         :mod:`rhnc.nmpc_codegen`); the summary reports ``codegen: compiled|interpreted``.
     """
+
+    OPTIONS = OPTIONS
 
     def __init__(self, name: str, controller: NMPCController, et_default: float) -> None:
         super().__init__(name)

@@ -21,6 +21,8 @@ class GoalMonitor(Participant):
     the ship has come within the arrival radius, and from then on).
     """
 
+    OPTIONS = OPTIONS
+
     def __init__(self, name: str, goal_m: tuple[float, float], radius_m: float) -> None:
         super().__init__(name)
         self.goal_m = goal_m

@@ -121,6 +121,8 @@ class NavigationParticipant(Participant):
     ``goal_distance_m``.
     """
 
+    OPTIONS = OPTIONS
+
     def __init__(self, name: str, metocean, delta: float, goal: tuple[float, float], speed: float,
                  horizon_steps: int, weights: FieldWeights, guidance: GuidanceParameters,
                  resolution_nm: float, energy: EnergyParameters, ship_range_m: float,
