@@ -63,7 +63,10 @@ DISTRIBUTION = "rhnc-cosim"
 #:     (:mod:`orchestrator.fmu_build`);
 #: ``batch``
 #:     a module giving a batch file's domain tables what they need (``encounters``:
-#:     target placement for Monte Carlo encounters; ``situations``: traffic-situation files).
+#:     target placement for Monte Carlo encounters; ``situations``: traffic-situation files);
+#: ``port_tables``
+#:     an :class:`orchestrator.plant_ports.PortTable`: the canonical ports FMU variables are
+#:     mapped onto, and the ``[participants.<plant>.initial]`` keys.
 GROUPS = {
     "participants": "rhnc_cosim.participants",
     "analyses": "rhnc_cosim.analyses",
@@ -74,6 +77,7 @@ GROUPS = {
     "comparison_figures": "rhnc_cosim.comparison_figures",
     "model_libraries": "rhnc_cosim.model_libraries",
     "batch": "rhnc_cosim.batch",
+    "port_tables": "rhnc_cosim.port_tables",
 }
 
 

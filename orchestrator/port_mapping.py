@@ -24,7 +24,8 @@ import math
 from collections.abc import Mapping
 
 from orchestrator.errors import FmuError, ScenarioError
-from orchestrator.plant_ports import DEG, INITIAL_KEYS, PLANT_PORTS, VECTOR_PORTS, WRAPPED_OUTPUTS
+from orchestrator.geometry import DEG
+from orchestrator.plant_ports import INITIAL_KEYS, PLANT_PORTS, VECTOR_PORTS, WRAPPED_OUTPUTS
 from orchestrator.scenario import ParticipantSpec, VariableMapping, VectorMapping
 from orchestrator.units import UnitParseError, declared_unit, describe_dimension, resolve_unit
 
