@@ -7,9 +7,9 @@ model's FMI 2.0 one (:mod:`orchestrator.model_description`).
 
 Each model folder ``models/<Name>/`` holds ``config.h``, ``model.c`` and a
 ``modelDescription.xml`` whose parameter start values are ``@name@`` placeholders; the
-shared FMI layer lives in ``models/common/``. At build time the ``[default]`` set of
-``models/KCS/parameter_sets.toml`` (the single source of the 3-DOF plant's parameters) is
-written as the C header ``kcs_parameter_defaults.h``; a model with a parameter set file of
+shared FMI layer lives in ``models/common/``. At build time the ``[default]`` set of the
+library's shared parameter sets (``models/KCS/parameter_sets.toml``, the single source of
+the 3-DOF plant's parameters) is written as the C header ``kcs_parameter_defaults.h``; a model with a parameter set file of
 its own (``models/<Name>/parameter_sets.toml``, e.g. ``KCSMMG``) also gets
 ``model_parameter_defaults.h`` from it.  The model's own set (else the KCS set) fills the
 placeholders, so the C start values and the XML can never disagree with the TOML.  The FMU
@@ -23,7 +23,8 @@ hash>/`` (``platformdirs``; ``XDG_CACHE_HOME`` on Linux moves it), built once pe
 The models folder is a *model library* registered in the entry-point group
 ``rhnc_cosim.model_libraries`` (:mod:`orchestrator.plugins`): an object with ``models_dir``
 (the folder), ``extra_inputs(name)`` (further files whose content determines the FMU) and
-``check_parameter_set(values, where)`` (refusing a ``[default]`` set with a ``ScenarioError``).
+``check_parameter_set(values, where)`` (refusing a ``[default]`` set with a ``ScenarioError``) and
+``shared_parameter_set`` (the model whose parameter sets every model is built with).
 The ship domain's library checks the particulars in those sets (length, beam, windage
 areas, ...) against the ship's ``ships/KCS.toml``, so a set that disagrees is never built.
 """
@@ -60,8 +61,6 @@ FMUS_DIR = _checkout_fmus()
 CACHE_NAME = "rhnc-cosim"
 
 COMMON = "common"
-PARAMETER_SETS = Path("KCS") / "parameter_sets.toml"
-DEFAULTS_HEADER = "kcs_parameter_defaults.h"
 MODEL_DEFAULTS_HEADER = "model_parameter_defaults.h"
 BOUNDS_HEADER = "model_bounds.h"
 RESOURCES = "resources"
@@ -132,10 +131,24 @@ def _sources(name: str, models_dir: Path, fmi_version: str = "2.0") -> list[Path
     return files
 
 
+def _shared_set() -> str:
+    """The model whose ``parameter_sets.toml`` every model of the library is built with (its
+    ``[default]`` set becomes ``<name>_parameter_defaults.h``): the library's
+    ``shared_parameter_set`` (``KCS`` for the ship models)."""
+    shared = getattr(model_library(), "shared_parameter_set", None)
+    if not shared:
+        raise FmuError("the registered model library names no shared_parameter_set")
+    return shared
+
+
+def _shared_parameter_file(models_dir: Path) -> Path:
+    return Path(models_dir) / _shared_set() / "parameter_sets.toml"
+
+
 def _own_parameter_sets(name: str, models_dir: Path) -> Path | None:
-    """The model's own parameter set file, when it has one besides the KCS set."""
+    """The model's own parameter set file, when it has one besides the shared set."""
     path = Path(models_dir) / name / "parameter_sets.toml"
-    return path if name != "KCS" and path.is_file() else None
+    return path if name != _shared_set() and path.is_file() else None
 
 
 def _resources(name: str, models_dir: Path) -> list[Path]:
@@ -151,7 +164,7 @@ def _inputs(name: str, models_dir: Path, fmi_version: str = "2.0") -> list[Path]
     library = model_library()  # its inputs and checks hold for a copy of its folder too
     return _sources(name, models_dir, fmi_version) + _resources(name, models_dir) + [
         models_dir / name / "modelDescription.xml",
-        models_dir / PARAMETER_SETS,
+        _shared_parameter_file(models_dir),
         *([own] if own else []),
         *(library.extra_inputs(name) if library is not None else []),
     ]
@@ -187,11 +200,11 @@ def source_hash(name: str, models_dir: Path | None = None, fmi_version: str = "2
 
 
 def _default_parameters(models_dir: Path, path: Path | None = None) -> dict[str, float]:
-    """The ``[default]`` set of ``path`` (the KCS set by default), checked against the ship's
-    particulars."""
+    """The ``[default]`` set of ``path`` (the shared set by default), checked by the model
+    library (the ship's particulars)."""
     from orchestrator.errors import ScenarioError
 
-    path = Path(path) if path is not None else Path(models_dir) / PARAMETER_SETS
+    path = Path(path) if path is not None else _shared_parameter_file(models_dir)
     try:
         with path.open("rb") as f:
             default = tomllib.load(f)["default"]
@@ -210,8 +223,7 @@ def _default_parameters(models_dir: Path, path: Path | None = None) -> dict[str,
     return {k: float(v) for k, v in values.items()}
 
 
-def _defaults_header(parameters: dict[str, float], prefix: str = "KCS",
-                     source: str = "models/KCS/parameter_sets.toml") -> str:
+def _defaults_header(parameters: dict[str, float], prefix: str, source: str) -> str:
     guard = f"{prefix}_PARAMETER_DEFAULTS_H"
     lines = [
         f"/* Generated by orchestrator/fmu_build.py from {source}",
@@ -227,7 +239,7 @@ def _defaults_header(parameters: dict[str, float], prefix: str = "KCS",
 def _model_description(name: str, models_dir: Path, parameters: dict[str, float],
                        parameter_file: Path | None = None) -> str:
     path = Path(models_dir) / name / "modelDescription.xml"
-    parameter_file = parameter_file or Path(models_dir) / PARAMETER_SETS
+    parameter_file = parameter_file or _shared_parameter_file(models_dir)
     text = path.read_text(encoding="utf-8")
 
     def substitute(match: re.Match) -> str:
@@ -313,8 +325,10 @@ def build_fmu(name: str, out_dir: Path | None = None, models_dir: Path | None = 
 
     with tempfile.TemporaryDirectory(prefix=f"fmu_build_{name}_") as tmp:
         tmp = Path(tmp)
-        header = tmp / DEFAULTS_HEADER
-        header.write_text(_defaults_header(parameters), encoding="utf-8")
+        shared = _shared_set()
+        header = tmp / f"{shared.lower()}_parameter_defaults.h"
+        header.write_text(_defaults_header(parameters, shared.upper(), f"models/{shared}/parameter_sets.toml"),
+                          encoding="utf-8")
         headers = [header]
         if own_parameters is not None:
             model_header = tmp / MODEL_DEFAULTS_HEADER

@@ -32,6 +32,8 @@ class ShipModelLibrary:
     """The built-in models: the 3-DOF and MMG KCS, the S175 test ship, the met-ocean field."""
 
     models_dir = MODELS_DIR
+    #: Every model is built with the KCS set's defaults (``kcs_parameter_defaults.h``).
+    shared_parameter_set = "KCS"
 
     @staticmethod
     def extra_inputs(name: str) -> list[Path]:
