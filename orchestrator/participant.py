@@ -94,7 +94,12 @@ def is_finite_number(value) -> bool:
 
     (TOML's ``true`` is a Python bool, itself an int subclass, so it must be excluded.)
     """
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:  # an int beyond the range of a float (TOML integers are unbounded here)
+        return False
 
 
 def reject_unknown_options(options: Mapping[str, Any], allowed: Sequence[str], where: str) -> None:
