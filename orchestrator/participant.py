@@ -116,6 +116,30 @@ def reject_unknown_options(options: Mapping[str, Any], allowed: Sequence[str], w
             )
 
 
+def check_options(model, options: Mapping[str, Any], where: str):
+    """``options`` validated by ``model``, a pydantic model (usually derived from
+    :class:`orchestrator.toml_input.TomlTable`: unknown keys forbidden, strict types).
+
+    The way a participant type (built-in or a user's own) declares its options: one model
+    in place of hand-written checks, and every problem one :class:`ScenarioError` line
+    ``<scenario file>: 'participants.<name>.options.<key>' ...``.
+
+    Parameters
+    ----------
+    model : type
+        The options model.
+    options : mapping
+        ``[participants.<name>.options]``.
+    where : str
+        ``BuildContext.where`` (``"<scenario file>: participants.<name>"``).
+    """
+    from orchestrator.toml_input import checked
+
+    file, _, table = where.rpartition(": ")
+    prefix = tuple(table.split(".")) + ("options",) if file else ("options",)
+    return checked(model, dict(options), file or where, prefix)
+
+
 class BuildContext:
     """What a participant factory may know about the scenario it is built for.
 

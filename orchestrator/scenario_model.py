@@ -34,6 +34,8 @@ OUTPUT_FORMATS = ("parquet", "csv")
 MAX_STEPS = 1_000_000
 #: Largest start or stop time [s] (about 317 years): keeps time arithmetic far from overflow.
 MAX_TIME_S = 1e10
+#: Shortest macro step [s].
+MIN_DT_S = 1e-6
 CONNECTIONS_HINT = " ('connections' must come before the first [table] of the file)"
 
 
@@ -145,9 +147,9 @@ class SimulationTable(ScenarioTable):
                 raise fail_whole(f"'{{prefix}}steps' = {count} is more than the limit of {MAX_STEPS} macro steps")
         else:
             count = (self.stop_s - self.start_s) / self.dt_s
+            if count > MAX_STEPS:
+                raise fail_whole(self._too_many(count))
             if count < 1 - 1e-9 or abs(count - round(count)) > 1e-9 * max(1.0, count):
-                if count > MAX_STEPS:
-                    raise fail_whole(self._too_many(count))
                 raise fail_whole("'{prefix}stop_s' - 'start_s' must be a positive whole number of 'dt_s' steps")
         if count > MAX_STEPS:
             raise fail_whole(self._too_many(count))
@@ -167,6 +169,8 @@ def _positive_time(value: Any) -> float:
     number = _time(value)
     if number <= 0:
         raise fail(f"must be positive, got {shown(value)}")
+    if number < MIN_DT_S:
+        raise fail(f"must be at least {MIN_DT_S:g} s, got {shown(value)}")
     return number
 
 

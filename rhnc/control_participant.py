@@ -67,6 +67,9 @@ OPTIONS = (
     "codegen",
 )
 WEIGHT_KEYS = ("q", "r", "r_rate")
+#: Largest values of the integer options: bounds on the size of the NLP built from them
+#: (checked before it is built; the shipped scenarios use 15-120 intervals).
+INTEGER_LIMITS = {"horizon_steps": 400, "substeps": 50, "max_iterations": 100_000, "max_obstacles": 64}
 
 
 def interpolate_reference(reference: np.ndarray, times: np.ndarray) -> np.ndarray:
@@ -190,11 +193,12 @@ class ControlParticipant(Participant):
             "control_interval_s": _number(options, "control_interval_s", where, context.step_size),
             "own_radius_m": _number(options, "own_radius_nm", where, 0.0) * NM,
         }
-        for key in ("horizon_steps", "substeps", "max_iterations", "max_obstacles"):
+        for key, most in INTEGER_LIMITS.items():
             if key in options:
                 value = options[key]
-                if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                    raise ScenarioError(f"{where}: option '{key}' must be an integer >= 1, got {value!r}")
+                if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= most:
+                    raise ScenarioError(f"{where}: option '{key}' must be an integer from 1 to {most}, "
+                                        f"got {value!r}"[:300])
                 kwargs[key] = value
         if "solver" in options:
             if options["solver"] not in SOLVERS:

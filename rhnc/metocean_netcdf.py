@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rhnc.metocean import EARTH_RADIUS, FIELDS, NM, MetOceanField
+from rhnc.metocean import EARTH_RADIUS, FIELDS, NM, MetOceanField, axis_node_count, check_grid_nodes
 
 log = logging.getLogger(__name__)
 
@@ -118,6 +118,9 @@ def read_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
     east = np.radians(lon - lon0) * EARTH_RADIUS * np.cos(np.radians(lat0))
     step = resolution_nm * NM if resolution_nm else float(np.min(np.diff(north)))
     # cover the data's whole extent with a spacing no coarser than `step`
+    nx = axis_node_count(north[-1] - north[0], step) + 1  # ceil, so one more node at most
+    ny = axis_node_count(east[-1] - east[0], step) + 1
+    check_grid_nodes(nx, ny, nt[0] if nt else 1)
     x = np.linspace(north[0], north[-1], int(np.ceil((north[-1] - north[0]) / step - 1e-9)) + 1)
     y = np.linspace(east[0], east[-1], int(np.ceil((east[-1] - east[0]) / step - 1e-9)) + 1)
     from scipy.interpolate import RegularGridInterpolator

@@ -38,7 +38,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from rhnc.energy import EnergyParameters, brake_power, fuel_rate_t_h
-from rhnc.metocean import MetOceanField, NM
+from rhnc.metocean import MetOceanField, NM, axis_node_count
 from rhnc.offline_route import shortest_route
 from rhnc.route_search import (IMPASSABLE, GridGraph, build_grid_graph, segment_clearance, shortcut_path,
                                shortest_path_tree, times_along_tree)
@@ -129,6 +129,8 @@ def _check(problem: RoutingProblem, speed_mps, arrival_s) -> None:
         raise ValueError(f"arrival_s {arrival_s!r} must be after the departure {problem.departure_s!r} s")
     if not problem.resolution_nm > 0:
         raise ValueError(f"resolution_nm must be positive, got {problem.resolution_nm!r}")
+    for axis in (problem.metocean.x, problem.metocean.y):  # the search grid, refused before it is built
+        axis_node_count(float(axis[-1] - axis[0]), problem.resolution_nm * NM, "the route search's resolution_nm")
     for name, point in (("start", problem.start_m), ("goal", problem.goal_m)):
         if not bool(problem.metocean.contains(point[0], point[1])):
             raise ValueError(f"the {name} ({point[0]:.0f}, {point[1]:.0f}) m lies outside the met-ocean map")
