@@ -201,8 +201,9 @@ class RouteSearch:
         self.problem = problem
         x_min, x_max, y_min, y_max = problem.metocean.extent
         step = problem.resolution_nm * NM
-        x = np.linspace(x_min, x_max, int(round((x_max - x_min) / step)) + 1)
-        y = np.linspace(y_min, y_max, int(round((y_max - y_min) / step)) + 1)
+        what = "the route search's resolution_nm"
+        x = np.linspace(x_min, x_max, axis_node_count(x_max - x_min, step, what))  # refused beyond the limit
+        y = np.linspace(y_min, y_max, axis_node_count(y_max - y_min, step, what))
         self.graph: GridGraph = build_grid_graph(x, y, problem.reach, problem.avoid)
         self.nodes = self.graph.node_points()
         self.source = self.graph.nearest_free_node(problem.start_m)
