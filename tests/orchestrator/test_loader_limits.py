@@ -222,3 +222,11 @@ def test_the_step_limit_is_checked_before_the_steps_are_counted(write_scenario):
     with pytest.raises(ScenarioError, match=r"gives 2e\+16 macro steps"):
         load_scenario(path)
     assert math.isfinite(2e16)
+
+
+def test_an_error_line_stays_one_line_whatever_the_path_holds(tmp_path, capsys):
+    path = tmp_path / "two\nlines.toml"
+    path.write_text(BASE.replace("dt_s = 5.0", "dt_s = -1.0"))
+    assert main(["validate", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "two\\nlines.toml" in err and "'simulation.dt_s' must be positive" in err
