@@ -144,7 +144,8 @@ class SimulationTable(ScenarioTable):
         if self.steps is not None:
             count = self.steps
             if count > MAX_STEPS:
-                raise fail_whole(f"'{{prefix}}steps' = {count} is more than the limit of {MAX_STEPS} macro steps")
+                raise fail_whole(f"'{{prefix}}steps' = {shown(count)} is more than the limit of {MAX_STEPS} "
+                                 "macro steps")
         else:
             count = (self.stop_s - self.start_s) / self.dt_s  # finite: times and dt_s are bounded
             if count < 1 - 1e-9 or abs(count - round(count)) > 1e-9 * max(1.0, count):
