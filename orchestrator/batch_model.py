@@ -172,8 +172,9 @@ class EncounterTable(TomlTable):
 
 def _count(value: Any) -> tuple[int, int]:
     count = [value, value] if isinstance(value, int) and not isinstance(value, bool) else value
-    if not (isinstance(count, list) and len(count) == 2 and all(isinstance(c, int) and not isinstance(c, bool)
-                                                                 for c in count) and 0 <= count[0] <= count[1] <= 10_000):
+    integers = isinstance(count, list) and len(count) == 2 and all(
+        isinstance(c, int) and not isinstance(c, bool) for c in count)
+    if not (integers and 0 <= count[0] <= count[1] <= 10_000):
         raise fail("must be an integer or [low, high] integers, 0 <= low <= high <= 10000")
     return count[0], count[1]
 
