@@ -252,6 +252,15 @@ def folder_name_problem(name: Any) -> str | None:
     return None
 
 
+def one_of(choices: tuple[str, ...]) -> PlainValidator:
+    """A validator accepting only one of ``choices`` (strings)."""
+    def check(value: Any) -> str:
+        if not isinstance(value, str) or value not in choices:
+            raise fail(f"must be one of {', '.join(choices)}, got {shown(value)}")
+        return value
+    return PlainValidator(check)
+
+
 def _folder_name(value: Any) -> str:
     problem = folder_name_problem(value)
     if problem:
