@@ -236,9 +236,9 @@ class ControlParticipant(Participant):
             if key in weights:
                 values = weights[key]
                 if not isinstance(values, list) or len(values) != size or not all(
-                    isinstance(v, (int, float)) and not isinstance(v, bool) and v >= 0 for v in values
+                    is_finite_number(v) and v >= 0 for v in values
                 ):
-                    raise ScenarioError(f"{where}.weights: '{key}' must be a list of {size} numbers >= 0")
+                    raise ScenarioError(f"{where}.weights: '{key}' must be a list of {size} finite numbers >= 0")
                 kwargs[key] = tuple(float(v) for v in values)
         try:
             settings = NMPCSettings(**kwargs)

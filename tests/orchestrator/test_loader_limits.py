@@ -170,6 +170,13 @@ def test_an_nmpc_horizon_beyond_the_limit_is_refused(write_scenario):
         CoSimulation(load_scenario(path)).close()
 
 
+def test_an_infinite_nmpc_weight_is_refused(write_scenario):
+    text = (REPO / "scenarios" / "exp3b_head_on.toml").read_text()
+    path = write_scenario(_edit(text, "et_default = 1.0", "et_default = 1.0\nweights = { r = [1.0, inf] }"), "w.toml")
+    with pytest.raises(ScenarioError, match=r"participants.ctrl.weights: 'r' must be a list of 2 finite numbers >= 0"):
+        CoSimulation(load_scenario(path)).close()
+
+
 def test_an_infinite_navigation_goal_is_refused(write_scenario):
     text = (REPO / "scenarios" / "exp2_rhnc.toml").read_text()
     path = write_scenario(text.replace("goal_nm = [100.0, 100.0]", "goal_nm = [inf, 100.0]", 1), "g.toml")
