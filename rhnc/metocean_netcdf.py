@@ -76,6 +76,7 @@ def read_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
     if resolution_nm is not None and not resolution_nm > 0:
         raise ValueError(f"resolution_nm must be positive, got {resolution_nm}")
     with xr.open_dataset(path) as ds:
+        _check_size(ds, time_index)  # from the header, before the data are read
         ds = ds.load()
     time_dim = next((d for d in TIME_DIMS if d in ds.dims), None)
     times_s, zero = None, None
@@ -134,6 +135,16 @@ def read_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
         projected = np.stack([RegularGridInterpolator((north, east), s)((xx, yy)) for s in slices])
         fields[name] = projected if time_dim else projected[0]
     return MetOceanField(x, y, fields, source=f"file: {path} (origin {lat0:.4f}N {lon0:.4f}E)", **keep)
+
+
+def _check_size(ds, time_index) -> None:
+    """Refuse a file whose grid exceeds the met-ocean grid limit (its sizes, not its data)."""
+    steps = 1 if time_index is not None else next((ds.sizes[d] for d in TIME_DIMS if d in ds.sizes), 1)
+    spatial = [ds.sizes[d] for d in ds.sizes if d not in TIME_DIMS] + [1, 1]
+    rest = 1
+    for size in spatial[2:]:  # further dimensions (levels, ensemble members) are read too
+        rest *= size
+    check_grid_nodes(spatial[0], spatial[1] * rest, steps)
 
 
 def to_dataset(field: MetOceanField):

@@ -237,3 +237,21 @@ def test_an_error_line_stays_one_line_whatever_the_path_holds(tmp_path, capsys):
     assert main(["validate", str(path)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "two\\nlines.toml" in err and "'simulation.dt_s' must be positive" in err
+
+
+def test_a_netcdf_grid_beyond_the_limit_is_refused_from_its_header(tmp_path):
+    """A file declaring a 3000 x 3000 grid (its data never written, so the file is small)."""
+    netCDF4 = pytest.importorskip("netCDF4")
+    from rhnc.metocean import MetOceanField
+
+    path = tmp_path / "huge.nc"
+    with netCDF4.Dataset(path, "w") as ds:
+        ds.createDimension("latitude", 3000)
+        ds.createDimension("longitude", 3000)
+        ds.createVariable("latitude", "f8", ("latitude",))
+        ds.createVariable("longitude", "f8", ("longitude",))
+        ds.createVariable("u10", "f4", ("latitude", "longitude"), chunksizes=(100, 100))
+    assert path.stat().st_size < 1_000_000
+    with pytest.raises(ScenarioError, match=r"s.toml: metocean: the met-ocean grid would hold 3000 x 3000 x 1 "
+                                            r"time steps = 9000000 nodes, more than the limit of 4000000"):
+        MetOceanField.from_scenario_table({"file": str(path)}, tmp_path, "s.toml: metocean")
