@@ -25,7 +25,7 @@ from orchestrator.batch_model import (DEFAULT_OBSTACLES_KEY, DEFAULT_TARGETS_KEY
                                       EncounterSpec, MonteCarloSpec, ObstacleSpec, Range, ReportTable,
                                       SituationsTable, monte_carlo_spec, run_count)
 from orchestrator.errors import ScenarioError
-from orchestrator.toml_input import checked, read_toml, shown_text
+from orchestrator.toml_input import checked, default_folder_name, read_toml, shown_text
 
 __all__ = ["BatchSpec", "Criterion", "DEFAULT_OBSTACLES_KEY", "DEFAULT_TARGETS_KEY", "EncounterSpec", "MAX_RUNS",
            "MonteCarloSpec", "ObstacleSpec", "Range", "RunSpec", "SituationRun", "load_batch", "parse_acceptance",
@@ -102,7 +102,7 @@ def load_batch(path) -> BatchSpec:
     where = str(path)
     top = checked(BatchFile, data, where)
     batch = checked(BatchTable, top.batch, where, ("batch",))
-    name = batch.name or path.stem
+    name = batch.name or default_folder_name(path.stem, "batch.name", where)
     scenario = (path.parent / batch.scenario).resolve()
     if not scenario.is_file():
         raise ScenarioError(f"{where}: 'batch.scenario': scenario file not found: {scenario}")

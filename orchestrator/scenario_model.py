@@ -18,8 +18,8 @@ from pydantic import PlainValidator, model_validator
 from orchestrator.errors import ScenarioError
 from orchestrator.scenario_participants import ScenarioTable, participant_specs
 from orchestrator.scenario_spec import Connection, OutputSpec, SimulationSpec, StopCondition
-from orchestrator.toml_input import (FolderName, PositiveInt, checked, fail, fail_whole, is_finite_number, one_of,
-                                     shown, shown_text)
+from orchestrator.toml_input import (FolderName, PositiveInt, checked, default_folder_name, fail, fail_whole,
+                                     is_finite_number, one_of, shown, shown_text)
 
 #: Exchange orders: participants due at a communication point step one after another, each
 #: seeing the outputs of those before it ("gauss-seidel"), or all from the values published
@@ -189,7 +189,8 @@ def build_scenario_parts(data: dict, where: str, default_name: str):
         The first problem, naming ``where`` (the file) and the dotted key.
     """
     top = checked(ScenarioFile, data, where)
-    simulation = checked(SimulationTable, top.simulation, where, ("simulation",)).spec(default_name)
+    table = checked(SimulationTable, top.simulation, where, ("simulation",))
+    simulation = table.spec(table.name or default_folder_name(default_name, "simulation.name", where))
     participants = participant_specs(top.participants, where)
     connections = _connections(top.connections, participants, where)
     outputs = checked(OutputsTable, top.outputs or {}, where, ("outputs",)).spec()

@@ -261,6 +261,15 @@ def one_of(choices: tuple[str, ...]) -> PlainValidator:
     return PlainValidator(check)
 
 
+def default_folder_name(stem: str, key: str, where: str) -> str:
+    """The file's stem as the results folder name when ``key`` is not given, if it can be one."""
+    problem = folder_name_problem(stem)
+    if problem:
+        raise ScenarioError(f"{where}: '{key}' is not given and the file name cannot name a results folder: it "
+                            f"{problem}; give '{key}'")
+    return stem
+
+
 def _folder_name(value: Any) -> str:
     problem = folder_name_problem(value)
     if problem:

@@ -255,3 +255,13 @@ def test_a_netcdf_grid_beyond_the_limit_is_refused_from_its_header(tmp_path):
     with pytest.raises(ScenarioError, match=r"s.toml: metocean: the met-ocean grid would hold 3000 x 3000 x 1 "
                                             r"time steps = 9000000 nodes, more than the limit of 4000000"):
         MetOceanField.from_scenario_table({"file": str(path)}, tmp_path, "s.toml: metocean")
+
+
+def test_a_file_name_that_cannot_name_the_results_folder_needs_simulation_name(tmp_path):
+    path = tmp_path / "..toml"  # its stem is ".": the results folder itself
+    path.write_text(BASE.replace('name = "trial"\n', ""))
+    with pytest.raises(ScenarioError, match=r"'simulation.name' is not given and the file name cannot name a results "
+                                            r"folder: it must not start with '.'"):
+        load_scenario(path)
+    path.write_text(BASE)
+    assert load_scenario(path).simulation.name == "trial"
