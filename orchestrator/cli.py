@@ -36,6 +36,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     validate = sub.add_parser("validate", help="check a scenario and its FMUs without running it")
     validate.add_argument("scenario", help="scenario TOML file")
+    validate.add_argument("--trust-code", action="store_true",
+                          help="also import type = \"python\" participant classes that come with the scenario "
+                               "(its folder or the current folder); only for code you trust")
     build = sub.add_parser("build", help="compile the FMUs in models/ into fmus/ (FMI 2.0) or fmus/fmi3/")
     build.add_argument("models", nargs="*", help="model names (default: all)")
     build.add_argument("--fmi-version", choices=("2.0", "3.0", "all"), default="2.0",
@@ -83,7 +86,7 @@ def main(argv=None) -> int:
                 print(f"error: {interrupts.reason()}", file=sys.stderr)
                 return EXIT_INTERRUPTED
     except ToolchainError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {one_line(exc)}", file=sys.stderr)
         return exc.exit_code
 
 
@@ -142,15 +145,22 @@ def _key_lines(summary) -> list[str]:
 
 
 def _validate(args) -> int:
-    from orchestrator.validate import validate_scenario
+    from orchestrator.validate import check_scenario
 
-    problems = validate_scenario(args.scenario)
-    for problem in problems:
-        print(f"error: {problem}", file=sys.stderr)
-    if problems:
+    report = check_scenario(args.scenario, trust_code=args.trust_code)
+    for problem in report.problems:
+        print(f"error: {one_line(problem)}", file=sys.stderr)
+    if report.problems:
         return 2
     print(f"ok: {args.scenario}")
+    for note in report.notes:
+        print(f"  note: {one_line(note)}")
     return 0
+
+
+def one_line(text: str) -> str:
+    """A message on one line: line breaks and other control characters escaped."""
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in str(text))
 
 
 def _build(args) -> int:

@@ -53,13 +53,9 @@ import pandas as pd
 
 from orchestrator.errors import ScenarioError
 from orchestrator import plugins
-from orchestrator.scenario import read_toml
 
 log = logging.getLogger(__name__)
 
-KEYS = ("name", "analysis", "metrics", "baseline", "runs", "set", "sweep")
-RUN_KEYS = ("label", "scenario", "set", "paper", "figures")
-SWEEP_KEYS = ("key", "values", "range")
 
 
 @dataclass
@@ -96,48 +92,10 @@ class ScenarioRunner:
 
 
 def load_comparison(path: Path) -> dict[str, Any]:
-    """Read and check a comparison file; errors name the file and the key."""
-    path = Path(path)
-    data, _ = read_toml(path, "comparison")
-    allowed = KEYS + tuple(plugins.names("comparisons"))
-    for key in data:
-        if key not in allowed:
-            raise ScenarioError(f"{path}: unknown key '{key}' (valid: {', '.join(allowed)})")
-    for key in ("name", "analysis"):
-        if not isinstance(data.get(key), str):
-            raise ScenarioError(f"{path}: '{key}' must be a string")
-    if not data["name"] or any(c in data["name"] for c in "/\\"):
-        raise ScenarioError(f"{path}: 'name' must be a non-empty string without slashes")
-    metrics = data.get("metrics")
-    if not isinstance(metrics, list) or not metrics or not all(isinstance(m, str) for m in metrics):
-        raise ScenarioError(f"{path}: 'metrics' must be a non-empty list of names")
-    runs = data.get("runs")
-    if not isinstance(runs, list) or not runs:
-        raise ScenarioError(f"{path}: at least one [[runs]] table is needed")
-    labels = []
-    for i, run in enumerate(runs):
-        where = f"{path}: runs[{i}]"
-        for key in run:
-            if key not in RUN_KEYS:
-                raise ScenarioError(f"{where}: unknown key '{key}' (valid: {', '.join(RUN_KEYS)})")
-        if not isinstance(run.get("label"), str) or not isinstance(run.get("scenario"), str):
-            raise ScenarioError(f"{where}: 'label' and 'scenario' must be strings")
-        if run["label"] in labels:
-            raise ScenarioError(f"{where}.label: '{run['label']}' is used twice")
-        scenario = path.parent / run["scenario"]
-        if not scenario.is_file():
-            raise ScenarioError(f"{where}.scenario: scenario file not found: {scenario}")
-        run["set"] = _overrides(run.get("set", {}), f"{where}.set")
-        for key in run.get("paper", {}):
-            if key not in metrics:
-                raise ScenarioError(f"{where}.paper: '{key}' is not one of the metrics")
-        labels.append(run["label"])
-    if "baseline" in data and data["baseline"] not in labels:
-        raise ScenarioError(f"{path}: baseline '{data['baseline']}' is not a run label ({', '.join(labels)})")
-    data["set"] = _overrides(data.get("set", {}), f"{path}: set")
-    if "sweep" in data:
-        data["sweep"] = _sweep(data["sweep"], path)
-    return data
+    """Read and check a comparison file (:mod:`orchestrator.compare_spec`); errors name the file and the key."""
+    from orchestrator.compare_spec import load_comparison as load
+
+    return load(path, tuple(plugins.names("comparisons")))
 
 
 def load_extensions(spec: dict[str, Any], path: Path) -> dict[str, Any]:
@@ -271,38 +229,6 @@ def _member_overrides(spec, value) -> dict[str, Any]:
 def _write_section(section: Section, out_dir: Path) -> None:
     for name, frame in section.tables.items():
         frame.to_csv(out_dir / f"{name}.csv", index=False)
-
-
-def _overrides(table, where: str) -> dict[str, Any]:
-    if not isinstance(table, dict):
-        raise ScenarioError(f"{where}: expected a table of dotted-key overrides")
-    for key in table:
-        if not key or not all(key.split(".")):
-            raise ScenarioError(f"{where}: key '{key}' is not a dotted key path")
-    return dict(table)
-
-
-def _sweep(table, path: Path) -> dict[str, Any]:
-    if not isinstance(table, dict):
-        raise ScenarioError(f"{path}: 'sweep' must be a table ([sweep])")
-    for key in table:
-        if key not in SWEEP_KEYS:
-            raise ScenarioError(f"{path}: unknown key 'sweep.{key}' (valid: {', '.join(SWEEP_KEYS)})")
-    if not isinstance(table.get("key"), str) or not table["key"]:
-        raise ScenarioError(f"{path}: 'sweep.key' must be a dotted scenario key, e.g. \"metocean.member\"")
-    if ("values" in table) == ("range" in table):
-        raise ScenarioError(f"{path}: give exactly one of 'sweep.values' or 'sweep.range'")
-    if "range" in table:
-        bounds = table["range"]
-        if (not isinstance(bounds, list) or len(bounds) != 2
-                or not all(isinstance(b, int) and not isinstance(b, bool) for b in bounds) or bounds[1] < bounds[0]):
-            raise ScenarioError(f"{path}: 'sweep.range' must be [first, last] integers with first <= last")
-        values = list(range(bounds[0], bounds[1] + 1))
-    else:
-        values = table["values"]
-        if not isinstance(values, list) or not values:
-            raise ScenarioError(f"{path}: 'sweep.values' must be a non-empty list")
-    return {"key": table["key"], "values": values}
 
 
 def comparison_table(spec: dict, summaries: dict[str, dict]) -> pd.DataFrame:

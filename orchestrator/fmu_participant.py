@@ -21,7 +21,7 @@ from fmpy.fmi1 import FMICallException
 
 from orchestrator.errors import FmuError, ModelError, ScenarioError
 from orchestrator.fmi_slave import REAL_TYPES, SUPPORTED_VERSIONS, FmiSlave
-from orchestrator.participant import Participant, Value
+from orchestrator.participant import Participant, Value, is_finite_number
 from orchestrator.plant_ports import PLANT_PORTS
 from orchestrator.port_mapping import bind_ports, initial_start_values
 from orchestrator.scenario import ParticipantSpec
@@ -67,6 +67,52 @@ def read_parameter_set(fmu_reference: str, set_name: str, where: str) -> dict:
             f"{where}.parameter_set: no set '{set_name}' in {file.name} (valid: {', '.join(sets)})"
         )
     return {key: value for key, value in sets[set_name].items() if key not in SET_METADATA_KEYS}
+
+
+#: Range of an FMI integer (a C int, 32 bits) that a scenario may set.
+INT32_RANGE = (-(2 ** 31), 2 ** 31 - 1)
+
+
+def declared_range(variable) -> tuple[float, float]:
+    """``[min, max]`` a variable of a modelDescription declares, on itself or on its declared type
+    (-inf / +inf where nothing is declared)."""
+    bounds = []
+    for attribute, default in (("min", -math.inf), ("max", math.inf)):
+        text = getattr(variable, attribute, None)
+        if text is None and getattr(variable, "declaredType", None) is not None:
+            text = getattr(variable.declaredType, attribute, None)
+        try:
+            bounds.append(float(text) if text is not None else default)
+        except (TypeError, ValueError):
+            bounds.append(default)
+    return bounds[0], bounds[1]
+
+
+def check_parameter_value(variable, value, where: str, fmu_name: str) -> None:
+    """Refuse a parameter value of the wrong kind, not finite, or outside the range the FMU declares.
+
+    Raises
+    ------
+    ScenarioError
+        ``<where>: ...`` naming the FMU variable, its type and its declared range.
+    """
+    kind = variable.type
+    if kind == "Boolean":
+        if not isinstance(value, bool):
+            raise ScenarioError(f"{where}: '{variable.name}' is a Boolean parameter of {fmu_name}, got {value!r}")
+        return
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ScenarioError(f"{where}: '{variable.name}' is a {kind} parameter of {fmu_name}, got {value!r}")
+    if not is_finite_number(value):
+        raise ScenarioError(f"{where}: '{variable.name}' must be a finite number, got {value!r}")
+    low, high = declared_range(variable)
+    if kind in ("Integer", "Enumeration") or kind.startswith(("Int", "UInt")):
+        if not isinstance(value, int):
+            raise ScenarioError(f"{where}: '{variable.name}' is an {kind} parameter of {fmu_name}, got {value!r}")
+        low, high = max(low, INT32_RANGE[0]), min(high, INT32_RANGE[1])
+    if not low <= value <= high:
+        raise ScenarioError(f"{where}: {value!r} is outside the range [{low:g}, {high:g}] that {fmu_name} declares "
+                            f"for '{variable.name}'")
 
 
 class FmuParticipant(Participant):
@@ -152,6 +198,8 @@ class FmuParticipant(Participant):
                     raise ScenarioError(f"{self.where}.parameters.{name}: '{name}' is {variable.type}, got a string")
             elif variable.type == "String":
                 raise ScenarioError(f"{self.where}.parameters.{name}: '{name}' is a String parameter")
+            else:
+                check_parameter_value(variable, value, f"{self.where}.parameters.{name}", self.fmu_path.name)
             values[name] = value
         return values
 

@@ -94,7 +94,12 @@ def is_finite_number(value) -> bool:
 
     (TOML's ``true`` is a Python bool, itself an int subclass, so it must be excluded.)
     """
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:  # an int beyond the range of a float (TOML integers are unbounded here)
+        return False
 
 
 def reject_unknown_options(options: Mapping[str, Any], allowed: Sequence[str], where: str) -> None:
@@ -109,6 +114,30 @@ def reject_unknown_options(options: Mapping[str, Any], allowed: Sequence[str], w
             raise ScenarioError(
                 f"{where}: unknown option '{key}' (valid: {', '.join(sorted(allowed))})"
             )
+
+
+def check_options(model, options: Mapping[str, Any], where: str):
+    """``options`` validated by ``model``, a pydantic model (usually derived from
+    :class:`orchestrator.toml_input.TomlTable`: unknown keys forbidden, strict types).
+
+    The way a participant type (built-in or a user's own) declares its options: one model
+    in place of hand-written checks, and every problem one :class:`ScenarioError` line
+    ``<scenario file>: 'participants.<name>.options.<key>' ...``.
+
+    Parameters
+    ----------
+    model : type
+        The options model.
+    options : mapping
+        ``[participants.<name>.options]``.
+    where : str
+        ``BuildContext.where`` (``"<scenario file>: participants.<name>"``).
+    """
+    from orchestrator.toml_input import checked
+
+    file, _, table = where.rpartition(": ")
+    prefix = tuple(table.split(".")) + ("options",) if file else ("options",)
+    return checked(model, dict(options), file or where, prefix)
 
 
 class BuildContext:

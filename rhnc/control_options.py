@@ -49,6 +49,9 @@ OPTIONS = (
     "codegen",
 )
 WEIGHT_KEYS = ("q", "r", "r_rate")
+#: Largest values of the integer options: bounds on the size of the NLP built from them
+#: (checked before it is built; the shipped scenarios use 15-120 intervals).
+INTEGER_LIMITS = {"horizon_steps": 400, "substeps": 50, "max_iterations": 100_000, "max_obstacles": 64}
 
 
 
@@ -78,11 +81,12 @@ def controller_from_options(options: Mapping[str, Any], context: BuildContext):
         "control_interval_s": _number(options, "control_interval_s", where, context.step_size),
         "own_radius_m": _number(options, "own_radius_nm", where, 0.0) * NM,
     }
-    for key in ("horizon_steps", "substeps", "max_iterations", "max_obstacles"):
+    for key, most in INTEGER_LIMITS.items():
         if key in options:
             value = options[key]
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ScenarioError(f"{where}: option '{key}' must be an integer >= 1, got {value!r}")
+            if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= most:
+                raise ScenarioError(f"{where}: option '{key}' must be an integer from 1 to {most}, "
+                                    f"got {value!r}"[:300])
             kwargs[key] = value
     if "solver" in options:
         if options["solver"] not in SOLVERS:
@@ -120,9 +124,9 @@ def controller_from_options(options: Mapping[str, Any], context: BuildContext):
         if key in weights:
             values = weights[key]
             if not isinstance(values, list) or len(values) != size or not all(
-                isinstance(v, (int, float)) and not isinstance(v, bool) and v >= 0 for v in values
+                is_finite_number(v) and v >= 0 for v in values
             ):
-                raise ScenarioError(f"{where}.weights: '{key}' must be a list of {size} numbers >= 0")
+                raise ScenarioError(f"{where}.weights: '{key}' must be a list of {size} finite numbers >= 0")
             kwargs[key] = tuple(float(v) for v in values)
     try:
         settings = NMPCSettings(**kwargs)

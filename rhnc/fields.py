@@ -40,6 +40,7 @@ import numpy as np
 from orchestrator.geometry import wrap_angle
 
 from rhnc.energy import EnergyParameters, cost_rate, emission_rate, brake_power, speed_through_water
+from rhnc.metocean import axis_node_count
 from orchestrator.geometry import NM
 
 WEATHER_NAMES = ("wind_north", "wind_east", "hs", "current_north", "current_east")
@@ -113,6 +114,8 @@ def resample_weather(metocean, resolution_nm: float = 1.0, t_s: float | None = N
     if resolution_nm <= 0:
         raise ValueError("planning resolution must be positive")
     step = resolution_nm * NM
+    axis_node_count(float(metocean.x[-1] - metocean.x[0]), step, "the planning resolution_nm")  # before allocating
+    axis_node_count(float(metocean.y[-1] - metocean.y[0]), step, "the planning resolution_nm")
     x = np.arange(metocean.x[0], metocean.x[-1] + 1e-6, step)
     y = np.arange(metocean.y[0], metocean.y[-1] + 1e-6, step)
     if x.size < 2 or y.size < 2:

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from orchestrator.geometry import NM, local_north_east_m
-from rhnc.metocean import FIELDS, MetOceanField
+from rhnc.metocean import FIELDS, MetOceanField, axis_node_count, check_grid_nodes
 
 log = logging.getLogger(__name__)
 
@@ -77,6 +77,7 @@ def read_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
     if resolution_nm is not None and not resolution_nm > 0:
         raise ValueError(f"resolution_nm must be positive, got {resolution_nm}")
     with xr.open_dataset(path) as ds:
+        _check_size(ds, time_index)  # from the header, before the data are read
         ds = ds.load()
     time_dim = next((d for d in TIME_DIMS if d in ds.dims), None)
     times_s, zero = None, None
@@ -118,6 +119,9 @@ def read_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
     north, east = local_north_east_m(lat, lon, lat0, lon0)
     step = resolution_nm * NM if resolution_nm else float(np.min(np.diff(north)))
     # cover the data's whole extent with a spacing no coarser than `step`
+    nx = axis_node_count(north[-1] - north[0], step) + 1  # ceil, so one more node at most
+    ny = axis_node_count(east[-1] - east[0], step) + 1
+    check_grid_nodes(nx, ny, nt[0] if nt else 1)
     x = np.linspace(north[0], north[-1], int(np.ceil((north[-1] - north[0]) / step - 1e-9)) + 1)
     y = np.linspace(east[0], east[-1], int(np.ceil((east[-1] - east[0]) / step - 1e-9)) + 1)
     from scipy.interpolate import RegularGridInterpolator
@@ -131,6 +135,16 @@ def read_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
         projected = np.stack([RegularGridInterpolator((north, east), s)((xx, yy)) for s in slices])
         fields[name] = projected if time_dim else projected[0]
     return MetOceanField(x, y, fields, source=f"file: {path} (origin {lat0:.4f}N {lon0:.4f}E)", **keep)
+
+
+def _check_size(ds, time_index) -> None:
+    """Refuse a file whose grid exceeds the met-ocean grid limit (its sizes, not its data)."""
+    steps = 1 if time_index is not None else next((ds.sizes[d] for d in TIME_DIMS if d in ds.sizes), 1)
+    spatial = [ds.sizes[d] for d in ds.sizes if d not in TIME_DIMS] + [1, 1]
+    rest = 1
+    for size in spatial[2:]:  # further dimensions (levels, ensemble members) are read too
+        rest *= size
+    check_grid_nodes(spatial[0], spatial[1] * rest, steps)
 
 
 def to_dataset(field: MetOceanField):

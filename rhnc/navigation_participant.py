@@ -88,6 +88,8 @@ OPTIONS = ("goal_nm", "speed_kn", "horizon_steps", "k1", "k2", "k3", "guidance_e
 METHODS = ("paper", "routing")
 ROUTING_ONLY = ("arrival_time_min", "max_speed_kn")
 PAPER_ONLY = ("k1", "k2", "k3", "guidance_eps", "guidance_c_rad")
+#: Most planning steps of one horizon (the paper's N_L is 16; Experiment 1 plans 110).
+MAX_HORIZON_STEPS = 1000
 #: Lowest planned speed through water of the routing method [m/s] (2 kn).
 MIN_PLANNED_SPEED_MPS = 2.0 * KNOT
 
@@ -105,9 +107,8 @@ def _number(options: Mapping[str, Any], key: str, default: float, where: str, po
 
 def _point_nm(options: Mapping[str, Any], key: str, where: str) -> tuple[float, float]:
     value = options[key]
-    if (not isinstance(value, (list, tuple)) or len(value) != 2
-            or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
-        raise ScenarioError(f"{where}.{key}: expected [north, east] in nm, got {value!r}")
+    if not isinstance(value, (list, tuple)) or len(value) != 2 or not all(is_finite_number(v) for v in value):
+        raise ScenarioError(f"{where}.{key}: expected [north, east] in nm (finite numbers), got {value!r}"[:300])
     return float(value[0]) * NM, float(value[1]) * NM
 
 
@@ -170,8 +171,9 @@ class NavigationParticipant(Participant):
             raise ScenarioError(f"{where}.goal_nm: the goal lies outside the met-ocean map")
         start = _point_nm(options, "start_nm", where) if "start_nm" in options else None
         horizon = options.get("horizon_steps", 16)
-        if isinstance(horizon, bool) or not isinstance(horizon, int) or horizon < 1:
-            raise ScenarioError(f"{where}.horizon_steps: expected a positive integer, got {horizon!r}")
+        if isinstance(horizon, bool) or not isinstance(horizon, int) or not 1 <= horizon <= MAX_HORIZON_STEPS:
+            raise ScenarioError(f"{where}.horizon_steps: expected an integer from 1 to {MAX_HORIZON_STEPS}, "
+                                f"got {horizon!r}"[:300])
         start_from = options.get("start_from", "prediction")
         if start_from not in ("prediction", "measured"):
             raise ScenarioError(f"{where}.start_from: '{start_from}' is not valid (valid: measured, prediction)")

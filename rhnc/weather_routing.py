@@ -39,7 +39,7 @@ from scipy.optimize import brentq
 
 from rhnc.energy import EnergyParameters, brake_power, fuel_rate_t_h
 from orchestrator.geometry import NM
-from rhnc.metocean import MetOceanField
+from rhnc.metocean import MetOceanField, axis_node_count
 from rhnc.offline_route import shortest_route
 from rhnc.route_search import (IMPASSABLE, GridGraph, build_grid_graph, segment_clearance, shortcut_path,
                                shortest_path_tree, times_along_tree)
@@ -130,6 +130,8 @@ def _check(problem: RoutingProblem, speed_mps, arrival_s) -> None:
         raise ValueError(f"arrival_s {arrival_s!r} must be after the departure {problem.departure_s!r} s")
     if not problem.resolution_nm > 0:
         raise ValueError(f"resolution_nm must be positive, got {problem.resolution_nm!r}")
+    for axis in (problem.metocean.x, problem.metocean.y):  # the search grid, refused before it is built
+        axis_node_count(float(axis[-1] - axis[0]), problem.resolution_nm * NM, "the route search's resolution_nm")
     for name, point in (("start", problem.start_m), ("goal", problem.goal_m)):
         if not bool(problem.metocean.contains(point[0], point[1])):
             raise ValueError(f"the {name} ({point[0]:.0f}, {point[1]:.0f}) m lies outside the met-ocean map")
@@ -200,8 +202,9 @@ class RouteSearch:
         self.problem = problem
         x_min, x_max, y_min, y_max = problem.metocean.extent
         step = problem.resolution_nm * NM
-        x = np.linspace(x_min, x_max, int(round((x_max - x_min) / step)) + 1)
-        y = np.linspace(y_min, y_max, int(round((y_max - y_min) / step)) + 1)
+        what = "the route search's resolution_nm"
+        x = np.linspace(x_min, x_max, axis_node_count(x_max - x_min, step, what))  # refused beyond the limit
+        y = np.linspace(y_min, y_max, axis_node_count(y_max - y_min, step, what))
         self.graph: GridGraph = build_grid_graph(x, y, problem.reach, problem.avoid)
         self.nodes = self.graph.node_points()
         self.source = self.graph.nearest_free_node(problem.start_m)
