@@ -26,6 +26,8 @@ import shutil
 from pathlib import Path
 from typing import Any
 
+from orchestrator.errors import ResultsError
+
 log = logging.getLogger(__name__)
 
 
@@ -64,7 +66,11 @@ class RunFolder:
     def __init__(self, results_root: Path, scenario_name: str, run_id: str) -> None:
         self.final = Path(results_root) / scenario_name / run_id
         self.staging = self.final.parent / f".{run_id}.{os.getpid()}-{secrets.token_hex(4)}.partial"
-        self.staging.mkdir(parents=True, exist_ok=False)
+        try:
+            self.staging.mkdir(parents=True, exist_ok=False)
+        except OSError as exc:
+            raise ResultsError(f"{self.final.parent}: cannot write results here: "
+                               f"{exc.strerror or exc}") from exc
 
     def path(self, name: str) -> Path:
         """Where to write ``name`` while staging."""
@@ -72,7 +78,7 @@ class RunFolder:
 
     def write_json(self, name: str, data: dict[str, Any]) -> Path:
         target = self.path(name)
-        target.write_text(json.dumps(data, indent=2, sort_keys=False, default=_json_default) + "\n")
+        target.write_text(json.dumps(data, indent=2, sort_keys=False, default=json_default) + "\n")
         return target
 
     def publish(self) -> Path:
@@ -108,7 +114,8 @@ def stale_staging(parent: Path, run_id: str) -> list[Path]:
     return sorted({*parent.glob(f".{run_id}.*.partial"), *parent.glob(f".{run_id}.partial")})
 
 
-def _json_default(value):
+def json_default(value):
+    """JSON for numpy numbers and arrays and paths; anything else is refused (TypeError)."""
     import numpy as np
 
     if isinstance(value, np.generic):

@@ -11,7 +11,7 @@ from typing import Any
 import pandas as pd
 
 from orchestrator import acceptance, interrupts
-from orchestrator.errors import ToolchainError
+from orchestrator.errors import ResultsError, ToolchainError
 from orchestrator.master import CoSimulation
 from orchestrator.results import RunFolder, new_run_id, versions
 from orchestrator.scenario import Scenario, load_scenario
@@ -65,10 +65,17 @@ def run_scenario(path, results_root="results", progress: bool = True, run_id: st
         cosim.close()
         raise
     try:
-        with interrupts.emergency_writer(lambda why: _write_interrupted(scenario, cosim, folder, overrides, why)):
+        with interrupts.emergency_writer(
+                lambda why, status: _write_emergency(scenario, cosim, folder, overrides, why, status)):
             outcome = cosim.run(progress=progress)
             with interrupts.deferred():
-                report = _write(scenario, cosim, outcome, folder, overrides)
+                try:
+                    report = _write(scenario, cosim, outcome, folder, overrides)
+                except OSError as exc:  # disk full, folder removed: keep nothing half-written
+                    raise ResultsError(
+                        f"{folder.final}: the results could not be written ({exc.strerror or exc}); nothing was "
+                        f"kept (the run itself: {outcome.status}"
+                        f"{', ' + outcome.reason if outcome.reason else ''})") from exc
     except BaseException:
         folder.discard()
         raise
@@ -77,21 +84,22 @@ def run_scenario(path, results_root="results", progress: bool = True, run_id: st
     return report
 
 
-def _write_interrupted(scenario: Scenario, cosim: CoSimulation, folder: RunFolder, overrides, why: str) -> None:
-    """What the watchdog keeps of a run whose participant did not return: status and time series."""
+def _write_emergency(scenario: Scenario, cosim: CoSimulation, folder: RunFolder, overrides, why: str,
+                     status: str) -> None:
+    """What a watchdog keeps of a run whose participant did not return: status and time series."""
     sim = scenario.simulation
     recorder = getattr(cosim, "recorder", None)
     if recorder is not None:
         recorder.to_frame().to_csv(folder.path("timeseries.csv"), index=False)
     folder.write_json("summary.json", {
         "scenario": str(scenario.path), "scenario_name": sim.name, "scenario_sha256": scenario.sha256,
-        "overrides": dict(overrides or {}), "run_id": folder.final.name, "status": "interrupted",
+        "overrides": dict(overrides or {}), "run_id": folder.final.name, "status": status,
         "reason": why, "versions": versions(),
         "simulation": {"start_s": sim.start_s, "stop_s": sim.stop_s, "dt_s": sim.dt_s,
                        "steps_planned": sim.steps, "steps_done": getattr(cosim, "steps_done", 0)},
         "timeseries": "timeseries.csv" if recorder is not None else None,
         "analyses": {}, "participants": {}})
-    print(f"interrupted: results in {folder.publish()}", flush=True)
+    print(f"{status}: results in {folder.publish()}", flush=True)
 
 
 def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, overrides) -> RunReport:
@@ -115,10 +123,12 @@ def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, 
             continue
         try:
             figures[name] = analyses.run_analysis(name, frame, scenario, cosim, folder.staging)
-        except ToolchainError as exc:
-            figures[name] = {"error": str(exc)}
+        except Exception as exc:  # an analysis of a failed run's partial series, or its own bug
+            text = str(exc) if isinstance(exc, ToolchainError) else f"{type(exc).__name__}: {exc}"
+            log.debug("analysis '%s' raised", name, exc_info=True)
+            figures[name] = {"error": text}
             if status == "finished":
-                status, reason = "failed", f"analysis '{name}': {exc}"
+                status, reason = "failed", f"analysis '{name}': {text}"
     figure_files, figure_errors = [], {}
     for name in scenario.outputs.figures if outcome.steps_done else ():
         try:

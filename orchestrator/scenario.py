@@ -18,20 +18,20 @@ from orchestrator.participant import is_finite_number
 from orchestrator.errors import ScenarioError
 
 TOP_LEVEL_KEYS = ("connections", "simulation", "metocean", "participants", "outputs", "acceptance")
-SIMULATION_KEYS = ("name", "start_s", "stop_s", "steps", "dt_s", "stop_when", "exchange")
+SIMULATION_KEYS = ("name", "start_s", "stop_s", "steps", "dt_s", "stop_when", "exchange", "step_timeout_s")
 #: Exchange orders: participants due at a communication point step one after another, each
 #: seeing the outputs of those before it ("gauss-seidel"), or all from the values published
 #: before the point ("jacobi", as masters that step FMUs in parallel do, e.g. libcosim).
 EXCHANGE_ORDERS = ("gauss-seidel", "jacobi")
 STOP_OPERATORS = ("<=", ">=", "<", ">")
 FMU_PARTICIPANT_KEYS = ("fmu", "fmi_version", "every", "parameter_set", "parameters", "mapping", "geodetic",
-                        "initial")
+                        "initial", "step_timeout_s")
 MAPPING_KEYS = ("variable", "scale", "offset", "unit", "geodetic", "start")
 VECTOR_MAPPING_KEYS = ("speed", "direction", "direction_is", "north", "east", "units")
 GEODETIC_ROLES = ("latitude", "longitude")
 DIRECTION_SENSES = ("towards", "from")
 FMI_VERSIONS = ("2.0", "3.0")
-PYTHON_PARTICIPANT_KEYS = ("type", "class", "every", "options")
+PYTHON_PARTICIPANT_KEYS = ("type", "class", "every", "options", "step_timeout_s")
 OUTPUT_KEYS = ("format", "analyses", "figures", "options")
 OUTPUT_FORMATS = ("parquet", "csv")
 
@@ -87,6 +87,8 @@ class ParticipantSpec:
     type: str | None = None
     class_path: str | None = None
     options: dict[str, Any] = field(default_factory=dict)
+    #: wall-time limit of one set-up or step call [s]; None: the simulation's
+    step_timeout_s: float | None = None
 
     @property
     def is_fmu(self) -> bool:
@@ -131,6 +133,8 @@ class SimulationSpec:
     dt_s: float
     stop_when: tuple[StopCondition, ...] = ()
     exchange: str = "gauss-seidel"
+    #: wall-time limit of one participant call (set-up or step) [s] (orchestrator.time_limits)
+    step_timeout_s: float = 300.0
 
     @property
     def steps(self) -> int:
@@ -333,8 +337,10 @@ def _simulation(table: dict, path: Path) -> SimulationSpec:
     if exchange not in EXCHANGE_ORDERS:
         raise ScenarioError(f"{where}: 'simulation.exchange' must be one of {', '.join(EXCHANGE_ORDERS)}, "
                             f"got {exchange!r}")
+    timeout = _number(table, "step_timeout_s", where, prefix, default=SimulationSpec.step_timeout_s, positive=True)
     return SimulationSpec(name=name, start_s=start, stop_s=stop, dt_s=dt,
-                          stop_when=_stop_conditions(table.get("stop_when", []), where), exchange=exchange)
+                          stop_when=_stop_conditions(table.get("stop_when", []), where), exchange=exchange,
+                          step_timeout_s=timeout)
 
 
 def _stop_conditions(entries, where: str) -> tuple[StopCondition, ...]:
@@ -392,7 +398,8 @@ def _participants(table: dict, where: str) -> tuple[ParticipantSpec, ...]:
             options = body.get("options", {})
             if not isinstance(options, dict):
                 raise ScenarioError(f"{where}: '{prefix}options' must be a table")
-            specs.append(ParticipantSpec(name=name, every=every, type=kind, class_path=class_path, options=options))
+            specs.append(ParticipantSpec(name=name, every=every, type=kind, class_path=class_path, options=options,
+                                         step_timeout_s=_participant_timeout(body, where, prefix)))
         else:
             raise ScenarioError(f"{where}: 'participants.{name}' needs either 'fmu' or 'type'")
     return tuple(specs)
@@ -441,8 +448,15 @@ def _fmu_participant(name: str, body: dict, every: int, where: str, prefix: str)
             raise ScenarioError(f"{where}: '{prefix}initial.{key}' must be a finite number, got {value!r}")
     return ParticipantSpec(name=name, every=every, fmu=fmu, parameter_set=parameter_set,
                            parameters=parameters, mapping=mapping, geodetic_origin_deg=origin,
-                           fmi_version=fmi_version,
+                           fmi_version=fmi_version, step_timeout_s=_participant_timeout(body, where, prefix),
                            initial={k: float(v) for k, v in initial.items()})
+
+
+def _participant_timeout(body: dict, where: str, prefix: str) -> float | None:
+    """A participant's own ``step_timeout_s`` [s], or None for the simulation's."""
+    if "step_timeout_s" not in body:
+        return None
+    return _number(body, "step_timeout_s", where, prefix, positive=True)
 
 
 def _mapping_entry(target, where: str, key: str) -> VariableMapping | VectorMapping:
