@@ -198,3 +198,81 @@ class Hog(Participant):
             except KeyboardInterrupt:
                 pass
         return {"ok": 1.0}
+
+
+class Sleeper(Participant):
+    """From ``at_s`` on, a step that sleeps ``sleep_s``; with ``swallow`` it catches everything
+    and sleeps again (a participant that no Python exception can stop)."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        participant = cls(name)
+        participant.at = options.get("at_s", 0.0)
+        participant.sleep_s = options.get("sleep_s", 3600.0)
+        participant.swallow = options.get("swallow", False)
+        return participant
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["ok"])
+
+    def setup(self, start_time, inputs):
+        return {"ok": 1.0}
+
+    def step(self, time, step_size, inputs):
+        import time as wallclock
+
+        if time >= self.at:
+            print(f"sleeper: sleeping at t = {time:g} s", flush=True)
+            while True:
+                try:
+                    wallclock.sleep(self.sleep_s)
+                    break
+                except BaseException:  # noqa: B036 - the point: it swallows even the time limit
+                    if not self.swallow:
+                        raise
+        return {"ok": 1.0}
+
+
+class Misbehaving(Participant):
+    """Fails in one of the ways a participant can fail outside a plain exception in its step.
+
+    ``how``: ``"exit"`` (sys.exit(5) in its step at ``at_s``), ``"terminate"`` (terminate()
+    raises), ``"summary"`` (summary() raises), ``"unserialisable"`` (a summary JSON cannot
+    hold), ``"options"`` (from_options raises ValueError).
+    """
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        how = options.get("how")
+        if how == "options":
+            raise ValueError("gain must be positive")
+        participant = cls(name)
+        participant.how = how
+        participant.at = options.get("at_s", 0.0)
+        participant.steps = 0
+        return participant
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["ok"])
+
+    def setup(self, start_time, inputs):
+        return {"ok": 1.0}
+
+    def step(self, time, step_size, inputs):
+        import sys
+
+        self.steps += 1
+        if self.how == "exit" and time >= self.at:
+            sys.exit(5)
+        return {"ok": 1.0}
+
+    def terminate(self):
+        if self.how == "terminate":
+            raise OSError("device busy")
+
+    def summary(self):
+        if self.how == "summary":
+            raise ZeroDivisionError("division by zero")
+        if self.how == "unserialisable":
+            return {"steps": self.steps, "model": object()}
+        return {"steps": self.steps}
