@@ -109,9 +109,33 @@ class RunFolder:
 
 
 def stale_staging(parent: Path, run_id: str) -> list[Path]:
-    """Staging folders of ``run_id`` under ``parent`` (left by a crashed or killed attempt)."""
+    """Staging folders of ``run_id`` under ``parent`` left by an attempt whose process has ended.
+
+    A staging folder belongs to the attempt that made it (its name holds the process id): one
+    whose process is still alive is never returned, so clearing stale folders never deletes
+    the files of another attempt that is still writing.
+    """
     parent = Path(parent)
-    return sorted({*parent.glob(f".{run_id}.*.partial"), *parent.glob(f".{run_id}.partial")})
+    found = sorted({*parent.glob(f".{run_id}.*.partial"), *parent.glob(f".{run_id}.partial")})
+    return [path for path in found if not _owner_alive(path, run_id)]
+
+
+def _owner_alive(staging: Path, run_id: str) -> bool:
+    """The process named in ``.<run-id>.<pid>-<token>.partial`` is still running (not this one's orphan)."""
+    middle = staging.name[len(run_id) + 2:-len(".partial")]
+    pid_text = middle.split("-", 1)[0]
+    if not pid_text.isdigit():
+        return False
+    pid = int(pid_text)
+    if pid == os.getpid():
+        return False  # an attempt of this process that ended without publishing
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True  # another user's process
+    return True
 
 
 def json_default(value):

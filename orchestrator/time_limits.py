@@ -96,18 +96,19 @@ class CallWatch:
             yield
             return
         deadline = time.monotonic() + limit_s
+        reason = describe(participant, phase, time_s, limit_s)
         with self._lock:
             self._generation += 1
-            self._call = (self._generation, deadline, describe(participant, phase, time_s, limit_s))
+            self._call = (self._generation, deadline, reason)
             self._lock.notify_all()
-        _publish_deadline(deadline + self.grace_s)
+        _publish_deadline(deadline + self.grace_s, reason)
         try:
             yield
         finally:
             with self._lock:
                 self._call = None
                 self._lock.notify_all()
-            _publish_deadline(0.0)
+            _publish_deadline(0.0, "")
         if self.expired is not None:
             raise StepTimeout(self.expired)
 
@@ -185,16 +186,17 @@ def _on_alarm(_number, _frame) -> None:
 
 
 # -- where a batch worker publishes its call deadline ------------------------------------------------
-_deadline_sink: Callable[[float], None] | None = None
+_deadline_sink: Callable[[float, str], None] | None = None
 
 
-def deadline_hook(sink: Callable[[float], None] | None) -> None:
-    """Register ``sink(deadline)``: called with the ``time.monotonic()`` by which the call in
-    progress must have returned (limit plus grace), and with 0.0 when no call is in progress."""
+def deadline_hook(sink: Callable[[float, str], None] | None) -> None:
+    """Register ``sink(deadline, reason)``: called with the ``time.monotonic()`` by which the call
+    in progress must have returned (limit plus grace) and the reason to give if it does not, and
+    with ``(0.0, "")`` when no call is in progress."""
     global _deadline_sink
     _deadline_sink = sink
 
 
-def _publish_deadline(deadline: float) -> None:
+def _publish_deadline(deadline: float, reason: str) -> None:
     if _deadline_sink is not None:
-        _deadline_sink(deadline)
+        _deadline_sink(deadline, reason)
