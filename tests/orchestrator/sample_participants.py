@@ -210,6 +210,7 @@ class Sleeper(Participant):
         participant.at = options.get("at_s", 0.0)
         participant.sleep_s = options.get("sleep_s", 3600.0)
         participant.swallow = options.get("swallow", False)
+        participant.unless_exists = options.get("unless_exists")
         return participant
 
     input_names = property(lambda self: [])
@@ -221,7 +222,9 @@ class Sleeper(Participant):
     def step(self, time, step_size, inputs):
         import time as wallclock
 
-        if time >= self.at:
+        import os
+
+        if time >= self.at and not (self.unless_exists and os.path.exists(self.unless_exists)):
             print(f"sleeper: sleeping at t = {time:g} s", flush=True)
             while True:
                 try:
@@ -276,3 +279,32 @@ class Misbehaving(Participant):
         if self.how == "unserialisable":
             return {"steps": self.steps, "model": object()}
         return {"steps": self.steps}
+
+
+class SelfKiller(Participant):
+    """At ``at_s`` sends SIGKILL to its own process unless the file ``unless_exists`` exists
+    (what the out-of-memory killer or an operator does to a worker)."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        participant = cls(name)
+        participant.at = options.get("at_s", 0.0)
+        participant.unless_exists = options.get("unless_exists")
+        participant.crash = options.get("crash", False)
+        return participant
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["ok"])
+
+    def setup(self, start_time, inputs):
+        return {"ok": 1.0}
+
+    def step(self, time, step_size, inputs):
+        import os
+        import signal
+
+        if time >= self.at and self.crash:
+            raise RuntimeError("a bug of its own")
+        if time >= self.at and not (self.unless_exists and os.path.exists(self.unless_exists)):
+            os.kill(os.getpid(), signal.SIGKILL)
+        return {"ok": 1.0}
