@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from orchestrator import interrupts, time_limits
-from orchestrator.errors import ModelError, ScenarioError, ToolchainError
+from orchestrator.errors import ModelError, ResultsError, ScenarioError, ToolchainError
 from orchestrator.participant import BuildContext, Participant, Value
 from orchestrator.recorder import Recorder
 from orchestrator.results import json_default
@@ -172,17 +172,22 @@ class CoSimulation:
         raise KeyError(name)
 
     # -- running -------------------------------------------------------------------------
-    def run(self, progress: bool = True, on_step: Callable[[int], None] | None = None) -> RunOutcome:
+    def run(self, progress: bool = True, on_step: Callable[[int], None] | None = None,
+            spool: Path | None = None) -> RunOutcome:
         """Set up, step and terminate every participant; never raises for a model failure.
 
         A failure inside the run (a model error, an FMU refusing a step, a participant
         raising) ends the run with status ``failed`` and a reason naming the participant;
         Ctrl-C or SIGTERM (see :mod:`orchestrator.interrupts`) end it with status
         ``interrupted``, checked between participant steps.  What was computed until then
-        stays in the recorder.
+        stays in the recorder, which writes its rows into ``spool`` as the run goes (see
+        :class:`~orchestrator.recorder.Recorder`; in memory without one).  A time series that
+        cannot be written (disk full) raises :class:`~orchestrator.errors.ResultsError` after
+        the participants are terminated.
         """
         sim = self.scenario.simulation
-        recorder = Recorder(sim.start_s, sim.dt_s, sim.steps)
+        recorder = Recorder(sim.start_s, sim.dt_s, sim.steps, spool=spool)
+        results_error = None
         self.recorder, self.steps_done = recorder, 0
         bus: dict[tuple[str, str], Value] = {}
         # per participant: (its input port, the bus key that drives it)
@@ -237,6 +242,7 @@ class CoSimulation:
                         else:
                             self._publish(participant, stamp, outputs, bus, recorder)
                     steps_done = self.steps_done = k + 1
+                    recorder.advance(t)  # every participant due at t has stepped: the row of t is final
                     if bar is not None:
                         bar.update(1)
                     if on_step is not None:
@@ -250,6 +256,8 @@ class CoSimulation:
                 self._check_stop()
         except KeyboardInterrupt:
             status, reason = "interrupted", interrupts.reason()
+        except ResultsError as exc:  # the disk, not a participant: no run status can be written
+            status, reason, results_error = "failed", str(exc), exc
         except time_limits.StepTimeout:
             status, reason = time_limits.TIMED_OUT, watch.expired or "a participant call timed out"
         except ToolchainError as exc:
@@ -268,6 +276,8 @@ class CoSimulation:
             # a library turned the interrupt into an error of its own
             status, reason = "interrupted", interrupts.reason()
         problems = self._terminate_all()
+        if results_error is not None:
+            raise results_error
         summaries, tables = {}, {}
         for participant in self.participants:
             try:

@@ -13,10 +13,14 @@ import pandas as pd
 from orchestrator import acceptance, interrupts
 from orchestrator.errors import ResultsError, ToolchainError
 from orchestrator.master import CoSimulation
+from orchestrator.recorder import ColumnFrame
 from orchestrator.results import RunFolder, new_run_id, versions
 from orchestrator.scenario import Scenario, load_scenario
 
 log = logging.getLogger(__name__)
+
+#: Folder in the staging folder where the time series is written during the run (removed on publish).
+SPOOL = ".timeseries-spool"
 
 
 @dataclass
@@ -67,7 +71,7 @@ def run_scenario(path, results_root="results", progress: bool = True, run_id: st
     try:
         with interrupts.emergency_writer(
                 lambda why, status: _write_emergency(scenario, cosim, folder, overrides, why, status)):
-            outcome = cosim.run(progress=progress)
+            outcome = cosim.run(progress=progress, spool=folder.path(SPOOL))
             with interrupts.deferred():
                 try:
                     report = _write(scenario, cosim, outcome, folder, overrides)
@@ -90,7 +94,9 @@ def _write_emergency(scenario: Scenario, cosim: CoSimulation, folder: RunFolder,
     sim = scenario.simulation
     recorder = getattr(cosim, "recorder", None)
     if recorder is not None:
-        recorder.to_frame().to_csv(folder.path("timeseries.csv"), index=False)
+        recorder.finish()  # the call in progress never returns: the rows up to the latest output are final
+        recorder.write_csv(folder.path("timeseries.csv"))
+        recorder.discard_spool()
     folder.write_json("summary.json", {
         "scenario": str(scenario.path), "scenario_name": sim.name, "scenario_sha256": scenario.sha256,
         "overrides": dict(overrides or {}), "run_id": folder.final.name, "status": status,
@@ -105,12 +111,16 @@ def _write_emergency(scenario: Scenario, cosim: CoSimulation, folder: RunFolder,
 def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, overrides) -> RunReport:
     from orchestrator import analyses
 
-    frame = outcome.recorder.to_frame()
+    recorder = outcome.recorder
+    recorder.finish()
     series_name = "timeseries.parquet" if scenario.outputs.format == "parquet" else "timeseries.csv"
     if scenario.outputs.format == "parquet":
-        frame.to_parquet(folder.path(series_name), index=False)
-    else:
-        frame.to_csv(folder.path(series_name), index=False)
+        recorder.write_parquet(folder.path(series_name))
+        frame = ColumnFrame(folder.path(series_name))
+    else:  # CSV for the user; the analyses read the spool merged into a Parquet file, removed below
+        recorder.write_csv(folder.path(series_name))
+        recorder.write_parquet(folder.path(SPOOL) / "merged.parquet")
+        frame = ColumnFrame(folder.path(SPOOL) / "merged.parquet")
     if cosim.metocean is not None:
         cosim.metocean.to_netcdf(folder.path("metocean.nc"))
     for name, rows in outcome.participant_tables.items():
@@ -165,6 +175,7 @@ def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, 
             "criteria": [{"name": v.name, "criterion": c.describe(), "passed": v.passed, "value": v.value,
                           "reason": v.reason} for v, c in zip(verdicts, scenario.acceptance)]}
     folder.write_json("summary.json", summary)
+    recorder.discard_spool()
     final = folder.publish()
     return RunReport(final, status, reason, summary)
 
