@@ -88,6 +88,11 @@ class Recorder:
         self._pending.append((stamp, flat))
         self._latest = max(self._latest, stamp)
 
+    @property
+    def buffered_rows(self) -> int:
+        """Rows emitted but not yet written (at most ``chunk_rows`` with a spool)."""
+        return len(self._rows)
+
     def last_time(self) -> float:
         """Latest time any output describes [s]."""
         return self._latest
