@@ -35,6 +35,7 @@ from typing import Any
 
 from orchestrator import acceptance, interrupts
 from orchestrator.batch_spec import BatchSpec, RunSpec, load_batch
+from orchestrator.dask_executor import DaskExecutor, check_scheduler
 from orchestrator.errors import ResultsError, ScenarioError, ToolchainError
 from orchestrator.results import stale_staging
 from orchestrator.time_limits import TIMED_OUT
@@ -85,7 +86,7 @@ class BatchReport:
 
 
 def run_batch(path, results_root="results", workers: int | None = None, scheduler: str | None = None,
-              progress: bool = True, retry_failed: bool = False) -> BatchReport:
+              progress: bool = True, retry_failed: bool = False, tls: dict | None = None) -> BatchReport:
     """Run every run of the batch file ``path`` not yet done, then rebuild its table.
 
     Parameters
@@ -103,15 +104,19 @@ def run_batch(path, results_root="results", workers: int | None = None, schedule
         Show a progress bar (tqdm).
     retry_failed : bool
         Redo runs recorded as failed (by default a failed run counts as done).
+    tls : dict, optional
+        ``{"ca": ..., "cert": ..., "key": ...}``: PEM files for a ``tls://`` scheduler
+        (:mod:`orchestrator.dask_executor`).
 
     Raises
     ------
     ScenarioError
         For a malformed batch file or an override the scenario does not accept.
     BatchError
-        When the Dask scheduler cannot be reached.
+        When the Dask scheduler cannot be reached, or its address and TLS files do not fit.
     """
     started = wallclock.perf_counter()
+    tls_files = check_scheduler(scheduler, **(tls or {})) if scheduler is not None or tls else None
     spec = load_batch(path)
     runs = spec.runs()
     check_against_scenario(spec, runs)
@@ -121,7 +126,8 @@ def run_batch(path, results_root="results", workers: int | None = None, schedule
         _write_json_atomic(root / "batch.json", _manifest(spec, runs))
         todo = pending_runs(root, runs, retry_failed)
         tasks = [RunTask(str(spec.scenario), str(root.resolve()), run.run_id, run.overrides) for run in todo]
-        executor = DaskExecutor(scheduler) if scheduler else LocalPool(workers or os.cpu_count() or 1)
+        executor = (DaskExecutor(scheduler, tls_files) if scheduler is not None
+                    else LocalPool(workers or os.cpu_count() or 1))
         bar = _progress_bar(len(runs), len(runs) - len(todo), spec.name, progress)
         interrupted = False
         results = executor.run(tasks)
@@ -343,45 +349,6 @@ class LocalPool:
         from orchestrator.worker_pool import WorkerPool
 
         yield from WorkerPool(self.workers, _pool_execute).run(tasks)
-
-
-class DaskExecutor:
-    """Runs on a Dask distributed cluster at ``address`` (a worker that dies is Dask's ``KilledWorker``)."""
-
-    def __init__(self, address: str) -> None:
-        self.address = address
-
-    def run(self, tasks: list[RunTask]) -> Iterator[tuple[RunTask, dict]]:
-        """Yield ``(task, record)`` as runs complete; closing the generator cancels the rest."""
-        from distributed import CancelledError, Client, KilledWorker, as_completed
-
-        try:
-            client = Client(self.address, timeout="10s", set_as_default=False)
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise BatchError(f"cannot reach the Dask scheduler at {self.address}: {exc}") from exc
-        futures = {}
-        try:
-            for task in tasks:
-                future = client.submit(execute_run, task, key=f"rhnc-run-{task.run_id}-{os.urandom(4).hex()}",
-                                       pure=False, retries=0)
-                futures[future] = task
-            for future in as_completed(futures, loop=client.loop):
-                task = futures[future]
-                try:
-                    record = future.result()
-                except KilledWorker:  # the cluster lost the worker (memory limit, node gone): redo on resume
-                    record = {"status": "worker_died", "reason": f"{WORKER_DIED}: the Dask cluster lost it",
-                              "infrastructure": True}
-                except CancelledError:
-                    continue
-                except Exception as exc:  # e.g. the package is missing on the worker
-                    record = {"status": "worker_died", "reason": f"the worker could not run it: {type(exc).__name__}: {exc}"}
-                yield task, record
-        finally:
-            if interrupts.stop_requested():
-                interrupts.acknowledge()
-            client.cancel(list(futures))
-            client.close()
 
 
 # -- the table and the overview -------------------------------------------------------------------
