@@ -203,3 +203,24 @@ def _hold_the_lock(task):
     time_limits._publish_deadline(time.monotonic() + 0.5, "participant 'hog' did not return from its step")
     ctypes.PyDLL(None).sleep(3600)  # PyDLL: the interpreter lock is held throughout
     return {"status": "finished"}
+
+
+def test_a_resume_never_clears_the_staging_folder_of_a_process_still_running(tmp_path):
+    from orchestrator.results import stale_staging
+
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    other = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    ended = subprocess.Popen([sys.executable, "-c", "pass"])
+    ended.wait()
+    try:
+        alive_staging = runs / f".abc123.{other.pid}-0a1b2c3d.partial"
+        dead_staging = runs / f".abc123.{ended.pid}-0a1b2c3d.partial"
+        for folder in (alive_staging, dead_staging):
+            folder.mkdir()
+            (folder / "timeseries.parquet").write_text("being written")
+        assert stale_staging(runs, "abc123") == [dead_staging]
+    finally:
+        other.kill()
+        other.wait()
+    assert stale_staging(runs, "abc123") == sorted([alive_staging, dead_staging])  # its owner has ended now
