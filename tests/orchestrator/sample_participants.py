@@ -211,6 +211,7 @@ class Sleeper(Participant):
         participant.sleep_s = options.get("sleep_s", 3600.0)
         participant.swallow = options.get("swallow", False)
         participant.unless_exists = options.get("unless_exists")
+        participant.busy = options.get("busy", False)
         return participant
 
     input_names = property(lambda self: [])
@@ -228,7 +229,12 @@ class Sleeper(Participant):
             print(f"sleeper: sleeping at t = {time:g} s", flush=True)
             while True:
                 try:
-                    wallclock.sleep(self.sleep_s)
+                    if self.busy:  # a Python loop that computes rather than sleeps
+                        end = wallclock.monotonic() + self.sleep_s
+                        while wallclock.monotonic() < end:
+                            pass
+                    else:
+                        wallclock.sleep(self.sleep_s)
                     break
                 except BaseException:  # noqa: B036 - the point: it swallows even the time limit
                     if not self.swallow:

@@ -153,3 +153,20 @@ def test_a_native_busy_loop_in_an_fmu_is_ended_with_its_status_and_series(tmp_pa
     series = (folder / "timeseries.csv").read_text().splitlines()
     assert series[0].startswith("time_s,") and "ship.x" in series[0]
     assert len(series) == 1 + 5
+
+
+def test_a_run_on_another_thread_is_stopped_at_its_limit(write_scenario, tmp_path):
+    """As in a Dask worker: no signal reaches the thread, the exception is raised in it."""
+    import threading
+
+    from orchestrator.run import run_scenario
+
+    path = write_scenario(SLEEPER.replace("at_s = 4.0", "at_s = 4.0\nbusy = true"))
+    reports = []
+    worker = threading.Thread(target=lambda: reports.append(run_scenario(path, tmp_path, progress=False)))
+    worker.start()
+    worker.join(120.0)
+    assert not worker.is_alive()
+    (report,) = reports
+    assert report.status == "timed out" and "participant 'nap'" in report.reason
+    assert report.summary["simulation"]["steps_done"] == 4
