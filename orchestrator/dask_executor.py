@@ -15,8 +15,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-#: Address schemes a batch accepts for ``--scheduler``.
-SCHEMES = ("tcp://", "tls://")
+#: Address schemes a batch accepts for ``--scheduler`` (``inproc://``: a cluster inside this process).
+SCHEMES = ("tcp://", "tls://", "inproc://")
 
 
 @dataclass(frozen=True)
@@ -44,9 +44,9 @@ def check_scheduler(address: str, ca=None, cert=None, key=None) -> TlsFiles | No
         raise BatchError("--scheduler: the address is empty; give tcp://host:8786 or tls://host:8786, "
                          "or leave the option out to run on the local pool")
     if not address.startswith(SCHEMES):
-        raise BatchError(f"--scheduler {address}: the address must start with {' or '.join(SCHEMES)} "
+        raise BatchError(f"--scheduler {address}: the address must start with tcp:// or tls:// "
                          "(tls:// with --tls-ca, --tls-cert and --tls-key for a cluster on a shared network)")
-    if address.startswith("tcp://"):
+    if not address.startswith("tls://"):
         named = [option for option, value in given.items() if value]
         if named:
             raise BatchError(f"--scheduler {address}: {', '.join(named)} need a tls:// address")
