@@ -147,7 +147,8 @@ class WorkerPool:
             while queue or any(w.task is not None for w in pool):
                 for index, worker in enumerate(pool):
                     if worker.task is None and queue and not interrupts.stop_requested():
-                        if not worker.process.is_alive():
+                        if not worker.process.is_alive():  # died or ended by the batch: a fresh one
+                            worker.connection.close()
                             pool[index] = worker = _Worker(context, self.execute)
                         worker.task = queue.popleft()
                         worker.connection.send(worker.task)
