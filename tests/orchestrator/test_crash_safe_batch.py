@@ -224,3 +224,41 @@ def test_a_resume_never_clears_the_staging_folder_of_a_process_still_running(tmp
         other.kill()
         other.wait()
     assert stale_staging(runs, "abc123") == sorted([alive_staging, dead_staging])  # its owner has ended now
+
+
+TIMED = """
+[simulation]
+name = "timed"
+steps = 6
+dt_s = 1.0
+step_timeout_s = 0.5
+[participants.clock]
+type = "python"
+class = "sample_participants:Clock"
+[participants.nap]
+type = "python"
+class = "sample_participants:Sleeper"
+[participants.nap.options]
+at_s = 2.0
+"""
+
+
+@pytest.mark.slow
+def test_timed_out_runs_in_a_batch_keep_their_status_and_are_not_redone(tmp_path):
+    """One run stopped at its limit in Python, one whose participant swallows the limit and is
+    ended with its worker process after its status was written; a resume keeps both."""
+    (tmp_path / "timed.toml").write_text(TIMED)
+    batch = tmp_path / "timed_batch.toml"
+    batch.write_text(BATCH.format(scenario="timed.toml").replace(
+        '"participants.clock.options" = [{}, {nan_at_s = 1.0e9}, {nan_at_s = 2.0e9}]',
+        '"participants.nap.options.swallow" = [false, true]'))
+    first = run_batch(batch, tmp_path, workers=2, progress=False)
+    rows = {bool(r["param:participants.nap.options.swallow"]): r for _, r in first.table.iterrows()}
+    for swallow in (False, True):
+        assert rows[swallow]["status"] == "timed out"
+        assert rows[swallow]["reason"].startswith("participant 'nap' did not return from its step at t = 2 s")
+    assert rows[True]["reason"].endswith("so the process was ended")  # by the run's own watchdog
+    summary = json.loads((tmp_path / "crashy" / "runs" / rows[True]["run_id"] / "summary.json").read_text())
+    assert summary["simulation"]["steps_done"] == 2 and summary["timeseries"] == "timeseries.csv"
+    second = run_batch(batch, tmp_path, workers=2, progress=False)
+    assert (second.ran, second.skipped) == (0, 2)
