@@ -260,5 +260,7 @@ def test_timed_out_runs_in_a_batch_keep_their_status_and_are_not_redone(tmp_path
     assert rows[True]["reason"].endswith("so the process was ended")  # by the run's own watchdog
     summary = json.loads((tmp_path / "crashy" / "runs" / rows[True]["run_id"] / "summary.json").read_text())
     assert summary["simulation"]["steps_done"] == 2 and summary["timeseries"] == "timeseries.csv"
+    runs = tmp_path / "crashy" / "runs"
+    assert sorted(p.name for p in runs.iterdir()) == sorted(first.table["run_id"])  # no second record of it
     second = run_batch(batch, tmp_path, workers=2, progress=False)
     assert (second.ran, second.skipped) == (0, 2)
