@@ -231,7 +231,7 @@ TIMED = """
 name = "timed"
 steps = 6
 dt_s = 1.0
-step_timeout_s = 0.5
+step_timeout_s = 1.0
 [participants.clock]
 type = "python"
 class = "sample_participants:Clock"

@@ -27,7 +27,7 @@ SLEEPER = """
 name = "sleepy"
 steps = 20
 dt_s = 1.0
-step_timeout_s = 0.5
+step_timeout_s = 1.0
 [participants.clock]
 type = "python"
 class = "sample_participants:Clock"
@@ -52,7 +52,7 @@ def test_a_sleeping_python_participant_is_stopped_at_its_limit(write_scenario, t
     assert main(["run", str(path), "--results", str(tmp_path / "results"), "--no-progress"]) == 3
     captured = capsys.readouterr()
     assert "error: participant 'nap' did not return from its step at t = 4 s within its wall-time limit " \
-           "of 0.5 s (step_timeout_s)" in captured.err
+           "of 1 s (step_timeout_s)" in captured.err
     folder, summary = summary_of(captured.out)
     assert "\ntimed out: results in" in captured.out
     assert summary["status"] == "timed out"
@@ -65,10 +65,10 @@ def test_a_sleeping_python_participant_is_stopped_at_its_limit(write_scenario, t
 def test_a_participants_own_limit_replaces_the_simulations(write_scenario, tmp_path):
     from orchestrator.run import run_scenario
 
-    text = SLEEPER.replace("step_timeout_s = 0.5", "step_timeout_s = 0.2").replace(
+    text = SLEEPER.replace("step_timeout_s = 1.0", "step_timeout_s = 0.5").replace(
         "[participants.nap.options]", "step_timeout_s = 30.0\n[participants.nap.options]\nsleep_s = 1.0")
     report = run_scenario(write_scenario(text), tmp_path, progress=False)
-    assert report.status == "finished"  # 1 s sleeps under nap's own 30 s limit; the clock's 0.2 s is never hit
+    assert report.status == "finished"  # 1 s sleeps under nap's own 30 s limit; the clock's 0.5 s is never hit
     assert load_scenario(write_scenario(text)).participant("nap").step_timeout_s == 30.0
 
 
@@ -76,8 +76,8 @@ def test_a_limit_the_participant_swallows_still_ends_the_run(write_scenario, tmp
     """The master checks the time-out flag after the call: a swallowed StepTimeout does not hide it."""
     from orchestrator.run import run_scenario
 
-    # interrupted at 0.5 s, it swallows the exception and sleeps 0.8 s more, then returns normally
-    text = SLEEPER.replace("at_s = 4.0", "at_s = 4.0\nsleep_s = 0.8\nswallow = true")
+    # interrupted at 1 s, it swallows the exception and sleeps 1.2 s more, then returns normally
+    text = SLEEPER.replace("at_s = 4.0", "at_s = 4.0\nsleep_s = 1.2\nswallow = true")
     report = run_scenario(write_scenario(text), tmp_path, progress=False)
     assert report.status == "timed out" and "participant 'nap'" in report.reason
     assert report.summary["simulation"]["steps_done"] == 4
@@ -87,14 +87,14 @@ def test_a_limit_the_participant_swallows_still_ends_the_run(write_scenario, tmp
                                         ("participants.nap", "participants.nap.step_timeout_s")])
 @pytest.mark.parametrize("value", [0, -1.0, "'10'", "nan"])
 def test_a_bad_limit_is_refused_naming_the_key(write_scenario, table, key, value):
-    text = SLEEPER.replace("step_timeout_s = 0.5\n", "")
+    text = SLEEPER.replace("step_timeout_s = 1.0\n", "")
     text = text.replace(f"[{table}]\n", f"[{table}]\nstep_timeout_s = {value}\n")
     with pytest.raises(ScenarioError, match=re.escape(f"'{key}' must be")):
         load_scenario(write_scenario(text))
 
 
 def test_the_default_limit_applies_when_none_is_given(write_scenario):
-    scenario = load_scenario(write_scenario(SLEEPER.replace("step_timeout_s = 0.5\n", "")))
+    scenario = load_scenario(write_scenario(SLEEPER.replace("step_timeout_s = 1.0\n", "")))
     assert scenario.simulation.step_timeout_s == time_limits.DEFAULT_STEP_TIMEOUT_S
 
 
