@@ -190,6 +190,11 @@ class FmuParticipant(Participant):
             shutil.rmtree(self._unzip_dir, ignore_errors=True)
             self._unzip_dir = None
 
+    def remove_files(self) -> None:
+        """Remove the unpacked FMU without calling it (the process is ending with a call still in it)."""
+        if self._unzip_dir is not None:
+            shutil.rmtree(self._unzip_dir, ignore_errors=True)
+
     # -- helpers ---------------------------------------------------------------------------
     def _on_message(self, status: int, category: str, text: str) -> None:
         # errors are raised with this text (ModelError); warnings are only logged

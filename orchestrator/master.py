@@ -328,6 +328,15 @@ class CoSimulation:
                 bus[(name, port)] = value
         recorder.add(name, stamp, outputs)
 
+    def remove_files(self) -> None:
+        """The process is ending with a participant call that never returned: remove the temporary
+        folders (the work folder, unpacked FMUs) without calling any participant."""
+        for participant in getattr(self, "participants", ()):
+            remove = getattr(participant, "remove_files", None)
+            if remove is not None:
+                remove()
+        self.close()
+
     def close(self) -> None:
         """Remove the temporary work folder (if the master made it)."""
         if self._own_work_dir:

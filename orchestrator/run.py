@@ -106,6 +106,7 @@ def _write_emergency(scenario: Scenario, cosim: CoSimulation, folder: RunFolder,
         "timeseries": "timeseries.csv" if recorder is not None else None,
         "analyses": {}, "participants": {}})
     print(f"{status}: results in {folder.publish()}", flush=True)
+    cosim.remove_files()  # the process ends next: no temporary folder may outlive the run
 
 
 def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, overrides) -> RunReport:

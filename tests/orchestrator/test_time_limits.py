@@ -99,12 +99,14 @@ def test_the_default_limit_applies_when_none_is_given(write_scenario):
 
 
 def run_cli(tmp_path, text, name, timeout=120):
+    """Run the command line in a process whose temporary folders go to ``tmp_path / "tmp"``."""
     path = tmp_path / f"{name}.toml"
     path.write_text(text)
+    (tmp_path / "tmp").mkdir()
     return subprocess.run(
         [sys.executable, "-m", "orchestrator", "run", str(path), "--results", str(tmp_path / "results"),
          "--no-progress"], capture_output=True, text=True, timeout=timeout,
-        env={**__import__("os").environ, "PYTHONPATH": f"{HERE}:{REPO}"})
+        env={**__import__("os").environ, "PYTHONPATH": f"{HERE}:{REPO}", "TMPDIR": str(tmp_path / "tmp")})
 
 
 @pytest.mark.slow
@@ -119,6 +121,7 @@ def test_a_participant_that_swallows_the_limit_is_ended_with_the_process(tmp_pat
     assert summary["simulation"]["steps_done"] == 4
     assert len((folder / "timeseries.csv").read_text().splitlines()) == 1 + 5
     assert [p.name for p in folder.parent.iterdir() if p.name.startswith(".")] == []
+    assert list((tmp_path / "tmp").iterdir()) == []  # no rhnc-run-* folder outlives the process
 
 
 @pytest.fixture(scope="module")
@@ -153,6 +156,7 @@ def test_a_native_busy_loop_in_an_fmu_is_ended_with_its_status_and_series(tmp_pa
     series = (folder / "timeseries.csv").read_text().splitlines()
     assert series[0].startswith("time_s,") and "ship.x" in series[0]
     assert len(series) == 1 + 5
+    assert list((tmp_path / "tmp").iterdir()) == []  # neither the run's folder nor the unpacked FMU
 
 
 def test_a_run_on_another_thread_is_stopped_at_its_limit(write_scenario, tmp_path):
