@@ -208,8 +208,10 @@ class ColumnFrame:
     """A Parquet time series read one column at a time, with the DataFrame access analyses use.
 
     Supports ``frame.columns``, ``len(frame)``, ``name in frame.columns``, ``frame[name]``
-    and ``frame.get(name, default)`` (a :class:`pandas.Series`), and ``frame.iloc[a:b]``
-    (a view of those rows); :meth:`to_pandas` reads it all.
+    and ``frame.get(name, default)`` (a :class:`pandas.Series`), ``frame[[a, b]]`` (a
+    DataFrame of those columns) and ``frame.iloc[a:b]`` (a view of those rows), each reading
+    only what it needs.  Any other DataFrame attribute reads the whole series once and
+    answers from it; :meth:`to_pandas` reads it all.
     """
 
     def __init__(self, path: Path, rows: slice = slice(None)) -> None:
@@ -220,15 +222,31 @@ class ColumnFrame:
         self.columns = pd.Index(self._file.schema_arrow.names)
         self._rows = rows
         self._count = len(range(self._file.metadata.num_rows)[rows])
+        self._whole: pd.DataFrame | None = None
 
     def __len__(self) -> int:
         return self._count
 
-    def __getitem__(self, name: str) -> pd.Series:
+    def __getitem__(self, name):
+        if isinstance(name, list):  # several columns: a DataFrame of those only
+            missing = [column for column in name if column not in self.columns]
+            if missing:
+                raise KeyError(missing)
+            return self._file.read(columns=name).to_pandas().iloc[self._rows].reset_index(drop=True)
         if not isinstance(name, str) or name not in self.columns:
             raise KeyError(name)
         values = self._file.read(columns=[name]).column(0).to_numpy()[self._rows]
         return pd.Series(values, name=name)
+
+    def __getattr__(self, name: str):
+        """Any other DataFrame attribute: the whole series is read once (for analyses written
+        against a DataFrame; they then hold it all, as before streaming)."""
+        if name.startswith("_"):
+            raise AttributeError(name)
+        log.debug("analysis used DataFrame.%s: reading the whole time series %s", name, self.path)
+        if self._whole is None:
+            self._whole = self.to_pandas()
+        return getattr(self._whole, name)
 
     def __contains__(self, name: str) -> bool:
         return name in self.columns
@@ -249,8 +267,8 @@ class _RowSlicer:
     def __init__(self, frame: ColumnFrame) -> None:
         self._frame = frame
 
-    def __getitem__(self, rows: slice) -> ColumnFrame:
-        if not isinstance(rows, slice):
-            raise TypeError("a ColumnFrame's rows are selected by a slice; read a column for single values")
+    def __getitem__(self, rows):
+        if not isinstance(rows, slice):  # a row, or rows by position: as a DataFrame would give them
+            return self._frame.to_pandas().iloc[rows]
         span = range(self._frame._file.metadata.num_rows)[self._frame._rows][rows]
         return ColumnFrame(self._frame.path, slice(span.start, span.stop, span.step))

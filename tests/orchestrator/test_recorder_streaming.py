@@ -131,3 +131,19 @@ def test_a_full_disk_during_the_run_is_one_line_and_leaves_nothing(write_scenari
     assert code == 4
     assert len(err) == 1 and err[0].endswith("the time series could not be written (the disk is full)")
     assert list((tmp_path / "results" / "long").iterdir()) == []
+
+
+def test_a_column_frame_answers_as_the_dataframe_it_stands_for(tmp_path):
+    """Analyses written against a DataFrame keep working: the usual access reads columns, any
+    other attribute reads the whole series."""
+    frame = pd.DataFrame({"time_s": np.arange(10.0), "ship.x": np.arange(10.0) ** 2, "ship.y": -np.arange(10.0)})
+    frame.to_parquet(tmp_path / "series.parquet", index=False)
+    lazy = ColumnFrame(tmp_path / "series.parquet")
+    pd.testing.assert_series_equal(lazy["ship.x"], frame["ship.x"])
+    pd.testing.assert_frame_equal(lazy[["ship.x", "ship.y"]], frame[["ship.x", "ship.y"]])
+    pd.testing.assert_series_equal(lazy.iloc[2:7]["ship.y"], frame["ship.y"].iloc[2:7].reset_index(drop=True))
+    pd.testing.assert_series_equal(lazy.iloc[3], frame.iloc[3])
+    assert lazy.loc[4, "ship.x"] == 16.0 and lazy.shape == (10, 3) and len(lazy.iloc[8:]) == 2
+    assert lazy.get("ship.z") is None and "ship.x" in lazy.columns
+    with pytest.raises(KeyError):
+        lazy["ship.z"]
