@@ -65,10 +65,10 @@ def test_a_sleeping_python_participant_is_stopped_at_its_limit(write_scenario, t
 def test_a_participants_own_limit_replaces_the_simulations(write_scenario, tmp_path):
     from orchestrator.run import run_scenario
 
-    text = SLEEPER.replace("step_timeout_s = 1.0", "step_timeout_s = 0.5").replace(
+    text = SLEEPER.replace("step_timeout_s = 1.0", "step_timeout_s = 0.5").replace("at_s = 4.0", "at_s = 17.0").replace(
         "[participants.nap.options]", "step_timeout_s = 30.0\n[participants.nap.options]\nsleep_s = 1.0")
     report = run_scenario(write_scenario(text), tmp_path, progress=False)
-    assert report.status == "finished"  # 1 s sleeps under nap's own 30 s limit; the clock's 0.5 s is never hit
+    assert report.status == "finished"  # three 1 s sleeps under nap's own 30 s limit, over the simulation's 0.5 s
     assert load_scenario(write_scenario(text)).participant("nap").step_timeout_s == 30.0
 
 
