@@ -11,24 +11,23 @@
 * ``overview.png``: pass/fail counts and the distributions of the key figures.
 
 A run folder with a ``summary.json`` is done: rerunning the batch skips it (runs that were
-interrupted are redone; failed ones too with ``retry_failed``).  Runs are deterministic, so
+interrupted, or failed for an infrastructure reason such as a killed worker or a full disk,
+are redone; runs that failed on their own too with ``retry_failed``).  The batch holds a
+lock on its results folder, and its workers die with it (:mod:`orchestrator.worker_pool`),
+so a resume started at once after the batch was killed finds no worker still writing.  Runs are deterministic, so
 the table does not depend on the executor or the number of workers, except for the
 columns in :data:`NONDETERMINISTIC_COLUMNS`.
 """
 
 from __future__ import annotations
 
-import concurrent.futures as cf
 import contextlib
 import json
 import logging
 import math
-import multiprocessing
 import os
 import shutil
-import signal
 import time as wallclock
-from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,8 +35,10 @@ from typing import Any
 
 from orchestrator import acceptance, interrupts
 from orchestrator.batch_spec import BatchSpec, RunSpec, load_batch
-from orchestrator.errors import ScenarioError, ToolchainError
+from orchestrator.dask_executor import DaskExecutor, check_scheduler
+from orchestrator.errors import ResultsError, ScenarioError, ToolchainError
 from orchestrator.results import stale_staging
+from orchestrator.time_limits import TIMED_OUT
 
 log = logging.getLogger(__name__)
 
@@ -85,7 +86,7 @@ class BatchReport:
 
 
 def run_batch(path, results_root="results", workers: int | None = None, scheduler: str | None = None,
-              progress: bool = True, retry_failed: bool = False) -> BatchReport:
+              progress: bool = True, retry_failed: bool = False, tls: dict | None = None) -> BatchReport:
     """Run every run of the batch file ``path`` not yet done, then rebuild its table.
 
     Parameters
@@ -103,15 +104,19 @@ def run_batch(path, results_root="results", workers: int | None = None, schedule
         Show a progress bar (tqdm).
     retry_failed : bool
         Redo runs recorded as failed (by default a failed run counts as done).
+    tls : dict, optional
+        ``{"ca": ..., "cert": ..., "key": ...}``: PEM files for a ``tls://`` scheduler
+        (:mod:`orchestrator.dask_executor`).
 
     Raises
     ------
     ScenarioError
         For a malformed batch file or an override the scenario does not accept.
     BatchError
-        When the Dask scheduler cannot be reached.
+        When the Dask scheduler cannot be reached, or its address and TLS files do not fit.
     """
     started = wallclock.perf_counter()
+    tls_files = check_scheduler(scheduler, **(tls or {})) if scheduler is not None or tls else None
     spec = load_batch(path)
     runs = spec.runs()
     check_against_scenario(spec, runs)
@@ -121,14 +126,15 @@ def run_batch(path, results_root="results", workers: int | None = None, schedule
         _write_json_atomic(root / "batch.json", _manifest(spec, runs))
         todo = pending_runs(root, runs, retry_failed)
         tasks = [RunTask(str(spec.scenario), str(root.resolve()), run.run_id, run.overrides) for run in todo]
-        executor = DaskExecutor(scheduler) if scheduler else LocalPool(workers or os.cpu_count() or 1)
+        executor = (DaskExecutor(scheduler, tls_files) if scheduler is not None
+                    else LocalPool(workers or os.cpu_count() or 1))
         bar = _progress_bar(len(runs), len(runs) - len(todo), spec.name, progress)
         interrupted = False
         results = executor.run(tasks)
         try:
             for task, record in results:
-                if record["status"] == "worker_died":
-                    write_failure(Path(task.batch_root), task, record["reason"])
+                if record["status"] in ("worker_died", TIMED_OUT):
+                    _record_lost_run(task, record)
                 if bar is not None:
                     bar.update(1)
         except KeyboardInterrupt:
@@ -217,19 +223,34 @@ def check_against_scenario(spec: BatchSpec, runs: list[RunSpec]) -> None:
 
 
 def pending_runs(root: Path, runs: list[RunSpec], retry_failed: bool = False) -> list[RunSpec]:
-    """The runs without a published result; clears their stale folders (interrupted, partial)."""
+    """The runs to do: without a published result, interrupted, or failed for infrastructure reasons.
+
+    A run recorded as failed for an infrastructure reason (its worker killed from outside, a
+    full disk, a results folder that could not be written) is redone; a run that failed on
+    its own (a model error, a crash of its own, a time limit) is kept unless
+    ``retry_failed``.  Stale folders of the runs to do are cleared, but never a staging
+    folder whose process is still running.
+    """
     todo = []
     for run in runs:
         folder = root / "runs" / run.run_id
         for staging in stale_staging(folder.parent, run.run_id):
             shutil.rmtree(staging, ignore_errors=True)
         summary = _read_summary(folder)
-        if summary is not None and summary.get("status") != "interrupted" and not (
-                retry_failed and summary.get("status") == "failed"):
+        if summary is not None and not needs_redo(summary, retry_failed):
             continue
         shutil.rmtree(folder, ignore_errors=True)
         todo.append(run)
     return todo
+
+
+def needs_redo(summary: dict, retry_failed: bool = False) -> bool:
+    """A published run a resume does again: interrupted, failed for an infrastructure reason, or
+    (with ``retry_failed``) failed or timed out on its own."""
+    status = summary.get("status")
+    if status == "interrupted" or summary.get("infrastructure"):
+        return True
+    return retry_failed and status in ("failed", TIMED_OUT)
 
 
 def _read_summary(folder: Path) -> dict | None:
@@ -251,22 +272,47 @@ def execute_run(task: RunTask) -> dict[str, str]:
     # a worker that died while running this id left its staging folder behind
     for staging in stale_staging(Path(task.batch_root) / "runs", task.run_id):
         shutil.rmtree(staging, ignore_errors=True)
+    infrastructure = False
     try:
         report = run_scenario(task.scenario, task.batch_root, progress=False, run_id=task.run_id,
                               overrides=task.overrides, group="runs")
         return {"status": report.status, "reason": report.reason}
     except KeyboardInterrupt:
         return {"status": "interrupted", "reason": "interrupted by the user (Ctrl-C)"}
+    except ResultsError as exc:  # the disk or the folder, not the run: a resume redoes it
+        reason, infrastructure = str(exc), True
     except ToolchainError as exc:
         reason = str(exc)
+    except OSError as exc:  # the machine (disk full while building, files gone): a resume redoes it
+        reason, infrastructure = f"{type(exc).__name__}: {exc}", True
     except Exception as exc:  # a participant's own bug while building: record it, go on
         reason = f"{type(exc).__name__}: {exc}"
-    write_failure(Path(task.batch_root), task, reason)
-    return {"status": "failed", "reason": reason}
+    try:
+        write_failure(Path(task.batch_root), task, reason, infrastructure=infrastructure)
+    except (OSError, ToolchainError) as exc:  # nothing can be written: the run stays to do
+        log.warning("run %s: its failure could not be recorded either: %s", task.run_id, exc)
+    return {"status": "failed", "reason": reason, "infrastructure": infrastructure}
 
 
-def write_failure(batch_root: Path, task: RunTask, reason: str) -> Path:
-    """Publish a run folder holding only a ``summary.json`` with status ``failed`` and ``reason``."""
+def _record_lost_run(task: RunTask, record: dict) -> None:
+    """A run whose worker died or was ended: keep what the run published, else record why."""
+    published = _read_summary(Path(task.batch_root) / "runs" / task.run_id)
+    if published is not None and published.get("status") not in ("interrupted", None):
+        return  # e.g. a run its own watchdog ended after writing its status (timed out)
+    try:
+        write_failure(Path(task.batch_root), task, record["reason"], status=record["status"].replace(
+            "worker_died", "failed"), infrastructure=bool(record.get("infrastructure")))
+    except (OSError, ToolchainError) as exc:
+        log.warning("run %s: could not record that its worker died: %s", task.run_id, exc)
+
+
+def write_failure(batch_root: Path, task: RunTask, reason: str, status: str = "failed",
+                  infrastructure: bool = False) -> Path:
+    """Publish a run folder holding only a ``summary.json`` with ``status`` and ``reason``.
+
+    ``infrastructure`` marks a failure that is not the run's (its worker killed from
+    outside, a full disk): a resume redoes such a run.
+    """
     from orchestrator.results import RunFolder
 
     for staging in stale_staging(batch_root / "runs", task.run_id):
@@ -279,14 +325,10 @@ def write_failure(batch_root: Path, task: RunTask, reason: str) -> Path:
         shutil.rmtree(earlier, ignore_errors=True)
     folder = RunFolder(batch_root, "runs", task.run_id)
     folder.write_json("summary.json", {"scenario": task.scenario, "overrides": task.overrides,
-                                       "run_id": task.run_id, "status": "failed", "reason": reason,
+                                       "run_id": task.run_id, "status": status, "reason": reason,
+                                       "infrastructure": infrastructure,
                                        "recorded_by": "batch runner (the run produced no results)"})
     return folder.publish()
-
-
-def _pool_worker_init() -> None:
-    # Idle workers ignore Ctrl-C (the batch stops them); a running run gets it (see _pool_execute).
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _pool_execute(task: RunTask) -> dict[str, str]:
@@ -297,103 +339,16 @@ def _pool_execute(task: RunTask) -> dict[str, str]:
 
 # -- executors ----------------------------------------------------------------------------------
 class LocalPool:
-    """A local process pool (``spawn``: no inherited threads or state).
-
-    At most ``workers`` runs are in flight.  When a worker dies, the runs that were in
-    flight are redone one at a time in a fresh pool, so the run that kills its worker is
-    found and recorded as failed while the others complete.
-    """
+    """Local worker processes (``spawn``), one run each at a time (see :mod:`orchestrator.worker_pool`)."""
 
     def __init__(self, workers: int) -> None:
         self.workers = max(1, int(workers))
 
-    def _pool(self, workers: int) -> cf.ProcessPoolExecutor:
-        return cf.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                                      initializer=_pool_worker_init)
-
     def run(self, tasks: list[RunTask]) -> Iterator[tuple[RunTask, dict]]:
         """Yield ``(task, record)`` as runs complete; closing the generator stops the pool."""
-        if not tasks:
-            return
-        queue, suspects = deque(tasks), deque()
-        in_flight: dict[cf.Future, tuple[RunTask, bool]] = {}
-        pool = self._pool(min(self.workers, len(tasks)))
-        try:
-            while queue or suspects or in_flight:
-                if suspects:
-                    if not in_flight:  # a suspect runs alone: if its worker dies, it is the culprit
-                        task = suspects.popleft()
-                        in_flight[pool.submit(_pool_execute, task)] = (task, True)
-                else:
-                    while queue and len(in_flight) < self.workers:
-                        task = queue.popleft()
-                        in_flight[pool.submit(_pool_execute, task)] = (task, False)
-                done, _ = cf.wait(in_flight, return_when=cf.FIRST_COMPLETED)
-                broken = False
-                for future in done:
-                    task, alone = in_flight.pop(future)
-                    try:
-                        yield task, future.result()
-                    except cf.process.BrokenProcessPool:
-                        broken = True
-                        if alone:
-                            yield task, {"status": "worker_died", "reason": WORKER_DIED}
-                        else:
-                            suspects.append(task)
-                if broken:
-                    for future, (task, _) in list(in_flight.items()):
-                        suspects.append(task)  # the pool is gone: everything in flight is redone
-                        in_flight.pop(future)
-                    pool.shutdown(wait=True, cancel_futures=True)
-                    pool = self._pool(min(self.workers, len(queue) + len(suspects)) or 1)
-        finally:
-            # normal end, Ctrl-C or an error: never start another run; running ones end
-            # (as 'interrupted' when they got the Ctrl-C too) and publish their folders
-            if interrupts.stop_requested():
-                interrupts.acknowledge()  # noticed: the running runs now end and write their folders
-            if interrupts.stop_requested() == "SIGTERM":  # sent to this process alone: pass it on
-                for process in list(getattr(pool, "_processes", {}).values()):
-                    with contextlib.suppress(OSError):
-                        os.kill(process.pid, signal.SIGINT)
-            pool.shutdown(wait=True, cancel_futures=True)
+        from orchestrator.worker_pool import WorkerPool
 
-
-class DaskExecutor:
-    """Runs on a Dask distributed cluster at ``address`` (a worker that dies is Dask's ``KilledWorker``)."""
-
-    def __init__(self, address: str) -> None:
-        self.address = address
-
-    def run(self, tasks: list[RunTask]) -> Iterator[tuple[RunTask, dict]]:
-        """Yield ``(task, record)`` as runs complete; closing the generator cancels the rest."""
-        from distributed import CancelledError, Client, KilledWorker, as_completed
-
-        try:
-            client = Client(self.address, timeout="10s", set_as_default=False)
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise BatchError(f"cannot reach the Dask scheduler at {self.address}: {exc}") from exc
-        futures = {}
-        try:
-            for task in tasks:
-                future = client.submit(execute_run, task, key=f"rhnc-run-{task.run_id}-{os.urandom(4).hex()}",
-                                       pure=False, retries=0)
-                futures[future] = task
-            for future in as_completed(futures, loop=client.loop):
-                task = futures[future]
-                try:
-                    record = future.result()
-                except KilledWorker:
-                    record = {"status": "worker_died", "reason": WORKER_DIED}
-                except CancelledError:
-                    continue
-                except Exception as exc:  # e.g. the package is missing on the worker
-                    record = {"status": "worker_died", "reason": f"the worker could not run it: {type(exc).__name__}: {exc}"}
-                yield task, record
-        finally:
-            if interrupts.stop_requested():
-                interrupts.acknowledge()
-            client.cancel(list(futures))
-            client.close()
+        yield from WorkerPool(self.workers, _pool_execute).run(tasks)
 
 
 # -- the table and the overview -------------------------------------------------------------------

@@ -59,7 +59,11 @@ def _parser() -> argparse.ArgumentParser:
     batch.add_argument("batch", help="batch TOML file")
     batch.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
     batch.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                       help="run on a Dask distributed cluster, e.g. tcp://host:8786 (instead of the local pool)")
+                       help="run on a Dask distributed cluster, tcp://host:8786 or tls://host:8786 (instead of the "
+                            "local pool; docs/batch.md)")
+    batch.add_argument("--tls-ca", default=None, metavar="FILE", help="tls:// scheduler: the cluster's CA certificate")
+    batch.add_argument("--tls-cert", default=None, metavar="FILE", help="tls:// scheduler: this client's certificate")
+    batch.add_argument("--tls-key", default=None, metavar="FILE", help="tls:// scheduler: this client's private key")
     batch.add_argument("--results", default="results", help="results folder (default: ./results)")
     batch.add_argument("--retry-failed", action="store_true", help="redo runs recorded as failed")
     batch.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -180,8 +184,10 @@ def _batch(args) -> int:
     if args.workers is not None and args.workers < 1:
         print("error: --workers must be at least 1", file=sys.stderr)
         return 2
+    tls = {"ca": args.tls_ca, "cert": args.tls_cert, "key": args.tls_key}
     report = run_batch(args.batch, args.results, workers=args.workers, scheduler=args.scheduler,
-                       progress=not args.no_progress, retry_failed=args.retry_failed)
+                       progress=not args.no_progress, retry_failed=args.retry_failed,
+                       tls=tls if any(tls.values()) else None)
     table = report.table
     counts = ", ".join(f"{count} {status}" for status, count in table["status"].value_counts().items())
     print(f"{report.passed}/{report.total} runs passed ({counts}); ran {report.ran}, "

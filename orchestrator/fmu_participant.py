@@ -20,6 +20,7 @@ from pathlib import Path
 from fmpy.fmi1 import FMICallException
 
 from orchestrator.errors import FmuError, ModelError, ScenarioError
+from orchestrator.fmu_archive import check_archive, extract_fmu
 from orchestrator.fmi_slave import REAL_TYPES, SUPPORTED_VERSIONS, FmiSlave
 from orchestrator.participant import Participant, Value, is_finite_number
 from orchestrator.plant_ports import PLANT_PORTS
@@ -141,6 +142,7 @@ class FmuParticipant(Participant):
 
         self.fmu_path = Path(fmu_path)
         self.where = where
+        check_archive(self.fmu_path, f"{where}.fmu")  # before any entry is read: no zip bomb, no '../'
         try:
             self.model_description = read_model_description(str(self.fmu_path))
         except Exception as exc:  # fmpy raises plain exceptions for broken archives/XML
@@ -205,10 +207,8 @@ class FmuParticipant(Participant):
 
     # -- lifecycle -----------------------------------------------------------------------
     def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
-        from fmpy import extract
-
         self._unzip_dir = tempfile.mkdtemp(prefix=f"fmu-{self.name}-")
-        extract(str(self.fmu_path), self._unzip_dir)
+        extract_fmu(self.fmu_path, Path(self._unzip_dir), f"{self.where}.fmu")
         self._slave = FmiSlave(self.model_description, self._unzip_dir, self.name, self._on_message)
         self._slave.instantiate()
         self._call("EnterInitializationMode", self._slave.enter_initialization, start_time)
@@ -237,6 +237,11 @@ class FmuParticipant(Participant):
         if self._unzip_dir is not None:
             shutil.rmtree(self._unzip_dir, ignore_errors=True)
             self._unzip_dir = None
+
+    def remove_files(self) -> None:
+        """Remove the unpacked FMU without calling it (the process is ending with a call still in it)."""
+        if self._unzip_dir is not None:
+            shutil.rmtree(self._unzip_dir, ignore_errors=True)
 
     # -- helpers ---------------------------------------------------------------------------
     def _on_message(self, status: int, category: str, text: str) -> None:

@@ -18,7 +18,7 @@ from pydantic import PlainValidator, model_validator
 from orchestrator.errors import ScenarioError
 from orchestrator.scenario_participants import ScenarioTable, participant_specs
 from orchestrator.scenario_spec import Connection, OutputSpec, SimulationSpec, StopCondition
-from orchestrator.toml_input import (FolderName, PositiveInt, checked, default_folder_name, fail, fail_whole,
+from orchestrator.toml_input import (FolderName, Positive, PositiveInt, checked, default_folder_name, fail, fail_whole,
                                      is_finite_number, one_of, shown, shown_text)
 
 #: Exchange orders: participants due at a communication point step one after another, each
@@ -113,6 +113,8 @@ class SimulationTable(ScenarioTable):
     dt_s: Annotated[float, PlainValidator(lambda v: _positive_time(v))]
     stop_when: Annotated[tuple[StopCondition, ...], PlainValidator(_stop_conditions)] = ()
     exchange: Annotated[str, one_of(EXCHANGE_ORDERS)] = "gauss-seidel"
+    #: wall-time limit of one participant call (set-up or step) [s]
+    step_timeout_s: Positive = SimulationSpec.step_timeout_s
 
     @model_validator(mode="after")
     def _time_grid(self):
@@ -138,7 +140,8 @@ class SimulationTable(ScenarioTable):
     def spec(self, default_name: str) -> SimulationSpec:
         stop = self.stop_s if self.steps is None else self.start_s + self.steps * self.dt_s
         return SimulationSpec(name=self.name or default_name, start_s=self.start_s, stop_s=stop, dt_s=self.dt_s,
-                              stop_when=self.stop_when, exchange=self.exchange)
+                              stop_when=self.stop_when, exchange=self.exchange,
+                              step_timeout_s=self.step_timeout_s)
 
 
 def _positive_time(value: Any) -> float:

@@ -15,7 +15,7 @@ from pydantic import Field, PlainValidator, model_validator
 
 from orchestrator.errors import ScenarioError
 from orchestrator.scenario_spec import ParticipantSpec, VariableMapping, VectorMapping
-from orchestrator.toml_input import (Finite, Text, TomlTable, checked, fail, fail_whole, is_finite_number, one_of,
+from orchestrator.toml_input import (Finite, Positive, Text, TomlTable, checked, fail, fail_whole, is_finite_number, one_of,
                                      shown, shown_text)
 
 GEODETIC_ROLES = ("latitude", "longitude")
@@ -55,6 +55,8 @@ class PythonParticipantTable(ScenarioTable):
     class_path: Annotated[str, PlainValidator(_class_path)] | None = Field(default=None, alias="class")
     every: Every = 1
     options: dict[str, Any] = {}
+    #: wall-time limit of one set-up or step call [s]; None: the simulation's
+    step_timeout_s: Positive | None = None
 
     @model_validator(mode="before")
     @classmethod
@@ -108,6 +110,8 @@ class FmuParticipantTable(ScenarioTable):
     mapping: Annotated[dict, PlainValidator(_table_of)] = {}
     geodetic: GeodeticTable | None = None
     initial: Annotated[dict, PlainValidator(_table_of)] = {}
+    #: wall-time limit of one set-up or step call [s]; None: the simulation's
+    step_timeout_s: Positive | None = None
 
     @model_validator(mode="before")
     @classmethod
@@ -213,7 +217,7 @@ def participant_specs(table: dict, where: str) -> tuple[ParticipantSpec, ...]:
         elif "type" in body:
             model = checked(PythonParticipantTable, body, where, at)
             specs.append(ParticipantSpec(name=name, every=model.every, type=model.type, class_path=model.class_path,
-                                         options=dict(model.options)))
+                                         options=dict(model.options), step_timeout_s=model.step_timeout_s))
         else:
             raise ScenarioError(f"{where}: '{_dotted(at)}' needs either 'fmu' or 'type'")
     return tuple(specs)
@@ -235,4 +239,5 @@ def _fmu_participant(name: str, model: FmuParticipantTable, where: str, at: tupl
     return ParticipantSpec(name=name, every=model.every, fmu=model.fmu, parameter_set=model.parameter_set,
                            parameters=dict(model.parameters), mapping=mapping,
                            geodetic_origin_deg=model.geodetic.origin_deg if model.geodetic else None,
-                           fmi_version=model.fmi_version, initial=initial)
+                           fmi_version=model.fmi_version, initial=initial,
+                           step_timeout_s=model.step_timeout_s)

@@ -62,6 +62,8 @@ class ParticipantSpec:
     type: str | None = None
     class_path: str | None = None
     options: dict[str, Any] = field(default_factory=dict)
+    #: wall-time limit of one set-up or step call [s]; None: the simulation's
+    step_timeout_s: float | None = None
 
     @property
     def is_fmu(self) -> bool:
@@ -106,6 +108,8 @@ class SimulationSpec:
     dt_s: float
     stop_when: tuple[StopCondition, ...] = ()
     exchange: str = "gauss-seidel"
+    #: wall-time limit of one participant call (set-up or step) [s] (orchestrator.time_limits)
+    step_timeout_s: float = 300.0
 
     @property
     def steps(self) -> int:

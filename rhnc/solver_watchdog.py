@@ -23,12 +23,14 @@ process under the iteration limit only.
 
 from __future__ import annotations
 
+import ctypes
 import dataclasses
 import logging
 import math
 import multiprocessing
 import os
 import signal
+import sys
 import time
 import weakref
 from collections.abc import Callable, Mapping
@@ -125,6 +127,17 @@ def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, 
             return
 
 
+def _die_with_parent() -> None:
+    """Linux: the kernel ends this worker when the controller's process dies (even by SIGKILL),
+    so that a solve looping in native code does not outlive it."""
+    if not sys.platform.startswith("linux"):
+        return  # elsewhere the worker ends at its next receive, when the pipe closes
+    try:
+        ctypes.CDLL(None).prctl(1, signal.SIGKILL, 0, 0, 0)  # 1: PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        LOG.debug("prctl unavailable", exc_info=True)
+
+
 def _kill(pid: int) -> None:
     try:
         os.kill(pid, signal.SIGKILL)
@@ -210,6 +223,7 @@ class BoundedSolver:
         pid = os.fork()
         if pid == 0:  # child
             parent_end.close()
+            _die_with_parent()
             try:
                 _serve(child_end, dict(self._solvers), self.factories)
             finally:

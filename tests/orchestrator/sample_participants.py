@@ -198,3 +198,120 @@ class Hog(Participant):
             except KeyboardInterrupt:
                 pass
         return {"ok": 1.0}
+
+
+class Sleeper(Participant):
+    """From ``at_s`` on, a step that sleeps ``sleep_s``; with ``swallow`` it catches everything
+    and sleeps again (a participant that no Python exception can stop)."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        participant = cls(name)
+        participant.at = options.get("at_s", 0.0)
+        participant.sleep_s = options.get("sleep_s", 3600.0)
+        participant.swallow = options.get("swallow", False)
+        participant.unless_exists = options.get("unless_exists")
+        participant.busy = options.get("busy", False)
+        return participant
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["ok"])
+
+    def setup(self, start_time, inputs):
+        return {"ok": 1.0}
+
+    def step(self, time, step_size, inputs):
+        import time as wallclock
+
+        import os
+
+        if time >= self.at and not (self.unless_exists and os.path.exists(self.unless_exists)):
+            print(f"sleeper: sleeping at t = {time:g} s", flush=True)
+            while True:
+                try:
+                    if self.busy:  # a Python loop that computes rather than sleeps
+                        end = wallclock.monotonic() + self.sleep_s
+                        while wallclock.monotonic() < end:
+                            pass
+                    else:
+                        wallclock.sleep(self.sleep_s)
+                    break
+                except BaseException:  # noqa: B036 - the point: it swallows even the time limit
+                    if not self.swallow:
+                        raise
+        return {"ok": 1.0}
+
+
+class Misbehaving(Participant):
+    """Fails in one of the ways a participant can fail outside a plain exception in its step.
+
+    ``how``: ``"exit"`` (sys.exit(5) in its step at ``at_s``), ``"terminate"`` (terminate()
+    raises), ``"summary"`` (summary() raises), ``"unserialisable"`` (a summary JSON cannot
+    hold), ``"options"`` (from_options raises ValueError), ``"nan_setup"`` (a NaN output at
+    set-up, past the checks a scenario file gets).
+    """
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        how = options.get("how")
+        if how == "options":
+            raise ValueError("gain must be positive")
+        participant = cls(name)
+        participant.how = how
+        participant.at = options.get("at_s", 0.0)
+        participant.steps = 0
+        return participant
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["ok"])
+
+    def setup(self, start_time, inputs):
+        return {"ok": float("nan") if self.how == "nan_setup" else 1.0}
+
+    def step(self, time, step_size, inputs):
+        import sys
+
+        self.steps += 1
+        if self.how == "exit" and time >= self.at:
+            sys.exit(5)
+        return {"ok": 1.0}
+
+    def terminate(self):
+        if self.how == "terminate":
+            raise OSError("device busy")
+
+    def summary(self):
+        if self.how == "summary":
+            raise ZeroDivisionError("division by zero")
+        if self.how == "unserialisable":
+            return {"steps": self.steps, "model": object()}
+        return {"steps": self.steps}
+
+
+class SelfKiller(Participant):
+    """At ``at_s`` sends SIGKILL to its own process unless the file ``unless_exists`` exists
+    (what the out-of-memory killer or an operator does to a worker)."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        participant = cls(name)
+        participant.at = options.get("at_s", 0.0)
+        participant.unless_exists = options.get("unless_exists")
+        participant.crash = options.get("crash", False)
+        return participant
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["ok"])
+
+    def setup(self, start_time, inputs):
+        return {"ok": 1.0}
+
+    def step(self, time, step_size, inputs):
+        import os
+        import signal
+
+        if time >= self.at and self.crash:
+            raise RuntimeError("a bug of its own")
+        if time >= self.at and not (self.unless_exists and os.path.exists(self.unless_exists)):
+            os.kill(os.getpid(), signal.SIGKILL)
+        return {"ok": 1.0}
