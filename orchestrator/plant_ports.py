@@ -26,6 +26,10 @@ ANGLE = dimension(rad=1)
 ANGULAR_RATE = dimension(rad=1, s=-1)
 FORCE = dimension(kg=1, m=1, s=-2)
 MOMENT = dimension(kg=1, m=2, s=-2)
+POWER = dimension(kg=1, m=2, s=-3)
+#: revolutions per second: a frequency; a unit of angle per time (pint's ``rpm``, ``rad/s``)
+#: is accepted for it and divided by 2 pi rad per revolution
+FREQUENCY = dimension(s=-1)
 
 
 @dataclass(frozen=True)
@@ -40,11 +44,15 @@ class PlantPort:
         Exponents over :data:`BASE_UNITS`; the port's value is in the SI unit of it.
     si_unit : str
         That unit's name, for messages.
+    revolutions : bool
+        A rate of revolutions (1/s): a unit of angle per time (``rpm``, ``rad/s``) is
+        converted at 2 pi rad per revolution.
     """
 
     causality: str
     dimension: tuple[int, ...]
     si_unit: str
+    revolutions: bool = False
 
     @property
     def is_angle(self) -> bool:
@@ -68,7 +76,18 @@ PLANT_PORTS: dict[str, PlantPort] = {
     "wind_speed": PlantPort("input", SPEED, "m/s"),
     "wind_direction": PlantPort("input", ANGLE, "rad"),
     "hs": PlantPort("input", LENGTH, "m"),
+    # actuator level (a plant steered by rudder and propeller, e.g. KCSMMG behind an allocation)
+    "rudder_angle_cmd": PlantPort("input", ANGLE, "rad"),
+    "propeller_rps_cmd": PlantPort("input", FREQUENCY, "1/s", revolutions=True),
+    "rudder_angle": PlantPort("output", ANGLE, "rad"),
+    "propeller_rps": PlantPort("output", FREQUENCY, "1/s", revolutions=True),
+    "thrust": PlantPort("output", FORCE, "N"),
+    "delivered_power": PlantPort("output", POWER, "W"),
 }
+
+#: The ports of an actuator-level plant that an allocation participant drives and reads.
+ACTUATOR_INPUTS = ("rudder_angle_cmd", "propeller_rps_cmd")
+ACTUATOR_OUTPUTS = ("rudder_angle", "propeller_rps")
 
 #: Output angles reported in (-pi, pi] whatever range the FMU uses (compass 0-360 deg).
 WRAPPED_OUTPUTS = ("psi", "cog")
@@ -95,4 +114,6 @@ INITIAL_KEYS = {
     "u_mps": ("u", 1.0), "u_kn": ("u", KNOT),
     "v_mps": ("v", 1.0), "v_kn": ("v", KNOT),
     "r_rad_s": ("r", 1.0), "r_deg_s": ("r", DEG), "r_deg_min": ("r", DEG / 60.0),
+    "rudder_angle_rad": ("rudder_angle", 1.0), "rudder_angle_deg": ("rudder_angle", DEG),
+    "propeller_rps": ("propeller_rps", 1.0), "propeller_rpm": ("propeller_rps", 1.0 / 60.0),
 }

@@ -149,7 +149,9 @@ class ControlParticipant(Participant):
         false: the paper's circles R + R_i; see :mod:`rhnc.nmpc_colregs`).
     clearance_margin_nm, clearance_margin_growth_kn : float
         Margin added to R + R_i [nm] and its growth with prediction time [kn = nm/h]
-        (default 0, 0): tightening against disturbances and model error.
+        (default 0, 0): tightening against disturbances and model error.  A model set
+        written by ``identify`` carries ``position_error_growth_mps``, the growth of its
+        own prediction error; it is the default growth with that model.
     stand_on_action_tcpa_s, stand_on_action_range_factor : float
         Rule 17: when a stand-on ship stops standing on (defaults 600 s, 2).
     disturbance_observer : bool
@@ -164,6 +166,7 @@ class ControlParticipant(Participant):
     def __init__(self, name: str, controller: NMPCController, et_default: float) -> None:
         super().__init__(name)
         self.model_check: dict[str, Any] = {"set": controller.params.name, "check": "plant not seen"}
+        self.margin_source = "scenario" if controller.settings.clearance_margin_growth_mps else "none"
         self._tau_r_history: list[float] = []
         self.controller = controller
         self.et_default = et_default
@@ -220,6 +223,16 @@ class ControlParticipant(Participant):
                                    ("observer_gain", "observer_gain", 1.0)):
             if key in options:
                 kwargs[target] = _number(options, key, where, None) * scale
+        margin_source = "scenario" if "clearance_margin_growth_kn" in options else "none"
+        if "clearance_margin_growth_kn" not in options and "position_error_growth_mps" in params.extras:
+            # an identified model carries how fast its predicted position drifts from the
+            # plant's: the collision domains are tightened by it (see rhnc/identification.py)
+            growth = params.extras["position_error_growth_mps"]
+            if not is_finite_number(growth) or growth < 0.0:
+                raise ScenarioError(f"{where}: model set '{params.name}': 'position_error_growth_mps' must be a "
+                                    f"number >= 0, got {growth!r}")
+            kwargs["clearance_margin_growth_mps"] = float(growth)
+            margin_source = "model's prediction error"
         if "collision_slack_weight" in options:  # false: hard collision constraints
             value = options["collision_slack_weight"]
             kwargs["collision_slack_weight"] = None if value is False else _number(
@@ -241,7 +254,9 @@ class ControlParticipant(Participant):
         except ValueError as error:
             raise ScenarioError(f"{where}: {error}") from None
         et_default = _number(options, "et_default", where, 0.0)
-        return cls(name, NMPCController(params, settings), et_default)
+        participant = cls(name, NMPCController(params, settings), et_default)
+        participant.margin_source = margin_source
+        return participant
 
     @property
     def input_names(self) -> Sequence[str]:
@@ -348,6 +363,8 @@ class ControlParticipant(Participant):
             "tau_r_sign_changes_per_100_solves": tau_r_sign_changes_per_100(
                 self._tau_r_history, self.controller.params.tau_r_max),
             "model_check": self.model_check,
+            "clearance_margin_growth_kn": self.controller.settings.clearance_margin_growth_mps / KNOT,
+            "clearance_margin_growth_from": self.margin_source,
             **self.controller.library.summary(),
         }
 

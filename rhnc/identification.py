@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from orchestrator.errors import ScenarioError, ToolchainError
-from rhnc.ship_model import DYNAMICS_KEYS, STATE_NAMES, ShipParameters, rk4_step
+from rhnc.ship_model import DYNAMICS_KEYS, STATE_NAMES, ShipParameters, derivatives, rk4_step
 
 LOG = logging.getLogger(__name__)
 KNOT = 1852.0 / 3600.0
@@ -47,6 +47,10 @@ COEFFICIENTS = ("m11", "m22", "m33", "d11", "d22", "d33", "d23", "d32")
 WEATHER_PORTS = ("current_north", "current_east", "wind_speed", "wind_direction", "hs")
 FIT_MANOEUVRES = ("speed_steps", "turn_starboard", "turn_port", "zigzag_10")
 VALIDATION_MANOEUVRE = "zigzag_20"
+#: prediction time over which the position error's growth is measured [s] (15 NMPC intervals of 20 s)
+PREDICTION_HORIZON_S = 300.0
+#: spacing of the prediction windows [s]
+WINDOW_STRIDE_S = 20.0
 SAMPLE_S = 1.0
 FILTER_WINDOW = 21
 
@@ -72,6 +76,7 @@ class Fit:
     validation: dict[str, dict[str, float]]
     records: dict[str, Record]
     predictions: dict[str, np.ndarray]
+    prediction_error: dict[str, float] = dataclasses.field(default_factory=dict)
 
 
 class PlantRunner:
@@ -303,6 +308,48 @@ def validation_errors(record: Record, predicted: np.ndarray) -> dict[str, float]
     }
 
 
+def position_error_growth(parameters: ShipParameters, records: dict[str, Record],
+                          horizon_s: float = PREDICTION_HORIZON_S, stride_s: float = WINDOW_STRIDE_S) -> dict[str, float]:
+    """How fast the model's predicted position drifts from the plant's: the NMPC's margin growth.
+
+    From every ``stride_s`` of every record the model is integrated open loop over
+    ``horizon_s`` with the recorded inputs, starting from the measured state, as the NMPC
+    predicts from each measured state.  The position error e(t) grows with the prediction
+    time t; its largest ratio e(t) / t over all windows and times is a growth rate [m/s]
+    such that a collision domain widened by ``growth * t`` covers the prediction error of
+    every window (the NMPC's ``clearance_margin_growth``: constraint tightening, so that a
+    plan grazing the domain does not take the plant into it).  Also returned: the largest
+    errors after 20 s, 60 s and ``horizon_s``.
+    """
+    steps = int(round(horizon_s / SAMPLE_S))
+    ratios, marks = [], {20: [], 60: [], steps: []}
+    times = SAMPLE_S * np.arange(1, steps + 1)
+    for record in records.values():
+        starts = np.arange(0, len(record.t) - steps, int(round(stride_s / SAMPLE_S)))
+        if not len(starts):
+            continue
+        state = record.states[starts].T.copy()          # (6, windows)
+        errors = np.empty((steps, len(starts)))
+        for j in range(steps):
+            tau = record.tau[starts + j].T
+            h = SAMPLE_S / 2.0
+            for _ in range(2):
+                k1 = derivatives(state, tau, parameters)
+                k2 = derivatives(state + 0.5 * h * k1, tau, parameters)
+                k3 = derivatives(state + 0.5 * h * k2, tau, parameters)
+                k4 = derivatives(state + h * k3, tau, parameters)
+                state = state + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+            measured = record.states[starts + j + 1]
+            errors[j] = np.hypot(state[0] - measured[:, 0], state[1] - measured[:, 1])
+        ratios.append(np.max(errors / times[:, None]))
+        for mark in marks:
+            marks[mark].append(np.max(errors[mark - 1]))
+    if not ratios:
+        raise ToolchainError(f"identify: no manoeuvre lasts the {horizon_s:g} s prediction horizon")
+    return {"growth_mps": float(max(ratios)), "horizon_s": float(horizon_s),
+            **{f"max_error_{int(mark * SAMPLE_S)}s_m": float(max(values)) for mark, values in marks.items()}}
+
+
 def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_name: str,
                    reference: ShipParameters | None = None, refine: bool = True) -> Fit:
     """Sail the manoeuvres, fit the coefficients, validate on the held-out manoeuvre.
@@ -339,12 +386,15 @@ def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_
     if reference is not None:
         predicted = simulate(reference, records[VALIDATION_MANOEUVRE])
         validation[f"held_out with {reference.name}"] = validation_errors(records[VALIDATION_MANOEUVRE], predicted)
-    return Fit(parameters, trim, rms, r2, validation, records, predictions)
+    error = position_error_growth(parameters, records)
+    parameters = dataclasses.replace(parameters, extras={"position_error_growth_mps": error["growth_mps"]})
+    return Fit(parameters, trim, rms, r2, validation, records, predictions, error)
 
 
 def parameter_set_toml(fit: Fit, identity: dict[str, str], source: str) -> str:
     """The fitted set as a parameter-set file (the format of ``models/KCS/parameter_sets.toml``)."""
     p = fit.parameters
+    through = f" through its allocation '{identity['through']}'" if identity.get("through") else ""
     lines = [
         "# Identified by `python -m orchestrator identify` (rhnc/identification.py): the NMPC's",
         "# 3-DOF prediction model fitted by least squares on the plant's manoeuvres, weather off.",
@@ -352,13 +402,17 @@ def parameter_set_toml(fit: Fit, identity: dict[str, str], source: str) -> str:
         "#        tau_u_max N; tau_r_max N m (the bounds given to identify).",
         "",
         f"[{p.name}]",
-        f"description = \"Identified on {identity['model_name']} from {source}; held-out "
+        f"description = \"Identified on {identity['model_name']}{through} from {source}; held-out "
         f"{VALIDATION_MANOEUVRE}: heading RMS "
         f"{fit.validation['held_out: ' + VALIDATION_MANOEUVRE]['heading_rms_deg']:.2f} deg\"",
         f"plant_fmu = \"{identity['model_name']}\"",
         f"plant_guid = \"{identity['guid']}\"",
     ]
     lines += [f"{key} = {getattr(p, key)!r}" for key in DYNAMICS_KEYS]
+    if "position_error_growth_mps" in p.extras:
+        lines += ["# m/s: growth of the model's position error with prediction time on the manoeuvres; the",
+                  "# NMPC widens its collision domains by it unless the scenario sets clearance_margin_growth_kn",
+                  f"position_error_growth_mps = {p.extras['position_error_growth_mps']!r}"]
     return "\n".join(lines) + "\n"
 
 
