@@ -387,6 +387,8 @@ class ControlParticipant(Participant):
             check = "identified"
         elif identity["model_name"] in declared:
             check = "declared"
+            if "tau_r" not in plant.input_names and "rudder_angle_cmd" in plant.input_names:
+                check = "declared (through an allocation: the plant takes rudder and propeller)"
         self.model_check = {"set": self.controller.params.name, "plant": identity["model_name"],
                             "plant_guid": identity["guid"], "check": check}
         if check.startswith("neither"):

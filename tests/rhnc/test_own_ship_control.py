@@ -46,6 +46,9 @@ def test_model_check_against_the_plant(caplog):
         assert ctrl.model_check["check"] == "identified"
         assert ctrl.controller.params.name == "S175"
         assert _ctrl(REPO / "scenarios" / "exp3a_static.toml").model_check["check"] == "declared"
+        # the KCS set steering the actuator-level KCS through the allocation participant
+        assert _ctrl(REPO / "scenarios" / "exp3a_static_mmg.toml").model_check["check"].startswith(
+            "declared (through an allocation")
     assert "neither" not in caplog.text
 
 
@@ -59,6 +62,25 @@ def test_model_file_options_are_checked():
         _ctrl(path, {"participants.ctrl.options.model_set": "nope"})
     with pytest.raises(ScenarioError, match="option 'model_set' needs 'model_file'"):
         _ctrl(OWN / "exp3a_s175_kcs_model.toml", {"participants.ctrl.options.model_set": "S175"})
+
+
+def test_identified_model_tightens_the_collision_domains_by_its_prediction_error():
+    path = OWN / "exp3a_s175_identified.toml"
+    ctrl = _ctrl(path)
+    growth = ctrl.controller.params.extras["position_error_growth_mps"]
+    assert growth > 0.0
+    assert ctrl.controller.settings.clearance_margin_growth_mps == pytest.approx(growth)
+    assert ctrl.controller.domains.settings.clearance_margin_growth_mps == pytest.approx(growth)
+    assert ctrl.summary()["clearance_margin_growth_from"] == "model's prediction error"
+    # the scenario's own value wins, zero included
+    ctrl = _ctrl(path, {"participants.ctrl.options.clearance_margin_growth_kn": 0.0})
+    assert ctrl.controller.settings.clearance_margin_growth_mps == 0.0
+    assert ctrl.summary()["clearance_margin_growth_from"] == "scenario"
+    # the KCS set carries none: the paper's circles as they were
+    assert _ctrl(OWN / "exp3a_s175_kcs_model.toml").controller.settings.clearance_margin_growth_mps == 0.0
+    with pytest.raises(ScenarioError, match=r"participants\.ctrl: model set 'S175': 'position_error_growth_mps' "
+                                            r"must be a number >= 0, got -1"):
+        _ctrl(path, {"participants.ctrl.options.parameter_overrides": {"position_error_growth_mps": -1.0}})
 
 
 def test_summary_records_the_model_check(tmp_path):
