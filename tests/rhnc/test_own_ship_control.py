@@ -47,8 +47,11 @@ def test_model_check_against_the_plant(caplog):
         assert ctrl.controller.params.name == "S175"
         assert _ctrl(REPO / "scenarios" / "exp3a_static.toml").model_check["check"] == "declared"
         # the KCS set steering the actuator-level KCS through the allocation participant
-        assert _ctrl(REPO / "scenarios" / "exp3a_static_mmg.toml").model_check["check"].startswith(
-            "declared (through an allocation")
+        mmg = REPO / "scenarios" / "exp3a_static_mmg.toml"
+        kcs_set = {"participants.ctrl.options.model_file": (REPO / "models" / "KCS" / "parameter_sets.toml").as_posix(),
+                   "participants.ctrl.options.model_set": "default"}
+        assert _ctrl(mmg, kcs_set).model_check["check"].startswith("declared (through an allocation")
+        assert _ctrl(mmg).model_check["check"] == "identified"   # the set identified through the allocation
     assert "neither" not in caplog.text
 
 
@@ -108,8 +111,10 @@ def test_experiment_3b_on_the_s175_with_its_identified_model(tmp_path):
 def test_experiment_3a_on_the_s175_identified_model_against_the_kcs_model(tmp_path):
     """Same scenario, same solver, side by side: only the prediction model differs.
 
-    (Measured: the identified model grazes the circle by 1.7 m with 15.5 sign changes per
-    100 solves, the KCS model cuts 23 m into it with 72; see docs/own-ship.md.)
+    The identified set comes with its prediction-error growth, by which the NMPC tightens the
+    circle, and the scenario runs the disturbance observer: the goals hold (measured: +15.6 m,
+    0.164 nm, 4.5 sign changes per 100 solves); the KCS model cuts 30 m into the circle with
+    71 (docs/own-ship.md).
     """
     figures = {}
     for model in ("kcs_model", "identified"):
@@ -117,7 +122,8 @@ def test_experiment_3a_on_the_s175_identified_model_against_the_kcs_model(tmp_pa
         assert report.ok, report.reason
         figures[model] = (report.summary["analyses"]["encounter"], report.summary["participants"]["ctrl"])
     (kcs, kcs_ctrl), (fit, fit_ctrl) = figures["kcs_model"], figures["identified"]
-    assert fit["min_clearance_nm"] > kcs["min_clearance_nm"] + 0.005
-    assert fit["min_clearance_nm"] > -0.002            # within 4 m of R + R_i
+    assert fit["separation_respected"] == 1 and fit["min_clearance_nm"] >= 0.0
+    assert kcs["min_clearance_nm"] < 0.0
     assert fit["cross_track_end_nm"] < 0.2 < kcs["cross_track_end_nm"]
-    assert fit_ctrl["tau_r_sign_changes_per_100_solves"] < kcs_ctrl["tau_r_sign_changes_per_100_solves"] / 3
+    assert fit_ctrl["tau_r_sign_changes_per_100_solves"] <= 10 < kcs_ctrl["tau_r_sign_changes_per_100_solves"]
+    assert fit_ctrl["clearance_margin_growth_from"] == "model's prediction error"
