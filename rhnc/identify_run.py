@@ -5,6 +5,10 @@ ready for the control participant's ``model_file``/``model_set``), ``fit_report.
 (coefficients, residuals, R², open-loop errors per manoeuvre and on the held-out one),
 ``fit_report.md`` and one figure per manoeuvre; with ``out`` also a copy of the
 parameter-set file there.
+
+A plant at actuator level (it takes rudder angle and propeller revolutions, not tau) is
+identified through the scenario's ``allocation`` participant, as the NMPC sees it in a run
+(:class:`AllocatedPlant`).
 """
 
 from __future__ import annotations
