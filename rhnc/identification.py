@@ -44,7 +44,8 @@ from pathlib import Path
 import numpy as np
 
 from orchestrator.errors import ScenarioError, ToolchainError
-from rhnc.ship_model import DYNAMICS_KEYS, STATE_NAMES, ShipParameters, derivatives, rk4_step
+from rhnc.prediction_error import position_error_growth
+from rhnc.ship_model import DYNAMICS_KEYS, STATE_NAMES, ShipParameters, rk4_step
 
 LOG = logging.getLogger(__name__)
 KNOT = 1852.0 / 3600.0
@@ -52,10 +53,6 @@ COEFFICIENTS = ("m11", "m22", "m33", "d11", "d22", "d33", "d23", "d32")
 WEATHER_PORTS = ("current_north", "current_east", "wind_speed", "wind_direction", "hs")
 FIT_MANOEUVRES = ("speed_steps", "turn_starboard", "turn_port", "zigzag_10")
 VALIDATION_MANOEUVRE = "zigzag_20"
-#: prediction time over which the position error's growth is measured [s] (15 NMPC intervals of 20 s)
-PREDICTION_HORIZON_S = 300.0
-#: spacing of the prediction windows [s]
-WINDOW_STRIDE_S = 20.0
 SAMPLE_S = 1.0
 FILTER_WINDOW = 21
 
@@ -311,48 +308,6 @@ def validation_errors(record: Record, predicted: np.ndarray) -> dict[str, float]
         "yaw_rate_rms_deg_min": float(np.sqrt(np.mean(rate ** 2))),
         "position_end_m": float(position[-1]),
     }
-
-
-def position_error_growth(parameters: ShipParameters, records: dict[str, Record],
-                          horizon_s: float = PREDICTION_HORIZON_S, stride_s: float = WINDOW_STRIDE_S) -> dict[str, float]:
-    """How fast the model's predicted position drifts from the plant's: the NMPC's margin growth.
-
-    From every ``stride_s`` of every record the model is integrated open loop over
-    ``horizon_s`` with the recorded inputs, starting from the measured state, as the NMPC
-    predicts from each measured state.  The position error e(t) grows with the prediction
-    time t; its largest ratio e(t) / t over all windows and times is a growth rate [m/s]
-    such that a collision domain widened by ``growth * t`` covers the prediction error of
-    every window (the NMPC's ``clearance_margin_growth``: constraint tightening, so that a
-    plan grazing the domain does not take the plant into it).  Also returned: the largest
-    errors after 20 s, 60 s and ``horizon_s``.
-    """
-    steps = int(round(horizon_s / SAMPLE_S))
-    ratios, marks = [], {20: [], 60: [], steps: []}
-    times = SAMPLE_S * np.arange(1, steps + 1)
-    for record in records.values():
-        starts = np.arange(0, len(record.t) - steps, int(round(stride_s / SAMPLE_S)))
-        if not len(starts):
-            continue
-        state = record.states[starts].T.copy()          # (6, windows)
-        errors = np.empty((steps, len(starts)))
-        for j in range(steps):
-            tau = record.tau[starts + j].T
-            h = SAMPLE_S / 2.0
-            for _ in range(2):
-                k1 = derivatives(state, tau, parameters)
-                k2 = derivatives(state + 0.5 * h * k1, tau, parameters)
-                k3 = derivatives(state + 0.5 * h * k2, tau, parameters)
-                k4 = derivatives(state + h * k3, tau, parameters)
-                state = state + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-            measured = record.states[starts + j + 1]
-            errors[j] = np.hypot(state[0] - measured[:, 0], state[1] - measured[:, 1])
-        ratios.append(np.max(errors / times[:, None]))
-        for mark in marks:
-            marks[mark].append(np.max(errors[mark - 1]))
-    if not ratios:
-        raise ToolchainError(f"identify: no manoeuvre lasts the {horizon_s:g} s prediction horizon")
-    return {"growth_mps": float(max(ratios)), "horizon_s": float(horizon_s),
-            **{f"max_error_{int(mark * SAMPLE_S)}s_m": float(max(values)) for mark, values in marks.items()}}
 
 
 def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_name: str,
