@@ -127,3 +127,14 @@ def test_experiment_3a_on_the_s175_identified_model_against_the_kcs_model(tmp_pa
     assert fit["cross_track_end_nm"] < 0.2 < kcs["cross_track_end_nm"]
     assert fit_ctrl["tau_r_sign_changes_per_100_solves"] <= 10 < kcs_ctrl["tau_r_sign_changes_per_100_solves"]
     assert fit_ctrl["clearance_margin_growth_from"] == "model's prediction error"
+
+
+OWN_SHIP_SCENARIOS = sorted(OWN.glob("exp*.toml")) + sorted((REPO / "scenarios").glob("exp*_mmg.toml"))
+
+
+@pytest.mark.parametrize("path", OWN_SHIP_SCENARIOS, ids=lambda path: path.stem)
+def test_the_own_ship_and_actuator_plant_scenarios_validate(path, capsys):
+    """Every shipped own-ship scenario loads and builds (validate: participants and FMUs, no run)."""
+    from orchestrator.cli import main
+
+    assert main(["validate", str(path)]) == 0, capsys.readouterr().err
