@@ -31,6 +31,10 @@ ANGLE = dimension(rad=1)
 ANGULAR_RATE = dimension(rad=1, s=-1)
 FORCE = dimension(kg=1, m=1, s=-2)
 MOMENT = dimension(kg=1, m=2, s=-2)
+POWER = dimension(kg=1, m=2, s=-3)
+#: revolutions per second: a frequency; a unit of angle per time (pint's ``rpm``, ``rad/s``)
+#: is accepted for it and divided by 2 pi rad per revolution
+FREQUENCY = dimension(s=-1)
 
 
 @dataclass(frozen=True)
@@ -45,11 +49,15 @@ class PlantPort:
         Exponents over :data:`BASE_UNITS`; the port's value is in the SI unit of it.
     si_unit : str
         That unit's name, for messages.
+    revolutions : bool
+        A rate of revolutions (1/s): a unit of angle per time (``rpm``, ``rad/s``) is
+        converted at 2 pi rad per revolution.
     """
 
     causality: str
     dimension: tuple[int, ...]
     si_unit: str
+    revolutions: bool = False
 
     @property
     def is_angle(self) -> bool:

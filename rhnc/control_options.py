@@ -112,6 +112,14 @@ def controller_from_options(options: Mapping[str, Any], context: BuildContext):
                                ("observer_gain", "observer_gain", 1.0)):
         if key in options:
             kwargs[target] = _number(options, key, where, None) * scale
+    if "clearance_margin_growth_kn" not in options and "position_error_growth_mps" in params.extras:
+        # an identified model carries how fast its predicted position drifts from the
+        # plant's: the collision domains are tightened by it (see rhnc/identification.py)
+        growth = params.extras["position_error_growth_mps"]
+        if not is_finite_number(growth) or growth < 0.0:
+            raise ScenarioError(f"{where}: model set '{params.name}': 'position_error_growth_mps' must be a "
+                                f"number >= 0, got {growth!r}")
+        kwargs["clearance_margin_growth_mps"] = float(growth)
     if "collision_slack_weight" in options:  # false: hard collision constraints
         value = options["collision_slack_weight"]
         kwargs["collision_slack_weight"] = None if value is False else _number(

@@ -116,7 +116,9 @@ class ControlParticipant(Participant):
         false: the paper's circles R + R_i; see :mod:`rhnc.nmpc_colregs`).
     clearance_margin_nm, clearance_margin_growth_kn : float
         Margin added to R + R_i [nm] and its growth with prediction time [kn = nm/h]
-        (default 0, 0): tightening against disturbances and model error.
+        (default 0, 0): tightening against disturbances and model error.  A model set
+        written by ``identify`` carries ``position_error_growth_mps``, the growth of its
+        own prediction error; it is the default growth with that model.
     stand_on_action_tcpa_s, stand_on_action_range_factor : float
         Rule 17: when a stand-on ship stops standing on (defaults 600 s, 2).
     disturbance_observer : bool
@@ -133,6 +135,7 @@ class ControlParticipant(Participant):
     def __init__(self, name: str, controller: NMPCController, et_default: float) -> None:
         super().__init__(name)
         self.model_check: dict[str, Any] = {"set": controller.params.name, "check": "plant not seen"}
+        self.margin_source = "scenario" if controller.settings.clearance_margin_growth_mps else "none"
         self._tau_r_history: list[float] = []
         self.controller = controller
         self.et_default = et_default
@@ -150,7 +153,14 @@ class ControlParticipant(Participant):
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "ControlParticipant":
         """Build from scenario options (see :mod:`rhnc.control_options`); errors name the key."""
         params, settings, et_default = controller_from_options(options, context)
-        return cls(name, NMPCController(params, settings), et_default)
+        participant = cls(name, NMPCController(params, settings), et_default)
+        if "clearance_margin_growth_kn" in options:
+            participant.margin_source = "scenario"
+        elif "position_error_growth_mps" in params.extras:
+            participant.margin_source = "model's prediction error"
+        else:
+            participant.margin_source = "none"
+        return participant
 
     @property
     def input_names(self) -> Sequence[str]:
@@ -257,6 +267,8 @@ class ControlParticipant(Participant):
             "tau_r_sign_changes_per_100_solves": tau_r_sign_changes_per_100(
                 self._tau_r_history, self.controller.params.tau_r_max),
             "model_check": self.model_check,
+            "clearance_margin_growth_kn": self.controller.settings.clearance_margin_growth_mps / KNOT,
+            "clearance_margin_growth_from": self.margin_source,
             **self.controller.library.summary(),
         }
 
@@ -279,6 +291,8 @@ class ControlParticipant(Participant):
             check = "identified"
         elif identity["model_name"] in declared:
             check = "declared"
+            if "tau_r" not in plant.input_names and "rudder_angle_cmd" in plant.input_names:
+                check = "declared (through an allocation: the plant takes rudder and propeller)"
         self.model_check = {"set": self.controller.params.name, "plant": identity["model_name"],
                             "plant_guid": identity["guid"], "check": check}
         if check.startswith("neither"):

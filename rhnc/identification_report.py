@@ -19,6 +19,7 @@ from rhnc.ship_model import DYNAMICS_KEYS
 def parameter_set_toml(fit: Fit, identity: dict[str, str], source: str) -> str:
     """The fitted set as a parameter-set file (the format of ``models/KCS/parameter_sets.toml``)."""
     p = fit.parameters
+    through = f" through its allocation '{identity['through']}'" if identity.get("through") else ""
     lines = [
         "# Identified by `python -m orchestrator identify` (rhnc/identification.py): the NMPC's",
         "# 3-DOF prediction model fitted by least squares on the plant's manoeuvres, weather off.",
@@ -26,13 +27,17 @@ def parameter_set_toml(fit: Fit, identity: dict[str, str], source: str) -> str:
         "#        tau_u_max N; tau_r_max N m (the bounds given to identify).",
         "",
         f"[{p.name}]",
-        f"description = \"Identified on {identity['model_name']} from {source}; held-out "
+        f"description = \"Identified on {identity['model_name']}{through} from {source}; held-out "
         f"{VALIDATION_MANOEUVRE}: heading RMS "
         f"{fit.validation['held_out: ' + VALIDATION_MANOEUVRE]['heading_rms_deg']:.2f} deg\"",
         f"plant_fmu = \"{identity['model_name']}\"",
         f"plant_guid = \"{identity['guid']}\"",
     ]
     lines += [f"{key} = {getattr(p, key)!r}" for key in DYNAMICS_KEYS]
+    if "position_error_growth_mps" in p.extras:
+        lines += ["# m/s: growth of the model's position error with prediction time on the manoeuvres; the",
+                  "# NMPC widens its collision domains by it unless the scenario sets clearance_margin_growth_kn",
+                  f"position_error_growth_mps = {p.extras['position_error_growth_mps']!r}"]
     return "\n".join(lines) + "\n"
 
 

@@ -10,7 +10,8 @@ m/s or knots.
 from __future__ import annotations
 
 from orchestrator.geometry import DEG, KNOT, NM
-from orchestrator.plant_ports import ANGLE, ANGULAR_RATE, FORCE, LENGTH, MOMENT, SPEED, PlantPort, PortTable
+from orchestrator.plant_ports import (ANGLE, ANGULAR_RATE, FORCE, FREQUENCY, LENGTH, MOMENT, POWER, SPEED, PlantPort,
+                                      PortTable)
 
 PORTS: dict[str, PlantPort] = {
     "x": PlantPort("output", LENGTH, "m"),
@@ -28,7 +29,18 @@ PORTS: dict[str, PlantPort] = {
     "wind_speed": PlantPort("input", SPEED, "m/s"),
     "wind_direction": PlantPort("input", ANGLE, "rad"),
     "hs": PlantPort("input", LENGTH, "m"),
+    # actuator level (a plant steered by rudder and propeller, e.g. KCSMMG behind an allocation)
+    "rudder_angle_cmd": PlantPort("input", ANGLE, "rad"),
+    "propeller_rps_cmd": PlantPort("input", FREQUENCY, "1/s", revolutions=True),
+    "rudder_angle": PlantPort("output", ANGLE, "rad"),
+    "propeller_rps": PlantPort("output", FREQUENCY, "1/s", revolutions=True),
+    "thrust": PlantPort("output", FORCE, "N"),
+    "delivered_power": PlantPort("output", POWER, "W"),
 }
+
+#: The ports of an actuator-level plant that an allocation participant drives and reads.
+ACTUATOR_INPUTS = ("rudder_angle_cmd", "propeller_rps_cmd")
+ACTUATOR_OUTPUTS = ("rudder_angle", "propeller_rps")
 
 #: Output angles reported in (-pi, pi] whatever range the FMU uses (compass 0-360 deg).
 WRAPPED_OUTPUTS = ("psi", "cog")
@@ -52,6 +64,8 @@ INITIAL_KEYS = {
     "u_mps": ("u", 1.0), "u_kn": ("u", KNOT),
     "v_mps": ("v", 1.0), "v_kn": ("v", KNOT),
     "r_rad_s": ("r", 1.0), "r_deg_s": ("r", DEG), "r_deg_min": ("r", DEG / 60.0),
+    "rudder_angle_rad": ("rudder_angle", 1.0), "rudder_angle_deg": ("rudder_angle", DEG),
+    "propeller_rps": ("propeller_rps", 1.0), "propeller_rpm": ("propeller_rps", 1.0 / 60.0),
 }
 
 
