@@ -337,7 +337,8 @@ class NMPCController:
         options = solver_options(s.solver, self.problem.equality, s.max_iterations, s.wall_time_limit_s,
                                  s.cpu_time_limit_s)
         # the NLP's functions compiled once per machine and cached (or interpreted)
-        library = self.library = NLPLibrary(self.problem.nlp, s.solver, options, s.codegen)
+        library = self.library = NLPLibrary(self.problem.nlp, s.solver, options, s.codegen,
+                                            self.problem.compact_nlp)
         solvers = {"hard": library.solver("rhnc_nmpc")}
         # The second, relaxed attempt gets a solver of its own: a solver keeps state between
         # calls (fatrop), and a failed hard attempt left in it spoils the relaxed one started
