@@ -40,6 +40,10 @@ OBSTACLE_FIELDS = 10
 DISTURBANCE_SIZE = 5
 
 
+#: IPOPT options of a warm-started solve (the guess and its multipliers near the solution)
+WARM_START_IPOPT = {"warm_start_bound_push": 1e-6, "warm_start_mult_bound_push": 1e-6, "mu_init": 1e-4}
+
+
 def disturbed_derivatives(params: ShipParameters) -> ca.Function:
     """``f(X[6], tau[2], d[5]) -> Xdot[6]``: the prediction model with a constant disturbance."""
     f = casadi_derivatives(params)
@@ -254,12 +258,18 @@ def build_problem(params: ShipParameters, horizon_steps: int, control_interval_s
 
 
 def solver_options(solver: str, equality: Sequence[bool], max_iterations: int, wall_time_s: float | None,
-                   cpu_time_s: float | None = None) -> dict:
-    """``nlpsol`` options per solver: quiet, iteration-limited (IPOPT also wall-time-limited)."""
+                   cpu_time_s: float | None = None, warm_start_duals: bool = False) -> dict:
+    """``nlpsol`` options per solver: quiet, iteration-limited (IPOPT also wall-time-limited).
+
+    ``warm_start_duals``: IPOPT starts from the multipliers passed with the guess
+    (``warm_start_init_point``) instead of computing its own.
+    """
     common = {"expand": True, "print_time": False, "error_on_fail": False}
     if solver == "ipopt":
         ipopt = {"print_level": 0, "sb": "yes", "max_iter": max_iterations, "tol": 1e-6,
-                 "mu_strategy": "adaptive", "warm_start_init_point": "no"}
+                 "mu_strategy": "adaptive", "warm_start_init_point": "yes" if warm_start_duals else "no"}
+        if warm_start_duals:
+            ipopt.update(WARM_START_IPOPT)
         if wall_time_s is not None:
             ipopt["max_wall_time"] = float(wall_time_s)
         if cpu_time_s is not None:
