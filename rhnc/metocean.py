@@ -306,9 +306,9 @@ class MetOceanField:
 
     def to_netcdf(self, path) -> Path:
         """Write the field as NetCDF (readable again by :meth:`from_netcdf`, every time step)."""
-        path = Path(path)
-        self.to_dataset().to_netcdf(path, engine="netcdf4")
-        return path
+        from rhnc.metocean_netcdf import write_netcdf
+
+        return write_netcdf(self, path)
 
     def write_fmu_grid(self, path) -> Path:
         """Write the binary grid the MetOcean FMU reads (``MOGRID2``, models/MetOcean/readme.md).
