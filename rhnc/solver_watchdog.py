@@ -78,7 +78,8 @@ class SolveOutcome:
     stopped_by : str
         Which limit stopped it: ``"cpu"``, ``"wall"`` or ``""``.
     cpu_time_s : float
-        Processor time of the solver call [s] (in the process that ran it).
+        Processor time of the solver call [s] (in the process that ran it; in the worker,
+        with the unpacking of the request and the building of the answer).
     lam_x, lam_g : numpy.ndarray
         Multipliers of the bounds and of the constraints at ``x`` (NaN when stopped): the
         next solve's dual warm start.
@@ -118,6 +119,7 @@ def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, 
     """Child's loop: receive (solver name, arguments), solve, send the outcome."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     while True:
+        cpu_start = time.process_time()  # waiting for a request costs no processor time
         try:
             name, arguments = connection.recv()
         except (EOFError, OSError):
@@ -125,6 +127,8 @@ def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, 
         if name not in solvers:
             solvers[name] = factories[name]()
         outcome = _timed_call(solvers[name], arguments)
+        # the worker's share of the call: unpacking the request, solving, building the answer
+        outcome.cpu_time_s = time.process_time() - cpu_start
         try:
             connection.send(outcome)
         except (BrokenPipeError, OSError):
