@@ -40,6 +40,10 @@ OBSTACLE_FIELDS = 10
 DISTURBANCE_SIZE = 5
 
 
+#: fatrop's initial barrier parameter.  The guess is the previous plan, shifted, so it starts
+#: close to the solution: 1e-3 took 15 % fewer iterations than 1e-1 in the benchmark's
+#: closed loops (one and three targets), to the same plans within the solver's tolerance.
+FATROP_MU_INIT = 1e-3
 #: IPOPT options of a warm-started solve (the guess and its multipliers near the solution)
 WARM_START_IPOPT = {"warm_start_bound_push": 1e-6, "warm_start_mult_bound_push": 1e-6, "mu_init": 1e-4}
 
@@ -277,7 +281,7 @@ def solver_options(solver: str, equality: Sequence[bool], max_iterations: int, w
         return {**common, "ipopt": ipopt}
     if solver == "fatrop":
         return {**common, "structure_detection": "auto", "equality": list(equality), "debug": False,
-                "fatrop": {"print_level": 0, "max_iter": max_iterations, "tol": 1e-6, "mu_init": 1e-1}}
+                "fatrop": {"print_level": 0, "max_iter": max_iterations, "tol": 1e-6, "mu_init": FATROP_MU_INIT}}
     return {
         **common,
         "qpsol": "qrqp",
