@@ -105,7 +105,8 @@ def _outcome(solver: ca.Function, result: Mapping, elapsed: float, cpu: float) -
         x=np.array(result["x"]).ravel(), g=np.array(result["g"]).ravel(), f=float(result["f"]),
         success=bool(stats.get("success", False)), iterations=int(stats.get("iter_count", -1)),
         status=str(stats.get("return_status", "unknown")), wall_time_s=elapsed, cpu_time_s=cpu,
-        lam_x=np.array(result["lam_x"]).ravel(), lam_g=np.array(result["lam_g"]).ravel(),
+        lam_x=np.array(result["lam_x"]).ravel() if "lam_x" in result else None,
+        lam_g=np.array(result["lam_g"]).ravel() if "lam_g" in result else None,
     )
 
 
