@@ -126,7 +126,7 @@ class ControlParticipant(Participant):
     observer_gain : float
         The observer's correction per step, in (0, 1] (default 0.5).
     codegen : bool
-        Compile the NLP to C once per machine and reuse it (default false; see
+        Compile the NLP to C once per machine and reuse it (default true; see
         :mod:`rhnc.nmpc_codegen`); the summary reports ``codegen: compiled|interpreted``.
     """
 

@@ -309,9 +309,9 @@ class MetOceanField:
 
     def to_netcdf(self, path) -> Path:
         """Write the field as NetCDF (readable again by :meth:`from_netcdf`, every time step)."""
-        path = Path(path)
-        self.to_dataset().to_netcdf(path, engine="netcdf4")
-        return path
+        from rhnc.metocean_netcdf import write_netcdf
+
+        return write_netcdf(self, path)
 
     def write_fmu_files(self, work_dir) -> dict[str, str]:
         """Write what the environment FMU reads into ``work_dir``: ``{placeholder: path}``.
