@@ -1,0 +1,54 @@
+"""Survivors of the mutation run explained by hand as equivalent mutants.
+
+Read by ``scripts/mutation_report.py``, which merges these explanations into
+``docs/mutation-report.md``.  A rule is matched on the mutation itself, not on mutmut's
+numbering (which moves whenever a module changes): (source file or "" for any, a regular
+expression searched in the stripped original lines, one searched in the stripped mutated
+lines, why the mutant cannot change behaviour).  Rerender the report after editing with
+``python scripts/mutation_report.py --report-only``.
+
+A rule belongs here only when no test can tell the mutant from the original (same results
+for every input the code accepts); a mutant that a test could kill gets a test instead.
+"""
+
+_NO_ROWS = "an empty (0, k) array: no row is read, the column count does not matter"
+_FLOAT = ("the dtype only changes for integer input, and every use combines it with a float array or "
+          "constant (numpy promotes), so the results are the same floats")
+_SIGN = "only the sign of the range rate is used, and the divisor is positive either way"
+_TRAPEZOID = "the trapezoid rule over fewer than two samples is 0.0, the value of the other branch"
+_REST_END = ("an end row at rest means p2 - 4 p1 + 3 p0 = 0 to within the rest threshold (one-sided difference "
+             "zero), which makes velocity and acceleration at the neighbouring row parallel to that precision: the "
+             "neighbour's yaw rate is 0 (exactly for a ship stopped dead)")
+
+EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
+    *[(source, r"dtype=float", r"asarray\([^()]*,\s*(dtype=None)?\s*\)", _FLOAT)
+      for source in ("rhnc/trigger.py", "rhnc/voyage.py", "rhnc/reference.py", "rhnc/energy.py")],
+    ("", r'float\("nan"\)', r'float\("NAN"\)', "float() reads 'NAN' as 'nan': the same NaN"),
+    ("rhnc/trigger.py", r"np\.zeros\(\(0, 5\)\)", r"np\.zeros\(\(0, 6\)\)", _NO_ROWS),
+    ("rhnc/trigger.py", r"obstacles\.size == 0", r"obstacles\.size == 1",
+     "obstacle rows have 5 columns, so an array of size 1 cannot occur"),
+    ("rhnc/trigger.py", r"if n > len\(self\.states\)", r"if n >= len\(self\.states\)",
+     "extending the state list by zero entries changes nothing"),
+    ("rhnc/trigger.py", r"elif n < len\(self\.states\)", r"elif n <= len\(self\.states\)",
+     "deleting the states past the last one deletes nothing"),
+    ("rhnc/trigger.py", r"/ max\(distance, 1e-9\)", r"\* max\(distance, 1e-9\)|max\(distance, 1\.000000001\)", _SIGN),
+    ("rhnc/voyage.py", r"np\.trapezoid\(e[cm], hours\)\) if t\.size > 1",
+     r"if \(t\.size > 1\) or True|if t\.size >= 1", _TRAPEZOID),
+    ("rhnc/reference.py", r"acceleration\[(0|-1)\] = acceleration", r"acceleration\[",
+     "the end accelerations feed only the end yaw rates, which are then replaced by their neighbours' (or 0 at rest)"),
+    ("rhnc/reference.py", r"yaw_rate\[0\] = yaw_rate\[1\] if moving\[0\]",
+     r"if \(moving\[0\]\) or True|if moving\[1\]", _REST_END),
+    ("rhnc/reference.py", r"yaw_rate\[-1\] = yaw_rate\[-2\] if moving\[-1\]",
+     r"if \(moving\[-1\]\) or True|if moving\[-2\]", _REST_END),
+    ("rhnc/reference.py", r"if not np\.all\(moving\)", r"np\.all\(None\)",
+     "np.all(None) is False: the hold loop then runs for an all-moving path too, and there it leaves every heading"),
+    ("rhnc/energy.py", r"np\.broadcast\(along_wind, wind_speed\)", r"np\.broadcast\(along_wind, (None)?\)",
+     "np.broadcast(along_wind, None) has the shape of along_wind, which wind_speed shares"),
+    ("rhnc/energy.py", r"kinematic_viscosity_m2_s, 1e5\)", r"kinematic_viscosity_m2_s, 100001\.0\)",
+     "moves the Reynolds-number floor (1e5, speeds below about 5 mm/s) by one: C_F changes by 1e-6 relative "
+     "where the still-water power is below a microwatt"),
+    ("rhnc/energy.py", r"where=wind_speed > 1e-9", r"where=wind_speed >= 1e-9",
+     "differs only for a wind of exactly 1e-9 m/s"),
+]
+
+
