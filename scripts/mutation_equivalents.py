@@ -49,6 +49,14 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      "where the still-water power is below a microwatt"),
     ("rhnc/energy.py", r"where=wind_speed > 1e-9", r"where=wind_speed >= 1e-9",
      "differs only for a wind of exactly 1e-9 m/s"),
+    ("rhnc/trigger.py", r'new_state, cause = state, ""', r'new_state, cause = state, "XX',
+     "the initial cause is never read: a transition is recorded only when the state changes, and every "
+     "branch that changes it sets the cause"),
+    ("rhnc/trigger.py", r"\(closing and distance <= warning\) or cpa_inside",
+     r"\(closing and distance < warning\) or cpa_inside",
+     "the first clause is implied by the second: a pair closing at a velocity has a CPA no farther than its "
+     "present range, so closing within the warning range already makes cpa_inside true"),
+    ("rhnc/trigger.py", r"if w2 < 1e-12:", r"if w2 <= 1e-12:",
+     "only a relative speed of exactly 1e-6 m/s is classified differently (the guard keeps the division "
+     "finite); at that speed the range changes by less than a metre in 11 days, so either verdict is right"),
 ]
-
-
