@@ -21,7 +21,7 @@ Run (slow: about a mutant a second on an idle core for the quick modules, severa
 each for the NMPC)::
 
     python scripts/mutation_report.py --only trigger voyage
-    python scripts/mutation_report.py --only nmpc --children 2
+    python scripts/mutation_report.py --only nmpc_terminal nmpc_problem --timeout-multiplier 4
     python scripts/mutation_report.py --report-only       # re-render with new explanations
     python scripts/mutation_report.py                     # every module (hours)
 """
@@ -69,9 +69,13 @@ MODULES = {
     "voyage": Module(("rhnc/voyage.py",), ("tests/rhnc/test_voyage.py",)),
     "planner": Module(("rhnc/planner.py",), ("tests/rhnc/test_fields_planner.py",)),
     "fields": Module(("rhnc/fields.py",), ("tests/rhnc/test_fields_planner.py",)),
-    "nmpc": Module(("rhnc/nmpc.py", "rhnc/nmpc_problem.py", "rhnc/nmpc_terminal.py", "rhnc/nmpc_warm_start.py",
-                    "rhnc/nmpc_colregs.py"),
-                   ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py")),
+    # the NMPC, file by file (each its own run, so that a part finishes and reports on its own)
+    "nmpc_warm_start": Module(("rhnc/nmpc_warm_start.py",), ("tests/rhnc/test_nmpc.py",)),
+    "nmpc_terminal": Module(("rhnc/nmpc_terminal.py",), ("tests/rhnc/test_nmpc.py",)),
+    "nmpc_colregs": Module(("rhnc/nmpc_colregs.py",), ("tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py")),
+    "nmpc_problem": Module(("rhnc/nmpc_problem.py",), ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py")),
+    "nmpc": Module(("rhnc/nmpc.py",), ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py",
+                                       "tests/rhnc/test_nmpc_limits.py")),
     "nmpc_codegen": Module(("rhnc/nmpc_codegen.py",), ("tests/rhnc/test_nmpc_codegen.py",)),
     "master": Module(("orchestrator/master.py",), ("tests/orchestrator/test_master.py",)),
     "scenario": Module(("orchestrator/scenario.py",), ("tests/orchestrator/test_scenario.py",)),
@@ -182,6 +186,8 @@ def run_module(key: str, children: int, timeout_multiplier: float, timeout_const
                   f"timeout_multiplier = {timeout_multiplier}\ntimeout_constant = {timeout_constant}\n")
         with open(work / "pyproject.toml", "a") as handle:
             handle.write(config)
+        with open(work / "tests" / "conftest.py", "a") as handle:
+            handle.write(FASTEST_FIRST)
         run = subprocess.run([sys.executable, "-m", "mutmut", "run", "--max-children", str(children)], cwd=work,
                              capture_output=True, text=True)
         (REPO / "results").mkdir(exist_ok=True)
@@ -208,6 +214,21 @@ def run_module(key: str, children: int, timeout_multiplier: float, timeout_const
     stamp = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     return Verdicts(key, list(module.sources), counts, survivors, time.perf_counter() - started, commit, stamp,
                     settings)
+
+
+#: appended to the copy's tests/conftest.py: each mutant's tests run fastest first (by the clean
+#: run's durations), so that with pytest's -x a killed mutant costs its quickest failing test
+FASTEST_FIRST = """
+
+def pytest_collection_modifyitems(config, items):  # added by scripts/mutation_report.py
+    import json
+    import pathlib
+    for stats in (pathlib.Path("mutmut-stats.json"), pathlib.Path("mutants/mutmut-stats.json")):
+        if stats.is_file():
+            seconds = json.loads(stats.read_text()).get("duration_by_test", {})
+            items.sort(key=lambda item: seconds.get(item.nodeid, 0.0))
+            break
+"""
 
 
 def load_verdicts() -> dict[str, Verdicts]:
