@@ -161,6 +161,15 @@ def source_of(mutant: str, sources: list[str]) -> str:
     return sources[0]
 
 
+#: run in the mutmut copy: the diffs of the mutants named on stdin, as JSON (one process for all,
+#: instead of one ``mutmut show`` each)
+SHOW_DIFFS = """
+import json, sys
+from mutmut.mutation.diff_apply import find_mutant, get_diff_for_mutant
+print(json.dumps({name: get_diff_for_mutant(name, path=find_mutant(name).path) for name in json.load(sys.stdin)}))
+"""
+
+
 def run_module(key: str, children: int, timeout_multiplier: float, timeout_constant: float) -> Verdicts:
     module = MODULES[key]
     started = time.perf_counter()
@@ -195,20 +204,22 @@ def run_module(key: str, children: int, timeout_multiplier: float, timeout_const
         listing = subprocess.run([sys.executable, "-m", "mutmut", "results", "--all", "true"], cwd=work,
                                  capture_output=True, text=True).stdout
         counts: dict[str, int] = {}
-        survivors = []
+        statuses = {}
         for line in listing.splitlines():
             match = re.match(r"\s*(\S+__mutmut_\d+): (.+)$", line)
-            if not match:
-                continue
-            name, status = match.group(1), match.group(2).strip()
-            counts[status] = counts.get(status, 0) + 1
-            if status not in KILLED:
-                shown = subprocess.run([sys.executable, "-m", "mutmut", "show", name], cwd=work,
-                                       capture_output=True, text=True).stdout
-                diff = "\n".join(l for l in shown.splitlines()
-                                 if l.startswith(("-", "+")) and not l.startswith(("---", "+++")))
-                survivors.append({"name": name, "source": source_of(name, list(module.sources)),
-                                  "status": status, "diff": diff})
+            if match:
+                statuses[match.group(1)] = status = match.group(2).strip()
+                counts[status] = counts.get(status, 0) + 1
+        left = [name for name, status in statuses.items() if status not in KILLED]
+        shown = subprocess.run([sys.executable, "-c", SHOW_DIFFS], cwd=work, input=json.dumps(left),
+                               capture_output=True, text=True, check=True).stdout
+        diffs = json.loads(shown)
+        survivors = []
+        for name in left:
+            diff = "\n".join(l for l in diffs[name].splitlines()
+                             if l.startswith(("-", "+")) and not l.startswith(("---", "+++")))
+            survivors.append({"name": name, "source": source_of(name, list(module.sources)),
+                              "status": statuses[name], "diff": diff})
     if not counts:
         raise RuntimeError(f"mutmut gave no verdicts for {key}; see results/mutmut-{key}.log")
     stamp = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
