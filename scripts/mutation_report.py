@@ -21,7 +21,8 @@ Run (slow: about a mutant a second on an idle core for the quick modules, severa
 each for the NMPC)::
 
     python scripts/mutation_report.py --only trigger voyage
-    python scripts/mutation_report.py --only nmpc_terminal nmpc_problem --timeout-multiplier 4
+    python scripts/mutation_report.py --only nmpc --sample 80 --timeout-multiplier 3
+    python scripts/mutation_report.py --only nmpc_terminal nmpc_problem --timeout-multiplier 3
     python scripts/mutation_report.py --report-only       # re-render with new explanations
     python scripts/mutation_report.py                     # every module (hours)
 """
@@ -32,6 +33,7 @@ import argparse
 import ast
 import datetime as dt
 import json
+import random
 import re
 import shutil
 import subprocess
@@ -69,13 +71,17 @@ MODULES = {
     "voyage": Module(("rhnc/voyage.py",), ("tests/rhnc/test_voyage.py",)),
     "planner": Module(("rhnc/planner.py",), ("tests/rhnc/test_fields_planner.py",)),
     "fields": Module(("rhnc/fields.py",), ("tests/rhnc/test_fields_planner.py",)),
-    # the NMPC, file by file (each its own run, so that a part finishes and reports on its own)
+    # the NMPC's parts together (slow: about 2400 mutants against solver runs; see --sample) ...
+    "nmpc": Module(("rhnc/nmpc.py", "rhnc/nmpc_problem.py", "rhnc/nmpc_terminal.py", "rhnc/nmpc_warm_start.py",
+                    "rhnc/nmpc_colregs.py"),
+                   ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py")),
+    # ... or file by file (each its own run, so that a part finishes and reports on its own)
     "nmpc_warm_start": Module(("rhnc/nmpc_warm_start.py",), ("tests/rhnc/test_nmpc.py",)),
     "nmpc_terminal": Module(("rhnc/nmpc_terminal.py",), ("tests/rhnc/test_nmpc.py",)),
     "nmpc_colregs": Module(("rhnc/nmpc_colregs.py",), ("tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py")),
     "nmpc_problem": Module(("rhnc/nmpc_problem.py",), ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py")),
-    "nmpc": Module(("rhnc/nmpc.py",), ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py",
-                                       "tests/rhnc/test_nmpc_limits.py")),
+    "nmpc_controller": Module(("rhnc/nmpc.py",), ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py",
+                                                  "tests/rhnc/test_nmpc_limits.py")),
     "nmpc_codegen": Module(("rhnc/nmpc_codegen.py",), ("tests/rhnc/test_nmpc_codegen.py",)),
     "master": Module(("orchestrator/master.py",), ("tests/orchestrator/test_master.py",)),
     "scenario": Module(("orchestrator/scenario.py",), ("tests/orchestrator/test_scenario.py",)),
@@ -170,7 +176,16 @@ print(json.dumps({name: get_diff_for_mutant(name, path=find_mutant(name).path) f
 """
 
 
-def run_module(key: str, children: int, timeout_multiplier: float, timeout_constant: float) -> Verdicts:
+def mutant_names(work: Path) -> list[str]:
+    """Every mutant mutmut generated in ``work`` (from its per-file records)."""
+    names = []
+    for meta in sorted((work / "mutants").rglob("*.meta")):
+        names += sorted(json.loads(meta.read_text()).get("exit_code_by_key", {}))
+    return names
+
+
+def run_module(key: str, children: int, timeout_multiplier: float, timeout_constant: float,
+               sample: int | None = None, seed: int = 0) -> Verdicts:
     module = MODULES[key]
     started = time.perf_counter()
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=REPO, capture_output=True,
@@ -197,8 +212,16 @@ def run_module(key: str, children: int, timeout_multiplier: float, timeout_const
             handle.write(config)
         with open(work / "tests" / "conftest.py", "a") as handle:
             handle.write(FASTEST_FIRST)
-        run = subprocess.run([sys.executable, "-m", "mutmut", "run", "--max-children", str(children)], cwd=work,
-                             capture_output=True, text=True)
+        mutmut_run = [sys.executable, "-m", "mutmut", "run", "--max-children", str(children)]
+        chosen = None
+        if sample:
+            # generate the mutants and the test coverage (a filter matching nothing stops mutmut
+            # right after), then test a random sample of them
+            subprocess.run(mutmut_run + ["no-such-mutant"], cwd=work, capture_output=True, text=True)
+            everything = mutant_names(work)
+            chosen = sorted(random.Random(seed).sample(everything, min(sample, len(everything))))
+            settings["sample"] = {"size": len(chosen), "of": len(everything), "seed": seed}
+        run = subprocess.run(mutmut_run + (chosen or []), cwd=work, capture_output=True, text=True)
         (REPO / "results").mkdir(exist_ok=True)
         (REPO / "results" / f"mutmut-{key}.log").write_text(run.stdout[-20000:] + "\n" + run.stderr[-20000:])
         listing = subprocess.run([sys.executable, "-m", "mutmut", "results", "--all", "true"], cwd=work,
@@ -207,7 +230,7 @@ def run_module(key: str, children: int, timeout_multiplier: float, timeout_const
         statuses = {}
         for line in listing.splitlines():
             match = re.match(r"\s*(\S+__mutmut_\d+): (.+)$", line)
-            if match:
+            if match and (chosen is None or match.group(1) in chosen):
                 statuses[match.group(1)] = status = match.group(2).strip()
                 counts[status] = counts.get(status, 0) + 1
         left = [name for name, status in statuses.items() if status not in KILLED]
@@ -258,8 +281,10 @@ def section(v: Verdicts) -> str:
     equivalent = [(s, why) for s, why in explained if why]
     open_ = [s for s, why in explained if not why]
     others = ", ".join(f"{n} {status}" for status, n in sorted(v.counts.items()) if status != "killed")
+    sampled = v.settings.get("sample")
     lines = [f"## {v.module} (" + ", ".join(f"`{s}`" for s in v.sources) + ")", "",
-             f"{v.total} mutants: {v.counts.get('killed', 0)} killed" + (f", {others}" if others else "")
+             (f"A random sample (seed {sampled['seed']}) of {sampled['size']} of the {sampled['of']} mutants. "
+              if sampled else "") + f"{v.total} mutants: {v.counts.get('killed', 0)} killed" + (f", {others}" if others else "")
              + f". **Score {v.score():.0f} %**; {len(equivalent)} survivors explained as equivalent, "
                f"{len(open_)} not. Run on commit {v.commit or '?'}, {v.date or '?'}, {v.seconds / 60:.1f} min "
                f"(tests: " + ", ".join(f"`{t}`" for t in v.settings.get("tests", [])) + ").", ""]
@@ -295,7 +320,8 @@ def write_report(verdicts: dict[str, Verdicts]) -> None:
         v = verdicts[key]
         explained = v.explained()
         equivalent = sum(1 for _, why in explained if why)
-        rows.append(f"| {key} | {v.total} | {v.counts.get('killed', 0)} | {v.counts.get('timeout', 0)} | "
+        sampled = v.settings.get("sample")
+        rows.append(f"| {key} | {v.total}" + (f" (sample of {sampled['of']})" if sampled else "") + f" | {v.counts.get('killed', 0)} | {v.counts.get('timeout', 0)} | "
                     f"{equivalent} | {len(explained) - equivalent} | {v.score():.0f} % | "
                     f"{100.0 * v.killed / max(v.total - equivalent, 1):.0f} % |")
         sections.append(section(v))
@@ -310,12 +336,16 @@ def main(argv=None) -> int:
     parser.add_argument("--timeout-multiplier", type=float, default=10.0,
                         help="a mutant's time limit is (clean test time + constant) * this")
     parser.add_argument("--timeout-constant", type=float, default=2.0, help="[s], see --timeout-multiplier")
+    parser.add_argument("--sample", type=int, help="test a random sample of this many mutants per module "
+                        "(an estimate of the score, for modules too slow to run whole)")
+    parser.add_argument("--seed", type=int, default=0, help="of the random sample")
     parser.add_argument("--report-only", action="store_true",
                         help="re-render the report from docs/mutation-verdicts.json without running mutmut")
     args = parser.parse_args(argv)
     if not args.report_only:
         for key in args.only or list(MODULES):
-            v = run_module(key, args.children, args.timeout_multiplier, args.timeout_constant)
+            v = run_module(key, args.children, args.timeout_multiplier, args.timeout_constant, args.sample,
+                           args.seed)
             verdicts = load_verdicts()  # reread: another run may have stored its module meanwhile
             verdicts[key] = v
             save_verdicts(verdicts)
