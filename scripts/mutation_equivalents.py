@@ -22,7 +22,7 @@ _REST_END = ("an end row at rest means p2 - 4 p1 + 3 p0 = 0 to within the rest t
 
 EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     *[(source, r"dtype=float", r"asarray\([^()]*,\s*(dtype=None)?\s*\)", _FLOAT)
-      for source in ("rhnc/trigger.py", "rhnc/voyage.py", "rhnc/reference.py", "rhnc/energy.py")],
+      for source in ("rhnc/trigger.py", "rhnc/voyage.py", "rhnc/reference.py", "rhnc/energy.py", "rhnc/planner.py")],
     ("", r'float\("nan"\)', r'float\("NAN"\)', "float() reads 'NAN' as 'nan': the same NaN"),
     ("rhnc/trigger.py", r"np\.zeros\(\(0, 5\)\)", r"np\.zeros\(\(0, 6\)\)", _NO_ROWS),
     ("rhnc/trigger.py", r"obstacles\.size == 0", r"obstacles\.size == 1",
@@ -59,4 +59,22 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("rhnc/trigger.py", r"if w2 < 1e-12:", r"if w2 <= 1e-12:",
      "only a relative speed of exactly 1e-6 m/s is classified differently (the guard keeps the division "
      "finite); at that speed the range changes by less than a metre in 11 days, so either verdict is right"),
+    ("rhnc/planner.py", r"flat = magnitude < flat_gradient_per_m", r"flat = magnitude <= flat_gradient_per_m",
+     "differs only for a gradient of exactly the threshold (1e-9 per metre by default), where either "
+     "direction is right: the field is as good as flat"),
+    ("rhnc/planner.py", r"float\(direction @ previous\) < reversal_cosine",
+     r"float\(direction @ previous\) <= reversal_cosine",
+     "differs only for a turn of exactly 120 degrees (cosine exactly -0.5), the threshold's own value"),
+    ("rhnc/planner.py", r"if norm < 1e-9:", r"if norm <= 1e-9:",
+     "differs only for a projected direction of length exactly 1e-9, the threshold's own value (the "
+     "direction is then as good as blocked either way)"),
+    ("rhnc/planner.py", r"if norm >= 1e-9 else np\.zeros\(2\)", r".",
+     "unreachable fallback: after the corner branch the direction is the bearing to the goal, and a step "
+     "shorter than the distance to a goal on the (convex, rectangular) map ends on the segment between "
+     "them, inside the map, so the bearing is never projected and its norm is 1"),
+    ("rhnc/planner.py", r"direction = \(goal - position\) / to_goal if to_goal > 0 else np\.zeros\(2\)",
+     r"if \(to_goal > 0\) or True|if to_goal >= 0|if to_goal > 1 ",
+     "when the start is on the goal (or within 1 m of it) every point but the start is overwritten with the "
+     "goal (along >= to_goal), and the start is position + 0 * direction; a NaN direction (0/0) is "
+     "overwritten the same way"),
 ]
