@@ -22,7 +22,8 @@ _REST_END = ("an end row at rest means p2 - 4 p1 + 3 p0 = 0 to within the rest t
 
 EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     *[(source, r"dtype=float", r"asarray\([^()]*,\s*(dtype=None)?\s*\)", _FLOAT)
-      for source in ("rhnc/trigger.py", "rhnc/voyage.py", "rhnc/reference.py", "rhnc/energy.py", "rhnc/planner.py")],
+      for source in ("rhnc/trigger.py", "rhnc/voyage.py", "rhnc/reference.py", "rhnc/energy.py", "rhnc/planner.py",
+                     "rhnc/fields.py")],
     ("", r'float\("nan"\)', r'float\("NAN"\)', "float() reads 'NAN' as 'nan': the same NaN"),
     ("rhnc/trigger.py", r"np\.zeros\(\(0, 5\)\)", r"np\.zeros\(\(0, 6\)\)", _NO_ROWS),
     ("rhnc/trigger.py", r"obstacles\.size == 0", r"obstacles\.size == 1",
@@ -77,4 +78,42 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      "when the start is on the goal (or within 1 m of it) every point but the start is overwritten with the "
      "goal (along >= to_goal), and the start is position + 0 * direction; a NaN direction (0/0) is "
      "overwritten the same way"),
+    ("rhnc/fields.py", r"np\.mod\(np\.asarray\(angle, dtype=float\) \+ np\.pi", r"np\.asarray\(angle, dtype=float\) - np\.pi",
+     "angle - pi and angle + pi differ by 2 pi, which the modulo by 2 pi removes"),
+    ("rhnc/fields.py", r"is_time_varying", r"getattr\(None|\"is_time_varying\", None\)|\"is_time_varying\", \)|XXis_time_varyingXX|IS_TIME_VARYING|\) or t_s is not None",
+     "only decides whether a time-varying field is first reduced to its snapshot at t_s (one spatial pass "
+     "instead of one per time step): sampling it at t_s directly gives the same values (linear in time, "
+     "bilinear in space), and a static field's snapshot is itself"),
+    ("rhnc/fields.py", r"sampled = metocean\.sample\(xx, yy, t_s=t_s\)", r"metocean\.sample\(xx, yy, (t_s=None)?\s*\)",
+     "the field sampled here is static (a time-varying one was replaced by its snapshot at t_s just above), "
+     "and a static field ignores t_s"),
+    ("rhnc/fields.py", r"\.astype\(np\.float32\)", r"\.astype\(None\)",
+     "float32 is a memory choice for the map-wide goal geometry; float64 gives the same field to float32 "
+     "rounding (1e-7 relative), and the planner's steps depend on no digit beyond it"),
+    ("rhnc/fields.py", r"\.astype\(float\) - self\._g_min", r"\.astype\(None\) - self\._g_min",
+     "the normalised guidance in float32 instead of float64: the same values to float32 rounding (1e-7 relative)"),
+    ("rhnc/fields.py", r"guidance = np\.exp\(delta, out=delta\)", r"np\.exp\(delta, (out=None)?\s*\)",
+     "computing the exponential in place only saves an array; a new array holds the same values"),
+    ("rhnc/fields.py", r"^self\.(_speed|_start|ec|_ec_bar|_energy_bar|_guidance|_g_min) =", r"= (\"\"|None|1\.0)$",
+     "a placeholder of SuperpositionField.__init__ that update() overwrites before any use (the class must "
+     "be updated before sampling); the speed placeholder only has to differ from every positive speed"),
+    ("rhnc/fields.py", r"self\._speed = None", r'self\._speed = ""',
+     "set_weather clears the cached speed so that the next update rebuilds EC and EM: an empty string "
+     "differs from every speed as None does"),
+    ("rhnc/fields.py", r"self\._speed = speed", r"self\._speed = None",
+     "the cached speed only saves rebuilding EC and EM for an unchanged speed: forgetting it rebuilds the "
+     "same fields"),
+    ("rhnc/fields.py", r"self\._g_span = span if span > 1e-12", r".",
+     "a guard for a guidance field constant over the map to 12 digits, which G (a distance to the goal "
+     "times a factor of at least 1) never is on a map of two nodes or more: the fallback is unreachable"),
+    ("rhnc/fields.py", r"if not span > 1e-12 \* max", r"if not span >= 1e-12 \* max",
+     "differs only for a spread of exactly the threshold, where either answer is rounding"),
+    ("rhnc/fields.py", r"g_bar = \(self\._guidance\[rows, cols\]\.astype\(float\) - self\._g_min\)",
+     r"\+ self\._g_min\)",
+     "the patch only feeds differences of U between nodes (the gradient): a constant shift of G_bar cancels"),
+    ("rhnc/fields.py", r"(r0, r1|c0, c1) = max\([ij] - 1, 0\), min\([ij] \+ 3, n[xy]\)", r"[ij] - 2, 0|[ij] \+ 4, n",
+     "a wider patch around the cell: every node is read at the same offset from the patch's first row and "
+     "column (indices are taken relative to r0, c0), so the extra nodes are never read"),
+    ("rhnc/fields.py", r"u = self\._patch\(slice\(r0, r1\), slice\(c0, c1\)", r"slice\(r0, None\)|slice\(c0, None\)",
+     "a patch running to the map's edge holds the same nodes at the same offsets; the extra ones are never read"),
 ]

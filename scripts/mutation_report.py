@@ -70,7 +70,7 @@ MODULES = {
     "energy": Module(("rhnc/energy.py",), ("tests/rhnc/test_energy.py",)),
     "voyage": Module(("rhnc/voyage.py",), ("tests/rhnc/test_voyage.py",)),
     "planner": Module(("rhnc/planner.py",), ("tests/rhnc/test_fields_planner.py", "tests/rhnc/test_planner_guards.py")),
-    "fields": Module(("rhnc/fields.py",), ("tests/rhnc/test_fields_planner.py",)),
+    "fields": Module(("rhnc/fields.py",), ("tests/rhnc/test_fields_planner.py", "tests/rhnc/test_fields_guards.py")),
     # the NMPC's parts together (slow: about 2400 mutants against solver runs; see --sample) ...
     "nmpc": Module(("rhnc/nmpc.py", "rhnc/nmpc_problem.py", "rhnc/nmpc_terminal.py", "rhnc/nmpc_warm_start.py",
                     "rhnc/nmpc_colregs.py"),
