@@ -116,4 +116,27 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      "column (indices are taken relative to r0, c0), so the extra nodes are never read"),
     ("rhnc/fields.py", r"u = self\._patch\(slice\(r0, r1\), slice\(c0, c1\)", r"slice\(r0, None\)|slice\(c0, None\)",
      "a patch running to the map's edge holds the same nodes at the same offsets; the extra ones are never read"),
+    ("orchestrator/master.py", r"_progress_bar|bar\.update\(1\)|def run\(self, progress: bool = True|tqdm\(total=total",
+     r".",
+     "the console progress bar (tqdm, drawn only for runs longer than 2 s, on stderr) is display: no result, "
+     "status or file depends on it"),
+    ("orchestrator/master.py", r"if not enabled:", r"if enabled:",
+     "the console progress bar is display only (see above)"),
+    ("orchestrator/master.py", r"tempfile\.mkdtemp\(prefix=\"rhnc-run-\"\)", r"prefix=(None|\"XXrhnc-run-XX\"|\"RHNC-RUN-\")",
+     "only the name of the master's temporary folder changes; it is made, used and removed the same way"),
+    ("orchestrator/master.py", r"shutil\.rmtree\(self\.work_dir, ignore_errors=True\)", r"ignore_errors=(None|False)|self\.work_dir, \)",
+     "removing the master's own temporary folder does not fail (the master made it and nothing else holds it): "
+     "whether a failure would be ignored is never exercised"),
+    ("orchestrator/master.py", r"recorder = Recorder\(sim\.start_s, sim\.dt_s, sim\.steps\)", r"sim\.dt_s, None\)",
+     "the recorder keeps the planned step count as an attribute nothing reads (run.py takes steps_planned "
+     "from the scenario)"),
+    ("orchestrator/master.py", r"pending = \[item for item in pending if item\[0\] > k\]", r"item\[0\] >= k\]",
+     "an output released at step k stays pending one step longer and is applied again at k + 1, where the bus "
+     "already holds exactly it: only its own participant writes those ports, and its next outputs are released "
+     "later (or, with every = 1, after it in the pending list, so they still win)"),
+    ("orchestrator/master.py", r"if type\(value\) is float:", r"type\(None\) is float",
+     "the float shortcut skipped: math.isfinite(float(value)) gives the same answer for a float"),
+    ("orchestrator/master.py", r"current\[1\] = None", r'current\[1\] = ""|current\[2\] = None',
+     "after the last step only the final stop check runs, and the position is read only by the stop "
+     "watchdog's log line; an empty name reads as no name, and the time is not shown without a name"),
 ]

@@ -83,7 +83,9 @@ MODULES = {
     "nmpc_controller": Module(("rhnc/nmpc.py",), ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py",
                                                   "tests/rhnc/test_nmpc_limits.py")),
     "nmpc_codegen": Module(("rhnc/nmpc_codegen.py",), ("tests/rhnc/test_nmpc_codegen.py",)),
-    "master": Module(("orchestrator/master.py",), ("tests/orchestrator/test_master.py",)),
+    "master": Module(("orchestrator/master.py",), ("tests/orchestrator/test_master.py",
+                                                   "tests/orchestrator/test_master_guards.py",
+                                                   "tests/orchestrator/test_fmu_participant.py")),
     "scenario": Module(("orchestrator/scenario.py",), ("tests/orchestrator/test_scenario.py",)),
     "fmu_participant": Module(("orchestrator/fmu_participant.py",), ("tests/orchestrator/test_fmu_participant.py",)),
 }
