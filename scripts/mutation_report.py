@@ -91,6 +91,10 @@ MODULES = {
 }
 
 
+#: the NMPC file by file: listed in the report only when run
+ALTERNATIVE_RUNS = ("nmpc_warm_start", "nmpc_terminal", "nmpc_colregs", "nmpc_problem", "nmpc_controller")
+
+
 def explained_by_rule(source: str, removed: list[str], added: list[str]) -> str:
     for where, original, mutated, why in EXPLAINED_RULES:
         if where and where != source:
@@ -133,7 +137,9 @@ class Verdicts:
         """(survivor, why) for every survivor, ``why`` empty when it is not explained."""
         log_lines = {source: log_message_lines((REPO / source).read_text()) if (REPO / source).is_file() else set()
                      for source in self.sources}
-        return [(s, explain(s["source"], s["diff"], log_lines.get(s["source"], set()))) for s in self.survivors]
+        # an entry carried over from an earlier report has no diff, only its explanation
+        return [(s, s["why"] if "why" in s and not s["diff"] else
+                 explain(s["source"], s["diff"], log_lines.get(s["source"], set()))) for s in self.survivors]
 
     def score(self) -> float:
         return 100.0 * self.killed / max(self.total, 1)
@@ -284,9 +290,11 @@ def section(v: Verdicts) -> str:
     open_ = [s for s, why in explained if not why]
     others = ", ".join(f"{n} {status}" for status, n in sorted(v.counts.items()) if status != "killed")
     sampled = v.settings.get("sample")
+    carried = ("Carried over from the previous report (mutmut's own diffs not kept then); the module has not "
+               f"changed since commit {v.commit}. " if v.settings.get("legacy") else "")
     lines = [f"## {v.module} (" + ", ".join(f"`{s}`" for s in v.sources) + ")", "",
              (f"A random sample (seed {sampled['seed']}) of {sampled['size']} of the {sampled['of']} mutants. "
-              if sampled else "") + f"{v.total} mutants: {v.counts.get('killed', 0)} killed" + (f", {others}" if others else "")
+              if sampled else "") + carried + f"{v.total} mutants: {v.counts.get('killed', 0)} killed" + (f", {others}" if others else "")
              + f". **Score {v.score():.0f} %**; {len(equivalent)} survivors explained as equivalent, "
                f"{len(open_)} not. Run on commit {v.commit or '?'}, {v.date or '?'}, {v.seconds / 60:.1f} min "
                f"(tests: " + ", ".join(f"`{t}`" for t in v.settings.get("tests", [])) + ").", ""]
@@ -299,7 +307,7 @@ def section(v: Verdicts) -> str:
         lines += [f"Survivors explained ({len(equivalent)}):", ""]
         for s, why in equivalent:
             changed = [l for l in s["diff"].splitlines() if l.startswith("+")]
-            lines.append(f"- `{s['name']}` (`{changed[0][1:].strip()[:90] if changed else ''}`): {why}")
+            lines.append(f"- `{s['name']}`" + (f" (`{changed[0][1:].strip()[:90]}`)" if changed else "") + f": {why}")
         lines.append("")
     return "\n".join(lines)
 
@@ -316,6 +324,8 @@ def write_report(verdicts: dict[str, Verdicts]) -> None:
               "score without equivalents |", "|---|---|---|---|---|---|---|---|"]
     rows, sections = [], []
     for key in MODULES:
+        if key not in verdicts and key in ALTERNATIVE_RUNS:
+            continue
         if key not in verdicts:
             rows.append(f"| {key} | - | - | - | - | - | not run yet | |")
             continue
