@@ -139,4 +139,17 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("orchestrator/master.py", r"current\[1\] = None", r'current\[1\] = ""|current\[2\] = None',
      "after the last step only the final stop check runs, and the position is read only by the stop "
      "watchdog's log line; an empty name reads as no name, and the time is not shown without a name"),
+    ("orchestrator/fmu_participant.py", r'tempfile\.mkdtemp\(prefix=f"fmu-\{self\.name\}-"\)', r"prefix=None",
+     "only the name of the folder the FMU is unpacked into changes"),
+    ("orchestrator/fmu_participant.py", r"FmiSlave\(self\.model_description, self\._unzip_dir, self\.name",
+     r"self\._unzip_dir, None,",
+     "the FMU instance's name reaches only the FMU's own log callback, whose messages the participant labels "
+     "with its own name"),
+    ("orchestrator/fmu_participant.py", r"shutil\.rmtree\(self\._unzip_dir, ignore_errors=True\)",
+     r"ignore_errors=(None|False)|self\._unzip_dir, \)",
+     "removing the participant's own unpacked FMU does not fail: whether a failure would be ignored is never "
+     "exercised"),
+    ("orchestrator/fmu_participant.py", r"self\.(_slave|_unzip_dir) = None", r'= ""',
+     "a second terminate() then finds an empty string instead of None: the slave's calls fail inside the "
+     "try blocks that already ignore a refusing FMU and rmtree('') is ignored, so it still does nothing"),
 ]

@@ -87,7 +87,8 @@ MODULES = {
                                                    "tests/orchestrator/test_master_guards.py",
                                                    "tests/orchestrator/test_fmu_participant.py")),
     "scenario": Module(("orchestrator/scenario.py",), ("tests/orchestrator/test_scenario.py",)),
-    "fmu_participant": Module(("orchestrator/fmu_participant.py",), ("tests/orchestrator/test_fmu_participant.py",)),
+    "fmu_participant": Module(("orchestrator/fmu_participant.py",), ("tests/orchestrator/test_fmu_participant.py",
+                                                                     "tests/orchestrator/test_fmu_participant_guards.py")),
 }
 
 
@@ -104,7 +105,7 @@ def explained_by_rule(source: str, removed: list[str], added: list[str]) -> str:
     return ""
 
 
-LOG_CALLS = {"debug", "info", "warning", "error", "exception", "critical"}
+LOG_CALLS = {"debug", "info", "warning", "error", "exception", "critical", "log"}
 
 #: mutmut's statuses that count as killed (a time-out is a mutant the tests did not let pass)
 KILLED = ("killed", "timeout")
