@@ -23,6 +23,7 @@ each for the NMPC)::
     python scripts/mutation_report.py --only trigger voyage
     python scripts/mutation_report.py --only nmpc --sample 80 --timeout-multiplier 3
     python scripts/mutation_report.py --only nmpc_terminal nmpc_problem --timeout-multiplier 3
+    python scripts/mutation_report.py --only master --survivors-only   # after new tests
     python scripts/mutation_report.py --report-only       # re-render with new explanations
     python scripts/mutation_report.py                     # every module (hours)
 """
@@ -194,7 +195,7 @@ def mutant_names(work: Path) -> list[str]:
 
 
 def run_module(key: str, children: int, timeout_multiplier: float, timeout_constant: float,
-               sample: int | None = None, seed: int = 0) -> Verdicts:
+               sample: int | None = None, seed: int = 0, previous: Verdicts | None = None) -> Verdicts:
     module = MODULES[key]
     started = time.perf_counter()
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=REPO, capture_output=True,
@@ -223,13 +224,17 @@ def run_module(key: str, children: int, timeout_multiplier: float, timeout_const
             handle.write(FASTEST_FIRST)
         mutmut_run = [sys.executable, "-m", "mutmut", "run", "--max-children", str(children)]
         chosen = None
-        if sample:
+        if sample or previous:
             # generate the mutants and the test coverage (a filter matching nothing stops mutmut
             # right after), then test a random sample of them
             subprocess.run(mutmut_run + ["no-such-mutant"], cwd=work, capture_output=True, text=True)
             everything = mutant_names(work)
-            chosen = sorted(random.Random(seed).sample(everything, min(sample, len(everything))))
-            settings["sample"] = {"size": len(chosen), "of": len(everything), "seed": seed}
+            if previous:  # only the earlier run's survivors that still exist
+                chosen = sorted({s["name"] for s in previous.survivors} & set(everything))
+                settings.update({key_: value for key_, value in previous.settings.items() if key_ == "sample"})
+            else:
+                chosen = sorted(random.Random(seed).sample(everything, min(sample, len(everything))))
+                settings["sample"] = {"size": len(chosen), "of": len(everything), "seed": seed}
         run = subprocess.run(mutmut_run + (chosen or []), cwd=work, capture_output=True, text=True)
         (REPO / "results").mkdir(exist_ok=True)
         (REPO / "results" / f"mutmut-{key}.log").write_text(run.stdout[-20000:] + "\n" + run.stderr[-20000:])
@@ -255,8 +260,20 @@ def run_module(key: str, children: int, timeout_multiplier: float, timeout_const
     if not counts:
         raise RuntimeError(f"mutmut gave no verdicts for {key}; see results/mutmut-{key}.log")
     stamp = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    return Verdicts(key, list(module.sources), counts, survivors, time.perf_counter() - started, commit, stamp,
-                    settings)
+    seconds = time.perf_counter() - started
+    if previous:
+        # the earlier verdicts stand for every mutant not retested; the retested take their new verdict
+        counts = dict(previous.counts)
+        for status in (s["status"] for s in previous.survivors):
+            counts[status] -= 1
+        for status in statuses.values():
+            counts[status] = counts.get(status, 0) + 1
+        counts = {status: n for status, n in counts.items() if n}
+        settings["survivors_retested"] = {"commit": commit, "date": stamp, "count": len(statuses),
+                                          "minutes": round(seconds / 60, 1)}
+        return Verdicts(key, list(module.sources), counts, survivors, previous.seconds, previous.commit,
+                        previous.date, {**previous.settings, **settings})
+    return Verdicts(key, list(module.sources), counts, survivors, seconds, commit, stamp, settings)
 
 
 #: appended to the copy's tests/conftest.py: each mutant's tests run fastest first (by the clean
@@ -291,7 +308,11 @@ def section(v: Verdicts) -> str:
     open_ = [s for s, why in explained if not why]
     others = ", ".join(f"{n} {status}" for status, n in sorted(v.counts.items()) if status != "killed")
     sampled = v.settings.get("sample")
-    carried = ("Carried over from the previous report (mutmut's own diffs not kept then); the module has not "
+    retested = v.settings.get("survivors_retested")
+    carried = (f"Survivors retested on commit {retested['commit']} ({retested['date']}, {retested['count']} "
+               f"mutants, {retested['minutes']} min) after new tests; the other verdicts are from the full run. "
+               if retested else "")
+    carried += ("Carried over from the previous report (mutmut's own diffs not kept then); the module has not "
                f"changed since commit {v.commit}. " if v.settings.get("legacy") else "")
     lines = [f"## {v.module} (" + ", ".join(f"`{s}`" for s in v.sources) + ")", "",
              (f"A random sample (seed {sampled['seed']}) of {sampled['size']} of the {sampled['of']} mutants. "
@@ -352,13 +373,19 @@ def main(argv=None) -> int:
     parser.add_argument("--sample", type=int, help="test a random sample of this many mutants per module "
                         "(an estimate of the score, for modules too slow to run whole)")
     parser.add_argument("--seed", type=int, default=0, help="of the random sample")
+    parser.add_argument("--survivors-only", action="store_true",
+                        help="retest only the survivors of the stored run (after new tests); the others keep "
+                             "their verdicts")
     parser.add_argument("--report-only", action="store_true",
                         help="re-render the report from docs/mutation-verdicts.json without running mutmut")
     args = parser.parse_args(argv)
     if not args.report_only:
         for key in args.only or list(MODULES):
+            previous = load_verdicts().get(key) if args.survivors_only else None
+            if args.survivors_only and previous is None:
+                raise SystemExit(f"no stored run of {key} to retest the survivors of")
             v = run_module(key, args.children, args.timeout_multiplier, args.timeout_constant, args.sample,
-                           args.seed)
+                           args.seed, previous)
             verdicts = load_verdicts()  # reread: another run may have stored its module meanwhile
             verdicts[key] = v
             save_verdicts(verdicts)
