@@ -75,12 +75,14 @@ MODULES = {
     # the NMPC's parts together (slow: about 2400 mutants against solver runs; see --sample) ...
     "nmpc": Module(("rhnc/nmpc.py", "rhnc/nmpc_problem.py", "rhnc/nmpc_terminal.py", "rhnc/nmpc_warm_start.py",
                     "rhnc/nmpc_colregs.py"),
-                   ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py")),
+                   ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py",
+                    "tests/rhnc/test_nmpc_cost.py")),
     # ... or file by file (each its own run, so that a part finishes and reports on its own)
     "nmpc_warm_start": Module(("rhnc/nmpc_warm_start.py",), ("tests/rhnc/test_nmpc.py",)),
     "nmpc_terminal": Module(("rhnc/nmpc_terminal.py",), ("tests/rhnc/test_nmpc.py",)),
     "nmpc_colregs": Module(("rhnc/nmpc_colregs.py",), ("tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py")),
-    "nmpc_problem": Module(("rhnc/nmpc_problem.py",), ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py")),
+    "nmpc_problem": Module(("rhnc/nmpc_problem.py",), ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py",
+                                                       "tests/rhnc/test_nmpc_cost.py")),
     "nmpc_controller": Module(("rhnc/nmpc.py",), ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py",
                                                   "tests/rhnc/test_nmpc_limits.py")),
     "nmpc_codegen": Module(("rhnc/nmpc_codegen.py",), ("tests/rhnc/test_nmpc_codegen.py",)),
