@@ -152,7 +152,8 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("orchestrator/fmu_participant.py", r"self\.(_slave|_unzip_dir) = None", r'= ""',
      "a second terminate() then finds an empty string instead of None: the slave's calls fail inside the "
      "try blocks that already ignore a refusing FMU and rmtree('') is ignored, so it still does nothing"),
-    ("rhnc/nmpc.py", r"reference\[:, 2\] -= 2\.0 \* np\.pi \* np\.round", r".",
+    ("rhnc/nmpc.py", r"reference\[:, 2\] -= 2\.0 \* np\.pi \* np\.round",
+     r"reference\[:, 2\] [-+]= 2\.0 \* np\.pi \* np\.round\(",
      "shifts the reference heading by a different whole number of turns: the objective is periodic in it "
      "(stage cost 2 (1 - cos e), terminal heading error wrapped by atan2, terminal frame from cos and sin; "
      "see tests/rhnc/test_nmpc_cost.py), so the optimum is the same"),
