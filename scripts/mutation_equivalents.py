@@ -21,7 +21,7 @@ _REST_END = ("an end row at rest means p2 - 4 p1 + 3 p0 = 0 to within the rest t
              "neighbour's yaw rate is 0 (exactly for a ship stopped dead)")
 
 EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
-    *[(source, r"dtype=float", r"asarray\([^()]*,\s*(dtype=None)?\s*\)", _FLOAT)
+    *[(source, r"dtype=float", r"(asarray|array)\([^()]*,\s*(dtype=None)?\s*\)", _FLOAT)
       for source in ("rhnc/trigger.py", "rhnc/voyage.py", "rhnc/reference.py", "rhnc/energy.py", "rhnc/planner.py",
                      "rhnc/fields.py")],
     ("", r'float\("nan"\)', r'float\("NAN"\)', "float() reads 'NAN' as 'nan': the same NaN"),
