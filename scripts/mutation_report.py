@@ -265,13 +265,24 @@ def run_module(key: str, children: int, timeout_multiplier: float, timeout_const
     seconds = time.perf_counter() - started
     if previous:
         # the earlier verdicts stand for every mutant not retested; the retested take their new verdict
+        # a retest cut short leaves some unchecked: they keep their earlier verdict
+        before = {s["name"]: s["status"] for s in previous.survivors}
+        unchecked = [name for name, status in statuses.items() if status == "not checked"]
+        for name in unchecked:
+            statuses[name] = before[name]
+        for entry in survivors:
+            entry["status"] = statuses[entry["name"]]
         counts = dict(previous.counts)
-        for status in (s["status"] for s in previous.survivors):
+        for status in before.values():
             counts[status] -= 1
+        for entry in previous.survivors:  # survivors whose function no longer exists keep their verdict too
+            if entry["name"] not in statuses:
+                statuses[entry["name"]] = entry["status"]
+                survivors.append(entry)
         for status in statuses.values():
             counts[status] = counts.get(status, 0) + 1
         counts = {status: n for status, n in counts.items() if n}
-        settings["survivors_retested"] = {"commit": commit, "date": stamp, "count": len(statuses),
+        settings["survivors_retested"] = {"commit": commit, "date": stamp, "count": len(statuses) - len(unchecked),
                                           "minutes": round(seconds / 60, 1)}
         return Verdicts(key, list(module.sources), counts, survivors, previous.seconds, previous.commit,
                         previous.date, {**previous.settings, **settings})
