@@ -249,6 +249,12 @@ def run_module(key: str, children: int, timeout_multiplier: float, timeout_const
             if match and (chosen is None or match.group(1) in chosen):
                 statuses[match.group(1)] = status = match.group(2).strip()
                 counts[status] = counts.get(status, 0) + 1
+        if sample and not previous:  # a sample cut short is the smaller sample it tested
+            statuses = {name: status for name, status in statuses.items() if status != "not checked"}
+            counts = {}
+            for status in statuses.values():
+                counts[status] = counts.get(status, 0) + 1
+            settings["sample"]["size"] = len(statuses)
         left = [name for name, status in statuses.items() if status not in KILLED]
         shown = subprocess.run([sys.executable, "-c", SHOW_DIFFS], cwd=work, input=json.dumps(left),
                                capture_output=True, text=True, check=True).stdout
