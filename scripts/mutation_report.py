@@ -89,7 +89,12 @@ MODULES = {
     "master": Module(("orchestrator/master.py",), ("tests/orchestrator/test_master.py",
                                                    "tests/orchestrator/test_master_guards.py",
                                                    "tests/orchestrator/test_fmu_participant.py")),
-    "scenario": Module(("orchestrator/scenario.py",), ("tests/orchestrator/test_scenario.py",)),
+    # the scenario file's reader: its own tests and those reading the tables it parses for others
+    "scenario": Module(("orchestrator/scenario.py",), ("tests/orchestrator/test_scenario.py",
+                                                       "tests/orchestrator/test_scenario_acceptance.py",
+                                                       "tests/orchestrator/test_port_mapping.py",
+                                                       "tests/orchestrator/test_master.py",
+                                                       "tests/orchestrator/test_fmu_participant.py")),
     "fmu_participant": Module(("orchestrator/fmu_participant.py",), ("tests/orchestrator/test_fmu_participant.py",
                                                                      "tests/orchestrator/test_fmu_participant_guards.py")),
 }
