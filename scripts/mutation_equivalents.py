@@ -159,4 +159,10 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      "see tests/rhnc/test_nmpc_cost.py), so the optimum is the same"),
     ("orchestrator/fmu_participant.py", r"return call\(\*args, \*\*kwargs\)", r"return call\(\*args, \)",
      "no caller of _call passes keyword arguments: dropping them forwards the same call"),
+    ("orchestrator/master.py", r'getattr\(participant, "checks_outputs_finite", False\)',
+     r'"checks_outputs_finite", None\)',
+     "the default is only tested for truth: None and False are both false"),
+    ("orchestrator/master.py", r"at t = \{t:g\} s\" if name else phase", r"if \(name\) or True else phase",
+     "the position without a participant is only reached after the last step, where only the stop "
+     "watchdog's log line reads it (its wording)"),
 ]
