@@ -336,8 +336,10 @@ def section(v: Verdicts) -> str:
     carried = (f"Survivors retested on commit {retested['commit']} ({retested['date']}, {retested['count']} "
                f"mutants, {retested['minutes']} min) after new tests; the other verdicts are from the full run. "
                if retested else "")
-    carried += ("Carried over from the previous report (mutmut's own diffs not kept then); the module has not "
-               f"changed since commit {v.commit}. " if v.settings.get("legacy") else "")
+    if v.settings.get("legacy"):
+        carried += ("Carried over from the previous report (mutmut's own diffs not kept then): "
+                    + (v.settings["changed"] if "changed" in v.settings else
+                       f"the module has not changed since commit {v.commit}") + ". ")
     lines = [f"## {v.module} (" + ", ".join(f"`{s}`" for s in v.sources) + ")", "",
              (f"A random sample (seed {sampled['seed']}) of {sampled['size']} of the {sampled['of']} mutants. "
               if sampled else "") + carried + f"{v.total} mutants: {v.counts.get('killed', 0)} killed" + (f", {others}" if others else "")
@@ -379,7 +381,8 @@ def write_report(verdicts: dict[str, Verdicts]) -> None:
         explained = v.explained()
         equivalent = sum(1 for _, why in explained if why)
         sampled = v.settings.get("sample")
-        rows.append(f"| {key} | {v.total}" + (f" (sample of {sampled['of']})" if sampled else "") + f" | {v.counts.get('killed', 0)} | {v.counts.get('timeout', 0)} | "
+        rows.append(f"| {key}" + (" (previous report)" if v.settings.get("legacy") else "")
+                    + (" (survivors retested)" if v.settings.get("survivors_retested") else "") + f" | {v.total}" + (f" (sample of {sampled['of']})" if sampled else "") + f" | {v.counts.get('killed', 0)} | {v.counts.get('timeout', 0)} | "
                     f"{equivalent} | {len(explained) - equivalent} | {v.score():.0f} % | "
                     f"{100.0 * v.killed / max(v.total - equivalent, 1):.0f} % |")
         sections.append(section(v))
