@@ -12,8 +12,8 @@ N = 2
 Q = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]
 
 
-@pytest.fixture(scope="module")
-def objective():
+@pytest.fixture
+def objective():  # built per test (mutation testing attributes a fixture's calls to the test that built it)
     problem = build_problem(load_parameter_set("default"), N, 20.0, 1, 1, Q, [0.0, 0.0], [0.0, 0.0], None,
                             np.ones(6), np.ones(2))
     cost = ca.Function("cost", [problem.nlp["x"], problem.nlp["p"]], [problem.nlp["f"]])
