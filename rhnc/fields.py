@@ -259,8 +259,12 @@ class SuperpositionField:
         return self.weather.extent
 
     # -- whole-map views (plots, tests) ----------------------------------------------
-    def guidance(self) -> np.ndarray:
-        """G [s] of the last update (float32)."""
+    def guidance_s(self) -> np.ndarray:
+        """G [s] of the last update (float32).
+
+        (Not ``guidance()``: the instance attribute ``guidance``, the field's
+        :class:`GuidanceParameters`, would hide a method of that name.)
+        """
         return self._guidance
 
     def guidance_normalised(self) -> np.ndarray:

@@ -315,3 +315,77 @@ class SelfKiller(Participant):
         if time >= self.at and not (self.unless_exists and os.path.exists(self.unless_exists)):
             os.kill(os.getpid(), signal.SIGKILL)
         return {"ok": 1.0}
+
+
+class Probe(Participant):
+    """Records what the master tells it (build context, sources, calls, the reported position)
+    and outputs its step's start time as ``value``; options make it misbehave on purpose."""
+
+    def __init__(self, name, options, context):
+        super().__init__(name)
+        self.options = options
+        self.context = context
+        self.sources = None
+        self.calls = []
+        self.positions = []
+        self.outputs_at_step_end = bool(options.get("at_step_end", False))
+        self.checks_outputs_finite = bool(options.get("checks_finite", False))
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        return cls(name, dict(options), context)
+
+    input_names = property(lambda self: ["value"])
+    output_names = property(lambda self: ["value", "extra"] if self.options.get("declare_extra") else ["value"])
+
+    def connected(self, sources):
+        self.sources = dict(sources)
+
+    def _where(self):
+        from orchestrator import interrupts
+
+        self.positions.append(interrupts._state.where())
+
+    def setup(self, start_time, inputs):
+        self._where()
+        self.setup_inputs = dict(inputs)
+        return {"value": float(start_time)}
+
+    def step(self, time, step_size, inputs):
+        from orchestrator import interrupts
+        from orchestrator.errors import ModelError
+
+        self._where()
+        self.calls.append((time, step_size))
+        at = self.options.get("at_s", math.inf)
+        if time >= at:
+            what = self.options.get("misbehave")
+            if what == "model_error":
+                raise ModelError("refused the step")
+            if what == "interrupt_as_error":  # a library that turns a signal into its own error
+                interrupts._state.signal_name = "SIGTERM"
+                raise RuntimeError("solver interrupted")
+            if what == "undeclared":
+                return {"value": time, "surprise": 1.0}
+            if what == "nan":
+                return {"value": math.nan}
+            if what == "integer":
+                return {"value": int(time)}
+            if what == "numpy_scalar":
+                return {"value": np.float64(time)}
+            if what == "numpy_nan":
+                return {"value": np.float64("nan")}
+        return {"value": float(time)}
+
+    def summary(self):
+        if self.options.get("bad_summary"):
+            raise ValueError("no summary today")
+        return {"calls": len(self.calls)}
+
+
+class NotAParticipant:
+    """Has from_options, but builds something else."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        return object()
