@@ -149,3 +149,15 @@ def test_the_speed_plan_makes_up_a_lagging_ship_and_arrives_on_time():
     # the lag is made up as it accrues; the remaining time shrinking, the last updates
     # raise the speed most (11 % over the passage here for a 2 % lag)
     assert planned[-1] / planned[0] < 1.15
+
+
+def test_the_route_switch_margin_is_checked():
+    field = storm_field()
+    with pytest.raises(ScenarioError, match=r"options.route_switch_margin_pct: must not be negative, got -0.1"):
+        build(field, goal_nm=[10, 10], route_switch_margin_pct=-0.1)
+    with pytest.raises(ScenarioError, match=r"options.route_switch_margin_pct: must be below 100, got 100"):
+        build(field, goal_nm=[10, 10], route_switch_margin_pct=100)
+    with pytest.raises(ScenarioError, match=r"options.route_switch_margin_pct: applies to method 'routing' only"):
+        build(field, goal_nm=[10, 10], method="paper", route_switch_margin_pct=0.1)
+    nav = build(field, goal_nm=[10, 10], route_switch_margin_pct=0.5)
+    assert nav.route_planner.switch_margin == pytest.approx(0.005)
