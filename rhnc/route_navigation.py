@@ -16,9 +16,8 @@ One planning update:
    first node; the one minimising (cost of the straight segment to it) + (its cost-to-go)
    is taken, and the route follows the search tree from it to the goal (the goal itself
    is a candidate once it is that near, so the last leg runs straight to it);
-2. the first part of the route (the horizon plus two grid steps) is shortened where a
-   straight segment costs no more than the grid path, and the rest of the grid path is
-   straightened where it only staircases (within half a grid step);
+2. the grid path is straightened where it only staircases (within half a grid step) and
+   then shortened wherever a straight segment costs no more than the legs it replaces;
 3. **commitment**: the route followed so far, rejoined from the start (straight to its
    next turning point), is kept unless the route just found, or the straight line to the
    goal, is cheaper by more than ``switch_margin`` (0.1 % by default) of the kept route's
@@ -171,7 +170,8 @@ class RecedingRoutePlanner:
 
     def route(self, time_s: float, start_m, speed_mps: float, price_usd_h: float,
               horizon_m: float, arrival_speed=None) -> np.ndarray:
-        """The route from ``start_m`` to the goal, shortened over ``horizon_m``.
+        """The route from ``start_m`` to the goal (``horizon_m`` is not used: the whole route
+        is shortened).
 
         Candidates: the route of the cost-to-go and the straight line to the goal.  The route
         the ship follows is kept (rejoined from the start) unless the cheaper candidate costs
