@@ -11,7 +11,8 @@ import pytest
 from rhnc.energy import EnergyParameters, brake_power, cost_rate, emission_rate, speed_through_water
 from rhnc.fields import (GuidanceParameters, PlanningWeather, SuperpositionField, bearing, energy_rate_fields,
                          guidance_field, normalise, resample_weather)
-from rhnc.metocean import KNOT, NM, MetOceanField
+from orchestrator.geometry import KNOT, NM
+from rhnc.metocean import MetOceanField
 
 SPEED = 18 * KNOT
 NAMES = ("wind_north", "wind_east", "hs", "current_north", "current_east")
