@@ -135,7 +135,17 @@ def _owner_alive(staging: Path, run_id: str) -> bool:
         return False
     except PermissionError:
         return True  # another user's process
-    return True
+    return not _is_zombie(pid)
+
+
+def _is_zombie(pid: int) -> bool:
+    """The process has ended but nobody has reaped it (a container whose first process does
+    not reap orphans keeps a killed worker so): it will never write again."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return False  # no /proc (not Linux): the signal check above is all there is
+    return state == "Z"
 
 
 def json_default(value):

@@ -264,3 +264,26 @@ def test_timed_out_runs_in_a_batch_keep_their_status_and_are_not_redone(tmp_path
     assert sorted(p.name for p in runs.iterdir()) == sorted(first.table["run_id"])  # no second record of it
     second = run_batch(batch, tmp_path, workers=2, progress=False)
     assert (second.ran, second.skipped) == (0, 2)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc for the process state")
+def test_a_staging_folder_of_an_ended_but_unreaped_process_is_stale(tmp_path):
+    """A killed worker that nobody reaps (a container without an init that reaps orphans) is a
+    zombie: the signal check still finds its pid, yet it will never write its folder again."""
+    from orchestrator.results import stale_staging
+
+    pid = os.fork()
+    if pid == 0:  # the child ends at once and stays unreaped until the end of this test
+        os._exit(0)
+    try:
+        for _ in range(200):  # until the child has ended
+            if Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z":
+                break
+            time.sleep(0.01)
+        ended = tmp_path / f".run1.{pid}-abcd.partial"
+        ours = tmp_path / f".run1.{os.getppid()}-abcd.partial"  # a live process (pytest's parent)
+        ended.mkdir()
+        ours.mkdir()
+        assert stale_staging(tmp_path, "run1") == [ended]
+    finally:
+        os.waitpid(pid, 0)
