@@ -47,6 +47,7 @@ OPTIONS = (
     "disturbance_observer",
     "observer_gain",
     "codegen",
+    "warm_start_duals",
 )
 WEIGHT_KEYS = ("q", "r", "r_rate")
 #: Largest values of the integer options: bounds on the size of the NLP built from them
@@ -100,7 +101,7 @@ def controller_from_options(options: Mapping[str, Any], context: BuildContext):
             kwargs[key] = None if options[key] is False else _number(options, key, where, None)
     if "max_speed_kn" in options:
         kwargs["max_speed_mps"] = _number(options, "max_speed_kn", where, None) * KNOT
-    for key in ("colregs", "disturbance_observer", "codegen"):
+    for key in ("colregs", "disturbance_observer", "codegen", "warm_start_duals"):
         if key in options:
             if not isinstance(options[key], bool):
                 raise ScenarioError(f"{where}: option '{key}' must be true or false, got {options[key]!r}")

@@ -128,6 +128,9 @@ class ControlParticipant(Participant):
     codegen : bool
         Compile the NLP to C once per machine and reuse it (default true; see
         :mod:`rhnc.nmpc_codegen`); the summary reports ``codegen: compiled|interpreted``.
+    warm_start_duals : bool
+        IPOPT starts from the previous solve's multipliers shifted by one interval
+        (default true; about half the iterations; ignored by fatrop).
     """
 
     OPTIONS = OPTIONS

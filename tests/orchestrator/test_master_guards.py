@@ -123,8 +123,9 @@ def test_a_participant_that_checks_its_own_outputs_is_not_checked_again(write_sc
 
 def test_a_summary_that_raises_is_reported_in_its_place(write_scenario):
     _, _, outcome = probe_run(write_scenario, "bad_summary = true")
-    assert outcome.status == "finished"
-    assert outcome.participant_summaries["probe"] == {"error": "ValueError: no summary today"}
+    assert outcome.status == "failed"  # a run whose figures cannot all be reported did not end cleanly
+    assert outcome.reason == "probe: summary raised ValueError: no summary today"
+    assert outcome.participant_summaries["probe"] == {"error": "summary raised ValueError: no summary today"}
     assert outcome.participant_summaries["clock"] == {"steps": 5}
 
 
