@@ -34,7 +34,7 @@ def check_scheduler(address: str, ca=None, cert=None, key=None) -> TlsFiles | No
     ``tcp://host:port`` takes no TLS files; ``tls://host:port`` needs all three, and each must
     be a readable file.
     """
-    from orchestrator.batch import BatchError
+    from orchestrator.batch_run import BatchError
 
     given = {"--tls-ca": ca, "--tls-cert": cert, "--tls-key": key}
     if address is None:
@@ -81,7 +81,7 @@ class DaskExecutor:
         from distributed import CancelledError, Client, KilledWorker, as_completed
 
         from orchestrator import interrupts
-        from orchestrator.batch import WORKER_DIED, BatchError, execute_run
+        from orchestrator.batch_run import WORKER_DIED, BatchError, execute_run
 
         try:
             client = Client(self.address, timeout="10s", set_as_default=False, security=self._security())

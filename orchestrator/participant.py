@@ -24,11 +24,12 @@ goes through the master's connections.
 from __future__ import annotations
 
 import abc
-import math
 from collections.abc import Mapping, Sequence
 from typing import Any, Union
 
 import numpy as np
+
+from orchestrator.toml_input import checked, is_finite_number  # noqa: F401 (part of the participant interface)
 
 Value = Union[float, np.ndarray]
 
@@ -89,19 +90,6 @@ class Participant(abc.ABC):
         return {}
 
 
-def is_finite_number(value) -> bool:
-    """True for a finite int or float that is not a bool: what every numeric option must be.
-
-    (TOML's ``true`` is a Python bool, itself an int subclass, so it must be excluded.)
-    """
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return False
-    try:
-        return math.isfinite(value)
-    except OverflowError:  # an int beyond the range of a float (TOML integers are unbounded here)
-        return False
-
-
 def reject_unknown_options(options: Mapping[str, Any], allowed: Sequence[str], where: str) -> None:
     """Raise ``ScenarioError`` naming the first option key not in ``allowed``.
 
@@ -133,8 +121,6 @@ def check_options(model, options: Mapping[str, Any], where: str):
     where : str
         ``BuildContext.where`` (``"<scenario file>: participants.<name>"``).
     """
-    from orchestrator.toml_input import checked
-
     file, _, table = where.rpartition(": ")
     prefix = tuple(table.split(".")) + ("options",) if file else ("options",)
     return checked(model, dict(options), file or where, prefix)

@@ -11,6 +11,7 @@ file and the dotted key (:func:`checked`).
 
 from __future__ import annotations
 
+import math
 import re
 import tomllib
 from collections.abc import Mapping
@@ -21,7 +22,20 @@ from pydantic import BaseModel, ConfigDict, PlainValidator, ValidationError, mod
 from pydantic_core import PydanticCustomError
 
 from orchestrator.errors import ScenarioError
-from orchestrator.participant import is_finite_number
+
+
+def is_finite_number(value) -> bool:
+    """True for a finite int or float that is not a bool: what every numeric option must be.
+
+    (TOML's ``true`` is a Python bool, itself an int subclass, so it must be excluded.)
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:  # an int beyond the range of a float (TOML integers are unbounded here)
+        return False
+
 
 #: Largest input file read [bytes]; the shipped ones are below 20 kB.
 MAX_FILE_BYTES = 16 * 1024 * 1024

@@ -177,7 +177,7 @@ class WorkerPool:
         if worker.process.sentinel in ready or not worker.process.is_alive():
             worker.process.join(1.0)
             how, infrastructure = describe_death(worker.process.exitcode)
-            from orchestrator.batch import WORKER_DIED
+            from orchestrator.batch_run import WORKER_DIED
 
             return {"status": "worker_died", "reason": f"{WORKER_DIED}: {how}", "infrastructure": infrastructure}
         deadline = worker.deadline.value
