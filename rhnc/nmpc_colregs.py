@@ -83,9 +83,15 @@ GIVE_WAY_CLASSES = ("head_on", "crossing_give_way", "overtaking")
 #: turns 10 deg in 51 s on 10/35 of its yaw moment and 180 deg in 207 s on all of it
 ALTERATION_RATE_DEG_S = 0.3
 ALTERATION_DELAY_S = 20.0
-#: a ship behind that ramp may take up to this rate [deg/s] to catch up (keeps the bound
-#: reachable from any measured state)
-CATCH_UP_RATE_DEG_S = 0.6
+#: a ship behind that ramp is asked to catch up as a first-order yaw response towards this
+#: rate [deg/s] with this time constant [s]: the KCS model's yaw inertia over its yaw damping
+#: is about 13 s, and its full yaw moment holds about 0.7 deg/s, so the bound asks for some
+#: 40 % of the moment and stays reachable from any measured state, while it still demands
+#: progress from the first step of every plan
+CATCH_UP_RATE_DEG_S = 0.3
+YAW_TIME_CONSTANT_S = 13.0
+#: numerical slack of that cap below the measured heading [deg]
+HEADING_TOLERANCE_DEG = 0.1
 
 
 @dataclasses.dataclass(frozen=True)
@@ -155,13 +161,17 @@ def heading_bounds(report: DomainReport, time_s: float, heading_rad: float, yaw_
     ``ALTERATION_DELAY_S``, to the alteration's heading.  The ramp is fixed in time, so
     re-solving every interval does not push it ahead of the ship.  Not to make the problem
     infeasible from a ship lagging behind it, it is capped by what the ship can reach from
-    the measured state (``heading_rad`` at ``time_s``): ``PORT_ALLOWANCE_DEG`` plus what a
-    yaw rate the other way carries it on over the delay behind the measured heading, then
-    ``CATCH_UP_RATE_DEG_S``.  Headings are brought to within half a turn of ``heading_rad``.
+    the measured state (``heading_rad`` at ``time_s``): the measured heading less what a yaw
+    rate the other way carries it on over the delay (and ``HEADING_TOLERANCE_DEG``), plus a
+    first-order yaw response towards ``CATCH_UP_RATE_DEG_S``.  No larger allowance: the controller applies only the first
+    step of each plan, and a first step allowed to sag below the measured heading would
+    postpone the alteration at every solve and never reach it.  Headings are brought to within half a turn of ``heading_rad``.
     """
     times_s = np.asarray(times_s, dtype=float)
-    allowance = math.radians(PORT_ALLOWANCE_DEG)
-    reachable = np.radians(CATCH_UP_RATE_DEG_S) * np.maximum(times_s - time_s - ALTERATION_DELAY_S, 0.0)
+    tolerance = math.radians(HEADING_TOLERANCE_DEG)
+    ahead_s = np.maximum(times_s - time_s, 0.0)
+    reachable = np.radians(CATCH_UP_RATE_DEG_S) * (
+        ahead_s - YAW_TIME_CONSTANT_S * (1.0 - np.exp(-ahead_s / YAW_TIME_CONSTANT_S)))
 
     def near(angle: float) -> float:
         return angle - 2.0 * math.pi * round((angle - heading_rad) / (2.0 * math.pi))
@@ -174,13 +184,13 @@ def heading_bounds(report: DomainReport, time_s: float, heading_rad: float, yaw_
     lower = upper = None
     if report.alteration_floor is not None:
         rise, size = ramp(report.alteration_floor)
-        start = heading_rad - allowance - max(0.0, -yaw_rate_rps) * ALTERATION_DELAY_S
         goal = near(report.alteration_floor[2])
+        start = heading_rad - tolerance - max(0.0, -yaw_rate_rps) * ALTERATION_DELAY_S
         lower = np.minimum.reduce([np.full_like(times_s, goal), goal - size + rise, start + reachable])
     if report.alteration_ceiling is not None:
         rise, size = ramp(report.alteration_ceiling)
-        start = heading_rad + allowance + max(0.0, yaw_rate_rps) * ALTERATION_DELAY_S
         goal = near(report.alteration_ceiling[2])
+        start = heading_rad + tolerance + max(0.0, yaw_rate_rps) * ALTERATION_DELAY_S
         upper = np.maximum.reduce([np.full_like(times_s, goal), goal - size - rise, start - reachable])
     return lower, upper
 
@@ -332,16 +342,16 @@ class CollisionDomains:
         to starboard, except when overtaking or being overtaken, where either side is
         allowed (Rule 13): then it continues a turn the plan has already begun (more than
         ``PORT_ALLOWANCE_DEG`` off the reference), else it turns away from the other ship.
-        It ends, for the rest of the encounter, when the target has passed (TCPA <= 0).
+        It ends with the encounter, when the target is past and clear: the tracker releases
+        its class (TCPA <= 0 and the range beyond its release range; Rule 13(d): until finally past
+        and clear; a ship alongside on a parallel course is not yet clear, and turning
+        back towards it then undoes the alteration).
         """
         s = self.settings
         if s.alteration_deg <= 0.0 or index in self._altered:
             return
         if index in self._altering:
-            if encounter.tcpa_s <= 0.0:
-                del self._altering[index]
-                self._altered.add(index)
-            return
+            return  # held until the tracker releases the target (see parameters)
         name = encounter.encounter_class
         if name in GIVE_WAY_CLASSES:
             begin = (0.0 < encounter.tcpa_s <= s.give_way_action_tcpa_s and encounter.cpa_m < s.risk_cpa_m)

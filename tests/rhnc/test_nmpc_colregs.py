@@ -14,7 +14,9 @@ import pytest
 
 from rhnc.colregs import wrap_deg
 from rhnc.nmpc import NMPCController, NMPCSettings
-from rhnc.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainSettings
+from rhnc.nmpc_colregs import (PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport, DomainSettings,
+                               CATCH_UP_RATE_DEG_S, HEADING_TOLERANCE_DEG, YAW_TIME_CONSTANT_S,
+                               heading_bounds)
 from rhnc.nmpc_problem import OBSTACLE_FIELDS
 from rhnc.reference_participant import line_or_turn_reference
 from rhnc.ship_model import load_parameter_set, rk4_step
@@ -100,6 +102,9 @@ def test_crossing_from_starboard_turns_to_starboard_and_passes_astern(kcs):
     assert first_alteration > 0.0  # the first real alteration is to starboard
     before_cpa = int(np.argmin(np.hypot(*(own[:, :2] - other).T)))
     assert heading_deg[:before_cpa].min() > -PORT_ALLOWANCE_DEG - 1.0
+    # Rules 8, 16: readily apparent (the full alteration) and early (5 min before the CPA)
+    apparent = int(np.argmax(heading_deg >= controller.settings.apparent_alteration_deg - 0.5))
+    assert heading_deg[apparent] >= 29.5 and (before_cpa - apparent) * 0.5 >= 300.0
     # the paper's circle turns to port and crosses ahead of it
     own, other, velocity, _ = encounter(kcs, start, velocity, colregs=False)
     assert abs(at_closest_approach(own, other, velocity)[2]) < 90.0
@@ -137,7 +142,7 @@ def test_overtaking_passes_clear(kcs):
     own, other, velocity, _ = encounter(kcs, start, velocity, colregs=True)
     separation, bearing, _ = at_closest_approach(own, other, velocity)
     assert separation >= RADIUS
-    assert own[-1, 0] > other[-1, 0] + 2.0 * NM  # got past it
+    assert own[-1, 0] > other[-1, 0] + 1.0 * NM  # got past it (holding its alteration until clear)
 
 
 def rho_circle_clearance(slots, slot, points_m, length_m):
@@ -212,3 +217,50 @@ def test_no_port_turn_for_a_crossing_target_on_the_port_side_even_while_standing
     _, report = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2).parameters(
         overtaken, state, np.zeros(2), SPEED, 5.0, 230.0, et=True)
     assert not report.no_port_turn
+
+
+def test_alteration_bound_rises_to_the_alteration_and_never_lets_the_first_step_sag():
+    report = DomainReport(np.zeros(1), np.ones(1), alteration_floor=(100.0, 0.0, math.radians(30.0)))
+    times = 100.0 + 20.0 * np.arange(1, 31)
+    floor, ceiling = heading_bounds(report, 100.0, 0.0, 0.0, times)
+    assert ceiling is None
+    floor_deg = np.degrees(floor)
+    assert np.all(np.diff(floor_deg) >= -1e-9) and floor_deg[-1] == pytest.approx(30.0)
+    assert floor_deg[0] < 3.0  # from a steady heading the ship is asked for a feasible start
+    # a ship behind the ramp (here on 20 deg at 600 s) may not plan a first step below its
+    # heading: applying only that step, it would otherwise put the turn off at every solve
+    later = 600.0 + 20.0 * np.arange(1, 16)
+    floor = np.degrees(heading_bounds(report, 600.0, math.radians(20.0), 0.0, later)[0])
+    # progress from step 1: a first-order yaw response towards CATCH_UP_RATE_DEG_S, from
+    # the measured heading less only the numerical tolerance
+    response = CATCH_UP_RATE_DEG_S * (20.0 - YAW_TIME_CONSTANT_S * (1.0 - math.exp(-20.0 / YAW_TIME_CONSTANT_S)))
+    assert floor[0] == pytest.approx(20.0 - HEADING_TOLERANCE_DEG + response) and floor[0] > 22.0
+    assert floor[-1] == pytest.approx(30.0)
+    # a yaw swing the other way is allowed for (the ship needs time to check it)
+    swinging = np.degrees(heading_bounds(report, 600.0, math.radians(20.0), math.radians(-0.2), later)[0])
+    assert swinging[0] < floor[0] - 3.0
+    # to port (overtaking on the other side): the mirror image
+    port = DomainReport(np.zeros(1), np.ones(1), alteration_ceiling=(100.0, 0.0, math.radians(-30.0)))
+    lower, upper = heading_bounds(port, 100.0, 0.0, 0.0, times)
+    assert lower is None and np.degrees(upper[-1]) == pytest.approx(-30.0)
+
+
+def test_give_way_alteration_starts_with_the_encounter_and_ends_when_clear():
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    start, velocity = target_on_collision_course(270.0, 15.0)  # crossing from starboard, CPA in 15 min
+    obstacles = np.array([[*start, *velocity, RADIUS]])
+    _, report = domains.parameters(obstacles, state, np.zeros(2), SPEED, 5.0, 230.0, et=True,
+                                   reference_heading_rad=0.0, time_s=0.0)
+    assert report.alteration_floor is None  # 15 min off: not yet
+    ahead = start + velocity * 240.0
+    moved = state.copy()
+    moved[0] = SPEED * 240.0
+    _, report = domains.parameters(np.array([[*ahead, *velocity, RADIUS]]), moved, moved[:2], SPEED, 5.0, 230.0,
+                                   et=True, reference_heading_rad=0.0, time_s=240.0)
+    assert report.alteration_floor == pytest.approx((240.0, 0.0, math.radians(30.0)))
+    assert domains.alterations == 1
+    far = moved[:2] + np.array([-6.0 * NM, -6.0 * NM])  # long past and clear: released
+    _, report = domains.parameters(np.array([[*far, *velocity, RADIUS]]), moved, moved[:2], SPEED, 5.0, 230.0,
+                                   et=True, reference_heading_rad=0.0, time_s=900.0)
+    assert report.alteration_floor is None
