@@ -289,7 +289,11 @@ def _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, targe
                                [f"alteration {(result['time_of_cpa_s'] - result['manoeuvre_time_s']) / 60:.1f} min "
                                 f"before the CPA (< {settings.early_before_cpa_min:g} min)"])
     give_way = encounter_class in GIVE_WAY_CLASSES
-    if give_way or (manoeuvred and encounter_class != "static"):
+    # a stand-on ship's manoeuvre made while it gives way to another target is that
+    # encounter's action (judged there, Rule 8 included), not one taken for this target
+    for_another = manoeuvred and any(onset <= result["manoeuvre_time_s"] for onset in give_way_onsets_s)
+    if give_way or (manoeuvred and encounter_class != "static"
+                    and not (encounter_class in STAND_ON_CLASSES and for_another)):
         large = (result["max_course_change_deg"] >= settings.apparent_course_change_deg
                  or result["max_speed_reduction"] >= settings.apparent_speed_reduction)
         size = [] if large else [f"alteration {result['max_course_change_deg']:.0f} deg, speed "

@@ -158,10 +158,10 @@ class ControlParticipant(Participant):
     apparent_alteration_deg : float
         Rules 8, 16: a give-way ship (or a stand-on ship that acts) holds its heading at
         least this far off its reference to the side the rules ask for until the target
-        has passed (default 30; 0: no minimum alteration).
+        is past and clear (default 35; 0: no minimum alteration).
     give_way_action_tcpa_s : float
         A give-way ship begins that alteration when the target's CPA is this close in time
-        (default 720 s).
+        (default 900 s).
     disturbance_observer : bool
         Offset-free NMPC: estimate current and loads and predict with them (default false).
     observer_gain : float

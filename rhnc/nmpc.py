@@ -184,8 +184,8 @@ class NMPCSettings:
     clearance_margin_growth_mps: float = 0.0
     stand_on_action_tcpa_s: float = 600.0
     stand_on_action_range_factor: float = 2.0
-    apparent_alteration_deg: float = 30.0
-    give_way_action_tcpa_s: float = 720.0
+    apparent_alteration_deg: float = 35.0
+    give_way_action_tcpa_s: float = 900.0
     disturbance_observer: bool = False
     observer_gain: float = 0.5
     codegen: bool = False

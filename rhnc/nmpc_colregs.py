@@ -116,11 +116,18 @@ class DomainSettings:
     alteration_deg : float
         Rule 8(b), 16: once the own ship gives way (or acts as stand-on ship), its heading
         is held at least this far off the reference heading it had when it began, to the
-        side the rules ask for, until the target has passed (0: no minimum alteration).
+        side the rules ask for, until the target is past and clear (0: no minimum
+        alteration).  35 deg: a readily apparent alteration is commonly read as 30 deg or
+        more of course over ground, and the bound holds the heading; in a cross wind the
+        course over ground differs from it by the drift angle (2-6 deg in the paper's
+        weather at 18 kn), and the course the change is seen from is the one at the onset.
+        A bound of exactly 30 deg lands on either side of 30 deg.
     give_way_action_tcpa_s : float
         A give-way ship begins that alteration when the collision constraints are on and
         the target's CPA (predicted at the present velocities, inside ``risk_cpa_m``) is
-        at most this far ahead [s].
+        at most this far ahead [s].  15 min: an alteration is to be seen at least 5 min
+        before the CPA; the turn itself takes 2-3 min, and turning away brings the CPA
+        forward (with 12 min, overtaking ships altered 3.7 min before their CPA).
     """
 
     own_radius_m: float = 0.0
@@ -131,8 +138,8 @@ class DomainSettings:
     stand_on_action_range_factor: float = STAND_ON_ACTION_RANGE_FACTOR
     risk_cpa_m: float = 2.0 * 1852.0
     risk_tcpa_s: float = 30.0 * 60.0
-    alteration_deg: float = 30.0
-    give_way_action_tcpa_s: float = 720.0
+    alteration_deg: float = 35.0
+    give_way_action_tcpa_s: float = 900.0
 
 
 @dataclasses.dataclass

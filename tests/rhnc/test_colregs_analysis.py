@@ -169,8 +169,10 @@ def test_stand_on_manoeuvre_made_while_giving_way_to_another_target_is_allowed()
     assert head_on["encounter_class"] == "head_on" and stand_on["encounter_class"] == "crossing_stand_on"
     assert stand_on["manoeuvre_time_s"] < 600.0
     assert stand_on["rule_17"] == PASS, stand_on["reasons"]
+    assert stand_on["rule_8"] == NOT_APPLICABLE  # the turn was the head-on encounter's action
+    assert head_on["rule_8"] == PASS
     alone = judge(track, _stand_on_target(t))  # the same turn with no one to give way to
-    assert alone["rule_17"] == FAIL
+    assert alone["rule_17"] == FAIL and alone["rule_8"] != NOT_APPLICABLE
 
 
 def test_overtaken_ship_standing_on_passes_and_rule_8_does_not_apply():
