@@ -217,6 +217,7 @@ class CollisionDomains:
         self.max_obstacles = max_obstacles
         self.tracker = EncounterTracker(settings.risk_cpa_m, settings.risk_tcpa_s)
         self._acting: set[int] = set()
+        self._guarding: set[int] = set()
         self._altering: dict[int, tuple[float, float, float, float]] = {}
         self._altered: set[int] = set()
         self.stand_on_actions = 0
@@ -226,6 +227,7 @@ class CollisionDomains:
         """Forget classes, Rule 17 decisions and alterations."""
         self.tracker = EncounterTracker(self.settings.risk_cpa_m, self.settings.risk_tcpa_s)
         self._acting = set()
+        self._guarding = set()
         self._altering = {}
         self._altered = set()
 
@@ -278,6 +280,7 @@ class CollisionDomains:
                 classes[index] = encounter
                 codes[index] = ENCOUNTER_CLASSES.index(encounter.encounter_class)
             self._acting &= set(self.tracker.locked)
+            self._guarding &= set(self.tracker.locked)
             self._altered &= set(self.tracker.locked)
             self._altering = {i: v for i, v in self._altering.items() if i in self.tracker.locked}
         if not et:
@@ -290,6 +293,8 @@ class CollisionDomains:
         own_velocity = own_speed * np.array([math.cos(own_course), math.sin(own_course)])
         heading_now = float(state[2]) if reference_heading_rad is None else float(reference_heading_rad)
         no_port_turn = False
+        locked = self.tracker.locked
+        giving_way = any(locked.get(j) in GIVE_WAY_CLASSES for j in self._altering)
         slot = 0
         for i in order:
             x, y, vx, vy, radius = rows[i]
@@ -309,6 +314,12 @@ class CollisionDomains:
                              i, name, cpa, tcpa)
                     self._acting.add(i)
                     self.stand_on_actions += 1
+                elif giving_way or i in self._guarding:
+                    # the own ship has left its course and speed for a target it gives way
+                    # to (the analysis's Rule 17 allows that): keep clear of this one too,
+                    # for the rest of the encounter, or the alteration, and the return to
+                    # the route after it, may carry the ship into it
+                    self._guarding.add(i)
                 else:
                     continue  # keep course and speed: this target's constraint stays off
             if s.colregs and encounter is not None:

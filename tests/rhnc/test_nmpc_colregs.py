@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from rhnc.colregs import wrap_deg
+from rhnc.colregs import ENCOUNTER_CLASSES
 from rhnc.nmpc import NMPCController, NMPCSettings
 from rhnc.nmpc_colregs import (PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport, DomainSettings,
                                CATCH_UP_RATE_DEG_S, HEADING_TOLERANCE_DEG, YAW_TIME_CONSTANT_S,
@@ -267,3 +268,36 @@ def test_give_way_alteration_starts_with_the_encounter_and_ends_when_clear():
     _, report = domains.parameters(np.array([[*far, *velocity, RADIUS]]), moved, moved[:2], SPEED, 5.0, 230.0,
                                    et=True, reference_heading_rad=0.0, time_s=900.0)
     assert report.alteration_floor is None
+
+
+def test_stand_on_target_is_kept_clear_of_once_the_ship_gives_way_to_another():
+    # a crossing ship from starboard (we give way, CPA in 14 min) and one from port (we stand
+    # on, CPA in 25 min): once the own ship alters for the first, it no longer keeps its
+    # course and speed, so the second one's constraint is on too, for the rest of its encounter
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    give_way_start, give_way_velocity = target_on_collision_course(270.0, 15.0)
+    stand_on_velocity = 15.0 * KNOT * np.array([0.0, 1.0])
+    stand_on_start = np.array([SPEED * 1500.0, 0.0]) - stand_on_velocity * 1500.0
+
+    def rows(dt_s, with_give_way=True):
+        stand_on = [*(stand_on_start + stand_on_velocity * dt_s), *stand_on_velocity, RADIUS]
+        give_way = [*(give_way_start + give_way_velocity * (dt_s + 60.0)), *give_way_velocity, RADIUS]
+        return np.array([stand_on, give_way] if with_give_way else [stand_on])
+
+    def solve_parameters(domains, dt_s, with_give_way=True):
+        own = state.copy()
+        own[0] = SPEED * dt_s
+        return domains.parameters(rows(dt_s, with_give_way), own, own[:2], SPEED, 5.0, 230.0, et=True,
+                                  reference_heading_rad=0.0, time_s=dt_s)[1]
+
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    first = solve_parameters(domains, 0.0)
+    assert first.class_codes[0] == ENCOUNTER_CLASSES.index("crossing_stand_on")
+    assert first.alteration_floor is not None and first.active[0] == 0.0  # altering from this solve on
+    assert solve_parameters(domains, 20.0).active[0] == 1.0
+    assert domains.stand_on_actions == 0  # not a Rule 17 action: no stand-on alteration of its own
+    domains._altering.clear()  # the give-way alteration is over (as when its target is released)
+    assert solve_parameters(domains, 40.0).active[0] == 1.0  # still kept clear of
+    alone = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    for dt_s in (0.0, 20.0, 40.0):
+        assert solve_parameters(alone, dt_s, with_give_way=False).active[0] == 0.0  # stands on
