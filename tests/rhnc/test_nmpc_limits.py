@@ -185,6 +185,14 @@ def test_participant_rejects_bad_new_options():
         ControlParticipant.from_options("ctrl", {"wall_time_limit_s": "1s"}, context())
     with pytest.raises(ScenarioError, match=r"participants.ctrl: observer_gain must be in \(0, 1\]"):
         ControlParticipant.from_options("ctrl", {"observer_gain": 2.0}, context())
+    with pytest.raises(ScenarioError, match=r"participants.ctrl: apparent_alteration_deg must be >= 0"):
+        ControlParticipant.from_options("ctrl", {"apparent_alteration_deg": -5.0}, context())
+    with pytest.raises(ScenarioError, match=r"participants.ctrl: option 'give_way_action_tcpa_s' must be a finite"):
+        ControlParticipant.from_options("ctrl", {"give_way_action_tcpa_s": "soon"}, context())
+    ctrl = ControlParticipant.from_options("ctrl", {"colregs": True, "apparent_alteration_deg": 40.0,
+                                                    "give_way_action_tcpa_s": 600.0}, context())
+    assert ctrl.controller.domains.settings.alteration_deg == 40.0
+    assert ctrl.controller.domains.settings.give_way_action_tcpa_s == 600.0
 
 
 def test_participant_reports_classes_domains_and_estimate(kcs):
