@@ -76,6 +76,8 @@ STAND_ON_CLASSES = ("crossing_stand_on", "overtaken")
 STARBOARD_CLASSES = ("head_on", "crossing_give_way", "crossing_stand_on")
 #: how far to port of the reference heading the plan may go while that holds [deg]
 PORT_ALLOWANCE_DEG = 2.0
+#: the alteration ends when the target is past (TCPA <= 0) and this many R + R_i away
+ALTERATION_CLEAR_FACTOR = 2.0
 #: classes in which the own ship gives way (Rules 13-16)
 GIVE_WAY_CLASSES = ("head_on", "crossing_give_way", "overtaking")
 #: the heading floor of a readily apparent alteration rises at this rate [deg/s] from the
@@ -323,7 +325,8 @@ class CollisionDomains:
                 else:
                     continue  # keep course and speed: this target's constraint stays off
             if s.colregs and encounter is not None:
-                self._update_alteration(i, encounter, heading_now, float(state[2]), time_s)
+                self._update_alteration(i, encounter, heading_now, float(state[2]), time_s,
+                                        s.own_radius_m + radius)
             if name in OFFSETS:
                 speed = math.hypot(vx, vy)
                 ahead = np.array([vx, vy]) / speed
@@ -352,7 +355,7 @@ class CollisionDomains:
         return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling)
 
     def _update_alteration(self, index: int, encounter, reference_heading_rad: float, heading_rad: float,
-                           time_s: float) -> None:
+                           time_s: float, separation_m: float) -> None:
         """Begin, keep or end the readily apparent alteration for one target (Rules 8, 16, 17).
 
         A give-way ship begins it once the target's CPA is at most
@@ -360,16 +363,20 @@ class CollisionDomains:
         to starboard, except when overtaking or being overtaken, where either side is
         allowed (Rule 13): then it continues a turn the plan has already begun (more than
         ``PORT_ALLOWANCE_DEG`` off the reference), else it turns away from the other ship.
-        It ends with the encounter, when the target is past and clear: the tracker releases
-        its class (TCPA <= 0 and the range beyond its release range; Rule 13(d): until finally past
-        and clear; a ship alongside on a parallel course is not yet clear, and turning
-        back towards it then undoes the alteration).
+        It ends, for the rest of the encounter, when the target is past and clear (Rule
+        13(d)): TCPA <= 0 and the range at least ``ALTERATION_CLEAR_FACTOR`` times R + R_i
+        (``separation_m``).  Ending it at TCPA <= 0 alone let a ship alongside an overtaken
+        target, 1.3 nm off, turn back towards it, and the solver failed from that warm
+        start; holding it until the tracker's 4 nm release made long detours.
         """
         s = self.settings
         if s.alteration_deg <= 0.0 or index in self._altered:
             return
         if index in self._altering:
-            return  # held until the tracker releases the target (see parameters)
+            if encounter.tcpa_s <= 0.0 and encounter.range_m >= ALTERATION_CLEAR_FACTOR * separation_m:
+                del self._altering[index]  # past and clear
+                self._altered.add(index)
+            return
         name = encounter.encounter_class
         if name in GIVE_WAY_CLASSES:
             begin = (0.0 < encounter.tcpa_s <= s.give_way_action_tcpa_s and encounter.cpa_m < s.risk_cpa_m)

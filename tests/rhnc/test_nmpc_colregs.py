@@ -264,10 +264,14 @@ def test_give_way_alteration_starts_with_the_encounter_and_ends_when_clear():
                                    et=True, reference_heading_rad=0.0, time_s=360.0)
     assert report.alteration_floor == pytest.approx((360.0, 0.0, math.radians(DomainSettings().alteration_deg)))
     assert domains.alterations == 1
-    far = moved[:2] + np.array([-6.0 * NM, -6.0 * NM])  # long past and clear: released
-    _, report = domains.parameters(np.array([[*far, *velocity, RADIUS]]), moved, moved[:2], SPEED, 5.0, 230.0,
-                                   et=True, reference_heading_rad=0.0, time_s=900.0)
-    assert report.alteration_floor is None
+    def passed(range_nm, time_s):  # the target astern on our port quarter, heading away west
+        where = moved[:2] + range_nm * NM * np.array([-math.sqrt(0.5), -math.sqrt(0.5)])
+        return domains.parameters(np.array([[*where, *velocity, RADIUS]]), moved, moved[:2], SPEED, 5.0, 230.0,
+                                  et=True, reference_heading_rad=0.0, time_s=time_s)[1]
+
+    assert passed(1.5, 900.0).alteration_floor is not None  # past, but not yet clear: held
+    assert passed(2.5, 920.0).alteration_floor is None  # past and clear (2 R + R_i): ended
+    assert passed(2.5, 940.0).alteration_floor is None and domains.alterations == 1  # not begun again
 
 
 def test_stand_on_target_is_kept_clear_of_once_the_ship_gives_way_to_another():
