@@ -9,7 +9,8 @@ With ``--write docs/encounters.md`` the table replaces the one between the lines
 ``<!-- suite-table:begin -->`` and ``<!-- suite-table:end -->`` of that file instead (the
 file is left untouched if either marker is missing).
 
-Columns: runs; runs keeping R + R_i from every obstacle that started outside it; runs with a
+Columns: runs; runs that met their stop condition (the suites' ``stop_when``: the goal
+reached) before the step limit; runs keeping R + R_i from every obstacle that started outside it; runs with a
 target that started inside R + R_i (the situation begins inside the domain: no controller can
 then keep R + R_i), judged apart by their own criterion, the range never falling below its
 value at the start; runs passed on the COLREG side (every target with a side rule: head-on
@@ -46,6 +47,7 @@ def summarise(folder) -> dict:
         encounter, colregs = analyses.get("encounter", {}), analyses.get("colregs", {})
         control = summary.get("participants", {}).get("ctrl", {})
         counts["finished"] += summary.get("status") == "finished"
+        counts["stopped"] += str(summary.get("reason", "")).startswith("stopped at")
         targets = colregs.get("targets", [])
         if "separation_kept" in colregs:  # over the targets that started outside R + R_i
             counts["separation"] += bool(colregs["separation_kept"])
@@ -85,16 +87,17 @@ def summarise(folder) -> dict:
 def markdown(rows: list[dict]) -> str:
     """One Markdown table, a row per batch summary (:func:`summarise`)."""
     rule_heads = " | ".join(rule.replace("rule_", "R") for rule in RULES)
-    lines = ["| batch | runs | separation >= R + R_i (started outside) | started inside: range kept "
+    lines = ["| batch | runs | arrived | separation >= R + R_i (started outside) | started inside: range kept "
              "| COLREG side (runs) | COLREG side (targets) | all verdicts pass | " + rule_heads
              + " | runs with fallback (fallbacks) | NMPC solve median / max [ms] | max solve CPU [ms] |",
-             "|---|---|---|---|---|---|---|" + "---|" * len(RULES) + "---|---|---|"]
+             "|---|---|---|---|---|---|---|---|" + "---|" * len(RULES) + "---|---|---|"]
     for r in rows:
         solve = (f"{r['solve_median_ms']:.0f} / {r['solve_max_ms']:.0f}" if r["solve_max_ms"] is not None else "-")
         cpu = f"{r['solve_cpu_max_ms']:.0f}" if r.get("solve_cpu_max_ms") is not None else "-"
         inside = f"{r.get('inside_kept', 0)}/{r.get('inside_runs', 0)}" if r.get("inside_runs") else "-"
         rules = " | ".join(f"{p}/{a}" if a else "-" for p, a in (r["rules"][rule] for rule in RULES))
-        lines.append(f"| {r['batch']} | {r['runs']} | {r['separation']}/{r['runs']} | {inside} "
+        lines.append(f"| {r['batch']} | {r['runs']} | {r.get('stopped', 0)}/{r['runs']} "
+                     f"| {r['separation']}/{r['runs']} | {inside} "
                      f"| {r['side_ok']}/{r['side_runs']} | {r['side_targets_ok']}/{r['side_targets']} "
                      f"| {r['verdict_ok']}/{r['runs']} | {rules} | {r['fallback_runs']} ({r.get('fallbacks', 0)}) "
                      f"| {solve} | {cpu} |")
