@@ -326,7 +326,7 @@ class CollisionDomains:
                     continue  # keep course and speed: this target's constraint stays off
             if s.colregs and encounter is not None:
                 self._update_alteration(i, encounter, heading_now, float(state[2]), time_s,
-                                        s.own_radius_m + radius)
+                                        s.own_radius_m + radius, (state[:2], own_speed, (x, y), (vx, vy)))
             if name in OFFSETS:
                 speed = math.hypot(vx, vy)
                 ahead = np.array([vx, vy]) / speed
@@ -355,11 +355,13 @@ class CollisionDomains:
         return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling)
 
     def _update_alteration(self, index: int, encounter, reference_heading_rad: float, heading_rad: float,
-                           time_s: float, separation_m: float) -> None:
+                           time_s: float, separation_m: float, motion=None) -> None:
         """Begin, keep or end the readily apparent alteration for one target (Rules 8, 16, 17).
 
         A give-way ship begins it once the target's CPA is at most
-        ``give_way_action_tcpa_s`` ahead; a stand-on ship once it acts (Rule 17(b)).  It is
+        ``give_way_action_tcpa_s`` ahead, predicted at the present velocities or with the
+        own ship already on the altered course (whichever comes first: turning away brings
+        the CPA forward, an overtaking ship's CPA most, as it closes slowly); a stand-on ship once it acts (Rule 17(b)).  It is
         to starboard, except when overtaking or being overtaken, where either side is
         allowed (Rule 13): then it continues a turn the plan has already begun (more than
         ``PORT_ALLOWANCE_DEG`` off the reference), else it turns away from the other ship.
@@ -378,11 +380,7 @@ class CollisionDomains:
                 self._altered.add(index)
             return
         name = encounter.encounter_class
-        if name in GIVE_WAY_CLASSES:
-            begin = (0.0 < encounter.tcpa_s <= s.give_way_action_tcpa_s and encounter.cpa_m < s.risk_cpa_m)
-        else:
-            begin = name in STAND_ON_CLASSES and index in self._acting and encounter.tcpa_s > 0.0
-        if not begin:
+        if name not in GIVE_WAY_CLASSES and name not in STAND_ON_CLASSES:
             return
         side = 1.0
         if name in ("overtaking", "overtaken"):
@@ -392,8 +390,21 @@ class CollisionDomains:
                 side = math.copysign(1.0, deviation)
             elif encounter.relative_bearing_deg > 0.0:
                 side = -1.0  # the other ship is on our starboard side: pass it on its port side
-        self._altering[index] = (time_s, heading_rad, reference_heading_rad + side * math.radians(s.alteration_deg),
-                                 side)
+        goal = reference_heading_rad + side * math.radians(s.alteration_deg)
+        if name in GIVE_WAY_CLASSES:
+            tcpa = encounter.tcpa_s
+            if motion is not None:  # turning away brings the CPA forward (an overtaker's most)
+                own_xy, own_speed, target_xy, target_velocity = motion
+                altered = own_speed * np.array([math.cos(goal), math.sin(goal)])
+                tcpa_altered = cpa_tcpa(own_xy, altered, target_xy, target_velocity)[1]
+                if tcpa_altered > 0.0:
+                    tcpa = min(tcpa, tcpa_altered)
+            begin = 0.0 < tcpa <= s.give_way_action_tcpa_s and encounter.tcpa_s > 0.0 and encounter.cpa_m < s.risk_cpa_m
+        else:
+            begin = index in self._acting and encounter.tcpa_s > 0.0
+        if not begin:
+            return
+        self._altering[index] = (time_s, heading_rad, goal, side)
         self.alterations += 1
         LOG.info("target %d (%s): altering %.0f deg to %s (CPA %.0f m in %.0f s)", index, name, s.alteration_deg,
                  "starboard" if side > 0 else "port", encounter.cpa_m, encounter.tcpa_s)

@@ -305,3 +305,17 @@ def test_stand_on_target_is_kept_clear_of_once_the_ship_gives_way_to_another():
     alone = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
     for dt_s in (0.0, 20.0, 40.0):
         assert solve_parameters(alone, dt_s, with_give_way=False).active[0] == 0.0  # stands on
+
+
+def test_overtaking_ship_alters_when_the_altered_course_brings_the_cpa_within_reach():
+    # 1.9 nm behind a 12 kn ship on the same course: at the present velocities the CPA is
+    # 19 min ahead, but turning away (to port: it is a little to starboard) brings it to
+    # about 2 min; the alteration begins now, not once the 15 min have run down
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    target = np.array([[1.9 * NM, 0.1 * NM, 12.0 * KNOT, 0.0, RADIUS]])
+    _, report = domains.parameters(target, state, np.zeros(2), SPEED, 5.0, 230.0, et=True,
+                                   reference_heading_rad=0.0, time_s=0.0)
+    assert report.class_codes[0] == ENCOUNTER_CLASSES.index("overtaking")
+    assert report.alteration_floor is None
+    assert report.alteration_ceiling == pytest.approx((0.0, 0.0, -math.radians(DomainSettings().alteration_deg)))
