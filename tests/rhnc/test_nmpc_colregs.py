@@ -319,3 +319,18 @@ def test_overtaking_ship_alters_when_the_altered_course_brings_the_cpa_within_re
     assert report.class_codes[0] == ENCOUNTER_CLASSES.index("overtaking")
     assert report.alteration_floor is None
     assert report.alteration_ceiling == pytest.approx((0.0, 0.0, -math.radians(DomainSettings().alteration_deg)))
+
+
+def test_targets_out_of_reach_within_the_horizon_get_no_constraint():
+    # 18 kn own ship (closing speed taken 25 % higher) and a 12 kn head-on target: within a
+    # 200 s horizon the two close by at most (22.5 + 12) kn * 200 s = 1.9 nm
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    targets = np.array([[5.0 * NM, 0.1 * NM, -12 * KNOT, 0.0, RADIUS],   # 5 nm: out of reach
+                        [2.5 * NM, -0.1 * NM, -12 * KNOT, 0.0, RADIUS]])  # 2.5 nm: may reach its domain
+    slots, report = domains.parameters(targets, state, np.zeros(2), 1.25 * SPEED, 5.0, 230.0, et=True,
+                                       horizon_s=200.0)
+    np.testing.assert_array_equal(report.active, [0.0, 1.0])
+    assert slots[-1, 0] == 1.0 and slots[-1, 1] == 0.0  # one slot filled, the second left off
+    _, report = domains.parameters(targets, state, np.zeros(2), 1.25 * SPEED, 5.0, 230.0, et=True)
+    np.testing.assert_array_equal(report.active, [1.0, 1.0])  # no horizon given: every target
