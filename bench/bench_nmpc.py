@@ -18,11 +18,20 @@ What is timed, per control step (``time.perf_counter`` around the call):
 * do-mpc: the whole ``MPC.make_step()`` (its time-varying-parameter callback filling the
   same reference and obstacle slots, its warm start from the previous solution, IPOPT).
 
-Solvers: IPOPT in both with the same options (tol 1e-6, MUMPS, max_iter 200, adaptive mu,
-print level 0), ours with the NLP interpreted and compiled (:mod:`rhnc.nmpc_codegen`);
-ours with its best solver (fatrop; the default is interpreted with the watchdog); do-mpc with its own code generation
-(``compile_nlp``, gcc -O1) with ``--do-mpc-compiled`` (its build is cached in the NMPC
-cache folder).  acados: tried when ``acados_template`` imports (see ``--help``).
+Solvers and settings, all in one table:
+
+* IPOPT in both with the same options (tol 1e-6, MUMPS, max_iter 200, adaptive mu, print
+  level 0), each tool at its defaults: ours interpreted, in-process, without multipliers
+  carried over; do-mpc as it comes (it passes the last multipliers, which IPOPT ignores
+  unless ``warm_start_init_point`` is set);
+* IPOPT in both, each with its best settings: the last solve's multipliers as the start
+  (``warm_start_init_point = yes`` and the same bound pushes and mu_init on both sides;
+  ours shifts plan and multipliers by one interval, do-mpc reuses them unshifted, its own
+  design), ours compiled (:mod:`rhnc.nmpc_codegen`) with and without the watchdog;
+* ours with fatrop, compiled and interpreted;
+* do-mpc with its own code generation (``compile_nlp``, gcc -O1) with
+  ``--do-mpc-compiled`` (its build is cached in the NMPC cache folder; it took 16 minutes
+  on this machine).  acados: tried when ``acados_template`` imports.
 
 The configurations advance in turn, one control step each, so that a change of the
 machine's load during the run falls on all of them alike.  The first control step of every
@@ -49,7 +58,7 @@ import numpy as np
 
 from rhnc.nmpc import NMPCController, NMPCSettings, reference_inputs
 from rhnc.nmpc_codegen import cache_dir
-from rhnc.nmpc_problem import DISTURBANCE_SIZE, OBSTACLE_FIELDS
+from rhnc.nmpc_problem import DISTURBANCE_SIZE, OBSTACLE_FIELDS, WARM_START_IPOPT
 from rhnc.reference_participant import line_or_turn_reference
 from rhnc.ship_model import load_parameter_set, rk4_step
 from rhnc.traffic import KNOT, NM
@@ -76,11 +85,11 @@ def reference_at(t_s: float) -> np.ndarray:
     return line_or_turn_reference(t_s + DT_S * np.arange(N + 1), (0.0, 0.0), COURSE_RAD, SPEED_MPS)
 
 
-def settings(solver: str, targets: int, codegen: bool, watchdog: bool) -> NMPCSettings:
+def settings(solver: str, targets: int, codegen: bool, watchdog: bool, warm_duals: bool = True) -> NMPCSettings:
     """The benchmark problem for our controller (hard constraints, one slot per target)."""
     limits = {} if watchdog else {"wall_time_limit_s": None, "cpu_time_limit_s": None}
     return NMPCSettings(solver=solver, horizon_steps=N, control_interval_s=DT_S, max_obstacles=targets,
-                        collision_slack_weight=None, codegen=codegen, **limits)
+                        collision_slack_weight=None, codegen=codegen, warm_start_duals=warm_duals, **limits)
 
 
 class ClosedLoop:
@@ -122,8 +131,8 @@ class ClosedLoop:
                 "codegen": self.codegen}
 
 
-def ours(params, solver: str, targets: int, codegen: bool, watchdog: bool) -> ClosedLoop:
-    controller = NMPCController(params, settings(solver, targets, codegen, watchdog))
+def ours(params, solver: str, targets: int, codegen: bool, watchdog: bool, warm_duals: bool = True) -> ClosedLoop:
+    controller = NMPCController(params, settings(solver, targets, codegen, watchdog, warm_duals))
 
     def step(t, state):
         if t == 0.0:
@@ -136,7 +145,7 @@ def ours(params, solver: str, targets: int, codegen: bool, watchdog: bool) -> Cl
     return ClosedLoop(step, targets, params, controller.library.mode, controller.close)
 
 
-def do_mpc_controller(params, targets: int, compiled: bool):
+def do_mpc_controller(params, targets: int, compiled: bool, warm_duals: bool = False):
     """The same OCP in do-mpc (discrete model = our RK4 step, IPOPT), and its step function."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -183,7 +192,8 @@ def do_mpc_controller(params, targets: int, compiled: bool):
     mpc.settings.n_horizon = s.horizon_steps
     mpc.settings.t_step = s.control_interval_s
     mpc.settings.store_full_solution = False
-    mpc.settings.nlpsol_opts = {"print_time": False, **{f"ipopt.{k}": v for k, v in IPOPT_OPTIONS.items()}}
+    ipopt = {**IPOPT_OPTIONS, **({"warm_start_init_point": "yes", **WARM_START_IPOPT} if warm_duals else {})}
+    mpc.settings.nlpsol_opts = {"print_time": False, **{f"ipopt.{k}": v for k, v in ipopt.items()}}
     mpc.set_objective(lterm=model.aux["stage"] + model.aux["input_cost"], mterm=model.aux["terminal"])
     mpc.set_rterm(w=np.array(s.r_rate))
     mpc.bounds["lower", "_u", "w"] = -1.0
@@ -243,8 +253,8 @@ def do_mpc_controller(params, targets: int, compiled: bool):
     return step
 
 
-def do_mpc_run(params, targets: int, compiled: bool) -> ClosedLoop:
-    step = do_mpc_controller(params, targets, compiled)
+def do_mpc_run(params, targets: int, compiled: bool, warm_duals: bool = False) -> ClosedLoop:
+    step = do_mpc_controller(params, targets, compiled, warm_duals)
     step(0.0, np.array([0.0, 0.0, COURSE_RAD, SPEED_MPS, 0.0, 0.0]))
     return ClosedLoop(step, targets, params, "compiled" if compiled else "interpreted")
 
@@ -267,7 +277,7 @@ def row(name: str, result: dict, baseline_tau: np.ndarray, tau_max: np.ndarray) 
     its = result["iterations"]
     tau_gap = np.max(np.abs(result["first_tau"] - baseline_tau) / tau_max)
     solver_median = f"{np.median(solver):8.2f}" if np.all(np.isfinite(solver)) else f"{'-':>8s}"
-    return (f"{name:34s} {np.median(wall):8.2f} {np.percentile(wall, 95):8.2f} {np.max(wall):8.2f} "
+    return (f"{name:48s} {np.median(wall):8.2f} {np.percentile(wall, 95):8.2f} {np.max(wall):8.2f} "
             f"{solver_median} {np.median(cpu):7.2f} {np.max(cpu):7.2f} {np.median(its):5.0f}/{np.max(its):<4d} {result['failures']:5d} "
             f"{result['clearance_m'] / NM:8.2f} {tau_gap:9.1e}")
 
@@ -284,17 +294,24 @@ def main() -> None:
     print(f"NMPC N_c = {N}, interval {DT_S:.0f} s, {args.steps} closed-loop steps; {os.cpu_count()} cores; "
           f"load average {load_before[0]:.1f} / {load_before[1]:.1f} / {load_before[2]:.1f} before")
     configurations = [
-        ("ours ipopt interpreted, in-process", lambda t: ours(params, "ipopt", t, False, False)),
-        ("ours ipopt compiled, in-process", lambda t: ours(params, "ipopt", t, True, False)),
-        ("ours ipopt compiled, watchdog", lambda t: ours(params, "ipopt", t, True, True)),
-        ("ours fatrop interpreted, watchdog", lambda t: ours(params, "fatrop", t, False, True)),
-        ("ours fatrop compiled, in-process", lambda t: ours(params, "fatrop", t, True, False)),
+        # IPOPT on both sides, each tool at its defaults: no multipliers carried over
+        ("ours ipopt interpreted, cold duals, in-process", lambda t: ours(params, "ipopt", t, False, False, False)),
+        ("do-mpc ipopt make_step", lambda t: do_mpc_run(params, t, False)),
+        # IPOPT on both sides, each with its best settings: the last solve's multipliers
+        ("ours ipopt compiled, warm duals, watchdog", lambda t: ours(params, "ipopt", t, True, True)),
+        ("ours ipopt compiled, warm duals, in-process", lambda t: ours(params, "ipopt", t, True, False)),
+        ("ours ipopt interpreted, warm duals, watchdog", lambda t: ours(params, "ipopt", t, False, True)),
+        ("do-mpc ipopt make_step, warm duals", lambda t: do_mpc_run(params, t, False, True)),
+        # fatrop (no warm start of the multipliers in its CasADi interface)
         ("ours fatrop compiled, watchdog", lambda t: ours(params, "fatrop", t, True, True)),
+        ("ours fatrop compiled, in-process", lambda t: ours(params, "fatrop", t, True, False)),
+        ("ours fatrop interpreted, watchdog", lambda t: ours(params, "fatrop", t, False, True)),
     ]
-    if not args.no_do_mpc:
-        configurations.append(("do-mpc ipopt make_step", lambda t: do_mpc_run(params, t, False)))
-        if args.do_mpc_compiled:
-            configurations.append(("do-mpc ipopt compiled make_step", lambda t: do_mpc_run(params, t, True)))
+    if args.no_do_mpc:
+        configurations = [c for c in configurations if not c[0].startswith("do-mpc")]
+    elif args.do_mpc_compiled:
+        configurations.append(("do-mpc ipopt compiled make_step, warm duals",
+                               lambda t: do_mpc_run(params, t, True, True)))
     for targets in args.targets:
         loops = {name: build(targets) for name, build in configurations}
         for _ in range(args.steps):
@@ -308,25 +325,22 @@ def main() -> None:
         baseline = results[configurations[0][0]]["first_tau"]
         print(f"\n{targets} target(s); whole step [ms]: wall median, 95th percentile, max; solver-only wall median; "
               "processor time median and max (this process plus the watchdog's worker)")
-        print(f"{'configuration':34s} {'median':>8s} {'p95':>8s} {'max':>8s} {'solver':>8s} {'cpu med':>7s} {'cpu max':>7s} {'iter med/max':>10s} "
+        print(f"{'configuration':48s} {'median':>8s} {'p95':>8s} {'max':>8s} {'solver':>8s} {'cpu med':>7s} {'cpu max':>7s} {'iter med/max':>10s} "
               f"{'fails':>5s} {'min gap nm':>8s} {'tau0 diff':>9s}")
         for name, result in results.items():
             if result["codegen"] not in name:
                 name = f"{name} ({result['codegen']})"
             print(row(name, result, baseline, params.tau_max))
-        if "do-mpc ipopt make_step" in results:
-            dompc = np.median(results["do-mpc ipopt make_step"]["wall"])
-            dompc_cpu = np.median(results["do-mpc ipopt make_step"]["cpu"])
-            for name in ("ours ipopt interpreted, in-process", "ours ipopt compiled, watchdog",
-                         "ours ipopt compiled, in-process", "ours fatrop interpreted, watchdog",
-                         "ours fatrop compiled, watchdog"):
-                print(f"  median speed-up, do-mpc ipopt make_step / {name}: "
-                      f"{dompc / np.median(results[name]['wall']):.1f}x wall, "
-                      f"{dompc_cpu / np.median(results[name]['cpu']):.1f}x processor time")
-            if "do-mpc ipopt compiled make_step" in results:
-                compiled = np.median(results["do-mpc ipopt compiled make_step"]["wall"])
-                print(f"  median speed-up, do-mpc ipopt compiled / ours ipopt compiled, watchdog: "
-                      f"{compiled / np.median(results['ours ipopt compiled, watchdog']['wall']):.1f}x")
+        pairs = [("do-mpc ipopt make_step", "ours ipopt interpreted, cold duals, in-process"),
+                 ("do-mpc ipopt make_step, warm duals", "ours ipopt compiled, warm duals, watchdog"),
+                 ("do-mpc ipopt make_step, warm duals", "ours ipopt compiled, warm duals, in-process"),
+                 ("do-mpc ipopt make_step, warm duals", "ours fatrop compiled, watchdog"),
+                 ("do-mpc ipopt make_step", "ours ipopt compiled, warm duals, watchdog")]
+        for theirs, mine in pairs:
+            if theirs in results and mine in results:
+                print(f"  median speed-up, {theirs} / {mine}: "
+                      f"{np.median(results[theirs]['wall']) / np.median(results[mine]['wall']):.1f}x wall, "
+                      f"{np.median(results[theirs]['cpu']) / np.median(results[mine]['cpu']):.1f}x processor time")
     load_after = os.getloadavg()
     print(f"\nload average {load_after[0]:.1f} / {load_after[1]:.1f} / {load_after[2]:.1f} after")
     reason = acados_available()

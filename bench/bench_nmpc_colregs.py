@@ -19,12 +19,11 @@ import math
 
 import numpy as np
 
+from orchestrator.geometry import KNOT, NM
 from rhnc.nmpc import NMPCController, NMPCSettings
 from rhnc.reference_participant import line_or_turn_reference
 from rhnc.ship_model import load_parameter_set, rk4_step
 
-NM = 1852.0
-KNOT = NM / 3600.0
 N = 15
 SPEED = 18 * KNOT
 MEETING_S = 900.0

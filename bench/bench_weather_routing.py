@@ -20,7 +20,8 @@ import time
 import numpy as np
 
 from rhnc import weather_generators
-from rhnc.metocean import KNOT, NM, MetOceanField
+from orchestrator.geometry import KNOT, NM
+from rhnc.metocean import MetOceanField
 from rhnc.route_search import shortest_path_tree
 from rhnc.track_cost import constant_speed_times, cost_of_track, densify
 from rhnc.weather_routing import RouteSearch, RoutingProblem, optimal_route, straight_route

@@ -2,18 +2,82 @@
 
 from __future__ import annotations
 
+import json
 import operator
 import re
 from dataclasses import dataclass
 from typing import Any
 
-from orchestrator.batch_spec import Criterion
-from orchestrator.participant import is_finite_number
+from pydantic import model_validator
+
+from orchestrator.errors import ScenarioError
+from orchestrator.toml_input import TomlTable, checked, fail_whole, is_finite_number, shown
 
 _OPERATORS = {"<": operator.lt, "<=": operator.le, "==": operator.eq, "!=": operator.ne,
               ">=": operator.ge, ">": operator.gt}
 _ORDERING = ("<", "<=", ">=", ">")
 _TERMS = re.compile(r"\s+([+-])\s+")
+
+
+#: Comparison operators of a criterion.
+OPERATORS = ("<", "<=", "==", "!=", ">=", ">")
+
+
+@dataclass(frozen=True)
+class Criterion:
+    """``[[acceptance]]``: ``metric op value`` or ``metric op ref``, paths into summary.json."""
+
+    name: str
+    metric: str
+    op: str
+    value: Any = None
+    ref: str | None = None
+
+    def describe(self) -> str:
+        return f"{self.metric} {self.op} {self.ref if self.ref is not None else json.dumps(self.value)}"
+
+
+class CriterionTable(TomlTable):
+    """One ``[[acceptance]]`` table of a scenario or batch file."""
+
+    name: Any = None
+    metric: Any = None
+    op: Any = None
+    value: Any = None
+    ref: Any = None
+
+    @model_validator(mode="after")
+    def _checks(self):
+        if not isinstance(self.metric, str) or not self.metric:
+            raise fail_whole("'{prefix}metric' must be a dotted path into summary.json")
+        if self.op not in OPERATORS:
+            raise fail_whole(f"'{{prefix}}op' must be one of {' '.join(OPERATORS)}, got {shown(self.op)}")
+        if ("value" in self.model_fields_set) == ("ref" in self.model_fields_set):
+            raise fail_whole("'{prefix}': give exactly one of 'value' (a literal) or 'ref' "
+                             "(figures of the summary joined by ' + ' / ' - ')")
+        if self.ref is not None and (not isinstance(self.ref, str) or not self.ref.strip()):
+            raise fail_whole("'{prefix}ref' must be a string such as \"a.b + c.d + 0.1\"")
+        if isinstance(self.value, float) and not is_finite_number(self.value):
+            raise fail_whole(f"'{{prefix}}value' must be finite, got {shown(self.value)}")
+        name = self.metric if self.name is None else self.name
+        if not isinstance(name, str) or not name:
+            raise fail_whole(f"'{{prefix}}name' must be a unique non-empty string, got {shown(name)}")
+        return self
+
+
+def parse_acceptance(entries: Any, where: str) -> tuple[Criterion, ...]:
+    """``[[acceptance]]`` entries of a batch or scenario file, checked; errors name file and key."""
+    if not isinstance(entries, list) or not all(isinstance(e, dict) for e in entries):
+        raise ScenarioError(f"{where}: 'acceptance' must be an array of tables ([[acceptance]])")
+    criteria, names = [], set()
+    for k, entry in enumerate(entries):
+        table = checked(CriterionTable, entry, where, ("acceptance", k))
+        name = table.name if table.name is not None else table.metric
+        if name in names:
+            raise ScenarioError(f"{where}: 'acceptance[{k}].name' must be a unique non-empty string, got {shown(name)}")
+        names.add(name)
+        criteria.append(Criterion(name=name, metric=table.metric, op=table.op, value=table.value, ref=table.ref))
+    return tuple(criteria)
 
 
 class MissingFigure(LookupError):

@@ -1,50 +1,35 @@
 """Post-run analyses and figures a scenario names in ``[outputs]``.
 
-An analysis is ``function(frame, scenario, cosim, out_dir) -> dict`` returning key
-figures for ``summary.json`` (and writing its own figures into ``out_dir``).  A figure is
-``function(frame, scenario, cosim, out_dir) -> list[str]`` of file names written.
-Both registries map a name to ``"module:function"`` so heavy imports stay lazy.
+An analysis is ``function(frame, scenario, cosim, out_dir, **options) -> dict`` returning
+key figures for ``summary.json`` (and writing its own figures into ``out_dir``).  A figure
+is ``function(frame, scenario, cosim, out_dir) -> list[str]`` of file names written.  Both
+are found by name in the entry-point groups ``rhnc_cosim.analyses`` and
+``rhnc_cosim.figures`` (:mod:`orchestrator.plugins`), so heavy imports stay lazy and a
+user's package adds its own the same way the ship analyses of :mod:`rhnc.cosim` are added.
 """
 
 from __future__ import annotations
 
-import importlib
-
 import numpy as np
 
+from orchestrator import plugins
 from orchestrator.errors import ScenarioError, ToolchainError
-
-ANALYSES = {
-    "turning_circle": "orchestrator.analyses:turning_circle_analysis",
-    "zigzag": "orchestrator.analyses:zigzag_analysis",
-    "voyage": "orchestrator.analyses:voyage_analysis",
-    "encounter": "orchestrator.analyses:encounter_analysis",
-    "colregs": "rhnc.colregs_analysis:colregs_analysis",
-}
-FIGURES = {
-    "track": "orchestrator.figures:track_figure",
-    "controls": "orchestrator.figures:controls_figure",
-    "navigation_fields": "orchestrator.figures:navigation_fields_figure",
-}
-
-#: The ship whose particulars (ships/<name>.toml) apply when the plant does not say.
-DEFAULT_SHIP = "KCS"
 
 
 def check_outputs(scenario) -> None:
     """Refuse unknown analyses, figures and analysis options before a run starts."""
     import inspect
 
-    def resolve(registry, name, key):
+    def resolve(kind, name, key):
         try:
-            return _resolve(registry, name, key)
+            return _resolve(kind, name, key)
         except ScenarioError as exc:
             raise ScenarioError(f"{scenario.path}: {exc}") from None
 
     for name in scenario.outputs.figures:
-        resolve(FIGURES, name, "figures")
+        resolve("figures", name, "figures")
     for name in scenario.outputs.analyses:
-        function = resolve(ANALYSES, name, "analyses")
+        function = resolve("analyses", name, "analyses")
         accepted = list(inspect.signature(function).parameters)[4:]
         options = scenario.outputs.options.get(name, {})
         for key in options:
@@ -63,35 +48,19 @@ def check_outputs(scenario) -> None:
 
 def run_analysis(name, frame, scenario, cosim, out_dir) -> dict:
     """Run analysis ``name`` with its ``[outputs.options.<name>]`` keywords."""
-    function = _resolve(ANALYSES, name, "analyses")
+    function = _resolve("analyses", name, "analyses")
     return function(frame, scenario, cosim, out_dir, **scenario.outputs.options.get(name, {}))
 
 
 def draw_figure(name, frame, scenario, cosim, out_dir) -> list[str]:
-    return _resolve(FIGURES, name, "figures")(frame, scenario, cosim, out_dir)
+    return _resolve("figures", name, "figures")(frame, scenario, cosim, out_dir)
 
 
-def _resolve(registry, name, key):
+def _resolve(kind, name, key):
+    registry = plugins.registrations(kind)
     if name not in registry:
         raise ScenarioError(f"'outputs.{key}': unknown name '{name}' (valid: {', '.join(sorted(registry))})")
-    module, _, function = registry[name].partition(":")
-    return getattr(importlib.import_module(module), function)
-
-
-def find_plant(cosim) -> str | None:
-    """The participant whose outputs include the ship state (x, y, psi), or None."""
-    for participant in cosim.participants:
-        if {"x", "y", "psi"} <= set(participant.output_names):
-            return participant.name
-    return None
-
-
-def plant_name(cosim) -> str:
-    """As :func:`find_plant`, for analyses that need a ship: raises without one."""
-    plant = find_plant(cosim)
-    if plant is None:
-        raise ToolchainError("no participant outputs the ship state x, y, psi")
-    return plant
+    return registry[name].load()
 
 
 def driver_column(scenario, target: str, port: str) -> str:
@@ -100,155 +69,6 @@ def driver_column(scenario, target: str, port: str) -> str:
         if connection.target == target and connection.target_port == port:
             return f"{connection.source}.{connection.source_port}"
     raise ToolchainError(f"nothing drives {target}.{port}")
-
-
-def tau_column(scenario, port: str) -> str | None:
-    """Column of the output feeding a ``tau_u``/``tau_r`` input anywhere (the plant's, or an
-    allocation's in front of an actuator-level plant), or None when nothing demands tau."""
-    for connection in scenario.connections:
-        if connection.target_port == port:
-            return f"{connection.source}.{connection.source_port}"
-    return None
-
-
-def steering_column(frame, scenario, plant) -> tuple[str, str]:
-    """What steers the plant: (column, kind) with kind ``"rudder"`` (radians) or ``"yaw moment"``.
-
-    An actuator-level plant is steered by what drives its ``rudder_angle_cmd`` input (else
-    its reported ``rudder_angle``); a plant that takes tau by what drives ``tau_r``.
-    """
-    try:
-        return driver_column(scenario, plant, "rudder_angle_cmd"), "rudder"
-    except ToolchainError:
-        pass
-    if f"{plant}.rudder_angle" in frame.columns:
-        return f"{plant}.rudder_angle", "rudder"
-    return driver_column(scenario, plant, "tau_r"), "yaw moment"
-
-
-def _execute_time(frame, column) -> float:
-    moving = np.nonzero(np.abs(frame[column].to_numpy()) > 0)[0]
-    if moving.size == 0:
-        raise ToolchainError(f"{column} is zero throughout: no manoeuvre to analyse")
-    return float(frame["time_s"].iloc[moving[0]])
-
-
-def _ship_length(cosim, plant) -> float:
-    """The plant's ``lpp`` parameter when the scenario sets it, else the ship's particulars."""
-    from rhnc.ships import load_ship
-
-    parameters = getattr(cosim.participant(plant), "parameters", {})
-    return float(parameters.get("lpp", parameters.get("length_m", load_ship(DEFAULT_SHIP).lpp_m)))
-
-
-def turning_circle_analysis(frame, scenario, cosim, out_dir) -> dict:
-    from rhnc.manoeuvres import turning_circle
-
-    plant = plant_name(cosim)
-    column, kind = steering_column(frame, scenario, plant)
-    execute = _execute_time(frame, column)
-    cols = [frame[f"{plant}.{c}"].to_numpy() for c in ("x", "y", "psi")]
-    figures = turning_circle(frame["time_s"].to_numpy(), *cols, execute_s=execute,
-                             length_m=_ship_length(cosim, plant))
-    figures["execute_s"] = execute
-    figures["steered_by"] = kind
-    figures["approach_speed_kn"] = float(frame[f"{plant}.u"].iloc[int(np.searchsorted(frame["time_s"], execute))]
-                                         / (1852 / 3600))
-    from orchestrator.figures import manoeuvre_figure
-
-    manoeuvre_figure(frame, plant, figures, out_dir / "turning_circle.png", "Turning circle")
-    return figures
-
-
-def zigzag_analysis(frame, scenario, cosim, out_dir) -> dict:
-    from rhnc.manoeuvres import zigzag
-
-    plant = plant_name(cosim)
-    column, kind = steering_column(frame, scenario, plant)
-    execute = _execute_time(frame, column)
-    figures = zigzag(frame["time_s"].to_numpy(), frame[f"{plant}.psi"].to_numpy(), frame[column].to_numpy(),
-                     execute_s=execute)
-    figures["execute_s"] = execute
-    figures["steered_by"] = kind
-    from orchestrator.figures import zigzag_figure
-
-    zigzag_figure(frame, plant, column, out_dir / "zigzag.png", kind)
-    return figures
-
-
-def voyage_analysis(frame, scenario, cosim, out_dir, goal_nm=None, arrival_radius_nm: float = 0.5,
-                    cii_year: int = 2026) -> dict:
-    """Cost, CO2 per nm and CII of the sailed track (:mod:`rhnc.voyage`).
-
-    The weather is what the plant met: the outputs of the participant driving the
-    plant's ``hs`` input (the environment FMU), else the scenario's met-ocean field at the
-    ship's positions and times, else calm water.  The energy constants are the navigation
-    participant's (so a scenario's overrides apply), else the defaults.
-
-    The brake power is the plant's own when it reports ``delivered_power`` (an
-    actuator-level plant: delivered power / shaft efficiency + auxiliary power), else the
-    energy model's from speed, heading and weather; ``energy_source`` says which.
-
-    With ``goal_nm = [north, east]`` the voyage ends on arrival, the first sample within
-    ``arrival_radius_nm`` of the goal (time spent waiting there is not sailing); the
-    result says whether and when the ship arrived.  ``made_good_nm`` is the straight-line
-    distance from the first to the last position of the voyage, the paper's "linear
-    mileage" in its Table 3, next to the distance sailed along the track;
-    ``mean_speed_made_good_kn`` divides it by the time taken, and
-    ``mean_speed_through_water_kn`` is the time-averaged ``hypot(u, v)`` of the plant.
-    """
-    from rhnc.energy import EnergyParameters
-    from rhnc.voyage import account_voyage, mean_speed_through_water_kn
-
-    plant = plant_name(cosim)
-    x, y = frame[f"{plant}.x"].to_numpy(), frame[f"{plant}.y"].to_numpy()
-    try:
-        environment = driver_column(scenario, plant, "hs").split(".")[0]
-        weather = {name: frame[f"{environment}.{name}"].to_numpy() for name in ("wind_north", "wind_east", "hs")}
-    except (ToolchainError, KeyError):
-        if cosim.metocean is not None:
-            weather = cosim.metocean.sample(x, y, t_s=frame["time_s"].to_numpy())
-        else:
-            weather = {name: np.zeros_like(x) for name in ("wind_north", "wind_east", "hs")}
-    energy = next((p.energy for p in cosim.participants if isinstance(getattr(p, "energy", None), EnergyParameters)),
-                  EnergyParameters())
-    end = len(frame)
-    arrival = {}
-    if goal_nm is not None:
-        try:
-            goal = np.asarray(goal_nm, dtype=float).reshape(2) * 1852.0
-        except (TypeError, ValueError) as exc:
-            raise ScenarioError(f"{scenario.path}: 'outputs.options.voyage.goal_nm' must be [north, east]") from exc
-        inside = np.nonzero(np.hypot(x - goal[0], y - goal[1]) <= arrival_radius_nm * 1852.0)[0]
-        arrival["arrived"] = bool(inside.size)
-        arrival["arrival_time_min"] = float(frame["time_s"].iloc[inside[0]] / 60.0) if inside.size else None
-        arrival["goal_distance_end_nm"] = float(np.hypot(x[-1] - goal[0], y[-1] - goal[1]) / 1852.0)
-        if inside.size:
-            end = inside[0] + 1
-    window = slice(0, end)
-    brake_power = None
-    if f"{plant}.delivered_power" in frame.columns:
-        brake_power = (frame[f"{plant}.delivered_power"].to_numpy()[window] / energy.shaft_efficiency
-                       + energy.auxiliary_power_w)
-    account = account_voyage(frame["time_s"].to_numpy()[window], x[window], y[window],
-                             frame[f"{plant}.u"].to_numpy()[window], frame[f"{plant}.psi"].to_numpy()[window],
-                             np.asarray(weather["wind_north"])[window], np.asarray(weather["wind_east"])[window],
-                             np.asarray(weather["hs"])[window], energy, cii_year=cii_year,
-                             brake_power_w=brake_power)
-    result = account.as_dict()
-    result["energy_source"] = ("plant delivered_power" if brake_power is not None
-                               else "energy model (speed, heading, weather)")
-    made_good = float(np.hypot(x[end - 1] - x[0], y[end - 1] - y[0]) / 1852.0)
-    result["made_good_nm"] = made_good
-    duration_h = account.time_min / 60.0
-    result["mean_speed_through_water_kn"] = mean_speed_through_water_kn(
-        frame["time_s"].to_numpy()[window], frame[f"{plant}.u"].to_numpy()[window],
-        frame[f"{plant}.v"].to_numpy()[window] if f"{plant}.v" in frame.columns else np.zeros(end))
-    result["mean_speed_made_good_kn"] = made_good / duration_h if duration_h > 0 else None
-    result["cost_per_made_good_nm_usd"] = account.cost_usd / made_good if made_good > 0 else None
-    result["co2_per_made_good_nm_kg"] = account.co2_t * 1000.0 / made_good if made_good > 0 else None
-    result.update(arrival)
-    return result
 
 
 def array_output(frame, column: str) -> np.ndarray:
@@ -263,65 +83,3 @@ def array_output(frame, column: str) -> np.ndarray:
     for cell, index in zip(cells, indices):
         values[(slice(None),) + index] = frame[cell].to_numpy()
     return values
-
-
-def own_radius_m(cosim) -> float:
-    """The own hazard radius R [m]: the controller's setting, 0 without a controller."""
-    for participant in cosim.participants:
-        settings = getattr(getattr(participant, "controller", None), "settings", None)
-        if settings is not None and hasattr(settings, "own_radius_m"):
-            return float(settings.own_radius_m)
-    return 0.0
-
-
-def encounter_analysis(frame, scenario, cosim, out_dir) -> dict:
-    """Minimum separation against R + R_i per obstacle, input bounds, return to the track.
-
-    The obstacles are the array output feeding any participant's ``obstacles`` input; the
-    reference is the array feeding a ``reference`` input, interpolated at each sample's
-    time.  Cross-track error is measured from that point across the reference course;
-    "back on track" is the first time after the closest approach from which it stays
-    within 0.2 nm.
-    """
-    from rhnc.encounter import cross_track_error, reference_at_times, separations, time_back_on_track
-
-    plant = plant_name(cosim)
-    t = frame["time_s"].to_numpy()
-    x, y = frame[f"{plant}.x"].to_numpy(), frame[f"{plant}.y"].to_numpy()
-    sources = {c.target_port: f"{c.source}.{c.source_port}" for c in scenario.connections}
-    result: dict = {}
-    if "obstacles" in sources:
-        obstacles = array_output(frame, sources["obstacles"])
-        per_obstacle = separations(t, x, y, obstacles, own_radius_m(cosim))
-        result["obstacles"] = per_obstacle
-        result["min_clearance_nm"] = min(o["min_clearance_nm"] for o in per_obstacle)
-        result["separation_respected"] = bool(result["min_clearance_nm"] >= -1e-6)
-        passed_at = max(o["time_of_min_s"] for o in per_obstacle)
-    else:
-        passed_at = float(t[0])
-    for port in ("tau_u", "tau_r"):
-        column = tau_column(scenario, port)
-        if column is None or column not in frame.columns:
-            continue  # steered at actuator level by a script: no tau demanded
-        bound = getattr(cosim.participant(plant), "parameters", {}).get(f"{port}_max")
-        peak = float(np.max(np.abs(frame[column].to_numpy())))
-        result[f"{port}_max_abs"] = peak
-        if bound is not None:
-            result[f"{port}_within_bound"] = bool(peak <= float(bound) * (1 + 1e-9))
-        # an allocation between the NMPC and an actuator-level plant reports what it achieved
-        achieved = next((c for c in frame.columns if c.endswith(f".{port}_achieved")), None)
-        if achieved is not None:
-            result[f"{port}_achieved_max_abs"] = float(np.max(np.abs(frame[achieved].to_numpy())))
-    for output, key, scale in (("rudder_angle", "rudder_max_abs_deg", 180.0 / np.pi),
-                               ("propeller_rps", "propeller_rps_max", 1.0)):
-        if f"{plant}.{output}" in frame.columns:  # what the plant's actuators did
-            result[key] = float(np.max(np.abs(frame[f"{plant}.{output}"].to_numpy())) * scale)
-    if "reference" in sources:
-        reference = reference_at_times(array_output(frame, sources["reference"]), t)
-        cross = cross_track_error(x, y, reference[:, 0], reference[:, 1], reference[:, 2])
-        after = t >= passed_at
-        result["cross_track_end_nm"] = float(abs(cross[-1]) / 1852.0)
-        result["cross_track_max_after_passing_nm"] = float(np.max(np.abs(cross[after])) / 1852.0)
-        result["back_on_track_s"] = time_back_on_track(t, cross, passed_at, 0.2 * 1852.0)
-        result["passed_at_s"] = passed_at
-    return result

@@ -11,24 +11,22 @@
 * ``overview.png``: pass/fail counts and the distributions of the key figures.
 
 A run folder with a ``summary.json`` is done: rerunning the batch skips it (runs that were
-interrupted are redone; failed ones too with ``retry_failed``).  Runs are deterministic, so
+interrupted, or failed for an infrastructure reason such as a killed worker or a full disk,
+are redone; runs that failed on their own too with ``retry_failed``).  The batch holds a
+lock on its results folder, and its workers die with it (:mod:`orchestrator.worker_pool`),
+so a resume started at once after the batch was killed finds no worker still writing.  Runs are deterministic, so
 the table does not depend on the executor or the number of workers, except for the
 columns in :data:`NONDETERMINISTIC_COLUMNS`.
 """
 
 from __future__ import annotations
 
-import concurrent.futures as cf
 import contextlib
 import json
 import logging
 import math
-import multiprocessing
 import os
-import shutil
-import signal
 import time as wallclock
-from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,8 +34,12 @@ from typing import Any
 
 from orchestrator import acceptance, interrupts
 from orchestrator.batch_spec import BatchSpec, RunSpec, load_batch
+# WORKER_DIED, BatchError, RunTask and execute_run are part of this module's interface too
+from orchestrator.batch_run import (WORKER_DIED, BatchError, RunTask, execute_run, pending_runs,  # noqa: F401
+                                    pool_execute, read_summary, record_lost_run)
+from orchestrator.dask_executor import DaskExecutor, check_scheduler
 from orchestrator.errors import ScenarioError, ToolchainError
-from orchestrator.results import stale_staging
+from orchestrator.time_limits import TIMED_OUT
 
 log = logging.getLogger(__name__)
 
@@ -45,23 +47,6 @@ log = logging.getLogger(__name__)
 NONDETERMINISTIC_COLUMNS = ("wall_time_s",)
 #: Figures shown in the overview whenever the table has them (suffix match).
 OVERVIEW_FIGURES = ("min_separation_nm", "cost_per_nm", "co2_per_nm")
-WORKER_DIED = "the worker process died during the run (crash, or killed by the system)"
-
-
-class BatchError(ToolchainError):
-    """A batch cannot be run (cluster unreachable, results folder unusable)."""
-
-    exit_code = 2
-
-
-@dataclass(frozen=True)
-class RunTask:
-    """What a worker needs to run one run (small and picklable)."""
-
-    scenario: str
-    batch_root: str
-    run_id: str
-    overrides: dict[str, Any]
 
 
 @dataclass
@@ -85,7 +70,7 @@ class BatchReport:
 
 
 def run_batch(path, results_root="results", workers: int | None = None, scheduler: str | None = None,
-              progress: bool = True, retry_failed: bool = False) -> BatchReport:
+              progress: bool = True, retry_failed: bool = False, tls: dict | None = None) -> BatchReport:
     """Run every run of the batch file ``path`` not yet done, then rebuild its table.
 
     Parameters
@@ -103,15 +88,19 @@ def run_batch(path, results_root="results", workers: int | None = None, schedule
         Show a progress bar (tqdm).
     retry_failed : bool
         Redo runs recorded as failed (by default a failed run counts as done).
+    tls : dict, optional
+        ``{"ca": ..., "cert": ..., "key": ...}``: PEM files for a ``tls://`` scheduler
+        (:mod:`orchestrator.dask_executor`).
 
     Raises
     ------
     ScenarioError
         For a malformed batch file or an override the scenario does not accept.
     BatchError
-        When the Dask scheduler cannot be reached.
+        When the Dask scheduler cannot be reached, or its address and TLS files do not fit.
     """
     started = wallclock.perf_counter()
+    tls_files = check_scheduler(scheduler, **(tls or {})) if scheduler is not None or tls else None
     spec = load_batch(path)
     runs = spec.runs()
     check_against_scenario(spec, runs)
@@ -121,14 +110,15 @@ def run_batch(path, results_root="results", workers: int | None = None, schedule
         _write_json_atomic(root / "batch.json", _manifest(spec, runs))
         todo = pending_runs(root, runs, retry_failed)
         tasks = [RunTask(str(spec.scenario), str(root.resolve()), run.run_id, run.overrides) for run in todo]
-        executor = DaskExecutor(scheduler) if scheduler else LocalPool(workers or os.cpu_count() or 1)
+        executor = (DaskExecutor(scheduler, tls_files) if scheduler is not None
+                    else LocalPool(workers or os.cpu_count() or 1))
         bar = _progress_bar(len(runs), len(runs) - len(todo), spec.name, progress)
         interrupted = False
         results = executor.run(tasks)
         try:
             for task, record in results:
-                if record["status"] == "worker_died":
-                    write_failure(Path(task.batch_root), task, record["reason"])
+                if record["status"] in ("worker_died", TIMED_OUT):
+                    record_lost_run(task, record)
                 if bar is not None:
                     bar.update(1)
         except KeyboardInterrupt:
@@ -142,7 +132,7 @@ def run_batch(path, results_root="results", workers: int | None = None, schedule
         with interrupts.deferred():
             # runs that published a folder during this batch, including those that ended
             # (finished or interrupted) while the pool shut down after a Ctrl-C
-            ran = sum(_read_summary(root / "runs" / task.run_id) is not None for task in tasks)
+            ran = sum(read_summary(root / "runs" / task.run_id) is not None for task in tasks)
             table = batch_table(spec, root)
             write_table(table, root)
             write_overview(table, spec, root / "overview.png")
@@ -216,184 +206,18 @@ def check_against_scenario(spec: BatchSpec, runs: list[RunSpec]) -> None:
         raise ScenarioError(f"{spec.path}: run {run.index}: the scenario does not accept its overrides: {problem}")
 
 
-def pending_runs(root: Path, runs: list[RunSpec], retry_failed: bool = False) -> list[RunSpec]:
-    """The runs without a published result; clears their stale folders (interrupted, partial)."""
-    todo = []
-    for run in runs:
-        folder = root / "runs" / run.run_id
-        for staging in stale_staging(folder.parent, run.run_id):
-            shutil.rmtree(staging, ignore_errors=True)
-        summary = _read_summary(folder)
-        if summary is not None and summary.get("status") != "interrupted" and not (
-                retry_failed and summary.get("status") == "failed"):
-            continue
-        shutil.rmtree(folder, ignore_errors=True)
-        todo.append(run)
-    return todo
-
-
-def _read_summary(folder: Path) -> dict | None:
-    try:
-        return json.loads((folder / "summary.json").read_text())
-    except (OSError, ValueError):
-        return None
-
-
-# -- the work of one run (in a worker) -----------------------------------------------------------
-def execute_run(task: RunTask) -> dict[str, str]:
-    """Run one run into ``<batch_root>/runs/<run_id>/``; returns its status and reason.
-
-    A scenario that cannot start (:class:`ToolchainError`, or a participant raising while
-    it is built) is recorded as a failed run with the reason, so the batch goes on.
-    """
-    from orchestrator.run import run_scenario
-
-    # a worker that died while running this id left its staging folder behind
-    for staging in stale_staging(Path(task.batch_root) / "runs", task.run_id):
-        shutil.rmtree(staging, ignore_errors=True)
-    try:
-        report = run_scenario(task.scenario, task.batch_root, progress=False, run_id=task.run_id,
-                              overrides=task.overrides, group="runs")
-        return {"status": report.status, "reason": report.reason}
-    except KeyboardInterrupt:
-        return {"status": "interrupted", "reason": "interrupted by the user (Ctrl-C)"}
-    except ToolchainError as exc:
-        reason = str(exc)
-    except Exception as exc:  # a participant's own bug while building: record it, go on
-        reason = f"{type(exc).__name__}: {exc}"
-    write_failure(Path(task.batch_root), task, reason)
-    return {"status": "failed", "reason": reason}
-
-
-def write_failure(batch_root: Path, task: RunTask, reason: str) -> Path:
-    """Publish a run folder holding only a ``summary.json`` with status ``failed`` and ``reason``."""
-    from orchestrator.results import RunFolder
-
-    for staging in stale_staging(batch_root / "runs", task.run_id):
-        shutil.rmtree(staging, ignore_errors=True)
-    # an earlier attempt of this run cut short (e.g. its worker stopped by the broken pool's
-    # shutdown) is stale, as pending_runs treats it on a resume: this record replaces it
-    earlier = batch_root / "runs" / task.run_id
-    summary = _read_summary(earlier)
-    if summary is not None and summary.get("status") == "interrupted":
-        shutil.rmtree(earlier, ignore_errors=True)
-    folder = RunFolder(batch_root, "runs", task.run_id)
-    folder.write_json("summary.json", {"scenario": task.scenario, "overrides": task.overrides,
-                                       "run_id": task.run_id, "status": "failed", "reason": reason,
-                                       "recorded_by": "batch runner (the run produced no results)"})
-    return folder.publish()
-
-
-def _pool_worker_init() -> None:
-    # Idle workers ignore Ctrl-C (the batch stops them); a running run gets it (see _pool_execute).
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
-def _pool_execute(task: RunTask) -> dict[str, str]:
-    # a running run stops on Ctrl-C as a single run does (status interrupted, folder kept)
-    with interrupts.handle_signals():
-        return execute_run(task)
-
-
 # -- executors ----------------------------------------------------------------------------------
 class LocalPool:
-    """A local process pool (``spawn``: no inherited threads or state).
-
-    At most ``workers`` runs are in flight.  When a worker dies, the runs that were in
-    flight are redone one at a time in a fresh pool, so the run that kills its worker is
-    found and recorded as failed while the others complete.
-    """
+    """Local worker processes (``spawn``), one run each at a time (see :mod:`orchestrator.worker_pool`)."""
 
     def __init__(self, workers: int) -> None:
         self.workers = max(1, int(workers))
 
-    def _pool(self, workers: int) -> cf.ProcessPoolExecutor:
-        return cf.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                                      initializer=_pool_worker_init)
-
     def run(self, tasks: list[RunTask]) -> Iterator[tuple[RunTask, dict]]:
         """Yield ``(task, record)`` as runs complete; closing the generator stops the pool."""
-        if not tasks:
-            return
-        queue, suspects = deque(tasks), deque()
-        in_flight: dict[cf.Future, tuple[RunTask, bool]] = {}
-        pool = self._pool(min(self.workers, len(tasks)))
-        try:
-            while queue or suspects or in_flight:
-                if suspects:
-                    if not in_flight:  # a suspect runs alone: if its worker dies, it is the culprit
-                        task = suspects.popleft()
-                        in_flight[pool.submit(_pool_execute, task)] = (task, True)
-                else:
-                    while queue and len(in_flight) < self.workers:
-                        task = queue.popleft()
-                        in_flight[pool.submit(_pool_execute, task)] = (task, False)
-                done, _ = cf.wait(in_flight, return_when=cf.FIRST_COMPLETED)
-                broken = False
-                for future in done:
-                    task, alone = in_flight.pop(future)
-                    try:
-                        yield task, future.result()
-                    except cf.process.BrokenProcessPool:
-                        broken = True
-                        if alone:
-                            yield task, {"status": "worker_died", "reason": WORKER_DIED}
-                        else:
-                            suspects.append(task)
-                if broken:
-                    for future, (task, _) in list(in_flight.items()):
-                        suspects.append(task)  # the pool is gone: everything in flight is redone
-                        in_flight.pop(future)
-                    pool.shutdown(wait=True, cancel_futures=True)
-                    pool = self._pool(min(self.workers, len(queue) + len(suspects)) or 1)
-        finally:
-            # normal end, Ctrl-C or an error: never start another run; running ones end
-            # (as 'interrupted' when they got the Ctrl-C too) and publish their folders
-            if interrupts.stop_requested():
-                interrupts.acknowledge()  # noticed: the running runs now end and write their folders
-            if interrupts.stop_requested() == "SIGTERM":  # sent to this process alone: pass it on
-                for process in list(getattr(pool, "_processes", {}).values()):
-                    with contextlib.suppress(OSError):
-                        os.kill(process.pid, signal.SIGINT)
-            pool.shutdown(wait=True, cancel_futures=True)
+        from orchestrator.worker_pool import WorkerPool
 
-
-class DaskExecutor:
-    """Runs on a Dask distributed cluster at ``address`` (a worker that dies is Dask's ``KilledWorker``)."""
-
-    def __init__(self, address: str) -> None:
-        self.address = address
-
-    def run(self, tasks: list[RunTask]) -> Iterator[tuple[RunTask, dict]]:
-        """Yield ``(task, record)`` as runs complete; closing the generator cancels the rest."""
-        from distributed import CancelledError, Client, KilledWorker, as_completed
-
-        try:
-            client = Client(self.address, timeout="10s", set_as_default=False)
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise BatchError(f"cannot reach the Dask scheduler at {self.address}: {exc}") from exc
-        futures = {}
-        try:
-            for task in tasks:
-                future = client.submit(execute_run, task, key=f"rhnc-run-{task.run_id}-{os.urandom(4).hex()}",
-                                       pure=False, retries=0)
-                futures[future] = task
-            for future in as_completed(futures, loop=client.loop):
-                task = futures[future]
-                try:
-                    record = future.result()
-                except KilledWorker:
-                    record = {"status": "worker_died", "reason": WORKER_DIED}
-                except CancelledError:
-                    continue
-                except Exception as exc:  # e.g. the package is missing on the worker
-                    record = {"status": "worker_died", "reason": f"the worker could not run it: {type(exc).__name__}: {exc}"}
-                yield task, record
-        finally:
-            if interrupts.stop_requested():
-                interrupts.acknowledge()
-            client.cancel(list(futures))
-            client.close()
+        yield from WorkerPool(self.workers, pool_execute).run(tasks)
 
 
 # -- the table and the overview -------------------------------------------------------------------
@@ -411,7 +235,7 @@ def batch_table(spec: BatchSpec, root: Path):
     figures = list(dict.fromkeys([c.metric for c in spec.acceptance] + list(spec.report_columns)))
     rows = []
     for run in spec.runs():
-        summary = _read_summary(root / "runs" / run.run_id) or {"status": "not run", "reason": "no results yet"}
+        summary = read_summary(root / "runs" / run.run_id) or {"status": "not run", "reason": "no results yet"}
         row = {"run_id": run.run_id, "index": run.index}
         row.update({f"param:{k}": v for k, v in run.parameters.items()})
         row.update(status=summary.get("status"), reason=summary.get("reason", ""))

@@ -1,4 +1,7 @@
-"""Command line: ``python -m orchestrator {run,validate,build,export,plan,compare,batch,identify} ...``.
+"""Command line: ``python -m orchestrator {run,validate,build,export,compare,batch,...} ...``.
+
+Installed packages add subcommands through the entry-point group ``rhnc_cosim.commands``
+(the ship domain adds ``plan`` and ``identify``, :mod:`rhnc.cosim.commands`).
 
 Known errors (bad scenario, missing FMU, failed model) print one line and exit non-zero:
 2 for bad input, 3 for a run that failed or missed its acceptance criteria, 130 for
@@ -33,6 +36,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     validate = sub.add_parser("validate", help="check a scenario and its FMUs without running it")
     validate.add_argument("scenario", help="scenario TOML file")
+    validate.add_argument("--trust-code", action="store_true",
+                          help="also import type = \"python\" participant classes that come with the scenario "
+                               "(its folder or the current folder); only for code you trust")
     build = sub.add_parser("build", help="compile the FMUs in models/ into fmus/ (FMI 2.0) or fmus/fmi3/")
     build.add_argument("models", nargs="*", help="model names (default: all)")
     build.add_argument("--fmi-version", choices=("2.0", "3.0", "all"), default="2.0",
@@ -49,27 +55,20 @@ def _parser() -> argparse.ArgumentParser:
     export.add_argument("--out", default="fmus/exported", help="folder for the FMUs (default: fmus/exported)")
     export.add_argument("--osp", action="store_true",
                         help="export every participant and write OspSystemStructure.xml for OSP's libcosim")
-    plan = sub.add_parser("plan", help="run an offline planning experiment (e.g. Experiment 1)")
-    plan.add_argument("scenario", help="offline planning TOML file")
-    plan.add_argument("--results", default="results", help="results folder (default: ./results)")
     batch = sub.add_parser("batch", help="run a batch of scenario variations into results/<batch>/ (resumable)")
     batch.add_argument("batch", help="batch TOML file")
     batch.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
     batch.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                       help="run on a Dask distributed cluster, e.g. tcp://host:8786 (instead of the local pool)")
+                       help="run on a Dask distributed cluster, tcp://host:8786 or tls://host:8786 (instead of the "
+                            "local pool; docs/batch.md)")
+    batch.add_argument("--tls-ca", default=None, metavar="FILE", help="tls:// scheduler: the cluster's CA certificate")
+    batch.add_argument("--tls-cert", default=None, metavar="FILE", help="tls:// scheduler: this client's certificate")
+    batch.add_argument("--tls-key", default=None, metavar="FILE", help="tls:// scheduler: this client's private key")
     batch.add_argument("--results", default="results", help="results folder (default: ./results)")
     batch.add_argument("--retry-failed", action="store_true", help="redo runs recorded as failed")
     batch.add_argument("--no-progress", action="store_true", help="no progress bar")
-    identify = sub.add_parser("identify", help="fit the NMPC's 3-DOF model on a scenario's plant FMU "
-                                               "(manoeuvres through its mapping) into a parameter-set file")
-    identify.add_argument("scenario", help="scenario TOML file whose plant FMU (and mapping) to identify")
-    identify.add_argument("--tau-u-max-N", type=float, default=None, help="largest surge force of the ship [N]")
-    identify.add_argument("--tau-r-max-Nm", type=float, default=None, help="largest yaw moment of the ship [N m]")
-    identify.add_argument("--speed-kn", type=float, default=18.0, help="service speed of the manoeuvres (default 18)")
-    identify.add_argument("--plant", default=None, help="participant name of the plant (default: the one ship FMU)")
-    identify.add_argument("--set", dest="set_name", default=None, help="name of the set (default: the FMU's model name)")
-    identify.add_argument("--out", default=None, help="also write the parameter-set file here")
-    identify.add_argument("--results", default="results", help="results folder (default: ./results)")
+    for name, command in _plugin_commands().items():
+        command.add_arguments(sub.add_parser(name, help=command.help))
     return parser
 
 
@@ -84,22 +83,32 @@ def main(argv=None) -> int:
     try:
         with interrupts.handle_signals():
             try:
-                return _COMMANDS[args.command](args)
+                if args.command in _COMMANDS:
+                    return _COMMANDS[args.command](args)
+                return _plugin_commands()[args.command].run(args)
             except KeyboardInterrupt:  # stopped before or between runs (set-up, building)
                 print(f"error: {interrupts.reason()}", file=sys.stderr)
                 return EXIT_INTERRUPTED
     except ToolchainError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {one_line(exc)}", file=sys.stderr)
         return exc.exit_code
 
 
-#: Loggers of this toolchain; ``-v`` shows their debug lines, not those of the libraries.
-OWN_LOGGERS = ("orchestrator", "rhnc")
+def own_loggers() -> tuple[str, ...]:
+    """Loggers of this toolchain: the master's and every package registering entry points.
+
+    ``-v`` shows their debug lines, not those of the libraries they use.
+    """
+    from orchestrator import plugins
+
+    packages = {registration.target.split(":")[0].split(".")[0].strip()
+                for kind in plugins.GROUPS for registration in plugins.registrations(kind).values()}
+    return ("orchestrator", *sorted(packages - {"orchestrator"}))
 
 
 def _configure_logging(verbose: bool) -> None:
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
-    for name in OWN_LOGGERS:
+    for name in own_loggers():
         logging.getLogger(name).setLevel(logging.DEBUG if verbose else logging.NOTSET)
 
 
@@ -140,15 +149,22 @@ def _key_lines(summary) -> list[str]:
 
 
 def _validate(args) -> int:
-    from orchestrator.validate import validate_scenario
+    from orchestrator.validate import check_scenario
 
-    problems = validate_scenario(args.scenario)
-    for problem in problems:
-        print(f"error: {problem}", file=sys.stderr)
-    if problems:
+    report = check_scenario(args.scenario, trust_code=args.trust_code)
+    for problem in report.problems:
+        print(f"error: {one_line(problem)}", file=sys.stderr)
+    if report.problems:
         return 2
     print(f"ok: {args.scenario}")
+    for note in report.notes:
+        print(f"  note: {one_line(note)}")
     return 0
+
+
+def one_line(text: str) -> str:
+    """A message on one line: line breaks and other control characters escaped."""
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in str(text))
 
 
 def _build(args) -> int:
@@ -162,24 +178,16 @@ def _build(args) -> int:
     return 0
 
 
-def _plan(args) -> int:
-    from pathlib import Path
-
-    from rhnc.offline_planning import run_offline_planning
-
-    folder = run_offline_planning(Path(args.scenario), Path(args.results))
-    print(f"finished: results in {folder}")
-    return 0
-
-
 def _batch(args) -> int:
     from orchestrator.batch import run_batch
 
     if args.workers is not None and args.workers < 1:
         print("error: --workers must be at least 1", file=sys.stderr)
         return 2
+    tls = {"ca": args.tls_ca, "cert": args.tls_cert, "key": args.tls_key}
     report = run_batch(args.batch, args.results, workers=args.workers, scheduler=args.scheduler,
-                       progress=not args.no_progress, retry_failed=args.retry_failed)
+                       progress=not args.no_progress, retry_failed=args.retry_failed,
+                       tls=tls if any(tls.values()) else None)
     table = report.table
     counts = ", ".join(f"{count} {status}" for status, count in table["status"].value_counts().items())
     print(f"{report.passed}/{report.total} runs passed ({counts}); ran {report.ran}, "
@@ -212,20 +220,6 @@ def _compare(args) -> int:
     return 0
 
 
-def _identify(args) -> int:
-    from rhnc.identify_run import run_identify
-
-    report = run_identify(args.scenario, args.results, plant=args.plant, speed_kn=args.speed_kn,
-                          tau_u_max_N=args.tau_u_max_N, tau_r_max_Nm=args.tau_r_max_Nm,
-                          set_name=args.set_name, out=args.out)
-    held = report.report["open_loop_errors"][f"held_out: {report.report['held_out']}"]
-    print(f"finished: results in {report.folder}")
-    print(f"  parameter set '{report.report['set']}' in {report.parameter_file}")
-    print(f"  held-out {report.report['held_out']}: heading RMS {held['heading_rms_deg']:.2f} deg, "
-          f"speed RMS {held['speed_rms_kn']:.3f} kn")
-    return 0
-
-
 def _export(args) -> int:
     from orchestrator.errors import ScenarioError
     from orchestrator.export import export_participant
@@ -243,8 +237,21 @@ def _export(args) -> int:
     return 0
 
 
-_COMMANDS = {"run": _run, "validate": _validate, "build": _build, "plan": _plan, "batch": _batch,
-             "compare": _compare, "export": _export, "identify": _identify}
+_COMMANDS = {"run": _run, "validate": _validate, "build": _build, "batch": _batch,
+             "compare": _compare, "export": _export}
+
+
+def _plugin_commands() -> dict:
+    """Subcommands installed packages register (``rhnc_cosim.commands``: ``plan``, ``identify``, ...)."""
+    from orchestrator import plugins
+
+    commands = {}
+    for name in plugins.names("commands"):
+        if name in _COMMANDS:
+            log.warning("ignoring the registered command '%s': a built-in command has that name", name)
+            continue
+        commands[name] = plugins.load("commands", name)
+    return commands
 
 
 def console_main() -> None:

@@ -24,11 +24,13 @@ A comparison file (TOML), e.g. ``scenarios/exp2_table3.toml`` for the paper's Ta
 ``python -m orchestrator compare FILE`` runs every scenario into
 ``results/<name>/<run-id>/runs/<label>/``, then writes ``table.csv`` and ``table.md`` (ours
 and the paper's value of each metric per run, and each run's change against the
-baseline), ``tracks.png`` (all tracks over the met-ocean field) and the copied figures.
+baseline), the figures of every registered comparison figure (entry-point group
+``rhnc_cosim.comparison_figures``: the ship domain draws ``tracks.png``, all tracks over the
+met-ocean field) and the copied figures.
 With ``[sweep]`` each value gets such a folder under ``members/`` and the top folder holds
 the sweep's table.
 
-A table named in :data:`orchestrator.registry.COMPARISON_EXTENSIONS` (``[voyage]``) hands
+A table named in the entry-point group ``rhnc_cosim.comparisons`` (``[voyage]``) hands
 the runs to a domain extension, which may set further overrides on every run, run more
 scenarios through the same machinery and add its own tables (``docs/compare-format.md``).
 The engine here knows nothing of what the extension measures.
@@ -38,7 +40,6 @@ from __future__ import annotations
 
 import copy
 import hashlib
-import importlib
 import json
 import logging
 import math
@@ -51,14 +52,10 @@ from typing import Any
 import pandas as pd
 
 from orchestrator.errors import ScenarioError
-from orchestrator.registry import COMPARISON_EXTENSIONS
-from orchestrator.scenario import read_toml
+from orchestrator import plugins
 
 log = logging.getLogger(__name__)
 
-KEYS = ("name", "analysis", "metrics", "baseline", "runs", "set", "sweep")
-RUN_KEYS = ("label", "scenario", "set", "paper", "figures")
-SWEEP_KEYS = ("key", "values", "range")
 
 
 @dataclass
@@ -95,61 +92,22 @@ class ScenarioRunner:
 
 
 def load_comparison(path: Path) -> dict[str, Any]:
-    """Read and check a comparison file; errors name the file and the key."""
-    path = Path(path)
-    data, _ = read_toml(path, "comparison")
-    allowed = KEYS + tuple(COMPARISON_EXTENSIONS)
-    for key in data:
-        if key not in allowed:
-            raise ScenarioError(f"{path}: unknown key '{key}' (valid: {', '.join(allowed)})")
-    for key in ("name", "analysis"):
-        if not isinstance(data.get(key), str):
-            raise ScenarioError(f"{path}: '{key}' must be a string")
-    if not data["name"] or any(c in data["name"] for c in "/\\"):
-        raise ScenarioError(f"{path}: 'name' must be a non-empty string without slashes")
-    metrics = data.get("metrics")
-    if not isinstance(metrics, list) or not metrics or not all(isinstance(m, str) for m in metrics):
-        raise ScenarioError(f"{path}: 'metrics' must be a non-empty list of names")
-    runs = data.get("runs")
-    if not isinstance(runs, list) or not runs:
-        raise ScenarioError(f"{path}: at least one [[runs]] table is needed")
-    labels = []
-    for i, run in enumerate(runs):
-        where = f"{path}: runs[{i}]"
-        for key in run:
-            if key not in RUN_KEYS:
-                raise ScenarioError(f"{where}: unknown key '{key}' (valid: {', '.join(RUN_KEYS)})")
-        if not isinstance(run.get("label"), str) or not isinstance(run.get("scenario"), str):
-            raise ScenarioError(f"{where}: 'label' and 'scenario' must be strings")
-        if run["label"] in labels:
-            raise ScenarioError(f"{where}.label: '{run['label']}' is used twice")
-        scenario = path.parent / run["scenario"]
-        if not scenario.is_file():
-            raise ScenarioError(f"{where}.scenario: scenario file not found: {scenario}")
-        run["set"] = _overrides(run.get("set", {}), f"{where}.set")
-        for key in run.get("paper", {}):
-            if key not in metrics:
-                raise ScenarioError(f"{where}.paper: '{key}' is not one of the metrics")
-        labels.append(run["label"])
-    if "baseline" in data and data["baseline"] not in labels:
-        raise ScenarioError(f"{path}: baseline '{data['baseline']}' is not a run label ({', '.join(labels)})")
-    data["set"] = _overrides(data.get("set", {}), f"{path}: set")
-    if "sweep" in data:
-        data["sweep"] = _sweep(data["sweep"], path)
-    return data
+    """Read and check a comparison file (:mod:`orchestrator.compare_spec`); errors name the file and the key."""
+    from orchestrator.compare_spec import load_comparison as load
+
+    return load(path, tuple(plugins.names("comparisons")))
 
 
 def load_extensions(spec: dict[str, Any], path: Path) -> dict[str, Any]:
     """Build the extensions the comparison names; each checks its table and every run."""
     extensions = {}
-    for name, target in COMPARISON_EXTENSIONS.items():
+    for name, registration in plugins.registrations("comparisons").items():
         if name not in spec:
             continue
         table = spec[name]
         if not isinstance(table, dict):
             raise ScenarioError(f"{path}: '{name}' must be a table ([{name}])")
-        module, _, attribute = target.partition(":")
-        extension_class = getattr(importlib.import_module(module), attribute)
+        extension_class = registration.load()
         extensions[name] = extension_class.from_table(table, Path(path), spec)
     return extensions
 
@@ -229,7 +187,8 @@ def _compare_once(spec, extensions, path: Path, overrides: dict, out_dir: Path, 
         flags += section.flags
         markdown.append(section.markdown)
     (out_dir / "table.md").write_text("\n".join(markdown) + "\n")
-    _tracks_figure(spec, reports, out_dir / "tracks.png")
+    for draw in plugins.load_all("comparison_figures").values():
+        draw(spec, reports, out_dir)
     failed = {label: r.reason for label, r in reports.items() if not r.ok}
     summary = {
         "runs": {label: str(r.folder.relative_to(out_dir)) for label, r in reports.items()},
@@ -270,38 +229,6 @@ def _member_overrides(spec, value) -> dict[str, Any]:
 def _write_section(section: Section, out_dir: Path) -> None:
     for name, frame in section.tables.items():
         frame.to_csv(out_dir / f"{name}.csv", index=False)
-
-
-def _overrides(table, where: str) -> dict[str, Any]:
-    if not isinstance(table, dict):
-        raise ScenarioError(f"{where}: expected a table of dotted-key overrides")
-    for key in table:
-        if not key or not all(key.split(".")):
-            raise ScenarioError(f"{where}: key '{key}' is not a dotted key path")
-    return dict(table)
-
-
-def _sweep(table, path: Path) -> dict[str, Any]:
-    if not isinstance(table, dict):
-        raise ScenarioError(f"{path}: 'sweep' must be a table ([sweep])")
-    for key in table:
-        if key not in SWEEP_KEYS:
-            raise ScenarioError(f"{path}: unknown key 'sweep.{key}' (valid: {', '.join(SWEEP_KEYS)})")
-    if not isinstance(table.get("key"), str) or not table["key"]:
-        raise ScenarioError(f"{path}: 'sweep.key' must be a dotted scenario key, e.g. \"metocean.member\"")
-    if ("values" in table) == ("range" in table):
-        raise ScenarioError(f"{path}: give exactly one of 'sweep.values' or 'sweep.range'")
-    if "range" in table:
-        bounds = table["range"]
-        if (not isinstance(bounds, list) or len(bounds) != 2
-                or not all(isinstance(b, int) and not isinstance(b, bool) for b in bounds) or bounds[1] < bounds[0]):
-            raise ScenarioError(f"{path}: 'sweep.range' must be [first, last] integers with first <= last")
-        values = list(range(bounds[0], bounds[1] + 1))
-    else:
-        values = table["values"]
-        if not isinstance(values, list) or not values:
-            raise ScenarioError(f"{path}: 'sweep.values' must be a non-empty list")
-    return {"key": table["key"], "values": values}
 
 
 def comparison_table(spec: dict, summaries: dict[str, dict]) -> pd.DataFrame:
@@ -360,32 +287,3 @@ def _format(value) -> str:
 
 def _digest(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def _tracks_figure(spec, reports, target: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from rhnc.metocean import NM, MetOceanField
-
-    fig, ax = plt.subplots(figsize=(7, 6))
-    first = next(iter(reports.values())).folder / "metocean.nc"
-    if first.is_file():
-        field = MetOceanField.from_netcdf(first).snapshot(0.0)  # at departure when it varies in time
-        mesh = ax.pcolormesh(field.y / NM, field.x / NM, field.wind_speed, shading="auto", cmap="viridis")
-        fig.colorbar(mesh, ax=ax, label="wind speed [m/s]")
-    for (label, report), colour in zip(reports.items(), ("tab:red", "white", "tab:orange", "tab:cyan")):
-        frame = pd.read_parquet(report.folder / "timeseries.parquet") if (
-            report.folder / "timeseries.parquet").is_file() else pd.read_csv(report.folder / "timeseries.csv")
-        plant = next(c[:-2] for c in frame.columns if c.endswith(".x") and f"{c[:-2]}.psi" in frame.columns)
-        ax.plot(frame[f"{plant}.y"] / NM, frame[f"{plant}.x"] / NM, color=colour, lw=2, label=label)
-    ax.set_xlabel("east [nm]")
-    ax.set_ylabel("north [nm]")
-    ax.set_aspect("equal")
-    ax.legend(loc="lower right")
-    ax.set_title(f"{spec['name']}: tracks")
-    fig.tight_layout()
-    fig.savefig(target, dpi=120)
-    plt.close(fig)

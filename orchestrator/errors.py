@@ -29,3 +29,9 @@ class SolverError(ToolchainError):
     """An optimisation problem could not be solved and no fallback applies."""
 
     exit_code = 3
+
+
+class ResultsError(ToolchainError):
+    """The results cannot be written (read-only folder, disk full): nothing half-written is left."""
+
+    exit_code = 4

@@ -188,9 +188,9 @@ def _complete_model_structure(source: Path, target: Path) -> None:
 
 
 def _target(spec) -> str:
-    from orchestrator.registry import PARTICIPANT_TYPES
+    from orchestrator.master import participant_target
 
-    return spec.class_path if spec.type == "python" else PARTICIPANT_TYPES[spec.type]
+    return participant_target(spec, f"participants.{spec.name}")
 
 
 def _layout(probe: _ShapeProbe, scenario_path: Path) -> dict[str, list[dict[str, Any]]]:

@@ -64,14 +64,13 @@ class ExportedParticipant(Fmi2Slave):
 
     # -- lifecycle -------------------------------------------------------------------------
     def exit_initialization_mode(self):
+        from orchestrator import plugins
         from orchestrator.master import _import_class
         from orchestrator.participant import BuildContext
 
         metocean = None
-        if self._spec["metocean"]:
-            from rhnc.metocean import MetOceanField
-
-            metocean = MetOceanField.from_netcdf(self._bundle / self._spec["metocean"])
+        if self._spec["metocean"]:  # the [metocean] table's object, saved by the export
+            metocean = plugins.load("scenario_tables", "metocean").from_netcdf(self._bundle / self._spec["metocean"])
         name = self._spec["participant"]
         where = f"{self._spec['scenario']} (exported): participants.{name}"
         context = BuildContext(where=where, scenario_dir=self._bundle, step_size=self._spec["step_size_s"],

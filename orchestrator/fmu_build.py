@@ -7,20 +7,33 @@ model's FMI 2.0 one (:mod:`orchestrator.model_description`).
 
 Each model folder ``models/<Name>/`` holds ``config.h``, ``model.c`` and a
 ``modelDescription.xml`` whose parameter start values are ``@name@`` placeholders; the
-shared FMI layer lives in ``models/common/``. At build time the ``[default]`` set of
-``models/KCS/parameter_sets.toml`` (the single source of the 3-DOF plant's parameters) is
-written as the C header ``kcs_parameter_defaults.h``; a model with a parameter set file of
+shared FMI layer lives in ``models/common/``. At build time the ``[default]`` set of the
+library's shared parameter sets (``models/KCS/parameter_sets.toml``, the single source of
+the 3-DOF plant's parameters) is written as the C header ``kcs_parameter_defaults.h``; a model with a parameter set file of
 its own (``models/<Name>/parameter_sets.toml``, e.g. ``KCSMMG``) also gets
 ``model_parameter_defaults.h`` from it.  The model's own set (else the KCS set) fills the
-placeholders, so the C start values and the XML can never disagree with the TOML.  The
-particulars in those sets (length, beam, windage areas, ...) must equal the ship's
-``ships/KCS.toml`` (:mod:`rhnc.ships`), or the build is refused. The FMU carries its ``sources/`` and
-the SHA-256 of every input file in the zip comment, which ``ensure_built`` compares.
+placeholders, so the C start values and the XML can never disagree with the TOML.  The FMU
+carries its ``sources/`` and the SHA-256 of every input file in the zip comment, which
+``ensure_built`` compares.
+
+In a source checkout the FMUs go into its ``fmus/``; an installed toolchain (the models are
+package data) builds them into the per-user cache, ``<user cache>/rhnc-cosim/fmus/<source
+hash>/`` (``platformdirs``; ``XDG_CACHE_HOME`` on Linux moves it), built once per source.
+
+Which models there are, what determines each FMU and where it goes are
+:mod:`orchestrator.fmu_sources`; this module compiles.  The models folder is a *model
+library* registered in the entry-point group ``rhnc_cosim.model_libraries``
+(:mod:`orchestrator.plugins`): an object with ``models_dir`` (the folder),
+``shared_parameter_set`` (the model whose parameter sets every model is built with),
+``extra_inputs(name)`` (further files whose content determines the FMU) and
+``check_parameter_set(values, where)`` (refusing a ``[default]`` set with a
+``ScenarioError``).  The ship domain's library checks the particulars in those sets
+(length, beam, windage areas, ...) against the ship's ``ships/KCS.toml``, so a set that
+disagrees is never built.
 """
 
 from __future__ import annotations
 
-import hashlib
 import logging
 import os
 import re
@@ -31,108 +44,34 @@ import tomllib
 import zipfile
 from pathlib import Path
 
+from orchestrator import fmu_sources
 from orchestrator.errors import FmuError
+# FMI_VERSIONS, model_names, source_hash, default_fmu_dir: also this module's interface
+from orchestrator.fmu_sources import (COMMON, FMI_VERSIONS, RESOURCES, _check_name, _models_dir,
+                                      _own_parameter_sets, _resources, _shared_parameter_file, _shared_set,
+                                      _sources, default_fmu_dir, fmu_path, model_library, model_names,
+                                      source_hash)
 
 log = logging.getLogger(__name__)
 
-MODELS_DIR = Path(__file__).resolve().parent.parent / "models"
-FMUS_DIR = Path(__file__).resolve().parent.parent / "fmus"
 
-COMMON = "common"
-PARAMETER_SETS = Path("KCS") / "parameter_sets.toml"
-DEFAULTS_HEADER = "kcs_parameter_defaults.h"
 MODEL_DEFAULTS_HEADER = "model_parameter_defaults.h"
-SHIP = "KCS"
 BOUNDS_HEADER = "model_bounds.h"
-RESOURCES = "resources"
 HASH_PREFIX = "rhnc-source-sha256="
-# Bump when the build recipe itself changes, so existing FMUs are rebuilt.
-RECIPE_VERSION = "2"
-SOURCE_SUFFIXES = (".c", ".h")
-FMI_VERSIONS = ("2.0", "3.0")
-#: The FMI API file of the shared layer per version; the other version's is left out.
-API_SOURCES = {"2.0": "fmi2_api.c", "3.0": "fmi3_api.c"}
 
 
-def model_names(models_dir: Path = MODELS_DIR) -> list[str]:
-    """Names of the buildable models: folders of ``models_dir`` with a ``model.c``."""
-    return sorted(
-        p.name for p in Path(models_dir).iterdir()
-        if p.is_dir() and p.name != COMMON and (p / "model.c").is_file()
-    )
-
-
-def _check_name(name: str, models_dir: Path) -> Path:
-    names = model_names(models_dir)
-    if name not in names:
-        raise FmuError(f"unknown model {name!r}; valid models: {', '.join(names)}")
-    return Path(models_dir) / name
-
-
-def _check_version(fmi_version: str) -> str:
-    if fmi_version not in FMI_VERSIONS:
-        raise FmuError(f"unknown FMI version {fmi_version!r} (valid: {', '.join(FMI_VERSIONS)})")
-    return fmi_version
-
-
-def _sources(name: str, models_dir: Path, fmi_version: str = "2.0") -> list[Path]:
-    """C sources and headers of one model for one FMI version: its folder's and the shared layer's."""
-    other_apis = {api for version, api in API_SOURCES.items() if version != fmi_version}
-    files = []
-    for folder in (Path(models_dir) / COMMON, Path(models_dir) / name):
-        files += sorted(p for p in folder.iterdir() if p.suffix in SOURCE_SUFFIXES and p.name not in other_apis)
-    return files
-
-
-def _own_parameter_sets(name: str, models_dir: Path) -> Path | None:
-    """The model's own parameter set file, when it has one besides the KCS set."""
-    path = Path(models_dir) / name / "parameter_sets.toml"
-    return path if name != "KCS" and path.is_file() else None
-
-
-def _resources(name: str, models_dir: Path) -> list[Path]:
-    """Files shipped in the FMU's ``resources/``: the model folder's ``resources/`` (e.g. a default grid)."""
-    folder = Path(models_dir) / name / RESOURCES
-    return sorted(p for p in folder.rglob("*") if p.is_file()) if folder.is_dir() else []
-
-
-def _inputs(name: str, models_dir: Path, fmi_version: str = "2.0") -> list[Path]:
-    """Every file whose content determines the FMU."""
-    from rhnc.ships import ship_file
-
-    models_dir = Path(models_dir)
-    own = _own_parameter_sets(name, models_dir)
-    return _sources(name, models_dir, fmi_version) + _resources(name, models_dir) + [
-        models_dir / name / "modelDescription.xml",
-        models_dir / PARAMETER_SETS,
-        *([own] if own else []),
-        ship_file(SHIP),
-    ]
-
-
-def fmu_path(name: str, out_dir: Path = FMUS_DIR, fmi_version: str = "2.0") -> Path:
-    """Where the FMU of a model is built: ``<out_dir>/<name>.fmu`` or ``<out_dir>/fmi3/<name>.fmu``."""
-    return Path(out_dir) / (f"{name}.fmu" if _check_version(fmi_version) == "2.0" else f"fmi3/{name}.fmu")
-
-
-def source_hash(name: str, models_dir: Path = MODELS_DIR, fmi_version: str = "2.0") -> str:
-    """SHA-256 over the recipe and FMI versions and the relative path and content of every input."""
-    models_dir = Path(models_dir)
-    digest = hashlib.sha256(f"{RECIPE_VERSION} {_check_version(fmi_version)}".encode())
-    for path in _inputs(name, models_dir, fmi_version):
-        relative = path.relative_to(models_dir) if path.is_relative_to(models_dir) else Path(path.parent.name, path.name)
-        digest.update(str(relative).encode() + b"\0")
-        digest.update(path.read_bytes() + b"\0")
-    return digest.hexdigest()
+def __getattr__(name: str):
+    if name in ("MODELS_DIR", "FMUS_DIR"):  # where the models are, looked up when asked for
+        return getattr(fmu_sources, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def _default_parameters(models_dir: Path, path: Path | None = None) -> dict[str, float]:
-    """The ``[default]`` set of ``path`` (the KCS set by default), checked against the ship's
-    particulars."""
+    """The ``[default]`` set of ``path`` (the shared set by default), checked by the model
+    library (the ship's particulars)."""
     from orchestrator.errors import ScenarioError
-    from rhnc.ships import check_parameter_set, load_ship
 
-    path = Path(path) if path is not None else Path(models_dir) / PARAMETER_SETS
+    path = Path(path) if path is not None else _shared_parameter_file(models_dir)
     try:
         with path.open("rb") as f:
             default = tomllib.load(f)["default"]
@@ -142,15 +81,16 @@ def _default_parameters(models_dir: Path, path: Path | None = None) -> dict[str,
     for key, value in values.items():
         if not isinstance(value, (int, float)) or isinstance(value, bool):
             raise FmuError(f"{path}: [default] {key} = {value!r} is not a number")
+    library = model_library()
     try:
-        check_parameter_set(values, load_ship(SHIP), f"{path}: [default]")
+        if library is not None:
+            library.check_parameter_set(values, f"{path}: [default]")
     except ScenarioError as exc:
         raise FmuError(str(exc)) from None
     return {k: float(v) for k, v in values.items()}
 
 
-def _defaults_header(parameters: dict[str, float], prefix: str = "KCS",
-                     source: str = "models/KCS/parameter_sets.toml") -> str:
+def _defaults_header(parameters: dict[str, float], prefix: str, source: str) -> str:
     guard = f"{prefix}_PARAMETER_DEFAULTS_H"
     lines = [
         f"/* Generated by orchestrator/fmu_build.py from {source}",
@@ -166,7 +106,7 @@ def _defaults_header(parameters: dict[str, float], prefix: str = "KCS",
 def _model_description(name: str, models_dir: Path, parameters: dict[str, float],
                        parameter_file: Path | None = None) -> str:
     path = Path(models_dir) / name / "modelDescription.xml"
-    parameter_file = parameter_file or Path(models_dir) / PARAMETER_SETS
+    parameter_file = parameter_file or _shared_parameter_file(models_dir)
     text = path.read_text(encoding="utf-8")
 
     def substitute(match: re.Match) -> str:
@@ -201,7 +141,7 @@ def _first_error(output: str) -> str:
     return lines[0] if lines else "no compiler output"
 
 
-def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR,
+def build_fmu(name: str, out_dir: Path | None = None, models_dir: Path | None = None,
               fmi_version: str = "2.0") -> Path:
     """Compile one model into ``out_dir/<name>.fmu`` (FMI 2.0) or ``out_dir/fmi3/<name>.fmu``.
 
@@ -209,10 +149,10 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR
     ----------
     name : str
         Model folder name under ``models_dir`` (see ``model_names``).
-    out_dir : Path
-        Folder receiving the FMU (created if missing).
-    models_dir : Path
-        The ``models/`` tree to build from.
+    out_dir : Path, optional
+        Folder receiving the FMU (created if missing); default :func:`default_fmu_dir`.
+    models_dir : Path, optional
+        The ``models/`` tree to build from (default: the registered model library's).
     fmi_version : {"2.0", "3.0"}
         The FMI standard of the FMU.
 
@@ -231,8 +171,9 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR
 
     from orchestrator import model_description
 
-    models_dir = Path(models_dir)
+    models_dir = _models_dir(models_dir)
     model_dir = _check_name(name, models_dir)
+    out_dir = default_fmu_dir(name, models_dir, fmi_version) if out_dir is None else out_dir
     fmu = fmu_path(name, out_dir, fmi_version)
     fmu.parent.mkdir(parents=True, exist_ok=True)
     parameters = _default_parameters(models_dir)
@@ -251,8 +192,10 @@ def build_fmu(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR
 
     with tempfile.TemporaryDirectory(prefix=f"fmu_build_{name}_") as tmp:
         tmp = Path(tmp)
-        header = tmp / DEFAULTS_HEADER
-        header.write_text(_defaults_header(parameters), encoding="utf-8")
+        shared = _shared_set()
+        header = tmp / f"{shared.lower()}_parameter_defaults.h"
+        header.write_text(_defaults_header(parameters, shared.upper(), f"models/{shared}/parameter_sets.toml"),
+                          encoding="utf-8")
         headers = [header]
         if own_parameters is not None:
             model_header = tmp / MODEL_DEFAULTS_HEADER
@@ -306,7 +249,7 @@ def _stored_hash(fmu: Path) -> str | None:
     return comment[len(HASH_PREFIX):] if comment.startswith(HASH_PREFIX) else None
 
 
-def ensure_built(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR,
+def ensure_built(name: str, out_dir: Path | None = None, models_dir: Path | None = None,
                  fmi_version: str = "2.0") -> Path:
     """Return the model's FMU, rebuilding it when missing or built from other sources.
 
@@ -314,7 +257,9 @@ def ensure_built(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_
     its modelDescription.xml, the parameter sets and the ship's particulars, stored in the
     FMU's zip comment.
     """
+    models_dir = _models_dir(models_dir)
     _check_name(name, models_dir)
+    out_dir = default_fmu_dir(name, models_dir, fmi_version) if out_dir is None else out_dir
     fmu = fmu_path(name, out_dir, fmi_version)
     if fmu.is_file() and _stored_hash(fmu) == source_hash(name, models_dir, fmi_version):
         log.debug("%s is up to date", fmu)
@@ -322,9 +267,10 @@ def ensure_built(name: str, out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_
     return build_fmu(name, out_dir, models_dir, fmi_version)
 
 
-def build_all(out_dir: Path = FMUS_DIR, models_dir: Path = MODELS_DIR,
+def build_all(out_dir: Path | None = None, models_dir: Path | None = None,
               fmi_versions: tuple[str, ...] = ("2.0",)) -> list[Path]:
     """Build every model of ``models_dir`` into ``out_dir`` for each FMI version; the FMUs written."""
+    models_dir = _models_dir(models_dir)
     return [build_fmu(name, out_dir, models_dir, version)
             for version in fmi_versions for name in model_names(models_dir)]
 

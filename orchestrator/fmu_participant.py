@@ -20,8 +20,9 @@ from pathlib import Path
 from fmpy.fmi1 import FMICallException
 
 from orchestrator.errors import FmuError, ModelError, ScenarioError
+from orchestrator.fmu_archive import check_archive, extract_fmu
 from orchestrator.fmi_slave import REAL_TYPES, SUPPORTED_VERSIONS, FmiSlave
-from orchestrator.participant import Participant, Value
+from orchestrator.participant import Participant, Value, is_finite_number
 from orchestrator.plant_ports import PLANT_PORTS
 from orchestrator.port_mapping import bind_ports, initial_start_values
 from orchestrator.scenario import ParticipantSpec
@@ -69,6 +70,52 @@ def read_parameter_set(fmu_reference: str, set_name: str, where: str) -> dict:
     return {key: value for key, value in sets[set_name].items() if key not in SET_METADATA_KEYS}
 
 
+#: Range of an FMI integer (a C int, 32 bits) that a scenario may set.
+INT32_RANGE = (-(2 ** 31), 2 ** 31 - 1)
+
+
+def declared_range(variable) -> tuple[float, float]:
+    """``[min, max]`` a variable of a modelDescription declares, on itself or on its declared type
+    (-inf / +inf where nothing is declared)."""
+    bounds = []
+    for attribute, default in (("min", -math.inf), ("max", math.inf)):
+        text = getattr(variable, attribute, None)
+        if text is None and getattr(variable, "declaredType", None) is not None:
+            text = getattr(variable.declaredType, attribute, None)
+        try:
+            bounds.append(float(text) if text is not None else default)
+        except (TypeError, ValueError):
+            bounds.append(default)
+    return bounds[0], bounds[1]
+
+
+def check_parameter_value(variable, value, where: str, fmu_name: str) -> None:
+    """Refuse a parameter value of the wrong kind, not finite, or outside the range the FMU declares.
+
+    Raises
+    ------
+    ScenarioError
+        ``<where>: ...`` naming the FMU variable, its type and its declared range.
+    """
+    kind = variable.type
+    if kind == "Boolean":
+        if not isinstance(value, bool):
+            raise ScenarioError(f"{where}: '{variable.name}' is a Boolean parameter of {fmu_name}, got {value!r}")
+        return
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ScenarioError(f"{where}: '{variable.name}' is a {kind} parameter of {fmu_name}, got {value!r}")
+    if not is_finite_number(value):
+        raise ScenarioError(f"{where}: '{variable.name}' must be a finite number, got {value!r}")
+    low, high = declared_range(variable)
+    if kind in ("Integer", "Enumeration") or kind.startswith(("Int", "UInt")):
+        if not isinstance(value, int):
+            raise ScenarioError(f"{where}: '{variable.name}' is an {kind} parameter of {fmu_name}, got {value!r}")
+        low, high = max(low, INT32_RANGE[0]), min(high, INT32_RANGE[1])
+    if not low <= value <= high:
+        raise ScenarioError(f"{where}: {value!r} is outside the range [{low:g}, {high:g}] that {fmu_name} declares "
+                            f"for '{variable.name}'")
+
+
 class FmuParticipant(Participant):
     """A co-simulation FMU (FMI 2.0 or 3.0) stepped through :class:`orchestrator.fmi_slave.FmiSlave`.
 
@@ -95,6 +142,7 @@ class FmuParticipant(Participant):
 
         self.fmu_path = Path(fmu_path)
         self.where = where
+        check_archive(self.fmu_path, f"{where}.fmu")  # before any entry is read: no zip bomb, no '../'
         try:
             self.model_description = read_model_description(str(self.fmu_path))
         except Exception as exc:  # fmpy raises plain exceptions for broken archives/XML
@@ -152,15 +200,15 @@ class FmuParticipant(Participant):
                     raise ScenarioError(f"{self.where}.parameters.{name}: '{name}' is {variable.type}, got a string")
             elif variable.type == "String":
                 raise ScenarioError(f"{self.where}.parameters.{name}: '{name}' is a String parameter")
+            else:
+                check_parameter_value(variable, value, f"{self.where}.parameters.{name}", self.fmu_path.name)
             values[name] = value
         return values
 
     # -- lifecycle -----------------------------------------------------------------------
     def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
-        from fmpy import extract
-
         self._unzip_dir = tempfile.mkdtemp(prefix=f"fmu-{self.name}-")
-        extract(str(self.fmu_path), self._unzip_dir)
+        extract_fmu(self.fmu_path, Path(self._unzip_dir), f"{self.where}.fmu")
         self._slave = FmiSlave(self.model_description, self._unzip_dir, self.name, self._on_message)
         self._slave.instantiate()
         self._call("EnterInitializationMode", self._slave.enter_initialization, start_time)
@@ -189,6 +237,11 @@ class FmuParticipant(Participant):
         if self._unzip_dir is not None:
             shutil.rmtree(self._unzip_dir, ignore_errors=True)
             self._unzip_dir = None
+
+    def remove_files(self) -> None:
+        """Remove the unpacked FMU without calling it (the process is ending with a call still in it)."""
+        if self._unzip_dir is not None:
+            shutil.rmtree(self._unzip_dir, ignore_errors=True)
 
     # -- helpers ---------------------------------------------------------------------------
     def _on_message(self, status: int, category: str, text: str) -> None:

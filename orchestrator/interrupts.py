@@ -57,7 +57,7 @@ class _State:
         self.deferring = 0
         self.installed = False
         self.grace_s = GRACE_S
-        self.emergency: list[Callable[[str], None]] = []
+        self.emergency: list[Callable[[str, str], None]] = []
         self.where: Callable[[], str] | None = None
         self.alarm_armed = False
 
@@ -100,8 +100,11 @@ def deferred() -> Iterator[None]:
 
 
 @contextlib.contextmanager
-def emergency_writer(write: Callable[[str], None]) -> Iterator[None]:
-    """Register ``write(reason)``, called by the watchdog before it ends the process."""
+def emergency_writer(write: Callable[[str, str], None]) -> Iterator[None]:
+    """Register ``write(reason, status)``, called by a watchdog before it ends the process.
+
+    ``status`` is ``"interrupted"`` here, ``"timed out"`` from :mod:`orchestrator.time_limits`.
+    """
     _state.emergency.append(write)
     try:
         yield
@@ -170,12 +173,17 @@ def _watch() -> None:
                     "the process was ended by the watchdog")
 
 
-def _emergency_exit(why: str) -> None:
+def write_emergency(why: str, status: str = "interrupted") -> None:
+    """Call the registered emergency writers (best effort: each failure is printed)."""
     for write in list(_state.emergency):
         try:
-            write(why)
+            write(why, status)
         except Exception as exc:  # best effort: the process ends either way
-            print(f"could not write the interrupted run's status: {exc}", file=sys.stderr, flush=True)
+            print(f"could not write the {status} run's status: {exc}", file=sys.stderr, flush=True)
+
+
+def _emergency_exit(why: str) -> None:
+    write_emergency(why)
     print(f"error: {why}", file=sys.stderr, flush=True)
     sys.stdout.flush()
     os._exit(EXIT_INTERRUPTED)

@@ -11,6 +11,7 @@ every m macro steps with a step of ``m * dt_s`` and holds its outputs in between
 from __future__ import annotations
 
 import importlib
+import json
 import logging
 import math
 import tempfile
@@ -22,11 +23,11 @@ from typing import Any
 
 import numpy as np
 
-from orchestrator import interrupts
-from orchestrator.errors import ModelError, ScenarioError, ToolchainError
+from orchestrator import interrupts, plugins, time_limits
+from orchestrator.errors import ModelError, ResultsError, ScenarioError, ToolchainError
 from orchestrator.participant import BuildContext, Participant, Value
 from orchestrator.recorder import Recorder
-from orchestrator.registry import PARTICIPANT_TYPES
+from orchestrator.results import json_default
 from orchestrator.scenario import Scenario
 
 log = logging.getLogger(__name__)
@@ -55,6 +56,11 @@ class CoSimulation:
     work_dir : Path, optional
         Where derived inputs (the FMU's met-ocean grid) are written; a temporary
         folder by default.
+
+    A scenario's domain table (``[metocean]``) is built by the class registered under its
+    name in the entry-point group ``rhnc_cosim.scenario_tables``; the object is handed to
+    every Python participant (``context.metocean``) and the files it writes replace their
+    placeholders in FMU parameters.
     """
 
     def __init__(self, scenario: Scenario, work_dir: Path | None = None) -> None:
@@ -64,20 +70,27 @@ class CoSimulation:
         self.scenario = scenario
         self._own_work_dir = work_dir is None
         self.work_dir = Path(tempfile.mkdtemp(prefix="rhnc-run-")) if work_dir is None else Path(work_dir)
+        try:
+            self._build_all(scenario)
+        except BaseException:  # a participant that fails to build leaves no temporary folder
+            self.close()
+            raise
+
+    def _build_all(self, scenario: Scenario) -> None:
         self.metocean = None
         substitutions = {}
         if scenario.metocean is not None:
-            from rhnc.metocean import MetOceanField
-
-            self.metocean = MetOceanField.from_scenario_table(
-                scenario.metocean, scenario.directory, f"{scenario.path}: metocean")
-            grid = self.metocean.write_fmu_grid(self.work_dir / "metocean.grid")
-            substitutions["metocean.grid"] = str(grid)
+            self.metocean = build_scenario_table("metocean", scenario.metocean, scenario.directory,
+                                                 f"{scenario.path}: metocean")
+            substitutions.update(self.metocean.write_fmu_files(self.work_dir))
         self.participants: list[Participant] = []
         self.every: dict[str, int] = {}
+        self.step_timeout_s: dict[str, float] = {}
         for spec in scenario.participants:
             self.participants.append(self._build(spec, substitutions))
             self.every[spec.name] = spec.every
+            self.step_timeout_s[spec.name] = (scenario.simulation.step_timeout_s if spec.step_timeout_s is None
+                                              else spec.step_timeout_s)
         self._check_connections()
         self._check_stop_conditions()
         by_name = {p.name: p for p in self.participants}
@@ -95,15 +108,7 @@ class CoSimulation:
 
             path = resolve_fmu(spec.fmu, self.scenario.directory, where, spec.fmi_version)
             return FmuParticipant(spec, path, where, substitutions)
-        if spec.type == "python":
-            target = spec.class_path
-        elif spec.type in PARTICIPANT_TYPES:
-            target = PARTICIPANT_TYPES[spec.type]
-        else:
-            raise ScenarioError(
-                f"{where}.type: unknown participant type '{spec.type}' "
-                f"(valid: {', '.join(sorted(PARTICIPANT_TYPES))}, python)"
-            )
+        target = participant_target(spec, where)
         cls = _import_class(target, f"{where}.class")
         context = BuildContext(
             where=where,
@@ -113,7 +118,16 @@ class CoSimulation:
             stop_time=self.scenario.simulation.stop_s,
             metocean=self.metocean,
         )
-        participant = cls.from_options(spec.name, spec.options, context)
+        try:
+            participant = cls.from_options(spec.name, spec.options, context)
+        except ToolchainError:
+            raise
+        except Exception as exc:  # the class's own check of its options, or its bug: one line
+            log.debug("from_options raised", exc_info=True)
+            raise ScenarioError(f"{where}: {target} could not be built from its options: "
+                                f"{type(exc).__name__}: {exc}") from exc
+        except SystemExit as exc:
+            raise ScenarioError(f"{where}: {target} called sys.exit({exc.code!r}) while being built") from exc
         if not isinstance(participant, Participant):
             raise ScenarioError(f"{where}: {target} does not build an orchestrator.participant.Participant")
         return participant
@@ -151,17 +165,22 @@ class CoSimulation:
         raise KeyError(name)
 
     # -- running -------------------------------------------------------------------------
-    def run(self, progress: bool = True, on_step: Callable[[int], None] | None = None) -> RunOutcome:
+    def run(self, progress: bool = True, on_step: Callable[[int], None] | None = None,
+            spool: Path | None = None) -> RunOutcome:
         """Set up, step and terminate every participant; never raises for a model failure.
 
         A failure inside the run (a model error, an FMU refusing a step, a participant
         raising) ends the run with status ``failed`` and a reason naming the participant;
         Ctrl-C or SIGTERM (see :mod:`orchestrator.interrupts`) end it with status
         ``interrupted``, checked between participant steps.  What was computed until then
-        stays in the recorder.
+        stays in the recorder, which writes its rows into ``spool`` as the run goes (see
+        :class:`~orchestrator.recorder.Recorder`; in memory without one).  A time series that
+        cannot be written (disk full) raises :class:`~orchestrator.errors.ResultsError` after
+        the participants are terminated.
         """
         sim = self.scenario.simulation
-        recorder = Recorder(sim.start_s, sim.dt_s, sim.steps)
+        recorder = Recorder(sim.start_s, sim.dt_s, sim.steps, spool=spool)
+        results_error = None
         self.recorder, self.steps_done = recorder, 0
         bus: dict[tuple[str, str], Value] = {}
         # per participant: (its input port, the bus key that drives it)
@@ -180,13 +199,16 @@ class CoSimulation:
         # Jacobi: outputs of a step from t reach the bus at t + step_size, as an FMI master
         # that steps all FMUs at once hands them on: (release step, participant, outputs)
         pending: list[tuple[int, str, dict]] = []
+        watch = time_limits.CallWatch(emergency=lambda why: interrupts.write_emergency(why, time_limits.TIMED_OUT))
+        limits = self.step_timeout_s
         try:
             with interrupts.reporting_position(position):
                 for participant in self.participants:  # set up completely: the record starts at t0
                     current[1] = participant.name
                     seen = {} if jacobi else bus
                     inputs = {port: seen[key] for port, key in inbound[participant.name] if key in seen}
-                    outputs = participant.setup(sim.start_s, inputs)
+                    with watch.call(participant.name, "set-up", sim.start_s, limits[participant.name]):
+                        outputs = participant.setup(sim.start_s, inputs)
                     self._publish(participant, sim.start_s, outputs, bus, recorder)
                 current[0] = "stepping"
                 for k in range(sim.steps):
@@ -204,7 +226,8 @@ class CoSimulation:
                         self._check_stop()
                         step_size = min(every, sim.steps - k) * sim.dt_s
                         inputs = {port: bus[key] for port, key in inbound[participant.name] if key in bus}
-                        outputs = participant.step(t, step_size, inputs)
+                        with watch.call(participant.name, "its step", t, limits[participant.name]):
+                            outputs = participant.step(t, step_size, inputs)
                         stamp = t + step_size if participant.outputs_at_step_end else t
                         if jacobi:
                             self._publish(participant, stamp, outputs, None, recorder)
@@ -212,6 +235,7 @@ class CoSimulation:
                         else:
                             self._publish(participant, stamp, outputs, bus, recorder)
                     steps_done = self.steps_done = k + 1
+                    recorder.advance(t)  # every participant due at t has stepped: the row of t is final
                     if bar is not None:
                         bar.update(1)
                     if on_step is not None:
@@ -225,30 +249,58 @@ class CoSimulation:
                 self._check_stop()
         except KeyboardInterrupt:
             status, reason = "interrupted", interrupts.reason()
+        except ResultsError as exc:  # the disk, not a participant: no run status can be written
+            status, reason, results_error = "failed", str(exc), exc
+        except time_limits.StepTimeout:
+            status, reason = time_limits.TIMED_OUT, watch.expired or "a participant call timed out"
         except ToolchainError as exc:
             status, reason = "failed", _naming(str(exc), current[1])
+        except SystemExit as exc:  # sys.exit() in a participant ends the run, not the process
+            status, reason = "failed", _naming(f"called sys.exit({exc.code!r})", current[1])
         except Exception as exc:  # a participant's own bug must still leave the results
             log.debug("participant raised", exc_info=True)
             status, reason = "failed", _naming(f"{type(exc).__name__}: {exc}", current[1])
         finally:
+            watch.close()
             interrupts.acknowledge()
             if bar is not None:
                 bar.close()
-            for participant in self.participants:
-                participant.terminate()
         if status == "failed" and interrupts.stop_requested():
             # a library turned the interrupt into an error of its own
             status, reason = "interrupted", interrupts.reason()
+        problems = self._terminate_all()
+        if results_error is not None:
+            raise results_error
         summaries, tables = {}, {}
         for participant in self.participants:
             try:
-                summaries[participant.name] = participant.summary()
+                summary = participant.summary()
+                json.dumps(summary, default=json_default)  # what summary.json will hold
+                summaries[participant.name] = summary
                 for table, rows in participant.tables().items():
                     tables[f"{participant.name}_{table}"] = rows
-            except Exception as exc:  # a summary must not hide the run's own outcome
-                summaries[participant.name] = {"error": f"{type(exc).__name__}: {exc}"}
+            except (Exception, SystemExit) as exc:  # a summary must not hide the run's own outcome
+                text = (f"its summary cannot be written to JSON ({exc})" if isinstance(exc, TypeError)
+                        else f"summary raised {type(exc).__name__}: {exc}")
+                summaries[participant.name] = {"error": text}
+                problems.append(f"{participant.name}: {text}")
+        if problems:
+            log.warning("after the run: %s", "; ".join(problems))
+            if status == "finished":
+                status, reason = "failed", "; ".join(problems)
         return RunOutcome(status, reason, steps_done, wallclock.perf_counter() - started, recorder, summaries,
                           tables)
+
+    def _terminate_all(self) -> list[str]:
+        """Terminate every participant (also after a failure); returns what went wrong."""
+        problems = []
+        for participant in self.participants:
+            try:
+                participant.terminate()
+            except (Exception, SystemExit) as exc:  # the other participants are terminated all the same
+                log.debug("terminate raised", exc_info=True)
+                problems.append(f"{participant.name}: terminate() raised {type(exc).__name__}: {exc}")
+        return problems
 
     @staticmethod
     def _check_stop() -> None:
@@ -268,6 +320,15 @@ class CoSimulation:
             if bus is not None:
                 bus[(name, port)] = value
         recorder.add(name, stamp, outputs)
+
+    def remove_files(self) -> None:
+        """The process is ending with a participant call that never returned: remove the temporary
+        folders (the work folder, unpacked FMUs) without calling any participant."""
+        for participant in getattr(self, "participants", ()):
+            remove = getattr(participant, "remove_files", None)
+            if remove is not None:
+                remove()
+        self.close()
 
     def close(self) -> None:
         """Remove the temporary work folder (if the master made it)."""
@@ -290,6 +351,30 @@ def _finite(value) -> bool:
     if isinstance(value, np.ndarray):
         return bool(np.all(np.isfinite(value)))
     return math.isfinite(float(value))
+
+
+def participant_target(spec, where: str) -> str:
+    """``module:Class`` of a Python participant: its ``class`` for ``type = "python"``, else the
+    entry registered under its type in ``rhnc_cosim.participants``."""
+    if spec.type == "python":
+        return spec.class_path
+    types = plugins.names("participants")
+    if spec.type not in types:
+        raise ScenarioError(
+            f"{where}.type: unknown participant type '{spec.type}' "
+            f"(valid: {', '.join(sorted(types))}, python)"
+        )
+    return plugins.target("participants", spec.type)
+
+
+def build_scenario_table(name: str, table: dict, scenario_dir: Path, where: str):
+    """The object a registered package builds from a scenario's top-level table ``name``."""
+    try:
+        handler = plugins.load("scenario_tables", name)
+    except KeyError:
+        raise ScenarioError(f"{where}: no installed package handles a [{name}] table (entry-point group "
+                            f"{plugins.GROUPS['scenario_tables']})") from None
+    return handler.from_scenario_table(table, scenario_dir, where)
 
 
 def _import_class(target: str, where: str):

@@ -24,11 +24,12 @@ goes through the master's connections.
 from __future__ import annotations
 
 import abc
-import math
 from collections.abc import Mapping, Sequence
 from typing import Any, Union
 
 import numpy as np
+
+from orchestrator.toml_input import checked, is_finite_number  # noqa: F401 (part of the participant interface)
 
 Value = Union[float, np.ndarray]
 
@@ -89,14 +90,6 @@ class Participant(abc.ABC):
         return {}
 
 
-def is_finite_number(value) -> bool:
-    """True for a finite int or float that is not a bool: what every numeric option must be.
-
-    (TOML's ``true`` is a Python bool, itself an int subclass, so it must be excluded.)
-    """
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-
-
 def reject_unknown_options(options: Mapping[str, Any], allowed: Sequence[str], where: str) -> None:
     """Raise ``ScenarioError`` naming the first option key not in ``allowed``.
 
@@ -109,6 +102,28 @@ def reject_unknown_options(options: Mapping[str, Any], allowed: Sequence[str], w
             raise ScenarioError(
                 f"{where}: unknown option '{key}' (valid: {', '.join(sorted(allowed))})"
             )
+
+
+def check_options(model, options: Mapping[str, Any], where: str):
+    """``options`` validated by ``model``, a pydantic model (usually derived from
+    :class:`orchestrator.toml_input.TomlTable`: unknown keys forbidden, strict types).
+
+    The way a participant type (built-in or a user's own) declares its options: one model
+    in place of hand-written checks, and every problem one :class:`ScenarioError` line
+    ``<scenario file>: 'participants.<name>.options.<key>' ...``.
+
+    Parameters
+    ----------
+    model : type
+        The options model.
+    options : mapping
+        ``[participants.<name>.options]``.
+    where : str
+        ``BuildContext.where`` (``"<scenario file>: participants.<name>"``).
+    """
+    file, _, table = where.rpartition(": ")
+    prefix = tuple(table.split(".")) + ("options",) if file else ("options",)
+    return checked(model, dict(options), file or where, prefix)
 
 
 class BuildContext:
@@ -124,8 +139,10 @@ class BuildContext:
         This participant's communication step [s] (``every`` times the macro step).
     start_time, stop_time : float
         Simulation interval [s].
-    metocean : rhnc.metocean.MetOceanField or None
-        The scenario's one met-ocean source (same data the environment FMU reads).
+    metocean : object or None
+        What the package registered for the scenario's ``[metocean]`` table built from it
+        (``rhnc_cosim.scenario_tables``): the one met-ocean source, the same data the
+        environment FMU reads.
     """
 
     def __init__(self, where, scenario_dir, step_size, start_time, stop_time, metocean=None):

@@ -1,14 +1,19 @@
-"""The canonical plant ports: causality, SI unit and the initial-condition keys.
+"""Canonical plant ports: what a port table declares, and the table the installed domain registers.
 
-This small table is the only ship knowledge the FMU mapping needs.  Every canonical port
-carries SI values on the co-simulation bus; a mapped FMU variable is converted to (and from)
-the port's unit by :mod:`orchestrator.port_mapping`.
+A *port table* names the canonical ports of a plant (causality, SI unit), the output angles
+to wrap, the vector inputs an FMU may take in another form and the ``[participants.<plant>.initial]``
+keys.  Every canonical port carries SI values on the co-simulation bus; a mapped FMU
+variable is converted to (and from) the port's unit by :mod:`orchestrator.port_mapping`.
+The master knows no plant: the table comes from the entry-point group
+``rhnc_cosim.port_tables`` (the ship domain registers the ship's, ``rhnc/cosim/plant_ports.py``)
+and is read here as ``PLANT_PORTS``, ``WRAPPED_OUTPUTS``, ``VECTOR_PORTS`` and ``INITIAL_KEYS``.
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
+import functools
+from dataclasses import dataclass, field
+
 
 #: Order of the exponents of a dimension: the seven SI base units and the radian, as in the
 #: ``BaseUnit`` element of an FMI 2.0 modelDescription.
@@ -26,6 +31,10 @@ ANGLE = dimension(rad=1)
 ANGULAR_RATE = dimension(rad=1, s=-1)
 FORCE = dimension(kg=1, m=1, s=-2)
 MOMENT = dimension(kg=1, m=2, s=-2)
+POWER = dimension(kg=1, m=2, s=-3)
+#: revolutions per second: a frequency; a unit of angle per time (pint's ``rpm``, ``rad/s``)
+#: is accepted for it and divided by 2 pi rad per revolution
+FREQUENCY = dimension(s=-1)
 
 
 @dataclass(frozen=True)
@@ -40,11 +49,15 @@ class PlantPort:
         Exponents over :data:`BASE_UNITS`; the port's value is in the SI unit of it.
     si_unit : str
         That unit's name, for messages.
+    revolutions : bool
+        A rate of revolutions (1/s): a unit of angle per time (``rpm``, ``rad/s``) is
+        converted at 2 pi rad per revolution.
     """
 
     causality: str
     dimension: tuple[int, ...]
     si_unit: str
+    revolutions: bool = False
 
     @property
     def is_angle(self) -> bool:
@@ -52,47 +65,44 @@ class PlantPort:
         return self.dimension[BASE_UNITS.index("rad")] != 0
 
 
-PLANT_PORTS: dict[str, PlantPort] = {
-    "x": PlantPort("output", LENGTH, "m"),
-    "y": PlantPort("output", LENGTH, "m"),
-    "psi": PlantPort("output", ANGLE, "rad"),
-    "u": PlantPort("output", SPEED, "m/s"),
-    "v": PlantPort("output", SPEED, "m/s"),
-    "r": PlantPort("output", ANGULAR_RATE, "rad/s"),
-    "sog": PlantPort("output", SPEED, "m/s"),
-    "cog": PlantPort("output", ANGLE, "rad"),
-    "tau_u": PlantPort("input", FORCE, "N"),
-    "tau_r": PlantPort("input", MOMENT, "N.m"),
-    "current_north": PlantPort("input", SPEED, "m/s"),
-    "current_east": PlantPort("input", SPEED, "m/s"),
-    "wind_speed": PlantPort("input", SPEED, "m/s"),
-    "wind_direction": PlantPort("input", ANGLE, "rad"),
-    "hs": PlantPort("input", LENGTH, "m"),
-}
+@dataclass(frozen=True)
+class PortTable:
+    """The canonical ports of a plant and how scenarios address them.
 
-#: Output angles reported in (-pi, pi] whatever range the FMU uses (compass 0-360 deg).
-WRAPPED_OUTPUTS = ("psi", "cog")
+    Attributes
+    ----------
+    ports : dict of str to PlantPort
+        Canonical port name -> causality and SI unit.
+    wrapped_outputs : tuple of str
+        Output angles reported in (-pi, pi] whatever range the FMU uses.
+    vector_ports : dict
+        Vector inputs an FMU may take in another form: name -> (form, first port, second
+        port); ``cartesian`` (north and east components) or ``polar_from`` (a speed and the
+        direction it comes from, clockwise from north).
+    initial_keys : dict
+        ``[participants.<plant>.initial]`` keys -> (canonical port, factor to its SI unit).
+    """
 
-#: Vector inputs an FMU may take in another form than the canonical ports give them:
-#: name -> (form of the canonical ports, first port, second port).  ``cartesian``: north and
-#: east components of a velocity; ``polar_from``: a speed and the direction it comes from
-#: (meteorological wind), clockwise from north.
-VECTOR_PORTS = {
-    "current": ("cartesian", "current_north", "current_east"),
-    "wind": ("polar_from", "wind_speed", "wind_direction"),
-}
+    ports: dict[str, PlantPort] = field(default_factory=dict)
+    wrapped_outputs: tuple[str, ...] = ()
+    vector_ports: dict[str, tuple[str, str, str]] = field(default_factory=dict)
+    initial_keys: dict[str, tuple[str, float]] = field(default_factory=dict)
 
-KNOT = 1852.0 / 3600.0
-NM = 1852.0
-DEG = math.pi / 180.0
 
-#: ``[participants.<plant>.initial]`` keys: the canonical port they set and the factor
-#: to the port's SI unit.
-INITIAL_KEYS = {
-    "x_m": ("x", 1.0), "x_nm": ("x", NM),
-    "y_m": ("y", 1.0), "y_nm": ("y", NM),
-    "psi_rad": ("psi", 1.0), "psi_deg": ("psi", DEG),
-    "u_mps": ("u", 1.0), "u_kn": ("u", KNOT),
-    "v_mps": ("v", 1.0), "v_kn": ("v", KNOT),
-    "r_rad_s": ("r", 1.0), "r_deg_s": ("r", DEG), "r_deg_min": ("r", DEG / 60.0),
-}
+@functools.lru_cache(maxsize=None)
+def port_table() -> PortTable:
+    """The registered port table (the first by name); an empty one when none is installed."""
+    from orchestrator import plugins
+
+    names = plugins.names("port_tables")
+    return plugins.load("port_tables", names[0]) if names else PortTable()
+
+
+_TABLE_ATTRIBUTES = {"PLANT_PORTS": "ports", "WRAPPED_OUTPUTS": "wrapped_outputs",
+                     "VECTOR_PORTS": "vector_ports", "INITIAL_KEYS": "initial_keys"}
+
+
+def __getattr__(name: str):
+    if name in _TABLE_ATTRIBUTES:
+        return getattr(port_table(), _TABLE_ATTRIBUTES[name])
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -24,9 +24,10 @@ import math
 from collections.abc import Mapping
 
 from orchestrator.errors import FmuError, ScenarioError
-from orchestrator.plant_ports import DEG, INITIAL_KEYS, PLANT_PORTS, VECTOR_PORTS, WRAPPED_OUTPUTS
+from orchestrator.geometry import DEG
+from orchestrator.plant_ports import ANGULAR_RATE, INITIAL_KEYS, PLANT_PORTS, VECTOR_PORTS, WRAPPED_OUTPUTS
 from orchestrator.scenario import ParticipantSpec, VariableMapping, VectorMapping
-from orchestrator.units import UnitParseError, declared_unit, describe_dimension, resolve_unit
+from orchestrator.units import SiUnit, UnitParseError, declared_unit, describe_dimension, resolve_unit
 
 log = logging.getLogger(__name__)
 
@@ -144,6 +145,9 @@ def scalar_conversion(port: str, entry: VariableMapping, variable, model_descrip
         except UnitParseError as exc:
             raise _fail(where, f"FMU variable '{variable.name}': {exc}") from None
     if spec is not None:
+        if si is not None and spec.revolutions and si.dimension == ANGULAR_RATE:
+            # rpm, rad/s: 2 pi rad per revolution
+            si = SiUnit(si.name, si.factor / (2.0 * math.pi), si.offset / (2.0 * math.pi), spec.dimension)
         if si is not None and si.dimension != spec.dimension:
             raise _fail(where, f"port '{port}' is in {spec.si_unit} but FMU variable '{variable.name}' is in "
                                f"'{unit_name}' ({describe_dimension(si.dimension)}): not convertible")

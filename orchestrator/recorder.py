@@ -1,15 +1,42 @@
-"""Records every participant output on the macro-step time grid.
+"""Records every participant output on the macro-step time grid, streamed to Parquet as the run goes.
 
 Each output carries the time it describes (see :mod:`orchestrator.participant`).  The
 time series has one row per communication point; a participant's value in a row is its
 latest output at or before that time (zero-order hold, as the master exchanges it).
 Array outputs become one column per element: ``nav.reference[3,1]``.
+
+A row is final once the master has stepped every participant due at its time: a later
+step only produces outputs stamped later.  The master then calls :meth:`Recorder.advance`
+and the row joins a buffer; every :data:`CHUNK_ROWS` rows the buffer is written as one
+complete Parquet part into the spool folder, so the memory a run holds does not grow with
+its length and what was written can be read back at any time (a watchdog's emergency
+write).  :meth:`Recorder.write_parquet` merges the parts into one file, one row group per
+part, under one schema: a column that appears late (a participant that only starts giving
+an output after a while) is NaN in the rows before.  Without a spool folder the rows stay
+in memory (tests, benchmarks).
+
+:class:`ColumnFrame` reads a Parquet time series one column at a time: what the analyses
+and figures get, so that they, too, hold only the columns they use.
 """
 
 from __future__ import annotations
 
+import errno
+import logging
+import shutil
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
+
+from orchestrator.errors import ResultsError
+
+log = logging.getLogger(__name__)
+
+#: Rows per Parquet row group written during the run.
+CHUNK_ROWS = 512
+#: Decimal places of the grid times (float stamps meet the grid).
+TIME_DECIMALS = 6
 
 
 class Recorder:
@@ -21,14 +48,29 @@ class Recorder:
         Start time and macro step [s].
     steps : int
         Number of macro steps planned.
+    spool : Path, optional
+        Folder for the Parquet parts written during the run (created when needed); None
+        keeps every row in memory.
+    chunk_rows : int
+        Rows per row group.
     """
 
-    def __init__(self, start_s: float, dt_s: float, steps: int) -> None:
+    def __init__(self, start_s: float, dt_s: float, steps: int, spool: Path | None = None,
+                 chunk_rows: int = CHUNK_ROWS) -> None:
         self.start_s = start_s
         self.dt_s = dt_s
         self.steps = steps
-        self._rows: dict[str, list[tuple[float, dict[str, float]]]] = {}
+        self.spool = None if spool is None else Path(spool)
+        self.chunk_rows = chunk_rows
+        self._pending: list[tuple[float, dict[str, float]]] = []  # outputs not yet in a row, in order
+        self._held: dict[str, float] = {}  # the latest value of every column applied to the rows
+        self._latest = start_s  # latest time any output describes
+        self._columns: list[str] = ["time_s"]
+        self._rows: list[list[float]] = []  # emitted rows not yet written (all rows without a spool)
+        self._emitted = 0  # grid rows emitted so far
+        self._parts: list[Path] = []  # complete Parquet files of CHUNK_ROWS rows each
 
+    # -- the master's side -------------------------------------------------------------------
     def add(self, participant: str, time_s: float, outputs) -> None:
         flat = {}
         for port, value in outputs.items():
@@ -42,28 +84,191 @@ class Recorder:
                     flat[f"{column}[{','.join(map(str, index))}]"] = float(value[index])
             else:
                 flat[column] = float(value)
-        self._rows.setdefault(participant, []).append((time_s, flat))
+        stamp = round(float(time_s), TIME_DECIMALS)
+        self._pending.append((stamp, flat))
+        self._latest = max(self._latest, stamp)
+
+    @property
+    def buffered_rows(self) -> int:
+        """Rows emitted but not yet written (at most ``chunk_rows`` with a spool)."""
+        return len(self._rows)
 
     def last_time(self) -> float:
         """Latest time any output describes [s]."""
-        times = [rows[-1][0] for rows in self._rows.values() if rows]
-        return max(times) if times else self.start_s
+        return self._latest
 
-    def to_frame(self, until_s: float | None = None) -> pd.DataFrame:
-        """The time series as a DataFrame with a ``time_s`` column.
+    def advance(self, until_s: float) -> None:
+        """Every participant due up to ``until_s`` has stepped: the rows up to it are final."""
+        count = int(np.floor((until_s - self.start_s) / self.dt_s + 1e-9)) + 1
+        while self._emitted < count:
+            grid = round(self.start_s + self.dt_s * self._emitted, TIME_DECIMALS)
+            keep = []
+            for stamp, flat in self._pending:
+                if stamp <= grid:
+                    for column in flat:
+                        if column not in self._held:
+                            self._columns.append(column)
+                    self._held.update(flat)
+                else:
+                    keep.append((stamp, flat))
+            self._pending = keep
+            self._held["time_s"] = grid
+            self._rows.append([self._held.get(column, np.nan) for column in self._columns])
+            self._emitted += 1
+            if self.spool is not None and len(self._rows) >= self.chunk_rows:
+                self._flush()
 
-        Rows cover the communication points up to ``until_s`` (default: the latest
-        recorded time).
-        """
-        until = self.last_time() if until_s is None else until_s
-        count = int(np.floor((until - self.start_s) / self.dt_s + 1e-9)) + 1
-        grid = np.round(self.start_s + self.dt_s * np.arange(max(count, 1)), 6)
-        frame = pd.DataFrame({"time_s": grid})
-        for participant, rows in self._rows.items():
-            times = np.round(np.array([time for time, _ in rows]), 6)  # float stamps meet the grid
-            part = pd.DataFrame([values for _, values in rows])
-            part.insert(0, "time_s", times)
-            # keep the last record for a time (a step's outputs replace set-up outputs)
-            part = part.drop_duplicates("time_s", keep="last").sort_values("time_s")
-            frame = pd.merge_asof(frame, part, on="time_s", direction="backward", tolerance=None)
-        return frame
+    def finish(self) -> None:
+        """Emit the rows up to the latest output and write what is buffered (with a spool)."""
+        self.advance(self._latest)
+        if self.spool is not None:
+            self._flush()
+
+    # -- reading back ------------------------------------------------------------------------------
+    def to_frame(self) -> pd.DataFrame:
+        """The whole time series as a DataFrame (short runs, emergency writes: it is all in memory)."""
+        frames = [pd.read_parquet(part) for part in self._parts]
+        frames.append(self._buffered_frame())
+        frames = [frame for frame in frames if len(frame)] or frames[-1:]
+        frame = frames[0] if len(frames) == 1 else pd.concat(frames, ignore_index=True)
+        return frame.reindex(columns=self._columns)
+
+    def write_parquet(self, target: Path) -> None:
+        """Write the time series to ``target`` (after :meth:`finish`): one file, one schema."""
+        if self.spool is None:
+            self.to_frame().to_parquet(target, index=False)
+            return
+        self._guard(lambda: self._merge_parts(target), target)
+
+    def write_csv(self, target: Path) -> None:
+        """Write the time series to ``target`` as CSV, one spool part at a time (after :meth:`finish`)."""
+        if self.spool is None:
+            self.to_frame().to_csv(target, index=False)
+            return
+
+        def write() -> None:
+            header = True
+            for part in self._parts:
+                chunk = pd.read_parquet(part).reindex(columns=self._columns)
+                chunk.to_csv(target, index=False, header=header, mode="w" if header else "a")
+                header = False
+            if header:
+                pd.DataFrame(columns=self._columns).to_csv(target, index=False)
+
+        self._guard(write, target)
+
+    def discard_spool(self) -> None:
+        """Remove the spool folder (its parts were merged, or are not wanted)."""
+        if self.spool is not None:
+            shutil.rmtree(self.spool, ignore_errors=True)
+
+    # -- writing ---------------------------------------------------------------------------------
+    def _buffered_frame(self) -> pd.DataFrame:
+        width = len(self._columns)
+        rows = [row + [np.nan] * (width - len(row)) for row in self._rows]
+        return pd.DataFrame(rows, columns=self._columns, dtype=float)
+
+    def _flush(self) -> None:
+        """Write the buffered rows as one complete Parquet part (readable at once, even mid-run)."""
+        if not self._rows:
+            return
+
+        def write() -> None:
+            self.spool.mkdir(parents=True, exist_ok=True)
+            part = self.spool / f"part-{len(self._parts):05d}.parquet"
+            self._buffered_frame().to_parquet(part, index=False)
+            self._parts.append(part)
+            self._rows = []
+
+        self._guard(write, self.spool)
+
+    def _merge_parts(self, target: Path) -> None:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        schema = pa.schema([pa.field(column, pa.float64()) for column in self._columns])
+        with pq.ParquetWriter(target, schema) as writer:
+            for part in self._parts:
+                table = pq.read_table(part)
+                columns = [table.column(name) if name in table.column_names
+                           else pa.array(np.full(table.num_rows, np.nan)) for name in self._columns]
+                writer.write_table(pa.Table.from_arrays(columns, schema=schema))
+
+    @staticmethod
+    def _guard(write, where: Path):
+        """Run ``write``; a full disk or an unwritable folder becomes a :class:`ResultsError`."""
+        try:
+            return write()
+        except OSError as exc:
+            reason = "the disk is full" if exc.errno in (errno.ENOSPC, errno.EDQUOT) else (exc.strerror or str(exc))
+            raise ResultsError(f"{where}: the time series could not be written ({reason})") from exc
+
+
+class ColumnFrame:
+    """A Parquet time series read one column at a time, with the DataFrame access analyses use.
+
+    Supports ``frame.columns``, ``len(frame)``, ``name in frame.columns``, ``frame[name]``
+    and ``frame.get(name, default)`` (a :class:`pandas.Series`), ``frame[[a, b]]`` (a
+    DataFrame of those columns) and ``frame.iloc[a:b]`` (a view of those rows), each reading
+    only what it needs.  Any other DataFrame attribute reads the whole series once and
+    answers from it; :meth:`to_pandas` reads it all.
+    """
+
+    def __init__(self, path: Path, rows: slice = slice(None)) -> None:
+        import pyarrow.parquet as pq
+
+        self.path = Path(path)
+        self._file = pq.ParquetFile(self.path)
+        self.columns = pd.Index(self._file.schema_arrow.names)
+        self._rows = rows
+        self._count = len(range(self._file.metadata.num_rows)[rows])
+        self._whole: pd.DataFrame | None = None
+
+    def __len__(self) -> int:
+        return self._count
+
+    def __getitem__(self, name):
+        if isinstance(name, list):  # several columns: a DataFrame of those only
+            missing = [column for column in name if column not in self.columns]
+            if missing:
+                raise KeyError(missing)
+            return self._file.read(columns=name).to_pandas().iloc[self._rows].reset_index(drop=True)
+        if not isinstance(name, str) or name not in self.columns:
+            raise KeyError(name)
+        values = self._file.read(columns=[name]).column(0).to_numpy()[self._rows]
+        return pd.Series(values, name=name)
+
+    def __getattr__(self, name: str):
+        """Any other DataFrame attribute: the whole series is read once (for analyses written
+        against a DataFrame; they then hold it all, as before streaming)."""
+        if name.startswith("_"):
+            raise AttributeError(name)
+        log.debug("analysis used DataFrame.%s: reading the whole time series %s", name, self.path)
+        if self._whole is None:
+            self._whole = self.to_pandas()
+        return getattr(self._whole, name)
+
+    def __contains__(self, name: str) -> bool:
+        return name in self.columns
+
+    def get(self, name: str, default=None):
+        """``frame[name]``, or ``default`` for a column the series does not have."""
+        return self[name] if isinstance(name, str) and name in self.columns else default
+
+    @property
+    def iloc(self) -> "_RowSlicer":
+        return _RowSlicer(self)
+
+    def to_pandas(self) -> pd.DataFrame:
+        return self._file.read().to_pandas().iloc[self._rows].reset_index(drop=True)
+
+
+class _RowSlicer:
+    def __init__(self, frame: ColumnFrame) -> None:
+        self._frame = frame
+
+    def __getitem__(self, rows):
+        if not isinstance(rows, slice):  # a row, or rows by position: as a DataFrame would give them
+            return self._frame.to_pandas().iloc[rows]
+        span = range(self._frame._file.metadata.num_rows)[self._frame._rows][rows]
+        return ColumnFrame(self._frame.path, slice(span.start, span.stop, span.step))

@@ -26,6 +26,8 @@ import shutil
 from pathlib import Path
 from typing import Any
 
+from orchestrator.errors import ResultsError
+
 log = logging.getLogger(__name__)
 
 
@@ -64,7 +66,11 @@ class RunFolder:
     def __init__(self, results_root: Path, scenario_name: str, run_id: str) -> None:
         self.final = Path(results_root) / scenario_name / run_id
         self.staging = self.final.parent / f".{run_id}.{os.getpid()}-{secrets.token_hex(4)}.partial"
-        self.staging.mkdir(parents=True, exist_ok=False)
+        try:
+            self.staging.mkdir(parents=True, exist_ok=False)
+        except OSError as exc:
+            raise ResultsError(f"{self.final.parent}: cannot write results here: "
+                               f"{exc.strerror or exc}") from exc
 
     def path(self, name: str) -> Path:
         """Where to write ``name`` while staging."""
@@ -72,7 +78,7 @@ class RunFolder:
 
     def write_json(self, name: str, data: dict[str, Any]) -> Path:
         target = self.path(name)
-        target.write_text(json.dumps(data, indent=2, sort_keys=False, default=_json_default) + "\n")
+        target.write_text(json.dumps(data, indent=2, sort_keys=False, default=json_default) + "\n")
         return target
 
     def publish(self) -> Path:
@@ -103,12 +109,47 @@ class RunFolder:
 
 
 def stale_staging(parent: Path, run_id: str) -> list[Path]:
-    """Staging folders of ``run_id`` under ``parent`` (left by a crashed or killed attempt)."""
+    """Staging folders of ``run_id`` under ``parent`` left by an attempt whose process has ended.
+
+    A staging folder belongs to the attempt that made it (its name holds the process id): one
+    whose process is still alive is never returned, so clearing stale folders never deletes
+    the files of another attempt that is still writing.
+    """
     parent = Path(parent)
-    return sorted({*parent.glob(f".{run_id}.*.partial"), *parent.glob(f".{run_id}.partial")})
+    found = sorted({*parent.glob(f".{run_id}.*.partial"), *parent.glob(f".{run_id}.partial")})
+    return [path for path in found if not _owner_alive(path, run_id)]
 
 
-def _json_default(value):
+def _owner_alive(staging: Path, run_id: str) -> bool:
+    """The process named in ``.<run-id>.<pid>-<token>.partial`` is still running (not this one's orphan)."""
+    middle = staging.name[len(run_id) + 2:-len(".partial")]
+    pid_text = middle.split("-", 1)[0]
+    if not pid_text.isdigit():
+        return False
+    pid = int(pid_text)
+    if pid == os.getpid():
+        return False  # an attempt of this process that ended without publishing
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True  # another user's process
+    return not _is_zombie(pid)
+
+
+def _is_zombie(pid: int) -> bool:
+    """The process has ended but nobody has reaped it (a container whose first process does
+    not reap orphans keeps a killed worker so): it will never write again."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return False  # no /proc (not Linux): the signal check above is all there is
+    return state == "Z"
+
+
+def json_default(value):
+    """JSON for numpy numbers and arrays and paths; anything else is refused (TypeError)."""
     import numpy as np
 
     if isinstance(value, np.generic):

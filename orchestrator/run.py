@@ -11,12 +11,16 @@ from typing import Any
 import pandas as pd
 
 from orchestrator import acceptance, interrupts
-from orchestrator.errors import ToolchainError
+from orchestrator.errors import ResultsError, ToolchainError
 from orchestrator.master import CoSimulation
+from orchestrator.recorder import ColumnFrame
 from orchestrator.results import RunFolder, new_run_id, versions
 from orchestrator.scenario import Scenario, load_scenario
 
 log = logging.getLogger(__name__)
+
+#: Folder in the staging folder where the time series is written during the run (removed on publish).
+SPOOL = ".timeseries-spool"
 
 
 @dataclass
@@ -65,10 +69,17 @@ def run_scenario(path, results_root="results", progress: bool = True, run_id: st
         cosim.close()
         raise
     try:
-        with interrupts.emergency_writer(lambda why: _write_interrupted(scenario, cosim, folder, overrides, why)):
-            outcome = cosim.run(progress=progress)
+        with interrupts.emergency_writer(
+                lambda why, status: _write_emergency(scenario, cosim, folder, overrides, why, status)):
+            outcome = cosim.run(progress=progress, spool=folder.path(SPOOL))
             with interrupts.deferred():
-                report = _write(scenario, cosim, outcome, folder, overrides)
+                try:
+                    report = _write(scenario, cosim, outcome, folder, overrides)
+                except OSError as exc:  # disk full, folder removed: keep nothing half-written
+                    raise ResultsError(
+                        f"{folder.final}: the results could not be written ({exc.strerror or exc}); nothing was "
+                        f"kept (the run itself: {outcome.status}"
+                        f"{', ' + outcome.reason if outcome.reason else ''})") from exc
     except BaseException:
         folder.discard()
         raise
@@ -77,32 +88,40 @@ def run_scenario(path, results_root="results", progress: bool = True, run_id: st
     return report
 
 
-def _write_interrupted(scenario: Scenario, cosim: CoSimulation, folder: RunFolder, overrides, why: str) -> None:
-    """What the watchdog keeps of a run whose participant did not return: status and time series."""
+def _write_emergency(scenario: Scenario, cosim: CoSimulation, folder: RunFolder, overrides, why: str,
+                     status: str) -> None:
+    """What a watchdog keeps of a run whose participant did not return: status and time series."""
     sim = scenario.simulation
     recorder = getattr(cosim, "recorder", None)
     if recorder is not None:
-        recorder.to_frame().to_csv(folder.path("timeseries.csv"), index=False)
+        recorder.finish()  # the call in progress never returns: the rows up to the latest output are final
+        recorder.write_csv(folder.path("timeseries.csv"))
+        recorder.discard_spool()
     folder.write_json("summary.json", {
         "scenario": str(scenario.path), "scenario_name": sim.name, "scenario_sha256": scenario.sha256,
-        "overrides": dict(overrides or {}), "run_id": folder.final.name, "status": "interrupted",
+        "overrides": dict(overrides or {}), "run_id": folder.final.name, "status": status,
         "reason": why, "versions": versions(),
         "simulation": {"start_s": sim.start_s, "stop_s": sim.stop_s, "dt_s": sim.dt_s,
                        "steps_planned": sim.steps, "steps_done": getattr(cosim, "steps_done", 0)},
         "timeseries": "timeseries.csv" if recorder is not None else None,
         "analyses": {}, "participants": {}})
-    print(f"interrupted: results in {folder.publish()}", flush=True)
+    print(f"{status}: results in {folder.publish()}", flush=True)
+    cosim.remove_files()  # the process ends next: no temporary folder may outlive the run
 
 
 def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, overrides) -> RunReport:
     from orchestrator import analyses
 
-    frame = outcome.recorder.to_frame()
+    recorder = outcome.recorder
+    recorder.finish()
     series_name = "timeseries.parquet" if scenario.outputs.format == "parquet" else "timeseries.csv"
     if scenario.outputs.format == "parquet":
-        frame.to_parquet(folder.path(series_name), index=False)
-    else:
-        frame.to_csv(folder.path(series_name), index=False)
+        recorder.write_parquet(folder.path(series_name))
+        frame = ColumnFrame(folder.path(series_name))
+    else:  # CSV for the user; the analyses read the spool merged into a Parquet file, removed below
+        recorder.write_csv(folder.path(series_name))
+        recorder.write_parquet(folder.path(SPOOL) / "merged.parquet")
+        frame = ColumnFrame(folder.path(SPOOL) / "merged.parquet")
     if cosim.metocean is not None:
         cosim.metocean.to_netcdf(folder.path("metocean.nc"))
     for name, rows in outcome.participant_tables.items():
@@ -115,10 +134,12 @@ def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, 
             continue
         try:
             figures[name] = analyses.run_analysis(name, frame, scenario, cosim, folder.staging)
-        except ToolchainError as exc:
-            figures[name] = {"error": str(exc)}
+        except Exception as exc:  # an analysis of a failed run's partial series, or its own bug
+            text = str(exc) if isinstance(exc, ToolchainError) else f"{type(exc).__name__}: {exc}"
+            log.debug("analysis '%s' raised", name, exc_info=True)
+            figures[name] = {"error": text}
             if status == "finished":
-                status, reason = "failed", f"analysis '{name}': {exc}"
+                status, reason = "failed", f"analysis '{name}': {text}"
     figure_files, figure_errors = [], {}
     for name in scenario.outputs.figures if outcome.steps_done else ():
         try:
@@ -155,6 +176,7 @@ def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, 
             "criteria": [{"name": v.name, "criterion": c.describe(), "passed": v.passed, "value": v.value,
                           "reason": v.reason} for v, c in zip(verdicts, scenario.acceptance)]}
     folder.write_json("summary.json", summary)
+    recorder.discard_spool()
     final = folder.publish()
     return RunReport(final, status, reason, summary)
 

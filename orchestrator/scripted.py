@@ -19,15 +19,71 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from typing import Annotated, Any
+
+from pydantic import PlainValidator, model_validator
 
 from orchestrator.errors import ScenarioError
-from orchestrator.participant import BuildContext, Participant, is_finite_number, reject_unknown_options
+from orchestrator.participant import BuildContext, Participant, check_options, is_finite_number
+from orchestrator.toml_input import Finite, TomlTable, fail, fail_whole, shown
 
-OPTIONS = ("mode", "tau_u_N", "tau_r_steps", "tau_r_Nm", "angle_deg", "execute_s")
+
+def _schedule(value: Any) -> tuple[tuple[float, float], ...]:
+    if not isinstance(value, list) or not all(
+            isinstance(s, list) and len(s) == 2 and all(is_finite_number(v) for v in s) for s in value):
+        raise fail(f"must be a list of [time_s, value] pairs of finite numbers, got {shown(value)}")
+    return tuple((float(t), float(v)) for t, v in value)
+
+
+def _mode(value: Any) -> str:
+    if value not in ("steps", "zigzag"):
+        raise fail(f"must be 'steps' or 'zigzag', got {shown(value)}")
+    return value
+
+
+Schedule = Annotated[tuple[tuple[float, float], ...], PlainValidator(_schedule)]
+Mode = Annotated[str, PlainValidator(_mode)]
+
+
+class ScriptedTauOptions(TomlTable):
+    """Options of ``type = "scripted_tau"``."""
+
+    mode: Mode = "steps"
+    tau_u_N: Finite = 0.0
+    tau_r_steps: Schedule = ()  # [time_s, yaw_moment_Nm]
+    tau_r_Nm: Finite | None = None
+    angle_deg: Finite = 10.0
+    execute_s: Finite = 0.0
+
+    @model_validator(mode="after")
+    def _zigzag_moment(self):
+        if self.mode == "zigzag" and self.tau_r_Nm is None:
+            raise fail_whole("missing option '{prefix}tau_r_Nm' (the zig-zag's yaw moment [N m])")
+        return self
+
+
+class ScriptedRudderOptions(TomlTable):
+    """Options of ``type = "scripted_rudder"``."""
+
+    mode: Mode = "steps"
+    propeller_rps: Finite
+    rudder_steps: Schedule = ()  # [time_s, angle_deg]
+    rudder_deg: Finite | None = None
+    angle_deg: Finite = 10.0
+    execute_s: Finite = 0.0
+
+    @model_validator(mode="after")
+    def _zigzag_rudder(self):
+        if self.mode == "zigzag" and self.rudder_deg is None:
+            raise fail_whole("missing option '{prefix}rudder_deg' (the zig-zag's rudder angle [deg])")
+        return self
 
 
 class ScriptedTau(Participant):
     """Open-loop tau = [surge force, yaw moment] from a script."""
+
+    #: Option keys (the schema docs/participants.md is checked against).
+    OPTIONS = tuple(ScriptedTauOptions.model_fields)
 
     def __init__(self, name: str, tau_u: float, steps=(), zigzag=None) -> None:
         super().__init__(name)
@@ -39,22 +95,10 @@ class ScriptedTau(Participant):
 
     @classmethod
     def from_options(cls, name: str, options: Mapping, context: BuildContext) -> "ScriptedTau":
-        where = context.where + ".options"
-        reject_unknown_options(options, OPTIONS, where)
-        mode = options.get("mode", "steps")
-        tau_u = _number(options, "tau_u_N", where, 0.0)
-        if mode == "steps":
-            steps = options.get("tau_r_steps", [])
-            if not isinstance(steps, list) or not all(
-                isinstance(s, list) and len(s) == 2 and all(isinstance(v, (int, float)) for v in s) for s in steps
-            ):
-                raise ScenarioError(f"{where}.tau_r_steps: must be a list of [time_s, yaw_moment_Nm] pairs")
-            return cls(name, tau_u, steps=[(float(t), float(v)) for t, v in steps])
-        if mode == "zigzag":
-            zigzag = (_number(options, "execute_s", where, 0.0), _number(options, "tau_r_Nm", where),
-                      math.radians(_number(options, "angle_deg", where, 10.0)))
-            return cls(name, tau_u, zigzag=zigzag)
-        raise ScenarioError(f"{where}.mode: must be 'steps' or 'zigzag', got {mode!r}")
+        checked = check_options(ScriptedTauOptions, options, context.where)
+        if checked.mode == "steps":
+            return cls(name, checked.tau_u_N, steps=list(checked.tau_r_steps))
+        return cls(name, checked.tau_u_N, zigzag=(checked.execute_s, checked.tau_r_Nm, math.radians(checked.angle_deg)))
 
     @property
     def input_names(self):
@@ -94,20 +138,6 @@ class ScriptedTau(Participant):
         return self._sign * moment
 
 
-def _number(options, key, where, default=None) -> float:
-    if key not in options:
-        if default is None:
-            raise ScenarioError(f"{where}: missing option '{key}'")
-        return float(default)
-    value = options[key]
-    if not is_finite_number(value):
-        raise ScenarioError(f"{where}.{key}: must be a finite number, got {value!r}")
-    return float(value)
-
-
-RUDDER_OPTIONS = ("mode", "propeller_rps", "rudder_steps", "rudder_deg", "angle_deg", "execute_s")
-
-
 class ScriptedRudder(ScriptedTau):
     """Open-loop rudder angle and propeller revolutions, for plants at actuator level.
 
@@ -118,24 +148,16 @@ class ScriptedRudder(ScriptedTau):
     Outputs ``rudder_angle_cmd`` [rad] and ``propeller_rps_cmd`` [1/s].
     """
 
+    OPTIONS = tuple(ScriptedRudderOptions.model_fields)
+
     @classmethod
     def from_options(cls, name: str, options: Mapping, context: BuildContext) -> "ScriptedRudder":
-        where = context.where + ".options"
-        reject_unknown_options(options, RUDDER_OPTIONS, where)
-        mode = options.get("mode", "steps")
-        rps = _number(options, "propeller_rps", where)
-        if mode == "steps":
-            steps = options.get("rudder_steps", [])
-            if not isinstance(steps, list) or not all(
-                isinstance(s, list) and len(s) == 2 and all(is_finite_number(v) for v in s) for s in steps
-            ):
-                raise ScenarioError(f"{where}.rudder_steps: must be a list of [time_s, angle_deg] pairs")
-            return cls(name, rps, steps=[(float(t), math.radians(v)) for t, v in steps])
-        if mode == "zigzag":
-            zigzag = (_number(options, "execute_s", where, 0.0), math.radians(_number(options, "rudder_deg", where)),
-                      math.radians(_number(options, "angle_deg", where, 10.0)))
-            return cls(name, rps, zigzag=zigzag)
-        raise ScenarioError(f"{where}.mode: must be 'steps' or 'zigzag', got {mode!r}")
+        checked = check_options(ScriptedRudderOptions, options, context.where)
+        if checked.mode == "steps":
+            return cls(name, checked.propeller_rps,
+                       steps=[(t, math.radians(angle)) for t, angle in checked.rudder_steps])
+        return cls(name, checked.propeller_rps, zigzag=(checked.execute_s, math.radians(checked.rudder_deg),
+                                                        math.radians(checked.angle_deg)))
 
     @property
     def output_names(self):

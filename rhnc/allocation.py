@@ -27,13 +27,13 @@ from __future__ import annotations
 import math
 import tomllib
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 from typing import Any
 
 from orchestrator.errors import ModelError, ScenarioError
 from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
+from rhnc.cosim.model_library import MODELS_DIR
 
-PARAMETER_SETS_FILE = Path(__file__).resolve().parents[1] / "models" / "KCSMMG" / "parameter_sets.toml"
+PARAMETER_SETS_FILE = MODELS_DIR / "KCSMMG" / "parameter_sets.toml"
 
 #: Coefficients of the force model (names and units as the KCSMMG plant's parameters).
 COEFFICIENTS = (
@@ -137,6 +137,8 @@ class AllocationParticipant(Participant):
     ``tau_r_achieved`` [N m], ``saturated`` (1 when the demand exceeded what the actuators
     could give within their ranges and rates this step).
     """
+
+    OPTIONS = OPTIONS
 
     def __init__(self, name: str, coefficients: Mapping[str, float], step_s: float) -> None:
         super().__init__(name)

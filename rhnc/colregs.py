@@ -50,6 +50,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from orchestrator.geometry import NM
+
 STATIC_SPEED_MPS = 0.1
 HEAD_ON_BEARING_DEG = 10.0
 HEAD_ON_COURSE_DEG = 15.0
@@ -120,7 +122,7 @@ class Encounter:
 
 def classify(own_xy: Sequence[float], own_course_rad: float, own_speed_mps: float,
              target_xy: Sequence[float], target_velocity_mps: Sequence[float],
-             cpa_limit_m: float = 2.0 * 1852.0, tcpa_limit_s: float = 30.0 * 60.0) -> Encounter:
+             cpa_limit_m: float = 2.0 * NM, tcpa_limit_s: float = 30.0 * 60.0) -> Encounter:
     """Classify one target (rules in the module docstring).
 
     Parameters
@@ -200,8 +202,8 @@ class EncounterTracker:
         After the CPA, the class is released once the range exceeds this [m].
     """
 
-    def __init__(self, cpa_limit_m: float = 2.0 * 1852.0, tcpa_limit_s: float = 30.0 * 60.0,
-                 release_range_m: float = 4.0 * 1852.0) -> None:
+    def __init__(self, cpa_limit_m: float = 2.0 * NM, tcpa_limit_s: float = 30.0 * 60.0,
+                 release_range_m: float = 4.0 * NM) -> None:
         self.cpa_limit_m = float(cpa_limit_m)
         self.tcpa_limit_s = float(tcpa_limit_s)
         self.release_range_m = float(release_range_m)

@@ -64,11 +64,12 @@ import math
 
 import numpy as np
 
+from orchestrator.geometry import NM
+
 from rhnc.colregs import (ROLE, STAND_ON_ACTION_RANGE_FACTOR, EncounterTracker, cpa_tcpa, stand_on_must_act,
                           wrap_deg)
 from rhnc.encounter import segment_min_distance
 
-NM = 1852.0
 PASS, FAIL, NOT_APPLICABLE = "pass", "fail", "not applicable"
 RULES = ("rule_8", "rule_13", "rule_14", "rule_15", "rule_16", "rule_17")
 GIVE_WAY_CLASSES = ("head_on", "crossing_give_way", "overtaking")
@@ -409,7 +410,8 @@ def colregs_analysis(frame, scenario, cosim, out_dir, manoeuvre_threshold_deg: f
     own radius R is the controller's.  The keyword options are :class:`JudgementSettings`
     (``[outputs.options.colregs]``).
     """
-    from orchestrator.analyses import array_output, own_radius_m, plant_name
+    from orchestrator.analyses import array_output
+    from rhnc.cosim.plant import own_radius_m, plant_name
 
     settings = JudgementSettings(manoeuvre_threshold_deg, manoeuvre_hold_s, apparent_course_change_deg,
                                  apparent_speed_reduction, early_before_cpa_min, stand_on_wait_min,

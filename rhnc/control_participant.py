@@ -22,54 +22,19 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 
-from orchestrator.errors import ModelError, ScenarioError
-from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
-from rhnc.nmpc import SOLVERS, NMPCController, NMPCSettings
-from rhnc.ship_model import PARAMETER_SETS_FILE, STATE_NAMES, available_parameter_sets, load_parameter_set
+from orchestrator.errors import ModelError
+from orchestrator.geometry import KNOT
+from orchestrator.participant import BuildContext, Participant, Value
+from rhnc.control_options import OPTIONS, controller_from_options
+from rhnc.nmpc import NMPCController
+from rhnc.ship_model import STATE_NAMES
 
 LOG = logging.getLogger(__name__)
-NM = 1852.0
-KNOT = NM / 3600.0
-
-OPTIONS = (
-    "parameter_set",
-    "model_file",
-    "model_set",
-    "parameter_overrides",
-    "horizon_steps",
-    "control_interval_s",
-    "substeps",
-    "own_radius_nm",
-    "solver",
-    "max_iterations",
-    "max_obstacles",
-    "weights",
-    "length_scale_m",
-    "speed_scale_mps",
-    "et_default",
-    "collision_slack_weight",
-    "wall_time_limit_s",
-    "cpu_time_limit_s",
-    "max_speed_kn",
-    "colregs",
-    "clearance_margin_nm",
-    "clearance_margin_growth_kn",
-    "stand_on_action_tcpa_s",
-    "stand_on_action_range_factor",
-    "apparent_alteration_deg",
-    "give_way_action_tcpa_s",
-    "disturbance_observer",
-    "observer_gain",
-    "codegen",
-)
-WEIGHT_KEYS = ("q", "r", "r_rate")
-
 
 def interpolate_reference(reference: np.ndarray, times: np.ndarray) -> np.ndarray:
     """Reference states (len(times), 6) at ``times`` [s] from an (M, 7) timed reference.
@@ -151,7 +116,9 @@ class ControlParticipant(Participant):
         false: the paper's circles R + R_i; see :mod:`rhnc.nmpc_colregs`).
     clearance_margin_nm, clearance_margin_growth_kn : float
         Margin added to R + R_i [nm] and its growth with prediction time [kn = nm/h]
-        (default 0, 0): tightening against disturbances and model error.
+        (default 0, 0): tightening against disturbances and model error.  A model set
+        written by ``identify`` carries ``position_error_growth_mps``, the growth of its
+        own prediction error; it is the default growth with that model.
     stand_on_action_tcpa_s, stand_on_action_range_factor : float
         Rule 17: when a stand-on ship stops standing on (defaults 600 s, 2; the
         ``colregs`` analysis judges with the same rule, :func:`rhnc.colregs.stand_on_must_act`).
@@ -167,13 +134,19 @@ class ControlParticipant(Participant):
     observer_gain : float
         The observer's correction per step, in (0, 1] (default 0.5).
     codegen : bool
-        Compile the NLP to C once per machine and reuse it (default false; see
+        Compile the NLP to C once per machine and reuse it (default true; see
         :mod:`rhnc.nmpc_codegen`); the summary reports ``codegen: compiled|interpreted``.
+    warm_start_duals : bool
+        IPOPT starts from the previous solve's multipliers shifted by one interval
+        (default true; about half the iterations; ignored by fatrop).
     """
+
+    OPTIONS = OPTIONS
 
     def __init__(self, name: str, controller: NMPCController, et_default: float) -> None:
         super().__init__(name)
         self.model_check: dict[str, Any] = {"set": controller.params.name, "check": "plant not seen"}
+        self.margin_source = "scenario" if controller.settings.clearance_margin_growth_mps else "none"
         self._tau_r_history: list[float] = []
         self.controller = controller
         self.et_default = et_default
@@ -189,71 +162,16 @@ class ControlParticipant(Participant):
 
     @classmethod
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "ControlParticipant":
-        """Build from scenario options (see class docstring); errors name the key."""
-        where = context.where
-        reject_unknown_options(options, OPTIONS, where)
-        overrides = options.get("parameter_overrides", {})
-        if not isinstance(overrides, Mapping):
-            raise ScenarioError(f"{where}: option 'parameter_overrides' must be a table")
-        params = _prediction_model(options, overrides, context)
-        kwargs: dict[str, Any] = {
-            "control_interval_s": _number(options, "control_interval_s", where, context.step_size),
-            "own_radius_m": _number(options, "own_radius_nm", where, 0.0) * NM,
-        }
-        for key in ("horizon_steps", "substeps", "max_iterations", "max_obstacles"):
-            if key in options:
-                value = options[key]
-                if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                    raise ScenarioError(f"{where}: option '{key}' must be an integer >= 1, got {value!r}")
-                kwargs[key] = value
-        if "solver" in options:
-            if options["solver"] not in SOLVERS:
-                raise ScenarioError(f"{where}: option 'solver' must be one of {', '.join(SOLVERS)}, got {options['solver']!r}")
-            kwargs["solver"] = options["solver"]
-        for key in ("length_scale_m", "speed_scale_mps"):
-            if key in options:
-                kwargs[key] = _number(options, key, where, None)
-        for key in ("cpu_time_limit_s", "wall_time_limit_s"):  # false: no such limit
-            if key in options:
-                kwargs[key] = None if options[key] is False else _number(options, key, where, None)
-        if "max_speed_kn" in options:
-            kwargs["max_speed_mps"] = _number(options, "max_speed_kn", where, None) * KNOT
-        for key in ("colregs", "disturbance_observer", "codegen"):
-            if key in options:
-                if not isinstance(options[key], bool):
-                    raise ScenarioError(f"{where}: option '{key}' must be true or false, got {options[key]!r}")
-                kwargs[key] = options[key]
-        for key, target, scale in (("clearance_margin_nm", "clearance_margin_m", NM),
-                                   ("clearance_margin_growth_kn", "clearance_margin_growth_mps", KNOT),
-                                   ("stand_on_action_tcpa_s", "stand_on_action_tcpa_s", 1.0),
-                                   ("stand_on_action_range_factor", "stand_on_action_range_factor", 1.0),
-                                   ("apparent_alteration_deg", "apparent_alteration_deg", 1.0),
-                                   ("give_way_action_tcpa_s", "give_way_action_tcpa_s", 1.0),
-                                   ("observer_gain", "observer_gain", 1.0)):
-            if key in options:
-                kwargs[target] = _number(options, key, where, None) * scale
-        if "collision_slack_weight" in options:  # false: hard collision constraints
-            value = options["collision_slack_weight"]
-            kwargs["collision_slack_weight"] = None if value is False else _number(
-                options, "collision_slack_weight", where, None)
-        weights = options.get("weights", {})
-        if not isinstance(weights, Mapping):
-            raise ScenarioError(f"{where}: option 'weights' must be a table with keys {', '.join(WEIGHT_KEYS)}")
-        reject_unknown_options(weights, WEIGHT_KEYS, f"{where}.weights")
-        for key, size in zip(WEIGHT_KEYS, (6, 2, 2)):
-            if key in weights:
-                values = weights[key]
-                if not isinstance(values, list) or len(values) != size or not all(
-                    isinstance(v, (int, float)) and not isinstance(v, bool) and v >= 0 for v in values
-                ):
-                    raise ScenarioError(f"{where}.weights: '{key}' must be a list of {size} numbers >= 0")
-                kwargs[key] = tuple(float(v) for v in values)
-        try:
-            settings = NMPCSettings(**kwargs)
-        except ValueError as error:
-            raise ScenarioError(f"{where}: {error}") from None
-        et_default = _number(options, "et_default", where, 0.0)
-        return cls(name, NMPCController(params, settings), et_default)
+        """Build from scenario options (see :mod:`rhnc.control_options`); errors name the key."""
+        params, settings, et_default = controller_from_options(options, context)
+        participant = cls(name, NMPCController(params, settings), et_default)
+        if "clearance_margin_growth_kn" in options:
+            participant.margin_source = "scenario"
+        elif "position_error_growth_mps" in params.extras:
+            participant.margin_source = "model's prediction error"
+        else:
+            participant.margin_source = "none"
+        return participant
 
     @property
     def input_names(self) -> Sequence[str]:
@@ -361,6 +279,8 @@ class ControlParticipant(Participant):
             "tau_r_sign_changes_per_100_solves": tau_r_sign_changes_per_100(
                 self._tau_r_history, self.controller.params.tau_r_max),
             "model_check": self.model_check,
+            "clearance_margin_growth_kn": self.controller.settings.clearance_margin_growth_mps / KNOT,
+            "clearance_margin_growth_from": self.margin_source,
             **self.controller.library.summary(),
         }
 
@@ -383,6 +303,8 @@ class ControlParticipant(Participant):
             check = "identified"
         elif identity["model_name"] in declared:
             check = "declared"
+            if "tau_r" not in plant.input_names and "rudder_angle_cmd" in plant.input_names:
+                check = "declared (through an allocation: the plant takes rudder and propeller)"
         self.model_check = {"set": self.controller.params.name, "plant": identity["model_name"],
                             "plant_guid": identity["guid"], "check": check}
         if check.startswith("neither"):
@@ -407,45 +329,3 @@ def tau_r_sign_changes_per_100(tau_r: Sequence[float], tau_r_max: float, deadban
         changes += int(last != 0.0 and sign != last)
         last = sign
     return 100.0 * changes / len(tau_r)
-
-
-def _prediction_model(options: Mapping[str, Any], overrides: Mapping[str, Any], context: BuildContext):
-    """The NMPC's model: ``parameter_set`` of the KCS file, or ``model_set`` of ``model_file``."""
-    where = context.where
-    if "model_file" in options:
-        if "parameter_set" in options:
-            raise ScenarioError(f"{where}: give either option 'parameter_set' or 'model_file', not both")
-        file = options["model_file"]
-        if not isinstance(file, str) or not file:
-            raise ScenarioError(f"{where}: option 'model_file' must be a path to a parameter-set TOML file")
-        path = Path(file) if Path(file).is_absolute() else Path(context.scenario_dir) / file
-        if not path.is_file():
-            raise ScenarioError(f"{where}: option 'model_file': {path} not found "
-                                "(write one with python -m orchestrator identify)")
-        set_name = options.get("model_set")
-        if set_name is None:
-            sets = available_parameter_sets(path)
-            if len(sets) != 1:
-                raise ScenarioError(f"{where}: option 'model_set' must name one of {', '.join(sets)} in {path}")
-            set_name = next(iter(sets))
-    else:
-        if "model_set" in options:
-            raise ScenarioError(f"{where}: option 'model_set' needs 'model_file'")
-        path = PARAMETER_SETS_FILE
-        set_name = options.get("parameter_set", "default")
-    if not isinstance(set_name, str):
-        raise ScenarioError(f"{where}: option '{'model_set' if 'model_file' in options else 'parameter_set'}' "
-                            "must be a string")
-    try:
-        return load_parameter_set(set_name, overrides, path=path)
-    except ScenarioError as error:
-        raise ScenarioError(f"{where}: {error}") from None
-
-
-def _number(options: Mapping[str, Any], key: str, where: str, default: float | None) -> float | None:
-    if key not in options:
-        return default
-    value = options[key]
-    if not is_finite_number(value):
-        raise ScenarioError(f"{where}: option '{key}' must be a finite number, got {value!r}")
-    return float(value)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rhnc.metocean import NM
+from orchestrator.geometry import NM
 
 
 def segment_min_distance(p0, p1, q0, q1):

@@ -37,8 +37,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from orchestrator.geometry import wrap_angle
+
 from rhnc.energy import EnergyParameters, cost_rate, emission_rate, brake_power, speed_through_water
-from rhnc.metocean import NM
+from rhnc.metocean import axis_node_count
+from orchestrator.geometry import NM
 
 WEATHER_NAMES = ("wind_north", "wind_east", "hs", "current_north", "current_east")
 
@@ -111,6 +114,8 @@ def resample_weather(metocean, resolution_nm: float = 1.0, t_s: float | None = N
     if resolution_nm <= 0:
         raise ValueError("planning resolution must be positive")
     step = resolution_nm * NM
+    axis_node_count(float(metocean.x[-1] - metocean.x[0]), step, "the planning resolution_nm")  # before allocating
+    axis_node_count(float(metocean.y[-1] - metocean.y[0]), step, "the planning resolution_nm")
     x = np.arange(metocean.x[0], metocean.x[-1] + 1e-6, step)
     y = np.arange(metocean.y[0], metocean.y[-1] + 1e-6, step)
     if x.size < 2 or y.size < 2:
@@ -125,12 +130,6 @@ def resample_weather(metocean, resolution_nm: float = 1.0, t_s: float | None = N
 def bearing(from_x, from_y, to_x, to_y):
     """Bearing [rad, clockwise from north, in (-pi, pi]] from one point to another."""
     return np.arctan2(np.asarray(to_y) - from_y, np.asarray(to_x) - from_x)
-
-
-def wrap_angle(angle):
-    """Wrap angles to (-pi, pi]."""
-    wrapped = np.mod(np.asarray(angle, dtype=float) + np.pi, 2.0 * np.pi) - np.pi
-    return np.where(wrapped == -np.pi, np.pi, wrapped)
 
 
 def energy_rate_fields(weather: PlanningWeather, goal: Sequence[float], speed: float,
@@ -260,8 +259,12 @@ class SuperpositionField:
         return self.weather.extent
 
     # -- whole-map views (plots, tests) ----------------------------------------------
-    def guidance(self) -> np.ndarray:
-        """G [s] of the last update (float32)."""
+    def guidance_s(self) -> np.ndarray:
+        """G [s] of the last update (float32).
+
+        (Not ``guidance()``: the instance attribute ``guidance``, the field's
+        :class:`GuidanceParameters`, would hide a method of that name.)
+        """
         return self._guidance
 
     def guidance_normalised(self) -> np.ndarray:

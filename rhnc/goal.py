@@ -6,11 +6,17 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from orchestrator.errors import ModelError, ScenarioError
-from orchestrator.participant import BuildContext, Participant, Value, reject_unknown_options
-from rhnc.metocean import NM
+from orchestrator.errors import ModelError
+from orchestrator.geometry import NM
+from orchestrator.participant import BuildContext, Participant, Value, check_options
+from orchestrator.toml_input import PairNm, Positive, TomlTable
 
-OPTIONS = ("goal_nm", "arrival_radius_nm")
+
+class GoalOptions(TomlTable):
+    """Options of ``type = "goal"``."""
+
+    goal_nm: PairNm
+    arrival_radius_nm: Positive = 0.5
 
 
 class GoalMonitor(Participant):
@@ -21,6 +27,8 @@ class GoalMonitor(Participant):
     the ship has come within the arrival radius, and from then on).
     """
 
+    OPTIONS = tuple(GoalOptions.model_fields)
+
     def __init__(self, name: str, goal_m: tuple[float, float], radius_m: float) -> None:
         super().__init__(name)
         self.goal_m = goal_m
@@ -29,16 +37,8 @@ class GoalMonitor(Participant):
 
     @classmethod
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "GoalMonitor":
-        where = f"{context.where}.options"
-        reject_unknown_options(options, OPTIONS, where)
-        goal = options.get("goal_nm")
-        if (not isinstance(goal, list) or len(goal) != 2
-                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in goal)):
-            raise ScenarioError(f"{where}.goal_nm: expected [north, east] in nm")
-        radius = options.get("arrival_radius_nm", 0.5)
-        if isinstance(radius, bool) or not isinstance(radius, (int, float)) or not radius > 0:
-            raise ScenarioError(f"{where}.arrival_radius_nm: expected a positive number, got {radius!r}")
-        return cls(name, (goal[0] * NM, goal[1] * NM), radius * NM)
+        checked = check_options(GoalOptions, options, context.where)
+        return cls(name, (checked.goal_nm[0] * NM, checked.goal_nm[1] * NM), checked.arrival_radius_nm * NM)
 
     input_names = property(lambda self: ("x", "y"))
     output_names = property(lambda self: ("goal_distance_m", "arrived"))

@@ -26,6 +26,11 @@ give: they cannot be seen in motions that stay inside them).
 
 Validation: the fitted model is integrated open loop with the recorded inputs of the
 held-out manoeuvre, from its first sample, and compared with what the plant did.
+
+Prediction error: from every 20 s of every manoeuvre the fitted model predicts 300 s ahead
+from the measured state, as the NMPC does; the growth of its position error with the
+prediction time (:func:`position_error_growth`) goes into the set as
+``position_error_growth_mps``, the NMPC's default tightening of its collision domains.
 """
 
 from __future__ import annotations
@@ -34,15 +39,15 @@ import dataclasses
 import logging
 import math
 from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
 
 from orchestrator.errors import ScenarioError, ToolchainError
-from rhnc.ship_model import DYNAMICS_KEYS, STATE_NAMES, ShipParameters, rk4_step
+from orchestrator.geometry import KNOT
+from rhnc.prediction_error import position_error_growth
+from rhnc.ship_model import STATE_NAMES, ShipParameters, rk4_step
 
 LOG = logging.getLogger(__name__)
-KNOT = 1852.0 / 3600.0
 COEFFICIENTS = ("m11", "m22", "m33", "d11", "d22", "d33", "d23", "d32")
 WEATHER_PORTS = ("current_north", "current_east", "wind_speed", "wind_direction", "hs")
 FIT_MANOEUVRES = ("speed_steps", "turn_starboard", "turn_port", "zigzag_10")
@@ -72,6 +77,7 @@ class Fit:
     validation: dict[str, dict[str, float]]
     records: dict[str, Record]
     predictions: dict[str, np.ndarray]
+    prediction_error: dict[str, float] = dataclasses.field(default_factory=dict)
 
 
 class PlantRunner:
@@ -339,27 +345,9 @@ def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_
     if reference is not None:
         predicted = simulate(reference, records[VALIDATION_MANOEUVRE])
         validation[f"held_out with {reference.name}"] = validation_errors(records[VALIDATION_MANOEUVRE], predicted)
-    return Fit(parameters, trim, rms, r2, validation, records, predictions)
-
-
-def parameter_set_toml(fit: Fit, identity: dict[str, str], source: str) -> str:
-    """The fitted set as a parameter-set file (the format of ``models/KCS/parameter_sets.toml``)."""
-    p = fit.parameters
-    lines = [
-        "# Identified by `python -m orchestrator identify` (rhnc/identification.py): the NMPC's",
-        "# 3-DOF prediction model fitted by least squares on the plant's manoeuvres, weather off.",
-        "# units: m11, m22 kg; m33 kg m^2; d11, d22 kg/s; d23, d32 kg m/s; d33 kg m^2/s;",
-        "#        tau_u_max N; tau_r_max N m (the bounds given to identify).",
-        "",
-        f"[{p.name}]",
-        f"description = \"Identified on {identity['model_name']} from {source}; held-out "
-        f"{VALIDATION_MANOEUVRE}: heading RMS "
-        f"{fit.validation['held_out: ' + VALIDATION_MANOEUVRE]['heading_rms_deg']:.2f} deg\"",
-        f"plant_fmu = \"{identity['model_name']}\"",
-        f"plant_guid = \"{identity['guid']}\"",
-    ]
-    lines += [f"{key} = {getattr(p, key)!r}" for key in DYNAMICS_KEYS]
-    return "\n".join(lines) + "\n"
+    error = position_error_growth(parameters, records)
+    parameters = dataclasses.replace(parameters, extras={"position_error_growth_mps": error["growth_mps"]})
+    return Fit(parameters, trim, rms, r2, validation, records, predictions, error)
 
 
 def check_bounds(tau_u_max: float | None, tau_r_max: float | None) -> tuple[float, float]:
@@ -370,38 +358,3 @@ def check_bounds(tau_u_max: float | None, tau_r_max: float | None) -> tuple[floa
         if not (math.isfinite(value) and value > 0):
             raise ScenarioError(f"identify: {name} must be a positive number, got {value}")
     return float(tau_u_max), float(tau_r_max)
-
-
-def write_figures(fit: Fit, folder: Path) -> list[str]:
-    """Measured against predicted heading, speed and yaw rate per manoeuvre; returns file names."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    files = []
-    for name, record in fit.records.items():
-        predicted = fit.predictions[name]
-        fig, axes = plt.subplots(4, 1, figsize=(8, 9), sharex=True)
-        series = ((np.degrees(record.states[:, 2]), np.degrees(predicted[:, 2]), "heading [deg]"),
-                  (record.states[:, 3] / KNOT, predicted[:, 3] / KNOT, "surge speed [kn]"),
-                  (np.degrees(record.states[:, 5]) * 60, np.degrees(predicted[:, 5]) * 60, "yaw rate [deg/min]"))
-        for axis, (measured, model, label) in zip(axes, series):
-            axis.plot(record.t, measured, label="plant FMU")
-            axis.plot(record.t, model, "--", label="identified model, open loop")
-            axis.set_ylabel(label)
-            axis.grid(True, alpha=0.3)
-        axes[0].legend(loc="best")
-        axes[3].plot(record.t, record.tau[:, 0] / fit.parameters.tau_u_max, label="tau_u / bound")
-        axes[3].plot(record.t, record.tau[:, 1] / fit.parameters.tau_r_max, label="tau_r / bound")
-        axes[3].set_ylabel("input")
-        axes[3].set_xlabel("time [s]")
-        axes[3].legend(loc="best")
-        held = " (held out)" if name == VALIDATION_MANOEUVRE else ""
-        axes[0].set_title(f"{name}{held}")
-        fig.tight_layout()
-        file = f"fit_{name}.png"
-        fig.savefig(folder / file, dpi=90)
-        plt.close(fig)
-        files.append(file)
-    return files

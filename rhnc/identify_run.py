@@ -5,6 +5,10 @@ ready for the control participant's ``model_file``/``model_set``), ``fit_report.
 (coefficients, residuals, R², open-loop errors per manoeuvre and on the held-out one),
 ``fit_report.md`` and one figure per manoeuvre; with ``out`` also a copy of the
 parameter-set file there.
+
+A plant at actuator level (it takes rudder angle and propeller revolutions, not tau) is
+identified through the scenario's ``allocation`` participant, as the NMPC sees it in a run
+(:class:`AllocatedPlant`).
 """
 
 from __future__ import annotations
@@ -15,10 +19,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from orchestrator.errors import ScenarioError
+from orchestrator.geometry import KNOT
 from orchestrator.results import RunFolder, new_run_id, versions
 from orchestrator.scenario import ParticipantSpec, load_scenario
-from rhnc.identification import (COEFFICIENTS, KNOT, VALIDATION_MANOEUVRE, PlantRunner, check_bounds,
-                                 identify_model, parameter_set_toml, write_figures)
+from rhnc.identification import COEFFICIENTS, VALIDATION_MANOEUVRE, PlantRunner, check_bounds, identify_model
+from rhnc.identification_report import parameter_set_toml, write_figures
 from rhnc.ship_model import STATE_NAMES, load_parameter_set
 
 LOG = logging.getLogger(__name__)
@@ -32,6 +37,72 @@ class IdentifyReport:
     report: dict
 
 
+class AllocatedPlant:
+    """An actuator-level plant FMU behind the scenario's allocation participant, seen from tau.
+
+    The NMPC of such a scenario demands tau = [surge force, yaw moment] from the allocation,
+    which commands the plant's rudder and propeller; so its model must be identified on the
+    two together.  Each step feeds tau to the allocation (with the plant's reported speed and
+    actuators, as the scenario's connections do) and its commands to the plant, at the
+    identification's sampling step, so the allocation's rate limits act as in a run.
+
+    Parameters
+    ----------
+    allocation : Participant
+        The scenario's allocation participant (inputs ``tau_u``, ``tau_r``, ...).
+    plant : FmuParticipant
+        The plant FMU participant.
+    commands : list of (str, str)
+        Allocation output -> plant input, from the scenario's connections.
+    feedback : list of (str, str)
+        Plant output -> allocation input, from the scenario's connections.
+    """
+
+    def __init__(self, allocation, plant, commands, feedback) -> None:
+        self.allocation = allocation
+        self.plant = plant
+        self.commands = list(commands)
+        self.feedback = list(feedback)
+        driven = {port for _, port in self.commands}
+        self.input_names = tuple(port for port in plant.input_names if port not in driven) + ("tau_u", "tau_r")
+        self.output_names = tuple(plant.output_names)
+        self._outputs: dict = {}
+
+    def _fed_back(self) -> dict:
+        return {target: self._outputs[source] for source, target in self.feedback if source in self._outputs}
+
+    def setup(self, start_time: float, inputs) -> dict:
+        self._outputs = self.plant.setup(start_time, {k: v for k, v in inputs.items() if k in self.plant.input_names})
+        self.allocation.setup(start_time, self._fed_back())
+        return self._outputs
+
+    def step(self, time: float, step_size: float, inputs) -> dict:
+        demand = {"tau_u": inputs["tau_u"], "tau_r": inputs["tau_r"], **self._fed_back()}
+        commands = self.allocation.step(time, step_size, demand)
+        plant_inputs = {k: v for k, v in inputs.items() if k in self.plant.input_names}
+        plant_inputs.update({target: commands[source] for source, target in self.commands})
+        self._outputs = self.plant.step(time, step_size, plant_inputs)
+        return self._outputs
+
+    def terminate(self) -> None:
+        self.allocation.terminate()
+        self.plant.terminate()
+
+
+def allocation_between(scenario, plant: ParticipantSpec):
+    """The allocation participant driving ``plant`` and the wiring: (spec, commands, feedback) or None."""
+    for spec in scenario.participants:
+        if spec.type != "allocation":
+            continue
+        commands = [(c.source_port, c.target_port) for c in scenario.connections
+                    if c.source == spec.name and c.target == plant.name]
+        if commands:
+            feedback = [(c.source_port, c.target_port) for c in scenario.connections
+                        if c.source == plant.name and c.target == spec.name]
+            return spec, commands, feedback
+    return None
+
+
 def find_plant_spec(scenario, name: str | None) -> ParticipantSpec:
     """The FMU participant to identify: ``name``, or the one FMU whose ports are the ship's."""
     fmus = [spec for spec in scenario.participants if spec.is_fmu]
@@ -41,10 +112,25 @@ def find_plant_spec(scenario, name: str | None) -> ParticipantSpec:
                 return spec
         raise ScenarioError(f"{scenario.path}: --plant {name}: no FMU participant of that name "
                             f"(FMU participants: {', '.join(s.name for s in fmus) or 'none'})")
-    ships = [spec for spec in fmus if {"x", "psi", "tau_u"} <= set(spec.mapping) | _own_names(spec, scenario)]
+    ships = [spec for spec in fmus
+             if {"x", "psi"} <= (ports := set(spec.mapping) | _own_names(spec, scenario))
+             and ("tau_u" in ports or allocation_between(scenario, spec) is not None)]
     if len(ships) != 1:
         raise ScenarioError(f"{scenario.path}: cannot tell the plant FMU ({len(ships)} candidates); name it with --plant")
     return ships[0]
+
+
+def _build_participant(scenario, spec: ParticipantSpec):
+    """A Python participant of the scenario built as a run builds it (step: the identification's sample)."""
+    from orchestrator.master import _import_class, participant_target
+    from orchestrator.participant import BuildContext
+    from rhnc.identification import SAMPLE_S
+
+    where = f"{scenario.path}: participants.{spec.name}"
+    context = BuildContext(where=where, scenario_dir=scenario.directory, step_size=SAMPLE_S,
+                           start_time=0.0, stop_time=scenario.simulation.stop_s)
+    return _import_class(participant_target(spec, where), f"{where}.type").from_options(spec.name, spec.options,
+                                                                                      context)
 
 
 def _own_names(spec, scenario) -> set[str]:
@@ -88,25 +174,32 @@ def run_identify(scenario_path, results_root="results", plant: str | None = None
         starts.add(getattr(entry, "start", None) or f"{port}0")
     parameters = {k: v for k, v in spec.parameters.items() if k not in starts}
 
+    allocation = allocation_between(scenario, spec)
+
     def build(initial):
         manoeuvre_spec = dataclasses.replace(spec, parameters=parameters, initial=initial)
-        return FmuParticipant(manoeuvre_spec, path, where)
+        plant = FmuParticipant(manoeuvre_spec, path, where)
+        if allocation is None:
+            return plant
+        return AllocatedPlant(_build_participant(scenario, allocation[0]), plant, allocation[1], allocation[2])
 
-    missing = [port for port in (*STATE_NAMES, "tau_u", "tau_r") if port not in probe.output_names + probe.input_names]
+    seen = build({}) if allocation is not None else probe
+    missing = [port for port in (*STATE_NAMES, "tau_u", "tau_r") if port not in (*seen.output_names, *seen.input_names)]
     if missing:
         raise ScenarioError(f"{where}: identify needs the plant ports {', '.join(missing)} (map them)")
     name = set_name or identity["model_name"]
     kcs = load_parameter_set("default")
     fit = identify_model(PlantRunner(build, speed_kn * KNOT), tau_u_max, tau_r_max, name, reference=kcs)
     source = Path(scenario_path).as_posix()
-    toml_text = parameter_set_toml(fit, identity, source)
+    toml_text = parameter_set_toml(fit, {**identity, "through": allocation[0].name if allocation else None}, source)
     folder = RunFolder(Path(results_root), f"identify/{name}", new_run_id(scenario.sha256))
     try:
         folder.path("parameter_sets.toml").write_text(toml_text)
         figures = write_figures(fit, folder.staging)
         report = {
             "scenario": str(scenario.path),
-            "plant": {"participant": spec.name, "fmu": str(path), **identity},
+            "plant": {"participant": spec.name, "fmu": str(path), **identity,
+                      "through": allocation[0].name if allocation is not None else None},
             "speed_kn": speed_kn,
             "trim_tau_u_N": fit.trim_tau_u,
             "set": name,
@@ -116,6 +209,7 @@ def run_identify(scenario_path, results_root="results", plant: str | None = None
             "r_squared": fit.r_squared,
             "open_loop_errors": fit.validation,
             "held_out": VALIDATION_MANOEUVRE,
+            "prediction_error": fit.prediction_error,
             "figures": figures,
             "versions": versions(),
         }
@@ -149,4 +243,12 @@ def _markdown(report: dict) -> str:
     for name, e in report["open_loop_errors"].items():
         lines.append(f"| {name} | {e['heading_rms_deg']:.2f} | {e['heading_max_deg']:.2f} | {e['speed_rms_kn']:.3f} | "
                      f"{e['yaw_rate_rms_deg_min']:.2f} | {e['position_end_m']:.0f} |")
+    error = report.get("prediction_error")
+    if error:
+        at_horizon = error[f"max_error_{int(error['horizon_s'])}s_m"]
+        lines += ["", f"Position error of the model's predictions from every {error['horizon_s']:.0f}-s window's measured "
+                  f"start: at most {error['max_error_20s_m']:.1f} m after 20 s, {error['max_error_60s_m']:.1f} m after "
+                  f"60 s, {at_horizon:.0f} m after {error['horizon_s']:.0f} s; "
+                  f"growth {error['growth_mps']:.3f} m/s ({error['growth_mps'] / KNOT:.2f} kn), the NMPC's default "
+                  "clearance margin growth with this model."]
     return "\n".join(lines) + "\n"

@@ -28,6 +28,8 @@ import json
 import math
 from pathlib import Path
 
+from orchestrator.geometry import NM
+
 #: Target courses [deg] per problem (own ship on 000 deg); "slow" marks a ship overtaken.
 PROBLEMS: dict[int, tuple[tuple[float, bool], ...]] = {
     1: ((180.0, False),),
@@ -81,7 +83,7 @@ def situation_json(number: int, latitude_deg: float = 57.0, longitude_deg: float
         always_xy=True)
 
     def ship(entry: dict, identifier: int, name: str) -> dict:
-        lon, lat = to_geographic.transform(entry["start_nm"][1] * 1852.0, entry["start_nm"][0] * 1852.0)
+        lon, lat = to_geographic.transform(entry["start_nm"][1] * NM, entry["start_nm"][0] * NM)
         return {"initial": {"position": {"lat": round(lat, 9), "lon": round(lon, 9)},
                             "sog": entry["speed_kn"], "cog": entry["course_deg"], "heading": entry["course_deg"]},
                 "static": {"id": identifier, "name": name}}

@@ -34,6 +34,8 @@ The environment FMU reads the same grid through ``write_fmu_grid`` (binary forma
 
 from __future__ import annotations
 
+import math
+
 import logging
 import struct
 from collections.abc import Mapping
@@ -43,13 +45,11 @@ from typing import Any
 import numpy as np
 
 from orchestrator.errors import ScenarioError
+from orchestrator.geometry import NM
 
 log = logging.getLogger(__name__)
 
-NM = 1852.0  #: metres per nautical mile
-KNOT = NM / 3600.0  #: m/s per knot
 GRAVITY = 9.81  #: m/s^2
-EARTH_RADIUS = 6_371_000.0  #: m, mean radius for the local projection
 
 FIELDS = ("wind_north", "wind_east", "hs", "current_north", "current_east")
 
@@ -284,7 +284,10 @@ class MetOceanField:
             raise ScenarioError(f"{where}: give exactly one of 'generator' or 'file'")
         if "generator" in table:
             return build_generated(table.pop("generator"), table, where)
-        file = Path(table.pop("file"))
+        file = table.pop("file")
+        if not isinstance(file, str) or not file or "\0" in file:
+            raise ScenarioError(f"{where}.file: expected the path of a NetCDF file, got {file!r}"[:300])
+        file = Path(file)
         file = file if file.is_absolute() else scenario_dir / file
         if not file.is_file():
             raise ScenarioError(f"{where}.file: met-ocean file not found: {file}")
@@ -306,9 +309,17 @@ class MetOceanField:
 
     def to_netcdf(self, path) -> Path:
         """Write the field as NetCDF (readable again by :meth:`from_netcdf`, every time step)."""
-        path = Path(path)
-        self.to_dataset().to_netcdf(path, engine="netcdf4")
-        return path
+        from rhnc.metocean_netcdf import write_netcdf
+
+        return write_netcdf(self, path)
+
+    def write_fmu_files(self, work_dir) -> dict[str, str]:
+        """Write what the environment FMU reads into ``work_dir``: ``{placeholder: path}``.
+
+        The co-simulation master substitutes each path for its placeholder in FMU
+        parameters (``grid_file = "metocean.grid"``).
+        """
+        return {"metocean.grid": str(self.write_fmu_grid(Path(work_dir) / "metocean.grid"))}
 
     def write_fmu_grid(self, path) -> Path:
         """Write the binary grid the MetOcean FMU reads (``MOGRID2``, models/MetOcean/readme.md).
@@ -350,12 +361,40 @@ def fetch_limited_hs(wind_speed, fetch_m: float):
     return np.minimum(limited, developed)
 
 
+#: Most nodes along one axis of a met-ocean grid (100 nm at 0.05 nm).
+MAX_AXIS_NODES = 2001
+#: Most nodes of a met-ocean grid over space and time (five float64 fields of 32 MB each).
+MAX_GRID_NODES = 4_000_000
+
+
+def axis_node_count(span: float, step: float, what: str = "resolution_nm") -> int:
+    """Nodes of an axis ``span`` long at spacing ``step`` (same units), refused beyond the limit.
+
+    Checked before any array is allocated: a fine resolution over a wide map would otherwise
+    ask for gigabytes.
+    """
+    count = span / step if step > 0 else math.inf
+    if not math.isfinite(count) or count + 1 > MAX_AXIS_NODES:
+        raise ValueError(f"{what} gives {count + 1:.3g} grid nodes along an axis, more than the limit of "
+                         f"{MAX_AXIS_NODES} (a coarser resolution or a smaller map)")
+    return int(round(count)) + 1
+
+
+def check_grid_nodes(nx: int, ny: int, nt: int = 1) -> None:
+    """Refuse a grid of more than :data:`MAX_GRID_NODES` nodes over space and time, before it is built."""
+    if nx * ny * nt > MAX_GRID_NODES:
+        raise ValueError(f"the met-ocean grid would hold {nx} x {ny} x {nt} time steps = {nx * ny * nt} nodes, "
+                         f"more than the limit of {MAX_GRID_NODES}")
+
+
 def map_axis(range_nm, resolution_nm) -> np.ndarray:
     """Evenly spaced nodes [m] over ``range_nm`` (start, stop) [nm] at ``resolution_nm`` [nm]."""
     start, stop = (float(v) for v in range_nm)
+    if not (math.isfinite(start) and math.isfinite(stop)):
+        raise ValueError(f"range {list(range_nm)} nm must be finite")
     if stop <= start:
         raise ValueError(f"range {list(range_nm)} nm must increase")
     if not resolution_nm > 0:
         raise ValueError("resolution_nm must be positive")
-    count = int(round((stop - start) / resolution_nm)) + 1
+    count = axis_node_count(stop - start, resolution_nm)
     return np.linspace(start, stop, max(count, 2)) * NM

@@ -59,6 +59,9 @@ method : str                "routing" (default) or "paper"
 arrival_time_min : float    routing: requested arrival time after t = 0 [min] (none:
                             constant speed_kn through water)
 max_speed_kn : float        routing: upper bound of the planned speed [kn] (24)
+route_switch_margin_pct : float   routing: least saving, in percent of the remaining
+                            passage's objective, for which the route followed is left for
+                            a new one (0.1; 0 takes every cheaper route found)
 """
 
 from __future__ import annotations
@@ -73,10 +76,11 @@ from orchestrator.errors import ModelError, ScenarioError
 from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
 from rhnc.energy import EnergyParameters, brake_power, cost_rate, emission_rate
 from rhnc.fields import FieldWeights, GuidanceParameters, SuperpositionField, bearing, resample_weather
-from rhnc.metocean import KNOT, NM
+from orchestrator.geometry import KNOT, NM
 from rhnc.planner import plan_local_path
 from rhnc.reference import reference_states
-from rhnc.route_navigation import SPEED_STEP_MPS, RecedingRoutePlanner, calm_water_time_price_usd_h
+from rhnc.route_navigation import (DEFAULT_SWITCH_MARGIN, SPEED_STEP_MPS, RecedingRoutePlanner,
+                                   calm_water_time_price_usd_h)
 from rhnc.weather_routing import PRICE_MULTIPLES, RoutingProblem, optimal_route, straight_route, time_price_usd_h
 from rhnc.trigger import TRIGGERED, EventTrigger
 
@@ -84,10 +88,12 @@ log = logging.getLogger(__name__)
 
 OPTIONS = ("goal_nm", "speed_kn", "horizon_steps", "k1", "k2", "k3", "guidance_eps", "guidance_c_rad",
            "resolution_nm", "energy", "eps_ship_nm", "eps_static_nm", "start_from", "start_nm", "method",
-           "arrival_time_min", "max_speed_kn")
+           "arrival_time_min", "max_speed_kn", "route_switch_margin_pct")
 METHODS = ("paper", "routing")
-ROUTING_ONLY = ("arrival_time_min", "max_speed_kn")
+ROUTING_ONLY = ("arrival_time_min", "max_speed_kn", "route_switch_margin_pct")
 PAPER_ONLY = ("k1", "k2", "k3", "guidance_eps", "guidance_c_rad")
+#: Most planning steps of one horizon (the paper's N_L is 16; Experiment 1 plans 110).
+MAX_HORIZON_STEPS = 1000
 #: Lowest planned speed through water of the routing method [m/s] (2 kn).
 MIN_PLANNED_SPEED_MPS = 2.0 * KNOT
 
@@ -103,11 +109,18 @@ def _number(options: Mapping[str, Any], key: str, default: float, where: str, po
     return float(value)
 
 
+def _switch_margin(options: Mapping[str, Any], where: str) -> float:
+    """``route_switch_margin_pct`` as a fraction (below 100 %)."""
+    margin = _number(options, "route_switch_margin_pct", 100.0 * DEFAULT_SWITCH_MARGIN, where)
+    if margin >= 100.0:
+        raise ScenarioError(f"{where}.route_switch_margin_pct: must be below 100, got {margin!r}")
+    return margin / 100.0
+
+
 def _point_nm(options: Mapping[str, Any], key: str, where: str) -> tuple[float, float]:
     value = options[key]
-    if (not isinstance(value, (list, tuple)) or len(value) != 2
-            or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
-        raise ScenarioError(f"{where}.{key}: expected [north, east] in nm, got {value!r}")
+    if not isinstance(value, (list, tuple)) or len(value) != 2 or not all(is_finite_number(v) for v in value):
+        raise ScenarioError(f"{where}.{key}: expected [north, east] in nm (finite numbers), got {value!r}"[:300])
     return float(value[0]) * NM, float(value[1]) * NM
 
 
@@ -121,12 +134,15 @@ class NavigationParticipant(Participant):
     ``goal_distance_m``.
     """
 
+    OPTIONS = OPTIONS
+
     def __init__(self, name: str, metocean, delta: float, goal: tuple[float, float], speed: float,
                  horizon_steps: int, weights: FieldWeights, guidance: GuidanceParameters,
                  resolution_nm: float, energy: EnergyParameters, ship_range_m: float,
                  static_range_m: float, start_from: str = "prediction",
                  start: tuple[float, float] | None = None, method: str = "paper",
-                 arrival_s: float | None = None, max_speed: float = 24.0 * KNOT) -> None:
+                 arrival_s: float | None = None, max_speed: float = 24.0 * KNOT,
+                 switch_margin: float = DEFAULT_SWITCH_MARGIN) -> None:
         super().__init__(name)
         self.metocean = metocean
         self.delta = float(delta)
@@ -147,7 +163,8 @@ class NavigationParticipant(Participant):
             self.weather = resample_weather(metocean, resolution_nm, t_s=0.0)
             self.field = SuperpositionField(self.weather, goal, energy, guidance, weights)
         else:
-            self.route_planner = RecedingRoutePlanner(metocean, goal, energy, resolution_nm)
+            self.route_planner = RecedingRoutePlanner(metocean, goal, energy, resolution_nm,
+                                                      switch_margin=switch_margin)
             self._route = None
             self._price_scale = None
             self._planned_speed = self.speed
@@ -168,8 +185,9 @@ class NavigationParticipant(Participant):
             raise ScenarioError(f"{where}.goal_nm: the goal lies outside the met-ocean map")
         start = _point_nm(options, "start_nm", where) if "start_nm" in options else None
         horizon = options.get("horizon_steps", 16)
-        if isinstance(horizon, bool) or not isinstance(horizon, int) or horizon < 1:
-            raise ScenarioError(f"{where}.horizon_steps: expected a positive integer, got {horizon!r}")
+        if isinstance(horizon, bool) or not isinstance(horizon, int) or not 1 <= horizon <= MAX_HORIZON_STEPS:
+            raise ScenarioError(f"{where}.horizon_steps: expected an integer from 1 to {MAX_HORIZON_STEPS}, "
+                                f"got {horizon!r}"[:300])
         start_from = options.get("start_from", "prediction")
         if start_from not in ("prediction", "measured"):
             raise ScenarioError(f"{where}.start_from: '{start_from}' is not valid (valid: measured, prediction)")
@@ -198,7 +216,8 @@ class NavigationParticipant(Participant):
                        _number(options, "eps_ship_nm", 4.5, where, positive=True) * NM,
                        _number(options, "eps_static_nm", 6.0, where, positive=True) * NM,
                        start_from, start, method, arrival_s,
-                       _number(options, "max_speed_kn", 24.0, where, positive=True) * KNOT)
+                       _number(options, "max_speed_kn", 24.0, where, positive=True) * KNOT,
+                       _switch_margin(options, where))
         except ValueError as exc:
             raise ScenarioError(f"{where}: {exc}") from exc
 
@@ -233,7 +252,9 @@ class NavigationParticipant(Participant):
 
     def summary(self) -> dict[str, Any]:
         transitions = [t.as_dict() for t in self.trigger.transitions]
-        extra = {} if self.method == "paper" else {"route_searches": self.route_planner.searches}
+        extra = {} if self.method == "paper" else {"route_searches": self.route_planner.searches,
+                                                   "route_switches": self.route_planner.switches,
+                                                   "routes_kept": self.route_planner.kept}
         return {
             **self.counts,
             **extra,
@@ -343,15 +364,18 @@ class NavigationParticipant(Participant):
         requested arrival time (:func:`rhnc.weather_routing.optimal_route`, which tries
         several prices) and the price that found the best route is kept, scaled with the
         calm-water price as the planned speed changes.  When the straight route wins, the
-        highest price tried is kept (it keeps the route straightest)."""
+        highest price tried is kept (it keeps the route straightest).  The route found (its
+        turning points moved sideways while that pays) is the passage plan the planner
+        starts out following (:meth:`RecedingRoutePlanner.follow`)."""
         problem = RoutingProblem(tuple(point), tuple(self.goal), self.metocean, self.energy,
                                  resolution_nm=self.resolution_nm, departure_s=time)
         try:
-            best = optimal_route(problem, arrival_s=self.arrival_s, refine=False)
+            best = optimal_route(problem, arrival_s=self.arrival_s)
         except ValueError as exc:
             log.warning("participant '%s': no route arrives at %.0f s (%s); pricing hours by the "
                         "calm-water shadow price", self.name, self.arrival_s, exc)
             return 1.0
+        self.route_planner.follow(best.waypoints_m)
         price = best.time_price_usd_h
         if not np.isfinite(price):
             price = max(PRICE_MULTIPLES) * time_price_usd_h(problem, straight_route(problem, arrival_s=self.arrival_s))
@@ -376,7 +400,9 @@ class NavigationParticipant(Participant):
                 round(self._planned_speed / SPEED_STEP_MPS) * SPEED_STEP_MPS, self.energy)
         route = planner.route(time, point, self._planned_speed, price,
                               planner.horizon_m(max(self._planned_speed, self.max_speed), self.delta,
-                                                self.horizon_steps))
+                                                self.horizon_steps),
+                              arrival_speed=None if self.arrival_s is None else (
+                                  lambda candidate: self.planned_speed(time, candidate)))
         speed = self.planned_speed(time, route)
         plan = planner.timed_plan(route, time, start_u, speed, self.delta, self.horizon_steps)
         self._route = plan.route

@@ -156,10 +156,14 @@ class NMPCSettings:
         Fraction of the observer's correction applied per step, in (0, 1].
     codegen : bool
         Compile the NLP's functions to C once per machine and reuse the cached library
-        (:mod:`rhnc.nmpc_codegen`); without a compiler they stay interpreted.  Off by
-        default: measured in closed loop, the compiled default problem took more processor
-        time per step than the interpreted one (its 4 MB of straight-line code runs from
-        cold caches at every control step), see ``docs/nmpc-performance.md``.
+        (:mod:`rhnc.nmpc_codegen`: one interval's code mapped over the horizon); without a
+        compiler, or with ``RHNC_NMPC_CODEGEN=0``, they stay interpreted (the same
+        solutions, slower).  On by default: measured in closed loop, a compiled step takes
+        about 40 % less processor time (``docs/nmpc-performance.md``).
+    warm_start_duals : bool
+        Start IPOPT from the previous solve's multipliers, shifted by one interval like
+        the plan (``warm_start_init_point``): about half the iterations.  fatrop's
+        interface takes no multipliers, so it is ignored there.
     """
 
     horizon_steps: int = 15
@@ -188,7 +192,8 @@ class NMPCSettings:
     give_way_action_tcpa_s: float = 900.0
     disturbance_observer: bool = False
     observer_gain: float = 0.5
-    codegen: bool = False
+    codegen: bool = True
+    warm_start_duals: bool = True
 
     def __post_init__(self) -> None:
         if self.horizon_steps < 1:
@@ -342,9 +347,10 @@ class NMPCController:
         self.terminal_weight = TerminalWeight(self.problem.step, params, s.q, s.r, U, self.input_scale,
                                               s.terminal_weight)
         options = solver_options(s.solver, self.problem.equality, s.max_iterations, s.wall_time_limit_s,
-                                 s.cpu_time_limit_s)
+                                 s.cpu_time_limit_s, s.warm_start_duals)
         # the NLP's functions compiled once per machine and cached (or interpreted)
-        library = self.library = NLPLibrary(self.problem.nlp, s.solver, options, s.codegen)
+        library = self.library = NLPLibrary(self.problem.nlp, s.solver, options, s.codegen,
+                                            self.problem.compact_nlp)
         solvers = {"hard": library.solver("rhnc_nmpc")}
         # The second, relaxed attempt gets a solver of its own: a solver keeps state between
         # calls (fatrop), and a failed hard attempt left in it spoils the relaxed one started
@@ -493,6 +499,7 @@ class NMPCController:
         # First the hard problem (slacks fixed at zero: the paper's constraints); only when it
         # fails, the soft one (slacks free): the plan that violates the clearance least.
         problem = self.problem
+        duals = self._dual_guess(time_s)
         elapsed, cpu, iterations, timed_out = 0.0, 0.0, 0, False
         budget = s.wall_time_limit_s
         for relaxed in ((False, True) if problem.sigma_index.size else (False,)):
@@ -502,7 +509,7 @@ class NMPCController:
             if budget is not None:
                 self.solvers.wall_time_s = max(budget - elapsed, 1e-3)
             outcome = self.solvers.solve("relaxed" if relaxed else "hard", x0=x0, p=p, lbx=lbx, ubx=ubx,
-                                         lbg=problem.lbg, ubg=problem.ubg)
+                                         lbg=problem.lbg, ubg=problem.ubg, **duals)
             elapsed += outcome.wall_time_s
             cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
             iterations += max(outcome.iterations, 0)
@@ -534,7 +541,7 @@ class NMPCController:
                                 outcome.f, violation, slack, False, disturbance, report.class_codes,
                                 report.active)
         solution.solve_cpu_time_s = cpu
-        self.memory.store(time_s, states, inputs)
+        self.memory.store(time_s, states, inputs, outcome.lam_x, outcome.lam_g)
         if self.observer is not None:
             self.observer.applied(solution.tau)
         return solution
@@ -579,6 +586,15 @@ class NMPCController:
         if not np.all(np.isfinite(z1)):
             guess[:] = np.nan
         return guess
+
+    def _dual_guess(self, time_s: float) -> dict:
+        """``lam_x0``, ``lam_g0`` from the last solve, shifted, for a solver that starts from them."""
+        if not self.settings.warm_start_duals:
+            return {}
+        shifted = self.memory.shifted_multipliers(time_s)
+        if shifted is None or not (np.all(np.isfinite(shifted[0])) and np.all(np.isfinite(shifted[1]))):
+            return {}
+        return {"lam_x0": shifted[0], "lam_g0": shifted[1]}
 
     def _violation(self, x_opt, g_opt, lbx, ubx) -> float:
         problem = self.problem

@@ -3,13 +3,17 @@
 CasADi evaluates the NLP's functions (objective, constraints, their gradient, Jacobian and
 the Hessian of the Lagrangian) in its virtual machine unless they are compiled.  Here they
 are generated to C (``CodeGenerator``), compiled into a shared library with the machine's C
-compiler and handed to ``nlpsol`` as that library (same iterates, same solution).  Each
-function evaluation is then 2.5-3 times faster in a tight loop, but the library of a
-problem of the default size is large (about 10 MB of C, 4 MB of straight-line machine code), and in closed
-loop, where every control step starts from cold caches, the compiled solves were measured
-slower than the interpreted ones; so it is an option (``NMPCSettings.codegen``, off by
-default; figures in ``docs/nmpc-performance.md``).  Compiling takes about a minute of
-processor time, so it is done once and kept:
+compiler and handed to ``nlpsol`` as that library (same iterates, same solution).
+
+What is compiled is the *compact* form of the NLP (``NMPCProblem.compact_nlp``): one
+control interval's function (model step, stage cost, clearances) mapped over the horizon,
+so that the C holds one interval's code and its derivatives, called in a loop.  The fully
+inlined form that CasADi interprets fastest was tried first: its library (10 MB of C, 4 MB
+of straight-line machine code for N_c = 15) was faster than the interpreter only while hot
+in the cache, and slower in closed loop, where every control step starts cold.  The compact
+library is about a tenth of that (1.6 MB of C, under 1 MB of code); figures in
+``docs/nmpc-performance.md``.  Compiling still takes some 40 s of processor time, so it is
+done once and kept:
 
 * **Where.** ``$RHNC_NMPC_CACHE`` if set, else ``$XDG_CACHE_HOME/rhnc-cosim/nmpc``, else
   ``~/.cache/rhnc-cosim/nmpc``.  One ``nlp_<solver>_<key>.so`` per problem; delete the
@@ -21,7 +25,7 @@ processor time, so it is done once and kept:
   watchdog's forked solver process finds the same file; a changed weight or horizon gets
   a file of its own.  The key is taken from the expression graph rather than from the
   generated C because generating the C costs seconds on every start, and serializing the
-  graph 0.1 s; the C is a function of the graph and the CasADi version.
+  graph a few ms; the C is a function of the graph and the CasADi version.
 * **Concurrency.** The build holds an exclusive lock (``<name>.lock``, ``fcntl``) so that
   two processes starting together compile once; the library is written under a temporary
   name and renamed into place, so a reader never sees half a file.
@@ -51,13 +55,12 @@ LOG = logging.getLogger(__name__)
 CACHE_ENV = "RHNC_NMPC_CACHE"
 #: environment variable that turns code generation off (``0``, ``off``, ``false``, ``no``)
 CODEGEN_ENV = "RHNC_NMPC_CODEGEN"
-#: compiler flags.  Measured on a problem of N_c = 15 with two obstacle slots (10 MB of C):
-#: -O0 compiles in a quarter of -O1's processor time (15 s against 57 s) but its code is
-#: slower than the interpreted functions; -O2 took over 10 minutes on a loaded machine and
-#: was abandoned.
+#: compiler flags.  On the compact NLP of N_c = 15 with one obstacle slot: -O1 compiles in
+#: 39 s, -O2 in 69 s for the same solve times within the noise (the inlined NLP: -O0 was
+#: slower than the interpreter, -O2 took over 10 minutes).
 COMPILER_FLAGS = ("-O1", "-fPIC", "-shared")
 #: bump when the way libraries are made changes, so that old files are not reused
-RECIPE_VERSION = "1"
+RECIPE_VERSION = "2"
 _OFF = {"0", "off", "false", "no"}
 
 
@@ -129,7 +132,7 @@ class NLPLibrary:
     Parameters
     ----------
     nlp : dict
-        CasADi NLP (``x``, ``f``, ``g``, ``p``) of SX expressions.
+        CasADi NLP (``x``, ``f``, ``g``, ``p``) of SX expressions: what is interpreted.
     plugin : str
         NLP solver plugin (``"fatrop"``, ``"ipopt"``, ...): its derivative functions are
         generated.
@@ -138,6 +141,9 @@ class NLPLibrary:
         when the library is compiled: its functions are already numeric code).
     enabled : bool
         False: use the interpreted functions without trying to compile.
+    compact_nlp : dict, optional
+        The same NLP in the form to compile (an MX graph mapping one interval's function,
+        see the module docstring); default ``nlp``.
 
     Attributes
     ----------
@@ -155,8 +161,10 @@ class NLPLibrary:
     #: libraries compiled by this process (the tests count them)
     builds = 0
 
-    def __init__(self, nlp: dict, plugin: str, options: dict, enabled: bool = True) -> None:
+    def __init__(self, nlp: dict, plugin: str, options: dict, enabled: bool = True,
+                 compact_nlp: dict | None = None) -> None:
         self.nlp = nlp
+        self.compact_nlp = nlp if compact_nlp is None else compact_nlp
         self.plugin = plugin
         self.options = dict(options)
         self.mode = "interpreted"
@@ -180,7 +188,7 @@ class NLPLibrary:
         directory = cache_dir()
         try:
             directory.mkdir(parents=True, exist_ok=True)
-            key = library_key(self.nlp, self.plugin, compiler)
+            key = library_key(self.compact_nlp, self.plugin, compiler)
             path = directory / f"nlp_{self.plugin}_{key[:24]}.so"
             if not path.is_file():
                 with _exclusive(directory / f"{path.stem}.lock"):
@@ -196,8 +204,10 @@ class NLPLibrary:
     def _build(self, compiler: str, path: Path) -> float:
         """Generate the C of the NLP's functions and compile it to ``path`` (atomically)."""
         start = time.perf_counter()
-        LOG.info("NMPC: compiling the NLP for %s into %s (once per machine; about a minute)", self.plugin, path)
-        symbolic = ca.nlpsol("rhnc_codegen", self.plugin, self.nlp, self.options)
+        LOG.info("NMPC: compiling the NLP for %s into %s (once per machine; under a minute)", self.plugin, path)
+        # not expanded: expanding would inline the mapped interval function again
+        options = {**self.options, "expand": False}
+        symbolic = ca.nlpsol("rhnc_codegen", self.plugin, self.compact_nlp, options)
         with tempfile.TemporaryDirectory(prefix="rhnc-nlp-") as work:
             generator = ca.CodeGenerator(path.stem, {})
             generator.add(symbolic.oracle())

@@ -2,7 +2,7 @@
 
 The scaled model (see :mod:`rhnc.nmpc`) is linearised about straight motion at speed U
 with the equilibrium input, and P solves the discrete algebraic Riccati equation with the
-stage weights Q and R (python-control ``dare``).  P lives in the reference's along-/
+stage weights Q and R (scipy's ``solve_discrete_are``).  P lives in the reference's along-/
 cross-track frame; the problem rotates the terminal error into that frame.  Values are
 cached per reference speed in 0.25 m/s bins.  Below ``MIN_TERMINAL_SPEED_MPS`` (a reference
 that stops at its destination) P is taken at that speed: about zero speed the cross-track
@@ -15,6 +15,7 @@ from collections.abc import Sequence
 
 import casadi as ca
 import numpy as np
+from scipy.linalg import solve_discrete_are
 
 from rhnc.nmpc_problem import DISTURBANCE_SIZE
 from rhnc.ship_model import ShipParameters
@@ -52,6 +53,10 @@ class TerminalWeight:
         self.input_scale = np.asarray(input_scale, dtype=float)
         self.enabled = enabled
         self._cache: dict[float, np.ndarray] = {}
+        z = ca.SX.sym("z", 6)
+        w = ca.SX.sym("w", 2)
+        z_next = step(z, w, ca.DM.zeros(DISTURBANCE_SIZE))[0]
+        self._linearised = ca.Function("linearised_step", [z, w], [ca.jacobian(z_next, z), ca.jacobian(z_next, w)])
 
     def __call__(self, speed_mps: float) -> np.ndarray:
         """P (6 x 6, scaled, path frame) about straight motion at ``speed_mps`` [m/s]."""
@@ -61,13 +66,7 @@ class TerminalWeight:
         if key not in self._cache:
             z0 = np.array([0.0, 0.0, 0.0, key / self.speed_scale, 0.0, 0.0])
             w0 = self.params.equilibrium_tau(key) / self.input_scale
-            z = ca.SX.sym("z", 6)
-            w = ca.SX.sym("w", 2)
-            z_next = self.step(z, w, ca.DM.zeros(DISTURBANCE_SIZE))[0]
-            jacobian = ca.Function("linearised_step", [z, w], [ca.jacobian(z_next, z), ca.jacobian(z_next, w)])
-            A, B = (np.array(m) for m in jacobian(z0, w0))
-            import control  # python-control: 1.5 s to import, needed only here
-
-            P, _, _ = control.dare(A, B, np.diag(self.q), np.diag(self.r))
+            A, B = (np.array(m) for m in self._linearised(z0, w0))
+            P = solve_discrete_are(A, B, np.diag(self.q), np.diag(self.r))
             self._cache[key] = 0.5 * (P + P.T)
         return self._cache[key]

@@ -34,12 +34,34 @@ class PlanMemory:
         self.states: np.ndarray | None = None
         self.inputs: np.ndarray | None = None
         self.time_s: float | None = None
+        self.lam_x: np.ndarray | None = None
+        self.lam_g: np.ndarray | None = None
 
     def reset(self) -> None:
-        self.states = self.inputs = self.time_s = None
+        self.states = self.inputs = self.time_s = self.lam_x = self.lam_g = None
 
-    def store(self, time_s: float, states: np.ndarray, inputs: np.ndarray) -> None:
+    def store(self, time_s: float, states: np.ndarray, inputs: np.ndarray, lam_x: np.ndarray | None = None,
+              lam_g: np.ndarray | None = None) -> None:
+        """Keep a plan (and the multipliers of the solve that made it, None for a fallback plan)."""
         self.time_s, self.states, self.inputs = float(time_s), np.array(states), np.array(inputs)
+        self.lam_x = None if lam_x is None else np.array(lam_x)
+        self.lam_g = None if lam_g is None else np.array(lam_g)
+
+    def shifted_multipliers(self, time_s: float) -> tuple[np.ndarray, np.ndarray] | None:
+        """The last solve's multipliers (bounds, constraints) advanced to ``time_s``, or None.
+
+        Both vectors are N stage blocks of equal length (the bounds' vector then the last
+        state's): each block takes the one ``shift`` stages later, the blocks past the end
+        repeat the last one, the way :meth:`shifted` treats the plan.
+        """
+        shift = self._shift(time_s)
+        if shift is None or self.lam_x is None or self.lam_g is None:
+            return None
+        N = self.horizon_steps
+        stride_g = len(self.lam_g) // N
+        stride_x = (len(self.lam_x) - 6) // N
+        return (np.r_[_shift_blocks(self.lam_x[:N * stride_x], stride_x, shift), self.lam_x[N * stride_x:]],
+                _shift_blocks(self.lam_g, stride_g, shift))
 
     def _shift(self, time_s: float) -> int | None:
         if self.states is None or self.time_s is None:
@@ -69,6 +91,12 @@ class PlanMemory:
             hold = np.array([float(np.asarray(previous_tau)[0]), 0.0])
             inputs = np.repeat(hold[None, :], N, axis=0)
         return np.clip(inputs, -tau_max, tau_max)
+
+
+def _shift_blocks(values: np.ndarray, stride: int, shift: int) -> np.ndarray:
+    blocks = values.reshape(-1, stride)
+    kept = blocks[shift:]
+    return np.vstack([kept, np.repeat(blocks[-1:], len(blocks) - len(kept), axis=0)]).ravel()
 
 
 def push_guess_clear(z_guess: np.ndarray, slots: np.ndarray, ref_scaled: np.ndarray, control_interval_s: float) -> None:

@@ -52,7 +52,8 @@ from orchestrator.errors import ScenarioError
 from orchestrator.scenario import read_toml
 from rhnc.energy import EnergyParameters
 from rhnc.fields import FieldWeights, GuidanceParameters, SuperpositionField, resample_weather
-from rhnc.metocean import KNOT, NM, MetOceanField
+from orchestrator.geometry import KNOT, NM
+from rhnc.metocean import MetOceanField
 from rhnc.planner import plan_local_path
 
 log = logging.getLogger(__name__)

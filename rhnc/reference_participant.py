@@ -16,10 +16,9 @@ from typing import Any
 import numpy as np
 
 from orchestrator.errors import ScenarioError
+from orchestrator.geometry import KNOT, NM
 from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
 
-NM = 1852.0
-KNOT = NM / 3600.0
 
 
 def line_or_turn_reference(
@@ -78,6 +77,9 @@ def waypoint_reference(elapsed_s: np.ndarray, waypoints_m: np.ndarray, speed_mps
     speed = np.where(s < cumulative[-1], speed_mps, 0.0)
     return np.column_stack([position, psi, speed, zeros, zeros])
 
+
+#: Most points of one reference horizon (the NMPC's horizon is at most 400 intervals).
+MAX_HORIZON_STEPS = 10_000
 
 class ReferencePathParticipant(Participant):
     """Publishes a timed reference trajectory; options in nm, kn and degrees.
@@ -154,8 +156,8 @@ class ReferencePathParticipant(Participant):
                 return line_or_turn_reference(elapsed, start, course, speed, radius)
 
         horizon = options.get("horizon_steps", 15)
-        if isinstance(horizon, bool) or not isinstance(horizon, int) or horizon < 1:
-            raise ScenarioError(f"{where}: option 'horizon_steps' must be an integer >= 1")
+        if isinstance(horizon, bool) or not isinstance(horizon, int) or not 1 <= horizon <= MAX_HORIZON_STEPS:
+            raise ScenarioError(f"{where}: option 'horizon_steps' must be an integer from 1 to {MAX_HORIZON_STEPS}")
         interval = _number(options, "interval_s", where) if "interval_s" in options else context.step_size
         if interval <= 0.0:
             raise ScenarioError(f"{where}: option 'interval_s' must be > 0")

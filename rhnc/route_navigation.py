@@ -16,9 +16,18 @@ One planning update:
    first node; the one minimising (cost of the straight segment to it) + (its cost-to-go)
    is taken, and the route follows the search tree from it to the goal (the goal itself
    is a candidate once it is that near, so the last leg runs straight to it);
-2. the first part of the route (the horizon plus two grid steps) is shortened where a
-   straight segment costs no more than the grid path;
-3. the reference points are placed along it at the times k delta, at the planned speed
+2. the grid path is straightened where it only staircases (within half a grid step) and
+   then shortened wherever a straight segment costs no more than the legs it replaces;
+3. **commitment**: the route followed so far, rejoined from the start (straight to its
+   next turning point), is kept unless the route just found, or the straight line to the
+   goal, is cheaper by more than ``switch_margin`` (0.1 % by default) of the kept route's
+   objective.  All are costed alike, as they would be sailed: at a requested arrival time
+   each by its fuel at the speed through water that arrives on time along it (the search's
+   price of an hour is only an estimate, and a detour it finds can cost more than the
+   line).  Two routes round either side of a gale often cost nearly the
+   same, and replanned every 4 min from a slightly different start the search alone
+   would flip between them, sailing an S round the gale that costs more than either side;
+4. the reference points are placed along it at the times k delta, at the planned speed
    through water (speed over ground = that + the current along the route), the first
    interval at the mean of the ship's predicted speed and the planned one; points past
    the goal stay on the goal.
@@ -26,8 +35,10 @@ One planning update:
 Reuse between updates: for a static field the cost-to-go depends only on the speed and
 the price of time, so it is kept until the planned speed moves to another 0.25 kn step
 (the tree's successors make each update a walk, not a search).  For a field that changes
-in time the weights are evaluated at the time each node would be reached from the
-current start (distance / speed) and the search is redone at every update.
+in time the weights are evaluated at the time each node would be reached from the start
+(distance / speed), and searched again as soon as the last search is done.  Every search
+after the first is spread over several updates (:mod:`rhnc.cost_to_go`) so that no update
+takes long; the last finished tree is used meanwhile.
 """
 
 from __future__ import annotations
@@ -38,8 +49,9 @@ import logging
 import numpy as np
 
 from rhnc.energy import EnergyParameters, brake_power, fuel_rate_t_h
-from rhnc.metocean import KNOT, NM
-from rhnc.route_search import cost_to_go_tree, shortcut_path
+from orchestrator.geometry import KNOT, NM
+from rhnc.cost_to_go import DEFAULT_PIECES, IncrementalCostToGo
+from rhnc.route_search import shortcut_path, simplify_polyline
 from rhnc.track_cost import constant_speed_times, densify, is_time_varying, sample_weather
 from rhnc.weather_routing import RouteSearch, RoutingProblem
 
@@ -47,6 +59,10 @@ log = logging.getLogger(__name__)
 
 #: Planned speeds are rounded to this step [m/s] for the cost-to-go (0.25 kn).
 SPEED_STEP_MPS = 0.25 * KNOT
+
+#: Default least saving, as a fraction of the remaining passage's objective, for which the
+#: planner leaves the route it follows for a new one (0.1 %).
+DEFAULT_SWITCH_MARGIN = 1e-3
 
 
 @dataclasses.dataclass(frozen=True)
@@ -100,7 +116,8 @@ class RecedingRoutePlanner:
     """
 
     def __init__(self, metocean, goal_m: tuple[float, float], energy: EnergyParameters = EnergyParameters(),
-                 resolution_nm: float = 1.0, reach: int = 3):
+                 resolution_nm: float = 1.0, reach: int = 3, switch_margin: float = DEFAULT_SWITCH_MARGIN,
+                 search_pieces: int = DEFAULT_PIECES):
         self.metocean = metocean
         self.goal = np.asarray(goal_m, dtype=float)
         self.energy = energy
@@ -111,30 +128,112 @@ class RecedingRoutePlanner:
         self.resolution_m = resolution_nm * NM
         self.reach = reach
         self.time_varying = is_time_varying(metocean)
-        self._key = None
-        self._tree = None
-        self.searches = 0
+        self.switch_margin = float(switch_margin)
+        self.incremental = IncrementalCostToGo(self.search, search_pieces)
+        self._committed: np.ndarray | None = None
+        #: updates that left the followed route for a cheaper one / that kept it
+        self.switches = 0
+        self.kept = 0
+
+    @property
+    def searches(self) -> int:
+        """Cost-to-go searches finished."""
+        return self.incremental.searches
 
     def cost_to_go(self, time_s: float, start: np.ndarray, speed_mps: float, price_usd_h: float):
-        """Every node's cost to the goal (a :class:`rhnc.route_search.ShortestPathTree`),
-        searched at ``speed_mps`` rounded to 0.25 kn and kept while speed and price hold
-        (for a static field)."""
+        """Every node's cost to the goal (a :class:`rhnc.route_search.ShortestPathTree`).
+
+        Searched at ``speed_mps`` rounded to 0.25 kn.  The first tree is searched at once;
+        afterwards a new search (static weather: when the speed step or the price changed;
+        weather that changes in time: continuously, with the weather at the time each node
+        would be reached from this start) advances by one piece per call
+        (:class:`rhnc.cost_to_go.IncrementalCostToGo`) while the last finished tree is used.
+        """
         key = (round(speed_mps / SPEED_STEP_MPS), round(price_usd_h, 3))
-        if self.time_varying or key != self._key:
-            node_times = None
-            if self.time_varying:
-                nodes = self.search.nodes
-                node_times = time_s + np.hypot(nodes[:, 0] - start[0], nodes[:, 1] - start[1]) / speed_mps
-            weights, _ = self.search.weights(key[0] * SPEED_STEP_MPS, price_usd_h, node_times)
-            self._tree = cost_to_go_tree(self.graph, weights, self.search.target)
-            self._key = key
-            self.searches += 1
-        return self._tree
+        speed = key[0] * SPEED_STEP_MPS
+        incremental = self.incremental
+
+        def node_times():
+            if not self.time_varying:
+                return None
+            nodes = self.search.nodes
+            return time_s + np.hypot(nodes[:, 0] - start[0], nodes[:, 1] - start[1]) / speed
+
+        if incremental.tree is None:
+            incremental.begin(key, speed, price_usd_h, node_times())
+            incremental.complete()
+        elif self.time_varying or key != incremental.key:
+            if incremental.pending_key is None or (not self.time_varying and incremental.pending_key != key):
+                incremental.begin(key, speed, price_usd_h, node_times())
+            incremental.advance()
+        return incremental.tree
 
     def route(self, time_s: float, start_m, speed_mps: float, price_usd_h: float,
-              horizon_m: float) -> np.ndarray:
-        """The route from ``start_m`` to the goal, shortened over ``horizon_m``."""
+              horizon_m: float, arrival_speed=None) -> np.ndarray:
+        """The route from ``start_m`` to the goal (``horizon_m`` is not used: the whole route
+        is shortened).
+
+        Candidates: the route of the cost-to-go and the straight line to the goal.  The route
+        the ship follows is kept (rejoined from the start) unless the cheaper candidate costs
+        less by more than ``switch_margin`` of the kept route's objective, all costed alike
+        by :meth:`RouteSearch.path_cost`: at ``speed_mps`` and
+        ``price_usd_h``, or, given ``arrival_speed`` (route -> speed through water [m/s]
+        that arrives on time along it), each at its own arrival speed, by its fuel alone
+        (the hours are the same)."""
         start = np.asarray(start_m, dtype=float)
+        fresh = self.tree_route(time_s, start, speed_mps, price_usd_h)
+        if len(fresh) == 2 and self._committed is None:
+            self._committed = fresh
+            return fresh
+
+        def objective(candidate):
+            if arrival_speed is None:
+                return self.search.path_cost(candidate, time_s, speed_mps, price_usd_h)
+            return self.search.path_cost(candidate, time_s, arrival_speed(candidate), 0.0)
+
+        # the straight line to the goal is always a candidate: the search's price of time is
+        # an estimate, and a detour it finds may cost more than the line when sailed
+        candidates = [fresh] if len(fresh) == 2 else [fresh, np.vstack([start, self.goal])]
+        costs = [objective(candidate) for candidate in candidates]
+        best = int(np.argmin(costs))
+        route = candidates[best]
+        kept = None if self._committed is None else self.rejoin(self._committed, start)
+        if kept is not None:
+            kept_usd = objective(kept)
+            if costs[best] < (1.0 - self.switch_margin) * kept_usd:
+                self.switches += 1
+                log.debug("t = %.0f s: new route, %.1f USD below the followed one (%.1f USD)",
+                          time_s, kept_usd - costs[best], kept_usd)
+            else:
+                route = kept
+                self.kept += 1
+        self._committed = route
+        return route
+
+    def follow(self, route: np.ndarray) -> None:
+        """Take ``route`` (start to goal, (n, 2) [m]) as the route followed, e.g. a passage
+        planned before departure; the updates keep it as long as nothing is found cheaper."""
+        self._committed = np.asarray(route, dtype=float).copy()
+
+    def rejoin(self, route: np.ndarray, start: np.ndarray) -> np.ndarray | None:
+        """``route`` continued from ``start``: straight to the first turning point beyond the
+        leg nearest to the start (and at least a grid step away), then as before; None when
+        the route is spent."""
+        if len(route) < 2:
+            return None
+        a, b = route[:-1], route[1:]
+        ab = b - a
+        length2 = np.maximum(np.sum(ab * ab, axis=1), 1e-12)
+        t = np.clip(np.sum((start - a) * ab, axis=1) / length2, 0.0, 1.0)
+        distance = np.hypot(*(start - (a + t[:, None] * ab)).T)
+        following = int(np.argmin(distance)) + 1
+        while following < len(route) - 1 and np.hypot(*(route[following] - start)) < self.resolution_m:
+            following += 1
+        return np.vstack([start, route[following:]])
+
+    def tree_route(self, time_s: float, start: np.ndarray, speed_mps: float, price_usd_h: float) -> np.ndarray:
+        """The cheapest route from ``start`` by the cost-to-go: the grid path straightened
+        where it only staircases, then shortened wherever a straight segment costs no more."""
         if np.hypot(*(self.goal - start)) < 1.0:
             return np.vstack([start, self.goal])
         tree = self.cost_to_go(time_s, start, speed_mps, price_usd_h)
@@ -154,17 +253,17 @@ class RecedingRoutePlanner:
         chain = [int(near[best])]
         while chain[-1] != tree.source:
             chain.append(int(tree.predecessor[chain[-1]]))
-        vertices = np.vstack([start, nodes[chain], self.goal])
-        leg_costs = np.concatenate([[first[best]], -np.diff(tree.cost[chain]), [0.0]])
+        # the grid's staircase straightened (within half a grid step), then the path
+        # shortened wherever a straight segment costs no more than the legs it replaces
+        vertices = simplify_polyline(np.vstack([start, nodes[chain], self.goal]), 0.5 * self.resolution_m)
         keep = np.concatenate([[True], np.hypot(*np.diff(vertices, axis=0).T) > 1e-6])
-        leg_costs = leg_costs[keep[1:]]
         vertices = vertices[keep]
-        along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(vertices, axis=0).T))])
-        head = int(min(np.searchsorted(along, horizon_m + 2 * self.resolution_m) + 1, len(vertices)))
-        if head >= 3:
-            kept = shortcut_path(head, lambda i, js: self.search.segment_costs(
-                vertices[i], vertices[js], time_s, speed_mps, price_usd_h), consecutive_costs=leg_costs[:head - 1])
-            vertices = np.vstack([vertices[kept], vertices[head:]])
+        if len(vertices) >= 3:
+            legs = self.search.leg_costs(vertices, time_s, speed_mps, price_usd_h)
+            passed_s = time_s + np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(vertices, axis=0).T))]) / speed_mps
+            kept = shortcut_path(len(vertices), lambda i, js: self.search.segment_costs(
+                vertices[i], vertices[js], passed_s[i], speed_mps, price_usd_h), consecutive_costs=legs)
+            vertices = vertices[kept]
         return vertices
 
     def plan(self, time_s: float, start_m, start_speed_mps: float, speed_mps: float, price_usd_h: float,

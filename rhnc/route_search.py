@@ -259,6 +259,41 @@ def times_along_tree(tree: ShortestPathTree, edge_duration_s: np.ndarray, graph:
     return start_time_s + elapsed
 
 
+def simplify_polyline(points: np.ndarray, tolerance_m: float) -> np.ndarray:
+    """The polyline with every vertex dropped that lies within ``tolerance_m`` [m] of the
+    simplified line (Douglas-Peucker); first and last vertex are kept.
+
+    Applied with half a grid step it straightens the staircase a grid path makes along a
+    course between two of the grid's headings, and keeps its real turns.
+    """
+    points = np.asarray(points, dtype=float)
+    if len(points) < 3:
+        return points.copy()
+    keep = np.zeros(len(points), dtype=bool)
+    keep[[0, -1]] = True
+    stack = [(0, len(points) - 1)]
+    while stack:
+        first, last = stack.pop()
+        if last - first < 2:
+            continue
+        inner = points[first + 1:last]
+        distance = _distance_to_segment(inner, points[first], points[last])
+        worst = int(np.argmax(distance))
+        if distance[worst] > tolerance_m:
+            split = first + 1 + worst
+            keep[split] = True
+            stack.extend([(first, split), (split, last)])
+    return points[keep]
+
+
+def _distance_to_segment(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance [m] of each of ``points`` (n, 2) from the segment a-b."""
+    ab = b - a
+    length2 = float(ab @ ab)
+    t = np.clip(((points - a) @ ab) / length2, 0.0, 1.0) if length2 > 0 else np.zeros(len(points))
+    return np.hypot(*(points - (a + t[:, None] * ab)).T)
+
+
 SegmentCosts = Callable[[int, np.ndarray], np.ndarray]
 
 

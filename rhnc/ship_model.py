@@ -28,9 +28,10 @@ import casadi as ca
 import numpy as np
 
 from orchestrator.errors import ScenarioError
+from rhnc.cosim.model_library import MODELS_DIR
 
 #: The plant's parameter sets, shared with the KCS FMU.
-PARAMETER_SETS_FILE = Path(__file__).resolve().parents[1] / "models" / "KCS" / "parameter_sets.toml"
+PARAMETER_SETS_FILE = MODELS_DIR / "KCS" / "parameter_sets.toml"
 
 #: Keys of a parameter set that the prediction model uses.
 DYNAMICS_KEYS = ("m11", "m22", "m33", "d11", "d22", "d33", "d23", "d32", "tau_u_max", "tau_r_max")

@@ -17,9 +17,13 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from orchestrator.errors import ScenarioError
+from orchestrator.geometry import KNOT
 
-SHIPS_DIR = Path(__file__).resolve().parents[1] / "ships"
-KNOT = 1852.0 / 3600.0
+#: The particulars files: package data of an installed toolchain (``rhnc/cosim/ships``, mapped
+#: from ``ships/`` by pyproject.toml), else ``ships/`` of the source checkout.
+SHIPS_DIR = next(p for p in (Path(__file__).resolve().parent / "cosim" / "ships",
+                             Path(__file__).resolve().parents[1] / "ships") if p.is_dir())
+
 
 #: Plant-FMU parameter name -> particulars attribute.
 PLANT_PARAMETERS = {

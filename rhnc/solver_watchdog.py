@@ -23,12 +23,14 @@ process under the iteration limit only.
 
 from __future__ import annotations
 
+import ctypes
 import dataclasses
 import logging
 import math
 import multiprocessing
 import os
 import signal
+import sys
 import time
 import weakref
 from collections.abc import Callable, Mapping
@@ -78,7 +80,11 @@ class SolveOutcome:
     stopped_by : str
         Which limit stopped it: ``"cpu"``, ``"wall"`` or ``""``.
     cpu_time_s : float
-        Processor time of the solver call [s] (in the process that ran it).
+        Processor time of the solver call [s] (in the process that ran it; in the worker,
+        with the unpacking of the request and the building of the answer).
+    lam_x, lam_g : numpy.ndarray
+        Multipliers of the bounds and of the constraints at ``x`` (NaN when stopped): the
+        next solve's dual warm start.
     """
 
     x: np.ndarray
@@ -91,6 +97,8 @@ class SolveOutcome:
     timed_out: bool = False
     stopped_by: str = ""
     cpu_time_s: float = float("nan")
+    lam_x: np.ndarray | None = None
+    lam_g: np.ndarray | None = None
 
 
 def _outcome(solver: ca.Function, result: Mapping, elapsed: float, cpu: float) -> SolveOutcome:
@@ -99,6 +107,8 @@ def _outcome(solver: ca.Function, result: Mapping, elapsed: float, cpu: float) -
         x=np.array(result["x"]).ravel(), g=np.array(result["g"]).ravel(), f=float(result["f"]),
         success=bool(stats.get("success", False)), iterations=int(stats.get("iter_count", -1)),
         status=str(stats.get("return_status", "unknown")), wall_time_s=elapsed, cpu_time_s=cpu,
+        lam_x=np.array(result["lam_x"]).ravel() if "lam_x" in result else None,
+        lam_g=np.array(result["lam_g"]).ravel() if "lam_g" in result else None,
     )
 
 
@@ -112,6 +122,7 @@ def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, 
     """Child's loop: receive (solver name, arguments), solve, send the outcome."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     while True:
+        cpu_start = time.process_time()  # waiting for a request costs no processor time
         try:
             name, arguments = connection.recv()
         except (EOFError, OSError):
@@ -119,10 +130,23 @@ def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, 
         if name not in solvers:
             solvers[name] = factories[name]()
         outcome = _timed_call(solvers[name], arguments)
+        # the worker's share of the call: unpacking the request, solving, building the answer
+        outcome.cpu_time_s = time.process_time() - cpu_start
         try:
             connection.send(outcome)
         except (BrokenPipeError, OSError):
             return
+
+
+def _die_with_parent() -> None:
+    """Linux: the kernel ends this worker when the controller's process dies (even by SIGKILL),
+    so that a solve looping in native code does not outlive it."""
+    if not sys.platform.startswith("linux"):
+        return  # elsewhere the worker ends at its next receive, when the pipe closes
+    try:
+        ctypes.CDLL(None).prctl(1, signal.SIGKILL, 0, 0, 0)  # 1: PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        LOG.debug("prctl unavailable", exc_info=True)
 
 
 def _kill(pid: int) -> None:
@@ -164,7 +188,7 @@ class BoundedSolver:
             self.wall_time_s = self.cpu_time_s = None
 
     def solve(self, name: str, **arguments) -> SolveOutcome:
-        """Call solver ``name`` with nlpsol arguments (x0, p, lbx, ubx, lbg, ubg)."""
+        """Call solver ``name`` with nlpsol arguments (x0, p, lbx, ubx, lbg, ubg, optionally lam_x0, lam_g0)."""
         if self.wall_time_s is None and self.cpu_time_s is None:
             if name not in self._solvers:
                 self._solvers[name] = self.factories[name]()
@@ -201,7 +225,7 @@ class BoundedSolver:
         n = len(np.atleast_1d(arguments.get("x0", [])))
         ng = len(np.atleast_1d(arguments.get("lbg", [])))
         return SolveOutcome(np.full(n, np.nan), np.full(ng, np.nan), float("nan"), False, -1, status, elapsed,
-                            timed_out=status == WALL_TIME_STATUS)
+                            timed_out=status == WALL_TIME_STATUS, lam_x=np.full(n, np.nan), lam_g=np.full(ng, np.nan))
 
     def _ensure_worker(self) -> None:
         if self._pid is not None:
@@ -210,6 +234,7 @@ class BoundedSolver:
         pid = os.fork()
         if pid == 0:  # child
             parent_end.close()
+            _die_with_parent()
             try:
                 _serve(child_end, dict(self._solvers), self.factories)
             finally:

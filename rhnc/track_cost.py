@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from rhnc.energy import EnergyParameters, brake_power, fuel_rate_t_h
-from rhnc.metocean import NM
+from orchestrator.geometry import NM
 
 #: Longest sub-leg [nm] over which the rates are integrated by the trapezoid rule.
 DEFAULT_SPACING_NM = 0.25

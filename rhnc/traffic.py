@@ -15,10 +15,9 @@ from typing import Any
 import numpy as np
 
 from orchestrator.errors import ScenarioError
-from orchestrator.participant import BuildContext, Participant, Value, reject_unknown_options
+from orchestrator.geometry import KNOT, NM
+from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
 
-NM = 1852.0
-KNOT = NM / 3600.0
 
 TARGET_KEYS = ("start_nm", "velocity_kn", "waypoints_nm", "speed_kn", "radius_nm")
 STATIC_KEYS = ("center_nm", "radius_nm")
@@ -160,7 +159,7 @@ def _target(entry: Mapping[str, Any], where: str) -> Target:
         if np.any(np.hypot(*np.diff(points, axis=0).T) == 0.0):
             raise ScenarioError(f"{where}: 'waypoints_nm' has two equal consecutive points")
         speed = entry.get("speed_kn")
-        if isinstance(speed, bool) or not isinstance(speed, (int, float)) or not speed > 0:
+        if not is_finite_number(speed) or not speed > 0:
             raise ScenarioError(f"{where}: 'speed_kn' must be a number > 0 with 'waypoints_nm'")
         return Target(points, None, float(speed) * KNOT, radius)
     for key in ("start_nm", "velocity_kn"):
@@ -184,6 +183,6 @@ def _pair(entry: Mapping[str, Any], key: str, where: str) -> np.ndarray:
 
 def _radius(entry: Mapping[str, Any], where: str) -> float:
     value = entry.get("radius_nm")
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not value >= 0:
-        raise ScenarioError(f"{where}: 'radius_nm' must be a number >= 0, got {value!r}")
+    if not is_finite_number(value) or not value >= 0:
+        raise ScenarioError(f"{where}: 'radius_nm' must be a finite number >= 0, got {value!r}"[:300])
     return float(value) * NM

@@ -37,9 +37,8 @@ from typing import Any
 import numpy as np
 
 from orchestrator.errors import ScenarioError
+from orchestrator.geometry import KNOT, NM
 
-NM = 1852.0
-KNOT = NM / 3600.0
 #: A target's last leg is extended by this long a sail [h] so that it never stops.
 EXTEND_LAST_LEG_H = 3.0
 

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rhnc.energy import EnergyParameters, brake_power, cost_rate, emission_rate
-from rhnc.metocean import KNOT, NM
+from orchestrator.geometry import KNOT, NM
 
 CONTAINER_CII_A = 1984.0
 CONTAINER_CII_C = 0.489

@@ -22,7 +22,7 @@ speed from the comparison:
   the routing model at one constant speed through water (the baseline's mean), which
   isolates the route from the speed;
 * each run's mean speed through water; runs whose mean speeds differ by more than
-  :data:`SPEED_SPREAD_LIMIT_PERCENT` without an equal-arrival baseline beside each are
+  :data:`rhnc.voyage_comparison_tables.SPEED_SPREAD_LIMIT_PERCENT` without an equal-arrival baseline beside each are
   flagged in the table.
 
 Tables, figures and the sweep summary are built in :mod:`rhnc.voyage_comparison_tables`.
@@ -46,40 +46,12 @@ from orchestrator.errors import ScenarioError
 from orchestrator.participant import is_finite_number
 from orchestrator.scenario import load_scenario
 from rhnc.equal_arrival import EqualArrival, match_arrival_time
-from rhnc.metocean import KNOT, NM
+from orchestrator.geometry import KNOT, NM
+from rhnc.voyage_comparison_tables import evaluation_section, sweep_section
+from rhnc.voyage_spec import (VOYAGE_KEYS, EqualArrivalSettings, OptimalRouteSettings, equal_arrival,
+                              optimal_route, point, positive, reject_unknown)
 
 log = logging.getLogger(__name__)
-
-VOYAGE_KEYS = ("start_nm", "goal_nm", "arrival_radius_nm", "max_duration_h", "equal_arrival", "optimal_route")
-EQUAL_ARRIVAL_KEYS = ("scenario", "speed_key", "systems", "max_trials")
-OPTIMAL_ROUTE_KEYS = ("resolution_nm", "avoid")
-#: Runs whose mean speeds through water differ by more than this are not comparable
-#: without an equal-arrival baseline [%].
-SPEED_SPREAD_LIMIT_PERCENT = 0.5
-#: Below this available saving [% of the straight route's cost] no share is given: the
-#: baseline arrives in the same macro step as the system, up to half a step (30 s of an 8 h
-#: passage) apart, and with fuel rising with about the cube of speed that alone moves a
-#: total by a few tenths of a percent, so a share of a smaller saving measures noise.
-MIN_AVAILABLE_SAVING_PERCENT = 0.5
-
-
-@dataclass(frozen=True)
-class EqualArrivalSettings:
-    """``[voyage.equal_arrival]``: which scenario, which speed key, for which systems."""
-
-    scenario: Path
-    speed_key: str
-    systems: tuple[str, ...]
-    max_trials: int = 8
-
-
-@dataclass(frozen=True)
-class OptimalRouteSettings:
-    """``[voyage.optimal_route]``: grid resolution [nm] and circles to avoid [m]."""
-
-    resolution_nm: float = 0.5
-    avoid_m: tuple[tuple[float, float, float], ...] = ()
-
 
 @dataclass(frozen=True)
 class SailedVoyage:
@@ -131,18 +103,18 @@ class VoyageComparison:
     def from_table(cls, table: Mapping[str, Any], path: Path, spec: Mapping[str, Any]) -> "VoyageComparison":
         """Check ``[voyage]`` of the comparison file ``path``; errors name the key."""
         where = f"{path}: voyage"
-        _reject_unknown(table, VOYAGE_KEYS, where)
-        start = _point(table, "start_nm", where)
-        goal = _point(table, "goal_nm", where)
-        radius = _positive(table, "arrival_radius_nm", where, 0.5)
-        max_hours = _positive(table, "max_duration_h", where, 24.0)
+        reject_unknown(table, VOYAGE_KEYS, where)
+        start = point(table, "start_nm", where)
+        goal = point(table, "goal_nm", where)
+        radius = positive(table, "arrival_radius_nm", where, 0.5)
+        max_hours = positive(table, "max_duration_h", where, 24.0)
         labels = tuple(run["label"] for run in spec["runs"])
         equal = None
         if "equal_arrival" in table:
-            equal = _equal_arrival(table["equal_arrival"], path, labels, spec.get("set", {}))
+            equal = equal_arrival(table["equal_arrival"], path, labels, spec.get("set", {}))
         optimal = None
         if "optimal_route" in table:
-            optimal = _optimal_route(table["optimal_route"], f"{where}.optimal_route")
+            optimal = optimal_route(table["optimal_route"], f"{where}.optimal_route")
         scenarios = {run["label"]: path.parent / run["scenario"] for run in spec["runs"]}
         comparison = cls(path, start * NM, goal * NM, radius, max_hours * 3600.0, equal, optimal, scenarios)
         comparison.published = {run["label"]: dict(run["paper"]) for run in spec["runs"] if "paper" in run}
@@ -189,8 +161,6 @@ class VoyageComparison:
     def evaluate(self, reports: Mapping[str, Any], runner: ScenarioRunner, overrides: Mapping[str, Any],
                  out_dir: Path) -> Section:
         """Equal-arrival baselines, route costs and the tables for one set of runs."""
-        from rhnc.voyage_comparison_tables import evaluation_section
-
         systems = {label: read_voyage(label, report) for label, report in reports.items()}
         baselines: dict[str, EqualArrival] = {}
         if self.equal_arrival is not None:
@@ -243,8 +213,6 @@ class VoyageComparison:
 
     def summarise_sweep(self, key: str, members: list[tuple[Any, Section]], out_dir: Path) -> Section:
         """The distribution, over a sweep's members, of each system's share of the available saving."""
-        from rhnc.voyage_comparison_tables import sweep_section
-
         return sweep_section(key, members, out_dir)
 
     # -- baselines and route costs ------------------------------------------------------------
@@ -355,77 +323,3 @@ def _uses_steps(scenario: Path) -> bool:
 
 def _float(value) -> float:
     return float(value) if is_finite_number(value) else math.nan
-
-
-def _reject_unknown(table: Mapping[str, Any], allowed, where: str) -> None:
-    for key in table:
-        if key not in allowed:
-            raise ScenarioError(f"{where}: unknown key '{key}' (valid: {', '.join(allowed)})")
-
-
-def _point(table: Mapping[str, Any], key: str, where: str) -> np.ndarray:
-    value = table.get(key)
-    if not isinstance(value, list) or len(value) != 2 or not all(is_finite_number(v) for v in value):
-        raise ScenarioError(f"{where}.{key}: expected [north, east] in nm, got {value!r}")
-    return np.asarray(value, dtype=float)
-
-
-def _positive(table: Mapping[str, Any], key: str, where: str, default: float) -> float:
-    value = table.get(key, default)
-    if not is_finite_number(value) or value <= 0:
-        raise ScenarioError(f"{where}.{key}: expected a positive number, got {value!r}")
-    return float(value)
-
-
-def _equal_arrival(table, path: Path, labels: tuple[str, ...], overrides: Mapping[str, Any]) -> EqualArrivalSettings:
-    where = f"{path}: voyage.equal_arrival"
-    if not isinstance(table, Mapping):
-        raise ScenarioError(f"{where}: expected a table ([voyage.equal_arrival])")
-    _reject_unknown(table, EQUAL_ARRIVAL_KEYS, where)
-    if not isinstance(table.get("scenario"), str):
-        raise ScenarioError(f"{where}.scenario: expected the baseline scenario file (relative to the comparison)")
-    scenario = path.parent / table["scenario"]
-    if not scenario.is_file():
-        raise ScenarioError(f"{where}.scenario: scenario file not found: {scenario}")
-    systems = table.get("systems", list(labels))
-    if not isinstance(systems, list) or not all(isinstance(s, str) for s in systems):
-        raise ScenarioError(f"{where}.systems: expected a list of run labels")
-    for label in systems:
-        if label not in labels:
-            raise ScenarioError(f"{where}.systems: '{label}' is not a run label ({', '.join(labels)})")
-    trials = table.get("max_trials", 8)
-    if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
-        raise ScenarioError(f"{where}.max_trials: expected a positive integer, got {trials!r}")
-    speed_key = table.get("speed_key")
-    if speed_key is None:
-        loaded = load_scenario(scenario, dict(overrides))
-        routes = [p for p in loaded.participants if p.type == "reference_path"]
-        if len(routes) != 1:
-            raise ScenarioError(f"{where}.speed_key: the baseline scenario has {len(routes)} reference_path "
-                                "participants; name the reference speed's dotted key")
-        speed_key = f"participants.{routes[0].name}.options.speed_kn"
-    if not isinstance(speed_key, str) or not all(speed_key.split(".")):
-        raise ScenarioError(f"{where}.speed_key: expected a dotted scenario key, got {speed_key!r}")
-    return EqualArrivalSettings(scenario, speed_key, tuple(systems), trials)
-
-
-def _optimal_route(table, where: str) -> OptimalRouteSettings:
-    if not isinstance(table, Mapping):
-        raise ScenarioError(f"{where}: expected a table ([voyage.optimal_route])")
-    _reject_unknown(table, OPTIMAL_ROUTE_KEYS, where)
-    resolution = _positive(table, "resolution_nm", where, 0.5)
-    avoid = table.get("avoid", [])
-    if not isinstance(avoid, list):
-        raise ScenarioError(f"{where}.avoid: expected a list of {{ center_nm = [x, y], radius_nm = r }}")
-    circles = []
-    for i, entry in enumerate(avoid):
-        here = f"{where}.avoid[{i}]"
-        if not isinstance(entry, Mapping):
-            raise ScenarioError(f"{here}: expected {{ center_nm = [x, y], radius_nm = r }}")
-        _reject_unknown(entry, ("center_nm", "radius_nm"), here)
-        centre = _point(entry, "center_nm", here)
-        radius = entry.get("radius_nm")
-        if not is_finite_number(radius) or radius <= 0:
-            raise ScenarioError(f"{here}.radius_nm: expected a positive number, got {radius!r}")
-        circles.append((float(centre[0] * NM), float(centre[1] * NM), float(radius * NM)))
-    return OptimalRouteSettings(resolution, tuple(circles))

@@ -29,15 +29,22 @@ import numpy as np
 import pandas as pd
 
 from orchestrator.compare import Section, markdown_table
+from orchestrator.geometry import KNOT, NM
 
 #: A run whose first sample lies further than this from the comparison's start is flagged [m].
-START_TOLERANCE_M = 0.05 * 1852.0
+START_TOLERANCE_M = 0.05 * NM
+#: Runs whose mean speeds through water differ by more than this are not comparable
+#: without an equal-arrival baseline [%].
+SPEED_SPREAD_LIMIT_PERCENT = 0.5
+#: Below this available saving [% of the straight route's cost] no share is given: the
+#: baseline arrives in the same macro step as the system, up to half a step (30 s of an 8 h
+#: passage) apart, and with fuel rising with about the cube of speed that alone moves a
+#: total by a few tenths of a percent, so a share of a smaller saving measures noise.
+MIN_AVAILABLE_SAVING_PERCENT = 0.5
 
 
 def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) -> Section:
     """Build the tables and flags of one comparison (see the module docstring)."""
-    from rhnc.voyage_comparison import MIN_AVAILABLE_SAVING_PERCENT, SPEED_SPREAD_LIMIT_PERCENT
-
     straight_nm = comparison.straight_distance_nm
     rows = []
     for label, system in systems.items():
@@ -116,8 +123,6 @@ def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) ->
 
 def sweep_section(key: str, members: list[tuple[Any, Section]], out_dir: Path) -> Section:
     """Per-member table, distribution of each system's share, and a figure."""
-    from rhnc.voyage_comparison import MIN_AVAILABLE_SAVING_PERCENT
-
     rows = []
     for value, section in members:
         row: dict[str, Any] = {key: value}
@@ -199,7 +204,7 @@ def _published_row(label: str, paper: dict[str, Any]) -> dict[str, Any]:
 
 
 def _route_row(label: str, kind: str, route, made_good_nm: float) -> dict[str, Any]:
-    mean_kn = float(route.speed_through_water_mps) / (1852.0 / 3600.0)
+    mean_kn = float(route.speed_through_water_mps) / KNOT
     return {
         "voyage": label, "kind": kind, "arrived": True, "arrival [min]": route.duration_s / 60.0,
         "mean speed through water [kn]": mean_kn,
@@ -232,7 +237,7 @@ def _flags(systems, baselines, routes, limit_percent: float, start_m=None) -> li
         runs = list(systems.values()) + [e.best.run for e in baselines.values() if e.best is not None]
         for run in runs:
             if len(run.track_m) and np.hypot(*(run.track_m[0] - start_m)) > START_TOLERANCE_M:
-                offset_nm = np.hypot(*(run.track_m[0] - start_m)) / 1852.0
+                offset_nm = np.hypot(*(run.track_m[0] - start_m)) / NM
                 flags.append(f"{run.label} started {offset_nm:.2f} nm from voyage.start_nm: not the same passage")
     speeds = {label: s.mean_speed_through_water_kn for label, s in systems.items()
               if math.isfinite(s.mean_speed_through_water_kn)}

@@ -30,7 +30,8 @@ import numpy as np
 
 from orchestrator.errors import ScenarioError
 from orchestrator.participant import is_finite_number
-from rhnc.metocean import DEFAULT_WIND_CONTROL_POINTS, KNOT, NM, MetOceanField, fetch_limited_hs, map_axis
+from orchestrator.geometry import KNOT, NM
+from rhnc.metocean import DEFAULT_WIND_CONTROL_POINTS, MetOceanField, check_grid_nodes, fetch_limited_hs, map_axis
 
 #: Draws of the storm set, fixed on 2026-11-22 before any routing result (docs/weather.md).
 STORM_SET_DRAWS = {
@@ -41,6 +42,8 @@ STORM_SET_DRAWS = {
     "background_wind_ms": (4.0, 10.0),  # wind far from the storm, uniform
     "wind_from_deg": (0.0, 360.0),    # direction the wind comes from, uniform
 }
+#: Most time steps of a moving storm's field.
+MAX_TIME_STEPS = 1000
 #: Members of the documented storm set (the batch runs 0 .. STORM_SET_SIZE - 1).
 STORM_SET_SIZE = 30
 
@@ -166,7 +169,12 @@ def cyclone(x_range_nm=(0.0, 100.0), y_range_nm=(0.0, 100.0), resolution_nm: flo
     if translation_kn > 0:
         if time_step_h > duration_h:
             raise ValueError(f"time_step_h {time_step_h} is longer than duration_h {duration_h}")
-        count = int(math.floor(duration_h / time_step_h + 1e-9)) + 1
+        steps = duration_h / time_step_h
+        if not steps < MAX_TIME_STEPS:
+            raise ValueError(f"duration_h / time_step_h gives {steps + 1:.3g} time steps, more than the limit of "
+                             f"{MAX_TIME_STEPS}")
+        count = int(math.floor(steps + 1e-9)) + 1
+        check_grid_nodes(x.size, y.size, count)
         times_s = np.arange(count) * time_step_h * 3600.0
     else:
         times_s = np.array([0.0])

@@ -38,7 +38,8 @@ import numpy as np
 from scipy.optimize import brentq
 
 from rhnc.energy import EnergyParameters, brake_power, fuel_rate_t_h
-from rhnc.metocean import MetOceanField, NM
+from orchestrator.geometry import NM
+from rhnc.metocean import MetOceanField, axis_node_count
 from rhnc.offline_route import shortest_route
 from rhnc.route_search import (IMPASSABLE, GridGraph, build_grid_graph, segment_clearance, shortcut_path,
                                shortest_path_tree, times_along_tree)
@@ -129,6 +130,8 @@ def _check(problem: RoutingProblem, speed_mps, arrival_s) -> None:
         raise ValueError(f"arrival_s {arrival_s!r} must be after the departure {problem.departure_s!r} s")
     if not problem.resolution_nm > 0:
         raise ValueError(f"resolution_nm must be positive, got {problem.resolution_nm!r}")
+    for axis in (problem.metocean.x, problem.metocean.y):  # the search grid, refused before it is built
+        axis_node_count(float(axis[-1] - axis[0]), problem.resolution_nm * NM, "the route search's resolution_nm")
     for name, point in (("start", problem.start_m), ("goal", problem.goal_m)):
         if not bool(problem.metocean.contains(point[0], point[1])):
             raise ValueError(f"the {name} ({point[0]:.0f}, {point[1]:.0f}) m lies outside the met-ocean map")
@@ -199,8 +202,9 @@ class RouteSearch:
         self.problem = problem
         x_min, x_max, y_min, y_max = problem.metocean.extent
         step = problem.resolution_nm * NM
-        x = np.linspace(x_min, x_max, int(round((x_max - x_min) / step)) + 1)
-        y = np.linspace(y_min, y_max, int(round((y_max - y_min) / step)) + 1)
+        what = "the route search's resolution_nm"
+        x = np.linspace(x_min, x_max, axis_node_count(x_max - x_min, step, what))  # refused beyond the limit
+        y = np.linspace(y_min, y_max, axis_node_count(y_max - y_min, step, what))
         self.graph: GridGraph = build_grid_graph(x, y, problem.reach, problem.avoid)
         self.nodes = self.graph.node_points()
         self.source = self.graph.nearest_free_node(problem.start_m)
@@ -212,18 +216,40 @@ class RouteSearch:
         self.static_weather = None if is_time_varying(problem.metocean) else problem.metocean.sample(
             self.nodes[:, 0], self.nodes[:, 1])
 
-    def weights(self, speed_mps: float, time_price_usd_h: float, node_times_s: np.ndarray | None):
-        """Edge weights [USD] and durations [s] at constant speed through water."""
+    def node_rates(self, speed_mps: float, time_price_usd_h: float, nodes, node_times_s: np.ndarray | None):
+        """Objective rate [USD/h] and speed over ground [m/s] of every move leaving ``nodes``.
+
+        Parameters
+        ----------
+        speed_mps : float
+            Speed through water [m/s].
+        time_price_usd_h : float
+            Price of an hour [USD/h], added to the fuel cost rate.
+        nodes : array of int or slice
+            Node ids.
+        node_times_s : ndarray or None
+            Time [s] each of ``nodes`` is passed (a field that changes in time), else None.
+
+        Returns
+        -------
+        rate, over_ground : ndarray (len(nodes), moves)
+        """
         p = self.problem
-        weather = self.static_weather
-        if weather is None:
-            weather = sample_weather(p.metocean, self.nodes[:, 0], self.nodes[:, 1], node_times_s)
+        if self.static_weather is not None:
+            weather = {name: values[nodes] for name, values in self.static_weather.items()}
+        else:
+            weather = sample_weather(p.metocean, self.nodes[nodes, 0], self.nodes[nodes, 1], node_times_s)
         heading = self.graph.heading_rad[None, :]
         along = weather["current_north"][:, None] * np.cos(heading) + weather["current_east"][:, None] * np.sin(heading)
-        over_ground = speed_mps + along
         power = brake_power(speed_mps, heading, weather["wind_north"][:, None], weather["wind_east"][:, None],
                             weather["hs"][:, None], p.energy)
         rate = fuel_rate_t_h(power, p.energy) * p.energy.fuel_price_usd_t + time_price_usd_h
+        return rate, speed_mps + along
+
+    def edge_weights(self, rate: np.ndarray, over_ground: np.ndarray):
+        """Edge weights [USD] and durations [s] from the rates of :meth:`node_rates` at every node:
+        the trapezoid of the rate at the edge's two ends over the time the edge takes at the
+        mean of their speeds over ground (``IMPASSABLE`` where a head current stops the ship)."""
         over_ground = over_ground.ravel()
         rate = rate.ravel()
         edge_speed = 0.5 * (over_ground[self._source_move] + over_ground[self._target_move])
@@ -232,6 +258,11 @@ class RouteSearch:
         weight = np.where(passable, (rate[self._source_move] + rate[self._target_move]) * (duration / 7200.0),
                           IMPASSABLE)
         return weight, duration
+
+    def weights(self, speed_mps: float, time_price_usd_h: float, node_times_s: np.ndarray | None):
+        """Edge weights [USD] and durations [s] at constant speed through water."""
+        rate, over_ground = self.node_rates(speed_mps, time_price_usd_h, slice(None), node_times_s)
+        return self.edge_weights(rate, over_ground)
 
     def route(self, speed_mps: float, time_price_usd_h: float, passes: int) -> np.ndarray:
         """Cheapest polyline start -> goal on the grid, shortened where straight segments pay."""
@@ -285,6 +316,47 @@ class RouteSearch:
         for cx, cy, radius in p.avoid:
             cost[segment_clearance(np.broadcast_to(a, ends.shape), ends, (cx, cy)) < radius] = np.inf
         return cost
+
+    def leg_costs(self, polyline: np.ndarray, start_s: float, speed_mps: float, time_price_usd_h: float) -> np.ndarray:
+        """Objective [USD] of each leg of ``polyline`` sailed at constant speed through water
+        from ``start_s``.
+
+        The measure of :meth:`segment_costs`, leg after leg: sub-legs no longer than half a
+        grid step, each costed by the trapezoid of the rate at its ends with its own course,
+        the weather sampled at the time each end is passed (distance / speed through water).
+        Infinite where a head current stops the ship or a leg enters an avoided circle.
+        """
+        p = self.problem
+        vertices = np.asarray(polyline, dtype=float)
+        legs = np.diff(vertices, axis=0)
+        pieces = np.maximum(np.ceil(np.hypot(*legs.T) / (p.resolution_nm * NM / 2.0) - 1e-9).astype(int), 1)
+        leg_of = np.repeat(np.arange(len(legs)), pieces)
+        fractions = np.concatenate([np.arange(n) / n for n in pieces]) if len(legs) else np.zeros(0)
+        points = np.vstack([vertices[leg_of] + fractions[:, None] * legs[leg_of], vertices[-1:]])
+        sub = np.diff(points, axis=0)
+        length = np.hypot(*sub.T)
+        passed_s = start_s + np.concatenate([[0.0], np.cumsum(length)]) / speed_mps
+        heading = np.tile(np.arctan2(legs[:, 1], legs[:, 0])[leg_of], 2)
+        ends = np.vstack([points[:-1], points[1:]])
+        weather = sample_weather(p.metocean, ends[:, 0], ends[:, 1], np.concatenate([passed_s[:-1], passed_s[1:]]))
+        along = weather["current_north"] * np.cos(heading) + weather["current_east"] * np.sin(heading)
+        power = brake_power(speed_mps, heading, weather["wind_north"], weather["wind_east"], weather["hs"], p.energy)
+        rate = fuel_rate_t_h(power, p.energy) * p.energy.fuel_price_usd_t + time_price_usd_h
+        count = length.size
+        sub_speed = speed_mps + 0.5 * (along[:count] + along[count:])
+        hours = np.where(length > 0, length / np.maximum(sub_speed, 1e-3), 0.0) / 3600.0
+        cost = np.bincount(leg_of, weights=0.5 * (rate[:count] + rate[count:]) * hours, minlength=len(legs))
+        cost[np.bincount(leg_of, weights=(sub_speed <= 1e-3) & (length > 0), minlength=len(legs)) > 0] = np.inf
+        for cx, cy, radius in p.avoid:
+            cost[segment_clearance(vertices[:-1], vertices[1:], (cx, cy)) < radius] = np.inf
+        return cost
+
+    def path_cost(self, polyline: np.ndarray, start_s: float, speed_mps: float, time_price_usd_h: float) -> float:
+        """Objective [USD] of sailing ``polyline`` at constant speed through water from
+        ``start_s``: the sum of :meth:`leg_costs`."""
+        if len(polyline) < 2:
+            return 0.0
+        return float(np.sum(self.leg_costs(polyline, start_s, speed_mps, time_price_usd_h)))
 
 
 def time_price_usd_h(problem: RoutingProblem, route: RouteResult) -> float:

@@ -1,22 +1,31 @@
 """Mutation testing of the core modules with mutmut; writes ``docs/mutation-report.md``.
 
-For each module, a clean copy of the committed tree (``git archive HEAD``) is made in a
-temporary folder, mutmut is configured there to mutate that module alone and to run the
-module's own tests, and its verdicts are collected.  A surviving mutant is either killed by
-a new test (rerun the script) or explained:
+For each module, a clean copy of the committed tree (``git archive HEAD``, plus the FMUs
+already built under ``fmus/``) is made in a temporary folder, mutmut is configured there to
+mutate that module's files alone and to run the module's own tests, and its verdicts are
+stored in ``docs/mutation-verdicts.json`` (one entry per module, replaced when the module is
+rerun).  The report is rendered from the stored verdicts.  A surviving mutant is either
+killed by a new test (commit it, rerun the module) or explained:
 
-* automatically, when the mutated line only feeds the text of a log message (``LOG.info``,
+* automatically, when the mutated lines only feed a log message (``LOG.info``,
   ``log.warning``, ...): the message's wording is not behaviour;
-* by hand, in :data:`EXPLAINED_RULES`, matched on the mutated line itself (so the
-  explanation follows the code, not mutmut's numbering, which moves when a module changes).
+* by hand, in ``scripts/mutation_equivalents.py``, matched on the mutated line itself (so
+  the explanation follows the code, not mutmut's numbering, which moves when a module
+  changes).  After editing it, ``--report-only`` re-renders the report without rerunning.
 
-Run (slow: about a mutant a second on an idle core; the NMPC and master take longest)::
+Each mutant gets a time limit of ``(t + timeout_constant) * timeout_multiplier`` seconds,
+``t`` being the clean run time of the tests that cover it; a mutant that runs out of it
+(an endless loop, a solver that no longer converges) counts as killed, as mutmut does.
 
-    python scripts/mutation_report.py                   # every module
+Run (slow: about a mutant a second on an idle core for the quick modules, several seconds
+each for the NMPC)::
+
     python scripts/mutation_report.py --only trigger voyage
-    python scripts/mutation_report.py --children 2
-
-Modules already in the report and not rerun keep their section.
+    python scripts/mutation_report.py --only nmpc --sample 80 --timeout-multiplier 3
+    python scripts/mutation_report.py --only nmpc_terminal nmpc_problem --timeout-multiplier 3
+    python scripts/mutation_report.py --only master --survivors-only   # after new tests
+    python scripts/mutation_report.py --report-only       # re-render with new explanations
+    python scripts/mutation_report.py                     # every module (hours)
 """
 
 from __future__ import annotations
@@ -25,73 +34,74 @@ import argparse
 import ast
 import datetime as dt
 import json
+import random
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from mutation_equivalents import EXPLAINED_RULES  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 REPORT = REPO / "docs" / "mutation-report.md"
+VERDICTS = REPO / "docs" / "mutation-verdicts.json"
 
-#: module key -> (source file, the tests that exercise it)
+@dataclass(frozen=True)
+class Module:
+    """One unit of the report: the files mutated together and the tests run against them.
+
+    ``tests`` is the pytest selection (files or node ids); mutmut runs, for each mutant, only
+    those of them that executed the mutated function in a clean run, stopping at the first
+    failure.  ``pytest_args`` narrows it further (``-k``/``-m`` expressions).
+    """
+
+    sources: tuple[str, ...]
+    tests: tuple[str, ...]
+    pytest_args: tuple[str, ...] = ()
+
+
 MODULES = {
-    "trigger": ("rhnc/trigger.py", ["tests/rhnc/test_trigger.py", "tests/rhnc/test_navigation_participant.py"]),
-    "reference": ("rhnc/reference.py", ["tests/rhnc/test_reference.py"]),
-    "energy": ("rhnc/energy.py", ["tests/rhnc/test_energy.py"]),
-    "voyage": ("rhnc/voyage.py", ["tests/rhnc/test_voyage.py"]),
-    "planner": ("rhnc/planner.py", ["tests/rhnc/test_fields_planner.py"]),
-    "fields": ("rhnc/fields.py", ["tests/rhnc/test_fields_planner.py"]),
-    "nmpc": ("rhnc/nmpc.py", ["tests/rhnc/test_nmpc.py"]),
-    "master": ("orchestrator/master.py", ["tests/orchestrator/test_master.py"]),
-    "scenario": ("orchestrator/scenario.py", ["tests/orchestrator/test_scenario.py"]),
-    "fmu_participant": ("orchestrator/fmu_participant.py", ["tests/orchestrator/test_fmu_participant.py"]),
+    "trigger": Module(("rhnc/trigger.py",), ("tests/rhnc/test_trigger.py", "tests/rhnc/test_navigation_participant.py")),
+    "reference": Module(("rhnc/reference.py",), ("tests/rhnc/test_reference.py",)),
+    "energy": Module(("rhnc/energy.py",), ("tests/rhnc/test_energy.py",)),
+    "voyage": Module(("rhnc/voyage.py",), ("tests/rhnc/test_voyage.py",)),
+    "planner": Module(("rhnc/planner.py",), ("tests/rhnc/test_fields_planner.py", "tests/rhnc/test_planner_guards.py")),
+    "fields": Module(("rhnc/fields.py",), ("tests/rhnc/test_fields_planner.py", "tests/rhnc/test_fields_guards.py")),
+    # the NMPC's parts together (slow: about 2400 mutants against solver runs; see --sample) ...
+    "nmpc": Module(("rhnc/nmpc.py", "rhnc/nmpc_problem.py", "rhnc/nmpc_terminal.py", "rhnc/nmpc_warm_start.py",
+                    "rhnc/nmpc_colregs.py"),
+                   ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py",
+                    "tests/rhnc/test_nmpc_cost.py")),
+    # ... or file by file (each its own run, so that a part finishes and reports on its own)
+    "nmpc_warm_start": Module(("rhnc/nmpc_warm_start.py",), ("tests/rhnc/test_nmpc.py",)),
+    "nmpc_terminal": Module(("rhnc/nmpc_terminal.py",), ("tests/rhnc/test_nmpc.py",)),
+    "nmpc_colregs": Module(("rhnc/nmpc_colregs.py",), ("tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py")),
+    "nmpc_problem": Module(("rhnc/nmpc_problem.py",), ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py",
+                                                       "tests/rhnc/test_nmpc_cost.py")),
+    "nmpc_controller": Module(("rhnc/nmpc.py",), ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py",
+                                                  "tests/rhnc/test_nmpc_limits.py")),
+    "nmpc_codegen": Module(("rhnc/nmpc_codegen.py",), ("tests/rhnc/test_nmpc_codegen.py",)),
+    "master": Module(("orchestrator/master.py",), ("tests/orchestrator/test_master.py",
+                                                   "tests/orchestrator/test_master_guards.py",
+                                                   "tests/orchestrator/test_fmu_participant.py")),
+    # the scenario file's reader: its own tests and those reading the tables it parses for others
+    "scenario": Module(("orchestrator/scenario.py",), ("tests/orchestrator/test_scenario.py",
+                                                       "tests/orchestrator/test_scenario_acceptance.py",
+                                                       "tests/orchestrator/test_port_mapping.py",
+                                                       "tests/orchestrator/test_master.py",
+                                                       "tests/orchestrator/test_fmu_participant.py")),
+    "fmu_participant": Module(("orchestrator/fmu_participant.py",), ("tests/orchestrator/test_fmu_participant.py",
+                                                                     "tests/orchestrator/test_fmu_participant_guards.py")),
 }
 
-_NO_ROWS = "an empty (0, k) array: no row is read, the column count does not matter"
-_FLOAT = ("the dtype only changes for integer input, and every use combines it with a float array or "
-          "constant (numpy promotes), so the results are the same floats")
-_SIGN = "only the sign of the range rate is used, and the divisor is positive either way"
-_TRAPEZOID = "the trapezoid rule over fewer than two samples is 0.0, the value of the other branch"
-_REST_END = ("an end row at rest means p2 - 4 p1 + 3 p0 = 0 to within the rest threshold (one-sided difference "
-             "zero), which makes velocity and acceleration at the neighbouring row parallel to that precision: the "
-             "neighbour's yaw rate is 0 (exactly for a ship stopped dead)")
 
-#: Survivors explained by hand, matched on the mutation itself (not on mutmut's numbering, which
-#: moves when the module changes): (source file, text of the original line, text of the mutated
-#: line, both as regular expressions searched in the stripped lines) -> why it is equivalent.
-EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
-    *[(source, r"dtype=float", r"asarray\([^()]*,\s*(dtype=None)?\s*\)", _FLOAT)
-      for source in ("rhnc/trigger.py", "rhnc/voyage.py", "rhnc/reference.py", "rhnc/energy.py")],
-    ("", r'float\("nan"\)', r'float\("NAN"\)', "float() reads 'NAN' as 'nan': the same NaN"),
-    ("rhnc/trigger.py", r"np\.zeros\(\(0, 5\)\)", r"np\.zeros\(\(0, 6\)\)", _NO_ROWS),
-    ("rhnc/trigger.py", r"obstacles\.size == 0", r"obstacles\.size == 1",
-     "obstacle rows have 5 columns, so an array of size 1 cannot occur"),
-    ("rhnc/trigger.py", r"if n > len\(self\.states\)", r"if n >= len\(self\.states\)",
-     "extending the state list by zero entries changes nothing"),
-    ("rhnc/trigger.py", r"elif n < len\(self\.states\)", r"elif n <= len\(self\.states\)",
-     "deleting the states past the last one deletes nothing"),
-    ("rhnc/trigger.py", r"/ max\(distance, 1e-9\)", r"\* max\(distance, 1e-9\)|max\(distance, 1\.000000001\)", _SIGN),
-    ("rhnc/voyage.py", r"np\.trapezoid\(e[cm], hours\)\) if t\.size > 1",
-     r"if \(t\.size > 1\) or True|if t\.size >= 1", _TRAPEZOID),
-    ("rhnc/reference.py", r"acceleration\[(0|-1)\] = acceleration", r"acceleration\[",
-     "the end accelerations feed only the end yaw rates, which are then replaced by their neighbours' (or 0 at rest)"),
-    ("rhnc/reference.py", r"yaw_rate\[0\] = yaw_rate\[1\] if moving\[0\]",
-     r"if \(moving\[0\]\) or True|if moving\[1\]", _REST_END),
-    ("rhnc/reference.py", r"yaw_rate\[-1\] = yaw_rate\[-2\] if moving\[-1\]",
-     r"if \(moving\[-1\]\) or True|if moving\[-2\]", _REST_END),
-    ("rhnc/reference.py", r"if not np\.all\(moving\)", r"np\.all\(None\)",
-     "np.all(None) is False: the hold loop then runs for an all-moving path too, and there it leaves every heading"),
-    ("rhnc/energy.py", r"np\.broadcast\(along_wind, wind_speed\)", r"np\.broadcast\(along_wind, (None)?\)",
-     "np.broadcast(along_wind, None) has the shape of along_wind, which wind_speed shares"),
-    ("rhnc/energy.py", r"kinematic_viscosity_m2_s, 1e5\)", r"kinematic_viscosity_m2_s, 100001\.0\)",
-     "moves the Reynolds-number floor (1e5, speeds below about 5 mm/s) by one: C_F changes by 1e-6 relative "
-     "where the still-water power is below a microwatt"),
-    ("rhnc/energy.py", r"where=wind_speed > 1e-9", r"where=wind_speed >= 1e-9",
-     "differs only for a wind of exactly 1e-9 m/s"),
-]
+#: the NMPC file by file: listed in the report only when run
+ALTERNATIVE_RUNS = ("nmpc_warm_start", "nmpc_terminal", "nmpc_colregs", "nmpc_problem", "nmpc_controller")
 
 
 def explained_by_rule(source: str, removed: list[str], added: list[str]) -> str:
@@ -103,18 +113,26 @@ def explained_by_rule(source: str, removed: list[str], added: list[str]) -> str:
     return ""
 
 
-LOG_CALLS = {"debug", "info", "warning", "error", "exception", "critical"}
+LOG_CALLS = {"debug", "info", "warning", "error", "exception", "critical", "log"}
+
+#: mutmut's statuses that count as killed (a time-out is a mutant the tests did not let pass)
+KILLED = ("killed", "timeout")
+#: statuses of mutants no test told apart from the original
+SURVIVED = ("survived", "no tests")
 
 
 @dataclass
 class Verdicts:
-    """mutmut's verdicts on one module."""
+    """mutmut's verdicts on one module, as stored in ``docs/mutation-verdicts.json``."""
 
     module: str
-    source: str
+    sources: list[str]
     counts: dict[str, int]
-    survivors: list[tuple[str, str, str]]  # (name, diff, explanation or "")
+    survivors: list[dict]  # {"name", "source", "status", "diff"}
     seconds: float
+    commit: str = ""
+    date: str = ""
+    settings: dict = field(default_factory=dict)
 
     @property
     def total(self) -> int:
@@ -122,14 +140,18 @@ class Verdicts:
 
     @property
     def killed(self) -> int:
-        return self.counts.get("killed", 0) + self.counts.get("timeout", 0)
+        return sum(self.counts.get(status, 0) for status in KILLED)
+
+    def explained(self) -> list[tuple[dict, str]]:
+        """(survivor, why) for every survivor, ``why`` empty when it is not explained."""
+        log_lines = {source: log_message_lines((REPO / source).read_text()) if (REPO / source).is_file() else set()
+                     for source in self.sources}
+        # an entry carried over from an earlier report has no diff, only its explanation
+        return [(s, s["why"] if "why" in s and not s["diff"] else
+                 explain(s["source"], s["diff"], log_lines.get(s["source"], set()))) for s in self.survivors]
 
     def score(self) -> float:
         return 100.0 * self.killed / max(self.total, 1)
-
-    def score_without_equivalent(self) -> float:
-        equivalent = sum(1 for _, _, why in self.survivors if why)
-        return 100.0 * self.killed / max(self.total - equivalent, 1)
 
 
 def log_message_lines(source: str) -> set[str]:
@@ -153,103 +175,251 @@ def explain(source: str, diff: str, in_log_calls: set[str]) -> str:
     return explained_by_rule(source, removed, added)
 
 
-def run_module(key: str, children: int) -> Verdicts:
-    source, tests = MODULES[key]
+def source_of(mutant: str, sources: list[str]) -> str:
+    """The file a mutant belongs to, from its name (``rhnc.nmpc_problem.x_build_problem__mutmut_3``)."""
+    dotted = mutant.split(".x")[0] if ".x" in mutant else mutant.rsplit(".", 1)[0]
+    for source in sources:
+        if source[:-3].replace("/", ".") == dotted:
+            return source
+    return sources[0]
+
+
+#: run in the mutmut copy: the diffs of the mutants named on stdin, as JSON (one process for all,
+#: instead of one ``mutmut show`` each)
+SHOW_DIFFS = """
+import json, sys
+from mutmut.mutation.diff_apply import find_mutant, get_diff_for_mutant
+print(json.dumps({name: get_diff_for_mutant(name, path=find_mutant(name).path) for name in json.load(sys.stdin)}))
+"""
+
+
+def mutant_names(work: Path) -> list[str]:
+    """Every mutant mutmut generated in ``work`` (from its per-file records)."""
+    names = []
+    for meta in sorted((work / "mutants").rglob("*.meta")):
+        names += sorted(json.loads(meta.read_text()).get("exit_code_by_key", {}))
+    return names
+
+
+def run_module(key: str, children: int, timeout_multiplier: float, timeout_constant: float,
+               sample: int | None = None, seed: int = 0, previous: Verdicts | None = None) -> Verdicts:
+    module = MODULES[key]
     started = time.perf_counter()
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=REPO, capture_output=True,
+                            text=True, check=True).stdout.strip()
     with tempfile.TemporaryDirectory(prefix=f"mutmut-{key}-") as tmp:
         work = Path(tmp)
         archive = subprocess.run(["git", "archive", "HEAD"], cwd=REPO, capture_output=True, check=True).stdout
         subprocess.run(["tar", "-x", "-C", str(work)], input=archive, check=True)
-        # every top-level folder the code may read (packages, models, ships, scenarios, ...)
+        # FMUs already built (rebuilt on demand, by source hash, when stale)
+        if (REPO / "fmus").is_dir():
+            shutil.copytree(REPO / "fmus", work / "fmus", dirs_exist_ok=True,
+                            ignore=shutil.ignore_patterns("build", "__pycache__"))
+        # every top-level folder the code may read (packages, models, ships, scenarios, fmus, ...)
         data_folders = sorted(p.name for p in work.iterdir() if p.is_dir() and p.name not in ("tests", ".ci"))
-        config = (f"\n[tool.mutmut]\nsource_paths = [{json.dumps(source)}]\n"
-                  f"pytest_add_cli_args_test_selection = {json.dumps(tests)}\n"
-                  "pytest_add_cli_args = [\"-p\", \"no:cacheprovider\", \"-m\", \"not slow\"]\n"
-                  f"also_copy = {json.dumps(data_folders)}\n")
+        settings = {"tests": list(module.tests), "pytest_args": ["-m", "not slow", *module.pytest_args],
+                    "timeout_multiplier": timeout_multiplier, "timeout_constant": timeout_constant,
+                    "children": children}
+        config = (f"\n[tool.mutmut]\nsource_paths = {json.dumps(list(module.sources))}\n"
+                  f"pytest_add_cli_args_test_selection = {json.dumps(list(module.tests))}\n"
+                  f"pytest_add_cli_args = {json.dumps(['-p', 'no:cacheprovider', *settings['pytest_args']])}\n"
+                  f"also_copy = {json.dumps(data_folders)}\n"
+                  f"timeout_multiplier = {timeout_multiplier}\ntimeout_constant = {timeout_constant}\n")
         with open(work / "pyproject.toml", "a") as handle:
             handle.write(config)
-        subprocess.run([sys.executable, "-m", "mutmut", "run", "--max-children", str(children)], cwd=work,
-                       capture_output=True, text=True)
+        with open(work / "tests" / "conftest.py", "a") as handle:
+            handle.write(FASTEST_FIRST)
+        mutmut_run = [sys.executable, "-m", "mutmut", "run", "--max-children", str(children)]
+        chosen = None
+        if sample or previous:
+            # generate the mutants and the test coverage (a filter matching nothing stops mutmut
+            # right after), then test a random sample of them
+            subprocess.run(mutmut_run + ["no-such-mutant"], cwd=work, capture_output=True, text=True)
+            everything = mutant_names(work)
+            if previous:  # only the earlier run's survivors that still exist
+                chosen = sorted({s["name"] for s in previous.survivors} & set(everything))
+                settings.update({key_: value for key_, value in previous.settings.items() if key_ == "sample"})
+            else:
+                chosen = sorted(random.Random(seed).sample(everything, min(sample, len(everything))))
+                settings["sample"] = {"size": len(chosen), "of": len(everything), "seed": seed}
+        run = subprocess.run(mutmut_run + (chosen or []), cwd=work, capture_output=True, text=True)
+        (REPO / "results").mkdir(exist_ok=True)
+        (REPO / "results" / f"mutmut-{key}.log").write_text(run.stdout[-20000:] + "\n" + run.stderr[-20000:])
         listing = subprocess.run([sys.executable, "-m", "mutmut", "results", "--all", "true"], cwd=work,
                                  capture_output=True, text=True).stdout
         counts: dict[str, int] = {}
-        survivors = []
-        in_log_calls = log_message_lines((REPO / source).read_text())
+        statuses = {}
         for line in listing.splitlines():
             match = re.match(r"\s*(\S+__mutmut_\d+): (.+)$", line)
-            if not match:
-                continue
-            name, status = match.group(1), match.group(2).strip()
+            if match and (chosen is None or match.group(1) in chosen):
+                statuses[match.group(1)] = status = match.group(2).strip()
+                counts[status] = counts.get(status, 0) + 1
+        if sample and not previous:  # a sample cut short is the smaller sample it tested
+            statuses = {name: status for name, status in statuses.items() if status != "not checked"}
+            counts = {}
+            for status in statuses.values():
+                counts[status] = counts.get(status, 0) + 1
+            settings["sample"]["size"] = len(statuses)
+        left = [name for name, status in statuses.items() if status not in KILLED]
+        shown = subprocess.run([sys.executable, "-c", SHOW_DIFFS], cwd=work, input=json.dumps(left),
+                               capture_output=True, text=True, check=True).stdout
+        diffs = json.loads(shown)
+        survivors = []
+        for name in left:
+            diff = "\n".join(l for l in diffs[name].splitlines()
+                             if l.startswith(("-", "+")) and not l.startswith(("---", "+++")))
+            survivors.append({"name": name, "source": source_of(name, list(module.sources)),
+                              "status": statuses[name], "diff": diff})
+    if not counts:
+        raise RuntimeError(f"mutmut gave no verdicts for {key}; see results/mutmut-{key}.log")
+    stamp = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    seconds = time.perf_counter() - started
+    if previous:
+        # the earlier verdicts stand for every mutant not retested; the retested take their new verdict
+        # a retest cut short leaves some unchecked: they keep their earlier verdict
+        before = {s["name"]: s["status"] for s in previous.survivors}
+        unchecked = [name for name, status in statuses.items() if status == "not checked"]
+        for name in unchecked:
+            statuses[name] = before[name]
+        for entry in survivors:
+            entry["status"] = statuses[entry["name"]]
+        counts = dict(previous.counts)
+        for status in before.values():
+            counts[status] -= 1
+        for entry in previous.survivors:  # survivors whose function no longer exists keep their verdict too
+            if entry["name"] not in statuses:
+                statuses[entry["name"]] = entry["status"]
+                survivors.append(entry)
+        for status in statuses.values():
             counts[status] = counts.get(status, 0) + 1
-            if status in ("survived", "no tests"):
-                diff = subprocess.run([sys.executable, "-m", "mutmut", "show", name], cwd=work,
-                                      capture_output=True, text=True).stdout
-                diff = "\n".join(l for l in diff.splitlines() if l.startswith(("-", "+")) and not l.startswith(("---", "+++")))
-                survivors.append((name, diff, explain(source, diff, in_log_calls)))
-    return Verdicts(key, source, counts, survivors, time.perf_counter() - started)
+        counts = {status: n for status, n in counts.items() if n}
+        settings["survivors_retested"] = {"commit": commit, "date": stamp, "count": len(statuses) - len(unchecked),
+                                          "minutes": round(seconds / 60, 1)}
+        return Verdicts(key, list(module.sources), counts, survivors, previous.seconds, previous.commit,
+                        previous.date, {**previous.settings, **settings})
+    return Verdicts(key, list(module.sources), counts, survivors, seconds, commit, stamp, settings)
+
+
+#: appended to the copy's tests/conftest.py: each mutant's tests run fastest first (by the clean
+#: run's durations), so that with pytest's -x a killed mutant costs its quickest failing test
+FASTEST_FIRST = """
+
+def pytest_collection_modifyitems(config, items):  # added by scripts/mutation_report.py
+    import json
+    import pathlib
+    for stats in (pathlib.Path("mutmut-stats.json"), pathlib.Path("mutants/mutmut-stats.json")):
+        if stats.is_file():
+            seconds = json.loads(stats.read_text()).get("duration_by_test", {})
+            items.sort(key=lambda item: seconds.get(item.nodeid, 0.0))
+            break
+"""
+
+
+def load_verdicts() -> dict[str, Verdicts]:
+    if not VERDICTS.is_file():
+        return {}
+    return {key: Verdicts(**value) for key, value in json.loads(VERDICTS.read_text()).items()}
+
+
+def save_verdicts(verdicts: dict[str, Verdicts]) -> None:
+    ordered = {key: verdicts[key].__dict__ for key in MODULES if key in verdicts}
+    VERDICTS.write_text(json.dumps(ordered, indent=1) + "\n")
 
 
 def section(v: Verdicts) -> str:
-    explained = [s for s in v.survivors if s[2]]
-    open_ = [s for s in v.survivors if not s[2]]
-    lines = [f"## {v.module} (`{v.source}`)", "",
-             f"{v.total} mutants: {v.killed} killed, " + ", ".join(f"{n} {s}" for s, n in sorted(v.counts.items())
-                                                                  if s not in ("killed", "timeout"))
-             + f". **Score {v.score():.0f} %** ({v.score_without_equivalent():.0f} % counting the "
-               f"{len(explained)} explained survivors as equivalent). {v.seconds / 60:.1f} min.", ""]
+    explained = v.explained()
+    equivalent = [(s, why) for s, why in explained if why]
+    open_ = [s for s, why in explained if not why]
+    others = ", ".join(f"{n} {status}" for status, n in sorted(v.counts.items()) if status != "killed")
+    sampled = v.settings.get("sample")
+    retested = v.settings.get("survivors_retested")
+    carried = (f"Survivors retested on commit {retested['commit']} ({retested['date']}, {retested['count']} "
+               f"mutants, {retested['minutes']} min) after new tests; the other verdicts are from the full run. "
+               if retested else "")
+    if v.settings.get("legacy"):
+        carried += ("Carried over from the previous report (mutmut's own diffs not kept then): "
+                    + (v.settings["changed"] if "changed" in v.settings else
+                       f"the module has not changed since commit {v.commit}") + ". ")
+    lines = [f"## {v.module} (" + ", ".join(f"`{s}`" for s in v.sources) + ")", "",
+             (f"A random sample (seed {sampled['seed']}) of {sampled['size']} of the {sampled['of']} mutants. "
+              if sampled else "") + carried + f"{v.total} mutants: {v.counts.get('killed', 0)} killed" + (f", {others}" if others else "")
+             + f". **Score {v.score():.0f} %**; {len(equivalent)} survivors explained as equivalent, "
+               f"{len(open_)} not. Run on commit {v.commit or '?'}, {v.date or '?'}, {v.seconds / 60:.1f} min "
+               f"(tests: " + ", ".join(f"`{t}`" for t in v.settings.get("tests", [])) + ").", ""]
     if open_:
         lines += [f"Survivors not yet killed or explained ({len(open_)}):", ""]
-        lines += [f"- `{name}`\n\n  ```diff\n" + "\n".join(f"  {l}" for l in diff.splitlines()) + "\n  ```"
-                  for name, diff, _ in open_]
+        lines += [f"- `{s['name']}` ({s['status']})\n\n  ```diff\n"
+                  + "\n".join(f"  {l}" for l in s["diff"].splitlines()) + "\n  ```" for s in open_]
         lines.append("")
-    if explained:
-        lines += [f"Survivors explained ({len(explained)}):", ""]
-        lines += [f"- `{name}`: {why}" for name, _, why in explained]
+    if equivalent:
+        lines += [f"Survivors explained ({len(equivalent)}):", ""]
+        for s, why in equivalent:
+            changed = [l for l in s["diff"].splitlines() if l.startswith("+")]
+            lines.append(f"- `{s['name']}`" + (f" (`{changed[0][1:].strip()[:90]}`)" if changed else "") + f": {why}")
         lines.append("")
     return "\n".join(lines)
 
 
-def write_report(results: dict[str, Verdicts]) -> None:
-    old_sections = {}
-    if REPORT.is_file():
-        for block in re.split(r"(?m)^(?=## )", REPORT.read_text()):
-            match = re.match(r"## (\w+) ", block)
-            if match:
-                old_sections[match.group(1)] = block.rstrip() + "\n"
+def write_report(verdicts: dict[str, Verdicts]) -> None:
     header = ["# Mutation testing report", "",
-              "Made by `python scripts/mutation_report.py` (mutmut, each module mutated alone against its "
-              "own tests; slow tests excluded). Score = killed / all mutants. A survivor is listed with its "
-              "diff until a test kills it or it is explained (a log message's wording is explained "
-              "automatically).", "", "| module | mutants | killed | survived | score |", "|---|---|---|---|---|"]
-    table_rows, sections = [], []
+              "Made by `python scripts/mutation_report.py` (mutmut; each module's files mutated alone and "
+              "run against that module's own tests, slow tests excluded; verdicts kept in "
+              "`docs/mutation-verdicts.json`). Score = (killed + timeout) / all mutants. A survivor is listed "
+              "with its diff until a test kills it or it is explained as equivalent: a log message's wording "
+              "automatically, anything else by hand in `scripts/mutation_equivalents.py`. The last column "
+              "counts the explained survivors as equivalent (left out of the total).", "",
+              "| module | mutants | killed | timeout | survived: equivalent | survived: open | score | "
+              "score without equivalents |", "|---|---|---|---|---|---|---|---|"]
+    rows, sections = [], []
     for key in MODULES:
-        if key in results:
-            v = results[key]
-            table_rows.append(f"| {key} | {v.total} | {v.killed} | {len(v.survivors)} | {v.score():.0f} % |")
-            sections.append(section(v))
-        elif key in old_sections:
-            match = re.search(r"(\d+) mutants: (\d+) killed.*?\*\*Score (\d+) %", old_sections[key], flags=re.S)
-            total, killed, score = match.groups() if match else ("?", "?", "?")
-            table_rows.append(f"| {key} | {total} | {killed} | see below | {score} % |")
-            sections.append(old_sections[key])
-        else:
-            table_rows.append(f"| {key} | - | - | - | not run yet |")
+        if key not in verdicts and key in ALTERNATIVE_RUNS:
+            continue
+        if key not in verdicts:
+            rows.append(f"| {key} | - | - | - | - | - | not run yet | |")
+            continue
+        v = verdicts[key]
+        explained = v.explained()
+        equivalent = sum(1 for _, why in explained if why)
+        sampled = v.settings.get("sample")
+        rows.append(f"| {key}" + (" (previous report)" if v.settings.get("legacy") else "")
+                    + (" (survivors retested)" if v.settings.get("survivors_retested") else "") + f" | {v.total}" + (f" (sample of {sampled['of']})" if sampled else "") + f" | {v.counts.get('killed', 0)} | {v.counts.get('timeout', 0)} | "
+                    f"{equivalent} | {len(explained) - equivalent} | {v.score():.0f} % | "
+                    f"{100.0 * v.killed / max(v.total - equivalent, 1):.0f} % |")
+        sections.append(section(v))
     stamp = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    REPORT.write_text("\n".join(header + table_rows) + f"\n\nLast updated {stamp}.\n\n" + "\n".join(sections))
+    REPORT.write_text("\n".join(header + rows) + f"\n\nRendered {stamp}.\n\n" + "\n".join(sections))
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", nargs="+", choices=list(MODULES))
     parser.add_argument("--children", type=int, default=1, help="mutants tested in parallel")
+    parser.add_argument("--timeout-multiplier", type=float, default=10.0,
+                        help="a mutant's time limit is (clean test time + constant) * this")
+    parser.add_argument("--timeout-constant", type=float, default=2.0, help="[s], see --timeout-multiplier")
+    parser.add_argument("--sample", type=int, help="test a random sample of this many mutants per module "
+                        "(an estimate of the score, for modules too slow to run whole)")
+    parser.add_argument("--seed", type=int, default=0, help="of the random sample")
+    parser.add_argument("--survivors-only", action="store_true",
+                        help="retest only the survivors of the stored run (after new tests); the others keep "
+                             "their verdicts")
+    parser.add_argument("--report-only", action="store_true",
+                        help="re-render the report from docs/mutation-verdicts.json without running mutmut")
     args = parser.parse_args(argv)
-    results = {}
-    for key in args.only or list(MODULES):
-        results[key] = run_module(key, args.children)
-        v = results[key]
-        print(f"{key}: {v.total} mutants, {v.killed} killed, {len(v.survivors)} survived "
-              f"({v.score():.0f} %), {v.seconds:.0f} s", flush=True)
-        write_report(results)
+    if not args.report_only:
+        for key in args.only or list(MODULES):
+            previous = load_verdicts().get(key) if args.survivors_only else None
+            if args.survivors_only and previous is None:
+                raise SystemExit(f"no stored run of {key} to retest the survivors of")
+            v = run_module(key, args.children, args.timeout_multiplier, args.timeout_constant, args.sample,
+                           args.seed, previous)
+            verdicts = load_verdicts()  # reread: another run may have stored its module meanwhile
+            verdicts[key] = v
+            save_verdicts(verdicts)
+            write_report(verdicts)
+            print(f"{key}: {v.total} mutants, {v.killed} killed, {len(v.survivors)} survived "
+                  f"({v.score():.0f} %), {v.seconds:.0f} s", flush=True)
+    write_report(load_verdicts())
     return 0
 
 

@@ -129,7 +129,7 @@ def paper_speed_effect() -> dict:
     """The paper's Table 3 speeds made good, and what that speed difference alone is worth
     per nm in calm water by this project's energy model."""
     from rhnc.energy import EnergyParameters, brake_power, cost_rate, emission_rate
-    from rhnc.metocean import KNOT
+    from orchestrator.geometry import KNOT
 
     spec = tomllib.loads((REPO / "scenarios" / "exp2_table3.toml").read_text())
     paper = {run["label"]: run["paper"] for run in spec["runs"] if "paper" in run}

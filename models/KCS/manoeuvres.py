@@ -3,6 +3,10 @@
 Run ``python models/KCS/manoeuvres.py [set]`` from the repository root; it builds the FMU
 if needed (orchestrator.fmu_build.ensure_built), steps it through fmpy at 1 s and prints the
 figures. The plant has no rudder: both manoeuvres command the yaw moment tau_r directly.
+The manoeuvre figures (advance, transfer, tactical and steady diameter, overshoots) are those
+of the scenarios' analyses, :mod:`rhnc.manoeuvres`; only the figures it does not define
+(time to 180 deg, the steady turn's speed, yaw rate and drift, the zig-zag period) are
+computed here.
 """
 
 from __future__ import annotations
@@ -18,8 +22,9 @@ from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
 from orchestrator.fmu_build import MODELS_DIR, ensure_built
+from orchestrator.geometry import KNOT
+from rhnc import manoeuvres
 
-KNOT = 1852.0 / 3600.0
 APPROACH_SPEED = 18 * KNOT  # m/s
 
 
@@ -38,7 +43,7 @@ class Ship:
         self.fmu.instantiate()
         self.fmu.setupExperiment(startTime=0.0)
         self.fmu.enterInitializationMode()
-        start = {k: v for k, v in self.p.items() if k != "description"}
+        start = {k: v for k, v in self.p.items() if k not in ("description", "plant_fmu", "plant_guid")}
         start["u0"] = APPROACH_SPEED
         self.set(**start)
         self.fmu.exitInitializationMode()
@@ -65,24 +70,23 @@ def turning_circle(parameter_set: str) -> dict[str, float]:
     """Full starboard yaw moment from a straight run at 18 kn; lengths in ship lengths."""
     ship = Ship(parameter_set)
     lpp = ship.p["lpp"]
-    heading, states = 0.0, []
+    heading = 0.0  # the moment applies from t = 0, in straight motion at 18 kn on heading 0
+    states = [{"x": 0.0, "y": 0.0, "psi": 0.0, "u": APPROACH_SPEED, "v": 0.0, "r": 0.0, "t": 0.0}]
     while heading < 4 * np.pi and ship.t < 4 * 3600:
         s = ship.advance(ship.p["tau_r_max"])
-        heading += s["r"] * ship.step if not states else \
-            np.angle(np.exp(1j * (s["psi"] - states[-1]["psi"])))
-        states.append({**s, "heading": heading, "t": ship.t})
+        heading += np.angle(np.exp(1j * (s["psi"] - states[-1]["psi"])))
+        states.append({**s, "t": ship.t})
     ship.close()
-    at90 = next(s for s in states if s["heading"] >= np.pi / 2)
-    at180 = next(s for s in states if s["heading"] >= np.pi)
-    second = [s for s in states if 2 * np.pi <= s["heading"]]
-    steady_diameter = np.ptp([s["y"] for s in second]) if second else float("nan")
+    t, x, y, psi = (np.array([s[k] for s in states]) for k in ("t", "x", "y", "psi"))
+    figures = manoeuvres.turning_circle(t, x, y, psi, execute_s=0.0, length_m=lpp)
+    change = np.abs(np.unwrap(psi))
     last = states[-1]
     return {
-        "advance_L": at90["x"] / lpp,
-        "transfer_L": at90["y"] / lpp,
-        "tactical_diameter_L": at180["y"] / lpp,
-        "steady_diameter_L": steady_diameter / lpp,
-        "time_to_180_s": at180["t"],
+        "advance_L": figures["advance_L"],
+        "transfer_L": figures["transfer_L"],
+        "tactical_diameter_L": figures["tactical_diameter_L"],
+        "steady_diameter_L": figures["steady_diameter_L"],
+        "time_to_180_s": float(np.interp(np.pi, change, t)),
         "steady_speed_kn": np.hypot(last["u"], last["v"]) / KNOT,
         "steady_yaw_rate_deg_s": np.degrees(last["r"]),
         "drift_angle_deg": np.degrees(np.arctan2(-last["v"], last["u"])),
@@ -96,21 +100,21 @@ def zigzag(parameter_set: str, angle_deg: float = 10.0) -> dict[str, float]:
     ship = Ship(parameter_set)
     moment = ship.p["tau_r_max"] * angle_deg / 35.0
     limit = np.radians(angle_deg)
-    sign, switches, peaks, extreme = 1.0, [], [], 0.0
-    while len(peaks) < 3 and ship.t < 3 * 3600:
+    sign, switches = 1.0, []
+    t, psi, steering = [0.0], [0.0], [moment]
+    while len(switches) < 5 and ship.t < 3 * 3600:
         s = ship.advance(sign * moment)
-        psi = s["psi"]
-        if sign * psi >= limit:  # heading reached +-angle: reverse the moment
+        if sign * s["psi"] >= limit:  # heading reached +-angle: reverse the moment
             switches.append(ship.t)
-            if len(switches) > 1:
-                peaks.append(abs(extreme) - angle_deg)
-            sign, extreme = -sign, 0.0
-        if switches and abs(np.degrees(psi)) > abs(extreme):
-            extreme = np.degrees(psi)
+            sign = -sign
+        t.append(ship.t)
+        psi.append(s["psi"])
+        steering.append(sign * moment)
     ship.close()
+    figures = manoeuvres.zigzag(np.array(t), np.array(psi), np.array(steering), execute_s=0.0)
     return {
-        "first_overshoot_deg": peaks[0],
-        "second_overshoot_deg": peaks[1],
+        "first_overshoot_deg": figures["first_overshoot_deg"],
+        "second_overshoot_deg": figures["second_overshoot_deg"],
         "time_to_first_switch_s": switches[0],
         "period_s": switches[3] - switches[1] if len(switches) > 3 else float("nan"),
     }

@@ -172,25 +172,17 @@ static inline void mmg_derivatives(const MmgParameters *p, const double X[MMG_NS
     }
 }
 
+/* mmg_derivatives in the integrator's form (rk4.h). */
+static inline void mmg_rk4_derivatives(const void *p, const void *in, const double *X, double *dX) {
+    mmg_derivatives((const MmgParameters *)p, X, (const MmgInputs *)in, dX);
+}
+
 /* Advances X over `duration` seconds with inputs held constant (RK4 substeps of h_int, the
  * last one ending on the communication point). Returns 0, or -1 on a non-finite state. */
 static inline int mmg_integrate(const MmgParameters *p, double X[MMG_NSTATES], const MmgInputs *in,
                                 double duration) {
-    double remaining = duration;
     int i;
-    while (remaining > 0.0) {
-        double k1[MMG_NSTATES], k2[MMG_NSTATES], k3[MMG_NSTATES], k4[MMG_NSTATES], Xt[MMG_NSTATES];
-        double h = p->h_int >= remaining - 1e-6 * p->h_int ? remaining : p->h_int;
-        mmg_derivatives(p, X, in, k1);
-        for (i = 0; i < MMG_NSTATES; i++) Xt[i] = X[i] + 0.5 * h * k1[i];
-        mmg_derivatives(p, Xt, in, k2);
-        for (i = 0; i < MMG_NSTATES; i++) Xt[i] = X[i] + 0.5 * h * k2[i];
-        mmg_derivatives(p, Xt, in, k3);
-        for (i = 0; i < MMG_NSTATES; i++) Xt[i] = X[i] + h * k3[i];
-        mmg_derivatives(p, Xt, in, k4);
-        for (i = 0; i < MMG_NSTATES; i++) X[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-        remaining -= h;
-    }
+    rk4_advance(mmg_rk4_derivatives, p, in, X, MMG_NSTATES, p->h_int, duration);
     X[MMG_PSI] = kcs_wrap_angle(X[MMG_PSI]);
     for (i = 0; i < MMG_NSTATES; i++)
         if (!isfinite(X[i])) return -1;

@@ -8,9 +8,10 @@ printed values are those in models/S175/model.c.
 
 import math
 
+from orchestrator.geometry import KNOT
+
 RHO = 1025.0
 NU = 1.19e-6          # m^2/s, sea water at 15 C
-KNOT = 1852.0 / 3600.0
 
 L, B, T, CB = 175.0, 25.4, 8.5, 0.572      # m, m, m, -: the ITTC S-175 container ship
 U = 18.0 * KNOT                             # m/s, dimensionalisation speed

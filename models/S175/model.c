@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "fmu_model.h"
+#include "rk4.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -169,23 +170,16 @@ fmi2Status model_set_real(ModelInstance *comp, fmi2ValueReference vr, fmi2Real v
     return fmi2OK;
 }
 
+/* derivatives in the integrator's form (rk4.h); the inputs are fields of the model data. */
+static void s175_derivatives(const void *d, const void *unused, const double *X, double *dX) {
+    (void)unused;
+    derivatives((const ModelData *)d, X, dX);
+}
+
 fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
     ModelData *d = &comp->data;
-    double k1[S_NSTATES], k2[S_NSTATES], k3[S_NSTATES], k4[S_NSTATES], Xt[S_NSTATES];
-    double remaining = h;
     int i;
-    while (remaining > 0.0) {
-        const double dt = d->h_int_s >= remaining - 1e-6 * d->h_int_s ? remaining : d->h_int_s;
-        derivatives(d, d->X, k1);
-        for (i = 0; i < S_NSTATES; i++) Xt[i] = d->X[i] + 0.5 * dt * k1[i];
-        derivatives(d, Xt, k2);
-        for (i = 0; i < S_NSTATES; i++) Xt[i] = d->X[i] + 0.5 * dt * k2[i];
-        derivatives(d, Xt, k3);
-        for (i = 0; i < S_NSTATES; i++) Xt[i] = d->X[i] + dt * k3[i];
-        derivatives(d, Xt, k4);
-        for (i = 0; i < S_NSTATES; i++) d->X[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-        remaining -= dt;
-    }
+    rk4_advance(s175_derivatives, d, NULL, d->X, S_NSTATES, d->h_int_s, h);
     d->X[S_PSI] = fmod(d->X[S_PSI], 2.0 * M_PI);
     for (i = 0; i < S_NSTATES; i++) {
         if (!isfinite(d->X[i])) {

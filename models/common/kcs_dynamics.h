@@ -11,6 +11,7 @@
 #include <math.h>
 
 #include "kcs_parameter_defaults.h"
+#include "rk4.h"
 
 #define KCS_GRAVITY 9.81 /* m/s^2 */
 #ifndef M_PI
@@ -114,18 +115,9 @@ static inline void kcs_derivatives(const KcsParameters *p, const double X[KCS_NS
     dX[KCS_R] = ((m11 - m22) * u * v - d32 * v - d33 * r + in->tau_r + w[2]) / m33;
 }
 
-static inline void kcs_rk4_step(const KcsParameters *p, double X[KCS_NSTATES],
-                                const KcsInputs *in, double h) {
-    double k1[KCS_NSTATES], k2[KCS_NSTATES], k3[KCS_NSTATES], k4[KCS_NSTATES], Xt[KCS_NSTATES];
-    int i;
-    kcs_derivatives(p, X, in, k1);
-    for (i = 0; i < KCS_NSTATES; i++) Xt[i] = X[i] + 0.5 * h * k1[i];
-    kcs_derivatives(p, Xt, in, k2);
-    for (i = 0; i < KCS_NSTATES; i++) Xt[i] = X[i] + 0.5 * h * k2[i];
-    kcs_derivatives(p, Xt, in, k3);
-    for (i = 0; i < KCS_NSTATES; i++) Xt[i] = X[i] + h * k3[i];
-    kcs_derivatives(p, Xt, in, k4);
-    for (i = 0; i < KCS_NSTATES; i++) X[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+/* kcs_derivatives in the integrator's form (rk4.h). */
+static inline void kcs_rk4_derivatives(const void *p, const void *in, const double *X, double *dX) {
+    kcs_derivatives((const KcsParameters *)p, X, (const KcsInputs *)in, dX);
 }
 
 /* Advances X over `duration` seconds with inputs held constant: RK4 substeps of h_int, the
@@ -135,17 +127,10 @@ static inline void kcs_rk4_step(const KcsParameters *p, double X[KCS_NSTATES],
 static inline int kcs_integrate(const KcsParameters *p, double X[KCS_NSTATES],
                                 const KcsInputs *in, double duration) {
     KcsInputs sat = *in;
-    double remaining = duration;
     int i;
     sat.tau_u = kcs_clamp(in->tau_u, p->tau_u_max);
     sat.tau_r = kcs_clamp(in->tau_r, p->tau_r_max);
-    while (remaining > 0.0) {
-        /* the last substep ends exactly at the communication point; a sliver below
-           1e-6 h_int is merged into the step before it */
-        double h = p->h_int >= remaining - 1e-6 * p->h_int ? remaining : p->h_int;
-        kcs_rk4_step(p, X, &sat, h);
-        remaining -= h;
-    }
+    rk4_advance(kcs_rk4_derivatives, p, &sat, X, KCS_NSTATES, p->h_int, duration);
     X[KCS_PSI] = kcs_wrap_angle(X[KCS_PSI]);
     for (i = 0; i < KCS_NSTATES; i++)
         if (!isfinite(X[i])) return -1;

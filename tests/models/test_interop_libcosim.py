@@ -57,7 +57,8 @@ def test_kcs_in_libcosim_matches_fmpy(fmus):
 def test_metocean_in_libcosim_returns_the_planners_values(fmus, tmp_path):
     from fmpy import read_model_description
 
-    from rhnc.metocean import NM, MetOceanField
+    from orchestrator.geometry import NM
+    from rhnc.metocean import MetOceanField
 
     field = MetOceanField.generate_paper_default(resolution_nm=5.0)
     grid = field.write_fmu_grid(tmp_path / "weather.grid")
@@ -82,7 +83,7 @@ def test_metocean_in_libcosim_returns_the_planners_values(fmus, tmp_path):
 def test_metocean_in_libcosim_follows_the_moving_storm_in_time(fmus, tmp_path):
     from fmpy import read_model_description
 
-    from rhnc.metocean import NM
+    from orchestrator.geometry import NM
     from rhnc.weather_generators import moving_storm
 
     field = moving_storm(resolution_nm=5.0, duration_h=3.0)

@@ -181,7 +181,7 @@ def test_time_steps_exact_linear_between_and_held_outside(fmus, open_slave, time
 
 def test_fmu_and_sample_agree_along_a_sailed_track_in_a_moving_storm(fmus, open_slave, tmp_path):
     """The planner's sample and the FMU give the same weather at the places and times sailed."""
-    from rhnc.metocean import KNOT, NM
+    from orchestrator.geometry import KNOT, NM
     from rhnc.weather_generators import moving_storm
 
     field = moving_storm(resolution_nm=2.0, duration_h=6.0)
@@ -222,7 +222,8 @@ def test_default_grid_in_resources_runs_the_default_experiment(fmus):
     """With no grid_file the FMU reads the paper's weather from its resources (5 nm grid)."""
     from fmpy import simulate_fmu
 
-    from rhnc.metocean import NM, MetOceanField
+    from orchestrator.geometry import NM
+    from rhnc.metocean import MetOceanField
 
     point = (40.0 * NM, 55.0 * NM)
     result = simulate_fmu(str(fmus["MetOcean"]), stop_time=60.0, output_interval=60.0,

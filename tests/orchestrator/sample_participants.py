@@ -198,3 +198,194 @@ class Hog(Participant):
             except KeyboardInterrupt:
                 pass
         return {"ok": 1.0}
+
+
+class Sleeper(Participant):
+    """From ``at_s`` on, a step that sleeps ``sleep_s``; with ``swallow`` it catches everything
+    and sleeps again (a participant that no Python exception can stop)."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        participant = cls(name)
+        participant.at = options.get("at_s", 0.0)
+        participant.sleep_s = options.get("sleep_s", 3600.0)
+        participant.swallow = options.get("swallow", False)
+        participant.unless_exists = options.get("unless_exists")
+        participant.busy = options.get("busy", False)
+        return participant
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["ok"])
+
+    def setup(self, start_time, inputs):
+        return {"ok": 1.0}
+
+    def step(self, time, step_size, inputs):
+        import time as wallclock
+
+        import os
+
+        if time >= self.at and not (self.unless_exists and os.path.exists(self.unless_exists)):
+            print(f"sleeper: sleeping at t = {time:g} s", flush=True)
+            while True:
+                try:
+                    if self.busy:  # a Python loop that computes rather than sleeps
+                        end = wallclock.monotonic() + self.sleep_s
+                        while wallclock.monotonic() < end:
+                            pass
+                    else:
+                        wallclock.sleep(self.sleep_s)
+                    break
+                except BaseException:  # noqa: B036 - the point: it swallows even the time limit
+                    if not self.swallow:
+                        raise
+        return {"ok": 1.0}
+
+
+class Misbehaving(Participant):
+    """Fails in one of the ways a participant can fail outside a plain exception in its step.
+
+    ``how``: ``"exit"`` (sys.exit(5) in its step at ``at_s``), ``"terminate"`` (terminate()
+    raises), ``"summary"`` (summary() raises), ``"unserialisable"`` (a summary JSON cannot
+    hold), ``"options"`` (from_options raises ValueError), ``"nan_setup"`` (a NaN output at
+    set-up, past the checks a scenario file gets).
+    """
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        how = options.get("how")
+        if how == "options":
+            raise ValueError("gain must be positive")
+        participant = cls(name)
+        participant.how = how
+        participant.at = options.get("at_s", 0.0)
+        participant.steps = 0
+        return participant
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["ok"])
+
+    def setup(self, start_time, inputs):
+        return {"ok": float("nan") if self.how == "nan_setup" else 1.0}
+
+    def step(self, time, step_size, inputs):
+        import sys
+
+        self.steps += 1
+        if self.how == "exit" and time >= self.at:
+            sys.exit(5)
+        return {"ok": 1.0}
+
+    def terminate(self):
+        if self.how == "terminate":
+            raise OSError("device busy")
+
+    def summary(self):
+        if self.how == "summary":
+            raise ZeroDivisionError("division by zero")
+        if self.how == "unserialisable":
+            return {"steps": self.steps, "model": object()}
+        return {"steps": self.steps}
+
+
+class SelfKiller(Participant):
+    """At ``at_s`` sends SIGKILL to its own process unless the file ``unless_exists`` exists
+    (what the out-of-memory killer or an operator does to a worker)."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        participant = cls(name)
+        participant.at = options.get("at_s", 0.0)
+        participant.unless_exists = options.get("unless_exists")
+        participant.crash = options.get("crash", False)
+        return participant
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["ok"])
+
+    def setup(self, start_time, inputs):
+        return {"ok": 1.0}
+
+    def step(self, time, step_size, inputs):
+        import os
+        import signal
+
+        if time >= self.at and self.crash:
+            raise RuntimeError("a bug of its own")
+        if time >= self.at and not (self.unless_exists and os.path.exists(self.unless_exists)):
+            os.kill(os.getpid(), signal.SIGKILL)
+        return {"ok": 1.0}
+
+
+class Probe(Participant):
+    """Records what the master tells it (build context, sources, calls, the reported position)
+    and outputs its step's start time as ``value``; options make it misbehave on purpose."""
+
+    def __init__(self, name, options, context):
+        super().__init__(name)
+        self.options = options
+        self.context = context
+        self.sources = None
+        self.calls = []
+        self.positions = []
+        self.outputs_at_step_end = bool(options.get("at_step_end", False))
+        self.checks_outputs_finite = bool(options.get("checks_finite", False))
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        return cls(name, dict(options), context)
+
+    input_names = property(lambda self: ["value"])
+    output_names = property(lambda self: ["value", "extra"] if self.options.get("declare_extra") else ["value"])
+
+    def connected(self, sources):
+        self.sources = dict(sources)
+
+    def _where(self):
+        from orchestrator import interrupts
+
+        self.positions.append(interrupts._state.where())
+
+    def setup(self, start_time, inputs):
+        self._where()
+        self.setup_inputs = dict(inputs)
+        return {"value": float(start_time)}
+
+    def step(self, time, step_size, inputs):
+        from orchestrator import interrupts
+        from orchestrator.errors import ModelError
+
+        self._where()
+        self.calls.append((time, step_size))
+        at = self.options.get("at_s", math.inf)
+        if time >= at:
+            what = self.options.get("misbehave")
+            if what == "model_error":
+                raise ModelError("refused the step")
+            if what == "interrupt_as_error":  # a library that turns a signal into its own error
+                interrupts._state.signal_name = "SIGTERM"
+                raise RuntimeError("solver interrupted")
+            if what == "undeclared":
+                return {"value": time, "surprise": 1.0}
+            if what == "nan":
+                return {"value": math.nan}
+            if what == "integer":
+                return {"value": int(time)}
+            if what == "numpy_scalar":
+                return {"value": np.float64(time)}
+            if what == "numpy_nan":
+                return {"value": np.float64("nan")}
+        return {"value": float(time)}
+
+    def summary(self):
+        if self.options.get("bad_summary"):
+            raise ValueError("no summary today")
+        return {"calls": len(self.calls)}
+
+
+class NotAParticipant:
+    """Has from_options, but builds something else."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        return object()

@@ -153,7 +153,7 @@ def test_crashed_worker_and_failing_scenario_are_recorded_and_the_batch_complete
     refuses = table["param:participants.helm.options.refuse"]
     assert set(table.loc[refuses, "reason"].str.extract(r"(options\.refuse: this helm refuses to be built)")[0]) == {
         "options.refuse: this helm refuses to be built"}
-    assert set(table.loc[dies & ~refuses, "reason"]) == {WORKER_DIED}
+    assert set(table.loc[dies & ~refuses, "reason"]) == {f"{WORKER_DIED}: exit code 17"}
     assert set(table.loc[~dies & ~refuses, "status"]) == {"finished"}
     assert set(table.loc[dies | refuses, "status"]) == {"failed"}
     assert not table.loc[dies | refuses, "passed"].any()

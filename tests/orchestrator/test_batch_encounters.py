@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from orchestrator.encounters import ENCOUNTER_TYPES, ShipMotion, cpa_tcpa, place_target
+from rhnc.cosim.encounters import ENCOUNTER_TYPES, ShipMotion, cpa_tcpa, place_target
 
 
 def _side(own: ShipMotion, target: ShipMotion, tcpa_min: float) -> str:

@@ -8,7 +8,7 @@ import pytest
 
 from orchestrator.acceptance import evaluate, lookup, reference_value
 from orchestrator.batch_spec import Criterion, load_batch
-from orchestrator.encounters import ShipMotion, cpa_tcpa
+from rhnc.cosim.encounters import ShipMotion, cpa_tcpa
 from orchestrator.errors import ScenarioError
 
 REPO = Path(__file__).resolve().parents[2]

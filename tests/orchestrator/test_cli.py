@@ -29,7 +29,8 @@ def test_bad_scenario_is_one_line_and_exit_2(tmp_path, capsys):
     bad.write_text("[simulation]\ndt_s = 1.0\nsteps = 2\nwarp = 9\n[participants.a]\ntype = 'scripted_tau'\n")
     assert main(["run", str(bad), "--results", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == [f"error: {bad}: unknown key 'simulation.warp' (valid: name, start_s, stop_s, steps, dt_s, stop_when, exchange)"]
+    assert err == [f"error: {bad}: unknown key 'simulation.warp' (valid: name, start_s, stop_s, steps, dt_s, stop_when, exchange, "
+                   "step_timeout_s)"]
     assert not (tmp_path / "bad").exists()  # nothing written for a scenario that never ran
 
 

@@ -71,10 +71,12 @@ def test_table_leaves_missing_figures_empty():
 
 
 @pytest.mark.parametrize("extra, message", [
-    ('colour = "red"', r"compare.toml: runs\[1\]: unknown key 'colour'"),
+    ('colour = "red"', r"compare.toml: unknown key 'runs\[1\].colour' "
+                       r"\(valid: label, scenario, set, paper, figures\)"),
     ('[[runs]]\nlabel = "x"\nscenario = "none.toml"', r"runs\[2\].scenario: scenario file not found"),
     ('[[runs]]\nlabel = "x"\nscenario = "slow.toml"\npaper = { speed = 1 }', r"runs\[2\].paper: 'speed' is not one of"),
-    ('[[runs]]\nlabel = "x"\nscenario = "slow.toml"\nset = 3', r"runs\[2\].set: expected a table"),
+    ('[[runs]]\nlabel = "x"\nscenario = "slow.toml"\nset = 3',
+     r"compare.toml: 'runs\[2\].set' expected a table of dotted-key overrides"),
 ])
 def test_comparison_file_errors(tmp_path, extra, message):
     with pytest.raises(ScenarioError, match=message):
@@ -105,7 +107,9 @@ def test_sweep_runs_the_comparison_once_per_value(tmp_path):
 
 
 @pytest.mark.parametrize("extra, message", [
-    ('[set]\n"a..b" = 1', r"compare.toml: set: key 'a..b' is not a dotted key path"),
+    ('[set]\n"a..b" = 1', r"compare.toml: 'set' key 'a..b' is not a dotted key path"),
+    ('[sweep]\nkey = "metocean.member"\nrange = [0, 100000000]', r"'sweep.range' spans 100000001 members, more "
+                                                                   r"than the limit of 10000"),
     ('[sweep]\nkey = "simulation.dt_s"', r"give exactly one of 'sweep.values' or 'sweep.range'"),
     ('[sweep]\nkey = "simulation.dt_s"\nvalues = [1.0]\nstep = 2', r"unknown key 'sweep.step'"),
 ])

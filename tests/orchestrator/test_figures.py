@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from orchestrator.figures import closest_approach_rows, time_mark_interval_min
+from rhnc.cosim.figures import closest_approach_rows, time_mark_interval_min
 
 NM = 1852.0
 

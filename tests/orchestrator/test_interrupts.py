@@ -17,8 +17,9 @@ import pytest
 
 HERE = Path(__file__).resolve().parent
 
-# NMPC-heavy tracking run: a 120-interval IPOPT problem solved every 20 s step, far more steps
-# than the test waits for; almost all of its time is spent inside CasADi solves (the test reads
+# NMPC-heavy tracking run: a 120-interval IPOPT problem solved every 20 s step from the plan
+# alone (no multipliers carried over, which would halve the iterations), far more steps than
+# the test waits for; almost all of its time is spent inside CasADi solves (the test reads
 # the beacon's line from a pipe and may read it late, so the other participants' share of a
 # step must be negligible for the signal to land in the NMPC's step).
 NMPC_SCENARIO = """
@@ -50,6 +51,7 @@ type = "control"
 [participants.ctrl.options]
 horizon_steps = 120
 solver = "ipopt"
+warm_start_duals = false
 [participants.ship]
 fmu = "KCS"
 [participants.ship.parameters]

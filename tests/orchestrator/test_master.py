@@ -153,11 +153,11 @@ def test_interrupt_keeps_results(write_scenario, tmp_path, monkeypatch):
 
     original = master.CoSimulation.run
 
-    def interrupted_run(self, progress=True, on_step=None):
+    def interrupted_run(self, progress=True, on_step=None, spool=None):
         def stop(k):
             if k == 2:
                 raise KeyboardInterrupt
-        return original(self, progress=False, on_step=stop)
+        return original(self, progress=False, on_step=stop, spool=spool)
 
     monkeypatch.setattr(master.CoSimulation, "run", interrupted_run)
     report = run_scenario(write_scenario(scenario_text()), tmp_path, progress=False)

@@ -5,7 +5,7 @@ import pytest
 
 from rhnc.encounter import (cross_track_error, reference_at_times, segment_min_distance, separations,
                              time_back_on_track)
-from rhnc.metocean import NM
+from orchestrator.geometry import NM
 
 
 def test_segment_min_distance_catches_a_crossing_between_samples():

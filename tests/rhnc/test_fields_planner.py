@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from rhnc.fields import (SuperpositionField, guidance_field, normalise, resample_weather, wrap_angle)
-from rhnc.metocean import KNOT, NM, MetOceanField
+from orchestrator.geometry import KNOT, NM
+from rhnc.metocean import MetOceanField
 from rhnc.planner import plan_local_path
 
 SPEED = 18 * KNOT
@@ -140,6 +141,11 @@ def test_symmetric_patch_does_not_trap_the_path():
     path = plan_local_path(field, start, STEP, 60)
     assert path.trapped_at is not None
     assert path.reached_goal
+    # the step at which the trap is noticed already descends G alone: no step turns back
+    steps = np.diff(path.points, axis=0)
+    steps = steps[np.hypot(*steps.T) > 0]
+    turns = np.sum(steps[1:] * steps[:-1], axis=1) / (np.hypot(*steps[1:].T) * np.hypot(*steps[:-1].T))
+    assert turns.min() >= -0.5
 
 
 def test_avoidance_state_descends_guidance_alone():

@@ -5,7 +5,7 @@ import pytest
 from orchestrator.errors import ScenarioError
 from orchestrator.participant import BuildContext
 from rhnc.goal import GoalMonitor
-from rhnc.metocean import NM
+from orchestrator.geometry import NM
 
 
 def context():
@@ -23,9 +23,11 @@ def test_distance_and_arrival_latch():
 
 
 @pytest.mark.parametrize("options, message", [
-    ({}, r"participants.goal.options.goal_nm: expected \[north, east\]"),
-    ({"goal_nm": [1, 2], "arrival_radius_nm": 0}, r"arrival_radius_nm: expected a positive number"),
-    ({"goal_nm": [1, 2], "radius": 1}, r"unknown option 'radius'"),
+    ({}, r"s.toml: missing key 'participants.goal.options.goal_nm'"),
+    ({"goal_nm": [1, float("inf")]}, r"'participants.goal.options.goal_nm' must be \[north, east\] in nm, got \[1, inf\]"),
+    ({"goal_nm": [1, 2], "arrival_radius_nm": 0}, r"'participants.goal.options.arrival_radius_nm' must be positive"),
+    ({"goal_nm": [1, 2], "radius": 1}, r"unknown key 'participants.goal.options.radius' \(valid: goal_nm, "
+                                       r"arrival_radius_nm\)"),
 ])
 def test_option_errors(options, message):
     with pytest.raises(ScenarioError, match=message):

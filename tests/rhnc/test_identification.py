@@ -10,7 +10,7 @@ import pytest
 
 from orchestrator.cli import main
 from orchestrator.errors import ScenarioError
-from rhnc.identification import COEFFICIENTS, Record, fit_coefficients, simulate
+from rhnc.identification import COEFFICIENTS, Record, fit_coefficients, position_error_growth, simulate
 from rhnc.identify_run import run_identify
 from rhnc.ship_model import ShipParameters, load_parameter_set
 
@@ -38,6 +38,58 @@ def test_least_squares_recovers_the_coefficients_of_data_from_the_model_itself()
     for key, value in zip(COEFFICIENTS, theta):
         assert value == pytest.approx(getattr(true, key), rel=0.01), key
     assert r2["surge"] > 0.999 and r2["yaw"] > 0.999
+
+
+def test_position_error_growth_measures_how_far_the_model_predicts_from_the_plant():
+    true = load_parameter_set("default")
+    trim = true.d11 * 9.26
+    records = {
+        "turn": _record("turn", true, lambda t: (trim, 0.5 * true.tau_r_max if t >= 60 else 0.0), 600),
+        "zigzag": _record("zigzag", true, lambda t: (trim, 0.3 * true.tau_r_max * np.sign(np.sin(t / 90))), 700),
+    }
+    exact = position_error_growth(true, records)
+    assert exact["growth_mps"] < 1e-6 and exact["max_error_300s_m"] < 1e-3
+    values = {key: getattr(true, key) for key in (*COEFFICIENTS, "tau_u_max", "tau_r_max")}
+    wrong = ShipParameters(**{**values, "d33": 1.3 * true.d33})
+    error = position_error_growth(wrong, records)
+    # a weaker turn: the prediction falls behind the plant's turn by tens of metres in 5 min
+    assert 0.05 < error["growth_mps"] < 10.0
+    assert error["max_error_20s_m"] < error["max_error_60s_m"] < error["max_error_300s_m"]
+    # the growth covers the error at every prediction time, the horizon's included
+    assert error["max_error_300s_m"] <= error["growth_mps"] * 300.0 + 1e-9
+    assert error["max_error_60s_m"] <= error["growth_mps"] * 60.0 + 1e-9
+
+
+def test_identify_sails_an_actuator_plant_through_the_scenarios_allocation():
+    """exp3a_static_mmg.toml: the KCSMMG takes rudder and revolutions; identify sees it from tau."""
+    import dataclasses
+
+    from orchestrator.fmu_participant import FmuParticipant, resolve_fmu
+    from orchestrator.scenario import load_scenario
+    from rhnc.identification import KNOT, PlantRunner
+    from rhnc.identify_run import AllocatedPlant, _build_participant, allocation_between, find_plant_spec
+
+    scenario = load_scenario(REPO / "scenarios" / "exp3a_static_mmg.toml")
+    spec = find_plant_spec(scenario, None)
+    assert spec.name == "ship" and spec.fmu == "KCSMMG"
+    alloc, commands, feedback = allocation_between(scenario, spec)
+    assert alloc.name == "alloc"
+    assert sorted(commands) == [("propeller_rps_cmd", "propeller_rps_cmd"), ("rudder_angle_cmd", "rudder_angle_cmd")]
+    assert ("rudder_angle", "rudder_angle") in feedback and ("u", "u") in feedback
+    where = f"{scenario.path}: participants.ship"
+    path = resolve_fmu(spec.fmu, scenario.directory, where)
+
+    def build(initial):
+        parameters = {k: v for k, v in spec.parameters.items() if k not in ("x0", "y0", "psi0", "u0", "v0", "r0")}
+        plant = FmuParticipant(dataclasses.replace(spec, parameters=parameters, initial=initial), path, where)
+        return AllocatedPlant(_build_participant(scenario, alloc), plant, commands, feedback)
+
+    record = PlantRunner(build, 18 * KNOT).sail("turn", 60.0, lambda t, x: (7.7e5, 2.4e8 if t >= 10 else 0.0))
+    assert record.states[-1, 5] > 0.0 and record.states[-1, 2] > 0.0   # a turn to starboard
+    assert "tau_u" in build({}).input_names and "rudder_angle_cmd" not in build({}).input_names
+    identified = tomllib.loads((REPO / "scenarios" / "KCSMMG_identified.toml").read_text())["KCSMMG"]
+    assert "through its allocation 'alloc'" in identified["description"]
+    assert identified["position_error_growth_mps"] > 0.0
 
 
 def test_identify_needs_the_bounds(capsys):

@@ -7,7 +7,8 @@ import pytest
 import xarray as xr
 
 from orchestrator.errors import ScenarioError
-from rhnc.metocean import NM, MetOceanField, fetch_limited_hs
+from orchestrator.geometry import NM
+from rhnc.metocean import MetOceanField, fetch_limited_hs
 
 
 def test_paper_default_field_is_plausible():

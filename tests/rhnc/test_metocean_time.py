@@ -111,6 +111,19 @@ def test_netcdf_round_trip_keeps_every_time_step(moving, tmp_path):
     np.testing.assert_array_equal(single.hs, moving._fields["hs"][2])
 
 
+def test_netcdf_written_directly_is_the_xarray_dataset(moving, tmp_path):
+    """The file every run writes (through netCDF4) holds what ``to_dataset`` describes, attributes too."""
+    from rhnc.metocean_netcdf import to_dataset
+
+    for field in (moving, MetOceanField.generate_paper_default(resolution_nm=20.0)):
+        path = field.to_netcdf(tmp_path / f"direct{field.is_time_varying}.nc")
+        with xr.open_dataset(path) as written:
+            expected = to_dataset(field)
+            assert written.identical(expected)
+            for name in written.variables:
+                assert written[name].attrs == expected[name].attrs, name
+
+
 def test_file_options_are_checked(moving, tmp_path):
     moving.to_netcdf(tmp_path / "w.nc")
     where = "s.toml: metocean"

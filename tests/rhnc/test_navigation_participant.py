@@ -7,7 +7,8 @@ import pytest
 
 from orchestrator.errors import ScenarioError
 from orchestrator.participant import BuildContext
-from rhnc.metocean import KNOT, NM, MetOceanField
+from orchestrator.geometry import KNOT, NM
+from rhnc.metocean import MetOceanField
 from rhnc.navigation_participant import NavigationParticipant
 
 DELTA = 240.0

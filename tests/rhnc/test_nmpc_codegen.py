@@ -123,9 +123,9 @@ def test_failing_compiler_keeps_the_interpreted_functions(cache, kcs, monkeypatc
 def test_control_participant_summary_says_which_was_used(cache, kcs):
     context = BuildContext("exp.toml: participants.ctrl", Path("."), 30.0, 0.0, 600.0)
     options = {"horizon_steps": 3, "substeps": 1, "max_obstacles": 1}
-    summary = ControlParticipant.from_options("ctrl", options, context).summary()
+    summary = ControlParticipant.from_options("ctrl", {**options, "codegen": False}, context).summary()
     assert summary["codegen"] == "interpreted" and summary["codegen_note"] == "code generation off in the settings"
-    summary = ControlParticipant.from_options("ctrl", {**options, "codegen": True}, context).summary()
+    summary = ControlParticipant.from_options("ctrl", options, context).summary()  # on by default
     assert summary["codegen"] == "compiled" and summary["codegen_library"].startswith(str(cache))
     with pytest.raises(ScenarioError, match=r"participants.ctrl: option 'codegen' must be true or false"):
         ControlParticipant.from_options("ctrl", {"codegen": "yes"}, context)

@@ -213,3 +213,11 @@ def test_participant_reports_classes_domains_and_estimate(kcs):
     summary = ctrl.summary()
     assert summary["timeout_count"] == 0 and summary["max_speed_kn"] == pytest.approx(18.0)
     ctrl.terminate()
+
+
+def test_the_dual_warm_start_can_be_turned_off_by_option():
+    built = ControlParticipant.from_options("ctrl", {"warm_start_duals": False}, context())
+    assert built.controller.settings.warm_start_duals is False
+    assert ControlParticipant.from_options("ctrl", {}, context()).controller.settings.warm_start_duals is True
+    with pytest.raises(ScenarioError, match=r"participants.ctrl: option 'warm_start_duals' must be true or false"):
+        ControlParticipant.from_options("ctrl", {"warm_start_duals": 0}, context())

@@ -46,6 +46,12 @@ def test_model_check_against_the_plant(caplog):
         assert ctrl.model_check["check"] == "identified"
         assert ctrl.controller.params.name == "S175"
         assert _ctrl(REPO / "scenarios" / "exp3a_static.toml").model_check["check"] == "declared"
+        # the KCS set steering the actuator-level KCS through the allocation participant
+        mmg = REPO / "scenarios" / "exp3a_static_mmg.toml"
+        kcs_set = {"participants.ctrl.options.model_file": (REPO / "models" / "KCS" / "parameter_sets.toml").as_posix(),
+                   "participants.ctrl.options.model_set": "default"}
+        assert _ctrl(mmg, kcs_set).model_check["check"].startswith("declared (through an allocation")
+        assert _ctrl(mmg).model_check["check"] == "identified"   # the set identified through the allocation
     assert "neither" not in caplog.text
 
 
@@ -59,6 +65,25 @@ def test_model_file_options_are_checked():
         _ctrl(path, {"participants.ctrl.options.model_set": "nope"})
     with pytest.raises(ScenarioError, match="option 'model_set' needs 'model_file'"):
         _ctrl(OWN / "exp3a_s175_kcs_model.toml", {"participants.ctrl.options.model_set": "S175"})
+
+
+def test_identified_model_tightens_the_collision_domains_by_its_prediction_error():
+    path = OWN / "exp3a_s175_identified.toml"
+    ctrl = _ctrl(path)
+    growth = ctrl.controller.params.extras["position_error_growth_mps"]
+    assert growth > 0.0
+    assert ctrl.controller.settings.clearance_margin_growth_mps == pytest.approx(growth)
+    assert ctrl.controller.domains.settings.clearance_margin_growth_mps == pytest.approx(growth)
+    assert ctrl.summary()["clearance_margin_growth_from"] == "model's prediction error"
+    # the scenario's own value wins, zero included
+    ctrl = _ctrl(path, {"participants.ctrl.options.clearance_margin_growth_kn": 0.0})
+    assert ctrl.controller.settings.clearance_margin_growth_mps == 0.0
+    assert ctrl.summary()["clearance_margin_growth_from"] == "scenario"
+    # the KCS set carries none: the paper's circles as they were
+    assert _ctrl(OWN / "exp3a_s175_kcs_model.toml").controller.settings.clearance_margin_growth_mps == 0.0
+    with pytest.raises(ScenarioError, match=r"participants\.ctrl: model set 'S175': 'position_error_growth_mps' "
+                                            r"must be a number >= 0, got -1"):
+        _ctrl(path, {"participants.ctrl.options.parameter_overrides": {"position_error_growth_mps": -1.0}})
 
 
 def test_summary_records_the_model_check(tmp_path):
@@ -86,8 +111,10 @@ def test_experiment_3b_on_the_s175_with_its_identified_model(tmp_path):
 def test_experiment_3a_on_the_s175_identified_model_against_the_kcs_model(tmp_path):
     """Same scenario, same solver, side by side: only the prediction model differs.
 
-    (Measured: the identified model grazes the circle by 1.7 m with 15.5 sign changes per
-    100 solves, the KCS model cuts 23 m into it with 72; see docs/own-ship.md.)
+    The identified set comes with its prediction-error growth, by which the NMPC tightens the
+    circle, and the scenario runs the disturbance observer: the goals hold (measured: +15.6 m,
+    0.164 nm, 4.5 sign changes per 100 solves); the KCS model cuts 30 m into the circle with
+    71 (docs/own-ship.md).
     """
     figures = {}
     for model in ("kcs_model", "identified"):
@@ -95,7 +122,19 @@ def test_experiment_3a_on_the_s175_identified_model_against_the_kcs_model(tmp_pa
         assert report.ok, report.reason
         figures[model] = (report.summary["analyses"]["encounter"], report.summary["participants"]["ctrl"])
     (kcs, kcs_ctrl), (fit, fit_ctrl) = figures["kcs_model"], figures["identified"]
-    assert fit["min_clearance_nm"] > kcs["min_clearance_nm"] + 0.005
-    assert fit["min_clearance_nm"] > -0.002            # within 4 m of R + R_i
+    assert fit["separation_respected"] == 1 and fit["min_clearance_nm"] >= 0.0
+    assert kcs["min_clearance_nm"] < 0.0
     assert fit["cross_track_end_nm"] < 0.2 < kcs["cross_track_end_nm"]
-    assert fit_ctrl["tau_r_sign_changes_per_100_solves"] < kcs_ctrl["tau_r_sign_changes_per_100_solves"] / 3
+    assert fit_ctrl["tau_r_sign_changes_per_100_solves"] <= 10 < kcs_ctrl["tau_r_sign_changes_per_100_solves"]
+    assert fit_ctrl["clearance_margin_growth_from"] == "model's prediction error"
+
+
+OWN_SHIP_SCENARIOS = sorted(OWN.glob("exp*.toml")) + sorted((REPO / "scenarios").glob("exp*_mmg.toml"))
+
+
+@pytest.mark.parametrize("path", OWN_SHIP_SCENARIOS, ids=lambda path: path.stem)
+def test_the_own_ship_and_actuator_plant_scenarios_validate(path, capsys):
+    """Every shipped own-ship scenario loads and builds (validate: participants and FMUs, no run)."""
+    from orchestrator.cli import main
+
+    assert main(["validate", str(path)]) == 0, capsys.readouterr().err

@@ -52,8 +52,14 @@ def test_traffic_errors_name_the_key():
         TrafficParticipant.from_options("traffic", {"ships": []}, context())
     with pytest.raises(ScenarioError, match=r"targets\[0\]: missing 'velocity_kn'"):
         TrafficParticipant.from_options("traffic", {"targets": [{"start_nm": [1, 1], "radius_nm": 1}]}, context())
-    with pytest.raises(ScenarioError, match=r"static_obstacles\[0\]: 'radius_nm' must be a number >= 0"):
+    with pytest.raises(ScenarioError, match=r"static_obstacles\[0\]: 'radius_nm' must be a finite number >= 0"):
         TrafficParticipant.from_options("traffic", {"static_obstacles": [{"center_nm": [1, 1]}]}, context())
+    with pytest.raises(ScenarioError, match=r"targets\[0\]: 'radius_nm' must be a finite number >= 0, got inf"):
+        TrafficParticipant.from_options("traffic", {"targets": [{"start_nm": [1, 1], "velocity_kn": [1, 0],
+                                                                 "radius_nm": float("inf")}]}, context())
+    with pytest.raises(ScenarioError, match=r"targets\[0\]: 'speed_kn' must be a number > 0"):
+        TrafficParticipant.from_options("traffic", {"targets": [{"waypoints_nm": [[0, 0], [1, 1]], "radius_nm": 1,
+                                                                 "speed_kn": float("inf")}]}, context())
 
 
 def test_no_traffic_gives_an_empty_obstacle_array():

@@ -176,7 +176,8 @@ def test_bad_situation_file_in_a_batch_exits_2_before_any_result(tmp_path, capsy
 
 
 @pytest.mark.parametrize("table, message", [
-    ('files = "nowhere/"', r"'situations.files': not found"),
+    ('files = "nowhere/"\nradius_nm = 1.0', r"'situations.files': not found"),
+    ('files = "DATA"', r"missing key 'situations.radius_nm'"),
     ('files = "DATA"\nradius_nm = -1.0', r"'situations.radius_nm' \(each target's hazard radius R_i\)"),
     ('files = "DATA"\nradius_nm = 1.0\nspeed = 3', r"unknown key 'situations.speed'"),
 ])

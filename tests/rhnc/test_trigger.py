@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from rhnc.metocean import NM
+from orchestrator.geometry import NM
 from rhnc.trigger import EventTrigger
 
 
@@ -200,3 +200,130 @@ def test_target_opening_inside_its_domain_is_not_released():
     for k in range(4):
         trigger.update(float(k), (k * 0.5 * NM, 0.0), (0.5 * NM, 0.0), (50 * NM, 0.0), obstacle)
     assert trigger.states == ["triggered"] and trigger.et == 1.0
+
+
+def test_own_hazard_radius_must_not_be_negative():
+    for radius in (-1.0, float("nan")):
+        with pytest.raises(ValueError, match="^the own hazard radius must not be negative$"):
+            EventTrigger(4.5 * NM, 6.0 * NM, own_radius_m=radius)
+
+
+def _opening_from(distance_m, radius_m, **trigger_options):
+    """States of a static obstacle straight astern at ``distance_m``, the ship heading away
+    towards its goal: triggered at once (within eps2), then the same geometry again."""
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM, **trigger_options)
+    row = np.array([[-distance_m, 0.0, 0.0, 0.0, radius_m]])
+    for k in range(2):
+        trigger.update(float(k), (0.0, 0.0), (5.0, 0.0), (20 * NM, 0.0), row)
+    return trigger.states[0]
+
+
+def test_domain_is_the_obstacle_radius_plus_the_own_radius():
+    # the own radius defaults to 0: the domain is the obstacle's radius alone
+    assert _opening_from(1000.5, 1000.0) == "passed"
+    assert _opening_from(1000.5, 1000.0, own_radius_m=1.0) == "triggered"
+    # with an own radius the domain is the sum: 1200 m is inside 1000 + 500 m
+    assert _opening_from(1200.0, 1000.0, own_radius_m=500.0) == "triggered"
+    assert _opening_from(1600.0, 1000.0, own_radius_m=500.0) == "passed"
+
+
+def test_an_opening_obstacle_exactly_on_its_domain_is_not_released():
+    assert _opening_from(1000.0, 1000.0) == "triggered"
+
+
+def test_an_opening_obstacle_exactly_at_the_warning_range_is_passed_not_cleared():
+    # cleared only beyond the warning range; at it (and beyond the domain) it is passed
+    assert _opening_from(6 * NM, 100.0) == "passed"
+    assert _opening_from(6 * NM + 1.0, 100.0) == "clear"
+
+
+def test_an_obstacle_abeam_is_at_its_cpa_and_released_beyond_its_domain():
+    # a static obstacle right abeam: the range rate is zero, the CPA is now, not ahead
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM)
+    row = np.array([[0.0, 2 * NM, 0.0, 0.0, 1 * NM]])
+    for k in range(2):
+        trigger.update(float(k), (0.0, 0.0), (5.0, 0.0), (20 * NM, 0.0), row)
+    assert trigger.states == ["passed"] and trigger.et == 0.0
+
+
+def test_a_target_keeping_station_with_the_own_ship_is_released():
+    # same velocity as the own ship, which heads for its goal: the range does not shrink
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM)
+    for k in range(2):
+        own = (5.0 * k, 0.0)
+        trigger.update(float(k), own, (5.0, 0.0), (20 * NM, 0.0), np.array([[own[0], 2 * NM, 5.0, 0.0, 100.0]]))
+    assert trigger.states == ["passed"]
+    # and an obstacle beside a ship at rest (no relative motion at all) as well
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM)
+    for k in range(2):
+        trigger.update(float(k), (0.0, 0.0), (0.0, 0.0), (20 * NM, 0.0), np.array([[0.0, 2 * NM, 0.0, 0.0, 100.0]]))
+    assert trigger.states == ["passed"]
+
+
+def test_at_the_goal_an_opening_obstacle_is_released():
+    # no direction to the goal is left: only the measured velocity decides (a ship stopped
+    # on its goal that an obstacle drifts away from releases it)
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM)
+    goal = (10 * NM, 0.0)
+    for k in range(2):
+        trigger.update(float(k), goal, (0.0, 0.0), goal, np.array([[10 * NM + 2000.0 + k, 0.0, 1.0, 0.0, 100.0]]))
+    assert trigger.states == ["passed"]
+
+
+def test_close_to_the_goal_the_way_back_to_it_still_counts():
+    # 0.5 m short of the goal, moving away from it and from an obstacle beyond it: the
+    # measured velocity opens the range but the way back to the goal closes it
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM)
+    goal = (0.5, 0.0)
+    row = np.array([[2 * NM, 0.0, 0.0, 0.0, 100.0]])
+    for k in range(2):
+        trigger.update(float(k), (0.0, 0.0), (-5.0, 0.0), goal, row)
+    assert trigger.states == ["triggered"]
+
+
+def test_one_state_per_obstacle_row_and_transitions_name_their_row():
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM)
+    near, far = [3 * NM, 0.0, 0.0, 0.0, 100.0], [-50 * NM, 0.0, 0.0, 0.0, 100.0]
+    trigger.update(0.0, (0.0, 0.0), (5.0, 0.0), (20 * NM, 0.0), np.array([far]))
+    trigger.update(1.0, (0.0, 0.0), (5.0, 0.0), (20 * NM, 0.0), np.array([far, near]))
+    assert trigger.states == ["clear", "triggered"]
+    assert [(t.obstacle, t.state) for t in trigger.transitions] == [(1, "triggered")]
+    trigger.update(2.0, (0.0, 0.0), (5.0, 0.0), (20 * NM, 0.0), np.array([far]))
+    assert trigger.states == ["clear"] and trigger.et == 0.0
+
+
+def test_transition_causes_are_the_documented_ones():
+    causes = {t.cause for t in states_and_transitions_of_a_pass()}
+    assert causes == {"within warning range", "passed: CPA past and opening beyond the domain",
+                      "beyond warning range"}
+
+
+def states_and_transitions_of_a_pass():
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM)
+    row = np.array([[10 * NM, 0.5 * NM, 0.0, 0.0, 100.0]])
+    for k in range(30):
+        trigger.update(float(k), (k * 1 * NM, 0.0), (1 * NM, 0.0), (50 * NM, 0.0), row)
+    return trigger.transitions
+
+
+def _passed_target_beyond_the_warning_range(cpa_m):
+    """A ship target passed (opening) within range, then, beyond eps1, closing on a course
+    whose CPA with the own ship (at rest at its goal-ward position) is ``cpa_m``."""
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM)
+    goal = (-20 * NM, 0.0)  # the way to the goal is along -x, away from the target
+    trigger.update(0.0, (0.0, 0.0), (0.0, 0.0), goal, np.array([[0.0, 4 * NM, 0.0, 5.0, 100.0]]))
+    trigger.update(1.0, (0.0, 0.0), (0.0, 0.0), goal, np.array([[0.0, 4 * NM, 0.0, 5.0, 100.0]]))
+    assert trigger.states == ["passed"]
+    # now 10 nm to the north-east, heading south: CPA (cpa_m, 0) ahead of the own ship
+    trigger.update(2.0, (0.0, 0.0), (0.0, 0.0), goal, np.array([[cpa_m, 10 * NM, 0.0, -5.0, 100.0]]))
+    return trigger
+
+
+def test_a_passed_target_whose_cpa_falls_inside_the_warning_range_is_rearmed_while_still_beyond_it():
+    rearmed = _passed_target_beyond_the_warning_range(0.9 * 4.5 * NM)
+    assert rearmed.states == ["triggered"] and rearmed.transitions[-1].cause == "closing again"
+    assert rearmed.transitions[-1].range_m > 4.5 * NM
+    # CPA exactly on the warning range counts as inside (like the range itself)
+    assert _passed_target_beyond_the_warning_range(4.5 * NM).states == ["triggered"]
+    # a CPA outside the warning range leaves it passed (closing, so not cleared either)
+    assert _passed_target_beyond_the_warning_range(1.1 * 4.5 * NM).states == ["passed"]

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from rhnc.energy import EnergyParameters, brake_power, cost_rate, emission_rate
-from rhnc.metocean import KNOT, NM
+from orchestrator.geometry import KNOT, NM
 from rhnc.voyage import account_voyage, cii_rating, cii_reference
 
 

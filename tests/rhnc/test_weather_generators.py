@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from orchestrator.errors import ScenarioError
-from rhnc.metocean import KNOT, NM, MetOceanField, fetch_limited_hs
+from orchestrator.geometry import KNOT, NM
+from rhnc.metocean import MetOceanField, fetch_limited_hs
 from rhnc.weather_generators import (GENERATORS, STORM_SET_SIZE, cyclone, holland_wind_speed, list_generators,
                                      storm_off_route, storm_set, storm_set_member)
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from rhnc.energy import EnergyParameters
-from rhnc.metocean import KNOT, NM
+from orchestrator.geometry import KNOT, NM
 from rhnc.route_search import segment_clearance
 from rhnc.track_cost import constant_speed_times, cost_of_track
 from rhnc.weather_routing import RouteSearch, RoutingProblem, optimal_route, straight_route

@@ -2,7 +2,8 @@
 
 import numpy as np
 
-from rhnc.metocean import FIELDS, NM, MetOceanField, fetch_limited_hs
+from orchestrator.geometry import NM
+from rhnc.metocean import FIELDS, MetOceanField, fetch_limited_hs
 
 
 def axis_nm(size_nm: float, resolution_nm: float) -> np.ndarray:

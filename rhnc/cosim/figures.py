@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
-NM = 1852.0
+from orchestrator.geometry import NM
 
 
 def _pyplot():
@@ -23,7 +25,7 @@ def track_figure(frame, scenario, cosim, out_dir) -> list[str]:
     circle) where it was when the own ship came closest to it, and the closest-approach
     segment marked with its range and time.
     """
-    from orchestrator.analyses import find_plant
+    from rhnc.cosim.plant import find_plant
 
     plant = find_plant(cosim)
     if plant is None:
@@ -238,7 +240,7 @@ def controls_figure(frame, scenario, cosim, out_dir) -> list[str]:
     """Surge force and yaw moment demanded (and achieved, behind an allocation) over time,
     with their bounds; below them the plant's rudder angle and propeller revolutions when it
     reports them (an actuator-level plant)."""
-    from orchestrator.analyses import find_plant, tau_column
+    from rhnc.cosim.plant import find_plant, tau_column
 
     plant = find_plant(cosim)
     if plant is None:
@@ -291,7 +293,7 @@ def navigation_fields_figure(frame, scenario, cosim, out_dir, panels: int = 6) -
     planning instant; the panel shows U (or
     G alone while the event trigger was on), the track sailed so far and the local plan.
     """
-    from orchestrator.analyses import plant_name
+    from rhnc.cosim.plant import plant_name
 
     navigation = next((p for p in cosim.participants if hasattr(p, "field") and hasattr(p.field, "potential")), None)
     if navigation is None:
@@ -336,3 +338,37 @@ def navigation_fields_figure(frame, scenario, cosim, out_dir, panels: int = 6) -
     fig.savefig(out_dir / "navigation_fields.png", dpi=110)
     plt.close(fig)
     return ["navigation_fields.png"]
+
+
+def comparison_tracks_figure(spec, reports, out_dir) -> list[str]:
+    """``tracks.png`` of a comparison: every run's track over the first run's met-ocean field.
+
+    Registered in ``rhnc_cosim.comparison_figures``; ``reports`` maps each run's label to its
+    run report (``folder`` holds its time series and ``metocean.nc``).
+    """
+    import pandas as pd
+
+    from rhnc.metocean import MetOceanField
+
+    target = Path(out_dir) / "tracks.png"
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7, 6))
+    first = next(iter(reports.values())).folder / "metocean.nc"
+    if first.is_file():
+        field = MetOceanField.from_netcdf(first).snapshot(0.0)  # at departure when it varies in time
+        mesh = ax.pcolormesh(field.y / NM, field.x / NM, field.wind_speed, shading="auto", cmap="viridis")
+        fig.colorbar(mesh, ax=ax, label="wind speed [m/s]")
+    for (label, report), colour in zip(reports.items(), ("tab:red", "white", "tab:orange", "tab:cyan")):
+        frame = pd.read_parquet(report.folder / "timeseries.parquet") if (
+            report.folder / "timeseries.parquet").is_file() else pd.read_csv(report.folder / "timeseries.csv")
+        plant = next(c[:-2] for c in frame.columns if c.endswith(".x") and f"{c[:-2]}.psi" in frame.columns)
+        ax.plot(frame[f"{plant}.y"] / NM, frame[f"{plant}.x"] / NM, color=colour, lw=2, label=label)
+    ax.set_xlabel("east [nm]")
+    ax.set_ylabel("north [nm]")
+    ax.set_aspect("equal")
+    ax.legend(loc="lower right")
+    ax.set_title(f"{spec['name']}: tracks")
+    fig.tight_layout()
+    fig.savefig(target, dpi=120)
+    plt.close(fig)
+    return [target.name]

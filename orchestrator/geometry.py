@@ -1,0 +1,35 @@
+"""Units and plane geometry every layer shares: nautical mile, knot, degree, angle wrap, projection.
+
+Scenarios place ships in a local plane: ``x`` north, ``y`` east [m], angles clockwise from
+north [rad].  Options and reports speak nautical miles and knots; these are the only
+definitions of those units in the toolchain (the ship domain imports them from here).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+NM = 1852.0  #: metres per nautical mile
+KNOT = NM / 3600.0  #: m/s per knot (nautical mile per hour)
+DEG = math.pi / 180.0  #: radians per degree
+EARTH_RADIUS_M = 6_371_000.0  #: mean radius of the Earth [m], for the local projection
+
+
+def wrap_angle(angle):
+    """Wrap angles [rad] to (-pi, pi] (numpy; arrays element-wise)."""
+    wrapped = np.mod(np.asarray(angle, dtype=float) + np.pi, 2.0 * np.pi) - np.pi
+    return np.where(wrapped == -np.pi, np.pi, wrapped)
+
+
+def local_north_east_m(lat_deg, lon_deg, lat0_deg: float, lon0_deg: float) -> tuple[np.ndarray, np.ndarray]:
+    """Equirectangular projection about ``(lat0_deg, lon0_deg)``: north and east [m].
+
+    Good to a fraction of a percent over a few hundred nautical miles away from the poles;
+    the distances of gridded met-ocean data.  (Traffic situations, placed across larger
+    areas, use pyproj's azimuthal equidistant projection instead.)
+    """
+    north = np.radians(np.asarray(lat_deg, dtype=float) - lat0_deg) * EARTH_RADIUS_M
+    east = np.radians(np.asarray(lon_deg, dtype=float) - lon0_deg) * EARTH_RADIUS_M * np.cos(np.radians(lat0_deg))
+    return north, east

@@ -1,0 +1,243 @@
+"""The ``[participants.<name>]`` tables of a scenario as pydantic models.
+
+A table with ``fmu`` is an FMU participant (its parameters, port mapping, geodetic origin
+and initial state), one with ``type`` a Python participant (a registered type or
+``type = "python"`` with ``class``); :func:`participant_specs` checks every table and
+returns the frozen :class:`~orchestrator.scenario_spec.ParticipantSpec` of each.  Options of
+Python participants are checked by the participant type that reads them.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from pydantic import Field, PlainValidator, model_validator
+
+from orchestrator.errors import ScenarioError
+from orchestrator.scenario_spec import ParticipantSpec, VariableMapping, VectorMapping
+from orchestrator.toml_input import (Finite, Positive, Text, TomlTable, checked, fail, fail_whole, is_finite_number, one_of,
+                                     shown, shown_text)
+
+GEODETIC_ROLES = ("latitude", "longitude")
+DIRECTION_SENSES = ("towards", "from")
+FMI_VERSIONS = ("2.0", "3.0")
+#: Largest ``every``: a participant steps at least once in this many macro steps (the step limit).
+MAX_EVERY = 1_000_000
+CONNECTIONS_HINT = " ('connections' must come before the first [table] of the file)"
+
+
+def _every(value: Any) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_EVERY:
+        raise fail(f"must be a positive integer (at most {MAX_EVERY}), got {shown(value)}")
+    return value
+
+
+class ScenarioTable(TomlTable):
+    """A table of a scenario file: a key that belongs at the top gets a hint (a TOML key after a
+    ``[table]`` header lands in that table)."""
+
+    key_hints = {"connections": CONNECTIONS_HINT}
+
+
+def _class_path(value: Any) -> str:
+    if not isinstance(value, str):
+        raise fail("must name 'package.module:Class' for type = \"python\"")
+    return value
+
+
+Every = Annotated[int, PlainValidator(_every)]
+
+
+class PythonParticipantTable(ScenarioTable):
+    """``[participants.<name>]`` of a Python participant: a registered type or ``type = "python"``."""
+
+    type: Text
+    class_path: Annotated[str, PlainValidator(_class_path)] | None = Field(default=None, alias="class")
+    every: Every = 1
+    options: dict[str, Any] = {}
+    #: wall-time limit of one set-up or step call [s]; None: the simulation's
+    step_timeout_s: Positive | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _options_table(cls, data: Any) -> Any:
+        if isinstance(data, dict) and "options" in data and not isinstance(data["options"], dict):
+            raise fail_whole("'{prefix}options' must be a table")
+        return data
+
+    @model_validator(mode="after")
+    def _class_for_python(self):
+        if self.type == "python" and self.class_path is None:
+            raise fail_whole("'{prefix}class' must name 'package.module:Class' for type = \"python\"")
+        if self.type != "python" and self.class_path is not None:
+            raise fail_whole("'{prefix}class' is only for type = \"python\"")
+        return self
+
+
+def _parameter(value: Any) -> Any:
+    if isinstance(value, (bool, str)):
+        return value
+    if not is_finite_number(value):
+        raise fail(f"must be a finite number, boolean or string, got {shown(value)}")
+    return value
+
+
+def _origin(value: Any) -> tuple[float, float]:
+    if (not isinstance(value, list) or len(value) != 2 or not all(is_finite_number(v) for v in value)
+            or not -90.0 < value[0] < 90.0 or not -180.0 <= value[1] <= 180.0):
+        raise fail(f"must be [latitude, longitude] in degrees, got {shown(value)}")
+    return float(value[0]), float(value[1])
+
+
+class GeodeticTable(ScenarioTable):
+    origin_deg: Annotated[tuple[float, float], PlainValidator(_origin)]
+
+
+def _table_of(value: Any) -> dict:
+    if not isinstance(value, dict):
+        raise fail("must be a table")
+    return value
+
+
+class FmuParticipantTable(ScenarioTable):
+    """``[participants.<name>]`` of an FMU: the model, its parameters and how its ports map."""
+
+    fmu: Annotated[str, PlainValidator(lambda v: _fmu(v))]
+    fmi_version: Annotated[str, one_of(FMI_VERSIONS)] = "2.0"
+    every: Every = 1
+    parameter_set: Text | None = None
+    parameters: dict[str, Annotated[Any, PlainValidator(_parameter)]] = {}
+    mapping: Annotated[dict, PlainValidator(_table_of)] = {}
+    geodetic: GeodeticTable | None = None
+    initial: Annotated[dict, PlainValidator(_table_of)] = {}
+    #: wall-time limit of one set-up or step call [s]; None: the simulation's
+    step_timeout_s: Positive | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _parameters_table(cls, data: Any) -> Any:
+        if isinstance(data, dict) and "parameters" in data and not isinstance(data["parameters"], dict):
+            raise fail_whole("'{prefix}parameters' must be a table")
+        return data
+
+
+def _fmu(value: Any) -> str:
+    if not isinstance(value, str) or not value:
+        raise fail("must be a model name or a path to an .fmu")
+    return value
+
+
+def _scale(value: Any) -> float:
+    if not is_finite_number(value):
+        raise fail(f"must be a finite number, got {shown(value)}")
+    if value == 0:
+        raise fail("must not be zero")
+    return float(value)
+
+
+class VariableTable(ScenarioTable):
+    """``mapping.<port> = { variable = ..., ... }``: one FMU variable."""
+
+    variable: Annotated[str, PlainValidator(lambda v: _variable(v))]
+    scale: Annotated[float, PlainValidator(_scale)] | None = None
+    offset: Finite | None = None
+    unit: Text | None = None
+    geodetic: Annotated[str, one_of(GEODETIC_ROLES)] | None = None
+    start: Text | None = None
+
+    def spec(self) -> VariableMapping:
+        return VariableMapping(self.variable, self.scale, self.offset, self.unit, self.geodetic, self.start)
+
+
+def _variable(value: Any) -> str:
+    if not isinstance(value, str) or not value:
+        raise fail("must be an FMU variable name")
+    return value
+
+
+class VectorTable(ScenarioTable):
+    """``mapping.<port> = { speed = ..., direction = ... }`` or ``{ north = ..., east = ... }``."""
+
+    speed: Text | None = None
+    direction: Text | None = None
+    direction_is: Annotated[str, one_of(DIRECTION_SENSES)] = "towards"
+    north: Text | None = None
+    east: Text | None = None
+    units: dict[str, Any] = {}
+
+    @model_validator(mode="after")
+    def _one_form(self):
+        polar = self.speed is not None or self.direction is not None
+        cartesian = self.north is not None or self.east is not None
+        names = ("speed", "direction") if polar else ("north", "east")
+        if polar == cartesian or not all(getattr(self, n) is not None for n in names):
+            raise fail_whole("'{key}' needs variable = \"...\", or a vector: speed and direction, or north and east")
+        if not all(k in names and isinstance(v, str) for k, v in self.units.items()):
+            raise fail_whole(f"'{{prefix}}units' must map {' and '.join(names)} to unit names")
+        return self
+
+    def spec(self) -> VectorMapping:
+        return VectorMapping(speed=self.speed, direction=self.direction, direction_is=self.direction_is,
+                             north=self.north, east=self.east, units=dict(self.units))
+
+
+MAPPING_FORMS = ("must be \"variable\", { variable = \"...\", scale = 1.0, ... } or a vector "
+                 "{ speed = ..., direction = ... } / { north = ..., east = ... }")
+
+
+def _mapping_entry(target: Any, where: str, at: tuple) -> VariableMapping | VectorMapping:
+    """One ``mapping.<port>`` entry: a variable name, a variable table or a vector table."""
+    if isinstance(target, str) and target:
+        return VariableMapping(target)
+    if not isinstance(target, dict) or ("variable" not in target
+                                        and not set(target) & {"speed", "direction", "north", "east"}):
+        raise ScenarioError(f"{where}: '{_dotted(at)}' {MAPPING_FORMS}")
+    if "variable" in target:
+        return checked(VariableTable, target, where, at).spec()
+    return checked(VectorTable, target, where, at).spec()
+
+
+def _dotted(at: tuple) -> str:
+    return ".".join(shown_text(part) for part in at)
+
+
+def participant_specs(table: dict, where: str) -> tuple[ParticipantSpec, ...]:
+    if not table:
+        raise ScenarioError(f"{where}: [participants] declares no participant")
+    specs = []
+    for name, body in table.items():
+        at = ("participants", name)
+        if not isinstance(body, dict):
+            raise ScenarioError(f"{where}: '{_dotted(at)}' must be a table")
+        if not name.isidentifier() or len(name) > 64:
+            raise ScenarioError(f"{where}: participant name '{shown_text(name)}' must be an identifier "
+                                f"(at most 64 characters)")
+        if "fmu" in body:
+            specs.append(_fmu_participant(name, checked(FmuParticipantTable, body, where, at), where, at))
+        elif "type" in body:
+            model = checked(PythonParticipantTable, body, where, at)
+            specs.append(ParticipantSpec(name=name, every=model.every, type=model.type, class_path=model.class_path,
+                                         options=dict(model.options), step_timeout_s=model.step_timeout_s))
+        else:
+            raise ScenarioError(f"{where}: '{_dotted(at)}' needs either 'fmu' or 'type'")
+    return tuple(specs)
+
+
+def _fmu_participant(name: str, model: FmuParticipantTable, where: str, at: tuple) -> ParticipantSpec:
+    from orchestrator.plant_ports import INITIAL_KEYS
+
+    mapping = {port: _mapping_entry(target, where, at + ("mapping", port)) for port, target in model.mapping.items()}
+    initial = {}
+    for key, value in model.initial.items():
+        if key not in INITIAL_KEYS:
+            raise ScenarioError(f"{where}: unknown key '{_dotted(at + ('initial', key))}' "
+                                f"(valid: {', '.join(INITIAL_KEYS)})")
+        if not is_finite_number(value):
+            raise ScenarioError(f"{where}: '{_dotted(at + ('initial', key))}' must be a finite number, "
+                                f"got {shown(value)}")
+        initial[key] = float(value)
+    return ParticipantSpec(name=name, every=model.every, fmu=model.fmu, parameter_set=model.parameter_set,
+                           parameters=dict(model.parameters), mapping=mapping,
+                           geodetic_origin_deg=model.geodetic.origin_deg if model.geodetic else None,
+                           fmi_version=model.fmi_version, initial=initial,
+                           step_timeout_s=model.step_timeout_s)

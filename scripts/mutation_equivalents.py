@@ -1,0 +1,168 @@
+"""Survivors of the mutation run explained by hand as equivalent mutants.
+
+Read by ``scripts/mutation_report.py``, which merges these explanations into
+``docs/mutation-report.md``.  A rule is matched on the mutation itself, not on mutmut's
+numbering (which moves whenever a module changes): (source file or "" for any, a regular
+expression searched in the stripped original lines, one searched in the stripped mutated
+lines, why the mutant cannot change behaviour).  Rerender the report after editing with
+``python scripts/mutation_report.py --report-only``.
+
+A rule belongs here only when no test can tell the mutant from the original (same results
+for every input the code accepts); a mutant that a test could kill gets a test instead.
+"""
+
+_NO_ROWS = "an empty (0, k) array: no row is read, the column count does not matter"
+_FLOAT = ("the dtype only changes for integer input, and every use combines it with a float array or "
+          "constant (numpy promotes), so the results are the same floats")
+_SIGN = "only the sign of the range rate is used, and the divisor is positive either way"
+_TRAPEZOID = "the trapezoid rule over fewer than two samples is 0.0, the value of the other branch"
+_REST_END = ("an end row at rest means p2 - 4 p1 + 3 p0 = 0 to within the rest threshold (one-sided difference "
+             "zero), which makes velocity and acceleration at the neighbouring row parallel to that precision: the "
+             "neighbour's yaw rate is 0 (exactly for a ship stopped dead)")
+
+EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
+    *[(source, r"dtype=float", r"(asarray|array)\([^()]*,\s*(dtype=None)?\s*\)", _FLOAT)
+      for source in ("rhnc/trigger.py", "rhnc/voyage.py", "rhnc/reference.py", "rhnc/energy.py", "rhnc/planner.py",
+                     "rhnc/fields.py")],
+    ("", r'float\("nan"\)', r'float\("NAN"\)', "float() reads 'NAN' as 'nan': the same NaN"),
+    ("rhnc/trigger.py", r"np\.zeros\(\(0, 5\)\)", r"np\.zeros\(\(0, 6\)\)", _NO_ROWS),
+    ("rhnc/trigger.py", r"obstacles\.size == 0", r"obstacles\.size == 1",
+     "obstacle rows have 5 columns, so an array of size 1 cannot occur"),
+    ("rhnc/trigger.py", r"if n > len\(self\.states\)", r"if n >= len\(self\.states\)",
+     "extending the state list by zero entries changes nothing"),
+    ("rhnc/trigger.py", r"elif n < len\(self\.states\)", r"elif n <= len\(self\.states\)",
+     "deleting the states past the last one deletes nothing"),
+    ("rhnc/trigger.py", r"/ max\(distance, 1e-9\)", r"\* max\(distance, 1e-9\)|max\(distance, 1\.000000001\)", _SIGN),
+    ("rhnc/voyage.py", r"np\.trapezoid\(e[cm], hours\)\) if t\.size > 1",
+     r"if \(t\.size > 1\) or True|if t\.size >= 1", _TRAPEZOID),
+    ("rhnc/reference.py", r"acceleration\[(0|-1)\] = acceleration", r"acceleration\[",
+     "the end accelerations feed only the end yaw rates, which are then replaced by their neighbours' (or 0 at rest)"),
+    ("rhnc/reference.py", r"yaw_rate\[0\] = yaw_rate\[1\] if moving\[0\]",
+     r"if \(moving\[0\]\) or True|if moving\[1\]", _REST_END),
+    ("rhnc/reference.py", r"yaw_rate\[-1\] = yaw_rate\[-2\] if moving\[-1\]",
+     r"if \(moving\[-1\]\) or True|if moving\[-2\]", _REST_END),
+    ("rhnc/reference.py", r"if not np\.all\(moving\)", r"np\.all\(None\)",
+     "np.all(None) is False: the hold loop then runs for an all-moving path too, and there it leaves every heading"),
+    ("rhnc/energy.py", r"np\.broadcast\(along_wind, wind_speed\)", r"np\.broadcast\(along_wind, (None)?\)",
+     "np.broadcast(along_wind, None) has the shape of along_wind, which wind_speed shares"),
+    ("rhnc/energy.py", r"kinematic_viscosity_m2_s, 1e5\)", r"kinematic_viscosity_m2_s, 100001\.0\)",
+     "moves the Reynolds-number floor (1e5, speeds below about 5 mm/s) by one: C_F changes by 1e-6 relative "
+     "where the still-water power is below a microwatt"),
+    ("rhnc/energy.py", r"where=wind_speed > 1e-9", r"where=wind_speed >= 1e-9",
+     "differs only for a wind of exactly 1e-9 m/s"),
+    ("rhnc/trigger.py", r'new_state, cause = state, ""', r'new_state, cause = state, "XX',
+     "the initial cause is never read: a transition is recorded only when the state changes, and every "
+     "branch that changes it sets the cause"),
+    ("rhnc/trigger.py", r"\(closing and distance <= warning\) or cpa_inside",
+     r"\(closing and distance < warning\) or cpa_inside",
+     "the first clause is implied by the second: a pair closing at a velocity has a CPA no farther than its "
+     "present range, so closing within the warning range already makes cpa_inside true"),
+    ("rhnc/trigger.py", r"if w2 < 1e-12:", r"if w2 <= 1e-12:",
+     "only a relative speed of exactly 1e-6 m/s is classified differently (the guard keeps the division "
+     "finite); at that speed the range changes by less than a metre in 11 days, so either verdict is right"),
+    ("rhnc/planner.py", r"flat = magnitude < flat_gradient_per_m", r"flat = magnitude <= flat_gradient_per_m",
+     "differs only for a gradient of exactly the threshold (1e-9 per metre by default), where either "
+     "direction is right: the field is as good as flat"),
+    ("rhnc/planner.py", r"float\(direction @ previous\) < reversal_cosine",
+     r"float\(direction @ previous\) <= reversal_cosine",
+     "differs only for a turn of exactly 120 degrees (cosine exactly -0.5), the threshold's own value"),
+    ("rhnc/planner.py", r"if norm < 1e-9:", r"if norm <= 1e-9:",
+     "differs only for a projected direction of length exactly 1e-9, the threshold's own value (the "
+     "direction is then as good as blocked either way)"),
+    ("rhnc/planner.py", r"if norm >= 1e-9 else np\.zeros\(2\)", r".",
+     "unreachable fallback: after the corner branch the direction is the bearing to the goal, and a step "
+     "shorter than the distance to a goal on the (convex, rectangular) map ends on the segment between "
+     "them, inside the map, so the bearing is never projected and its norm is 1"),
+    ("rhnc/planner.py", r"direction = \(goal - position\) / to_goal if to_goal > 0 else np\.zeros\(2\)",
+     r"if \(to_goal > 0\) or True|if to_goal >= 0|if to_goal > 1 ",
+     "when the start is on the goal (or within 1 m of it) every point but the start is overwritten with the "
+     "goal (along >= to_goal), and the start is position + 0 * direction; a NaN direction (0/0) is "
+     "overwritten the same way"),
+    ("rhnc/fields.py", r"np\.mod\(np\.asarray\(angle, dtype=float\) \+ np\.pi", r"np\.asarray\(angle, dtype=float\) - np\.pi",
+     "angle - pi and angle + pi differ by 2 pi, which the modulo by 2 pi removes"),
+    ("rhnc/fields.py", r"is_time_varying", r"getattr\(None|\"is_time_varying\", None\)|\"is_time_varying\", \)|XXis_time_varyingXX|IS_TIME_VARYING|\) or t_s is not None",
+     "only decides whether a time-varying field is first reduced to its snapshot at t_s (one spatial pass "
+     "instead of one per time step): sampling it at t_s directly gives the same values (linear in time, "
+     "bilinear in space), and a static field's snapshot is itself"),
+    ("rhnc/fields.py", r"sampled = metocean\.sample\(xx, yy, t_s=t_s\)", r"metocean\.sample\(xx, yy, (t_s=None)?\s*\)",
+     "the field sampled here is static (a time-varying one was replaced by its snapshot at t_s just above), "
+     "and a static field ignores t_s"),
+    ("rhnc/fields.py", r"\.astype\(np\.float32\)", r"\.astype\(None\)",
+     "float32 is a memory choice for the map-wide goal geometry; float64 gives the same field to float32 "
+     "rounding (1e-7 relative), and the planner's steps depend on no digit beyond it"),
+    ("rhnc/fields.py", r"\.astype\(float\) - self\._g_min", r"\.astype\(None\) - self\._g_min",
+     "the normalised guidance in float32 instead of float64: the same values to float32 rounding (1e-7 relative)"),
+    ("rhnc/fields.py", r"guidance = np\.exp\(delta, out=delta\)", r"np\.exp\(delta, (out=None)?\s*\)",
+     "computing the exponential in place only saves an array; a new array holds the same values"),
+    ("rhnc/fields.py", r"^self\.(_speed|_start|ec|_ec_bar|_energy_bar|_guidance|_g_min) =", r"= (\"\"|None|1\.0)$",
+     "a placeholder of SuperpositionField.__init__ that update() overwrites before any use (the class must "
+     "be updated before sampling); the speed placeholder only has to differ from every positive speed"),
+    ("rhnc/fields.py", r"self\._speed = None", r'self\._speed = ""',
+     "set_weather clears the cached speed so that the next update rebuilds EC and EM: an empty string "
+     "differs from every speed as None does"),
+    ("rhnc/fields.py", r"self\._speed = speed", r"self\._speed = None",
+     "the cached speed only saves rebuilding EC and EM for an unchanged speed: forgetting it rebuilds the "
+     "same fields"),
+    ("rhnc/fields.py", r"self\._g_span = span if span > 1e-12", r".",
+     "a guard for a guidance field constant over the map to 12 digits, which G (a distance to the goal "
+     "times a factor of at least 1) never is on a map of two nodes or more: the fallback is unreachable"),
+    ("rhnc/fields.py", r"if not span > 1e-12 \* max", r"if not span >= 1e-12 \* max",
+     "differs only for a spread of exactly the threshold, where either answer is rounding"),
+    ("rhnc/fields.py", r"g_bar = \(self\._guidance\[rows, cols\]\.astype\(float\) - self\._g_min\)",
+     r"\+ self\._g_min\)",
+     "the patch only feeds differences of U between nodes (the gradient): a constant shift of G_bar cancels"),
+    ("rhnc/fields.py", r"(r0, r1|c0, c1) = max\([ij] - 1, 0\), min\([ij] \+ 3, n[xy]\)", r"[ij] - 2, 0|[ij] \+ 4, n",
+     "a wider patch around the cell: every node is read at the same offset from the patch's first row and "
+     "column (indices are taken relative to r0, c0), so the extra nodes are never read"),
+    ("rhnc/fields.py", r"u = self\._patch\(slice\(r0, r1\), slice\(c0, c1\)", r"slice\(r0, None\)|slice\(c0, None\)",
+     "a patch running to the map's edge holds the same nodes at the same offsets; the extra ones are never read"),
+    ("orchestrator/master.py", r"_progress_bar|bar\.update\(1\)|def run\(self, progress: bool = True|tqdm\(total=total",
+     r".",
+     "the console progress bar (tqdm, drawn only for runs longer than 2 s, on stderr) is display: no result, "
+     "status or file depends on it"),
+    ("orchestrator/master.py", r"if not enabled:", r"if enabled:",
+     "the console progress bar is display only (see above)"),
+    ("orchestrator/master.py", r"tempfile\.mkdtemp\(prefix=\"rhnc-run-\"\)", r"prefix=(None|\"XXrhnc-run-XX\"|\"RHNC-RUN-\")",
+     "only the name of the master's temporary folder changes; it is made, used and removed the same way"),
+    ("orchestrator/master.py", r"shutil\.rmtree\(self\.work_dir, ignore_errors=True\)", r"ignore_errors=(None|False)|self\.work_dir, \)",
+     "removing the master's own temporary folder does not fail (the master made it and nothing else holds it): "
+     "whether a failure would be ignored is never exercised"),
+    ("orchestrator/master.py", r"recorder = Recorder\(sim\.start_s, sim\.dt_s, sim\.steps\)", r"sim\.dt_s, None\)",
+     "the recorder keeps the planned step count as an attribute nothing reads (run.py takes steps_planned "
+     "from the scenario)"),
+    ("orchestrator/master.py", r"pending = \[item for item in pending if item\[0\] > k\]", r"item\[0\] >= k\]",
+     "an output released at step k stays pending one step longer and is applied again at k + 1, where the bus "
+     "already holds exactly it: only its own participant writes those ports, and its next outputs are released "
+     "later (or, with every = 1, after it in the pending list, so they still win)"),
+    ("orchestrator/master.py", r"if type\(value\) is float:", r"type\(None\) is float",
+     "the float shortcut skipped: math.isfinite(float(value)) gives the same answer for a float"),
+    ("orchestrator/master.py", r"current\[1\] = None", r'current\[1\] = ""|current\[2\] = None',
+     "after the last step only the final stop check runs, and the position is read only by the stop "
+     "watchdog's log line; an empty name reads as no name, and the time is not shown without a name"),
+    ("orchestrator/fmu_participant.py", r'tempfile\.mkdtemp\(prefix=f"fmu-\{self\.name\}-"\)', r"prefix=None",
+     "only the name of the folder the FMU is unpacked into changes"),
+    ("orchestrator/fmu_participant.py", r"FmiSlave\(self\.model_description, self\._unzip_dir, self\.name",
+     r"self\._unzip_dir, None,",
+     "the FMU instance's name reaches only the FMU's own log callback, whose messages the participant labels "
+     "with its own name"),
+    ("orchestrator/fmu_participant.py", r"shutil\.rmtree\(self\._unzip_dir, ignore_errors=True\)",
+     r"ignore_errors=(None|False)|self\._unzip_dir, \)",
+     "removing the participant's own unpacked FMU does not fail: whether a failure would be ignored is never "
+     "exercised"),
+    ("orchestrator/fmu_participant.py", r"self\.(_slave|_unzip_dir) = None", r'= ""',
+     "a second terminate() then finds an empty string instead of None: the slave's calls fail inside the "
+     "try blocks that already ignore a refusing FMU and rmtree('') is ignored, so it still does nothing"),
+    ("rhnc/nmpc.py", r"reference\[:, 2\] -= 2\.0 \* np\.pi \* np\.round",
+     r"reference\[:, 2\] [-+]= 2\.0 \* np\.pi \* np\.round\(",
+     "shifts the reference heading by a different whole number of turns: the objective is periodic in it "
+     "(stage cost 2 (1 - cos e), terminal heading error wrapped by atan2, terminal frame from cos and sin; "
+     "see tests/rhnc/test_nmpc_cost.py), so the optimum is the same"),
+    ("orchestrator/fmu_participant.py", r"return call\(\*args, \*\*kwargs\)", r"return call\(\*args, \)",
+     "no caller of _call passes keyword arguments: dropping them forwards the same call"),
+    ("orchestrator/master.py", r'getattr\(participant, "checks_outputs_finite", False\)',
+     r'"checks_outputs_finite", None\)',
+     "the default is only tested for truth: None and False are both false"),
+    ("orchestrator/master.py", r"at t = \{t:g\} s\" if name else phase", r"if \(name\) or True else phase",
+     "the position without a participant is only reached after the last step, where only the stop "
+     "watchdog's log line reads it (its wording)"),
+]

@@ -1,0 +1,59 @@
+"""The one definition of the toolchain's units and angle wrap (orchestrator/geometry.py)."""
+
+from __future__ import annotations
+
+import ast
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from orchestrator.geometry import DEG, KNOT, NM, local_north_east_m, wrap_angle
+
+REPO = Path(__file__).resolve().parents[2]
+#: Packages and scripts that must take the units from orchestrator.geometry.
+CHECKED = ("orchestrator", "rhnc", "bench", "scripts", "models")
+#: Files that still define their own (the NMPC modules, being split on another branch).
+PENDING = {"rhnc/nmpc.py"}
+
+
+def test_units():
+    assert NM == 1852.0
+    assert KNOT * 3600.0 == pytest.approx(1852.0, rel=1e-15)
+    assert 180.0 * DEG == pytest.approx(math.pi, rel=1e-15)
+
+
+def test_wrap_angle_half_open():
+    assert wrap_angle(math.pi) == math.pi
+    assert wrap_angle(-math.pi) == math.pi
+    assert wrap_angle(3 * math.pi / 2) == pytest.approx(-math.pi / 2)
+    assert np.allclose(wrap_angle([0.1 + 4 * math.pi, -0.1 - 4 * math.pi]), [0.1, -0.1])
+
+
+def test_projection_one_minute_of_latitude_is_about_a_nautical_mile():
+    north, east = local_north_east_m(np.array([60.0 + 1 / 60]), np.array([10.0]), 60.0, 10.0)
+    assert north[0] == pytest.approx(NM, rel=0.002) and east[0] == 0.0
+    north, east = local_north_east_m(np.array([60.0]), np.array([10.0 + 1 / 60]), 60.0, 10.0)
+    assert east[0] == pytest.approx(NM * 0.5, rel=0.002)  # cos 60 deg
+
+
+def _unit_definitions(path: Path) -> list[str]:
+    found = []
+    for node in ast.parse(path.read_text(encoding="utf-8")).body:
+        targets = node.targets if isinstance(node, ast.Assign) else []
+        for target in targets:
+            if isinstance(target, ast.Name) and target.id in ("NM", "KNOT", "DEG"):
+                found.append(f"{path.relative_to(REPO)}:{node.lineno} {target.id}")
+        if isinstance(node, ast.FunctionDef) and node.name == "wrap_angle":
+            found.append(f"{path.relative_to(REPO)}:{node.lineno} wrap_angle")
+    return found
+
+
+def test_units_and_wrap_are_defined_once():
+    found = []
+    for folder in CHECKED:
+        for path in sorted((REPO / folder).rglob("*.py")):
+            if path.name != "geometry.py" and str(path.relative_to(REPO)) not in PENDING:
+                found += _unit_definitions(path)
+    assert found == []

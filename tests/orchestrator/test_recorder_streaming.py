@@ -1,0 +1,149 @@
+"""The time series is written in Parquet parts as the run goes: the same table as holding every
+row in memory, a bounded number of rows held, late columns filled, a full disk one line."""
+
+import errno
+import os
+
+import numpy as np
+import pandas as pd
+import pyarrow.parquet as pq
+import pytest
+
+from orchestrator.cli import main
+from orchestrator.recorder import ColumnFrame, Recorder
+
+
+def reference_frame(records, start_s, dt_s):
+    """The table by its definition: per participant the latest record at or before each grid time."""
+    until = max(t for _, t, _ in records)
+    grid = np.round(start_s + dt_s * np.arange(int(np.floor((until - start_s) / dt_s + 1e-9)) + 1), 6)
+    frame = pd.DataFrame({"time_s": grid})
+    for name in dict.fromkeys(n for n, _, _ in records):
+        rows = [(round(t, 6), {f"{name}.{k}": v for k, v in out.items()}) for n, t, out in records if n == name]
+        part = pd.DataFrame([values for _, values in rows])
+        part.insert(0, "time_s", [t for t, _ in rows])
+        part = part.drop_duplicates("time_s", keep="last").sort_values("time_s")
+        frame = pd.merge_asof(frame, part, on="time_s", direction="backward")
+    return frame
+
+
+def simulate(recorder, steps=40, dt=2.0):
+    """A sampled participant every step, a dynamic one (outputs at step end) every 3 steps, and
+    one that gives a second output only from step 25 on; set-up outputs first."""
+    records = []
+
+    def add(name, t, outputs):
+        recorder.add(name, t, outputs)
+        records.append((name, t, outputs))
+
+    add("nav", 0.0, {"a": 0.0})
+    add("ship", 0.0, {"x": 100.0})
+    add("late", 0.0, {"p": -1.0})
+    for k in range(steps):
+        t = k * dt
+        add("nav", t, {"a": float(k)})
+        if k % 3 == 0:
+            add("ship", t + min(3, steps - k) * dt, {"x": 100.0 + k})
+        add("late", t, {"p": float(k), **({"q": 10.0 * k} if k >= 25 else {})})
+        recorder.advance(t)
+        yield records
+
+
+def test_the_streamed_series_equals_the_table_by_definition(tmp_path):
+    recorder = Recorder(0.0, 2.0, 40, spool=tmp_path / "spool", chunk_rows=7)
+    for records in simulate(recorder):
+        assert recorder.buffered_rows < 7  # never more than one part's rows in memory
+    recorder.finish()
+    recorder.write_parquet(tmp_path / "series.parquet")
+    written = pd.read_parquet(tmp_path / "series.parquet")
+    expected = reference_frame(records, 0.0, 2.0)
+    pd.testing.assert_frame_equal(written, expected[written.columns], check_dtype=False)
+    assert list(written.columns) == ["time_s", "nav.a", "ship.x", "late.p", "late.q"]
+    assert written["late.q"].iloc[:25].isna().all() and written["late.q"].iloc[25] == 250.0
+    assert pq.ParquetFile(tmp_path / "series.parquet").num_row_groups == len(written) // 7 + 1
+    recorder.write_csv(tmp_path / "series.csv")
+    pd.testing.assert_frame_equal(pd.read_csv(tmp_path / "series.csv"), written, check_dtype=False)
+    frame = ColumnFrame(tmp_path / "series.parquet")
+    assert len(frame) == len(written) and list(frame.columns) == list(written.columns)
+    np.testing.assert_array_equal(frame.iloc[3:9]["ship.x"], written["ship.x"].iloc[3:9])
+
+
+def test_in_memory_and_streamed_recorders_agree(tmp_path):
+    streamed = Recorder(0.0, 2.0, 40, spool=tmp_path / "spool", chunk_rows=5)
+    held = Recorder(0.0, 2.0, 40)
+    for _ in zip(simulate(streamed), simulate(held)):
+        pass
+    streamed.finish()
+    held.finish()
+    pd.testing.assert_frame_equal(streamed.to_frame(), held.to_frame())
+
+
+LONG = """
+[simulation]
+name = "long"
+steps = 3000
+dt_s = 1.0
+[participants.clock]
+type = "python"
+class = "sample_participants:Clock"
+[outputs]
+figures = []
+"""
+
+
+def test_a_run_writes_its_series_while_it_runs(write_scenario, tmp_path, monkeypatch):
+    from orchestrator import master
+    from orchestrator.run import run_scenario
+
+    seen = {}
+    original = master.CoSimulation.run
+
+    def watched(self, progress=True, on_step=None, spool=None):
+        def peek(k):
+            if k == 2999:
+                seen["parts"] = len(list(spool.glob("part-*.parquet")))
+                seen["buffered"] = self.recorder.buffered_rows
+        return original(self, progress=False, on_step=peek, spool=spool)
+
+    monkeypatch.setattr(master.CoSimulation, "run", watched)
+    report = run_scenario(write_scenario(LONG), tmp_path, progress=False)
+    assert report.status == "finished"
+    assert seen["parts"] == 3000 // 512 and seen["buffered"] == 3000 % 512
+    frame = pd.read_parquet(report.folder / "timeseries.parquet")
+    assert len(frame) == 3000 and frame["clock.count"].iloc[-1] == 3000.0
+    assert sorted(p.name for p in report.folder.iterdir()) == ["clock_calls.csv", "summary.json",
+                                                               "timeseries.parquet"]  # no spool left
+
+
+def test_a_full_disk_during_the_run_is_one_line_and_leaves_nothing(write_scenario, tmp_path, capsys, monkeypatch):
+    real = pd.DataFrame.to_parquet
+    written = []
+
+    def filling(self, path, *args, **kwargs):
+        if len(written) == 2:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        written.append(path)
+        return real(self, path, *args, **kwargs)
+
+    monkeypatch.setattr(pd.DataFrame, "to_parquet", filling)
+    code = main(["run", str(write_scenario(LONG)), "--results", str(tmp_path / "results"), "--no-progress"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 4
+    assert len(err) == 1 and err[0].endswith("the time series could not be written (the disk is full)")
+    assert list((tmp_path / "results" / "long").iterdir()) == []
+
+
+def test_a_column_frame_answers_as_the_dataframe_it_stands_for(tmp_path):
+    """Analyses written against a DataFrame keep working: the usual access reads columns, any
+    other attribute reads the whole series."""
+    frame = pd.DataFrame({"time_s": np.arange(10.0), "ship.x": np.arange(10.0) ** 2, "ship.y": -np.arange(10.0)})
+    frame.to_parquet(tmp_path / "series.parquet", index=False)
+    lazy = ColumnFrame(tmp_path / "series.parquet")
+    pd.testing.assert_series_equal(lazy["ship.x"], frame["ship.x"])
+    pd.testing.assert_frame_equal(lazy[["ship.x", "ship.y"]], frame[["ship.x", "ship.y"]])
+    pd.testing.assert_series_equal(lazy.iloc[2:7]["ship.y"], frame["ship.y"].iloc[2:7].reset_index(drop=True))
+    pd.testing.assert_series_equal(lazy.iloc[3], frame.iloc[3])
+    assert lazy.loc[4, "ship.x"] == 16.0 and lazy.shape == (10, 3) and len(lazy.iloc[8:]) == 2
+    assert lazy.get("ship.z") is None and "ship.x" in lazy.columns
+    with pytest.raises(KeyError):
+        lazy["ship.z"]
