@@ -56,6 +56,11 @@ STATIC_SPEED_MPS = 0.1
 HEAD_ON_BEARING_DEG = 10.0
 HEAD_ON_COURSE_DEG = 15.0
 ABAFT_BEAM_DEG = 112.5
+#: Rule 17(b): a stand-on ship may act once the CPA predicted at the present velocities lies
+#: inside the required separation and is at most this far ahead [s] ...
+STAND_ON_ACTION_TCPA_S = 600.0
+#: ... or the range has fallen below this many times the required separation
+STAND_ON_ACTION_RANGE_FACTOR = 2.0
 
 ENCOUNTER_CLASSES = ("static", "none", "head_on", "crossing_give_way", "crossing_stand_on",
                      "overtaking", "overtaken")
@@ -154,6 +159,33 @@ def classify(own_xy: Sequence[float], own_course_rad: float, own_speed_mps: floa
     else:
         name = "crossing_stand_on"
     return Encounter(name, beta, alpha, range_m, cpa, tcpa)
+
+
+def stand_on_must_act(cpa_m: float, tcpa_s: float, range_m: float, separation_m: float,
+                      action_tcpa_s: float = STAND_ON_ACTION_TCPA_S,
+                      action_range_factor: float = STAND_ON_ACTION_RANGE_FACTOR) -> bool:
+    """Rule 17(b): the give-way vessel's action is clearly not enough, so the stand-on ship acts.
+
+    Read as: the closest approach predicted with both ships at their present velocities
+    (the stand-on ship keeping its course and speed) lies inside ``separation_m`` and
+    either it is at most ``action_tcpa_s`` ahead, or the ships are already within
+    ``action_range_factor * separation_m`` (a ship closing slowly, e.g. overtaking from
+    astern, whose TCPA stays long while it is close).  The controller decides with this
+    function when to stop standing on, and the ``colregs`` analysis judges with it whether
+    a stand-on manoeuvre came too early: one definition for both.
+
+    Parameters
+    ----------
+    cpa_m, tcpa_s : float
+        Predicted closest approach [m] and the time to it [s] (<= 0: opening).
+    range_m : float
+        Present range [m].
+    separation_m : float
+        The separation to keep, R + R_i [m].
+    """
+    if not (cpa_m < separation_m and tcpa_s > 0.0):
+        return False
+    return tcpa_s <= action_tcpa_s or range_m <= action_range_factor * separation_m
 
 
 class EncounterTracker:

@@ -8,19 +8,31 @@ test every verdict.  Per target it reports
   with the own ship's course and speed over ground;
 * the closest point of approach: range and time, refined along the straight chords
   between samples (both ships moving linearly over a sample interval);
-* the passing side: where the target lies from the own ship's heading at the CPA
-  (``port``: a port-to-port passing), and, in a crossing, whether the own ship
+* the passing side: where the target lies from the own ship's course over ground at the
+  CPA (``port``: a port-to-port passing), and, in a crossing, whether the own ship
   crossed ahead of or astern of the target (on crossing the target's course line; at the CPA if
   the tracks never cross);
-* the first manoeuvre after the onset: the first time the heading departs from the
-  heading at the onset by ``manoeuvre_threshold_deg`` or more and stays beyond it for
+* the first manoeuvre after the onset: the first time the course over ground departs from
+  the course at the onset by ``manoeuvre_threshold_deg`` or more and stays beyond it for
   ``manoeuvre_hold_s`` (a sustained alteration, not yaw in a seaway), and its side;
 * a verdict per rule, ``"pass"``, ``"fail"`` or ``"not applicable"``, with the reason.
+
+Manoeuvres are read from the course over ground (COG, from the sampled positions), not from
+the heading: in a cross wind a ship holding its course sails with a drift angle of several
+degrees, and a controller that trims its heading for it has not altered course.  Another
+ship sees the COG (radar, AIS).  The largest difference heading - COG between onset and CPA
+is reported as ``max_drift_angle_deg`` when the heading is given.
+
+A target that starts inside R + R_i (the situation begins inside the domain: no
+controller can then keep R + R_i) is reported apart, ``started_inside``, with its own
+criterion: the range must never fall below its value at the start
+(``range_kept_from_start``).  Its rule verdicts judge the separation by that criterion;
+``separation_kept`` still says, truthfully, that R + R_i was not kept.
 
 The verdicts (thresholds are :class:`JudgementSettings`):
 
 Rule 8 (action to avoid collision), applicable to a give-way vessel and to any vessel that
-manoeuvred: the alteration is large enough to be readily apparent (a heading change of at
+manoeuvred: the alteration is large enough to be readily apparent (a change of course of at
 least ``apparent_course_change_deg`` before the CPA, or a speed reduction of at least
 ``apparent_speed_reduction`` of the speed at onset), made at least
 ``early_before_cpa_min`` before the CPA, and the ships pass at a safe distance (the
@@ -32,9 +44,11 @@ the separation.
 Rule 16 (action by the give-way vessel): an early alteration (as in Rule 8) and the
 separation kept ("keep well clear").
 Rule 17 (stand-on): keep course and speed; a manoeuvre is allowed only once the give-way
-vessel's action is clearly not enough, read here as: the CPA predicted at constant
-velocities is below the separation and less than ``stand_on_wait_min`` ahead, or the own
-ship is at that time giving way to another target (with several targets a stand-on ship
+vessel's action is clearly not enough, read as :func:`rhnc.colregs.stand_on_must_act` (the
+controller's rule): at the start of the manoeuvre, the CPA predicted with the own ship still
+on the course and speed it stood on with is below the separation, and less than
+``stand_on_wait_min`` ahead or the range below ``stand_on_range_factor`` separations; or the
+own ship is at that time giving way to another target (with several targets a stand-on ship
 may have to act for a third one); and in a crossing, no alteration to port for a vessel on
 the own port side (Rule 17(c)).
 
@@ -52,7 +66,8 @@ import numpy as np
 
 from orchestrator.geometry import NM
 
-from rhnc.colregs import ROLE, EncounterTracker, cpa_tcpa, wrap_deg
+from rhnc.colregs import (ROLE, STAND_ON_ACTION_RANGE_FACTOR, EncounterTracker, cpa_tcpa, stand_on_must_act,
+                          wrap_deg)
 from rhnc.encounter import segment_min_distance
 
 PASS, FAIL, NOT_APPLICABLE = "pass", "fail", "not applicable"
@@ -73,6 +88,7 @@ class JudgementSettings:
     stand_on_wait_min: float = 10.0
     risk_cpa_nm: float = 2.0
     risk_tcpa_min: float = 30.0
+    stand_on_range_factor: float = STAND_ON_ACTION_RANGE_FACTOR
 
     def __post_init__(self) -> None:
         for field in dataclasses.fields(self):
@@ -109,9 +125,10 @@ def closest_approach(t, own_xy: np.ndarray, target_xy: np.ndarray) -> tuple[floa
 
 def first_manoeuvre(t, heading_rad, start_index: int, end_time_s: float,
                     settings: JudgementSettings) -> tuple[float | None, str | None]:
-    """Time [s] and side of the first sustained heading change after ``start_index``.
+    """Time [s] and side of the first sustained change of course after ``start_index``.
 
-    The heading must depart from its value at ``start_index`` by at least the threshold and
+    ``heading_rad`` is the course (over ground, as :func:`judge_encounters` passes it) at
+    each sample [rad].  It must depart from its value at ``start_index`` by at least the threshold and
     stay beyond it (on the same side) for ``manoeuvre_hold_s``; only changes that begin
     before ``end_time_s`` count.
     """
@@ -155,14 +172,15 @@ def crossed_ahead(own_xy: np.ndarray, target: np.ndarray, start: int, cpa_index:
     return bool(along[k] > 0.0)
 
 
-def judge_target(t, own_xy, heading_rad, speed_mps, target: np.ndarray, encounter_class: str,
+def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter_class: str,
                  onset_index: int | None, required_m: float, settings: JudgementSettings,
                  give_way_onsets_s: tuple[float, ...] = ()) -> dict:
     """Everything the ``colregs`` analysis reports for one target (see the module docstring).
 
     Parameters
     ----------
-    t : (n,) [s]; own_xy : (n, 2) [m]; heading_rad : (n,) [rad]; speed_mps : (n,) [m/s]
+    t : (n,) [s]; own_xy : (n, 2) [m]; course_rad : (n,) course over ground [rad];
+    speed_mps : (n,) speed over ground [m/s]
     target : (n, 5)
         The target at each sample: x, y, vx, vy, radius [m, m/s].
     encounter_class : str
@@ -179,9 +197,11 @@ def judge_target(t, own_xy, heading_rad, speed_mps, target: np.ndarray, encounte
     """
     t = np.asarray(t, dtype=float)
     cpa_m, cpa_time, cpa_index = closest_approach(t, own_xy, target[:, :2])
+    initial_range_m = float(np.hypot(*(target[0, :2] - own_xy[0])))
+    started_inside = bool(initial_range_m < required_m)
     k = min(int(round(cpa_index)), t.size - 1)
     offset = target[k, :2] - own_xy[k]
-    bearing = float(wrap_deg(math.degrees(math.atan2(offset[1], offset[0]) - heading_rad[k])))
+    bearing = float(wrap_deg(math.degrees(math.atan2(offset[1], offset[0]) - course_rad[k])))
     result: dict = {
         "encounter_class": encounter_class,
         "role": ROLE[encounter_class],
@@ -189,6 +209,9 @@ def judge_target(t, own_xy, heading_rad, speed_mps, target: np.ndarray, encounte
         "cpa_nm": cpa_m / NM,
         "required_nm": required_m / NM,
         "separation_kept": bool(cpa_m >= required_m - 1e-6),
+        "initial_range_nm": initial_range_m / NM,
+        "started_inside": started_inside,
+        "range_kept_from_start": bool(cpa_m >= initial_range_m - 1e-6) if started_inside else None,
         "time_of_cpa_s": cpa_time,
         "passing_side": "starboard" if bearing > 0 else "port",
         "relative_bearing_at_cpa_deg": bearing,
@@ -205,16 +228,16 @@ def judge_target(t, own_xy, heading_rad, speed_mps, target: np.ndarray, encounte
     if encounter_class.startswith("crossing"):
         ahead = crossed_ahead(own_xy, target, onset_index, cpa_index)
         result["crossed"] = None if ahead is None else ("ahead" if ahead else "astern")
-    manoeuvre_time, side = first_manoeuvre(t, heading_rad, onset_index, cpa_time, settings)
+    manoeuvre_time, side = first_manoeuvre(t, course_rad, onset_index, cpa_time, settings)
     result["manoeuvre_time_s"], result["manoeuvre_side"] = manoeuvre_time, side
     before = (t >= t[onset_index]) & (t <= cpa_time)
-    unwrapped = np.unwrap(heading_rad)
+    unwrapped = np.unwrap(course_rad)
     change = np.degrees(unwrapped[before] - unwrapped[onset_index])
     result["max_course_change_deg"] = float(np.max(np.abs(change))) if change.size else 0.0
     speed0 = float(speed_mps[onset_index])
     if speed0 > 0 and np.any(before):
         result["max_speed_reduction"] = float(max(0.0, 1.0 - np.min(speed_mps[before]) / speed0))
-    verdicts, reasons = _verdicts(result, encounter_class, t, own_xy, speed_mps, target, settings,
+    verdicts, reasons = _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, target, settings,
                                   give_way_onsets_s)
     result.update(verdicts)
     result["reasons"] = reasons
@@ -235,7 +258,15 @@ def _side_correct(result: dict, encounter_class: str) -> bool | None:
     return None
 
 
-def _verdicts(result, encounter_class, t, own_xy, speed_mps, target, settings,
+def _last_steady_sample(t, course_rad, onset_index: int, index: int, settings: JudgementSettings) -> int:
+    """The last sample before ``index`` whose course is within half the manoeuvre threshold of
+    the course at the onset (where the manoeuvre began); the onset if none."""
+    change = np.abs(wrap_deg(np.degrees(np.asarray(course_rad[onset_index:index + 1]) - course_rad[onset_index])))
+    steady = np.nonzero(change < 0.5 * settings.manoeuvre_threshold_deg)[0]
+    return onset_index + int(steady[-1]) if steady.size else onset_index
+
+
+def _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, target, settings,
               give_way_onsets_s=()) -> tuple[dict, dict]:
     verdicts = {rule: NOT_APPLICABLE for rule in RULES}
     reasons: dict[str, str] = {}
@@ -245,8 +276,13 @@ def _verdicts(result, encounter_class, t, own_xy, speed_mps, target, settings,
         if failures:
             reasons[rule] = "; ".join(failures)
 
-    kept = result["separation_kept"]
-    separation = [] if kept else [f"CPA {result['cpa_nm']:.2f} nm < required {result['required_nm']:.2f} nm"]
+    if result["started_inside"]:  # no controller can keep R + R_i: the range must not close further
+        kept = result["range_kept_from_start"]
+        separation = [] if kept else [f"started {result['initial_range_nm']:.2f} nm off, inside the required "
+                                      f"{result['required_nm']:.2f} nm, and closed to {result['cpa_nm']:.2f} nm"]
+    else:
+        kept = result["separation_kept"]
+        separation = [] if kept else [f"CPA {result['cpa_nm']:.2f} nm < required {result['required_nm']:.2f} nm"]
     manoeuvred = result["manoeuvre_time_s"] is not None
     early_s = settings.early_before_cpa_min * 60.0
     early = manoeuvred and result["time_of_cpa_s"] - result["manoeuvre_time_s"] >= early_s
@@ -254,7 +290,11 @@ def _verdicts(result, encounter_class, t, own_xy, speed_mps, target, settings,
                                [f"alteration {(result['time_of_cpa_s'] - result['manoeuvre_time_s']) / 60:.1f} min "
                                 f"before the CPA (< {settings.early_before_cpa_min:g} min)"])
     give_way = encounter_class in GIVE_WAY_CLASSES
-    if give_way or (manoeuvred and encounter_class != "static"):
+    # a stand-on ship's manoeuvre made while it gives way to another target is that
+    # encounter's action (judged there, Rule 8 included), not one taken for this target
+    for_another = manoeuvred and any(onset <= result["manoeuvre_time_s"] for onset in give_way_onsets_s)
+    if give_way or (manoeuvred and encounter_class != "static"
+                    and not (encounter_class in STAND_ON_CLASSES and for_another)):
         large = (result["max_course_change_deg"] >= settings.apparent_course_change_deg
                  or result["max_speed_reduction"] >= settings.apparent_speed_reduction)
         size = [] if large else [f"alteration {result['max_course_change_deg']:.0f} deg, speed "
@@ -274,13 +314,18 @@ def _verdicts(result, encounter_class, t, own_xy, speed_mps, target, settings,
         failures = []
         if manoeuvred:
             k = int(np.searchsorted(t, result["manoeuvre_time_s"]))
-            own_velocity = np.gradient(own_xy, t, axis=0)[k]
-            cpa, tcpa = cpa_tcpa(own_xy[k], own_velocity, target[k, :2], target[k, 2:4])
+            # the manoeuvre is detected once the course has moved by the threshold; judge
+            # the decision with the velocity the ship stood on with before it began
+            k_before = _last_steady_sample(t, course_rad, onset_index, k, settings)
+            own_velocity = np.gradient(own_xy, t, axis=0)[k_before]
+            cpa, tcpa = cpa_tcpa(own_xy[k_before], own_velocity, target[k_before, :2], target[k_before, 2:4])
+            range_m = float(np.hypot(*(target[k_before, :2] - own_xy[k_before])))
             giving_way = any(onset <= result["manoeuvre_time_s"] for onset in give_way_onsets_s)
-            if not giving_way and not (cpa < result["required_nm"] * NM
-                                       and 0.0 < tcpa <= settings.stand_on_wait_min * 60.0):
-                failures.append(f"altered course with predicted CPA {cpa / NM:.2f} nm in {tcpa / 60:.1f} min: "
-                                f"the give-way vessel's action could still suffice")
+            if not giving_way and not stand_on_must_act(cpa, tcpa, range_m, result["required_nm"] * NM,
+                                                        settings.stand_on_wait_min * 60.0,
+                                                        settings.stand_on_range_factor):
+                failures.append(f"altered course with predicted CPA {cpa / NM:.2f} nm in {tcpa / 60:.1f} min at "
+                                f"{range_m / NM:.2f} nm: the give-way vessel's action could still suffice")
             if encounter_class == "crossing_stand_on" and result["manoeuvre_side"] == "port":
                 failures.append("altered to port for a vessel on the port side (Rule 17(c))")
         judge("rule_17", failures + separation)
@@ -294,7 +339,9 @@ def judge_encounters(t, x, y, heading_rad, obstacles: np.ndarray, own_radius_m: 
     Parameters
     ----------
     t, x, y, heading_rad : (n,) arrays
-        Times [s], own positions [m] and heading [rad].
+        Times [s], own positions [m] and heading [rad] (or None).  Every judgement uses
+        the course over ground from the positions; the heading only gives each target's
+        ``max_drift_angle_deg`` (heading - COG, largest between onset and CPA).
     obstacles : (n, m, 5) array
         Every obstacle at each sample: x, y, vx, vy, radius [m, m/s].
     own_radius_m : float
@@ -309,7 +356,7 @@ def judge_encounters(t, x, y, heading_rad, obstacles: np.ndarray, own_radius_m: 
     settings = settings or JudgementSettings()
     t = np.asarray(t, dtype=float)
     own_xy = np.column_stack([x, y]).astype(float)
-    heading = np.asarray(heading_rad, dtype=float)
+    heading = None if heading_rad is None else np.asarray(heading_rad, dtype=float)
     obstacles = np.asarray(obstacles, dtype=float).reshape(t.size, -1, 5)
     vx, vy = ground_velocity(t, x, y)
     speed = np.hypot(vx, vy)
@@ -328,12 +375,22 @@ def judge_encounters(t, x, y, heading_rad, obstacles: np.ndarray, own_radius_m: 
         required = own_radius_m + float(np.max(obstacles[:, i, 4]))
         give_way_onsets = tuple(float(t[k]) for j, (other, k) in classes.items()
                                 if j != i and other in GIVE_WAY_CLASSES)
-        judged = judge_target(t, own_xy, heading, speed, obstacles[:, i], name, onset, required, settings,
+        judged = judge_target(t, own_xy, course, speed, obstacles[:, i], name, onset, required, settings,
                               give_way_onsets)
+        judged["max_drift_angle_deg"] = None
+        if heading is not None and onset is not None:
+            window = (t >= t[onset]) & (t <= judged["time_of_cpa_s"])
+            drift = wrap_deg(np.degrees(heading[window] - course[window]))
+            judged["max_drift_angle_deg"] = float(np.max(np.abs(drift))) if drift.size else 0.0
         targets.append({"obstacle": i, **judged})
     verdicts = [target["verdict"] for target in targets if target["verdict"] != NOT_APPLICABLE]
     sides = [target["side_correct"] for target in targets if target["side_correct"] is not None]
+    outside = [target["separation_kept"] for target in targets if not target["started_inside"]]
+    inside = [target["range_kept_from_start"] for target in targets if target["started_inside"]]
     return {
+        "separation_kept": bool(all(outside)),
+        "started_inside": [target["obstacle"] for target in targets if target["started_inside"]],
+        "started_inside_range_kept": bool(all(inside)) if inside else None,
         "targets": targets,
         "verdict": NOT_APPLICABLE if not verdicts else (PASS if all(v == PASS for v in verdicts) else FAIL),
         "side_correct": None if not sides else bool(all(sides)),
@@ -345,7 +402,8 @@ def judge_encounters(t, x, y, heading_rad, obstacles: np.ndarray, own_radius_m: 
 def colregs_analysis(frame, scenario, cosim, out_dir, manoeuvre_threshold_deg: float = 5.0,
                      manoeuvre_hold_s: float = 120.0, apparent_course_change_deg: float = 30.0,
                      apparent_speed_reduction: float = 0.5, early_before_cpa_min: float = 5.0,
-                     stand_on_wait_min: float = 10.0, risk_cpa_nm: float = 2.0, risk_tcpa_min: float = 30.0) -> dict:
+                     stand_on_wait_min: float = 10.0, risk_cpa_nm: float = 2.0, risk_tcpa_min: float = 30.0,
+                     stand_on_range_factor: float = STAND_ON_ACTION_RANGE_FACTOR) -> dict:
     """The ``colregs`` analysis of a run: :func:`judge_encounters` on its recorded tracks.
 
     The obstacles are the array output feeding any participant's ``obstacles`` input; the
@@ -357,12 +415,12 @@ def colregs_analysis(frame, scenario, cosim, out_dir, manoeuvre_threshold_deg: f
 
     settings = JudgementSettings(manoeuvre_threshold_deg, manoeuvre_hold_s, apparent_course_change_deg,
                                  apparent_speed_reduction, early_before_cpa_min, stand_on_wait_min,
-                                 risk_cpa_nm, risk_tcpa_min)
+                                 risk_cpa_nm, risk_tcpa_min, stand_on_range_factor)
     plant = plant_name(cosim)
     sources = {c.target_port: f"{c.source}.{c.source_port}" for c in scenario.connections}
     if "obstacles" not in sources:
         return {"targets": [], "verdict": NOT_APPLICABLE, "side_correct": None, "targets_failed": 0,
-                "rules_failed": []}
+                "rules_failed": [], "separation_kept": True, "started_inside": [], "started_inside_range_kept": None}
     return judge_encounters(frame["time_s"].to_numpy(), frame[f"{plant}.x"].to_numpy(),
                             frame[f"{plant}.y"].to_numpy(), frame[f"{plant}.psi"].to_numpy(),
                             array_output(frame, sources["obstacles"]), own_radius_m(cosim), settings)

@@ -44,6 +44,8 @@ OPTIONS = (
     "clearance_margin_growth_kn",
     "stand_on_action_tcpa_s",
     "stand_on_action_range_factor",
+    "apparent_alteration_deg",
+    "give_way_action_tcpa_s",
     "disturbance_observer",
     "observer_gain",
     "codegen",
@@ -110,6 +112,8 @@ def controller_from_options(options: Mapping[str, Any], context: BuildContext):
                                ("clearance_margin_growth_kn", "clearance_margin_growth_mps", KNOT),
                                ("stand_on_action_tcpa_s", "stand_on_action_tcpa_s", 1.0),
                                ("stand_on_action_range_factor", "stand_on_action_range_factor", 1.0),
+                               ("apparent_alteration_deg", "apparent_alteration_deg", 1.0),
+                               ("give_way_action_tcpa_s", "give_way_action_tcpa_s", 1.0),
                                ("observer_gain", "observer_gain", 1.0)):
         if key in options:
             kwargs[target] = _number(options, key, where, None) * scale

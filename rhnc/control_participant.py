@@ -120,7 +120,15 @@ class ControlParticipant(Participant):
         written by ``identify`` carries ``position_error_growth_mps``, the growth of its
         own prediction error; it is the default growth with that model.
     stand_on_action_tcpa_s, stand_on_action_range_factor : float
-        Rule 17: when a stand-on ship stops standing on (defaults 600 s, 2).
+        Rule 17: when a stand-on ship stops standing on (defaults 600 s, 2; the
+        ``colregs`` analysis judges with the same rule, :func:`rhnc.colregs.stand_on_must_act`).
+    apparent_alteration_deg : float
+        Rules 8, 16: a give-way ship (or a stand-on ship that acts) holds its heading at
+        least this far off its reference to the side the rules ask for until the target
+        is past and clear (default 35; 0: no minimum alteration).
+    give_way_action_tcpa_s : float
+        A give-way ship begins that alteration when the target's CPA is this close in time
+        (default 900 s).
     disturbance_observer : bool
         Offset-free NMPC: estimate current and loads and predict with them (default false).
     observer_gain : float
@@ -266,6 +274,7 @@ class ControlParticipant(Participant):
             "solve_cpu_time_median_s": float(np.median(self._cpu_times)) if self._cpu_times else None,
             "solve_cpu_time_max_s": float(np.max(self._cpu_times)) if self._cpu_times else None,
             "stand_on_actions": self.controller.domains.stand_on_actions,
+            "apparent_alterations": self.controller.domains.alterations,
             "max_speed_kn": float(max(self._speeds)) / KNOT if self._speeds else None,
             "tau_r_sign_changes_per_100_solves": tau_r_sign_changes_per_100(
                 self._tau_r_history, self.controller.params.tau_r_max),

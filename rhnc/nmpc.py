@@ -67,7 +67,7 @@ from orchestrator.interrupts import stop_requested
 from rhnc.colregs import ENCOUNTER_CLASSES
 from rhnc.disturbance_observer import DisturbanceObserver, trimmed_reference
 from rhnc.nmpc_codegen import NLPLibrary
-from rhnc.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport, DomainSettings
+from rhnc.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport, DomainSettings, heading_bounds
 from rhnc.nmpc_problem import DISTURBANCE_SIZE, OBSTACLE_FIELDS, build_problem, solver_options
 from rhnc.nmpc_terminal import MIN_TERMINAL_SPEED_MPS, TerminalWeight
 from rhnc.nmpc_warm_start import PlanMemory, push_guess_clear
@@ -146,6 +146,10 @@ class NMPCSettings:
         Margin added to R + R_i [m] and its growth per second of prediction [m/s].
     stand_on_action_tcpa_s, stand_on_action_range_factor : float
         When a stand-on ship acts (Rule 17), see :class:`rhnc.nmpc_colregs.DomainSettings`.
+    apparent_alteration_deg, give_way_action_tcpa_s : float
+        The readily apparent alteration of a give-way (or acting stand-on) ship and when a
+        give-way ship begins it (``alteration_deg``, ``give_way_action_tcpa_s`` of
+        :class:`rhnc.nmpc_colregs.DomainSettings`).
     disturbance_observer : bool
         Estimate current and body-frame loads and predict with them (offset-free).
     observer_gain : float
@@ -184,6 +188,8 @@ class NMPCSettings:
     clearance_margin_growth_mps: float = 0.0
     stand_on_action_tcpa_s: float = 600.0
     stand_on_action_range_factor: float = 2.0
+    apparent_alteration_deg: float = 35.0
+    give_way_action_tcpa_s: float = 900.0
     disturbance_observer: bool = False
     observer_gain: float = 0.5
     codegen: bool = True
@@ -211,7 +217,7 @@ class NMPCSettings:
         if not self.max_speed_mps > 0.0:
             raise ValueError(f"max_speed_mps must be > 0, got {self.max_speed_mps}")
         for name in ("clearance_margin_m", "clearance_margin_growth_mps", "stand_on_action_tcpa_s",
-                     "stand_on_action_range_factor"):
+                     "stand_on_action_range_factor", "apparent_alteration_deg", "give_way_action_tcpa_s"):
             if getattr(self, name) < 0.0:
                 raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
         if not 0.0 < self.observer_gain <= 1.0:
@@ -224,6 +230,7 @@ class NMPCSettings:
             clearance_margin_growth_mps=self.clearance_margin_growth_mps,
             stand_on_action_tcpa_s=self.stand_on_action_tcpa_s,
             stand_on_action_range_factor=self.stand_on_action_range_factor,
+            alteration_deg=self.apparent_alteration_deg, give_way_action_tcpa_s=self.give_way_action_tcpa_s,
         )
 
 
@@ -465,12 +472,22 @@ class NMPCController:
         P = self.terminal_weight(speed_ref)
         closing = max(speed_ref, math.hypot(state[3], state[4])) * 1.25
         slots, report = self.domains.parameters(obstacles, state, origin, closing,
-                                                s.control_interval_s / s.substeps, self.length_scale, et)
+                                                s.control_interval_s / s.substeps, self.length_scale, et,
+                                                reference_heading_rad=float(reference[0, 2]),
+                                                horizon_s=N * s.control_interval_s, time_s=time_s)
         p = self.problem.parameters(ref_scaled, w_d, w_prev, P, disturbance, slots)
         lbx, ubx = self._bounds(state, origin)
+        heading_index = self.problem.z_index[1:, 2]
         if report.no_port_turn:  # Rules 14, 15, 17(c): no alteration to port
             allowance = math.radians(PORT_ALLOWANCE_DEG)
-            lbx[self.problem.z_index[1:, 2]] = np.minimum(ref_scaled[2, 1:] - allowance, state[2])
+            lbx[heading_index] = np.minimum(ref_scaled[2, 1:] - allowance, state[2])
+        # Rules 8, 16, 17: a readily apparent alteration once the ship gives way or acts
+        floor, ceiling = heading_bounds(report, time_s, float(state[2]), float(state[5]),
+                                        time_s + s.control_interval_s * np.arange(1, N + 1))
+        if floor is not None:
+            lbx[heading_index] = np.maximum(lbx[heading_index], floor)
+        if ceiling is not None:
+            ubx[heading_index] = np.minimum(ubx[heading_index], ceiling)
         x0 = self._initial_guess(time_s, state, ref_scaled, w_d, origin, slots, disturbance)
 
         if not np.all(np.isfinite(x0)):

@@ -60,7 +60,8 @@ import math
 
 import numpy as np
 
-from rhnc.colregs import ENCOUNTER_CLASSES, EncounterTracker, cpa_tcpa
+from rhnc.colregs import (ENCOUNTER_CLASSES, STAND_ON_ACTION_RANGE_FACTOR, STAND_ON_ACTION_TCPA_S,
+                          EncounterTracker, cpa_tcpa, stand_on_must_act)
 from rhnc.nmpc_problem import OBSTACLE_FIELDS
 
 LOG = logging.getLogger(__name__)
@@ -75,6 +76,24 @@ STAND_ON_CLASSES = ("crossing_stand_on", "overtaken")
 STARBOARD_CLASSES = ("head_on", "crossing_give_way", "crossing_stand_on")
 #: how far to port of the reference heading the plan may go while that holds [deg]
 PORT_ALLOWANCE_DEG = 2.0
+#: the alteration ends when the target is past (TCPA <= 0) and this many R + R_i away
+ALTERATION_CLEAR_FACTOR = 2.0
+#: classes in which the own ship gives way (Rules 13-16)
+GIVE_WAY_CLASSES = ("head_on", "crossing_give_way", "overtaking")
+#: the heading floor of a readily apparent alteration rises at this rate [deg/s] from the
+#: heading the ship had when the alteration began, after this delay [s]: the KCS model
+#: turns 10 deg in 51 s on 10/35 of its yaw moment and 180 deg in 207 s on all of it
+ALTERATION_RATE_DEG_S = 0.3
+ALTERATION_DELAY_S = 20.0
+#: a ship behind that ramp is asked to catch up as a first-order yaw response towards this
+#: rate [deg/s] with this time constant [s]: the KCS model's yaw inertia over its yaw damping
+#: is about 13 s, and its full yaw moment holds about 0.7 deg/s, so the bound asks for some
+#: 40 % of the moment and stays reachable from any measured state, while it still demands
+#: progress from the first step of every plan
+CATCH_UP_RATE_DEG_S = 0.3
+YAW_TIME_CONSTANT_S = 13.0
+#: numerical slack of that cap below the measured heading [deg]
+HEADING_TOLERANCE_DEG = 0.1
 
 
 @dataclasses.dataclass(frozen=True)
@@ -91,33 +110,98 @@ class DomainSettings:
         Added to R + R_i [m].
     clearance_margin_growth_mps : float
         Growth of the margin per second of prediction [m/s].
-    stand_on_action_tcpa_s : float
-        Rule 17: a stand-on ship acts when the predicted CPA is inside rho and the CPA is
-        at most this far ahead [s] ...
-    stand_on_action_range_factor : float
-        ... or the range is below this many rho.
+    stand_on_action_tcpa_s, stand_on_action_range_factor : float
+        Rule 17: when a stand-on ship acts, see :func:`rhnc.colregs.stand_on_must_act`
+        (judged against R + R_i, without the margin, as the ``colregs`` analysis does).
     risk_cpa_m, risk_tcpa_s : float
         Risk of collision for the classification (see :func:`rhnc.colregs.classify`).
+    alteration_deg : float
+        Rule 8(b), 16: once the own ship gives way (or acts as stand-on ship), its heading
+        is held at least this far off the reference heading it had when it began, to the
+        side the rules ask for, until the target is past and clear (0: no minimum
+        alteration).  35 deg: a readily apparent alteration is commonly read as 30 deg or
+        more of course over ground, and the bound holds the heading; in a cross wind the
+        course over ground differs from it by the drift angle (2-6 deg in the paper's
+        weather at 18 kn), and the course the change is seen from is the one at the onset.
+        A bound of exactly 30 deg lands on either side of 30 deg.
+    give_way_action_tcpa_s : float
+        A give-way ship begins that alteration when the collision constraints are on and
+        the target's CPA (predicted at the present velocities, inside ``risk_cpa_m``) is
+        at most this far ahead [s].  15 min: an alteration is to be seen at least 5 min
+        before the CPA; the turn itself takes 2-3 min, and turning away brings the CPA
+        forward (with 12 min, overtaking ships altered 3.7 min before their CPA).
     """
 
     own_radius_m: float = 0.0
     colregs: bool = False
     clearance_margin_m: float = 0.0
     clearance_margin_growth_mps: float = 0.0
-    stand_on_action_tcpa_s: float = 600.0
-    stand_on_action_range_factor: float = 2.0
+    stand_on_action_tcpa_s: float = STAND_ON_ACTION_TCPA_S
+    stand_on_action_range_factor: float = STAND_ON_ACTION_RANGE_FACTOR
     risk_cpa_m: float = 2.0 * 1852.0
     risk_tcpa_s: float = 30.0 * 60.0
+    alteration_deg: float = 35.0
+    give_way_action_tcpa_s: float = 900.0
 
 
 @dataclasses.dataclass
 class DomainReport:
     """Per obstacle row: its class code (index of ``ENCOUNTER_CLASSES``, -1 unclassified) and
-    whether its constraint is on in this solve."""
+    whether its constraint is on in this solve; the heading rules of this solve.
+
+    ``alteration_floor`` / ``alteration_ceiling``: a readily apparent alteration to
+    starboard / to port, as (time it began [s], heading then [rad], heading to reach
+    [rad]), or None; see :func:`heading_bounds`.
+    """
 
     class_codes: np.ndarray
     active: np.ndarray
     no_port_turn: bool = False
+    alteration_floor: tuple[float, float, float] | None = None
+    alteration_ceiling: tuple[float, float, float] | None = None
+
+
+def heading_bounds(report: DomainReport, time_s: float, heading_rad: float, yaw_rate_rps: float,
+                   times_s: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Lower and upper heading bounds [rad] at the absolute ``times_s`` [s] (None: unbounded).
+
+    The bound of a readily apparent alteration rises (falls) at ``ALTERATION_RATE_DEG_S``
+    from the heading the ship had when the alteration began, after
+    ``ALTERATION_DELAY_S``, to the alteration's heading.  The ramp is fixed in time, so
+    re-solving every interval does not push it ahead of the ship.  Not to make the problem
+    infeasible from a ship lagging behind it, it is capped by what the ship can reach from
+    the measured state (``heading_rad`` at ``time_s``): the measured heading less what a yaw
+    rate the other way carries it on over the delay (and ``HEADING_TOLERANCE_DEG``), plus a
+    first-order yaw response towards ``CATCH_UP_RATE_DEG_S``.  No larger allowance: the controller applies only the first
+    step of each plan, and a first step allowed to sag below the measured heading would
+    postpone the alteration at every solve and never reach it.  Headings are brought to within half a turn of ``heading_rad``.
+    """
+    times_s = np.asarray(times_s, dtype=float)
+    tolerance = math.radians(HEADING_TOLERANCE_DEG)
+    ahead_s = np.maximum(times_s - time_s, 0.0)
+    reachable = np.radians(CATCH_UP_RATE_DEG_S) * (
+        ahead_s - YAW_TIME_CONSTANT_S * (1.0 - np.exp(-ahead_s / YAW_TIME_CONSTANT_S)))
+
+    def near(angle: float) -> float:
+        return angle - 2.0 * math.pi * round((angle - heading_rad) / (2.0 * math.pi))
+
+    def ramp(alteration) -> tuple[np.ndarray, float]:
+        began_s, heading_then, goal = alteration
+        rise = np.radians(ALTERATION_RATE_DEG_S) * np.maximum(times_s - began_s - ALTERATION_DELAY_S, 0.0)
+        return rise, near(goal) - near(heading_then)
+
+    lower = upper = None
+    if report.alteration_floor is not None:
+        rise, size = ramp(report.alteration_floor)
+        goal = near(report.alteration_floor[2])
+        start = heading_rad - tolerance - max(0.0, -yaw_rate_rps) * ALTERATION_DELAY_S
+        lower = np.minimum.reduce([np.full_like(times_s, goal), goal - size + rise, start + reachable])
+    if report.alteration_ceiling is not None:
+        rise, size = ramp(report.alteration_ceiling)
+        goal = near(report.alteration_ceiling[2])
+        start = heading_rad + tolerance + max(0.0, yaw_rate_rps) * ALTERATION_DELAY_S
+        upper = np.maximum.reduce([np.full_like(times_s, goal), goal - size - rise, start - reachable])
+    return lower, upper
 
 
 class CollisionDomains:
@@ -135,15 +219,23 @@ class CollisionDomains:
         self.max_obstacles = max_obstacles
         self.tracker = EncounterTracker(settings.risk_cpa_m, settings.risk_tcpa_s)
         self._acting: set[int] = set()
+        self._guarding: set[int] = set()
+        self._altering: dict[int, tuple[float, float, float, float]] = {}
+        self._altered: set[int] = set()
         self.stand_on_actions = 0
+        self.alterations = 0
 
     def reset(self) -> None:
-        """Forget classes and Rule 17 decisions."""
+        """Forget classes, Rule 17 decisions and alterations."""
         self.tracker = EncounterTracker(self.settings.risk_cpa_m, self.settings.risk_tcpa_s)
         self._acting = set()
+        self._guarding = set()
+        self._altering = {}
+        self._altered = set()
 
     def parameters(self, obstacles: np.ndarray | None, state: np.ndarray, origin: np.ndarray, closing_speed_mps: float,
-                   substep_s: float, length_scale_m: float, et: bool) -> tuple[np.ndarray, DomainReport]:
+                   substep_s: float, length_scale_m: float, et: bool, reference_heading_rad: float | None = None,
+                   horizon_s: float | None = None, time_s: float = 0.0) -> tuple[np.ndarray, DomainReport]:
         """Slot parameters (OBSTACLE_FIELDS x max_obstacles, scaled) and the per-row report.
 
         Parameters
@@ -162,6 +254,15 @@ class CollisionDomains:
             L [m].
         et : bool
             Event trigger: constraints on.
+        reference_heading_rad : float, optional
+            The reference's heading now [rad]: a readily apparent alteration is measured
+            from it (default: the measured heading).
+        horizon_s : float, optional
+            Prediction horizon [s]: an obstacle that cannot reach its domain within it,
+            whatever either ship does at its present speed, gets no slot (default: every
+            obstacle gets one).
+        time_s : float
+            Time of the solve [s] (when an alteration begins).
         """
         s = self.settings
         L = length_scale_m
@@ -181,6 +282,9 @@ class CollisionDomains:
                 classes[index] = encounter
                 codes[index] = ENCOUNTER_CLASSES.index(encounter.encounter_class)
             self._acting &= set(self.tracker.locked)
+            self._guarding &= set(self.tracker.locked)
+            self._altered &= set(self.tracker.locked)
+            self._altering = {i: v for i, v in self._altering.items() if i in self.tracker.locked}
         if not et:
             return slots, DomainReport(codes, active_rows)
         distance = np.hypot(rows[:, 0] - origin[0], rows[:, 1] - origin[1]) - rows[:, 4]
@@ -189,8 +293,12 @@ class CollisionDomains:
             LOG.warning("%d obstacles given, NMPC uses the %d nearest", len(order), self.max_obstacles)
             order = order[: self.max_obstacles]
         own_velocity = own_speed * np.array([math.cos(own_course), math.sin(own_course)])
+        heading_now = float(state[2]) if reference_heading_rad is None else float(reference_heading_rad)
         no_port_turn = False
-        for slot, i in enumerate(order):
+        locked = self.tracker.locked
+        giving_way = any(locked.get(j) in GIVE_WAY_CLASSES for j in self._altering)
+        slot = 0
+        for i in order:
             x, y, vx, vy, radius = rows[i]
             rho = s.own_radius_m + radius + s.clearance_margin_m
             if rho <= 0.0:
@@ -202,14 +310,23 @@ class CollisionDomains:
                 no_port_turn = True
             if name in STAND_ON_CLASSES and i not in self._acting:
                 cpa, tcpa = cpa_tcpa(state[:2], own_velocity, (x, y), (vx, vy))
-                late = 0.0 < tcpa <= s.stand_on_action_tcpa_s or encounter.range_m <= s.stand_on_action_range_factor * rho
-                if cpa < rho and late:
+                if stand_on_must_act(cpa, tcpa, encounter.range_m, s.own_radius_m + radius,
+                                     s.stand_on_action_tcpa_s, s.stand_on_action_range_factor):
                     LOG.info("Rule 17: target %d (%s) is not giving way enough (CPA %.0f m, TCPA %.0f s): acting",
                              i, name, cpa, tcpa)
                     self._acting.add(i)
                     self.stand_on_actions += 1
+                elif giving_way or i in self._guarding:
+                    # the own ship has left its course and speed for a target it gives way
+                    # to (the analysis's Rule 17 allows that): keep clear of this one too,
+                    # for the rest of the encounter, or the alteration, and the return to
+                    # the route after it, may carry the ship into it
+                    self._guarding.add(i)
                 else:
                     continue  # keep course and speed: this target's constraint stays off
+            if s.colregs and encounter is not None:
+                self._update_alteration(i, encounter, heading_now, float(state[2]), time_s,
+                                        s.own_radius_m + radius, (state[:2], own_speed, (x, y), (vx, vy)))
             if name in OFFSETS:
                 speed = math.hypot(vx, vy)
                 ahead = np.array([vx, vy]) / speed
@@ -218,8 +335,76 @@ class CollisionDomains:
                 offset = rho * (forward * ahead + side * starboard)
             domain_radius = rho + float(np.hypot(*offset))
             closing = closing_speed_mps + math.hypot(vx, vy)
+            if horizon_s is not None:
+                growth = s.clearance_margin_growth_mps * horizon_s
+                centre = np.array([x, y]) + offset
+                if np.hypot(*(centre - state[:2])) - closing * horizon_s > domain_radius + growth:
+                    continue  # out of reach within the horizon: no constraint needed
+            if slot >= self.max_obstacles:
+                continue
             inflation = (closing * substep_s / (2.0 * domain_radius)) ** 2
             slots[:, slot] = [(x - origin[0]) / L, (y - origin[1]) / L, vx / L, vy / L, offset[0] / L,
                               offset[1] / L, domain_radius / L, s.clearance_margin_growth_mps / L, inflation, 1.0]
             active_rows[i] = 1.0
-        return slots, DomainReport(codes, active_rows, no_port_turn)
+            slot += 1
+        floors = [a[:3] for a in self._altering.values() if a[3] > 0]
+        ceilings = [a[:3] for a in self._altering.values() if a[3] < 0]
+        floor = max(floors, key=lambda a: a[2]) if floors else None
+        ceiling = (min(ceilings, key=lambda a: a[2]) if ceilings and floor is None and not no_port_turn
+                   else None)
+        return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling)
+
+    def _update_alteration(self, index: int, encounter, reference_heading_rad: float, heading_rad: float,
+                           time_s: float, separation_m: float, motion=None) -> None:
+        """Begin, keep or end the readily apparent alteration for one target (Rules 8, 16, 17).
+
+        A give-way ship begins it once the target's CPA is at most
+        ``give_way_action_tcpa_s`` ahead, predicted at the present velocities or with the
+        own ship already on the altered course (whichever comes first: turning away brings
+        the CPA forward, an overtaking ship's CPA most, as it closes slowly); a stand-on ship once it acts (Rule 17(b)).  It is
+        to starboard, except when overtaking or being overtaken, where either side is
+        allowed (Rule 13): then it continues a turn the plan has already begun (more than
+        ``PORT_ALLOWANCE_DEG`` off the reference), else it turns away from the other ship.
+        It ends, for the rest of the encounter, when the target is past and clear (Rule
+        13(d)): TCPA <= 0 and the range at least ``ALTERATION_CLEAR_FACTOR`` times R + R_i
+        (``separation_m``).  Ending it at TCPA <= 0 alone let a ship alongside an overtaken
+        target, 1.3 nm off, turn back towards it, and the solver failed from that warm
+        start; holding it until the tracker's 4 nm release made long detours.
+        """
+        s = self.settings
+        if s.alteration_deg <= 0.0 or index in self._altered:
+            return
+        if index in self._altering:
+            if encounter.tcpa_s <= 0.0 and encounter.range_m >= ALTERATION_CLEAR_FACTOR * separation_m:
+                del self._altering[index]  # past and clear
+                self._altered.add(index)
+            return
+        name = encounter.encounter_class
+        if name not in GIVE_WAY_CLASSES and name not in STAND_ON_CLASSES:
+            return
+        side = 1.0
+        if name in ("overtaking", "overtaken"):
+            deviation = math.degrees(heading_rad - reference_heading_rad)
+            deviation = (deviation + 180.0) % 360.0 - 180.0
+            if abs(deviation) > PORT_ALLOWANCE_DEG:
+                side = math.copysign(1.0, deviation)
+            elif encounter.relative_bearing_deg > 0.0:
+                side = -1.0  # the other ship is on our starboard side: pass it on its port side
+        goal = reference_heading_rad + side * math.radians(s.alteration_deg)
+        if name in GIVE_WAY_CLASSES:
+            tcpa = encounter.tcpa_s
+            if motion is not None:  # turning away brings the CPA forward (an overtaker's most)
+                own_xy, own_speed, target_xy, target_velocity = motion
+                altered = own_speed * np.array([math.cos(goal), math.sin(goal)])
+                tcpa_altered = cpa_tcpa(own_xy, altered, target_xy, target_velocity)[1]
+                if tcpa_altered > 0.0:
+                    tcpa = min(tcpa, tcpa_altered)
+            begin = 0.0 < tcpa <= s.give_way_action_tcpa_s and encounter.tcpa_s > 0.0 and encounter.cpa_m < s.risk_cpa_m
+        else:
+            begin = index in self._acting and encounter.tcpa_s > 0.0
+        if not begin:
+            return
+        self._altering[index] = (time_s, heading_rad, goal, side)
+        self.alterations += 1
+        LOG.info("target %d (%s): altering %.0f deg to %s (CPA %.0f m in %.0f s)", index, name, s.alteration_deg,
+                 "starboard" if side > 0 else "port", encounter.cpa_m, encounter.tcpa_s)

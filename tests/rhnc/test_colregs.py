@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from rhnc.colregs import EncounterTracker, classify, cpa_tcpa, wrap_deg
+from rhnc.colregs import EncounterTracker, classify, cpa_tcpa, stand_on_must_act, wrap_deg
 
 NM = 1852.0
 KN = NM / 3600.0
@@ -84,3 +84,30 @@ def test_tracker_releases_after_the_encounter():
     held = tracker.update((7.0 * NM, 0.0), 0.0, 18.0 * KN,
                           np.array([[5.0 * NM, 0.1 * NM, *_velocity(180.0, 15.0), NM]]))[0]
     assert held.encounter_class == "head_on"
+
+
+def test_stand_on_must_act_is_one_rule_for_controller_and_analysis():
+    separation = 1852.0
+    # a CPA inside the separation, close in time: act
+    assert stand_on_must_act(100.0, 300.0, 3.0 * separation, separation)
+    # the same CPA far ahead in time, still far off: keep standing on
+    assert not stand_on_must_act(100.0, 900.0, 3.0 * separation, separation)
+    # far ahead in time but already within twice the separation (a slow overtaker): act
+    assert stand_on_must_act(100.0, 900.0, 1.9 * separation, separation)
+    # the CPA clears the separation, or lies behind: no need
+    assert not stand_on_must_act(separation + 1.0, 300.0, 1.5 * separation, separation)
+    assert not stand_on_must_act(100.0, -10.0, 1.5 * separation, separation)
+    # the thresholds are parameters
+    assert stand_on_must_act(100.0, 900.0, 3.0 * separation, separation, action_tcpa_s=1000.0)
+
+
+def test_controller_and_analysis_share_the_rule_17_thresholds():
+    from rhnc import colregs_analysis, nmpc_colregs
+    from rhnc.nmpc import NMPCSettings
+
+    assert nmpc_colregs.stand_on_must_act is stand_on_must_act
+    assert colregs_analysis.stand_on_must_act is stand_on_must_act
+    settings = NMPCSettings()
+    analysis = colregs_analysis.JudgementSettings()
+    assert settings.stand_on_action_tcpa_s == analysis.stand_on_wait_min * 60.0
+    assert settings.stand_on_action_range_factor == analysis.stand_on_range_factor

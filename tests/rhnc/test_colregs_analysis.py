@@ -169,8 +169,10 @@ def test_stand_on_manoeuvre_made_while_giving_way_to_another_target_is_allowed()
     assert head_on["encounter_class"] == "head_on" and stand_on["encounter_class"] == "crossing_stand_on"
     assert stand_on["manoeuvre_time_s"] < 600.0
     assert stand_on["rule_17"] == PASS, stand_on["reasons"]
+    assert stand_on["rule_8"] == NOT_APPLICABLE  # the turn was the head-on encounter's action
+    assert head_on["rule_8"] == PASS
     alone = judge(track, _stand_on_target(t))  # the same turn with no one to give way to
-    assert alone["rule_17"] == FAIL
+    assert alone["rule_17"] == FAIL and alone["rule_8"] != NOT_APPLICABLE
 
 
 def test_overtaken_ship_standing_on_passes_and_rule_8_does_not_apply():
@@ -243,3 +245,51 @@ def test_bad_analysis_option_is_refused_before_the_run(tmp_path, capsys):
     error = capsys.readouterr().err.strip().splitlines()
     assert len(error) == 1 and "bad.toml: 'outputs.options.colregs': early_before_cpa_min must be" in error[0]
     assert not results.exists() or not any(results.rglob("summary.json"))
+
+
+# -- course over ground, not heading -------------------------------------------------------------
+def test_manoeuvres_are_read_from_the_course_over_ground_not_the_heading():
+    # a ship holding its track north while its heading swings 30 deg into a cross wind
+    # (drift angle) has not altered course; the other ship sees the track
+    t, x, y, heading = own_track(20)
+    drifting = np.radians(np.clip((t - 60.0) * 0.5, 0.0, 30.0))
+    result = judge((t, x, y, drifting), target_states(t, (7.0, 0.5), 180.0, 18.0))
+    assert result["manoeuvre_time_s"] is None and result["max_course_change_deg"] < 1.0
+    assert result["max_drift_angle_deg"] == pytest.approx(30.0, abs=0.5)
+    assert result["rule_16"] == FAIL and "no alteration" in result["reasons"]["rule_16"]
+    # and a real 45 deg turn of the track counts even when the heading is held at zero
+    t, x, y, _ = own_track(20, turns=[(1.0, 45.0)])
+    result = judge((t, x, y, np.zeros_like(t)), target_states(t, (7.0, 0.1), 180.0, 18.0))
+    assert result["manoeuvre_side"] == "starboard" and result["max_course_change_deg"] > 40.0
+    assert result["rule_8"] == PASS and result["rule_14"] == PASS
+
+
+# -- a situation that starts inside the domain ---------------------------------------------------
+def test_target_starting_inside_the_domain_is_reported_apart_with_its_own_criterion():
+    # a ship 0.8 nm off on the starboard quarter at the start (R + R_i = 1 nm), sailing
+    # east while the own ship sails north: the range opens from the start
+    track = own_track(20)
+    t = track[0]
+    target = target_states(t, (-0.6, 0.53), 90.0, 10.0)
+    summary = judge_encounters(*track, target, 0.0, JudgementSettings())
+    result = summary["targets"][0]
+    assert result["started_inside"] and result["initial_range_nm"] == pytest.approx(0.8, abs=0.01)
+    assert not result["separation_kept"]  # R + R_i was never held: said as it is
+    assert result["range_kept_from_start"]
+    assert summary["started_inside"] == [0] and summary["started_inside_range_kept"] is True
+    assert summary["separation_kept"]  # the targets that started outside (none) kept it
+    closing = own_track(20)  # a crossing ship 0.8 nm off on the starboard bow: the range closes
+    summary = judge_encounters(*closing, target_states(closing[0], (0.6, 0.53), 270.0, 6.0), 0.0,
+                               JudgementSettings())
+    result = summary["targets"][0]
+    assert result["started_inside"] and not result["range_kept_from_start"]
+    assert summary["started_inside_range_kept"] is False
+    failed = [reason for reason in result["reasons"].values() if "started 0.80 nm off" in reason]
+    assert failed and result["verdict"] == FAIL
+
+
+def test_target_starting_outside_counts_towards_separation():
+    track = own_track(20)
+    summary = judge_encounters(*track, target_states(track[0], (7.0, 0.5), 180.0, 18.0), 0.0, JudgementSettings())
+    assert summary["started_inside"] == [] and summary["started_inside_range_kept"] is None
+    assert summary["separation_kept"] is False and summary["targets"][0]["range_kept_from_start"] is None

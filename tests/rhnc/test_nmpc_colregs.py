@@ -13,8 +13,11 @@ import numpy as np
 import pytest
 
 from rhnc.colregs import wrap_deg
+from rhnc.colregs import ENCOUNTER_CLASSES
 from rhnc.nmpc import NMPCController, NMPCSettings
-from rhnc.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainSettings
+from rhnc.nmpc_colregs import (PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport, DomainSettings,
+                               CATCH_UP_RATE_DEG_S, HEADING_TOLERANCE_DEG, YAW_TIME_CONSTANT_S,
+                               heading_bounds)
 from rhnc.nmpc_problem import OBSTACLE_FIELDS
 from rhnc.reference_participant import line_or_turn_reference
 from rhnc.ship_model import load_parameter_set, rk4_step
@@ -100,6 +103,9 @@ def test_crossing_from_starboard_turns_to_starboard_and_passes_astern(kcs):
     assert first_alteration > 0.0  # the first real alteration is to starboard
     before_cpa = int(np.argmin(np.hypot(*(own[:, :2] - other).T)))
     assert heading_deg[:before_cpa].min() > -PORT_ALLOWANCE_DEG - 1.0
+    # Rules 8, 16: readily apparent (the full alteration) and early (5 min before the CPA)
+    apparent = int(np.argmax(heading_deg >= controller.settings.apparent_alteration_deg - 0.5))
+    assert heading_deg[apparent] >= 29.5 and (before_cpa - apparent) * 0.5 >= 300.0
     # the paper's circle turns to port and crosses ahead of it
     own, other, velocity, _ = encounter(kcs, start, velocity, colregs=False)
     assert abs(at_closest_approach(own, other, velocity)[2]) < 90.0
@@ -137,7 +143,7 @@ def test_overtaking_passes_clear(kcs):
     own, other, velocity, _ = encounter(kcs, start, velocity, colregs=True)
     separation, bearing, _ = at_closest_approach(own, other, velocity)
     assert separation >= RADIUS
-    assert own[-1, 0] > other[-1, 0] + 2.0 * NM  # got past it
+    assert own[-1, 0] > other[-1, 0] + 0.5 * NM  # got past it (slowly: it holds its alteration until clear)
 
 
 def rho_circle_clearance(slots, slot, points_m, length_m):
@@ -212,3 +218,119 @@ def test_no_port_turn_for_a_crossing_target_on_the_port_side_even_while_standing
     _, report = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2).parameters(
         overtaken, state, np.zeros(2), SPEED, 5.0, 230.0, et=True)
     assert not report.no_port_turn
+
+
+def test_alteration_bound_rises_to_the_alteration_and_never_lets_the_first_step_sag():
+    report = DomainReport(np.zeros(1), np.ones(1), alteration_floor=(100.0, 0.0, math.radians(30.0)))
+    times = 100.0 + 20.0 * np.arange(1, 31)
+    floor, ceiling = heading_bounds(report, 100.0, 0.0, 0.0, times)
+    assert ceiling is None
+    floor_deg = np.degrees(floor)
+    assert np.all(np.diff(floor_deg) >= -1e-9) and floor_deg[-1] == pytest.approx(30.0)
+    assert floor_deg[0] < 3.0  # from a steady heading the ship is asked for a feasible start
+    # a ship behind the ramp (here on 20 deg at 600 s) may not plan a first step below its
+    # heading: applying only that step, it would otherwise put the turn off at every solve
+    later = 600.0 + 20.0 * np.arange(1, 16)
+    floor = np.degrees(heading_bounds(report, 600.0, math.radians(20.0), 0.0, later)[0])
+    # progress from step 1: a first-order yaw response towards CATCH_UP_RATE_DEG_S, from
+    # the measured heading less only the numerical tolerance
+    response = CATCH_UP_RATE_DEG_S * (20.0 - YAW_TIME_CONSTANT_S * (1.0 - math.exp(-20.0 / YAW_TIME_CONSTANT_S)))
+    assert floor[0] == pytest.approx(20.0 - HEADING_TOLERANCE_DEG + response) and floor[0] > 22.0
+    assert floor[-1] == pytest.approx(30.0)
+    # a yaw swing the other way is allowed for (the ship needs time to check it)
+    swinging = np.degrees(heading_bounds(report, 600.0, math.radians(20.0), math.radians(-0.2), later)[0])
+    assert swinging[0] < floor[0] - 3.0
+    # to port (overtaking on the other side): the mirror image
+    port = DomainReport(np.zeros(1), np.ones(1), alteration_ceiling=(100.0, 0.0, math.radians(-30.0)))
+    lower, upper = heading_bounds(port, 100.0, 0.0, 0.0, times)
+    assert lower is None and np.degrees(upper[-1]) == pytest.approx(-30.0)
+
+
+def test_give_way_alteration_starts_with_the_encounter_and_ends_when_clear():
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    start, velocity = target_on_collision_course(270.0, 15.0)  # crossing from starboard, CPA in 15 min
+    earlier = start - velocity * 300.0  # CPA in 20 min: not yet
+    obstacles = np.array([[*earlier, *velocity, RADIUS]])
+    behind = state.copy()
+    behind[0] = -SPEED * 300.0
+    _, report = domains.parameters(obstacles, behind, behind[:2], SPEED, 5.0, 230.0, et=True,
+                                   reference_heading_rad=0.0, time_s=0.0)
+    assert report.alteration_floor is None
+    ahead = start + velocity * 60.0  # CPA in 14 min: within give_way_action_tcpa_s
+    moved = state.copy()
+    moved[0] = SPEED * 60.0
+    _, report = domains.parameters(np.array([[*ahead, *velocity, RADIUS]]), moved, moved[:2], SPEED, 5.0, 230.0,
+                                   et=True, reference_heading_rad=0.0, time_s=360.0)
+    assert report.alteration_floor == pytest.approx((360.0, 0.0, math.radians(DomainSettings().alteration_deg)))
+    assert domains.alterations == 1
+    def passed(range_nm, time_s):  # the target astern on our port quarter, heading away west
+        where = moved[:2] + range_nm * NM * np.array([-math.sqrt(0.5), -math.sqrt(0.5)])
+        return domains.parameters(np.array([[*where, *velocity, RADIUS]]), moved, moved[:2], SPEED, 5.0, 230.0,
+                                  et=True, reference_heading_rad=0.0, time_s=time_s)[1]
+
+    assert passed(1.5, 900.0).alteration_floor is not None  # past, but not yet clear: held
+    assert passed(2.5, 920.0).alteration_floor is None  # past and clear (2 R + R_i): ended
+    assert passed(2.5, 940.0).alteration_floor is None and domains.alterations == 1  # not begun again
+
+
+def test_stand_on_target_is_kept_clear_of_once_the_ship_gives_way_to_another():
+    # a crossing ship from starboard (we give way, CPA in 14 min) and one from port (we stand
+    # on, CPA in 25 min): once the own ship alters for the first, it no longer keeps its
+    # course and speed, so the second one's constraint is on too, for the rest of its encounter
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    give_way_start, give_way_velocity = target_on_collision_course(270.0, 15.0)
+    stand_on_velocity = 15.0 * KNOT * np.array([0.0, 1.0])
+    stand_on_start = np.array([SPEED * 1500.0, 0.0]) - stand_on_velocity * 1500.0
+
+    def rows(dt_s, with_give_way=True):
+        stand_on = [*(stand_on_start + stand_on_velocity * dt_s), *stand_on_velocity, RADIUS]
+        give_way = [*(give_way_start + give_way_velocity * (dt_s + 60.0)), *give_way_velocity, RADIUS]
+        return np.array([stand_on, give_way] if with_give_way else [stand_on])
+
+    def solve_parameters(domains, dt_s, with_give_way=True):
+        own = state.copy()
+        own[0] = SPEED * dt_s
+        return domains.parameters(rows(dt_s, with_give_way), own, own[:2], SPEED, 5.0, 230.0, et=True,
+                                  reference_heading_rad=0.0, time_s=dt_s)[1]
+
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    first = solve_parameters(domains, 0.0)
+    assert first.class_codes[0] == ENCOUNTER_CLASSES.index("crossing_stand_on")
+    assert first.alteration_floor is not None and first.active[0] == 0.0  # altering from this solve on
+    assert solve_parameters(domains, 20.0).active[0] == 1.0
+    assert domains.stand_on_actions == 0  # not a Rule 17 action: no stand-on alteration of its own
+    domains._altering.clear()  # the give-way alteration is over (as when its target is released)
+    assert solve_parameters(domains, 40.0).active[0] == 1.0  # still kept clear of
+    alone = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    for dt_s in (0.0, 20.0, 40.0):
+        assert solve_parameters(alone, dt_s, with_give_way=False).active[0] == 0.0  # stands on
+
+
+def test_overtaking_ship_alters_when_the_altered_course_brings_the_cpa_within_reach():
+    # 1.9 nm behind a 12 kn ship on the same course: at the present velocities the CPA is
+    # 19 min ahead, but turning away (to port: it is a little to starboard) brings it to
+    # about 2 min; the alteration begins now, not once the 15 min have run down
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    target = np.array([[1.9 * NM, 0.1 * NM, 12.0 * KNOT, 0.0, RADIUS]])
+    _, report = domains.parameters(target, state, np.zeros(2), SPEED, 5.0, 230.0, et=True,
+                                   reference_heading_rad=0.0, time_s=0.0)
+    assert report.class_codes[0] == ENCOUNTER_CLASSES.index("overtaking")
+    assert report.alteration_floor is None
+    assert report.alteration_ceiling == pytest.approx((0.0, 0.0, -math.radians(DomainSettings().alteration_deg)))
+
+
+def test_targets_out_of_reach_within_the_horizon_get_no_constraint():
+    # 18 kn own ship (closing speed taken 25 % higher) and a 12 kn head-on target: within a
+    # 200 s horizon the two close by at most (22.5 + 12) kn * 200 s = 1.9 nm
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    targets = np.array([[5.0 * NM, 0.1 * NM, -12 * KNOT, 0.0, RADIUS],   # 5 nm: out of reach
+                        [2.5 * NM, -0.1 * NM, -12 * KNOT, 0.0, RADIUS]])  # 2.5 nm: may reach its domain
+    slots, report = domains.parameters(targets, state, np.zeros(2), 1.25 * SPEED, 5.0, 230.0, et=True,
+                                       horizon_s=200.0)
+    np.testing.assert_array_equal(report.active, [0.0, 1.0])
+    assert slots[-1, 0] == 1.0 and slots[-1, 1] == 0.0  # one slot filled, the second left off
+    _, report = domains.parameters(targets, state, np.zeros(2), 1.25 * SPEED, 5.0, 230.0, et=True)
+    np.testing.assert_array_equal(report.active, [1.0, 1.0])  # no horizon given: every target

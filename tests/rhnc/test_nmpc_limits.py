@@ -185,6 +185,14 @@ def test_participant_rejects_bad_new_options():
         ControlParticipant.from_options("ctrl", {"wall_time_limit_s": "1s"}, context())
     with pytest.raises(ScenarioError, match=r"participants.ctrl: observer_gain must be in \(0, 1\]"):
         ControlParticipant.from_options("ctrl", {"observer_gain": 2.0}, context())
+    with pytest.raises(ScenarioError, match=r"participants.ctrl: apparent_alteration_deg must be >= 0"):
+        ControlParticipant.from_options("ctrl", {"apparent_alteration_deg": -5.0}, context())
+    with pytest.raises(ScenarioError, match=r"participants.ctrl: option 'give_way_action_tcpa_s' must be a finite"):
+        ControlParticipant.from_options("ctrl", {"give_way_action_tcpa_s": "soon"}, context())
+    ctrl = ControlParticipant.from_options("ctrl", {"colregs": True, "apparent_alteration_deg": 40.0,
+                                                    "give_way_action_tcpa_s": 600.0}, context())
+    assert ctrl.controller.domains.settings.alteration_deg == 40.0
+    assert ctrl.controller.domains.settings.give_way_action_tcpa_s == 600.0
 
 
 def test_participant_reports_classes_domains_and_estimate(kcs):
@@ -196,7 +204,7 @@ def test_participant_reports_classes_domains_and_estimate(kcs):
     assert first["encounter_class"].shape == (3,) and first["disturbance"].shape == (5,)
     times = np.arange(0.0, 600.0, 20.0)
     reference = np.column_stack([times, line_or_turn_reference(times, (0, 0), 0.0, 18 * KNOT)])
-    head_on = np.array([[4.0 * NM, 0.1 * NM, -12 * KNOT, 0.0, NM]])
+    head_on = np.array([[2.5 * NM, 0.1 * NM, -12 * KNOT, 0.0, NM]])  # within reach of the 200 s horizon
     state = {"x": 0.0, "y": 0.0, "psi": 0.0, "u": 18 * KNOT, "v": 0.0, "r": 0.0}
     out = ctrl.step(0.0, 20.0, {**state, "reference": reference, "obstacles": head_on})
     np.testing.assert_array_equal(out["encounter_class"], [ENCOUNTER_CLASSES.index("head_on"), -1, -1])

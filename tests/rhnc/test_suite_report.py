@@ -2,30 +2,55 @@
 
 import json
 
-from rhnc.suite_report import markdown, summarise
+from rhnc.suite_report import BEGIN, END, main, markdown, summarise
 
 
-def _run(folder, name, separation, side, verdict, fallbacks, solve_max_s, targets):
+def _run(folder, name, separation, side, verdict, fallbacks, solve_max_s, targets, started_inside=(),
+         inside_kept=None):
     path = folder / "runs" / name
     path.mkdir(parents=True)
     path.joinpath("summary.json").write_text(json.dumps({
-        "status": "finished",
-        "analyses": {"encounter": {"separation_respected": separation},
+        "status": "finished", "reason": "stopped at t = 100 s: goal.arrived > 0.5" if name != "b" else "",
+        "analyses": {"encounter": {"separation_respected": separation and not started_inside},
                      "colregs": {"side_correct": side, "verdict": verdict, "targets": targets,
+                                 "separation_kept": separation, "started_inside": list(started_inside),
+                                 "started_inside_range_kept": inside_kept,
                                  "rules_failed": [] if verdict != "fail" else ["rule_15"]}},
         "participants": {"ctrl": {"fallback_count": fallbacks, "solve_time_max_s": solve_max_s,
-                                  "solve_time_median_s": solve_max_s / 10}},
+                                  "solve_time_median_s": solve_max_s / 10, "solve_cpu_time_max_s": solve_max_s / 2}},
     }))
 
 
 def test_counts_of_a_batch(tmp_path):
-    _run(tmp_path, "a", True, True, "pass", 0, 0.05, [{"side_correct": True}])
-    _run(tmp_path, "b", False, False, "fail", 2, 0.30, [{"side_correct": False}, {"side_correct": True}])
-    _run(tmp_path, "c", True, None, "not applicable", 0, 0.02, [{"side_correct": None}])
+    _run(tmp_path, "a", True, True, "pass", 0, 0.05, [{"side_correct": True, "rule_8": "pass", "rule_14": "pass"}])
+    _run(tmp_path, "b", False, False, "fail", 2, 0.30, [{"side_correct": False, "rule_15": "fail", "rule_8": "fail"},
+                                                        {"side_correct": True, "rule_8": "not applicable"}])
+    # a target that started inside R + R_i: the separation over the others holds, and the
+    # run is counted apart by its own criterion
+    _run(tmp_path, "c", True, None, "not applicable", 0, 0.02, [{"side_correct": None}], started_inside=[0],
+         inside_kept=True)
     row = summarise(tmp_path)
-    assert row["runs"] == 3 and row["separation"] == 2
+    assert row["runs"] == 3 and row["separation"] == 2 and row["stopped"] == 2
+    assert (row["inside_kept"], row["inside_runs"]) == (1, 1)
     assert (row["side_ok"], row["side_runs"]) == (1, 2)
     assert (row["side_targets_ok"], row["side_targets"]) == (2, 3)
-    assert row["verdict_ok"] == 2 and row["fallback_runs"] == 1
-    assert row["solve_max_ms"] == 300.0 and row["rules_failed"] == {"rule_15": 1}
-    assert "| 2/3 | 1/2 | 2/3 | 2/3 | 1 | 5 / 300 | R15: 1 |" in markdown([row])
+    assert row["verdict_ok"] == 2 and row["fallback_runs"] == 1 and row["fallbacks"] == 2
+    assert row["rules"]["rule_8"] == (1, 2) and row["rules"]["rule_15"] == (0, 1) and row["rules"]["rule_13"] == (0, 0)
+    assert row["solve_max_ms"] == 300.0 and row["solve_cpu_max_ms"] == 150.0 and row["rules_failed"] == {"rule_15": 1}
+    assert "| 2/3 | 2/3 | 1/1 | 1/2 | 2/3 | 2/3 | 1/2 | - | 1/1 | 0/1 | - | - | 1 (2) | 5 / 300 | 150 |" in markdown([row])
+
+
+def test_table_is_written_between_the_markers(tmp_path, capsys):
+    _run(tmp_path / "suite", "a", True, True, "pass", 0, 0.05, [{"side_correct": True}])
+    doc = tmp_path / "doc.md"
+    doc.write_text(f"intro\n{BEGIN}\nold table\n{END}\nafter\n")
+    assert main([str(tmp_path / "suite"), "--write", str(doc)]) == 0
+    text = doc.read_text()
+    assert "old table" not in text and text.startswith("intro\n") and text.endswith(f"{END}\nafter\n")
+    assert "| suite | 1 | 1/1 | 1/1 |" in text
+    plain = tmp_path / "plain.md"
+    plain.write_text("no markers\n")
+    assert main([str(tmp_path / "suite"), "--write", str(plain)]) == 2
+    assert plain.read_text() == "no markers\n"
+    assert "plain.md: no '<!-- suite-table:begin -->'" in capsys.readouterr().err
+    assert main([str(tmp_path / "nothing")]) == 2
