@@ -166,7 +166,8 @@ class VoyageComparison:
         if self.equal_arrival is not None:
             for label in self.equal_arrival.systems:
                 if systems[label].usable:
-                    baselines[label] = self._equal_arrival_baseline(systems[label], runner, overrides)
+                    baselines[label] = self._equal_arrival_baseline(systems[label], runner, overrides,
+                                                                    reports[label])
         routes = self._route_costs(systems, baselines, overrides) if self._needs_routing() else {}
         section = evaluation_section(self, systems, baselines, routes, out_dir)
         if self.optimal_route is not None and self.equal_arrival is not None:
@@ -221,9 +222,11 @@ class VoyageComparison:
         return float(np.hypot(*(self.goal_m - self.start_m)) / NM)
 
     def _equal_arrival_baseline(self, system: SailedVoyage, runner: ScenarioRunner,
-                                overrides: Mapping[str, Any]) -> EqualArrival:
+                                overrides: Mapping[str, Any], report) -> EqualArrival:
         settings = self.equal_arrival
         base = dict(overrides)
+        if settings.same_control:
+            base.update(self.control_overrides(report, overrides))
         base.update(self.run_overrides(settings.scenario, overrides, f"{self.path}: voyage.equal_arrival"))
         label = f"{system.label} equal-arrival baseline"
         dt_s = load_scenario(settings.scenario, base).simulation.dt_s
@@ -234,6 +237,28 @@ class VoyageComparison:
 
         first = (self.straight_distance_nm - self.arrival_radius_nm) / (system.arrival_s / 3600.0)
         return match_arrival_time(arrival_of, system.arrival_s, dt_s, first, settings.max_trials)
+
+    def control_overrides(self, report, overrides: Mapping[str, Any]) -> dict[str, Any]:
+        """Overrides giving the baseline's control participant the options of the system's,
+        so that both sides sail with the same NMPC settings (an offset-free observer on one
+        side only would be compared, not the navigation).  Nothing when either scenario has
+        no single participant of type "control"."""
+        where = f"{self.path}: voyage.equal_arrival.same_control"
+        scenario = report.summary.get("scenario")
+        if not scenario:
+            return {}
+        system = load_scenario(Path(scenario), dict(report.summary.get("overrides") or {}))
+        baseline = load_scenario(self.equal_arrival.scenario, dict(overrides))
+        controls = [[p for p in loaded.participants if p.type == "control"] for loaded in (system, baseline)]
+        if any(len(found) != 1 for found in controls):
+            return {}
+        (own,), (theirs,) = controls
+        if Path(scenario).resolve().parent != self.equal_arrival.scenario.resolve().parent and any(
+                isinstance(value, str) for value in own.options.values()):
+            raise ScenarioError(f"{where}: {scenario} and {self.equal_arrival.scenario} lie in different "
+                                "folders and the control options name files; put them side by side or "
+                                "set same_control = false")
+        return {f"participants.{theirs.name}.options": copy.deepcopy(dict(own.options))}
 
     def _needs_routing(self) -> bool:
         return self.optimal_route is not None or self.equal_arrival is not None

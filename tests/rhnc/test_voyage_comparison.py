@@ -270,3 +270,43 @@ def test_run_that_failed_after_arriving_counts_and_is_flagged(tmp_path):
     assert list(section.tables["voyage_headline"]["system"]) == ["RHNC"]
     assert ("RHNC arrived at 60 min, then the run ended 'failed' (left the map): its totals up to arrival are used"
             in section.flags)
+
+
+class _Recorded(Exception):
+    pass
+
+
+def first_baseline_overrides(comparison, system_scenario: Path) -> dict:
+    """The overrides of the first equal-arrival trial run for a system sailed from ``system_scenario``."""
+    seen = []
+
+    def runner(scenario, overrides, label):
+        seen.append(dict(overrides))
+        raise _Recorded
+
+    report = SimpleNamespace(summary={"scenario": str(system_scenario), "overrides": {}})
+    with pytest.raises(_Recorded):
+        comparison._equal_arrival_baseline(voyage("detour", 16.5), runner, {}, report)
+    return seen[0]
+
+
+@pytest.mark.parametrize("same_control", [None, True, False])
+def test_the_baseline_sails_with_the_systems_control_options(tmp_path, same_control):
+    # the system's NMPC runs an offset-free observer; the baseline's scenario has none
+    path = write(tmp_path, equal="" if same_control is None else f"same_control = {str(same_control).lower()}")
+    detour = tmp_path / "detour.toml"
+    detour.write_text(detour.read_text().replace("horizon_steps = 10", "horizon_steps = 12\ndisturbance_observer = true"))
+    comparison = load_extensions(load_comparison(path), path)["voyage"]
+    overrides = first_baseline_overrides(comparison, detour)
+    if same_control is False:
+        assert not any(key.startswith("participants.ctrl") for key in overrides)
+    else:
+        assert overrides["participants.ctrl.options"] == {"horizon_steps": 12, "disturbance_observer": True}
+    assert overrides["participants.route.options.speed_kn"] > 0      # the speed search goes on as before
+
+
+def test_same_control_must_be_true_or_false(tmp_path):
+    path = write(tmp_path, equal='same_control = "yes"')
+    with pytest.raises(ScenarioError, match=r"compare.toml: voyage.equal_arrival.same_control: expected true or "
+                                            r"false, got 'yes'"):
+        load_extensions(load_comparison(path), path)
