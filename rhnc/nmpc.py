@@ -68,7 +68,8 @@ from rhnc.colregs import ENCOUNTER_CLASSES
 from rhnc.disturbance_observer import DisturbanceObserver, trimmed_reference
 from rhnc.nmpc_codegen import NLPLibrary
 from rhnc.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport, DomainSettings, heading_bounds
-from rhnc.nmpc_problem import DISTURBANCE_SIZE, OBSTACLE_FIELDS, build_problem, solver_options
+from rhnc.nmpc_problem import (ACCEPTABLE_VIOLATION, DISTURBANCE_SIZE, FRESH_SOLVER_PLUGINS, OBSTACLE_FIELDS,
+                               build_problem, solver_options)
 from rhnc.nmpc_terminal import MIN_TERMINAL_SPEED_MPS, TerminalWeight
 from rhnc.nmpc_warm_start import PlanMemory, push_guess_clear
 from rhnc.ship_model import ShipParameters
@@ -277,6 +278,10 @@ class NMPCSolution:
     solve_cpu_time_s : float
         Processor time of the solver calls [s]: the solve's cost whatever else the machine
         runs (``solve_time_s`` is wall time, pipe to the worker included).
+    preparation_cpu_s : float
+        Processor time [s] spent outside the solve on the fresh solver objects it used
+        (fatrop: built by the worker after its previous answer, see
+        :mod:`rhnc.solver_watchdog`).
     """
 
     tau: np.ndarray
@@ -295,6 +300,7 @@ class NMPCSolution:
     encounter_classes: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     domain_active: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     solve_cpu_time_s: float = 0.0
+    preparation_cpu_s: float = 0.0
 
 
 def wrap_angle(angle):
@@ -351,7 +357,8 @@ class NMPCController:
         # the NLP's functions compiled once per machine and cached (or interpreted)
         library = self.library = NLPLibrary(self.problem.nlp, s.solver, options, s.codegen,
                                             self.problem.compact_nlp)
-        solvers = {"hard": library.solver("rhnc_nmpc")}
+        factories = {"hard": lambda: library.solver("rhnc_nmpc")}
+        solvers = {"hard": factories["hard"]()}
         # The second, relaxed attempt gets a solver of its own: a solver keeps state between
         # calls (fatrop), and a failed hard attempt left in it spoils the relaxed one started
         # from the same guess (seen: 162 iterations and failure, against 59 and success from a
@@ -359,8 +366,12 @@ class NMPCController:
         # building it costs about 0.5 s of processor time, which inside a control step showed
         # up as an 8 s solve on a loaded machine.
         if self.problem.sigma_index.size:
-            solvers["relaxed"] = library.solver("rhnc_nmpc_relaxed")
-        self.solvers = BoundedSolver(solvers, {}, s.wall_time_limit_s, s.cpu_time_limit_s)
+            factories["relaxed"] = lambda: library.solver("rhnc_nmpc_relaxed")
+            solvers["relaxed"] = factories["relaxed"]()
+        # a fresh solver object per solve where building one is cheap (compiled: about 1 ms;
+        # interpreted, nlpsol derives the NLP's functions anew: about 0.5 s)
+        fresh = s.solver in FRESH_SOLVER_PLUGINS and library.mode == "compiled"
+        self.solvers = BoundedSolver(solvers, factories, s.wall_time_limit_s, s.cpu_time_limit_s, fresh=fresh)
         self.domains = CollisionDomains(s.domain_settings(), s.max_obstacles)
         self.observer = (DisturbanceObserver(params, self.state_scale, s.observer_gain)
                          if s.disturbance_observer else None)
@@ -497,12 +508,18 @@ class NMPCController:
             return self._fail(time_s, state, previous_tau, 0.0, 0, "prediction_not_finite", UNKNOWN, UNKNOWN,
                               False, disturbance, report)
         # First the hard problem (slacks fixed at zero: the paper's constraints); only when it
-        # fails, the soft one (slacks free): the plan that violates the clearance least.
+        # fails, the soft one (slacks free): the plan that violates the clearance least.  After
+        # a step that found no plan keeping the clearance, the soft one alone: the hard problem
+        # is then most likely infeasible again, and failing it took up to 200 iterations
+        # (~100 ms); should it be feasible, the exact L1 penalty gives its plan (zero slack).
         problem = self.problem
         duals = self._dual_guess(time_s)
-        elapsed, cpu, iterations, timed_out = 0.0, 0.0, 0, False
+        elapsed, cpu, preparation, iterations, timed_out = 0.0, 0.0, 0.0, 0, False
         budget = s.wall_time_limit_s
-        for relaxed in ((False, True) if problem.sigma_index.size else (False,)):
+        attempts = (False, True) if problem.sigma_index.size else (False,)
+        if self.memory.clearance_relaxed and problem.sigma_index.size:
+            attempts = (True,)
+        for relaxed in attempts:
             if relaxed and stop_requested():  # Ctrl-C aborted the first attempt: no second one
                 raise KeyboardInterrupt
             ubx[problem.sigma_index] = np.inf if relaxed else 0.0
@@ -512,21 +529,29 @@ class NMPCController:
                                          lbg=problem.lbg, ubg=problem.ubg, **duals)
             elapsed += outcome.wall_time_s
             cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
+            preparation += outcome.preparation_cpu_s
             iterations += max(outcome.iterations, 0)
-            success = outcome.success and bool(np.all(np.isfinite(outcome.x)))
+            # a point the solver stopped at as acceptable is used only when it keeps every
+            # constraint to the solver's tolerance (never an infeasible iterate)
+            accepted = (outcome.acceptable and bool(np.all(np.isfinite(outcome.x)) and np.all(np.isfinite(outcome.g)))
+                        and self._violation(outcome.x, outcome.g, lbx, ubx) <= ACCEPTABLE_VIOLATION)
+            success = (outcome.success or accepted) and bool(np.all(np.isfinite(outcome.x)))
             if success or outcome.timed_out:
                 timed_out = outcome.timed_out
                 break
         x_opt, g_opt = outcome.x, outcome.g
         status = outcome.status
-        if s.solver == "fatrop" and not timed_out:  # fatrop reports an integer code
+        if accepted:
+            status = "Solved_To_Acceptable_Level"
+        elif s.solver == "fatrop" and not timed_out:  # fatrop reports an integer code
             status = "Solve_Succeeded" if outcome.success else f"fatrop_return_code_{status}"
         if not success:
             finite = bool(np.all(np.isfinite(x_opt)) and np.all(np.isfinite(g_opt)) and np.isfinite(outcome.f))
             violation = self._violation(x_opt, g_opt, lbx, ubx) if finite else UNKNOWN
             failed = self._fail(time_s, state, previous_tau, elapsed, iterations, status,
                                 outcome.f if finite else UNKNOWN, violation, timed_out, disturbance, report)
-            failed.solve_cpu_time_s = cpu
+            failed.solve_cpu_time_s, failed.preparation_cpu_s = cpu, preparation
+            self.memory.clearance_relaxed = relaxed
             return failed
         violation = self._violation(x_opt, g_opt, lbx, ubx)
         slack = float(np.max(x_opt[problem.sigma_index], initial=0.0))
@@ -540,8 +565,9 @@ class NMPCController:
         solution = NMPCSolution(inputs[0].copy(), states, inputs, elapsed, iterations, status, True, False,
                                 outcome.f, violation, slack, False, disturbance, report.class_codes,
                                 report.active)
-        solution.solve_cpu_time_s = cpu
+        solution.solve_cpu_time_s, solution.preparation_cpu_s = cpu, preparation
         self.memory.store(time_s, states, inputs, outcome.lam_x, outcome.lam_g)
+        self.memory.clearance_relaxed = slack > 0.0
         if self.observer is not None:
             self.observer.applied(solution.tau)
         return solution

@@ -25,6 +25,13 @@ class PlanMemory:
         delta [s].
     rollout : callable
         ``rollout(state (6,), inputs (n, 2)) -> states (n+1, 6)`` [SI] with the prediction model.
+
+    Attributes
+    ----------
+    clearance_relaxed : bool
+        The last step found no plan that keeps every clearance (its plan needed the
+        collision slacks, or both attempts failed): the next step solves the relaxed
+        problem first (see :class:`rhnc.nmpc.NMPCController`).
     """
 
     def __init__(self, horizon_steps: int, control_interval_s: float, rollout) -> None:
@@ -36,9 +43,11 @@ class PlanMemory:
         self.time_s: float | None = None
         self.lam_x: np.ndarray | None = None
         self.lam_g: np.ndarray | None = None
+        self.clearance_relaxed = False
 
     def reset(self) -> None:
         self.states = self.inputs = self.time_s = self.lam_x = self.lam_g = None
+        self.clearance_relaxed = False
 
     def store(self, time_s: float, states: np.ndarray, inputs: np.ndarray, lam_x: np.ndarray | None = None,
               lam_g: np.ndarray | None = None) -> None:

@@ -19,6 +19,15 @@ When a limit is hit, the child is killed, the call reports ``wall_time_exceeded`
 the next call forks a fresh worker.  The pipe adds some 0.1-0.3 ms per solve.  Where
 ``os.fork`` does not exist (Windows), or with both limits None, solves run in this
 process under the iteration limit only.
+
+Fresh solvers (``fresh=True``): a solver object serves one call only, and the next call of
+that name gets a new one from its factory.  fatrop's solver object keeps part of its
+last solve's state (the iterate's data are not reset between calls): started from the
+next, shifted guess, it then needed more iterations and sometimes failed where a new
+object of the same problem solved (the measurements are in ``docs/nmpc-performance.md``).
+The worker builds the replacement right after it has sent its answer, while the
+controller applies the plan and the plant moves on, so that the solve itself does not
+wait for it; its processor time is reported apart (``SolveOutcome.preparation_cpu_s``).
 """
 
 from __future__ import annotations
@@ -85,6 +94,13 @@ class SolveOutcome:
     lam_x, lam_g : numpy.ndarray
         Multipliers of the bounds and of the constraints at ``x`` (NaN when stopped): the
         next solve's dual warm start.
+    preparation_cpu_s : float
+        Processor time [s] spent before this call, outside it, on building the fresh solver
+        object it used (``fresh``; 0 otherwise).
+    acceptable : bool
+        The solver stopped at a point that meets its relaxed ("acceptable") tolerances
+        rather than its tolerance (fatrop's return flag, IPOPT's status); ``success`` is
+        then False, and the caller judges the point.
     """
 
     x: np.ndarray
@@ -99,13 +115,23 @@ class SolveOutcome:
     cpu_time_s: float = float("nan")
     lam_x: np.ndarray | None = None
     lam_g: np.ndarray | None = None
+    preparation_cpu_s: float = 0.0
+    acceptable: bool = False
+
+
+#: fatrop's return flag (``stats()["fatrop"]["return_flag"]``) for a stop at an acceptable point
+FATROP_ACCEPTABLE_FLAG = 2
 
 
 def _outcome(solver: ca.Function, result: Mapping, elapsed: float, cpu: float) -> SolveOutcome:
     stats = solver.stats()
+    success = bool(stats.get("success", False))
+    acceptable = not success and (
+        stats.get("return_status") == "Solved_To_Acceptable_Level"
+        or stats.get("fatrop", {}).get("return_flag") == FATROP_ACCEPTABLE_FLAG)
     return SolveOutcome(
         x=np.array(result["x"]).ravel(), g=np.array(result["g"]).ravel(), f=float(result["f"]),
-        success=bool(stats.get("success", False)), iterations=int(stats.get("iter_count", -1)),
+        success=success, iterations=int(stats.get("iter_count", -1)), acceptable=acceptable,
         status=str(stats.get("return_status", "unknown")), wall_time_s=elapsed, cpu_time_s=cpu,
         lam_x=np.array(result["lam_x"]).ravel() if "lam_x" in result else None,
         lam_g=np.array(result["lam_g"]).ravel() if "lam_g" in result else None,
@@ -118,9 +144,12 @@ def _timed_call(solver, arguments) -> SolveOutcome:
     return _outcome(solver, result, time.perf_counter() - start, time.process_time() - cpu_start)
 
 
-def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, Callable[[], ca.Function]]) -> None:
-    """Child's loop: receive (solver name, arguments), solve, send the outcome."""
+def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, Callable[[], ca.Function]],
+           fresh: bool) -> None:
+    """Child's loop: receive (solver name, arguments), solve, send the outcome; with ``fresh``,
+    replace the solver just used once the answer is sent."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+    preparation = dict.fromkeys(solvers, 0.0)
     while True:
         cpu_start = time.process_time()  # waiting for a request costs no processor time
         try:
@@ -132,10 +161,15 @@ def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, 
         outcome = _timed_call(solvers[name], arguments)
         # the worker's share of the call: unpacking the request, solving, building the answer
         outcome.cpu_time_s = time.process_time() - cpu_start
+        outcome.preparation_cpu_s = preparation.get(name, 0.0)
         try:
             connection.send(outcome)
         except (BrokenPipeError, OSError):
             return
+        if fresh:  # the controller is not waiting now
+            start = time.process_time()
+            solvers[name] = factories[name]()
+            preparation[name] = time.process_time() - start
 
 
 def _die_with_parent() -> None:
@@ -171,13 +205,20 @@ class BoundedSolver:
         in this process.
     cpu_time_s : float or None
         Limit of the worker's processor time per call [s] (Linux; ignored elsewhere).
+    fresh : bool
+        Use each solver object for one call only (module docstring); ``factories`` must
+        then build every name.
     """
 
     def __init__(self, solvers: Mapping[str, ca.Function], factories: Mapping[str, Callable[[], ca.Function]],
-                 wall_time_s: float | None, cpu_time_s: float | None = None) -> None:
+                 wall_time_s: float | None, cpu_time_s: float | None = None, fresh: bool = False) -> None:
+        missing = sorted(set(solvers) - set(factories)) if fresh else []
+        if missing:
+            raise ValueError(f"fresh solvers need a factory for every solver; none for {', '.join(missing)}")
         self.factories = dict(factories)
         self.wall_time_s = wall_time_s
         self.cpu_time_s = cpu_time_s
+        self.fresh = fresh
         self._solvers: dict[str, ca.Function] = dict(solvers)
         self._pid: int | None = None
         self._connection = None
@@ -192,7 +233,12 @@ class BoundedSolver:
         if self.wall_time_s is None and self.cpu_time_s is None:
             if name not in self._solvers:
                 self._solvers[name] = self.factories[name]()
-            return _timed_call(self._solvers[name], arguments)
+            outcome = _timed_call(self._solvers[name], arguments)
+            if self.fresh:  # in this process the replacement is part of the step
+                start = time.process_time()
+                self._solvers[name] = self.factories[name]()
+                outcome.preparation_cpu_s = time.process_time() - start
+            return outcome
         arguments = {key: np.asarray(value, dtype=float) for key, value in arguments.items()}
         start = time.perf_counter()
         self._ensure_worker()
@@ -236,7 +282,7 @@ class BoundedSolver:
             parent_end.close()
             _die_with_parent()
             try:
-                _serve(child_end, dict(self._solvers), self.factories)
+                _serve(child_end, dict(self._solvers), self.factories, self.fresh)
             finally:
                 os._exit(0)
         child_end.close()

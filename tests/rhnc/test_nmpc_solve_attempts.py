@@ -1,0 +1,158 @@
+"""How the NMPC spends its solves: a fresh fatrop object per solve, the relaxed problem first
+after a step without a clearance-keeping plan, and points the solver stopped at as acceptable
+used only when they keep every constraint."""
+
+import math
+
+import numpy as np
+import pytest
+
+from rhnc.nmpc import NMPCController, NMPCSettings
+from rhnc.reference_participant import line_or_turn_reference
+from rhnc.ship_model import load_parameter_set
+from rhnc.solver_watchdog import FATROP_ACCEPTABLE_FLAG, BoundedSolver, _outcome
+
+KNOT = 1852.0 / 3600.0
+DT = 20.0
+N = 15
+
+
+class StatefulSolver:
+    """Counts the calls it has served, as a fatrop object keeps data of its last solve."""
+
+    def __init__(self):
+        self.calls = 0
+
+    def __call__(self, **arguments):
+        self.calls += 1
+        return {"x": np.asarray(arguments["x0"]), "g": np.zeros(1), "f": 0.0}
+
+    def stats(self):
+        return {"success": True, "iter_count": self.calls, "return_status": "Solve_Succeeded"}
+
+
+@pytest.mark.parametrize("wall_time_s", [None, 30.0], ids=["in-process", "worker"])
+@pytest.mark.parametrize("fresh", [True, False])
+def test_fresh_solver_objects_serve_one_call_each(fresh, wall_time_s):
+    bounded = BoundedSolver({"nlp": StatefulSolver()}, {"nlp": StatefulSolver}, wall_time_s=wall_time_s, fresh=fresh)
+    served = [bounded.solve("nlp", x0=np.zeros(2)).iterations for _ in range(3)]
+    bounded.close()
+    assert served == ([1, 1, 1] if fresh else [1, 2, 3])
+
+
+def test_fresh_solvers_need_a_factory_for_each_name():
+    with pytest.raises(ValueError, match="none for nlp"):
+        BoundedSolver({"nlp": StatefulSolver()}, {}, wall_time_s=None, fresh=True)
+
+
+class Stopped:
+    """A solver result with fatrop's statistics of a stop at ``flag``."""
+
+    def __init__(self, flag):
+        self.flag = flag
+
+    def stats(self):
+        return {"success": self.flag == 0, "iter_count": 7, "return_status": 0 if self.flag == 0 else 1,
+                "fatrop": {"return_flag": self.flag}}
+
+
+@pytest.mark.parametrize("flag, acceptable", [(0, False), (1, False), (FATROP_ACCEPTABLE_FLAG, True)])
+def test_fatrop_stop_at_an_acceptable_point_is_reported_apart(flag, acceptable):
+    outcome = _outcome(Stopped(flag), {"x": np.zeros(2), "g": np.zeros(1), "f": 0.0}, 0.0, 0.0)
+    assert outcome.acceptable is acceptable
+    assert outcome.success is (flag == 0)
+
+
+@pytest.fixture(scope="module")
+def kcs():
+    return load_parameter_set("default")
+
+
+@pytest.fixture(scope="module")
+def controller(kcs):
+    return NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=DT, max_obstacles=1,
+                                            wall_time_limit_s=None, cpu_time_limit_s=None))
+
+
+def straight(course=0.3, speed=18 * KNOT):
+    state = np.array([0.0, 0.0, course, speed, 0.0, 0.0])
+    return state, (lambda t: line_or_turn_reference(t + DT * np.arange(N + 1), (0.0, 0.0), course, speed))
+
+
+class CallLog:
+    """Records the names of the solver calls a controller makes."""
+
+    def __init__(self, controller):
+        self.names = []
+        self.bounded = controller.solvers
+        self.solve = self.bounded.solve
+
+        def logged(name, **arguments):
+            self.names.append(name)
+            return self.solve(name, **arguments)
+
+        self.bounded.solve = logged
+
+    def detach(self):
+        del self.bounded.solve
+
+
+def test_after_a_step_without_a_clearance_keeping_plan_the_relaxed_problem_is_solved_alone(controller):
+    state, reference_at = straight()
+    course = state[2]
+    # an obstacle 300 m off the starboard bow with a 500 m radius: the ship is inside it
+    inside = np.array([[300 * math.cos(course + 0.5), 300 * math.sin(course + 0.5), 0.0, 0.0, 500.0]])
+    controller.reset()
+    log = CallLog(controller)
+    try:
+        first = controller.solve(0.0, state, reference_at(0.0), inside, et=True)
+        assert first.success and first.collision_slack > 0
+        assert log.names == ["hard", "relaxed"]
+        log.names.clear()
+        second = controller.solve(DT, first.states[1], reference_at(DT), inside, et=True)
+        assert second.success
+        assert log.names == ["relaxed"]  # the hard problem is not tried again
+        # once a plan keeps the clearance again (obstacle far away), the hard problem comes first
+        far = inside + np.array([[5e4, 5e4, 0.0, 0.0, 0.0]])
+        third = controller.solve(2 * DT, second.states[1], reference_at(2 * DT), far, et=True)
+        assert third.success and third.collision_slack == 0.0
+        log.names.clear()
+        controller.solve(3 * DT, third.states[1], reference_at(3 * DT), far, et=True)
+        assert log.names == ["hard"]
+    finally:
+        log.detach()
+
+
+class AcceptableStop:
+    """Wraps a solver: reports fatrop's acceptable stop, optionally moving the point off the
+    dynamics (a point that does not keep its constraints)."""
+
+    def __init__(self, solver, offset):
+        self.solver, self.offset = solver, offset
+
+    def __call__(self, **arguments):
+        result = dict(self.solver(**arguments))
+        result["x"] = np.array(result["x"]).ravel() + self.offset
+        return result
+
+    def stats(self):
+        return {**self.solver.stats(), "success": False, "return_status": 1,
+                "fatrop": {"return_flag": FATROP_ACCEPTABLE_FLAG}}
+
+
+@pytest.mark.parametrize("offset, used", [(0.0, True), (1e-3, False)])
+def test_an_acceptable_point_is_used_only_when_it_keeps_the_constraints(controller, offset, used):
+    state, reference_at = straight()
+    controller.reset()
+    real = dict(controller.solvers._solvers)
+    for name, solver in real.items():  # both attempts stop at the same kind of point
+        controller.solvers._solvers[name] = AcceptableStop(solver, offset)
+    try:
+        solution = controller.solve(0.0, state, reference_at(0.0))
+    finally:
+        controller.solvers._solvers.update(real)
+    assert solution.success is used and solution.fallback is not used
+    if used:
+        assert solution.status == "Solved_To_Acceptable_Level"
+    else:
+        assert solution.constraint_violation > 1e-6
