@@ -95,8 +95,10 @@ def settings(solver: str, targets: int, codegen: bool, watchdog: bool, warm_dual
 class ClosedLoop:
     """One configuration's closed loop, advanced one control step at a time.
 
-    ``step(t, state) -> (tau, solver_s, iterations, ok, worker_cpu_s)`` is the controller
-    under test (``worker_cpu_s``: processor time spent in the watchdog's worker process).
+    ``step(t, state) -> (tau, solver_s, iterations, ok, worker_cpu_s, preparation_s)`` is the
+    controller under test (``worker_cpu_s``: processor time spent in the watchdog's worker
+    process on the call; ``preparation_s``: processor time spent on the fresh fatrop object
+    the call used, outside the solve, which the CPU columns leave out and ``prep`` shows).
     All configurations advance in turn, step by step, so that a change of the machine's
     load during the run falls on all of them alike.
     """
@@ -105,15 +107,19 @@ class ClosedLoop:
         self.step, self.targets, self.params, self.codegen, self.close = step, targets, params, codegen, close
         self.state = np.array([0.0, 0.0, COURSE_RAD, SPEED_MPS, 0.0, 0.0])
         self.wall, self.cpu, self.solver, self.iterations, self.failures, self.taus = [], [], [], [], 0, []
+        self.preparation = []
         self.clearance_m = np.inf
         self.k = 0
 
     def advance(self) -> None:
         t = self.k * DT_S
         start, cpu_start = time.perf_counter(), time.process_time()
-        tau, solver_s, its, ok, worker_cpu_s = self.step(t, self.state)
+        tau, solver_s, its, ok, worker_cpu_s, preparation_s = self.step(t, self.state)
         self.wall.append(time.perf_counter() - start)
-        self.cpu.append(time.process_time() - cpu_start + worker_cpu_s)
+        # in this process the preparation is inside the step: counted apart, as in the worker
+        in_step = 0.0 if worker_cpu_s else preparation_s
+        self.cpu.append(time.process_time() - cpu_start - in_step + worker_cpu_s)
+        self.preparation.append(preparation_s)
         self.solver.append(solver_s)
         self.iterations.append(its)
         self.failures += 0 if ok else 1
@@ -127,6 +133,7 @@ class ClosedLoop:
 
     def result(self) -> dict:
         return {"wall": np.array(self.wall), "cpu": np.array(self.cpu), "solver": np.array(self.solver), "iterations": np.array(self.iterations),
+                "preparation": np.array(self.preparation),
                 "failures": self.failures, "clearance_m": self.clearance_m, "first_tau": self.taus[0],
                 "codegen": self.codegen}
 
@@ -139,7 +146,8 @@ def ours(params, solver: str, targets: int, codegen: bool, watchdog: bool, warm_
             controller.reset()
         solution = controller.solve(t, state, reference_at(t), obstacles_at(t, targets), et=True)
         worker_cpu_s = solution.solve_cpu_time_s if watchdog else 0.0
-        return solution.tau, solution.solve_time_s, solution.iterations, solution.success, worker_cpu_s
+        return (solution.tau, solution.solve_time_s, solution.iterations, solution.success, worker_cpu_s,
+                solution.preparation_cpu_s)
 
     step(0.0, np.array([0.0, 0.0, COURSE_RAD, SPEED_MPS, 0.0, 0.0]))  # fork the worker, load the solver
     return ClosedLoop(step, targets, params, controller.library.mode, controller.close)
@@ -248,7 +256,7 @@ def do_mpc_controller(params, targets: int, compiled: bool, warm_duals: bool = F
         w0 = np.array(mpc.make_step(z0)).ravel()
         stats = mpc.solver_stats
         return (w0 * ref_ctrl.input_scale, stats.get("t_wall_total", np.nan), stats.get("iter_count", -1),
-                bool(stats.get("success", False)), 0.0)
+                bool(stats.get("success", False)), 0.0, 0.0)
 
     return step
 
@@ -278,7 +286,8 @@ def row(name: str, result: dict, baseline_tau: np.ndarray, tau_max: np.ndarray) 
     tau_gap = np.max(np.abs(result["first_tau"] - baseline_tau) / tau_max)
     solver_median = f"{np.median(solver):8.2f}" if np.all(np.isfinite(solver)) else f"{'-':>8s}"
     return (f"{name:48s} {np.median(wall):8.2f} {np.percentile(wall, 95):8.2f} {np.max(wall):8.2f} "
-            f"{solver_median} {np.median(cpu):7.2f} {np.max(cpu):7.2f} {np.median(its):5.0f}/{np.max(its):<4d} {result['failures']:5d} "
+            f"{solver_median} {np.median(cpu):7.2f} {np.max(cpu):7.2f} {np.median(result['preparation']) * 1e3:5.2f} "
+            f"{np.median(its):5.0f}/{np.max(its):<4d} {result['failures']:5d} "
             f"{result['clearance_m'] / NM:8.2f} {tau_gap:9.1e}")
 
 
@@ -324,8 +333,9 @@ def main() -> None:
                 loop.close()
         baseline = results[configurations[0][0]]["first_tau"]
         print(f"\n{targets} target(s); whole step [ms]: wall median, 95th percentile, max; solver-only wall median; "
-              "processor time median and max (this process plus the watchdog's worker)")
-        print(f"{'configuration':48s} {'median':>8s} {'p95':>8s} {'max':>8s} {'solver':>8s} {'cpu med':>7s} {'cpu max':>7s} {'iter med/max':>10s} "
+              "processor time median and max (this process plus the watchdog's worker); prep: median processor "
+              "time of the fresh fatrop object, built outside the solve")
+        print(f"{'configuration':48s} {'median':>8s} {'p95':>8s} {'max':>8s} {'solver':>8s} {'cpu med':>7s} {'cpu max':>7s} {'prep':>5s} {'iter med/max':>10s} "
               f"{'fails':>5s} {'min gap nm':>8s} {'tau0 diff':>9s}")
         for name, result in results.items():
             if result["codegen"] not in name:
