@@ -69,7 +69,7 @@ from rhnc.disturbance_observer import DisturbanceObserver, trimmed_reference
 from rhnc.nmpc_codegen import NLPLibrary
 from rhnc.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport, DomainSettings, heading_bounds
 from rhnc.nmpc_problem import (ACCEPTABLE_VIOLATION, DISTURBANCE_SIZE, FRESH_SOLVER_PLUGINS, OBSTACLE_FIELDS,
-                               build_problem, solver_options)
+                               build_problem, renew_solver_after, solver_options)
 from rhnc.nmpc_terminal import MIN_TERMINAL_SPEED_MPS, TerminalWeight
 from rhnc.nmpc_warm_start import PlanMemory, push_guess_clear
 from rhnc.ship_model import ShipParameters
@@ -279,8 +279,8 @@ class NMPCSolution:
         Processor time of the solver calls [s]: the solve's cost whatever else the machine
         runs (``solve_time_s`` is wall time, pipe to the worker included).
     preparation_cpu_s : float
-        Processor time [s] spent outside the solve on the fresh solver objects it used
-        (fatrop: built by the worker after its previous answer, see
+        Processor time [s] spent outside the solve on new solver objects (fatrop, after a
+        difficult solve: built by the worker after its answer, see
         :mod:`rhnc.solver_watchdog`).
     """
 
@@ -368,10 +368,10 @@ class NMPCController:
         if self.problem.sigma_index.size:
             factories["relaxed"] = lambda: library.solver("rhnc_nmpc_relaxed")
             solvers["relaxed"] = factories["relaxed"]()
-        # a fresh solver object per solve where building one is cheap (compiled: about 1 ms;
-        # interpreted, nlpsol derives the NLP's functions anew: about 0.5 s)
-        fresh = s.solver in FRESH_SOLVER_PLUGINS and library.mode == "compiled"
-        self.solvers = BoundedSolver(solvers, factories, s.wall_time_limit_s, s.cpu_time_limit_s, fresh=fresh)
+        # a new solver object after a difficult solve, where building one is cheap (compiled:
+        # about 1 ms; interpreted, nlpsol derives the NLP's functions anew: about 0.5 s)
+        renew = renew_solver_after if s.solver in FRESH_SOLVER_PLUGINS and library.mode == "compiled" else None
+        self.solvers = BoundedSolver(solvers, factories, s.wall_time_limit_s, s.cpu_time_limit_s, renew=renew)
         self.domains = CollisionDomains(s.domain_settings(), s.max_obstacles)
         self.observer = (DisturbanceObserver(params, self.state_scale, s.observer_gain)
                          if s.disturbance_observer else None)

@@ -20,14 +20,15 @@ the next call forks a fresh worker.  The pipe adds some 0.1-0.3 ms per solve.  W
 ``os.fork`` does not exist (Windows), or with both limits None, solves run in this
 process under the iteration limit only.
 
-Fresh solvers (``fresh=True``): a solver object serves one call only, and the next call of
-that name gets a new one from its factory.  fatrop's solver object keeps part of its
-last solve's state (the iterate's data are not reset between calls): started from the
-next, shifted guess, it then needed more iterations and sometimes failed where a new
-object of the same problem solved (the measurements are in ``docs/nmpc-performance.md``).
-The worker builds the replacement right after it has sent its answer, while the
-controller applies the plan and the plant moves on, so that the solve itself does not
-wait for it; its processor time is reported apart (``SolveOutcome.preparation_cpu_s``).
+Fresh solvers (``renew``): after a call whose outcome ``renew(outcome)`` marks, the next
+call of that name gets a new solver object from its factory.  fatrop's solver object keeps
+part of its last solve's state (the iterate's data are not reset between calls): started
+from the next, shifted guess, it then needed more iterations and sometimes failed where a
+new object of the same problem solved (the measurements are in
+``docs/nmpc-performance.md``).  The worker builds the replacement right after it has sent
+its answer, while the controller applies the plan and the plant moves on, so that the
+solve itself does not wait for it; its processor time is reported apart
+(``SolveOutcome.preparation_cpu_s``).
 """
 
 from __future__ import annotations
@@ -95,8 +96,9 @@ class SolveOutcome:
         Multipliers of the bounds and of the constraints at ``x`` (NaN when stopped): the
         next solve's dual warm start.
     preparation_cpu_s : float
-        Processor time [s] spent before this call, outside it, on building the fresh solver
-        object it used (``fresh``; 0 otherwise).
+        Processor time [s] spent outside the solve on building a fresh solver object
+        (``renew``): in the worker the one this call used, built after the previous answer;
+        in this process the one built after this call for the next.
     acceptable : bool
         The solver stopped at a point that meets its relaxed ("acceptable") tolerances
         rather than its tolerance (fatrop's return flag, IPOPT's status); ``success`` is
@@ -145,9 +147,9 @@ def _timed_call(solver, arguments) -> SolveOutcome:
 
 
 def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, Callable[[], ca.Function]],
-           fresh: bool) -> None:
-    """Child's loop: receive (solver name, arguments), solve, send the outcome; with ``fresh``,
-    replace the solver just used once the answer is sent."""
+           renew: Callable[[SolveOutcome], bool] | None) -> None:
+    """Child's loop: receive (solver name, arguments), solve, send the outcome; replace the
+    solver just used, once the answer is sent, when ``renew`` says so."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     preparation = dict.fromkeys(solvers, 0.0)
     while True:
@@ -166,7 +168,8 @@ def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, 
             connection.send(outcome)
         except (BrokenPipeError, OSError):
             return
-        if fresh:  # the controller is not waiting now
+        preparation[name] = 0.0
+        if renew is not None and renew(outcome):  # the controller is not waiting now
             start = time.process_time()
             solvers[name] = factories[name]()
             preparation[name] = time.process_time() - start
@@ -205,20 +208,22 @@ class BoundedSolver:
         in this process.
     cpu_time_s : float or None
         Limit of the worker's processor time per call [s] (Linux; ignored elsewhere).
-    fresh : bool
-        Use each solver object for one call only (module docstring); ``factories`` must
-        then build every name.
+    renew : callable, optional
+        ``renew(outcome) -> bool``: after a call with this outcome, that solver name gets a
+        new object from its factory (module docstring); ``factories`` must then build every
+        name.  None: each object serves every call of its name.
     """
 
     def __init__(self, solvers: Mapping[str, ca.Function], factories: Mapping[str, Callable[[], ca.Function]],
-                 wall_time_s: float | None, cpu_time_s: float | None = None, fresh: bool = False) -> None:
-        missing = sorted(set(solvers) - set(factories)) if fresh else []
+                 wall_time_s: float | None, cpu_time_s: float | None = None,
+                 renew: Callable[[SolveOutcome], bool] | None = None) -> None:
+        missing = sorted(set(solvers) - set(factories)) if renew is not None else []
         if missing:
-            raise ValueError(f"fresh solvers need a factory for every solver; none for {', '.join(missing)}")
+            raise ValueError(f"renewed solvers need a factory for every solver; none for {', '.join(missing)}")
         self.factories = dict(factories)
         self.wall_time_s = wall_time_s
         self.cpu_time_s = cpu_time_s
-        self.fresh = fresh
+        self.renew = renew
         self._solvers: dict[str, ca.Function] = dict(solvers)
         self._pid: int | None = None
         self._connection = None
@@ -234,7 +239,7 @@ class BoundedSolver:
             if name not in self._solvers:
                 self._solvers[name] = self.factories[name]()
             outcome = _timed_call(self._solvers[name], arguments)
-            if self.fresh:  # in this process the replacement is part of the step
+            if self.renew is not None and self.renew(outcome):  # here the replacement is part of the step
                 start = time.process_time()
                 self._solvers[name] = self.factories[name]()
                 outcome.preparation_cpu_s = time.process_time() - start
@@ -282,7 +287,7 @@ class BoundedSolver:
             parent_end.close()
             _die_with_parent()
             try:
-                _serve(child_end, dict(self._solvers), self.factories, self.fresh)
+                _serve(child_end, dict(self._solvers), self.factories, self.renew)
             finally:
                 os._exit(0)
         child_end.close()

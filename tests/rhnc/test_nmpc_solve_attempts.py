@@ -3,11 +3,13 @@ after a step without a clearance-keeping plan, and points the solver stopped at 
 used only when they keep every constraint."""
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from rhnc.nmpc import NMPCController, NMPCSettings
+from rhnc.nmpc_problem import renew_solver_after
 from rhnc.reference_participant import line_or_turn_reference
 from rhnc.ship_model import load_parameter_set
 from rhnc.solver_watchdog import FATROP_ACCEPTABLE_FLAG, BoundedSolver, _outcome
@@ -32,17 +34,24 @@ class StatefulSolver:
 
 
 @pytest.mark.parametrize("wall_time_s", [None, 30.0], ids=["in-process", "worker"])
-@pytest.mark.parametrize("fresh", [True, False])
-def test_fresh_solver_objects_serve_one_call_each(fresh, wall_time_s):
-    bounded = BoundedSolver({"nlp": StatefulSolver()}, {"nlp": StatefulSolver}, wall_time_s=wall_time_s, fresh=fresh)
-    served = [bounded.solve("nlp", x0=np.zeros(2)).iterations for _ in range(3)]
+@pytest.mark.parametrize("renew, served", [(None, [1, 2, 3, 4, 5]), (lambda outcome: True, [1, 1, 1, 1, 1]),
+                                           (lambda outcome: outcome.iterations > 2, [1, 2, 3, 1, 2])],
+                         ids=["never", "always", "after-2-calls"])
+def test_solver_objects_are_renewed_after_the_outcomes_the_rule_names(renew, served, wall_time_s):
+    bounded = BoundedSolver({"nlp": StatefulSolver()}, {"nlp": StatefulSolver}, wall_time_s=wall_time_s, renew=renew)
+    calls = [bounded.solve("nlp", x0=np.zeros(2)).iterations for _ in range(5)]
     bounded.close()
-    assert served == ([1, 1, 1] if fresh else [1, 2, 3])
+    assert calls == served
 
 
-def test_fresh_solvers_need_a_factory_for_each_name():
+def test_renewed_solvers_need_a_factory_for_each_name():
     with pytest.raises(ValueError, match="none for nlp"):
-        BoundedSolver({"nlp": StatefulSolver()}, {}, wall_time_s=None, fresh=True)
+        BoundedSolver({"nlp": StatefulSolver()}, {}, wall_time_s=None, renew=lambda outcome: True)
+
+
+@pytest.mark.parametrize("success, iterations, renew", [(True, 6, False), (True, 7, True), (False, 3, True)])
+def test_a_new_fatrop_object_follows_a_failed_or_long_solve(success, iterations, renew):
+    assert renew_solver_after(SimpleNamespace(success=success, iterations=iterations)) is renew
 
 
 class Stopped:
