@@ -138,7 +138,9 @@ class NMPCSettings:
         closes faster than the ship can turn) it re-solves with the slacks free and returns
         the plan that violates the clearance least, instead of a fallback that ignores the
         obstacle.  (The L1 term is an exact penalty: were the hard problem feasible, the
-        soft one would give the same plan.)  None: no slacks and no second attempt.
+        soft one would give the same plan.)  After a step whose plan needed the slacks, or
+        whose attempts both failed, the next step solves the soft problem alone.  None: no
+        slacks and no second attempt.
     max_speed_mps : float
         Upper bound of the surge speed u [m/s] (and cap of the reference speed).
     colregs : bool
