@@ -193,14 +193,14 @@ class VoyageComparison:
         straight route, both arriving when the straight route sailed at the equal-arrival
         scenario's own reference speed (taken as speed through water) arrives."""
         from rhnc.energy import EnergyParameters
-        from rhnc.metocean import MetOceanField
+        from rhnc.metocean_sources import from_scenario_table
         from rhnc.weather_routing import RoutingProblem, optimal_route, straight_route
 
         speed_kn = self.nominal_speed_kn(overrides)
         loaded = load_scenario(self.equal_arrival.scenario, dict(overrides))
         if speed_kn is None or loaded.metocean is None:
             raise ValueError("the equal-arrival scenario has no reference speed or no [metocean] table")
-        metocean = MetOceanField.from_scenario_table(loaded.metocean, loaded.directory, f"{loaded.path}: metocean")
+        metocean = from_scenario_table(loaded.metocean, loaded.directory, f"{loaded.path}: metocean")
         settings = self.optimal_route
         problem = RoutingProblem(self.start_m, self.goal_m, metocean, energy=EnergyParameters(),
                                  resolution_nm=settings.resolution_nm, avoid=settings.avoid_m)
@@ -241,7 +241,7 @@ class VoyageComparison:
     def _route_costs(self, systems, baselines, overrides) -> dict[str, dict[str, Any]]:
         """Per system: straight and optimal routes at its arrival time, track and line at equal speed."""
         from rhnc.energy import EnergyParameters
-        from rhnc.metocean import MetOceanField
+        from rhnc.metocean_sources import from_scenario_table
 
         scenario = self.equal_arrival.scenario if self.equal_arrival else self.run_scenarios[self.labels[0]]
         loaded = load_scenario(scenario, dict(overrides))
@@ -251,7 +251,7 @@ class VoyageComparison:
         from rhnc.track_cost import constant_speed_times, densify
         from rhnc.weather_routing import RoutingProblem, cost_of_track, optimal_route, straight_route
 
-        metocean = MetOceanField.from_scenario_table(loaded.metocean, loaded.directory,
+        metocean = from_scenario_table(loaded.metocean, loaded.directory,
                                                      f"{loaded.path}: metocean")
         energy = EnergyParameters()
         settings = self.optimal_route or OptimalRouteSettings()

@@ -39,7 +39,8 @@ from scipy.optimize import brentq
 
 from rhnc.energy import EnergyParameters, brake_power, fuel_rate_t_h
 from orchestrator.geometry import NM
-from rhnc.metocean import MetOceanField, axis_node_count
+from rhnc.metocean import MetOceanField
+from rhnc.metocean_grid import axis_node_count
 from rhnc.offline_route import shortest_route
 from rhnc.route_search import (IMPASSABLE, GridGraph, build_grid_graph, segment_clearance, shortcut_path,
                                shortest_path_tree, times_along_tree)
