@@ -53,7 +53,6 @@ from orchestrator.scenario import read_toml
 from rhnc.energy import EnergyParameters
 from rhnc.fields import FieldWeights, GuidanceParameters, SuperpositionField, resample_weather
 from orchestrator.geometry import KNOT, NM
-from rhnc.metocean import MetOceanField
 from rhnc.metocean_sources import from_scenario_table
 from rhnc.planner import plan_local_path
 

@@ -73,8 +73,8 @@ MODULES = {
     "planner": Module(("rhnc/planner.py",), ("tests/rhnc/test_fields_planner.py", "tests/rhnc/test_planner_guards.py")),
     "fields": Module(("rhnc/fields.py",), ("tests/rhnc/test_fields_planner.py", "tests/rhnc/test_fields_guards.py")),
     # the NMPC's parts together (slow: about 2400 mutants against solver runs; see --sample) ...
-    "nmpc": Module(("rhnc/nmpc.py", "rhnc/nmpc_problem.py", "rhnc/nmpc_terminal.py", "rhnc/nmpc_warm_start.py",
-                    "rhnc/nmpc_colregs.py"),
+    "nmpc": Module(("rhnc/nmpc.py", "rhnc/nmpc_settings.py", "rhnc/nmpc_problem.py", "rhnc/nmpc_terminal.py",
+                    "rhnc/nmpc_warm_start.py", "rhnc/nmpc_colregs.py"),
                    ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py",
                     "tests/rhnc/test_nmpc_cost.py")),
     # ... or file by file (each its own run, so that a part finishes and reports on its own)
@@ -83,8 +83,9 @@ MODULES = {
     "nmpc_colregs": Module(("rhnc/nmpc_colregs.py",), ("tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py")),
     "nmpc_problem": Module(("rhnc/nmpc_problem.py",), ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py",
                                                        "tests/rhnc/test_nmpc_cost.py")),
-    "nmpc_controller": Module(("rhnc/nmpc.py",), ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py",
-                                                  "tests/rhnc/test_nmpc_limits.py")),
+    "nmpc_controller": Module(("rhnc/nmpc.py", "rhnc/nmpc_settings.py"),
+                              ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py",
+                               "tests/rhnc/test_nmpc_limits.py")),
     "nmpc_codegen": Module(("rhnc/nmpc_codegen.py",), ("tests/rhnc/test_nmpc_codegen.py",)),
     "master": Module(("orchestrator/master.py",), ("tests/orchestrator/test_master.py",
                                                    "tests/orchestrator/test_master_guards.py",
