@@ -167,7 +167,6 @@ def _check_size(ds, time_index) -> None:
     check_grid_nodes(spatial[0], spatial[1] * rest, steps)
 
 
-
 def _seconds(times, origin, path, time_dim) -> tuple[np.ndarray, str]:
     """Seconds [s] of CF-decoded ``times`` since ``origin`` (ISO 8601), else since the first
     time; and that zero as an ISO 8601 string."""
