@@ -69,7 +69,8 @@ from orchestrator.interrupts import stop_requested
 from rhnc.colregs import ENCOUNTER_CLASSES
 from rhnc.disturbance_observer import DisturbanceObserver, trimmed_reference
 from rhnc.nmpc_codegen import NLPLibrary
-from rhnc.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport, heading_bounds
+from rhnc.nmpc_alteration import heading_bounds
+from rhnc.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport
 from rhnc.nmpc_problem import DISTURBANCE_SIZE, OBSTACLE_FIELDS, build_problem, solver_options
 from rhnc.nmpc_settings import SOLVERS, NMPCSettings, NMPCSolution
 from rhnc.nmpc_terminal import MIN_TERMINAL_SPEED_MPS, TerminalWeight

@@ -74,13 +74,13 @@ MODULES = {
     "fields": Module(("rhnc/fields.py",), ("tests/rhnc/test_fields_planner.py", "tests/rhnc/test_fields_guards.py")),
     # the NMPC's parts together (slow: about 2400 mutants against solver runs; see --sample) ...
     "nmpc": Module(("rhnc/nmpc.py", "rhnc/nmpc_settings.py", "rhnc/nmpc_problem.py", "rhnc/nmpc_terminal.py",
-                    "rhnc/nmpc_warm_start.py", "rhnc/nmpc_colregs.py"),
+                    "rhnc/nmpc_warm_start.py", "rhnc/nmpc_colregs.py", "rhnc/nmpc_alteration.py"),
                    ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py",
                     "tests/rhnc/test_nmpc_cost.py")),
     # ... or file by file (each its own run, so that a part finishes and reports on its own)
     "nmpc_warm_start": Module(("rhnc/nmpc_warm_start.py",), ("tests/rhnc/test_nmpc.py",)),
     "nmpc_terminal": Module(("rhnc/nmpc_terminal.py",), ("tests/rhnc/test_nmpc.py",)),
-    "nmpc_colregs": Module(("rhnc/nmpc_colregs.py",), ("tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py")),
+    "nmpc_colregs": Module(("rhnc/nmpc_colregs.py", "rhnc/nmpc_alteration.py"), ("tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py")),
     "nmpc_problem": Module(("rhnc/nmpc_problem.py",), ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py",
                                                        "tests/rhnc/test_nmpc_cost.py")),
     "nmpc_controller": Module(("rhnc/nmpc.py", "rhnc/nmpc_settings.py"),
