@@ -3,9 +3,10 @@
 A fair baseline for a navigation system sails the straight (or shortest obstacle-free)
 route at the one constant speed that brings it to the goal when the system under test
 arrived.  The arrival time of a co-simulated voyage is a decreasing function of the
-reference speed, close to ``T(v) = lag + distance / v`` and known only by running it, on
-the macro-step grid.  It is searched for with the secant method in ``1 / v`` (in which
-``T`` is nearly linear, so the secant lands within a step in two or three runs), guarded
+reference speed, close to ``T(v) = lag + distance / v`` and known only by running it (the
+crossing of the arrival radius, interpolated between samples).  It is searched for with the
+secant method in ``1 / v`` (in which ``T`` is nearly linear, so the secant lands within a
+second in three or four runs), guarded
 by bisection once a too-early and a too-late speed bracket the target; a speed whose run
 does not arrive at all counts as too slow.
 """
@@ -65,7 +66,7 @@ def match_arrival_time(arrival_of: Callable[[float], tuple[float | None, Any]], 
     target_s : float
         Arrival time to match [s since departure].
     tolerance_s : float
-        Accepted difference [s], e.g. one macro step.
+        Accepted difference [s].
     first_speed_kn : float
         The first speed to try [kn], e.g. distance / target time.
     max_trials : int
@@ -74,7 +75,7 @@ def match_arrival_time(arrival_of: Callable[[float], tuple[float | None, Any]], 
         Speeds outside this range [kn] are not tried.
     aim_s : float, optional
         The search goes on until a trial lands this close to the target [s] (default half
-        the tolerance: on a macro-step grid, the same sample as the target), or the trials
+        the tolerance), or the trials
         run out; ``matched`` still only asks for ``tolerance_s``.
 
     Returns

@@ -36,10 +36,10 @@ START_TOLERANCE_M = 0.05 * NM
 #: Runs whose mean speeds through water differ by more than this are not comparable
 #: without an equal-arrival baseline [%].
 SPEED_SPREAD_LIMIT_PERCENT = 0.5
-#: Below this available saving [% of the straight route's cost] no share is given: the
-#: baseline arrives in the same macro step as the system, up to half a step (30 s of an 8 h
-#: passage) apart, and with fuel rising with about the cube of speed that alone moves a
-#: total by a few tenths of a percent, so a share of a smaller saving measures noise.
+#: Below this available saving [% of the straight route's cost] no share is given: a
+#: saving that small is of the order of what the sailed runs differ by without any routing
+#: (the NMPC's speed and heading keeping in the weather, the speed plan's corrections), so a
+#: share of it measures noise.
 MIN_AVAILABLE_SAVING_PERCENT = 0.5
 
 
@@ -265,8 +265,8 @@ def _flags(systems, baselines, routes, limit_percent: float, start_m=None) -> li
         if not equal.matched:
             best = equal.best
             miss = f"{abs(best.arrival_s - equal.target_s):.0f} s off" if best else "no trial arrived"
-            flags.append(f"the equal-arrival baseline of {label} missed its arrival time by more than one "
-                         f"macro step ({miss} after {len(equal.trials)} runs)")
+            flags.append(f"the equal-arrival baseline of {label} missed its arrival time by more than "
+                         f"{equal.tolerance_s:g} s ({miss} after {len(equal.trials)} runs)")
     return flags
 
 
