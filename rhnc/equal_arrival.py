@@ -21,6 +21,10 @@ from typing import Any
 
 log = logging.getLogger(__name__)
 
+#: Two trials arriving this close around the target [s] (one 1 min macro step) may stand
+#: in for a trial at it (:attr:`EqualArrival.interpolated`).
+MAX_BRACKET_S = 60.0
+
 
 @dataclass(frozen=True)
 class ArrivalTrial:
@@ -50,6 +54,41 @@ class EqualArrival:
         """True when the best trial arrives within the tolerance of the target."""
         best = self.best
         return best is not None and abs(best.arrival_s - self.target_s) <= self.tolerance_s
+
+    @property
+    def bracket(self) -> tuple[ArrivalTrial, ArrivalTrial] | None:
+        """The arrived trials nearest the target before and after it (None unless both exist)."""
+        arrived = [t for t in self.trials if t.arrival_s is not None]
+        early = [t for t in arrived if t.arrival_s <= self.target_s]
+        late = [t for t in arrived if t.arrival_s > self.target_s]
+        if not early or not late:
+            return None
+        return max(early, key=lambda t: t.arrival_s), min(late, key=lambda t: t.arrival_s)
+
+    @property
+    def interpolated(self) -> bool:
+        """True when no trial arrived within the tolerance but two bracket the target within
+        ``MAX_BRACKET_S``: the arrival jumps with the speed there (the last control steps
+        before the goal), and the baseline's figures are read between the two."""
+        if self.matched:
+            return False
+        pair = self.bracket
+        return pair is not None and pair[1].arrival_s - pair[0].arrival_s <= MAX_BRACKET_S
+
+    @property
+    def usable(self) -> bool:
+        return self.matched or self.interpolated
+
+    def at_target(self, figure: Callable[[ArrivalTrial], float]) -> float:
+        """``figure`` of the baseline at the target arrival: the best trial's when matched,
+        else linear in the arrival time between the bracketing trials."""
+        if self.matched:
+            return float(figure(self.best))
+        if not self.interpolated:
+            raise ValueError("the equal-arrival baseline has no trial at or around the target arrival")
+        early, late = self.bracket
+        weight = (self.target_s - early.arrival_s) / (late.arrival_s - early.arrival_s)
+        return float(figure(early) + weight * (figure(late) - figure(early)))
 
 
 def match_arrival_time(arrival_of: Callable[[float], tuple[float | None, Any]], target_s: float,

@@ -299,10 +299,10 @@ class VoyageComparison:
                     log.warning("%s: no optimal route at %s's arrival: %s", self.path, label, exc)
                     entry.pop("straight", None)
                     entry["routing_error"] = str(exc)
-            best = baselines[label].best if label in baselines else None
-            if best is not None and baselines[label].matched:
+            equal = baselines.get(label)
+            if equal is not None and equal.usable:
                 # both at the baseline's measured mean speed through water, from the same departure
-                speed = best.run.mean_speed_through_water_kn * KNOT
+                speed = equal.at_target(lambda t: t.run.mean_speed_through_water_kn) * KNOT
                 track = densify(_with_goal(system.track_m, self.goal_m), settings.resolution_nm * NM / 2.0)
                 line = densify(np.vstack([self.start_m, self.goal_m]), settings.resolution_nm * NM / 2.0)
                 entry["equal_speed_kn"] = speed / KNOT
