@@ -19,7 +19,7 @@ from orchestrator.participant import is_finite_number
 from orchestrator.scenario import load_scenario
 
 VOYAGE_KEYS = ("start_nm", "goal_nm", "arrival_radius_nm", "max_duration_h", "equal_arrival", "optimal_route")
-EQUAL_ARRIVAL_KEYS = ("scenario", "speed_key", "systems", "max_trials")
+EQUAL_ARRIVAL_KEYS = ("scenario", "speed_key", "systems", "max_trials", "same_control")
 OPTIMAL_ROUTE_KEYS = ("resolution_nm", "avoid")
 
 
@@ -31,6 +31,9 @@ class EqualArrivalSettings:
     speed_key: str
     systems: tuple[str, ...]
     max_trials: int = 8
+    #: the baseline's control participant takes each system's control options (same NMPC
+    #: settings on both sides of the comparison)
+    same_control: bool = True
 
 
 @dataclass(frozen=True)
@@ -80,6 +83,9 @@ def equal_arrival(table, path: Path, labels: tuple[str, ...], overrides: Mapping
     trials = table.get("max_trials", 8)
     if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
         raise ScenarioError(f"{where}.max_trials: expected a positive integer, got {trials!r}")
+    same_control = table.get("same_control", True)
+    if not isinstance(same_control, bool):
+        raise ScenarioError(f"{where}.same_control: expected true or false, got {same_control!r}")
     speed_key = table.get("speed_key")
     if speed_key is None:
         loaded = load_scenario(scenario, dict(overrides))
@@ -90,7 +96,7 @@ def equal_arrival(table, path: Path, labels: tuple[str, ...], overrides: Mapping
         speed_key = f"participants.{routes[0].name}.options.speed_kn"
     if not isinstance(speed_key, str) or not all(speed_key.split(".")):
         raise ScenarioError(f"{where}.speed_key: expected a dotted scenario key, got {speed_key!r}")
-    return EqualArrivalSettings(scenario, speed_key, tuple(systems), trials)
+    return EqualArrivalSettings(scenario, speed_key, tuple(systems), trials, same_control)
 
 
 def optimal_route(table, where: str) -> OptimalRouteSettings:

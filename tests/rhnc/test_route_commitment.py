@@ -84,3 +84,20 @@ def test_simplify_polyline_straightens_a_staircase_and_keeps_real_turns():
     np.testing.assert_array_equal(simplify_polyline(staircase, 0.75), [[0, 0], [3, 3]])
     corner = np.array([[0, 0], [5, 0], [5, 5]], dtype=float)
     np.testing.assert_array_equal(simplify_polyline(corner, 0.75), corner)
+
+
+def test_a_ship_set_off_the_followed_route_is_steered_back_to_it():
+    """The followed route keeps its geometry: a ship set 0.2 nm off it aims at the route
+    ``lookahead_m`` beyond its projection, update after update, instead of at the goal."""
+    planner = RecedingRoutePlanner(storm_field(), tuple(GOAL), resolution_nm=0.5)
+    planner.follow(np.vstack([np.zeros(2), GOAL]))
+    direction = GOAL / np.hypot(*GOAL)
+    across = np.array([direction[1], -direction[0]])
+    for along_nm in (5.0, 6.0, 8.0):
+        start = (along_nm * direction + 0.2 * across) * NM
+        route = planner.route(0.0, start, SPEED, PRICE, 0.0)
+        aim = route[1]
+        assert abs(aim @ across) < 1.0                                  # on the followed line
+        assert aim @ direction == pytest.approx(start @ direction + planner.lookahead_m, abs=1.0)
+        assert np.allclose(route[-1], GOAL)
+    assert planner.switches == 0 and planner.kept == 3
