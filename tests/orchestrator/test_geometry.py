@@ -55,3 +55,9 @@ def test_units_and_wrap_are_defined_once():
             if path.name != "geometry.py":
                 found += _unit_definitions(path)
     assert found == []
+
+
+def test_degrees_wrap_to_the_half_open_interval_like_radians():
+    from orchestrator.geometry import wrap_deg
+
+    assert wrap_deg([-180.0, 180.0, 540.0, -190.0, 359.0]).tolist() == [180.0, 180.0, 180.0, 170.0, -1.0]
