@@ -21,7 +21,7 @@ import numpy as np
 
 from rhnc.fields import SuperpositionField, resample_weather
 from orchestrator.geometry import KNOT, NM
-from rhnc.metocean import MetOceanField
+from rhnc.weather_generators import paper_default
 from rhnc.planner import plan_local_path
 
 
@@ -33,7 +33,7 @@ def main() -> None:
     parser.add_argument("--routing-resolution-nm", type=float, nargs="+", default=[1.0, 0.5])
     args = parser.parse_args()
 
-    metocean = MetOceanField.generate_paper_default(resolution_nm=1.0)
+    metocean = paper_default(resolution_nm=1.0)
     weather = resample_weather(metocean, args.resolution_nm)
     goal = (100 * NM, 100 * NM)
     field = SuperpositionField(weather, goal)

@@ -188,7 +188,7 @@ def _complete_model_structure(source: Path, target: Path) -> None:
 
 
 def _target(spec) -> str:
-    from orchestrator.master import participant_target
+    from orchestrator.participant_build import participant_target
 
     return participant_target(spec, f"participants.{spec.name}")
 

@@ -65,7 +65,7 @@ class ExportedParticipant(Fmi2Slave):
     # -- lifecycle -------------------------------------------------------------------------
     def exit_initialization_mode(self):
         from orchestrator import plugins
-        from orchestrator.master import _import_class
+        from orchestrator.participant_build import participant_class
         from orchestrator.participant import BuildContext
 
         metocean = None
@@ -76,7 +76,7 @@ class ExportedParticipant(Fmi2Slave):
         context = BuildContext(where=where, scenario_dir=self._bundle, step_size=self._spec["step_size_s"],
                                start_time=self._spec["start_s"], stop_time=self._spec["stop_s"],
                                metocean=metocean)
-        cls = _import_class(self._spec["target"], f"{where}.class")
+        cls = participant_class(self._spec["target"], f"{where}.class")
         self._participant = cls.from_options(name, self._spec["options"], context)
         self._publish(self._participant.setup(self._spec["start_s"], self._inputs()))
 

@@ -17,10 +17,16 @@ DEG = math.pi / 180.0  #: radians per degree
 EARTH_RADIUS_M = 6_371_000.0  #: mean radius of the Earth [m], for the local projection
 
 
-def wrap_angle(angle):
-    """Wrap angles [rad] to (-pi, pi] (numpy; arrays element-wise)."""
-    wrapped = np.mod(np.asarray(angle, dtype=float) + np.pi, 2.0 * np.pi) - np.pi
-    return np.where(wrapped == -np.pi, np.pi, wrapped)
+def wrap_angle(angle, half_turn: float = np.pi):
+    """Wrap angles to (-half_turn, half_turn]: radians by default, degrees with
+    ``half_turn = 180`` (numpy; arrays element-wise)."""
+    wrapped = np.mod(np.asarray(angle, dtype=float) + half_turn, 2.0 * half_turn) - half_turn
+    return np.where(wrapped == -half_turn, half_turn, wrapped)
+
+
+def wrap_deg(angle_deg):
+    """Wrap angles [deg] to (-180, 180]."""
+    return wrap_angle(angle_deg, 180.0)
 
 
 def local_north_east_m(lat_deg, lon_deg, lat0_deg: float, lon0_deg: float) -> tuple[np.ndarray, np.ndarray]:

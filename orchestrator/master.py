@@ -10,7 +10,6 @@ every m macro steps with a step of ``m * dt_s`` and holds its outputs in between
 
 from __future__ import annotations
 
-import importlib
 import json
 import logging
 import math
@@ -23,9 +22,10 @@ from typing import Any
 
 import numpy as np
 
-from orchestrator import interrupts, plugins, time_limits
+from orchestrator import interrupts, time_limits
 from orchestrator.errors import ModelError, ResultsError, ScenarioError, ToolchainError
-from orchestrator.participant import BuildContext, Participant, Value
+from orchestrator.participant import Participant, Value
+from orchestrator.participant_build import build_participant, build_scenario_table
 from orchestrator.recorder import Recorder
 from orchestrator.results import json_default
 from orchestrator.scenario import Scenario
@@ -57,7 +57,7 @@ class CoSimulation:
         Where derived inputs (the FMU's met-ocean grid) are written; a temporary
         folder by default.
 
-    A scenario's domain table (``[metocean]``) is built by the class registered under its
+    A scenario's domain table (``[metocean]``) is built by what is registered under its
     name in the entry-point group ``rhnc_cosim.scenario_tables``; the object is handed to
     every Python participant (``context.metocean``) and the files it writes replace their
     placeholders in FMU parameters.
@@ -87,7 +87,7 @@ class CoSimulation:
         self.every: dict[str, int] = {}
         self.step_timeout_s: dict[str, float] = {}
         for spec in scenario.participants:
-            self.participants.append(self._build(spec, substitutions))
+            self.participants.append(build_participant(spec, self.scenario, self.metocean, substitutions))
             self.every[spec.name] = spec.every
             self.step_timeout_s[spec.name] = (scenario.simulation.step_timeout_s if spec.step_timeout_s is None
                                               else spec.step_timeout_s)
@@ -100,38 +100,7 @@ class CoSimulation:
         # ports are fixed once a participant is built
         self._declared = {p.name: frozenset(p.output_names) for p in self.participants}
 
-    # -- construction ------------------------------------------------------------------
-    def _build(self, spec, substitutions) -> Participant:
-        where = f"{self.scenario.path}: participants.{spec.name}"
-        if spec.is_fmu:
-            from orchestrator.fmu_participant import FmuParticipant, resolve_fmu
-
-            path = resolve_fmu(spec.fmu, self.scenario.directory, where, spec.fmi_version)
-            return FmuParticipant(spec, path, where, substitutions)
-        target = participant_target(spec, where)
-        cls = _import_class(target, f"{where}.class")
-        context = BuildContext(
-            where=where,
-            scenario_dir=self.scenario.directory,
-            step_size=spec.every * self.scenario.simulation.dt_s,
-            start_time=self.scenario.simulation.start_s,
-            stop_time=self.scenario.simulation.stop_s,
-            metocean=self.metocean,
-        )
-        try:
-            participant = cls.from_options(spec.name, spec.options, context)
-        except ToolchainError:
-            raise
-        except Exception as exc:  # the class's own check of its options, or its bug: one line
-            log.debug("from_options raised", exc_info=True)
-            raise ScenarioError(f"{where}: {target} could not be built from its options: "
-                                f"{type(exc).__name__}: {exc}") from exc
-        except SystemExit as exc:
-            raise ScenarioError(f"{where}: {target} called sys.exit({exc.code!r}) while being built") from exc
-        if not isinstance(participant, Participant):
-            raise ScenarioError(f"{where}: {target} does not build an orchestrator.participant.Participant")
-        return participant
-
+    # -- checks of the built participants ---------------------------------------------------
     def _check_connections(self) -> None:
         by_name = {p.name: p for p in self.participants}
         where = self.scenario.path
@@ -351,44 +320,6 @@ def _finite(value) -> bool:
     if isinstance(value, np.ndarray):
         return bool(np.all(np.isfinite(value)))
     return math.isfinite(float(value))
-
-
-def participant_target(spec, where: str) -> str:
-    """``module:Class`` of a Python participant: its ``class`` for ``type = "python"``, else the
-    entry registered under its type in ``rhnc_cosim.participants``."""
-    if spec.type == "python":
-        return spec.class_path
-    types = plugins.names("participants")
-    if spec.type not in types:
-        raise ScenarioError(
-            f"{where}.type: unknown participant type '{spec.type}' "
-            f"(valid: {', '.join(sorted(types))}, python)"
-        )
-    return plugins.target("participants", spec.type)
-
-
-def build_scenario_table(name: str, table: dict, scenario_dir: Path, where: str):
-    """The object a registered package builds from a scenario's top-level table ``name``."""
-    try:
-        handler = plugins.load("scenario_tables", name)
-    except KeyError:
-        raise ScenarioError(f"{where}: no installed package handles a [{name}] table (entry-point group "
-                            f"{plugins.GROUPS['scenario_tables']})") from None
-    return handler.from_scenario_table(table, scenario_dir, where)
-
-
-def _import_class(target: str, where: str):
-    module_name, _, class_name = target.partition(":")
-    if not module_name or not class_name:
-        raise ScenarioError(f"{where}: '{target}' must read 'package.module:Class'")
-    try:
-        module = importlib.import_module(module_name)
-    except ImportError as exc:
-        raise ScenarioError(f"{where}: cannot import module '{module_name}': {exc}") from exc
-    cls = getattr(module, class_name, None)
-    if cls is None or not hasattr(cls, "from_options"):
-        raise ScenarioError(f"{where}: '{target}' is not a participant class with from_options()")
-    return cls
 
 
 def _progress_bar(total: int, name: str, enabled: bool):

@@ -49,7 +49,7 @@ DISTRIBUTION = "rhnc-cosim"
 #:     an object with ``add_arguments(parser)``, ``help`` and ``run(args) -> int``: a
 #:     subcommand of ``python -m orchestrator``;
 #: ``scenario_tables``
-#:     a class for a scenario's top-level table of that name (``[metocean]``) with
+#:     a class or module for a scenario's top-level table of that name (``[metocean]``) with
 #:     ``from_scenario_table(table, scenario_dir, where)`` and ``from_netcdf(path)``; the
 #:     object built has ``write_fmu_files(work_dir) -> {placeholder: path}``,
 #:     ``to_netcdf(path)`` and ``source``; participants see it as ``context.<name>``;

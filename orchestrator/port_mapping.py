@@ -24,7 +24,7 @@ import math
 from collections.abc import Mapping
 
 from orchestrator.errors import FmuError, ScenarioError
-from orchestrator.geometry import DEG
+from orchestrator.geometry import DEG, wrap_angle
 from orchestrator.plant_ports import ANGULAR_RATE, INITIAL_KEYS, PLANT_PORTS, VECTOR_PORTS, WRAPPED_OUTPUTS
 from orchestrator.scenario import ParticipantSpec, VariableMapping, VectorMapping
 from orchestrator.units import SiUnit, UnitParseError, declared_unit, describe_dimension, resolve_unit
@@ -33,14 +33,6 @@ log = logging.getLogger(__name__)
 
 #: Type names of real variables: FMI 2.0 ``Real``, FMI 3.0 ``Float64``/``Float32``.
 REAL_TYPES = ("Real", "Float64", "Float32")
-
-
-def _wrap(angle: float) -> float:
-    """Angle in (-pi, pi]."""
-    wrapped = math.fmod(angle + math.pi, 2.0 * math.pi)
-    if wrapped <= 0.0:
-        wrapped += 2.0 * math.pi
-    return wrapped - math.pi
 
 
 class ScalarBinding:
@@ -53,7 +45,7 @@ class ScalarBinding:
 
     def to_canonical(self, values: Mapping[str, float]) -> dict[str, float]:
         value = self.scale * values[self.variables[0]] + self.offset
-        return {self.ports[0]: _wrap(value) if self.wrap else value}
+        return {self.ports[0]: float(wrap_angle(value)) if self.wrap else value}
 
     def to_fmu(self, canonical: Mapping[str, float]) -> dict[str, float]:
         return {self.variables[0]: (canonical[self.ports[0]] - self.offset) / self.scale}

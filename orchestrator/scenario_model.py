@@ -103,6 +103,15 @@ class ScenarioFile(ScenarioTable):
         return self
 
 
+def _positive_time(value: Any) -> float:
+    number = _time(value)
+    if number <= 0:
+        raise fail(f"must be positive, got {shown(value)}")
+    if number < MIN_DT_S:
+        raise fail(f"must be at least {MIN_DT_S:g} s, got {shown(value)}")
+    return number
+
+
 class SimulationTable(ScenarioTable):
     """``[simulation]``: the time grid and when the run ends."""
 
@@ -110,7 +119,7 @@ class SimulationTable(ScenarioTable):
     start_s: Time = 0.0
     stop_s: Time | None = None
     steps: PositiveInt | None = None
-    dt_s: Annotated[float, PlainValidator(lambda v: _positive_time(v))]
+    dt_s: Annotated[float, PlainValidator(_positive_time)]
     stop_when: Annotated[tuple[StopCondition, ...], PlainValidator(_stop_conditions)] = ()
     exchange: Annotated[str, one_of(EXCHANGE_ORDERS)] = "gauss-seidel"
     #: wall-time limit of one participant call (set-up or step) [s]
@@ -142,15 +151,6 @@ class SimulationTable(ScenarioTable):
         return SimulationSpec(name=self.name or default_name, start_s=self.start_s, stop_s=stop, dt_s=self.dt_s,
                               stop_when=self.stop_when, exchange=self.exchange,
                               step_timeout_s=self.step_timeout_s)
-
-
-def _positive_time(value: Any) -> float:
-    number = _time(value)
-    if number <= 0:
-        raise fail(f"must be positive, got {shown(value)}")
-    if number < MIN_DT_S:
-        raise fail(f"must be at least {MIN_DT_S:g} s, got {shown(value)}")
-    return number
 
 
 class OutputsTable(ScenarioTable):

@@ -50,7 +50,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from orchestrator.geometry import NM
+from orchestrator.geometry import NM, wrap_deg
 
 STATIC_SPEED_MPS = 0.1
 HEAD_ON_BEARING_DEG = 10.0
@@ -70,12 +70,6 @@ ENCOUNTER_CLASSES = ("static", "none", "head_on", "crossing_give_way", "crossing
 #: "avoid" (a static obstacle), "none".
 ROLE = {"static": "avoid", "none": "none", "head_on": "give_way", "crossing_give_way": "give_way",
         "crossing_stand_on": "stand_on", "overtaking": "give_way", "overtaken": "stand_on"}
-
-
-def wrap_deg(angle_deg):
-    """Wrap an angle [deg] to (-180, 180]."""
-    wrapped = np.mod(np.asarray(angle_deg, dtype=float) + 180.0, 360.0) - 180.0
-    return np.where(wrapped == -180.0, 180.0, wrapped)
 
 
 def bearing_deg(from_x, from_y, to_x, to_y):

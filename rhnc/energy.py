@@ -1,6 +1,6 @@
 """Brake power, fuel cost rate EC and CO2 emission rate EM of the ship (paper Eq. 1-3, 31).
 
-Spec section 3 restates the model::
+The model, as used here (docs/method.md gives the choices behind it)::
 
     P   = K (Ps + Pw + Pa) + P_aux                                   [W]
     K   = max( 1 / (eta (j + k v / v_d)),  1 / (eta (1 - r Hs)) )    (1 - r Hs clamped >= 0.1)

@@ -3,9 +3,10 @@
 A fair baseline for a navigation system sails the straight (or shortest obstacle-free)
 route at the one constant speed that brings it to the goal when the system under test
 arrived.  The arrival time of a co-simulated voyage is a decreasing function of the
-reference speed, close to ``T(v) = lag + distance / v`` and known only by running it, on
-the macro-step grid.  It is searched for with the secant method in ``1 / v`` (in which
-``T`` is nearly linear, so the secant lands within a step in two or three runs), guarded
+reference speed, close to ``T(v) = lag + distance / v`` and known only by running it (the
+crossing of the arrival radius, interpolated between samples).  It is searched for with the
+secant method in ``1 / v`` (in which ``T`` is nearly linear, so the secant lands within a
+second in three or four runs), guarded
 by bisection once a too-early and a too-late speed bracket the target; a speed whose run
 does not arrive at all counts as too slow.
 """
@@ -19,6 +20,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 log = logging.getLogger(__name__)
+
+#: Two trials arriving this close around the target [s] (one 1 min macro step) may stand
+#: in for a trial at it (:attr:`EqualArrival.interpolated`).
+MAX_BRACKET_S = 60.0
 
 
 @dataclass(frozen=True)
@@ -50,6 +55,41 @@ class EqualArrival:
         best = self.best
         return best is not None and abs(best.arrival_s - self.target_s) <= self.tolerance_s
 
+    @property
+    def bracket(self) -> tuple[ArrivalTrial, ArrivalTrial] | None:
+        """The arrived trials nearest the target before and after it (None unless both exist)."""
+        arrived = [t for t in self.trials if t.arrival_s is not None]
+        early = [t for t in arrived if t.arrival_s <= self.target_s]
+        late = [t for t in arrived if t.arrival_s > self.target_s]
+        if not early or not late:
+            return None
+        return max(early, key=lambda t: t.arrival_s), min(late, key=lambda t: t.arrival_s)
+
+    @property
+    def interpolated(self) -> bool:
+        """True when no trial arrived within the tolerance but two bracket the target within
+        ``MAX_BRACKET_S``: the arrival jumps with the speed there (the last control steps
+        before the goal), and the baseline's figures are read between the two."""
+        if self.matched:
+            return False
+        pair = self.bracket
+        return pair is not None and pair[1].arrival_s - pair[0].arrival_s <= MAX_BRACKET_S
+
+    @property
+    def usable(self) -> bool:
+        return self.matched or self.interpolated
+
+    def at_target(self, figure: Callable[[ArrivalTrial], float]) -> float:
+        """``figure`` of the baseline at the target arrival: the best trial's when matched,
+        else linear in the arrival time between the bracketing trials."""
+        if self.matched:
+            return float(figure(self.best))
+        if not self.interpolated:
+            raise ValueError("the equal-arrival baseline has no trial at or around the target arrival")
+        early, late = self.bracket
+        weight = (self.target_s - early.arrival_s) / (late.arrival_s - early.arrival_s)
+        return float(figure(early) + weight * (figure(late) - figure(early)))
+
 
 def match_arrival_time(arrival_of: Callable[[float], tuple[float | None, Any]], target_s: float,
                        tolerance_s: float, first_speed_kn: float, max_trials: int = 8,
@@ -65,7 +105,7 @@ def match_arrival_time(arrival_of: Callable[[float], tuple[float | None, Any]], 
     target_s : float
         Arrival time to match [s since departure].
     tolerance_s : float
-        Accepted difference [s], e.g. one macro step.
+        Accepted difference [s].
     first_speed_kn : float
         The first speed to try [kn], e.g. distance / target time.
     max_trials : int
@@ -74,7 +114,7 @@ def match_arrival_time(arrival_of: Callable[[float], tuple[float | None, Any]], 
         Speeds outside this range [kn] are not tried.
     aim_s : float, optional
         The search goes on until a trial lands this close to the target [s] (default half
-        the tolerance: on a macro-step grid, the same sample as the target), or the trials
+        the tolerance), or the trials
         run out; ``matched`` still only asks for ``tolerance_s``.
 
     Returns

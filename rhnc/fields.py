@@ -40,7 +40,7 @@ import numpy as np
 from orchestrator.geometry import wrap_angle
 
 from rhnc.energy import EnergyParameters, cost_rate, emission_rate, brake_power, speed_through_water
-from rhnc.metocean import axis_node_count
+from rhnc.metocean_grid import axis_node_count
 from orchestrator.geometry import NM
 
 WEATHER_NAMES = ("wind_north", "wind_east", "hs", "current_north", "current_east")

@@ -39,13 +39,14 @@ import dataclasses
 import logging
 import math
 from collections.abc import Callable
+from types import SimpleNamespace
 
 import numpy as np
 
 from orchestrator.errors import ScenarioError, ToolchainError
 from orchestrator.geometry import KNOT
 from rhnc.prediction_error import position_error_growth
-from rhnc.ship_model import STATE_NAMES, ShipParameters, rk4_step
+from rhnc.ship_model import STATE_NAMES, ShipParameters, equations_of_motion, rk4_step
 
 LOG = logging.getLogger(__name__)
 COEFFICIENTS = ("m11", "m22", "m33", "d11", "d22", "d33", "d23", "d32")
@@ -247,13 +248,12 @@ def refine_output_error(records: dict[str, Record], theta: np.ndarray) -> np.nda
     from scipy.optimize import least_squares
 
     factors = ca.SX.sym("k", len(COEFFICIENTS))
-    m11, m22, m33, d11, d22, d33, d23, d32 = [factors[i] * float(theta[i]) for i in range(len(COEFFICIENTS))]
+    scaled = SimpleNamespace(**{name: factors[i] * float(theta[i]) for i, name in enumerate(COEFFICIENTS)})
     state, tau = ca.SX.sym("X", 4), ca.SX.sym("tau", 2)   # psi, u, v, r
 
-    def f(x):
-        _, u, v, r = x[0], x[1], x[2], x[3]
-        return ca.vertcat(r, (m22 * v * r - d11 * u + tau[0]) / m11, (-m11 * u * r - d22 * v - d23 * r) / m22,
-                          ((m11 - m22) * u * v - d32 * v - d33 * r + tau[1]) / m33)
+    def f(x):   # the ship's equations (rows psi, u, v, r) with the scaled coefficients
+        full = ca.vertcat(0.0, 0.0, x)
+        return equations_of_motion(full, tau, scaled, ca.cos, ca.sin, lambda rows: ca.vertcat(*rows))[2:]
 
     h = SAMPLE_S / 2.0
     x = state

@@ -122,15 +122,15 @@ def find_plant_spec(scenario, name: str | None) -> ParticipantSpec:
 
 def _build_participant(scenario, spec: ParticipantSpec):
     """A Python participant of the scenario built as a run builds it (step: the identification's sample)."""
-    from orchestrator.master import _import_class, participant_target
+    from orchestrator.participant_build import participant_class, participant_target
     from orchestrator.participant import BuildContext
     from rhnc.identification import SAMPLE_S
 
     where = f"{scenario.path}: participants.{spec.name}"
     context = BuildContext(where=where, scenario_dir=scenario.directory, step_size=SAMPLE_S,
                            start_time=0.0, stop_time=scenario.simulation.stop_s)
-    return _import_class(participant_target(spec, where), f"{where}.type").from_options(spec.name, spec.options,
-                                                                                      context)
+    return participant_class(participant_target(spec, where), f"{where}.type").from_options(spec.name, spec.options,
+                                                                                          context)
 
 
 def _own_names(spec, scenario) -> set[str]:

@@ -21,12 +21,14 @@ first and after the last time.  A static field has a single time step and ignore
 The MetOcean FMU evaluates the same formula at its own simulation time, so FMU and planner
 agree to rounding (``models/MetOcean/readme.md``).
 
-Sources
--------
+Sources (:mod:`rhnc.metocean_sources`, what a scenario's ``[metocean]`` table names)
+-------------------------------------------------------------------------------------
 * generators (:mod:`rhnc.weather_generators`, one registry, ``[metocean] generator =
   "<name>"``): the paper's synthetic weather and the storm sets of ``docs/weather.md``;
 * ``from_netcdf``: a NetCDF file with CF names as ERA5 and CMEMS write them, every time
-  step of it (:mod:`rhnc.metocean_netcdf`).
+  step of it (written again by :meth:`MetOceanField.to_netcdf`, :mod:`rhnc.metocean_netcdf`).
+
+This module knows none of its sources: they build the field, it only holds and samples it.
 
 The environment FMU reads the same grid through ``write_fmu_grid`` (binary format
 ``MOGRID2``, described in ``models/MetOcean/readme.md``).
@@ -34,39 +36,19 @@ The environment FMU reads the same grid through ``write_fmu_grid`` (binary forma
 
 from __future__ import annotations
 
-import math
-
-import logging
 import struct
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from orchestrator.errors import ScenarioError
-from orchestrator.geometry import NM
-
-log = logging.getLogger(__name__)
+from rhnc.metocean_grid import FIELDS
+from rhnc.metocean_netcdf import to_dataset, write_netcdf
 
 GRAVITY = 9.81  #: m/s^2
 
-FIELDS = ("wind_north", "wind_east", "hs", "current_north", "current_east")
-
 #: Magic of the FMU grid file with a time axis (the FMU still reads the static MOGRID1).
 FMU_GRID_MAGIC = b"MOGRID2\n"
-
-#: Default wind-speed control points [m/s] of the paper-style weather, a 5 x 5 lattice
-#: spanning the map (rows: north from south to north, columns: east from west to east).
-#: A band of strong wind across the middle of the direct (0,0)->(100,100) nm route, calm
-#: water in the north-west and south-east corners.
-DEFAULT_WIND_CONTROL_POINTS = (
-    (8.0, 9.0, 10.0, 8.0, 6.0),
-    (9.0, 12.0, 14.0, 11.0, 7.0),
-    (7.0, 13.0, 18.0, 14.0, 9.0),
-    (6.0, 10.0, 15.0, 12.0, 8.0),
-    (5.0, 7.0, 10.0, 9.0, 7.0),
-)
 
 
 class MetOceanField:
@@ -249,68 +231,13 @@ class MetOceanField:
         fields = {name: (1 - w) * stack[k] + w * stack[k + 1] for name, stack in self._fields.items()}
         return MetOceanField(self.x, self.y, fields, source=f"{self.source} at t = {float(t_s):g} s")
 
-    # -- sources ---------------------------------------------------------------------
-    @classmethod
-    def generate_paper_default(cls, **options) -> "MetOceanField":
-        """The paper's synthetic weather; see :func:`rhnc.weather_generators.paper_default`."""
-        from rhnc.weather_generators import paper_default
-
-        return paper_default(**options)
-
-    @classmethod
-    def from_netcdf(cls, path, origin_deg=None, resolution_nm: float | None = None,
-                    time_index: int | None = None, start_time: str | None = None) -> "MetOceanField":
-        """Load a NetCDF file with CF names (ERA5/CMEMS style), every time step of it.
-
-        See :func:`rhnc.metocean_netcdf.read_netcdf` for the options.
-        """
-        from rhnc.metocean_netcdf import read_netcdf
-
-        return read_netcdf(path, origin_deg=origin_deg, resolution_nm=resolution_nm,
-                           time_index=time_index, start_time=start_time)
-
-    @classmethod
-    def from_scenario_table(cls, table: Mapping[str, Any], scenario_dir: Path, where: str) -> "MetOceanField":
-        """Build the field a scenario's ``[metocean]`` table describes.
-
-        ``generator = "<name>"`` with that generator's keys (registry and keys:
-        :func:`rhnc.weather_generators.list_generators`), or ``file = "path.nc"`` with the
-        options of :meth:`from_netcdf`.  Errors name ``where`` (file and table) and the key.
-        """
-        from rhnc.weather_generators import build_generated, checked_option
-
-        table = dict(table)
-        if ("generator" in table) == ("file" in table):
-            raise ScenarioError(f"{where}: give exactly one of 'generator' or 'file'")
-        if "generator" in table:
-            return build_generated(table.pop("generator"), table, where)
-        file = table.pop("file")
-        if not isinstance(file, str) or not file or "\0" in file:
-            raise ScenarioError(f"{where}.file: expected the path of a NetCDF file, got {file!r}"[:300])
-        file = Path(file)
-        file = file if file.is_absolute() else scenario_dir / file
-        if not file.is_file():
-            raise ScenarioError(f"{where}.file: met-ocean file not found: {file}")
-        for key in table:
-            if key not in _FILE_KEYS:
-                raise ScenarioError(f"{where}: unknown key '{key}' (valid: {', '.join(sorted(_FILE_KEYS))})")
-            table[key] = checked_option(table[key], _FILE_KEYS[key], f"{where}.{key}")
-        try:
-            return cls.from_netcdf(file, **table)
-        except (ValueError, TypeError, KeyError) as exc:
-            raise ScenarioError(f"{where}: {exc}") from exc
-
     # -- writers -------------------------------------------------------------------
     def to_dataset(self):
         """The field as an ``xarray.Dataset`` with CF-style names and attributes."""
-        from rhnc.metocean_netcdf import to_dataset
-
         return to_dataset(self)
 
     def to_netcdf(self, path) -> Path:
-        """Write the field as NetCDF (readable again by :meth:`from_netcdf`, every time step)."""
-        from rhnc.metocean_netcdf import write_netcdf
-
+        """Write the field as NetCDF (read again, every time step, by :func:`rhnc.metocean_sources.from_netcdf`)."""
         return write_netcdf(self, path)
 
     def write_fmu_files(self, work_dir) -> dict[str, str]:
@@ -340,10 +267,6 @@ class MetOceanField:
         return path
 
 
-#: Keys of a ``[metocean] file = ...`` table and their kinds (see rhnc.weather_generators.checked_option).
-_FILE_KEYS = {"origin_deg": "point", "resolution_nm": "number", "time_index": "integer", "start_time": "text"}
-
-
 def wind_from_direction(wind_north, wind_east):
     """Meteorological direction [rad in [0, 2 pi)] the wind comes from."""
     return np.mod(np.arctan2(-np.asarray(wind_east), -np.asarray(wind_north)), 2 * np.pi)
@@ -359,42 +282,3 @@ def fetch_limited_hs(wind_speed, fetch_m: float):
     limited = 0.0016 * u * np.sqrt(fetch_m / GRAVITY)
     developed = 0.21 * u**2 / GRAVITY
     return np.minimum(limited, developed)
-
-
-#: Most nodes along one axis of a met-ocean grid (100 nm at 0.05 nm).
-MAX_AXIS_NODES = 2001
-#: Most nodes of a met-ocean grid over space and time (five float64 fields of 32 MB each).
-MAX_GRID_NODES = 4_000_000
-
-
-def axis_node_count(span: float, step: float, what: str = "resolution_nm") -> int:
-    """Nodes of an axis ``span`` long at spacing ``step`` (same units), refused beyond the limit.
-
-    Checked before any array is allocated: a fine resolution over a wide map would otherwise
-    ask for gigabytes.
-    """
-    count = span / step if step > 0 else math.inf
-    if not math.isfinite(count) or count + 1 > MAX_AXIS_NODES:
-        raise ValueError(f"{what} gives {count + 1:.3g} grid nodes along an axis, more than the limit of "
-                         f"{MAX_AXIS_NODES} (a coarser resolution or a smaller map)")
-    return int(round(count)) + 1
-
-
-def check_grid_nodes(nx: int, ny: int, nt: int = 1) -> None:
-    """Refuse a grid of more than :data:`MAX_GRID_NODES` nodes over space and time, before it is built."""
-    if nx * ny * nt > MAX_GRID_NODES:
-        raise ValueError(f"the met-ocean grid would hold {nx} x {ny} x {nt} time steps = {nx * ny * nt} nodes, "
-                         f"more than the limit of {MAX_GRID_NODES}")
-
-
-def map_axis(range_nm, resolution_nm) -> np.ndarray:
-    """Evenly spaced nodes [m] over ``range_nm`` (start, stop) [nm] at ``resolution_nm`` [nm]."""
-    start, stop = (float(v) for v in range_nm)
-    if not (math.isfinite(start) and math.isfinite(stop)):
-        raise ValueError(f"range {list(range_nm)} nm must be finite")
-    if stop <= start:
-        raise ValueError(f"range {list(range_nm)} nm must increase")
-    if not resolution_nm > 0:
-        raise ValueError("resolution_nm must be positive")
-    count = axis_node_count(stop - start, resolution_nm)
-    return np.linspace(start, stop, max(count, 2)) * NM

@@ -1,13 +1,10 @@
-"""Met-ocean NetCDF in and out: CF names as ERA5 and CMEMS write them, every time step.
+"""Met-ocean NetCDF: the CF names as ERA5 and CMEMS write them, and the writer of every time step.
 
-Reading (:func:`read_netcdf`): the five fields of :mod:`rhnc.metocean` under their short
-names (``u10``, ``v10``, ``swh``, ``uo``, ``vo``) or CF standard names, on a
-``northing``/``easting`` grid in metres (what :func:`to_dataset` writes) or on a
-``latitude``/``longitude`` grid projected to the local plane about an origin.  A ``time``
-or ``valid_time`` dimension is read whole: its CF-decoded dates become seconds since
-``start_time`` (an ISO 8601 date, the calendar time of the simulation's t = 0), else since
-the file's ``time_origin`` attribute (written by :func:`to_dataset`), else since the
-file's first time.  ``time_index`` takes one time step only (a static field).
+The names serve both ways: :func:`rhnc.metocean_sources.from_netcdf` reads the five fields
+under them (short names or CF standard names), and the writer below writes them.  The
+writer takes any field object (grid ``x``, ``y``, ``times_s``, ``start_time``, ``source``
+and the five gridded quantities of :data:`rhnc.metocean_grid.FIELDS`) and imports no field
+class, so that the field can offer ``to_netcdf`` without its readers importing it back.
 
 Writing (:func:`to_dataset`, :func:`write_netcdf`): a static field without a time
 dimension (as before time was supported); a time-varying one with a ``time`` coordinate in
@@ -19,15 +16,11 @@ and setting it up), the netCDF4 library alone some 20 ms.
 
 from __future__ import annotations
 
-import logging
 from pathlib import Path
 
 import numpy as np
 
-from orchestrator.geometry import NM, local_north_east_m
-from rhnc.metocean import FIELDS, MetOceanField, axis_node_count, check_grid_nodes
-
-log = logging.getLogger(__name__)
+from rhnc.metocean_grid import FIELDS
 
 #: CF variable names (ERA5/CMEMS short names first, then standard_name) per field.
 CF_NAMES = {
@@ -48,109 +41,7 @@ TIME_DIMS = ("time", "valid_time")
 DEFAULT_TIME_ORIGIN = "1970-01-01T00:00:00"
 
 
-def read_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
-                time_index: int | None = None, start_time: str | None = None) -> MetOceanField:
-    """Load a NetCDF file with CF names (ERA5/CMEMS style) through xarray.
-
-    Parameters
-    ----------
-    path : path-like
-        The NetCDF file.
-    origin_deg : (lat, lon), optional
-        For a latitude/longitude grid: the point that becomes x = y = 0 of the local
-        plane (default: the south-west corner of the data).
-    resolution_nm : float, optional
-        For a latitude/longitude grid: spacing of the local grid [nm] (default: the
-        data's own spacing in latitude, in nm).
-    time_index : int, optional
-        Take only this time step (a static field).  Default: every time step.
-    start_time : str, optional
-        ISO 8601 calendar time of the simulation's t = 0 (default: the file's
-        ``time_origin`` attribute, else its first time).
-
-    Missing variables are an error, except the current, which defaults to zero
-    (ERA5 carries no current) with a warning.  NaN (land in ocean products)
-    becomes zero.
-    """
-    import xarray as xr
-
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"met-ocean file not found: {path}")
-    if resolution_nm is not None and not resolution_nm > 0:
-        raise ValueError(f"resolution_nm must be positive, got {resolution_nm}")
-    with xr.open_dataset(path) as ds:
-        _check_size(ds, time_index)  # from the header, before the data are read
-        ds = ds.load()
-    time_dim = next((d for d in TIME_DIMS if d in ds.dims), None)
-    times_s, zero = None, None
-    if time_dim is not None and time_index is not None:
-        if isinstance(time_index, bool) or not isinstance(time_index, int) or not (
-                -ds.sizes[time_dim] <= time_index < ds.sizes[time_dim]):
-            raise ValueError(f"time_index {time_index!r} is not one of the file's {ds.sizes[time_dim]} time steps")
-        ds = ds.isel({time_dim: time_index})
-        time_dim = None
-    elif time_dim is not None and ds.sizes[time_dim] == 1:
-        ds = ds.isel({time_dim: 0})
-        time_dim = None
-    elif time_dim is not None:
-        ds = ds.sortby(time_dim)
-        times_s, zero = _seconds(ds[time_dim].values, start_time or ds.attrs.get("time_origin"), path, time_dim)
-    for extra in [d for d in ds.dims if d not in ("northing", "easting", "latitude", "longitude", "lat", "lon",
-                                                  time_dim)]:
-        ds = ds.isel({extra: 0})
-    arrays = {name: _find_variable(ds, name, path) for name in FIELDS}
-    lead = (time_dim,) if time_dim else ()
-    nt = (ds.sizes[time_dim],) if time_dim else ()
-    keep = {"times_s": times_s, "start_time": zero}
-    if "northing" in ds.dims and "easting" in ds.dims:
-        x = ds["northing"].values.astype(float)
-        y = ds["easting"].values.astype(float)
-        fields = {name: _as_grid(arr, lead + ("northing", "easting"), nt + (x.size, y.size))
-                  for name, arr in arrays.items()}
-        return MetOceanField(x, y, fields, source=f"file: {path}", **keep)
-    lat_name = "latitude" if "latitude" in ds.dims else "lat"
-    lon_name = "longitude" if "longitude" in ds.dims else "lon"
-    if lat_name not in ds.dims or lon_name not in ds.dims:
-        raise ValueError(f"{path}: expected dimensions northing/easting [m] or latitude/longitude")
-    lat = ds[lat_name].values.astype(float)
-    lon = ds[lon_name].values.astype(float)
-    order_lat = np.argsort(lat)
-    order_lon = np.argsort(lon)
-    lat, lon = lat[order_lat], lon[order_lon]
-    lat0, lon0 = origin_deg if origin_deg is not None else (lat[0], lon[0])
-    north, east = local_north_east_m(lat, lon, lat0, lon0)
-    step = resolution_nm * NM if resolution_nm else float(np.min(np.diff(north)))
-    # cover the data's whole extent with a spacing no coarser than `step`
-    nx = axis_node_count(north[-1] - north[0], step) + 1  # ceil, so one more node at most
-    ny = axis_node_count(east[-1] - east[0], step) + 1
-    check_grid_nodes(nx, ny, nt[0] if nt else 1)
-    x = np.linspace(north[0], north[-1], int(np.ceil((north[-1] - north[0]) / step - 1e-9)) + 1)
-    y = np.linspace(east[0], east[-1], int(np.ceil((east[-1] - east[0]) / step - 1e-9)) + 1)
-    from scipy.interpolate import RegularGridInterpolator
-
-    xx, yy = np.meshgrid(x, y, indexing="ij")
-    fields = {}
-    for name, arr in arrays.items():
-        grid = _as_grid(arr, lead + (lat_name, lon_name), nt + (lat.size, lon.size))
-        grid = grid[..., order_lat, :][..., order_lon]
-        slices = grid if time_dim else grid[None]
-        projected = np.stack([RegularGridInterpolator((north, east), s)((xx, yy)) for s in slices])
-        fields[name] = projected if time_dim else projected[0]
-    return MetOceanField(x, y, fields, source=f"file: {path} (origin {lat0:.4f}N {lon0:.4f}E)", **keep)
-
-
-def _check_size(ds, time_index) -> None:
-    """Refuse a file whose grid exceeds the met-ocean grid limit (its sizes, not its data)."""
-    steps = 1 if time_index is not None else next((ds.sizes[d] for d in TIME_DIMS if d in ds.sizes), 1)
-    spatial = [ds.sizes[d] for d in ds.sizes if d not in TIME_DIMS] + [1, 1]
-    rest = 1
-    for size in spatial[2:]:  # further dimensions (levels, ensemble members) are read too
-        rest *= size
-    check_grid_nodes(spatial[0], spatial[1] * rest, steps)
-
-
-def to_dataset(field: MetOceanField):
+def to_dataset(field):
     """The field as an ``xarray.Dataset`` with CF-style names and attributes."""
     import xarray as xr
 
@@ -180,7 +71,7 @@ def to_dataset(field: MetOceanField):
     return dataset
 
 
-def write_netcdf(field: MetOceanField, path) -> Path:
+def write_netcdf(field, path) -> Path:
     """Write ``field`` as NetCDF-4 with the names, attributes and time encoding of :func:`to_dataset`."""
     import netCDF4
 
@@ -211,38 +102,3 @@ def write_netcdf(field: MetOceanField, path) -> Path:
             variable.setncatts({"standard_name": _STANDARD_NAMES[name], "units": units.get(name, "m s-1")})
             variable[:] = getattr(field, name)
     return path
-
-
-def _seconds(times, origin, path, time_dim) -> tuple[np.ndarray, str]:
-    """Seconds [s] of CF-decoded ``times`` since ``origin`` (ISO 8601), else since the first
-    time; and that zero as an ISO 8601 string."""
-    if not np.issubdtype(np.asarray(times).dtype, np.datetime64):
-        raise ValueError(f"{path}: the '{time_dim}' coordinate is not a CF time (no 'units = \"<unit> since "
-                         "<date>\"' attribute); give time_index to read one time step")
-    times = np.asarray(times).astype("datetime64[ns]")
-    try:
-        zero = np.datetime64(origin, "ns") if origin is not None else times[0]
-    except ValueError as exc:
-        raise ValueError(f"start_time '{origin}' is not an ISO 8601 date") from exc
-    return (times - zero).astype("timedelta64[ns]").astype("int64") / 1e9, str(zero)
-
-
-def _find_variable(ds, name, path):
-    for candidate in CF_NAMES[name]:
-        if candidate in ds.data_vars:
-            return ds[candidate]
-    for var in ds.data_vars.values():
-        if var.attrs.get("standard_name") in CF_NAMES[name]:
-            return var
-    if name.startswith("current"):
-        log.warning("%s: no %s variable (%s); assuming zero current", path, name, "/".join(CF_NAMES[name]))
-        any_var = next(iter(ds.data_vars.values()))
-        return any_var * 0.0
-    raise ValueError(f"{path}: no variable for {name} (looked for {', '.join(CF_NAMES[name])})")
-
-
-def _as_grid(arr, dims, shape) -> np.ndarray:
-    values = arr.transpose(*dims).values.astype(float) if set(dims) <= set(arr.dims) else None
-    if values is None or values.shape != tuple(shape):
-        raise ValueError(f"variable {arr.name} must have dimensions {dims}")
-    return np.nan_to_num(values, nan=0.0)

@@ -4,8 +4,8 @@ Two methods, selected per scenario by the option ``method``:
 
 * ``"routing"`` (the default): a receding-horizon route search with the energy cost of
   each step on the course it is sailed, weights in US dollars (fuel and hours), and a
-  speed plan for a requested arrival time (:mod:`rhnc.route_navigation`,
-  docs/navigation.md);
+  speed plan for a requested arrival time (:mod:`rhnc.navigation_routing`,
+  :mod:`rhnc.route_navigation`, docs/navigation.md);
 * ``"paper"``: the paper's potential fields and gradient descent (Algorithm 1), below.
 
 Both take the planning start from Interface I and update the event trigger in the same
@@ -66,7 +66,6 @@ route_switch_margin_pct : float   routing: least saving, in percent of the remai
 
 from __future__ import annotations
 
-import logging
 from collections.abc import Mapping
 from typing import Any
 
@@ -79,12 +78,9 @@ from rhnc.fields import FieldWeights, GuidanceParameters, SuperpositionField, be
 from orchestrator.geometry import KNOT, NM
 from rhnc.planner import plan_local_path
 from rhnc.reference import reference_states
-from rhnc.route_navigation import (DEFAULT_SWITCH_MARGIN, SPEED_STEP_MPS, RecedingRoutePlanner,
-                                   calm_water_time_price_usd_h)
-from rhnc.weather_routing import PRICE_MULTIPLES, RoutingProblem, optimal_route, straight_route, time_price_usd_h
+from rhnc.navigation_routing import RoutingMethod
+from rhnc.route_navigation import DEFAULT_SWITCH_MARGIN
 from rhnc.trigger import TRIGGERED, EventTrigger
-
-log = logging.getLogger(__name__)
 
 OPTIONS = ("goal_nm", "speed_kn", "horizon_steps", "k1", "k2", "k3", "guidance_eps", "guidance_c_rad",
            "resolution_nm", "energy", "eps_ship_nm", "eps_static_nm", "start_from", "start_nm", "method",
@@ -94,8 +90,6 @@ ROUTING_ONLY = ("arrival_time_min", "max_speed_kn", "route_switch_margin_pct")
 PAPER_ONLY = ("k1", "k2", "k3", "guidance_eps", "guidance_c_rad")
 #: Most planning steps of one horizon (the paper's N_L is 16; Experiment 1 plans 110).
 MAX_HORIZON_STEPS = 1000
-#: Lowest planned speed through water of the routing method [m/s] (2 kn).
-MIN_PLANNED_SPEED_MPS = 2.0 * KNOT
 
 
 def _number(options: Mapping[str, Any], key: str, default: float, where: str, positive: bool = False) -> float:
@@ -163,11 +157,9 @@ class NavigationParticipant(Participant):
             self.weather = resample_weather(metocean, resolution_nm, t_s=0.0)
             self.field = SuperpositionField(self.weather, goal, energy, guidance, weights)
         else:
-            self.route_planner = RecedingRoutePlanner(metocean, goal, energy, resolution_nm,
-                                                      switch_margin=switch_margin)
-            self._route = None
-            self._price_scale = None
-            self._planned_speed = self.speed
+            self.routing = RoutingMethod(name, metocean, goal, energy, resolution_nm, self.delta, self.horizon_steps,
+                                         self.speed, arrival_s, self.max_speed, switch_margin)
+            self.route_planner = self.routing.planner
         self._reached_goal = False
 
     # -- construction from a scenario ---------------------------------------------------
@@ -342,73 +334,11 @@ class NavigationParticipant(Participant):
             raise ModelError(f"participant '{self.name}': non-finite reference or energy rate at t={time:.0f} s")
         return outputs
 
-    # -- the routing method ----------------------------------------------------------------
-    def planned_speed(self, time: float, route: np.ndarray) -> float:
-        """Speed through water [m/s] for this instant: ``speed_kn``, or the length of
-        ``route`` (start to goal) over the remaining time less the current along it, within
-        the bounds."""
-        if self.arrival_s is None:
-            return self.speed
-        remaining_m = float(np.sum(np.hypot(*np.diff(route, axis=0).T)))
-        remaining_s = self.arrival_s - time
-        if remaining_s <= 0.0:
-            return self.max_speed
-        wanted = remaining_m / remaining_s - self.route_planner.mean_current_along_mps(route, time)
-        return float(min(max(wanted, MIN_PLANNED_SPEED_MPS), self.max_speed))
-
-    def _calibrate_time_price(self, time: float, point: np.ndarray) -> float:
-        """Price of an hour at fixed arrival, as a multiple of the calm-water shadow price.
-
-        The shadow price along a route (v dF/dv - F) only estimates what an hour is worth
-        on the best route, so once, at the first plan, the whole passage is routed at the
-        requested arrival time (:func:`rhnc.weather_routing.optimal_route`, which tries
-        several prices) and the price that found the best route is kept, scaled with the
-        calm-water price as the planned speed changes.  When the straight route wins, the
-        highest price tried is kept (it keeps the route straightest).  The route found (its
-        turning points moved sideways while that pays) is the passage plan the planner
-        starts out following (:meth:`RecedingRoutePlanner.follow`)."""
-        problem = RoutingProblem(tuple(point), tuple(self.goal), self.metocean, self.energy,
-                                 resolution_nm=self.resolution_nm, departure_s=time)
-        try:
-            best = optimal_route(problem, arrival_s=self.arrival_s)
-        except ValueError as exc:
-            log.warning("participant '%s': no route arrives at %.0f s (%s); pricing hours by the "
-                        "calm-water shadow price", self.name, self.arrival_s, exc)
-            return 1.0
-        self.route_planner.follow(best.waypoints_m)
-        price = best.time_price_usd_h
-        if not np.isfinite(price):
-            price = max(PRICE_MULTIPLES) * time_price_usd_h(problem, straight_route(problem, arrival_s=self.arrival_s))
-        return price / max(calm_water_time_price_usd_h(best.speed_through_water_mps, self.energy), 1e-9)
-
     def _plan_route(self, time: float, ship: tuple[float, float, float, float],
                     start: tuple[float, float, float, float], et: float) -> dict[str, Value]:
-        start_x, start_y, start_psi, start_u = start
-        x_min, x_max, y_min, y_max = self.metocean.extent
-        point = np.array([min(max(start_x, x_min), x_max), min(max(start_y, y_min), y_max)])
-        planner = self.route_planner
-        # the route is searched at the previous instant's speed and price (the route hardly
-        # depends on them), then the speed is planned for the route found
-        if self._route is None:
-            self._planned_speed = self.planned_speed(time, np.vstack([point, self.goal]))
-        if self.arrival_s is None:
-            price = self.energy.running_cost_usd_day / 24.0
-        else:  # hours are fixed: each costs the fuel of the speed-up that saves it
-            if self._price_scale is None:
-                self._price_scale = self._calibrate_time_price(time, point)
-            price = self._price_scale * calm_water_time_price_usd_h(
-                round(self._planned_speed / SPEED_STEP_MPS) * SPEED_STEP_MPS, self.energy)
-        route = planner.route(time, point, self._planned_speed, price,
-                              planner.horizon_m(max(self._planned_speed, self.max_speed), self.delta,
-                                                self.horizon_steps),
-                              arrival_speed=None if self.arrival_s is None else (
-                                  lambda candidate: self.planned_speed(time, candidate)))
-        speed = self.planned_speed(time, route)
-        plan = planner.timed_plan(route, time, start_u, speed, self.delta, self.horizon_steps)
-        self._route = plan.route
-        self._planned_speed = speed
+        plan = self.routing.plan(time, start)
         self.counts["plans"] += 1
         self.counts["avoidance_plans"] += int(et > 0.5)
         self._reached_goal = plan.reached_goal
-        reference = reference_states(plan.points, self.delta, start_time=time, initial_heading=start_psi)
-        return self._outputs(time, reference, et, ship, planned_speed_mps=speed)
+        reference = reference_states(plan.points, self.delta, start_time=time, initial_heading=start[2])
+        return self._outputs(time, reference, et, ship, planned_speed_mps=plan.speed_through_water_mps)

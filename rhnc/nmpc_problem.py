@@ -167,6 +167,15 @@ class NMPCProblem:
             np.asarray(obstacles).ravel(order="F"),
         ])
 
+    def violation(self, x: np.ndarray, g: np.ndarray, lbx: np.ndarray, ubx: np.ndarray) -> float:
+        """Largest violation of the bounds of ``x`` and ``g`` (0 when the point is feasible)."""
+        return float(max(
+            np.max(np.maximum(self.lbg - g, 0.0), initial=0.0),
+            np.max(np.maximum(g - self.ubg, 0.0), initial=0.0),
+            np.max(np.maximum(lbx - x, 0.0), initial=0.0),
+            np.max(np.maximum(x - ubx, 0.0), initial=0.0),
+        ))
+
 
 def stage_function(params: ShipParameters, control_interval_s: float, substeps: int, max_obstacles: int,
                    q: Sequence[float], r: Sequence[float], r_rate: Sequence[float], slack_weight: float | None,

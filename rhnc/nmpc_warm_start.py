@@ -24,7 +24,8 @@ class PlanMemory:
     control_interval_s : float
         delta [s].
     rollout : callable
-        ``rollout(state (6,), inputs (n, 2)) -> states (n+1, 6)`` [SI] with the prediction model.
+        ``rollout(state (6,), inputs (n, 2)[, disturbance]) -> states (n+1, 6)`` [SI] with the
+        prediction model (no disturbance when it is left out).
 
     Attributes
     ----------
@@ -72,6 +73,13 @@ class PlanMemory:
         return (np.r_[_shift_blocks(self.lam_x[:N * stride_x], stride_x, shift), self.lam_x[N * stride_x:]],
                 _shift_blocks(self.lam_g, stride_g, shift))
 
+    def dual_guess(self, time_s: float) -> dict:
+        """``lam_x0``, ``lam_g0`` of the last solve, shifted, for a solver that starts from them ({} if none)."""
+        shifted = self.shifted_multipliers(time_s)
+        if shifted is None or not (np.all(np.isfinite(shifted[0])) and np.all(np.isfinite(shifted[1]))):
+            return {}
+        return {"lam_x0": shifted[0], "lam_g0": shifted[1]}
+
     def _shift(self, time_s: float) -> int | None:
         if self.states is None or self.time_s is None:
             return None
@@ -100,6 +108,28 @@ class PlanMemory:
             hold = np.array([float(np.asarray(previous_tau)[0]), 0.0])
             inputs = np.repeat(hold[None, :], N, axis=0)
         return np.clip(inputs, -tau_max, tau_max)
+
+    def fallback_plan(self, time_s: float, state: np.ndarray, previous_tau: np.ndarray, tau_max: np.ndarray,
+                      disturbance: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The plan applied when a solve fails: (states (N+1, 6), inputs (N, 2)) [SI], kept as the next one.
+
+        The inputs of :meth:`fallback_inputs`, rolled out from the measured ``state`` with the
+        ``disturbance`` estimate.  When that prediction is not finite, the states hold the
+        measured one and the memory is cleared (no warm start from it).
+        """
+        inputs = self.fallback_inputs(time_s, previous_tau, tau_max)
+        try:
+            with np.errstate(all="ignore"):
+                states = self.rollout(state, inputs, disturbance)
+        except RuntimeError:
+            states = np.full((len(inputs) + 1, 6), np.nan)
+        # keep the shifted plan (not the failed iterate) as the next warm start / fallback
+        if np.all(np.isfinite(states)):
+            self.store(time_s, states, inputs)
+        else:
+            self.reset()
+            states = np.vstack([state, np.repeat(state[None, :], len(inputs), axis=0)])
+        return states, inputs
 
 
 def _shift_blocks(values: np.ndarray, stride: int, shift: int) -> np.ndarray:

@@ -17,7 +17,7 @@ N_L steps of ``step_nm``.  Results go to ``results/<name>/<run-id>/``:
 Scenario file (TOML, strict keys)::
 
     name = "exp1_cost_vs_emission"        # optional, default: the file's stem
-    [metocean]                            # rhnc.metocean.MetOceanField.from_scenario_table
+    [metocean]                            # rhnc.metocean_sources.from_scenario_table
     generator = "paper_default"
     [planner]
     start_nm = [0.0, 0.0]                 # north, east
@@ -53,7 +53,7 @@ from orchestrator.scenario import read_toml
 from rhnc.energy import EnergyParameters
 from rhnc.fields import FieldWeights, GuidanceParameters, SuperpositionField, resample_weather
 from orchestrator.geometry import KNOT, NM
-from rhnc.metocean import MetOceanField
+from rhnc.metocean_sources import from_scenario_table
 from rhnc.planner import plan_local_path
 
 log = logging.getLogger(__name__)
@@ -169,7 +169,7 @@ def run_offline_planning(scenario_path: Path, results_root: Path) -> Path:
 
     scenario_path = Path(scenario_path)
     settings = load_offline_scenario(scenario_path)
-    metocean = MetOceanField.from_scenario_table(settings["metocean"], scenario_path.parent,
+    metocean = from_scenario_table(settings["metocean"], scenario_path.parent,
                                                  f"{scenario_path}: metocean")
     for label in ("start", "goal"):
         if not bool(metocean.contains(*settings[label])):

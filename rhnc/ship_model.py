@@ -182,24 +182,26 @@ def load_parameter_set(
 # --------------------------------------------------------------------------------------
 
 
+def equations_of_motion(state, tau, p: ShipParameters, cos, sin, stack):
+    """The 3-DOF equations, written once for every backend: ``cos``, ``sin`` and ``stack``
+    (a list of six expressions -> a vector) come from numpy or CasADi."""
+    psi, u, v, r = state[2], state[3], state[4], state[5]
+    return stack([
+        u * cos(psi) - v * sin(psi),
+        u * sin(psi) + v * cos(psi),
+        r,
+        (p.m22 * v * r - p.d11 * u + tau[0]) / p.m11,
+        (-p.m11 * u * r - p.d22 * v - p.d23 * r) / p.m22,
+        ((p.m11 - p.m22) * u * v - p.d32 * v - p.d33 * r + tau[1]) / p.m33,
+    ])
+
+
 def derivatives(state: np.ndarray, tau: np.ndarray, params: ShipParameters) -> np.ndarray:
     """Time derivative of ``state`` (6,) under ``tau`` (2,) [SI], numpy.
 
-    Works on 1-D arrays; see :func:`casadi_derivatives` for the symbolic version.
+    Works on 1-D arrays; :func:`casadi_derivatives` is the same equations, symbolic.
     """
-    _, _, psi, u, v, r = state
-    tau_u, tau_r = tau
-    p = params
-    return np.array(
-        [
-            u * np.cos(psi) - v * np.sin(psi),
-            u * np.sin(psi) + v * np.cos(psi),
-            r,
-            (p.m22 * v * r - p.d11 * u + tau_u) / p.m11,
-            (-p.m11 * u * r - p.d22 * v - p.d23 * r) / p.m22,
-            ((p.m11 - p.m22) * u * v - p.d32 * v - p.d33 * r + tau_r) / p.m33,
-        ]
-    )
+    return equations_of_motion(state, tau, params, np.cos, np.sin, np.array)
 
 
 def rk4_step(state: np.ndarray, tau: np.ndarray, dt: float, substeps: int, params: ShipParameters) -> np.ndarray:
@@ -225,16 +227,7 @@ def casadi_derivatives(params: ShipParameters) -> ca.Function:
     """CasADi function ``f(X[6], tau[2]) -> Xdot[6]`` of the prediction model (SX)."""
     state = ca.SX.sym("X", 6)
     tau = ca.SX.sym("tau", 2)
-    psi, u, v, r = state[2], state[3], state[4], state[5]
-    p = params
-    xdot = ca.vertcat(
-        u * ca.cos(psi) - v * ca.sin(psi),
-        u * ca.sin(psi) + v * ca.cos(psi),
-        r,
-        (p.m22 * v * r - p.d11 * u + tau[0]) / p.m11,
-        (-p.m11 * u * r - p.d22 * v - p.d23 * r) / p.m22,
-        ((p.m11 - p.m22) * u * v - p.d32 * v - p.d33 * r + tau[1]) / p.m33,
-    )
+    xdot = equations_of_motion(state, tau, params, ca.cos, ca.sin, lambda rows: ca.vertcat(*rows))
     return ca.Function("ship_f", [state, tau], [xdot], ["X", "tau"], ["Xdot"])
 
 

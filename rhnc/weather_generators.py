@@ -31,7 +31,8 @@ import numpy as np
 from orchestrator.errors import ScenarioError
 from orchestrator.participant import is_finite_number
 from orchestrator.geometry import KNOT, NM
-from rhnc.metocean import DEFAULT_WIND_CONTROL_POINTS, MetOceanField, check_grid_nodes, fetch_limited_hs, map_axis
+from rhnc.metocean import MetOceanField, fetch_limited_hs
+from rhnc.metocean_grid import check_grid_nodes, map_axis
 
 #: Draws of the storm set, fixed on 2026-11-22 before any routing result (docs/weather.md).
 STORM_SET_DRAWS = {
@@ -42,6 +43,17 @@ STORM_SET_DRAWS = {
     "background_wind_ms": (4.0, 10.0),  # wind far from the storm, uniform
     "wind_from_deg": (0.0, 360.0),    # direction the wind comes from, uniform
 }
+#: Default wind-speed control points [m/s] of the paper-style weather, a 5 x 5 lattice
+#: spanning the map (rows: north from south to north, columns: east from west to east).
+#: A band of strong wind across the middle of the direct (0,0)->(100,100) nm route, calm
+#: water in the north-west and south-east corners.
+DEFAULT_WIND_CONTROL_POINTS = (
+    (8.0, 9.0, 10.0, 8.0, 6.0),
+    (9.0, 12.0, 14.0, 11.0, 7.0),
+    (7.0, 13.0, 18.0, 14.0, 9.0),
+    (6.0, 10.0, 15.0, 12.0, 8.0),
+    (5.0, 7.0, 10.0, 9.0, 7.0),
+)
 #: Most time steps of a moving storm's field.
 MAX_TIME_STEPS = 1000
 #: Members of the documented storm set (the batch runs 0 .. STORM_SET_SIZE - 1).

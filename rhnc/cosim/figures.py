@@ -348,14 +348,14 @@ def comparison_tracks_figure(spec, reports, out_dir) -> list[str]:
     """
     import pandas as pd
 
-    from rhnc.metocean import MetOceanField
+    from rhnc.metocean_sources import from_netcdf
 
     target = Path(out_dir) / "tracks.png"
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 6))
     first = next(iter(reports.values())).folder / "metocean.nc"
     if first.is_file():
-        field = MetOceanField.from_netcdf(first).snapshot(0.0)  # at departure when it varies in time
+        field = from_netcdf(first).snapshot(0.0)  # at departure when it varies in time
         mesh = ax.pcolormesh(field.y / NM, field.x / NM, field.wind_speed, shading="auto", cmap="viridis")
         fig.colorbar(mesh, ax=ax, label="wind speed [m/s]")
     for (label, report), colour in zip(reports.items(), ("tab:red", "white", "tab:orange", "tab:cyan")):

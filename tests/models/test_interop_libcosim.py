@@ -58,9 +58,9 @@ def test_metocean_in_libcosim_returns_the_planners_values(fmus, tmp_path):
     from fmpy import read_model_description
 
     from orchestrator.geometry import NM
-    from rhnc.metocean import MetOceanField
+    from rhnc.weather_generators import paper_default
 
-    field = MetOceanField.generate_paper_default(resolution_nm=5.0)
+    field = paper_default(resolution_nm=5.0)
     grid = field.write_fmu_grid(tmp_path / "weather.grid")
     fmu = fmus["MetOcean"]
     vr = {v.name: v.valueReference for v in read_model_description(str(fmu)).modelVariables}

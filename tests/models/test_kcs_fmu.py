@@ -26,7 +26,7 @@ def parameters(name: str = "default") -> dict[str, float]:
 
 
 def reference_rhs(p, tau_u, tau_r, env):
-    """Spec section 1 with the readme's wind and wave loads, written independently of the C."""
+    """The 3-DOF equations with the model readme's wind and wave loads, written independently of the C."""
     m11, m22, m33 = p["m11"], p["m22"], p["m33"]
     d11, d22, d33, d23, d32 = p["d11"], p["d22"], p["d33"], p["d23"], p["d32"]
     vc = np.array([env["current_north"], env["current_east"]])

@@ -223,12 +223,12 @@ def test_default_grid_in_resources_runs_the_default_experiment(fmus):
     from fmpy import simulate_fmu
 
     from orchestrator.geometry import NM
-    from rhnc.metocean import MetOceanField
+    from rhnc.weather_generators import paper_default
 
     point = (40.0 * NM, 55.0 * NM)
     result = simulate_fmu(str(fmus["MetOcean"]), stop_time=60.0, output_interval=60.0,
                           start_values={"x": point[0], "y": point[1]}, output=["hs", "wind_speed"])
-    expected = MetOceanField.generate_paper_default(resolution_nm=5.0).sample(*point)
+    expected = paper_default(resolution_nm=5.0).sample(*point)
     assert result["hs"][-1] == pytest.approx(float(expected["hs"]), rel=1e-12)
     assert result["wind_speed"][-1] == pytest.approx(float(expected["wind_speed"]), rel=1e-12)
 
@@ -239,10 +239,10 @@ def test_shipped_default_grid_is_the_generators_output():
     from pathlib import Path
 
     from orchestrator.fmu_build import MODELS_DIR
-    from rhnc.metocean import MetOceanField
+    from rhnc.weather_generators import paper_default
 
     with tempfile.TemporaryDirectory() as tmp:
-        fresh = MetOceanField.generate_paper_default(resolution_nm=5.0).write_fmu_grid(Path(tmp) / "g")
+        fresh = paper_default(resolution_nm=5.0).write_fmu_grid(Path(tmp) / "g")
         assert fresh.read_bytes() == (MODELS_DIR / "MetOcean" / "resources" / "default.grid").read_bytes()
 
 

@@ -14,8 +14,6 @@ from orchestrator.geometry import DEG, KNOT, NM, local_north_east_m, wrap_angle
 REPO = Path(__file__).resolve().parents[2]
 #: Packages and scripts that must take the units from orchestrator.geometry.
 CHECKED = ("orchestrator", "rhnc", "bench", "scripts", "models")
-#: Files that still define their own (the NMPC modules, being split on another branch).
-PENDING = {"rhnc/nmpc.py"}
 
 
 def test_units():
@@ -45,8 +43,8 @@ def _unit_definitions(path: Path) -> list[str]:
         for target in targets:
             if isinstance(target, ast.Name) and target.id in ("NM", "KNOT", "DEG"):
                 found.append(f"{path.relative_to(REPO)}:{node.lineno} {target.id}")
-        if isinstance(node, ast.FunctionDef) and node.name == "wrap_angle":
-            found.append(f"{path.relative_to(REPO)}:{node.lineno} wrap_angle")
+        if isinstance(node, ast.FunctionDef) and node.name.strip("_") in ("wrap", "wrap_angle"):
+            found.append(f"{path.relative_to(REPO)}:{node.lineno} {node.name}")
     return found
 
 
@@ -54,6 +52,12 @@ def test_units_and_wrap_are_defined_once():
     found = []
     for folder in CHECKED:
         for path in sorted((REPO / folder).rglob("*.py")):
-            if path.name != "geometry.py" and str(path.relative_to(REPO)) not in PENDING:
+            if path.name != "geometry.py":
                 found += _unit_definitions(path)
     assert found == []
+
+
+def test_degrees_wrap_to_the_half_open_interval_like_radians():
+    from orchestrator.geometry import wrap_deg
+
+    assert wrap_deg([-180.0, 180.0, 540.0, -190.0, 359.0]).tolist() == [180.0, 180.0, 180.0, 170.0, -1.0]

@@ -242,7 +242,7 @@ def test_an_error_line_stays_one_line_whatever_the_path_holds(tmp_path, capsys):
 def test_a_netcdf_grid_beyond_the_limit_is_refused_from_its_header(tmp_path):
     """A file declaring a 3000 x 3000 grid (its data never written, so the file is small)."""
     netCDF4 = pytest.importorskip("netCDF4")
-    from rhnc.metocean import MetOceanField
+    from rhnc.metocean_sources import from_scenario_table
 
     path = tmp_path / "huge.nc"
     with netCDF4.Dataset(path, "w") as ds:
@@ -254,7 +254,7 @@ def test_a_netcdf_grid_beyond_the_limit_is_refused_from_its_header(tmp_path):
     assert path.stat().st_size < 1_000_000
     with pytest.raises(ScenarioError, match=r"s.toml: metocean: the met-ocean grid would hold 3000 x 3000 x 1 "
                                             r"time steps = 9000000 nodes, more than the limit of 4000000"):
-        MetOceanField.from_scenario_table({"file": str(path)}, tmp_path, "s.toml: metocean")
+        from_scenario_table({"file": str(path)}, tmp_path, "s.toml: metocean")
 
 
 def test_a_file_name_that_cannot_name_the_results_folder_needs_simulation_name(tmp_path):

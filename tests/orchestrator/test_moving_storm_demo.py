@@ -9,7 +9,7 @@ import pytest
 
 from orchestrator.run import run_scenario
 from rhnc.energy import EnergyParameters, brake_power, cost_rate
-from rhnc.metocean import MetOceanField
+from rhnc.metocean_sources import from_netcdf
 
 pytestmark = pytest.mark.slow
 
@@ -25,7 +25,7 @@ def demo(tmp_path_factory):
     report = run_scenario(SCENARIO, tmp_path_factory.mktemp("storm"), progress=False, overrides=SHORT)
     assert report.ok, report.reason
     frame = pd.read_parquet(report.folder / "timeseries.parquet")
-    return frame, MetOceanField.from_netcdf(report.folder / "metocean.nc")
+    return frame, from_netcdf(report.folder / "metocean.nc")
 
 
 def test_run_keeps_the_moving_field(demo):
@@ -89,7 +89,7 @@ figures = []
     report = run_scenario(scenario, tmp_path / "results", progress=False)
     assert report.ok, report.reason
     frame = pd.read_parquet(report.folder / "timeseries.parquet")
-    field = MetOceanField.from_netcdf(report.folder / "metocean.nc")
+    field = from_netcdf(report.folder / "metocean.nc")
     t, x, y = frame["time_s"].to_numpy(), frame["ship.x"].to_numpy(), frame["ship.y"].to_numpy()
     weather = field.sample(x, y, t_s=t)
     expected = account_voyage(t, x, y, frame["ship.u"], frame["ship.psi"], weather["wind_north"],

@@ -6,7 +6,7 @@ import pandas as pd
 import pytest
 
 from orchestrator.run import run_scenario
-from rhnc.metocean import MetOceanField
+from rhnc.metocean_sources import from_netcdf
 
 KNOT = 1852 / 3600
 DEG = np.pi / 180
@@ -109,7 +109,7 @@ def test_vendor_b_plant_gives_the_same_trajectory(runs):
 
 def test_environment_fmu_returns_the_planners_values_at_the_ships_positions(runs):
     frame, report = runs["kcs"]
-    field = MetOceanField.from_netcdf(report.folder / "metocean.nc")
+    field = from_netcdf(report.folder / "metocean.nc")
     expected = field.sample(frame["ship.x"].to_numpy(), frame["ship.y"].to_numpy())
     for name in ("wind_speed", "wind_direction", "hs", "current_north", "current_east", "wind_north", "wind_east"):
         np.testing.assert_allclose(frame[f"env.{name}"], expected[name], rtol=1e-12, atol=1e-12, err_msg=name)

@@ -6,7 +6,7 @@ import numpy as np
 
 from orchestrator.batch_spec import load_batch
 from orchestrator.scenario import load_scenario
-from rhnc.metocean import MetOceanField
+from rhnc.metocean_sources import from_scenario_table
 from rhnc.weather_generators import STORM_SET_SIZE, storm_set_member
 
 BATCH = Path(__file__).parents[2] / "batches" / "weather_set.toml"
@@ -20,7 +20,7 @@ def test_batch_runs_every_member_of_the_set_each_in_its_own_storm():
     peaks = []
     for run in runs[:3]:
         scenario = load_scenario(batch.scenario, run.overrides)
-        field = MetOceanField.from_scenario_table(scenario.metocean, scenario.directory, "weather_set")
+        field = from_scenario_table(scenario.metocean, scenario.directory, "weather_set")
         member = run.overrides["metocean.member"]
         assert f"storm_set seed 2026 member {member} " in field.source
         peaks.append(storm_set_member(2026, member)["peak_wind_ms"])

@@ -102,11 +102,11 @@ def test_stand_on_must_act_is_one_rule_for_controller_and_analysis():
 
 
 def test_controller_and_analysis_share_the_rule_17_thresholds():
-    from rhnc import colregs_analysis, nmpc_colregs
+    from rhnc import colregs_analysis, colregs_judgement, nmpc_colregs
     from rhnc.nmpc import NMPCSettings
 
     assert nmpc_colregs.stand_on_must_act is stand_on_must_act
-    assert colregs_analysis.stand_on_must_act is stand_on_must_act
+    assert colregs_judgement.stand_on_must_act is stand_on_must_act
     settings = NMPCSettings()
     analysis = colregs_analysis.JudgementSettings()
     assert settings.stand_on_action_tcpa_s == analysis.stand_on_wait_min * 60.0

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from rhnc.equal_arrival import match_arrival_time
+from rhnc.equal_arrival import ArrivalTrial, EqualArrival, match_arrival_time
 
 DISTANCE_NM = 140.9
 
@@ -74,3 +74,23 @@ def test_target_inside_a_jump_is_bracketed_and_reported(target_s):
     result = match_arrival_time(arrival_of, target_s, tolerance_s=60.0, first_speed_kn=17.0)
     assert not result.matched
     assert all(abs(t.speed_kn - 17.5) < 0.1 for t in result.trials[-3:])
+
+
+def test_a_baseline_whose_arrival_jumps_over_the_target_is_read_between_the_two_trials():
+    # the arrival jumps 22 s between two speeds 0.0002 kn apart: no trial lands within 2 s
+    trials = [ArrivalTrial(17.6778, 28686.7, 100.0), ArrivalTrial(17.6776, 28708.8, 90.0),
+              ArrivalTrial(17.6831, 28680.6, 130.0)]
+    equal = EqualArrival(target_s=28689.6, tolerance_s=2.0, trials=trials)
+    assert not equal.matched and equal.interpolated and equal.usable
+    assert equal.bracket == (trials[0], trials[1])
+    weight = (28689.6 - 28686.7) / (28708.8 - 28686.7)
+    assert equal.at_target(lambda t: t.run) == pytest.approx(100.0 - 10.0 * weight)
+    assert equal.at_target(lambda t: t.arrival_s) == pytest.approx(28689.6)
+    # a bracket wider than a macro step does not stand in for a trial at the target
+    wide = EqualArrival(target_s=28689.6, tolerance_s=2.0, trials=[trials[2], ArrivalTrial(17.5, 28760.0, 80.0)])
+    assert not wide.interpolated and not wide.usable
+    with pytest.raises(ValueError, match="no trial at or around the target"):
+        wide.at_target(lambda t: t.run)
+    # matched: the best trial's own figure
+    exact = EqualArrival(target_s=28686.0, tolerance_s=2.0, trials=trials)
+    assert exact.matched and not exact.interpolated and exact.at_target(lambda t: t.run) == 100.0

@@ -8,6 +8,7 @@ import pytest
 from rhnc.fields import (SuperpositionField, guidance_field, normalise, resample_weather, wrap_angle)
 from orchestrator.geometry import KNOT, NM
 from rhnc.metocean import MetOceanField
+from rhnc.weather_generators import paper_default
 from rhnc.planner import plan_local_path
 
 SPEED = 18 * KNOT
@@ -165,10 +166,9 @@ def test_normalised_cost_and_emission_fields_coincide():
 
 def test_final_approach_runs_straight_to_a_goal_within_the_horizon():
     from rhnc.fields import SuperpositionField, resample_weather
-    from rhnc.metocean import MetOceanField
     from rhnc.planner import plan_local_path
 
-    weather = resample_weather(MetOceanField.generate_paper_default(resolution_nm=1.0), 1.0)
+    weather = resample_weather(paper_default(resolution_nm=1.0), 1.0)
     goal = (100 * 1852.0, 100 * 1852.0)
     field = SuperpositionField(weather, goal)
     start = (95 * 1852.0, 88 * 1852.0)

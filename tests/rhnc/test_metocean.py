@@ -9,10 +9,12 @@ import xarray as xr
 from orchestrator.errors import ScenarioError
 from orchestrator.geometry import NM
 from rhnc.metocean import MetOceanField, fetch_limited_hs
+from rhnc.metocean_sources import from_netcdf, from_scenario_table
+from rhnc.weather_generators import paper_default
 
 
 def test_paper_default_field_is_plausible():
-    field = MetOceanField.generate_paper_default()
+    field = paper_default()
     assert field.x.size == field.y.size == 101
     assert field.extent == (0.0, 100 * NM, 0.0, 100 * NM)
     # the spline passes through the control points at the lattice nodes
@@ -44,12 +46,12 @@ def test_sample_is_bilinear_and_refuses_outside_points():
 
 
 def test_netcdf_round_trip_keeps_cf_names(tmp_path):
-    field = MetOceanField.generate_paper_default(resolution_nm=5.0)
+    field = paper_default(resolution_nm=5.0)
     path = field.to_netcdf(tmp_path / "weather.nc")
     with xr.open_dataset(path) as ds:
         assert {"u10", "v10", "swh", "uo", "vo"} <= set(ds.data_vars)
         assert ds["swh"].attrs["standard_name"] == "sea_surface_wave_significant_height"
-    again = MetOceanField.from_netcdf(path)
+    again = from_netcdf(path)
     for name in ("wind_north", "wind_east", "hs", "current_north", "current_east"):
         np.testing.assert_array_equal(getattr(again, name), getattr(field, name))
 
@@ -67,10 +69,10 @@ def test_era5_style_latitude_longitude_file(tmp_path):
                 "time": ("time", [1067868, 1067869], {"units": "hours since 1900-01-01 00:00:00.0"})},
     )
     ds.to_netcdf(tmp_path / "era5.nc")
-    everything = MetOceanField.from_netcdf(tmp_path / "era5.nc")
+    everything = from_netcdf(tmp_path / "era5.nc")
     np.testing.assert_array_equal(everything.times_s, [0.0, 3600.0])  # every time step, since the first
     np.testing.assert_allclose(everything.wind_speed[1], 2 * everything.wind_speed[0])
-    field = MetOceanField.from_netcdf(tmp_path / "era5.nc", time_index=0)
+    field = from_netcdf(tmp_path / "era5.nc", time_index=0)
     assert not field.is_time_varying
     assert field.x[0] == 0.0 and field.y[0] == 0.0
     assert field.x[-1] == pytest.approx(np.radians(1.0) * 6_371_000, rel=0.01)
@@ -85,28 +87,28 @@ def test_missing_wave_variable_is_an_error(tmp_path):
                     coords={"northing": [0.0, 1.0], "easting": [0.0, 1.0]})
     ds.to_netcdf(tmp_path / "thin.nc")
     with pytest.raises(ValueError, match=r"thin.nc: no variable for wind_north \(looked for v10, northward_wind\)"):
-        MetOceanField.from_netcdf(tmp_path / "thin.nc")
+        from_netcdf(tmp_path / "thin.nc")
 
 
 def test_scenario_table_errors_name_the_key(tmp_path):
     where = "s.toml: metocean"
     with pytest.raises(ScenarioError, match=r"s.toml: metocean: give exactly one of 'generator' or 'file'"):
-        MetOceanField.from_scenario_table({}, tmp_path, where)
+        from_scenario_table({}, tmp_path, where)
     with pytest.raises(ScenarioError, match=r"metocean.generator: unknown generator 'storm'"):
-        MetOceanField.from_scenario_table({"generator": "storm"}, tmp_path, where)
+        from_scenario_table({"generator": "storm"}, tmp_path, where)
     with pytest.raises(ScenarioError, match=r"metocean: unknown key 'wind_kn'"):
-        MetOceanField.from_scenario_table({"generator": "paper_default", "wind_kn": 3}, tmp_path, where)
+        from_scenario_table({"generator": "paper_default", "wind_kn": 3}, tmp_path, where)
     with pytest.raises(ScenarioError, match=r"metocean.file: met-ocean file not found: .*none.nc"):
-        MetOceanField.from_scenario_table({"file": "none.nc"}, tmp_path, where)
+        from_scenario_table({"file": "none.nc"}, tmp_path, where)
     with pytest.raises(ScenarioError, match=r"metocean.wind_control_points_ms: expected a 2-D list of numbers"):
-        MetOceanField.from_scenario_table({"generator": "paper_default", "wind_control_points_ms": [1, 2]},
+        from_scenario_table({"generator": "paper_default", "wind_control_points_ms": [1, 2]},
                                           tmp_path, where)
     with pytest.raises(ScenarioError, match=r"metocean: wind_control_points_ms needs a 2-D lattice"):
-        MetOceanField.from_scenario_table({"generator": "paper_default", "wind_control_points_ms": [[1, 2]]},
+        from_scenario_table({"generator": "paper_default", "wind_control_points_ms": [[1, 2]]},
                                           tmp_path, where)
 
 
 def test_scenario_table_reads_a_file_relative_to_the_scenario(tmp_path):
-    MetOceanField.generate_paper_default(resolution_nm=10.0).to_netcdf(tmp_path / "w.nc")
-    field = MetOceanField.from_scenario_table({"file": "w.nc"}, Path(tmp_path), "s.toml: metocean")
+    paper_default(resolution_nm=10.0).to_netcdf(tmp_path / "w.nc")
+    field = from_scenario_table({"file": "w.nc"}, Path(tmp_path), "s.toml: metocean")
     assert field.x.size == 11

@@ -9,6 +9,8 @@ import xarray as xr
 from orchestrator.errors import ScenarioError
 from rhnc.fields import resample_weather
 from rhnc.metocean import FIELDS, MetOceanField
+from rhnc.metocean_sources import from_netcdf, from_scenario_table
+from rhnc.weather_generators import paper_default
 
 TIMES_S = np.array([0.0, 3600.0, 9000.0])  # uneven steps on purpose
 
@@ -23,7 +25,7 @@ def moving():
 
 
 def test_static_field_behaves_as_without_time():
-    field = MetOceanField.generate_paper_default(resolution_nm=10.0)
+    field = paper_default(resolution_nm=10.0)
     assert not field.is_time_varying and field.hs.shape == (11, 11)
     x, y = np.array([1000.0, 50_000.0]), np.array([7000.0, 90_000.0])
     for name, value in field.sample(x, y).items():
@@ -100,14 +102,14 @@ def test_netcdf_round_trip_keeps_every_time_step(moving, tmp_path):
     with xr.open_dataset(path) as ds:
         assert ds["swh"].dims == ("time", "northing", "easting")
         assert str(ds["time"].values[1]).startswith("2023-03-01T07:00:00")
-    again = MetOceanField.from_netcdf(path)
+    again = from_netcdf(path)
     np.testing.assert_array_equal(again.times_s, TIMES_S)
     for name in FIELDS:
         np.testing.assert_array_equal(getattr(again, name), getattr(moving, name))
     # a later departure shifts the clock: the file's first step is then 2 h before t = 0
-    later = MetOceanField.from_netcdf(path, start_time="2023-03-01T08:00:00")
+    later = from_netcdf(path, start_time="2023-03-01T08:00:00")
     np.testing.assert_array_equal(later.times_s, TIMES_S - 7200.0)
-    single = MetOceanField.from_netcdf(path, time_index=2)
+    single = from_netcdf(path, time_index=2)
     np.testing.assert_array_equal(single.hs, moving._fields["hs"][2])
 
 
@@ -115,7 +117,7 @@ def test_netcdf_written_directly_is_the_xarray_dataset(moving, tmp_path):
     """The file every run writes (through netCDF4) holds what ``to_dataset`` describes, attributes too."""
     from rhnc.metocean_netcdf import to_dataset
 
-    for field in (moving, MetOceanField.generate_paper_default(resolution_nm=20.0)):
+    for field in (moving, paper_default(resolution_nm=20.0)):
         path = field.to_netcdf(tmp_path / f"direct{field.is_time_varying}.nc")
         with xr.open_dataset(path) as written:
             expected = to_dataset(field)
@@ -128,15 +130,15 @@ def test_file_options_are_checked(moving, tmp_path):
     moving.to_netcdf(tmp_path / "w.nc")
     where = "s.toml: metocean"
     with pytest.raises(ScenarioError, match=r"s.toml: metocean: time_index 3 is not one of the file's 3 time steps"):
-        MetOceanField.from_scenario_table({"file": "w.nc", "time_index": 3}, tmp_path, where)
+        from_scenario_table({"file": "w.nc", "time_index": 3}, tmp_path, where)
     with pytest.raises(ScenarioError, match=r"s.toml: metocean: start_time 'noon' is not an ISO 8601 date"):
-        MetOceanField.from_scenario_table({"file": "w.nc", "start_time": "noon"}, tmp_path, where)
+        from_scenario_table({"file": "w.nc", "start_time": "noon"}, tmp_path, where)
     with pytest.raises(ScenarioError, match=r"s.toml: metocean.start_time: expected a string, got 2023"):
-        MetOceanField.from_scenario_table({"file": "w.nc", "start_time": 2023}, tmp_path, where)
+        from_scenario_table({"file": "w.nc", "start_time": 2023}, tmp_path, where)
     with pytest.raises(ScenarioError, match=r"s.toml: metocean.time_index: expected an integer, got '1'"):
-        MetOceanField.from_scenario_table({"file": "w.nc", "time_index": "1"}, tmp_path, where)
+        from_scenario_table({"file": "w.nc", "time_index": "1"}, tmp_path, where)
     with pytest.raises(ScenarioError, match=r"s.toml: metocean: unknown key 'start'"):
-        MetOceanField.from_scenario_table({"file": "w.nc", "start": "noon"}, tmp_path, where)
+        from_scenario_table({"file": "w.nc", "start": "noon"}, tmp_path, where)
 
 
 def test_time_without_cf_units_is_refused(tmp_path):
@@ -145,7 +147,7 @@ def test_time_without_cf_units_is_refused(tmp_path):
                     coords={"northing": [0.0, 1.0], "easting": [0.0, 1.0], "time": [0, 6]})
     ds.to_netcdf(tmp_path / "bare.nc")
     with pytest.raises(ValueError, match=r"bare.nc: the 'time' coordinate is not a CF time"):
-        MetOceanField.from_netcdf(tmp_path / "bare.nc")
+        from_netcdf(tmp_path / "bare.nc")
 
 
 def test_fmu_grid_file_carries_the_times(moving, tmp_path):

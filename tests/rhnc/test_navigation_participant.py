@@ -8,7 +8,7 @@ import pytest
 from orchestrator.errors import ScenarioError
 from orchestrator.participant import BuildContext
 from orchestrator.geometry import KNOT, NM
-from rhnc.metocean import MetOceanField
+from rhnc.weather_generators import paper_default
 from rhnc.navigation_participant import NavigationParticipant
 
 DELTA = 240.0
@@ -16,7 +16,7 @@ DELTA = 240.0
 
 @pytest.fixture(scope="module")
 def metocean():
-    return MetOceanField.generate_paper_default(resolution_nm=2.0)
+    return paper_default(resolution_nm=2.0)
 
 
 def context(metocean):

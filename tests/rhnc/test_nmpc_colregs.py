@@ -15,9 +15,8 @@ import pytest
 from rhnc.colregs import wrap_deg
 from rhnc.colregs import ENCOUNTER_CLASSES
 from rhnc.nmpc import NMPCController, NMPCSettings
-from rhnc.nmpc_colregs import (PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport, DomainSettings,
-                               CATCH_UP_RATE_DEG_S, HEADING_TOLERANCE_DEG, YAW_TIME_CONSTANT_S,
-                               heading_bounds)
+from rhnc.nmpc_alteration import CATCH_UP_RATE_DEG_S, HEADING_TOLERANCE_DEG, YAW_TIME_CONSTANT_S, heading_bounds
+from rhnc.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport, DomainSettings
 from rhnc.nmpc_problem import OBSTACLE_FIELDS
 from rhnc.reference_participant import line_or_turn_reference
 from rhnc.ship_model import load_parameter_set, rk4_step

@@ -27,7 +27,7 @@ def test_default_set_is_full_scale_kcs_and_course_stable(kcs):
     assert kcs.straight_line_stable(18 * KNOT)
 
 
-def test_paper_table2_is_unstable_at_18_kn_as_spec_1a_says():
+def test_paper_table2_is_unstable_at_18_kn():
     paper = load_parameter_set("paper_table2")
     assert paper.m11 == pytest.approx(897.77)
     assert not paper.straight_line_stable(18 * KNOT)

@@ -183,3 +183,18 @@ def test_mean_speed_through_water_weights_by_time_and_counts_sway():
     assert mean_speed_through_water_kn(t2, np.array([0.0, 0.0, 10.0]) * KNOT, np.zeros(3)) == pytest.approx(
         0.5 * 10.0 * 3000.0 / 3600.0)
     assert mean_speed_through_water_kn([0.0, 10.0], [3.0, 3.0], [4.0, 4.0]) == pytest.approx(5.0 / KNOT)
+
+
+def test_a_voyage_ends_at_the_crossing_of_the_arrival_radius_not_at_the_next_sample():
+    from rhnc.cosim.analyses import cut_at_crossing
+
+    # samples every 60 s; the goal distance falls from 700 m to 100 m between 60 and 120 s
+    time = np.array([0.0, 60.0, 120.0, 180.0])
+    distance = np.array([1000.0, 700.0, 100.0, 0.0])
+    series = {"time_s": time, "cost": np.array([0.0, 1.0, 2.0, 3.0])}
+    cut = cut_at_crossing(series, distance, first_inside=2, radius_m=400.0)
+    # crossing 300 m of the 600 m between 60 s and 120 s: at 90 s
+    assert cut["time_s"].tolist() == [0.0, 60.0, 90.0]
+    assert cut["cost"][-1] == pytest.approx(1.5)
+    # a ship inside at the first sample has sailed nothing
+    assert cut_at_crossing(series, distance, first_inside=0, radius_m=2000.0)["time_s"].tolist() == [0.0]

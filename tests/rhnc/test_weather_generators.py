@@ -5,7 +5,8 @@ import pytest
 
 from orchestrator.errors import ScenarioError
 from orchestrator.geometry import KNOT, NM
-from rhnc.metocean import MetOceanField, fetch_limited_hs
+from rhnc.metocean import fetch_limited_hs
+from rhnc.metocean_sources import from_scenario_table
 from rhnc.weather_generators import (GENERATORS, STORM_SET_SIZE, cyclone, holland_wind_speed, list_generators,
                                      storm_off_route, storm_set, storm_set_member)
 
@@ -14,7 +15,7 @@ WHERE = "s.toml: metocean"
 
 
 def build(table):
-    return MetOceanField.from_scenario_table(table, None, WHERE)
+    return from_scenario_table(table, None, WHERE)
 
 
 def test_registry_lists_every_generator():
