@@ -5,7 +5,7 @@ and prints one Markdown table with a row per batch::
 
     python -m rhnc.suite_report results/suites/imazu_rhnc_colregs results/suites/random1_rhnc_colregs ...
 
-With ``--write docs/encounters.md`` the table replaces the one between the lines
+With ``--write docs/encounters.md`` (repeatable: ``--write README.md`` too) the table replaces the one between the lines
 ``<!-- suite-table:begin -->`` and ``<!-- suite-table:end -->`` of that file instead (the
 file is left untouched if either marker is missing).
 
@@ -117,8 +117,8 @@ def write_between_markers(path, table: str) -> None:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description="tabulate encounter-suite batch results")
     parser.add_argument("folders", nargs="+", help="batch result folders (results/<batch>)")
-    parser.add_argument("--write", metavar="MARKDOWN", help="write the table between the suite-table markers "
-                        "of this file instead of printing it")
+    parser.add_argument("--write", metavar="MARKDOWN", action="append", help="write the table between the "
+                        "suite-table markers of this file instead of printing it (repeat for several files)")
     args = parser.parse_args(argv)
     missing = [folder for folder in args.folders if not (Path(folder) / "runs").is_dir()]
     if missing:
@@ -127,7 +127,11 @@ def main(argv=None) -> int:
     table = markdown([summarise(folder) for folder in args.folders])
     if args.write:
         try:
-            write_between_markers(args.write, table)
+            for path in args.write:   # every file checked before one is written
+                if BEGIN not in Path(path).read_text() or END not in Path(path).read_text():
+                    raise ValueError(f"{path}: no '{BEGIN}' ... '{END}' lines to write the table between")
+            for path in args.write:
+                write_between_markers(path, table)
         except (OSError, ValueError) as error:
             print(f"suite_report: {error}", file=sys.stderr)  # noqa: T201 - a command's error
             return 2

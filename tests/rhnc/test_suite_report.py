@@ -54,3 +54,16 @@ def test_table_is_written_between_the_markers(tmp_path, capsys):
     assert plain.read_text() == "no markers\n"
     assert "plain.md: no '<!-- suite-table:begin -->'" in capsys.readouterr().err
     assert main([str(tmp_path / "nothing")]) == 2
+
+
+def test_the_table_goes_to_every_file_named_or_to_none(tmp_path, capsys):
+    _run(tmp_path / "suite", "a", True, True, "pass", 0, 0.05, [{"side_correct": True}])
+    doc, readme, plain = tmp_path / "doc.md", tmp_path / "README.md", tmp_path / "plain.md"
+    for path in (doc, readme):
+        path.write_text(f"{BEGIN}\nold\n{END}\n")
+    plain.write_text("no markers\n")
+    # a file without markers refuses the whole write: the others keep their old table
+    assert main([str(tmp_path / "suite"), "--write", str(doc), "--write", str(plain), "--write", str(readme)]) == 2
+    assert "old" in doc.read_text() and "old" in readme.read_text()
+    assert main([str(tmp_path / "suite"), "--write", str(doc), "--write", str(readme)]) == 0
+    assert doc.read_text() == readme.read_text() and "| suite | 1 | 1/1 | 1/1 |" in readme.read_text()
