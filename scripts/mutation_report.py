@@ -96,7 +96,9 @@ MODULES = {
                                                        "tests/orchestrator/test_master.py",
                                                        "tests/orchestrator/test_fmu_participant.py")),
     "fmu_participant": Module(("orchestrator/fmu_participant.py",), ("tests/orchestrator/test_fmu_participant.py",
-                                                                     "tests/orchestrator/test_fmu_participant_guards.py")),
+                                                                     "tests/orchestrator/test_fmu_participant_guards.py",
+                                                                     "tests/orchestrator/test_fmu_participant_types.py",
+                                                                     "tests/orchestrator/test_fmu_participant_values.py")),
 }
 
 
