@@ -165,4 +165,17 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("orchestrator/master.py", r"at t = \{t:g\} s\" if name else phase", r"if \(name\) or True else phase",
      "the position without a participant is only reached after the last step, where only the stop "
      "watchdog's log line reads it (its wording)"),
+    ("orchestrator/fmu_participant.py", r"path = path if path\.is_absolute\(\) else scenario_dir / path",
+     r"if \(path\.is_absolute\(\)\) and False",
+     "joining an absolute path to a folder gives the absolute path itself (pathlib drops the folder), so "
+     "scenario_dir / path equals path whenever path is absolute"),
+    ("orchestrator/fmu_participant.py", r"bounds\.append\(float\(text\) if text is not None else default\)",
+     r"if \(text is not None\) or True",
+     "float(None) raises TypeError, which the except clause around it turns into the same default"),
+    ("orchestrator/fmu_participant.py", r'if kind in \("Integer", "Enumeration"\) or kind\.startswith',
+     r'kind in \("(XXIntegerXX|integer|INTEGER)", "Enumeration"\)',
+     "'Integer' also starts with 'Int', so the startswith test alone already takes it into the integer branch"),
+    ("orchestrator/fmu_participant.py", r'variable\.variability == "constant"', r'variability == "(XXconstantXX|CONSTANT)"',
+     "no variable reaches this check as a constant parameter: FMPy's read_model_description (run on every FMU "
+     "before) refuses causality='parameter' with variability='constant' as an illegal combination"),
 ]
