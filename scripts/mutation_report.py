@@ -89,12 +89,15 @@ MODULES = {
     "master": Module(("orchestrator/master.py",), ("tests/orchestrator/test_master.py",
                                                    "tests/orchestrator/test_master_guards.py",
                                                    "tests/orchestrator/test_fmu_participant.py")),
-    # the scenario file's reader: its own tests and those reading the tables it parses for others
-    "scenario": Module(("orchestrator/scenario.py",), ("tests/orchestrator/test_scenario.py",
-                                                       "tests/orchestrator/test_scenario_acceptance.py",
-                                                       "tests/orchestrator/test_port_mapping.py",
-                                                       "tests/orchestrator/test_master.py",
-                                                       "tests/orchestrator/test_fmu_participant.py")),
+    # the scenario file's reader (TOML reading and limits, pydantic tables, the frozen result): its own
+    # tests, the hostile-input ones, and those reading the tables it parses for others
+    "scenario": Module(("orchestrator/scenario.py", "orchestrator/scenario_model.py",
+                        "orchestrator/scenario_participants.py", "orchestrator/scenario_spec.py",
+                        "orchestrator/toml_input.py"),
+                       ("tests/orchestrator/test_scenario.py", "tests/orchestrator/test_scenario_acceptance.py",
+                        "tests/orchestrator/test_loader_limits.py", "tests/orchestrator/test_loader_fuzz.py",
+                        "tests/orchestrator/test_port_mapping.py", "tests/orchestrator/test_batch_spec.py",
+                        "tests/orchestrator/test_master.py", "tests/orchestrator/test_fmu_participant.py")),
     "fmu_participant": Module(("orchestrator/fmu_participant.py",), ("tests/orchestrator/test_fmu_participant.py",
                                                                      "tests/orchestrator/test_fmu_participant_guards.py",
                                                                      "tests/orchestrator/test_fmu_participant_types.py",
