@@ -97,7 +97,9 @@ MODULES = {
                        ("tests/orchestrator/test_scenario.py", "tests/orchestrator/test_scenario_acceptance.py",
                         "tests/orchestrator/test_loader_limits.py", "tests/orchestrator/test_loader_fuzz.py",
                         "tests/orchestrator/test_port_mapping.py", "tests/orchestrator/test_batch_spec.py",
-                        "tests/orchestrator/test_master.py", "tests/orchestrator/test_fmu_participant.py")),
+                        "tests/orchestrator/test_master.py", "tests/orchestrator/test_fmu_participant.py"),
+                       # (about validate's imports, and fails in mutmut's copy, whose sys.path differs)
+                       ("-k", "not test_validate_imports_no_code_beside_the_scenario_unless_trusted")),
     "fmu_participant": Module(("orchestrator/fmu_participant.py",), ("tests/orchestrator/test_fmu_participant.py",
                                                                      "tests/orchestrator/test_fmu_participant_guards.py",
                                                                      "tests/orchestrator/test_fmu_participant_types.py",
