@@ -95,6 +95,7 @@ MODULES = {
                         "orchestrator/scenario_participants.py", "orchestrator/scenario_spec.py",
                         "orchestrator/toml_input.py"),
                        ("tests/orchestrator/test_scenario.py", "tests/orchestrator/test_scenario_acceptance.py",
+                        "tests/orchestrator/test_scenario_reader.py", "tests/orchestrator/test_toml_input.py",
                         "tests/orchestrator/test_loader_limits.py", "tests/orchestrator/test_loader_fuzz.py",
                         "tests/orchestrator/test_port_mapping.py", "tests/orchestrator/test_batch_spec.py",
                         "tests/orchestrator/test_master.py", "tests/orchestrator/test_fmu_participant.py"),
