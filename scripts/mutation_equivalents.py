@@ -178,4 +178,12 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("orchestrator/fmu_participant.py", r'variable\.variability == "constant"', r'variability == "(XXconstantXX|CONSTANT)"',
      "no variable reaches this check as a constant parameter: FMPy's read_model_description (run on every FMU "
      "before) refuses causality='parameter' with variability='constant' as an illegal combination"),
+    ("orchestrator/toml_input.py", r'raw\.decode\("utf-8"\)', r'raw\.decode\("UTF-8"\)',
+     "Python looks codecs up by their normalised lower-case name: 'UTF-8' is the same codec as 'utf-8'"),
+    ("orchestrator/toml_input.py", r'c\.encode\("unicode_escape"\)\.decode\("ascii"\)',
+     r'encode\("UNICODE_ESCAPE"\)|decode\("ASCII"\)',
+     "Python looks codecs up by their normalised lower-case name: the same codecs"),
+    ("orchestrator/toml_input.py", r"exc\.errors\(include_url=False\)", r"include_url=True",
+     "include_url only adds a 'url' entry to each error, and message_of reads the type, location, context, "
+     "message and input, never the url"),
 ]

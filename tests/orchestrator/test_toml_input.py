@@ -149,6 +149,8 @@ def test_pydantics_own_errors_read_as_one_line():
     assert message_of({"type": "dict_type", "loc": ("a", 0), "msg": "Input should be a dict.", "input": 5},
                       where) == "file.toml: 'a[0]': input should be a dict, got 5"
     assert message_of({"type": "odd", "loc": ("a",)}, where) == "file.toml: 'a': is not valid, got None"
+    assert message_of({"type": "odd", "loc": ("a",), "msg": "Value should be X.", "input": 1}, where) == (
+        "file.toml: 'a': value should be X, got 1")  # only the full stop is dropped
     assert message_of({"type": "unknown_key", "loc": ("a",), "ctx": {"key": "b", "valid": "c, d"}}, where) == (
         "file.toml: unknown key 'a.b' (valid: c, d)")
     assert message_of({"type": "extra_forbidden", "loc": ("a", "b")}, where) == "file.toml: unknown key 'a.b'"
