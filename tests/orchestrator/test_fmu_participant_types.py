@@ -19,6 +19,8 @@ from orchestrator.fmi_slave import FmiSlave
 from orchestrator.fmu_participant import FmuParticipant, read_parameter_set, resolve_fmu
 from orchestrator.scenario_spec import ParticipantSpec
 
+from fmu_copies import copy_with_description
+
 WHERE = "scenario.toml: participants.vendor"
 
 ENUMERATION_TYPE = """<TypeDefinitions>
@@ -45,19 +47,15 @@ FMI3_PARAMETERS = """
 
 def kcs_with(tmp_path: Path, fmi_version: str = "2.0", **replacements: str) -> Path:
     """A copy of the built-in KCS FMU whose modelDescription.xml has ``old`` replaced by ``new``."""
-    source = fmu_build.ensure_built("KCS", fmi_version=fmi_version)
-    target = tmp_path / "Vendor.fmu"
-    with zipfile.ZipFile(source) as original, zipfile.ZipFile(target, "w") as copy:
-        for item in original.infolist():
-            data = original.read(item.filename)
-            if item.filename == "modelDescription.xml":
-                text = data.decode()
-                for old, new in replacements.values():
-                    assert old in text, old
-                    text = text.replace(old, new, 1)
-                data = text.encode()
-            copy.writestr(item, data)
-    return target
+
+    def edit(text: str) -> str:
+        for old, new in replacements.values():
+            assert old in text, old
+            text = text.replace(old, new, 1)
+        return text
+
+    return copy_with_description(fmu_build.ensure_built("KCS", fmi_version=fmi_version), tmp_path / "Vendor.fmu",
+                                 edit)
 
 
 @pytest.fixture
