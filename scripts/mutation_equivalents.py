@@ -145,10 +145,6 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      r"self\._unzip_dir, None,",
      "the FMU instance's name reaches only the FMU's own log callback, whose messages the participant labels "
      "with its own name"),
-    ("orchestrator/fmu_participant.py", r"shutil\.rmtree\(self\._unzip_dir, ignore_errors=True\)",
-     r"ignore_errors=(None|False)|self\._unzip_dir, \)",
-     "removing the participant's own unpacked FMU does not fail: whether a failure would be ignored is never "
-     "exercised"),
     ("orchestrator/fmu_participant.py", r"self\.(_slave|_unzip_dir) = None", r'= ""',
      "a second terminate() then finds an empty string instead of None: the slave's calls fail inside the "
      "try blocks that already ignore a refusing FMU and rmtree('') is ignored, so it still does nothing"),

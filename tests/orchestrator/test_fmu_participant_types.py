@@ -293,6 +293,9 @@ def test_remove_files_removes_the_unpacked_fmu_without_calling_it(typed_fmu, sla
     vendor.remove_files()
     assert not unpacked.exists()
     assert slave.made[0].calls == calls
+    vendor.remove_files()  # the folder is gone already: nothing to do, no error
+    vendor.terminate()
+    assert [call[0] for call in slave.made[0].calls[len(calls):]] == ["terminate", "free"]
 
 
 def test_an_initial_state_is_converted_into_a_unit_the_fmu_defines(tmp_path, slave):
