@@ -182,4 +182,27 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("orchestrator/toml_input.py", r"exc\.errors\(include_url=False\)", r"include_url=True",
      "include_url only adds a 'url' entry to each error, and message_of reads the type, location, context, "
      "message and input, never the url"),
+    ("rhnc/nmpc_codegen.py", r'os\.environ\.get\(CODEGEN_ENV, ""\)', r'CODEGEN_ENV, "XXXX"\)',
+     "the default for an unset variable is only looked up among the off words, and 'xxxx' is none of them either"),
+    ("rhnc/nmpc_codegen.py", r"timeout=30, check=False", r"timeout=31,",
+     "differs only for a compiler whose --version answers after 30 to 31 s, the limit's own value"),
+    ("rhnc/nmpc_codegen.py", r"timeout=30, check=False", r"check=None\)|timeout=30, \)",
+     "subprocess.run's check is False by default, and None is as false: a failing --version is not raised either way"),
+    ("rhnc/nmpc_codegen.py", r'oracle = ca\.Function\("nlp", \[nlp\["x"\], nlp\["p"\]\]', r".",
+     "the oracle's names only label the serialized graph the key hashes: every problem still gets one key of its "
+     "own, the same in every process, so the same problems share a library and different ones do not; keys are "
+     "only compared with keys this code makes (a cache filled under other names is not found and is rebuilt once, "
+     "as after any change of the recipe)"),
+    ("rhnc/nmpc_codegen.py", r'" "\.join\(COMPILER_FLAGS\)|digest\.update\(b"\\0"\)', r'"XX XX"\.join|b"XX\\0XX"',
+     "another fixed spelling of the same parts of the key (flags joined, parts separated): as unambiguous, so the "
+     "same problems share a key and different ones do not; keys are only compared with keys this code makes"),
+    ("rhnc/nmpc_codegen.py", r'ca\.nlpsol\("rhnc_codegen", self\.plugin', r'"(XXrhnc_codegenXX|RHNC_CODEGEN)"',
+     "the name of an nlpsol made only to generate the code: the generated functions are named after its oracle "
+     "('nlp', 'nlp_grad_f', 'nlp_hess_l', ... whatever the solver's name), which is what the loading nlpsol looks up"),
+    ("rhnc/nmpc_codegen.py", r'self\._compiled_solver\("rhnc_codegen_check", path\)', r"XXrhnc_codegen_checkXX|RHNC_CODEGEN_CHECK",
+     "the name of a solver made once to load the library and then dropped"),
+    ("rhnc/nmpc_codegen.py", r'tempfile\.TemporaryDirectory\(prefix="rhnc-nlp-"\)', r"prefix=(None|\"XXrhnc-nlp-XX\"|\"RHNC-NLP-\")",
+     "only the name of the temporary folder the C is generated in"),
+    ("rhnc/nmpc_codegen.py", r"ca\.CodeGenerator\(path\.stem, \{\}\)", r"ca\.CodeGenerator\(path\.stem, \)",
+     "CodeGenerator's options default to an empty dict: the same call"),
 ]

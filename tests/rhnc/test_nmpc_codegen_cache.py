@@ -4,6 +4,7 @@ run is told when it cannot have one: on a one-variable NLP that compiles in abou
 import logging
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import casadi as ca
@@ -85,11 +86,22 @@ def test_unset_the_environment_leaves_code_generation_on(monkeypatch):
 
 # -- what keys a library ---------------------------------------------------------------------------
 def test_a_compiler_is_identified_by_its_path_and_first_version_line(tmp_path):
-    compiler = script(tmp_path, "cc", "echo 'cc 1.2.3'\necho 'second line'\n")
+    compiler = script(tmp_path, "cc", '[ "$1" = "--version" ] && echo "cc 1.2.3" && echo "second line"\n')
     assert _compiler_identity(str(compiler)) == f"{compiler}|cc 1.2.3"
+    complaining = script(tmp_path, "complaining-cc", "echo 'cc 4.5'\nexit 1\n")  # a version, and a failure
+    assert _compiler_identity(str(complaining)) == f"{complaining}|cc 4.5"
     silent = script(tmp_path, "silent-cc", "exit 0\n")
     assert _compiler_identity(str(silent)) == f"{silent}|"
     assert _compiler_identity(str(tmp_path / "missing")) == f"{tmp_path / 'missing'}|"
+
+
+def test_a_compiler_hanging_on_its_version_is_given_up_on(monkeypatch):
+    def hangs(command, **options):
+        assert options.get("timeout") is not None, "no time limit: a hanging compiler hangs the run"
+        raise subprocess.TimeoutExpired(command, options["timeout"])
+
+    monkeypatch.setattr(subprocess, "run", hangs)
+    assert _compiler_identity("/usr/bin/cc") == "/usr/bin/cc|"
 
 
 def test_the_key_follows_the_problem_the_solver_and_the_compiler(tmp_path):
@@ -105,7 +117,9 @@ def test_the_key_follows_the_problem_the_solver_and_the_compiler(tmp_path):
 # -- building, loading, falling back -------------------------------------------------------------------
 def test_a_library_is_built_once_named_by_solver_and_key_and_solves_as_interpreted(cache):
     builds = NLPLibrary.builds
+    started = time.perf_counter()
     library = NLPLibrary(tiny_nlp(), "ipopt", OPTIONS)
+    assert 0.0 < library.build_time_s <= time.perf_counter() - started
     assert library.mode == "compiled" and NLPLibrary.builds == builds + 1
     key = library_key(tiny_nlp(), "ipopt", find_compiler())
     assert library.path == cache / f"nlp_ipopt_{key[:24]}.so" and library.path.is_file()
@@ -121,6 +135,13 @@ def test_a_library_is_built_once_named_by_solver_and_key_and_solves_as_interpret
     stopped = library.solver("c", {**OPTIONS, "ipopt": {"print_level": 0, "sb": "yes", "max_iter": 0}})
     solve(stopped)
     assert stopped.stats()["return_status"] == "Maximum_Iterations_Exceeded"
+
+
+def test_the_cache_folder_is_made_with_its_parents(tmp_path, monkeypatch):
+    monkeypatch.setenv(CACHE_ENV, str(tmp_path / "a" / "b" / "nmpc"))
+    monkeypatch.delenv(CODEGEN_ENV, raising=False)
+    library = NLPLibrary(tiny_nlp(), "ipopt", OPTIONS)
+    assert library.mode == "compiled" and library.path.parent == tmp_path / "a" / "b" / "nmpc"
 
 
 def test_a_library_built_by_another_process_meanwhile_is_not_rebuilt(cache, monkeypatch):
