@@ -145,10 +145,6 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      r"self\._unzip_dir, None,",
      "the FMU instance's name reaches only the FMU's own log callback, whose messages the participant labels "
      "with its own name"),
-    ("orchestrator/fmu_participant.py", r"shutil\.rmtree\(self\._unzip_dir, ignore_errors=True\)",
-     r"ignore_errors=(None|False)|self\._unzip_dir, \)",
-     "removing the participant's own unpacked FMU does not fail: whether a failure would be ignored is never "
-     "exercised"),
     ("orchestrator/fmu_participant.py", r"self\.(_slave|_unzip_dir) = None", r'= ""',
      "a second terminate() then finds an empty string instead of None: the slave's calls fail inside the "
      "try blocks that already ignore a refusing FMU and rmtree('') is ignored, so it still does nothing"),
@@ -165,4 +161,48 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("orchestrator/master.py", r"at t = \{t:g\} s\" if name else phase", r"if \(name\) or True else phase",
      "the position without a participant is only reached after the last step, where only the stop "
      "watchdog's log line reads it (its wording)"),
+    ("orchestrator/fmu_participant.py", r"path = path if path\.is_absolute\(\) else scenario_dir / path",
+     r"if \(path\.is_absolute\(\)\) and False",
+     "joining an absolute path to a folder gives the absolute path itself (pathlib drops the folder), so "
+     "scenario_dir / path equals path whenever path is absolute"),
+    ("orchestrator/fmu_participant.py", r"bounds\.append\(float\(text\) if text is not None else default\)",
+     r"if \(text is not None\) or True",
+     "float(None) raises TypeError, which the except clause around it turns into the same default"),
+    ("orchestrator/fmu_participant.py", r'if kind in \("Integer", "Enumeration"\) or kind\.startswith',
+     r'kind in \("(XXIntegerXX|integer|INTEGER)", "Enumeration"\)',
+     "'Integer' also starts with 'Int', so the startswith test alone already takes it into the integer branch"),
+    ("orchestrator/fmu_participant.py", r'variable\.variability == "constant"', r'variability == "(XXconstantXX|CONSTANT)"',
+     "no variable reaches this check as a constant parameter: FMPy's read_model_description (run on every FMU "
+     "before) refuses causality='parameter' with variability='constant' as an illegal combination"),
+    ("orchestrator/toml_input.py", r'raw\.decode\("utf-8"\)', r'raw\.decode\("UTF-8"\)',
+     "Python looks codecs up by their normalised lower-case name: 'UTF-8' is the same codec as 'utf-8'"),
+    ("orchestrator/toml_input.py", r'c\.encode\("unicode_escape"\)\.decode\("ascii"\)',
+     r'encode\("UNICODE_ESCAPE"\)|decode\("ASCII"\)',
+     "Python looks codecs up by their normalised lower-case name: the same codecs"),
+    ("orchestrator/toml_input.py", r"exc\.errors\(include_url=False\)", r"include_url=True",
+     "include_url only adds a 'url' entry to each error, and message_of reads the type, location, context, "
+     "message and input, never the url"),
+    ("rhnc/nmpc_codegen.py", r'os\.environ\.get\(CODEGEN_ENV, ""\)', r'CODEGEN_ENV, "XXXX"\)',
+     "the default for an unset variable is only looked up among the off words, and 'xxxx' is none of them either"),
+    ("rhnc/nmpc_codegen.py", r"timeout=30, check=False", r"timeout=31,",
+     "differs only for a compiler whose --version answers after 30 to 31 s, the limit's own value"),
+    ("rhnc/nmpc_codegen.py", r"timeout=30, check=False", r"check=None\)|timeout=30, \)",
+     "subprocess.run's check is False by default, and None is as false: a failing --version is not raised either way"),
+    ("rhnc/nmpc_codegen.py", r'oracle = ca\.Function\("nlp", \[nlp\["x"\], nlp\["p"\]\]', r".",
+     "the oracle's names only label the serialized graph the key hashes: every problem still gets one key of its "
+     "own, the same in every process, so the same problems share a library and different ones do not; keys are "
+     "only compared with keys this code makes (a cache filled under other names is not found and is rebuilt once, "
+     "as after any change of the recipe)"),
+    ("rhnc/nmpc_codegen.py", r'" "\.join\(COMPILER_FLAGS\)|digest\.update\(b"\\0"\)', r'"XX XX"\.join|b"XX\\0XX"',
+     "another fixed spelling of the same parts of the key (flags joined, parts separated): as unambiguous, so the "
+     "same problems share a key and different ones do not; keys are only compared with keys this code makes"),
+    ("rhnc/nmpc_codegen.py", r'ca\.nlpsol\("rhnc_codegen", self\.plugin', r'"(XXrhnc_codegenXX|RHNC_CODEGEN)"',
+     "the name of an nlpsol made only to generate the code: the generated functions are named after its oracle "
+     "('nlp', 'nlp_grad_f', 'nlp_hess_l', ... whatever the solver's name), which is what the loading nlpsol looks up"),
+    ("rhnc/nmpc_codegen.py", r'self\._compiled_solver\("rhnc_codegen_check", path\)', r"XXrhnc_codegen_checkXX|RHNC_CODEGEN_CHECK",
+     "the name of a solver made once to load the library and then dropped"),
+    ("rhnc/nmpc_codegen.py", r'tempfile\.TemporaryDirectory\(prefix="rhnc-nlp-"\)', r"prefix=(None|\"XXrhnc-nlp-XX\"|\"RHNC-NLP-\")",
+     "only the name of the temporary folder the C is generated in"),
+    ("rhnc/nmpc_codegen.py", r"ca\.CodeGenerator\(path\.stem, \{\}\)", r"ca\.CodeGenerator\(path\.stem, \)",
+     "CodeGenerator's options default to an empty dict: the same call"),
 ]

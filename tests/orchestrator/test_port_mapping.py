@@ -4,7 +4,6 @@ with one line (exit 2)."""
 
 import math
 import shutil
-import zipfile
 
 import numpy as np
 import pandas as pd
@@ -18,6 +17,8 @@ from orchestrator.port_mapping import VectorBinding
 from orchestrator.run import run_scenario
 from orchestrator.scenario import load_scenario
 from orchestrator.units import resolve_unit
+
+from fmu_copies import copy_with_description
 
 KNOT = 1852 / 3600
 NM = 1852.0
@@ -170,19 +171,12 @@ def test_offset_after_the_declared_unit(write_scenario):
 @pytest.fixture
 def s175_without_heading_unit(tmp_path):
     """A copy of the S175 FMU whose heading declares no unit (as some vendors ship them)."""
-    source = fmu_build.ensure_built("S175")
-    target = tmp_path / "S175_nounit.fmu"
-    with zipfile.ZipFile(source) as zin, zipfile.ZipFile(target, "w") as zout:
-        for item in zin.infolist():
-            data = zin.read(item.filename)
-            if item.filename == "modelDescription.xml":
-                text = data.decode()
-                start = text.index('name="heading"')
-                end = text.index("</ScalarVariable>", start)
-                text = text[:start] + text[start:end].replace('declaredType="Bearing"', "") + text[end:]
-                data = text.encode()
-            zout.writestr(item, data)
-    return target
+    def without_heading_unit(text: str) -> str:
+        start = text.index('name="heading"')
+        end = text.index("</ScalarVariable>", start)
+        return text[:start] + text[start:end].replace('declaredType="Bearing"', "") + text[end:]
+
+    return copy_with_description(fmu_build.ensure_built("S175"), tmp_path / "S175_nounit.fmu", without_heading_unit)
 
 
 MISTAKES = {
