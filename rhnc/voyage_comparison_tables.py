@@ -36,10 +36,8 @@ START_TOLERANCE_M = 0.05 * NM
 #: Runs whose mean speeds through water differ by more than this are not comparable
 #: without an equal-arrival baseline [%].
 SPEED_SPREAD_LIMIT_PERCENT = 0.5
-#: Below this available saving [% of the straight route's cost] no share is given: a
-#: saving that small is of the order of what the sailed runs differ by without any routing
-#: (the NMPC's speed and heading keeping in the weather, the speed plan's corrections), so a
-#: share of it measures noise.
+#: Below this available saving [% of the straight route's cost] no share is given: a ratio
+#: of two small numbers (docs/compare-format.md).
 MIN_AVAILABLE_SAVING_PERCENT = 0.5
 
 

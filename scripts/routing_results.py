@@ -11,6 +11,9 @@ project's energy model); nothing is typed by hand.  Run the comparisons first:
     python -m orchestrator compare scenarios/weather/storm_set.toml
     python -m orchestrator compare scenarios/weather/storm_set_routing.toml
     python scripts/routing_results.py [--results results] [--out docs/routing-results.md]
+
+It also rewrites the README's routing table and storm-set findings (between the
+``routing-summary`` markers), so the README quotes exactly these runs.
 """
 
 from __future__ import annotations
@@ -190,10 +193,94 @@ def summary_text(rows: list[dict], sweeps: dict, effect: dict) -> list[str]:
     return lines
 
 
+README_BEGIN, README_END = "<!-- routing-summary:begin -->", "<!-- routing-summary:end -->"
+#: (label in the comparisons, words in the README)
+README_SYSTEMS = (("RHNC", "RHNC, paper's method"), ("RHNC routing", "RHNC, routing method"))
+#: the goal of the routing navigation over the storm set
+GOAL_SHARE_PERCENT, GOAL_WORST_PERCENT = 80.0, -0.5
+
+
+def storm_set_findings(section, label: str) -> dict:
+    """Per-member figures of ``label`` over a sweep: savings, shares at two thresholds, worst."""
+    members = section.tables["voyage_sweep"]
+    key = members.columns[0]
+    saving = members[f"{label} saving cost [%]"].astype(float)
+    available = members[f"{label} available cost saving [%]"].astype(float)
+    arrived = saving.notna()
+    share = 100.0 * saving / available
+
+    def median_share(threshold):
+        picked = arrived & (available >= threshold)
+        return (float(np.median(share[picked])) if picked.any() else float("nan")), int(picked.sum())
+
+    worst = int(saving[arrived].idxmin())
+    return {"members": len(members), "arrived": int(arrived.sum()),
+            "median": float(saving[arrived].median()), "p25": float(saving[arrived].quantile(0.25)),
+            "p75": float(saving[arrived].quantile(0.75)), "share_05": median_share(0.5),
+            "share_01": median_share(0.1), "worst": float(saving[worst]), "worst_member": members[key][worst],
+            "dearer": int((saving[arrived] < GOAL_WORST_PERCENT).sum())}
+
+
+def readme_block(rows: list[dict], sweeps: dict) -> str:
+    """The README's routing table and storm-set findings, from the same runs as the document."""
+    lines = ["| weather (start (0, 0), goal (100, 100) nm) | system | arrival [min] | saving vs equal-arrival "
+             "baseline, cost / CO2 | available saving | share |", "|---|---|---|---|---|---|"]
+    for weather in dict.fromkeys(row["weather"] for row in rows):
+        for label, words in README_SYSTEMS:
+            row = next((r for r in rows if r["weather"] == weather and r["system"] == label), None)
+            if row is None:
+                continue
+            if row.get("arrived") is False:
+                lines.append(f"| `{weather}` | {words} | did not arrive (mean "
+                             f"{row['mean speed through water [kn]']:.1f} kn through water) | - | - | - |")
+                continue
+            saving = row.get("saving cost [%]")
+            if saving is None or saving != saving:
+                lines.append(f"| `{weather}` | {words} | {fmt(row.get('arrival [min]'))} | no baseline | "
+                             f"{fmt(row.get('available cost [%]'))} % | - |")
+                continue
+            share = row.get("share cost [%]")
+            lines.append(f"| `{weather}` | {words} | {row['arrival [min]']:.1f} | {saving:+.2f} % / "
+                         f"{row['saving CO2 [%]']:+.2f} % | {row['available cost [%]']:.2f} % | "
+                         f"{'-' if share is None or share != share else f'{share:.0f} %'} |")
+    routing = next((section for method, (section, _) in sweeps.items() if "routing" in method), None)
+    paper = next((section for method, (section, _) in sweeps.items() if "routing" not in method), None)
+    if routing is not None:
+        r = storm_set_findings(routing, "RHNC routing")
+        met = r["share_05"][0] >= GOAL_SHARE_PERCENT and r["dearer"] == 0 and r["arrived"] == r["members"]
+        lines += ["", f"Over the {r['members']} drawn gales of the storm set, co-simulated at equal arrival time, "
+                  f"the routing navigation arrived in {r['arrived']} and saved a median {r['median']:+.2f} % "
+                  f"(quartiles {r['p25']:+.2f} to {r['p75']:+.2f} %); of the available saving it captured a median "
+                  f"{r['share_05'][0]:.0f} % over the {r['share_05'][1]} members offering at least 0.5 % and "
+                  f"{r['share_01'][0]:.0f} % over the {r['share_01'][1]} offering at least 0.1 %; its worst member "
+                  f"(member {r['worst_member']}) is {r['worst']:+.2f} %, and {r['dearer']} members are more than "
+                  f"0.5 % dearer than the line."]
+        if paper is not None:
+            q = storm_set_findings(paper, "RHNC")
+            lines[-1] += (f" The paper's method in the same set arrived in {q['arrived']}; there it saved a "
+                          f"median {q['median']:+.2f} % (worst {q['worst']:+.2f} %), and {q['dearer']} of those "
+                          f"{q['arrived']} are more than 0.5 % dearer.")
+        lines += ["", f"**Goal** (a median share of at least {GOAL_SHARE_PERCENT:.0f} % over the members offering at "
+                  "least 0.5 %, never more than 0.5 % dearer than the equal-arrival line, over the storm set): "
+                  + ("**met**." if met else "**not met**.")]
+    return "\n".join(lines)
+
+
+def write_readme_block(readme: Path, block: str) -> None:
+    text = readme.read_text()
+    if README_BEGIN not in text or README_END not in text:
+        raise SystemExit(f"{readme}: no {README_BEGIN} ... {README_END} markers to write the routing summary between")
+    head, rest = text.split(README_BEGIN, 1)
+    _, tail = rest.split(README_END, 1)
+    readme.write_text(head + README_BEGIN + "\n" + block + "\n" + README_END + tail)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--results", default=str(REPO / "results"))
     parser.add_argument("--out", default=str(REPO / "docs" / "routing-results.md"))
+    parser.add_argument("--readme", default=str(REPO / "README.md"), help="README whose routing summary is rewritten "
+                                                                       "('' to leave it)")
     parser.add_argument("--note", default="", help="a caveat printed under the title (e.g. which runs predate a "
                                                    "model change)")
     args = parser.parse_args()
@@ -206,7 +293,7 @@ def main() -> None:
              "[compare-format.md](compare-format.md)); rerun them and the script to regenerate. Every run sails "
              "(0, 0) -> (100, 100) nm until it arrives within 0.5 nm of the goal. Beside each system: its "
              "equal-arrival baseline (Offline-SPNC's straight line, co-simulated with the same plant and NMPC, its "
-             "reference speed searched until it arrives in the same macro step) and the optimal weather route at "
+             "reference speed searched until it crosses the arrival radius within 2 s of the system) and the optimal weather route at "
              "the same arrival time (costed by the routing model). Saving: against the baseline, positive when the "
              "system is cheaper. Available: optimal route against straight route. Share: saving / available.", ""]
     summary_rows, sections, speed_spreads = [], [], {}
@@ -221,14 +308,19 @@ def main() -> None:
         speed_spreads[name] = summary.get("voyage", {}).get("speed_spread_percent")
         for _, row in headline.iterrows():
             summary_rows.append({"weather": words.split(":")[0], **row.to_dict()})
+        for label, sailed in summary.get("voyage", {}).get("systems", {}).items():
+            if not sailed.get("arrived"):   # listed in the README as not arrived, with its mean speed
+                summary_rows.append({"weather": words.split(":")[0], "system": label, "arrived": False,
+                                     "mean speed through water [kn]": sailed.get("mean_speed_through_water_kn")})
         shutil.copyfile(folder / "tracks.png", figures / f"{out.stem}_{name}_tracks.png")
         sections += [f"### {words}", "", f"`python -m orchestrator compare {path}` (results `{folder.name}`)", "",
                      table(runs, RUNS), "", table(headline, HEADLINE), ""]
         sections += [f"**FLAG**: {flag}" for flag in summary.get("flags", [])]
         sections += ["", f"![tracks](figures/{out.stem}_{name}_tracks.png)", ""]
-    if summary_rows:
+    sailed_rows = [row for row in summary_rows if row.get("arrived") is not False]
+    if sailed_rows:
         lines += ["## Headline: each weather, each system, at equal arrival time", "",
-                  table(pd.DataFrame(summary_rows), ["weather"] + HEADLINE), ""]
+                  table(pd.DataFrame(sailed_rows), ["weather"] + HEADLINE), ""]
     lines += ["## Per weather", ""] + sections
 
     lines += ["## The drawn storm set: each navigation's share of the available saving", ""]
@@ -268,11 +360,14 @@ def main() -> None:
         lines += [f"In our default-weather run the systems' mean speeds through water differ by up to "
                   f"{speed_spreads['exp2_table3']:.2f} %; the per-nm columns of the Table 3 comparison carry the "
                   "same mix, which is why the headline above is taken against the equal-arrival baseline.", ""]
-    lines[4:4] = summary_text(summary_rows, sweep_facts, effect)
+    lines[4:4] = summary_text(sailed_rows, sweep_facts, effect)
     if args.note:
         lines[2:2] = [f"**Note.** {args.note}", ""]
     out.write_text("\n".join(lines) + "\n")
     print(f"wrote {out}")
+    if args.readme:
+        write_readme_block(Path(args.readme), readme_block(summary_rows, sweep_facts))
+        print(f"rewrote the routing summary in {args.readme}")
 
 
 if __name__ == "__main__":
