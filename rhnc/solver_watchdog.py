@@ -158,21 +158,38 @@ def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, 
             name, arguments = connection.recv()
         except (EOFError, OSError):
             return
-        if name not in solvers:
-            solvers[name] = factories[name]()
-        outcome = _timed_call(solvers[name], arguments)
+        try:
+            if name not in solvers:
+                solvers[name] = factories[name]()
+            outcome = _timed_call(solvers[name], arguments)
+        except Exception as error:  # noqa: BLE001 - a solver refusing its call: raised by the controller
+            if not _send(connection, SolverError(f"{type(error).__name__}: {' '.join(str(error).split())}")):
+                return
+            continue
         # the worker's share of the call: unpacking the request, solving, building the answer
         outcome.cpu_time_s = time.process_time() - cpu_start
         outcome.preparation_cpu_s = preparation.get(name, 0.0)
-        try:
-            connection.send(outcome)
-        except (BrokenPipeError, OSError):
+        if not _send(connection, outcome):
             return
         preparation[name] = 0.0
         if renew is not None and renew(outcome):  # the controller is not waiting now
             start = time.process_time()
             solvers[name] = factories[name]()
             preparation[name] = time.process_time() - start
+
+
+def _send(connection, message) -> bool:
+    try:
+        connection.send(message)
+    except (BrokenPipeError, OSError):
+        return False
+    return True
+
+
+class SolverError(RuntimeError):
+    """A solver call that raised in the worker (an option the installed CasADi does not
+    know, a function that cannot be evaluated): raised again in the controller's process,
+    with its message, as the call would raise without a worker."""
 
 
 def _die_with_parent() -> None:
@@ -268,6 +285,8 @@ class BoundedSolver:
             LOG.warning("NMPC solver worker died; starting a new one")
             self.close()
             return self._stopped(arguments, time.perf_counter() - start, "solver_worker_died")
+        if isinstance(outcome, SolverError):
+            raise outcome
         outcome.wall_time_s = time.perf_counter() - start
         return outcome
 

@@ -165,3 +165,20 @@ def test_an_acceptable_point_is_used_only_when_it_keeps_the_constraints(controll
         assert solution.status == "Solved_To_Acceptable_Level"
     else:
         assert solution.constraint_violation > 1e-6
+
+
+class RefusingSolver:
+    """A solver whose call raises, as CasADi does for an option its fatrop does not know."""
+
+    def __call__(self, **arguments):
+        raise RuntimeError("Error in Function::call for 'rhnc_nmpc' [FatropInterface]:\n"
+                           "Fatrop option not supported: tol_acceptable")
+
+
+@pytest.mark.parametrize("wall_time_s", [None, 30.0], ids=["in-process", "worker"])
+def test_a_solver_that_raises_reports_its_error_with_or_without_the_worker(wall_time_s):
+    bounded = BoundedSolver({"nlp": RefusingSolver()}, {"nlp": RefusingSolver}, wall_time_s=wall_time_s)
+    for _ in range(2):   # the worker goes on serving after an error
+        with pytest.raises(RuntimeError, match="Fatrop option not supported: tol_acceptable"):
+            bounded.solve("nlp", x0=np.zeros(2))
+    bounded.close()
