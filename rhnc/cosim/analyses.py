@@ -81,9 +81,10 @@ def voyage_analysis(frame, scenario, cosim, out_dir, goal_nm=None, arrival_radiu
     actuator-level plant: delivered power / shaft efficiency + auxiliary power), else the
     energy model's from speed, heading and weather; ``energy_source`` says which.
 
-    With ``goal_nm = [north, east]`` the voyage ends on arrival, the first sample within
-    ``arrival_radius_nm`` of the goal (time spent waiting there is not sailing); the
-    result says whether and when the ship arrived.  ``made_good_nm`` is the straight-line
+    With ``goal_nm = [north, east]`` the voyage ends on arrival, the instant the ship
+    crosses ``arrival_radius_nm`` of the goal, interpolated between the samples around it
+    (:func:`cut_at_crossing`; time spent waiting there is not sailing); the result says
+    whether and when the ship arrived.  ``made_good_nm`` is the straight-line
     distance from the first to the last position of the voyage, the paper's "linear
     mileage" in its Table 3, next to the distance sailed along the track;
     ``mean_speed_made_good_kn`` divides it by the time taken, and
