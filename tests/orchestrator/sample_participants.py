@@ -335,7 +335,7 @@ class Probe(Participant):
     def from_options(cls, name, options, context):
         return cls(name, dict(options), context)
 
-    input_names = property(lambda self: ["value"])
+    input_names = property(lambda self: list(self.options.get("inputs", ["value"])))
     output_names = property(lambda self: ["value", "extra"] if self.options.get("declare_extra") else ["value"])
 
     def connected(self, sources):
