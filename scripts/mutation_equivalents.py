@@ -127,7 +127,7 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("orchestrator/master.py", r"shutil\.rmtree\(self\.work_dir, ignore_errors=True\)", r"ignore_errors=(None|False)|self\.work_dir, \)",
      "removing the master's own temporary folder does not fail (the master made it and nothing else holds it): "
      "whether a failure would be ignored is never exercised"),
-    ("orchestrator/master.py", r"recorder = Recorder\(sim\.start_s, sim\.dt_s, sim\.steps\)", r"sim\.dt_s, None\)",
+    ("orchestrator/master.py", r"recorder = Recorder\(sim\.start_s, sim\.dt_s, sim\.steps", r"sim\.dt_s, None(\)|, spool=spool\))",
      "the recorder keeps the planned step count as an attribute nothing reads (run.py takes steps_planned "
      "from the scenario)"),
     ("orchestrator/master.py", r"pending = \[item for item in pending if item\[0\] > k\]", r"item\[0\] >= k\]",
@@ -155,6 +155,11 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      "see tests/rhnc/test_nmpc_cost.py), so the optimum is the same"),
     ("orchestrator/fmu_participant.py", r"return call\(\*args, \*\*kwargs\)", r"return call\(\*args, \)",
      "no caller of _call passes keyword arguments: dropping them forwards the same call"),
+    ("orchestrator/master.py", r'for participant in getattr\(self, "participants", \(\)\)',
+     r'getattr\(self, "participants", (None)?\)',
+     "remove_files is called only on a master whose __init__ returned (run.py sets up the watchdog that "
+     "calls it after building the master), and __init__ sets participants before building any: the "
+     "default is never used"),
     ("orchestrator/master.py", r'getattr\(participant, "checks_outputs_finite", False\)',
      r'"checks_outputs_finite", None\)',
      "the default is only tested for truth: None and False are both false"),

@@ -91,7 +91,9 @@ MODULES = {
                                                        "tests/rhnc/test_nmpc_codegen_cache.py")),
     "master": Module(("orchestrator/master.py", "orchestrator/participant_build.py"),
                      ("tests/orchestrator/test_master.py", "tests/orchestrator/test_master_guards.py",
-                      "tests/orchestrator/test_fmu_participant.py")),
+                      "tests/orchestrator/test_fmu_participant.py", "tests/orchestrator/test_failure_paths.py",
+                      "tests/orchestrator/test_time_limits.py", "tests/orchestrator/test_plugins.py",
+                      "tests/orchestrator/test_recorder_streaming.py")),
     # the scenario file's reader (TOML reading and limits, pydantic tables, the frozen result): its own
     # tests, the hostile-input ones, and those reading the tables it parses for others
     "scenario": Module(("orchestrator/scenario.py", "orchestrator/scenario_model.py",

@@ -225,3 +225,11 @@ def test_a_built_in_fmu_is_built_for_the_fmi_version_its_participant_asks_for(wr
     with pytest.raises(ScenarioError, match="^stop here"):
         CoSimulation(load_scenario(write_scenario(text)))
     assert asked == [("KCS", "3.0")]
+
+
+def test_removing_the_files_asks_every_participant_that_has_some_and_removes_the_work_folder(write_scenario):
+    cosim = CoSimulation(load_scenario(write_scenario(PROBE.format(every=1, options=""))))
+    assert not hasattr(cosim.participant("clock"), "remove_files")  # skipped, not an error
+    cosim.remove_files()
+    assert cosim.participant("probe").removed == 1
+    assert not cosim.work_dir.exists()
