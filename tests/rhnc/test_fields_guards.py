@@ -61,6 +61,14 @@ def test_a_resolution_leaving_one_node_along_either_axis_is_refused(x_nm, y_nm):
         resample_weather(metocean(x_nm, y_nm), 1.0)
 
 
+@pytest.mark.parametrize("x_nm, y_nm", [([0, 1500, 3000], [0, 5]), ([0, 5], [0, 1500, 3000])])
+def test_a_planning_grid_over_the_node_limit_along_either_axis_is_refused_before_it_is_built(x_nm, y_nm):
+    # 3000 nm at 1 nm: 3001 nodes, over the limit of 2001 (measured over the whole axis, not from its second node)
+    with pytest.raises(ValueError, match=r"^the planning resolution_nm gives 3e\+03 grid nodes along an axis, "
+                                         r"more than the limit of 2001"):
+        resample_weather(metocean(x_nm, y_nm), 1.0)
+
+
 def test_two_nodes_along_each_axis_are_enough():
     weather = resample_weather(metocean([0, 1], [0, 1]), 1.0)
     assert (weather.x.size, weather.y.size) == (2, 2)
