@@ -76,9 +76,10 @@ MODULES = {
     "nmpc": Module(("rhnc/nmpc.py", "rhnc/nmpc_settings.py", "rhnc/nmpc_problem.py", "rhnc/nmpc_terminal.py",
                     "rhnc/nmpc_warm_start.py", "rhnc/nmpc_colregs.py", "rhnc/nmpc_alteration.py"),
                    ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py",
-                    "tests/rhnc/test_nmpc_cost.py")),
+                    "tests/rhnc/test_nmpc_cost.py", "tests/rhnc/test_nmpc_warm_start.py")),
     # ... or file by file (each its own run, so that a part finishes and reports on its own)
-    "nmpc_warm_start": Module(("rhnc/nmpc_warm_start.py",), ("tests/rhnc/test_nmpc.py",)),
+    "nmpc_warm_start": Module(("rhnc/nmpc_warm_start.py",), ("tests/rhnc/test_nmpc.py",
+                                                             "tests/rhnc/test_nmpc_warm_start.py")),
     "nmpc_terminal": Module(("rhnc/nmpc_terminal.py",), ("tests/rhnc/test_nmpc.py",)),
     "nmpc_colregs": Module(("rhnc/nmpc_colregs.py", "rhnc/nmpc_alteration.py"),
                            ("tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py")),
