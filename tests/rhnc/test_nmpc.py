@@ -265,3 +265,16 @@ def test_without_a_previous_input_given_the_previous_plans_first_input_is_taken(
     np.testing.assert_allclose(second.tau, given.tau, rtol=1e-6)
     remembered.close()
     told.close()
+
+
+@pytest.mark.parametrize("speed_kn, course, reference_kn, bound", [(24, -1.5, 6, -1.0), (6, 1.5, 24, 1.0)])
+def test_applied_inputs_stay_within_the_actuator_limits_exactly(controller, speed_kn, course, reference_kn, bound):
+    """The solver meets its bounds to its tolerance (about 1e-8 beyond them); the inputs it
+    hands on are clipped to the limits themselves."""
+    controller.reset()
+    state = np.array([0.0, 0.0, 0.0, speed_kn * KNOT, 0.0, 0.0])  # too fast or slow, the course far to one side
+    reference = line_or_turn_reference(DT * np.arange(N + 1), (0.0, 0.0), course, reference_kn * KNOT)
+    solution = controller.solve(0.0, state, reference)
+    assert solution.success
+    assert np.all(np.abs(solution.inputs) <= controller.input_scale)
+    assert np.any(solution.inputs == bound * controller.input_scale)  # saturated: the bound itself
