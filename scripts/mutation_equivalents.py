@@ -160,6 +160,14 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      "remove_files is called only on a master whose __init__ returned (run.py sets up the watchdog that "
      "calls it after building the master), and __init__ sets participants before building any: the "
      "default is never used"),
+    ("orchestrator/master.py", r'status, reason, results_error = "failed", str\(exc\), exc',
+     r'"(XXfailedXX|FAILED)", str\(exc\)|"failed", str\(None\)',
+     "a results error is raised again once the participants are terminated: the status and reason set with it "
+     "are never read (an interrupt seen meanwhile only replaces them before the same raise)"),
+    ("orchestrator/master.py", r'watch\.expired or "a participant call timed out"',
+     r'watch\.expired or "(XXa participant call timed outXX|A PARTICIPANT CALL TIMED OUT)"',
+     "StepTimeout is raised only by the watch, after it has set expired to the reason (describe()'s text, never "
+     "empty): the fallback text is never used"),
     ("orchestrator/master.py", r'getattr\(participant, "checks_outputs_finite", False\)',
      r'"checks_outputs_finite", None\)',
      "the default is only tested for truth: None and False are both false"),

@@ -233,3 +233,28 @@ def test_removing_the_files_asks_every_participant_that_has_some_and_removes_the
     cosim.remove_files()
     assert cosim.participant("probe").removed == 1
     assert not cosim.work_dir.exists()
+
+
+def test_every_participant_whose_terminate_fails_is_named_in_the_reason(write_scenario):
+    text = PROBE.format(every=1, options="") + "".join(
+        f'\n[participants.{name}]\ntype = "python"\nclass = "sample_participants:Misbehaving"\n'
+        f'[participants.{name}.options]\nhow = "terminate"\n' for name in ("pump", "winch"))
+    cosim = CoSimulation(load_scenario(write_scenario(text)))
+    try:
+        outcome = cosim.run(progress=False)
+    finally:
+        cosim.close()
+    assert outcome.status == "failed"
+    assert outcome.reason == ("pump: terminate() raised OSError: device busy; "
+                              "winch: terminate() raised OSError: device busy")
+
+
+def test_a_class_calling_sys_exit_while_being_built_is_refused_naming_it(write_scenario):
+    text = PROBE.format(every=1, options="") + (
+        '\n[participants.bad]\ntype = "python"\nclass = "sample_participants:Misbehaving"\n'
+        '[participants.bad.options]\nhow = "exit_options"\n')
+    scenario = load_scenario(write_scenario(text))
+    with pytest.raises(ScenarioError) as refused:
+        CoSimulation(scenario)
+    assert str(refused.value) == (f"{scenario.path}: participants.bad: sample_participants:Misbehaving called "
+                                  "sys.exit(4) while being built")
