@@ -127,7 +127,8 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("orchestrator/master.py", r"shutil\.rmtree\(self\.work_dir, ignore_errors=True\)", r"ignore_errors=(None|False)|self\.work_dir, \)",
      "removing the master's own temporary folder does not fail (the master made it and nothing else holds it): "
      "whether a failure would be ignored is never exercised"),
-    ("orchestrator/master.py", r"recorder = Recorder\(sim\.start_s, sim\.dt_s, sim\.steps", r"sim\.dt_s, None(\)|, spool=spool\))",
+    ("orchestrator/master.py", r"recorder = Recorder\(sim\.start_s, sim\.dt_s, sim\.steps",
+     r"sim\.dt_s, None(\)|, spool=spool\))",
      "the recorder keeps the planned step count as an attribute nothing reads (run.py takes steps_planned "
      "from the scenario)"),
     ("orchestrator/master.py", r"pending = \[item for item in pending if item\[0\] > k\]", r"item\[0\] >= k\]",

@@ -235,15 +235,11 @@ def test_removing_the_files_asks_every_participant_that_has_some_and_removes_the
     assert not cosim.work_dir.exists()
 
 
-def test_every_participant_whose_terminate_fails_is_named_in_the_reason(write_scenario):
+def test_every_participant_whose_terminate_fails_is_named_in_the_reason(run_to_end):
     text = PROBE.format(every=1, options="") + "".join(
         f'\n[participants.{name}]\ntype = "python"\nclass = "sample_participants:Misbehaving"\n'
         f'[participants.{name}.options]\nhow = "terminate"\n' for name in ("pump", "winch"))
-    cosim = CoSimulation(load_scenario(write_scenario(text)))
-    try:
-        outcome = cosim.run(progress=False)
-    finally:
-        cosim.close()
+    outcome = run_to_end(text)
     assert outcome.status == "failed"
     assert outcome.reason == ("pump: terminate() raised OSError: device busy; "
                               "winch: terminate() raised OSError: device busy")
