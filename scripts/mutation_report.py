@@ -72,13 +72,14 @@ MODULES = {
     "voyage": Module(("rhnc/voyage.py",), ("tests/rhnc/test_voyage.py",)),
     "planner": Module(("rhnc/planner.py",), ("tests/rhnc/test_fields_planner.py", "tests/rhnc/test_planner_guards.py")),
     "fields": Module(("rhnc/fields.py",), ("tests/rhnc/test_fields_planner.py", "tests/rhnc/test_fields_guards.py")),
-    # the NMPC's parts together (slow: about 2400 mutants against solver runs; see --sample) ...
+    # the NMPC's parts together (slow: about 3100 mutants against solver runs; see --sample) ...
     "nmpc": Module(("rhnc/nmpc.py", "rhnc/nmpc_settings.py", "rhnc/nmpc_problem.py", "rhnc/nmpc_terminal.py",
                     "rhnc/nmpc_warm_start.py", "rhnc/nmpc_colregs.py", "rhnc/nmpc_alteration.py"),
                    ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py",
-                    "tests/rhnc/test_nmpc_cost.py")),
+                    "tests/rhnc/test_nmpc_cost.py", "tests/rhnc/test_nmpc_warm_start.py")),
     # ... or file by file (each its own run, so that a part finishes and reports on its own)
-    "nmpc_warm_start": Module(("rhnc/nmpc_warm_start.py",), ("tests/rhnc/test_nmpc.py",)),
+    "nmpc_warm_start": Module(("rhnc/nmpc_warm_start.py",), ("tests/rhnc/test_nmpc.py",
+                                                             "tests/rhnc/test_nmpc_warm_start.py")),
     "nmpc_terminal": Module(("rhnc/nmpc_terminal.py",), ("tests/rhnc/test_nmpc.py",)),
     "nmpc_colregs": Module(("rhnc/nmpc_colregs.py", "rhnc/nmpc_alteration.py"),
                            ("tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py")),
@@ -91,7 +92,9 @@ MODULES = {
                                                        "tests/rhnc/test_nmpc_codegen_cache.py")),
     "master": Module(("orchestrator/master.py", "orchestrator/participant_build.py"),
                      ("tests/orchestrator/test_master.py", "tests/orchestrator/test_master_guards.py",
-                      "tests/orchestrator/test_fmu_participant.py")),
+                      "tests/orchestrator/test_fmu_participant.py", "tests/orchestrator/test_failure_paths.py",
+                      "tests/orchestrator/test_time_limits.py", "tests/orchestrator/test_plugins.py",
+                      "tests/orchestrator/test_recorder_streaming.py")),
     # the scenario file's reader (TOML reading and limits, pydantic tables, the frozen result): its own
     # tests, the hostile-input ones, and those reading the tables it parses for others
     "scenario": Module(("orchestrator/scenario.py", "orchestrator/scenario_model.py",

@@ -13,3 +13,20 @@ def write_scenario(tmp_path):
         return path
 
     return write
+
+
+@pytest.fixture
+def run_to_end(write_scenario):
+    """Write a scenario, build its master, run it (no progress bar) and close it: the outcome."""
+
+    def run(text):
+        from orchestrator.master import CoSimulation
+        from orchestrator.scenario import load_scenario
+
+        cosim = CoSimulation(load_scenario(write_scenario(text)))
+        try:
+            return cosim.run(progress=False)
+        finally:
+            cosim.close()
+
+    return run

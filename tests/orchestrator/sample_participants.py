@@ -202,7 +202,8 @@ class Hog(Participant):
 
 class Sleeper(Participant):
     """From ``at_s`` on, a step that sleeps ``sleep_s``; with ``swallow`` it catches everything
-    and sleeps again (a participant that no Python exception can stop)."""
+    and sleeps again (a participant that no Python exception can stop); ``setup_sleep_s``: a
+    set-up that sleeps that long."""
 
     @classmethod
     def from_options(cls, name, options, context):
@@ -212,12 +213,16 @@ class Sleeper(Participant):
         participant.swallow = options.get("swallow", False)
         participant.unless_exists = options.get("unless_exists")
         participant.busy = options.get("busy", False)
+        participant.setup_sleep_s = options.get("setup_sleep_s", 0.0)
         return participant
 
     input_names = property(lambda self: [])
     output_names = property(lambda self: ["ok"])
 
     def setup(self, start_time, inputs):
+        import time as wallclock
+
+        wallclock.sleep(self.setup_sleep_s)
         return {"ok": 1.0}
 
     def step(self, time, step_size, inputs):
@@ -256,6 +261,10 @@ class Misbehaving(Participant):
         how = options.get("how")
         if how == "options":
             raise ValueError("gain must be positive")
+        if how == "exit_options":
+            import sys
+
+            sys.exit(4)
         participant = cls(name)
         participant.how = how
         participant.at = options.get("at_s", 0.0)
@@ -335,7 +344,11 @@ class Probe(Participant):
     def from_options(cls, name, options, context):
         return cls(name, dict(options), context)
 
-    input_names = property(lambda self: ["value"])
+    input_names = property(lambda self: list(self.options.get("inputs", ["value"])))
+
+    def remove_files(self):
+        """What a watchdog calls on a run that is ending: only counted here."""
+        self.removed = getattr(self, "removed", 0) + 1
     output_names = property(lambda self: ["value", "extra"] if self.options.get("declare_extra") else ["value"])
 
     def connected(self, sources):

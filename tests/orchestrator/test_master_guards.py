@@ -176,6 +176,9 @@ def test_participant_lookup_names_the_missing_one(write_scenario):
     ("sample_participants:Nowhere", r"participants.probe.class: 'sample_participants:Nowhere' is not a participant "
                                     r"class with from_options\(\)$"),
     ("sample_participants:math", r"'sample_participants:math' is not a participant class with from_options\(\)$"),
+    # the module ends at the first colon: what follows is looked up in it as the class
+    ("sample_participants:Probe:v2", r"participants.probe.class: 'sample_participants:Probe:v2' is not a participant "
+                                     r"class with from_options\(\)$"),
     ("sample_participants:NotAParticipant", r"participants.probe: sample_participants:NotAParticipant does not "
                                             r"build an orchestrator.participant.Participant$"),
 ])
@@ -190,7 +193,64 @@ def test_refusals_name_the_scenario_file_and_list_the_valid_names(write_scenario
     with pytest.raises(ScenarioError, match=r"^.*scenario.toml: connection 'clock.count -> probe.speed': probe has "
                                             r"no input 'speed' \(inputs: value\)$"):
         CoSimulation(load_scenario(write_scenario(text)))
+    text = PROBE.format(every=1, options='inputs = ["value", "heading"]').replace("probe.value", "probe.speed")
+    with pytest.raises(ScenarioError, match=r"no input 'speed' \(inputs: value, heading\)$"):
+        CoSimulation(load_scenario(write_scenario(text)))
     text = PROBE.format(every=1, options="").replace('type = "python"\nclass = "sample_participants:Probe"',
                                                      'type = "radar"')
     with pytest.raises(ScenarioError, match=r"unknown participant type 'radar' \(valid: [a-z_]+, [a-z_]+, .*, python\)"):
         CoSimulation(load_scenario(write_scenario(text)))
+
+
+def test_a_met_ocean_file_is_found_beside_the_scenario_and_its_errors_name_the_table(write_scenario, tmp_path):
+    text = PROBE.format(every=1, options="") + '\n[metocean]\nfile = "weather/missing.nc"\n'
+    scenario = load_scenario(write_scenario(text))
+    with pytest.raises(ScenarioError) as refused:
+        CoSimulation(scenario)
+    assert str(refused.value) == (f"{scenario.path}: metocean.file: met-ocean file not found: "
+                                  f"{tmp_path / 'weather' / 'missing.nc'}")
+
+
+def test_a_built_in_fmu_is_built_for_the_fmi_version_its_participant_asks_for(write_scenario, monkeypatch):
+    from orchestrator import fmu_build
+
+    asked = []
+
+    def ensure_built(name, fmi_version="2.0"):
+        asked.append((name, fmi_version))
+        raise ScenarioError("stop here: the FMU itself is not needed")
+
+    monkeypatch.setattr(fmu_build, "ensure_built", ensure_built)
+    text = PROBE.format(every=1, options="") + '\n[participants.ship]\nfmu = "KCS"\nfmi_version = "3.0"\n'
+    with pytest.raises(ScenarioError, match="^stop here"):
+        CoSimulation(load_scenario(write_scenario(text)))
+    assert asked == [("KCS", "3.0")]
+
+
+def test_removing_the_files_asks_every_participant_that_has_some_and_removes_the_work_folder(write_scenario):
+    cosim = CoSimulation(load_scenario(write_scenario(PROBE.format(every=1, options=""))))
+    assert not hasattr(cosim.participant("clock"), "remove_files")  # skipped, not an error
+    cosim.remove_files()
+    assert cosim.participant("probe").removed == 1
+    assert not cosim.work_dir.exists()
+
+
+def test_every_participant_whose_terminate_fails_is_named_in_the_reason(run_to_end):
+    text = PROBE.format(every=1, options="") + "".join(
+        f'\n[participants.{name}]\ntype = "python"\nclass = "sample_participants:Misbehaving"\n'
+        f'[participants.{name}.options]\nhow = "terminate"\n' for name in ("pump", "winch"))
+    outcome = run_to_end(text)
+    assert outcome.status == "failed"
+    assert outcome.reason == ("pump: terminate() raised OSError: device busy; "
+                              "winch: terminate() raised OSError: device busy")
+
+
+def test_a_class_calling_sys_exit_while_being_built_is_refused_naming_it(write_scenario):
+    text = PROBE.format(every=1, options="") + (
+        '\n[participants.bad]\ntype = "python"\nclass = "sample_participants:Misbehaving"\n'
+        '[participants.bad.options]\nhow = "exit_options"\n')
+    scenario = load_scenario(write_scenario(text))
+    with pytest.raises(ScenarioError) as refused:
+        CoSimulation(scenario)
+    assert str(refused.value) == (f"{scenario.path}: participants.bad: sample_participants:Misbehaving called "
+                                  "sys.exit(4) while being built")

@@ -174,3 +174,31 @@ def test_a_run_on_another_thread_is_stopped_at_its_limit(write_scenario, tmp_pat
     (report,) = reports
     assert report.status == "timed out" and "participant 'nap'" in report.reason
     assert report.summary["simulation"]["steps_done"] == 4
+
+
+def test_a_set_up_over_its_limit_ends_the_run_naming_the_set_up(run_to_end):
+    text = SLEEPER.replace("step_timeout_s = 1.0", "step_timeout_s = 0.3").replace(
+        "[participants.nap.options]", "[participants.nap.options]\nsetup_sleep_s = 5.0")
+    outcome = run_to_end(text)
+    assert outcome.status == "timed out"
+    assert outcome.reason == ("participant 'nap' did not return from set-up at t = 0 s within its wall-time limit "
+                              "of 0.3 s (step_timeout_s)")
+
+
+def test_a_call_that_does_not_return_after_its_interrupt_has_the_run_written_as_timed_out(run_to_end,
+                                                                                          monkeypatch):
+    """What the watchdog writes before it ends the process: the run's emergency writers are
+    called with the reason and the status "timed out" (the process's end is only recorded here)."""
+    from orchestrator import interrupts
+
+    written, ended = [], []
+    monkeypatch.setattr(interrupts, "write_emergency", lambda why, status="interrupted": written.append((why, status)))
+    monkeypatch.setattr(time_limits.os, "_exit", ended.append)
+    # interrupted at 0.3 s, it swallows that and sleeps 2.5 s more: 2 s of grace run out first
+    text = SLEEPER.replace("step_timeout_s = 1.0", "step_timeout_s = 0.3").replace(
+        "at_s = 4.0", "at_s = 1.0\nsleep_s = 2.5\nswallow = true")
+    outcome = run_to_end(text)
+    assert outcome.status == "timed out" and ended == [time_limits.EXIT_TIMED_OUT]
+    assert written == [("participant 'nap' did not return from its step at t = 1 s within its wall-time limit of "
+                        "0.3 s (step_timeout_s); the call did not return 2 s after it was interrupted (native code), "
+                        "so the process was ended", "timed out")]

@@ -43,6 +43,12 @@ def test_resampling_defaults_to_one_nautical_mile_and_stops_inside_the_extent():
     assert weather.y[-1] == 6 * NM
 
 
+def test_resampling_stops_inside_the_extent_along_y_too():
+    weather = resample_weather(metocean([0, 3, 6], np.linspace(0, 10 - 0.5 / NM, 5)))
+    assert weather.y[-1] == 9 * NM  # 10 nm lies 0.5 m beyond the grid: not a node
+    assert weather.x[-1] == 6 * NM
+
+
 @pytest.mark.parametrize("resolution", [0.0, -1.0])
 def test_resolution_must_be_positive(resolution):
     with pytest.raises(ValueError, match="^planning resolution must be positive$"):
@@ -52,6 +58,14 @@ def test_resolution_must_be_positive(resolution):
 @pytest.mark.parametrize("x_nm, y_nm", [([0, 0.5], [0, 5]), ([0, 5], [0, 0.5])])
 def test_a_resolution_leaving_one_node_along_either_axis_is_refused(x_nm, y_nm):
     with pytest.raises(ValueError, match="^planning resolution 1.0 nm leaves fewer than 2 nodes on the map$"):
+        resample_weather(metocean(x_nm, y_nm), 1.0)
+
+
+@pytest.mark.parametrize("x_nm, y_nm", [([0, 1500, 3000], [0, 5]), ([0, 5], [0, 1500, 3000])])
+def test_a_planning_grid_over_the_node_limit_along_either_axis_is_refused_before_it_is_built(x_nm, y_nm):
+    # 3000 nm at 1 nm: 3001 nodes, over the limit of 2001 (measured over the whole axis, not from its second node)
+    with pytest.raises(ValueError, match=r"^the planning resolution_nm gives 3e\+03 grid nodes along an axis, "
+                                         r"more than the limit of 2001"):
         resample_weather(metocean(x_nm, y_nm), 1.0)
 
 
@@ -110,6 +124,14 @@ def test_guidance_abeam_of_the_ship_goal_line_is_scaled_by_exp_delta2_over_2c2(c
     assert g[0, 0] == pytest.approx(expected, rel=1e-12)
 
 
+def test_guidance_at_the_start_is_the_time_to_the_goal_times_eps():
+    # on the ship-goal line the bearing difference is 0: G = eps * distance / speed, for a
+    # line running neither north nor east from a start off the grid's diagonal
+    start, goal = (2 * NM, 9 * NM), (30 * NM, 20 * NM)
+    g = guidance_field([start[0]], [start[1]], start, goal, SPEED, GuidanceParameters(eps=2.0, c_rad=0.5))
+    assert g[0, 0] == pytest.approx(2.0 * math.hypot(28 * NM, 11 * NM) / SPEED, rel=1e-12)
+
+
 def test_superposition_guidance_matches_the_wrapped_formula_across_south():
     """The ship north of the goal: psi = pi, and the bearings to the goal from either side of
     the line are near +pi and -pi: the difference must be wrapped, not taken as ~2 pi."""
@@ -160,6 +182,14 @@ def test_new_weather_on_the_same_grid_rebuilds_the_energy_fields():
     assert not np.allclose(field.ec, calm_ec)
     coarse = resample_weather(metocean(np.arange(0, 11, 2.0), np.arange(0, 11, 2.0)), 2.0)
     with pytest.raises(ValueError, match=r"^new planning weather has 6 x 6 nodes, the field 11 x 11$"):
+        field.set_weather(coarse)
+
+
+def test_new_weather_on_another_grid_is_refused_naming_both_node_counts():
+    wide = resample_weather(metocean(np.arange(0, 11, 1.0), np.arange(0, 6, 1.0)), 1.0)
+    field = SuperpositionField(wide, (9 * NM, 4 * NM))
+    coarse = resample_weather(metocean(np.arange(0, 11, 2.0), np.arange(0, 6, 1.0)), 2.0)
+    with pytest.raises(ValueError, match=r"^new planning weather has 6 x 3 nodes, the field 11 x 6$"):
         field.set_weather(coarse)
 
 

@@ -117,12 +117,13 @@ def test_infeasible_solve_falls_back_to_the_shifted_plan(kcs):
     state = np.array([0.0, 0.0, course, speed, 0.0, 0.0])
     first = controller.solve(0.0, state, reference_at(0.0))
     assert first.success and not first.fallback
+    assert (controller.fallback_count, controller.failure_count) == (0, 0)  # a fresh controller's counts
     state = rk4_step(state, first.tau, DT, 40, kcs)
     before = controller.fallback_count
     on_the_ship = np.array([[state[0], state[1], 0.0, 0.0, 500.0]])
     second = controller.solve(DT, state, reference_at(DT), on_the_ship, et=True)
     assert not second.success and second.fallback
-    assert controller.fallback_count == before + 1
+    assert controller.fallback_count == before + 1 and controller.failure_count == 1
     np.testing.assert_allclose(second.tau, first.inputs[1])  # next input of the previous plan
     # with no previous plan: hold the surge force, zero yaw moment
     controller.reset()
@@ -243,3 +244,37 @@ def test_participant_step_outputs(kcs):
     assert out["solver_ok"] == 1.0 and out["fallback"] == 0.0
     assert out["tau_r"] < 0.0  # 50 m east (starboard) of a northbound track: turn to port
     assert ctrl.summary()["solves"] == 1
+
+
+def test_without_a_previous_input_given_the_previous_plans_first_input_is_taken(kcs):
+    """The input-rate term starts from the input applied last: the stored plan's first input,
+    the same as passing it as ``previous_tau`` (not the equilibrium force of the speed)."""
+    course, speed = 0.3, 14 * KNOT
+    state = np.array([0.0, 0.0, 0.0, 18 * KNOT, 0.0, 0.0])  # off course and too fast: inputs far from equilibrium
+
+    def reference_at(t):
+        return line_or_turn_reference(t + DT * np.arange(N + 1), (0.0, 0.0), course, speed)
+
+    remembered, told = (NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=DT)) for _ in range(2))
+    first = remembered.solve(0.0, state, reference_at(0.0))
+    told.solve(0.0, state, reference_at(0.0))
+    state = rk4_step(state, first.tau, DT, 40, kcs)
+    second = remembered.solve(DT, state, reference_at(DT))
+    given = told.solve(DT, state, reference_at(DT), previous_tau=first.inputs[0])
+    assert second.success and given.success
+    np.testing.assert_allclose(second.tau, given.tau, rtol=1e-6)
+    remembered.close()
+    told.close()
+
+
+@pytest.mark.parametrize("speed_kn, course, reference_kn, bound", [(24, -1.5, 6, -1.0), (6, 1.5, 24, 1.0)])
+def test_applied_inputs_stay_within_the_actuator_limits_exactly(controller, speed_kn, course, reference_kn, bound):
+    """The solver meets its bounds to its tolerance (about 1e-8 beyond them); the inputs it
+    hands on are clipped to the limits themselves."""
+    controller.reset()
+    state = np.array([0.0, 0.0, 0.0, speed_kn * KNOT, 0.0, 0.0])  # too fast or slow, the course far to one side
+    reference = line_or_turn_reference(DT * np.arange(N + 1), (0.0, 0.0), course, reference_kn * KNOT)
+    solution = controller.solve(0.0, state, reference)
+    assert solution.success
+    assert np.all(np.abs(solution.inputs) <= controller.input_scale)
+    assert np.any(solution.inputs == bound * controller.input_scale)  # saturated: the bound itself

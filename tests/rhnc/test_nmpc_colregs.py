@@ -333,3 +333,30 @@ def test_targets_out_of_reach_within_the_horizon_get_no_constraint():
     assert slots[-1, 0] == 1.0 and slots[-1, 1] == 0.0  # one slot filled, the second left off
     _, report = domains.parameters(targets, state, np.zeros(2), 1.25 * SPEED, 5.0, 230.0, et=True)
     np.testing.assert_array_equal(report.active, [1.0, 1.0])  # no horizon given: every target
+
+
+def test_each_obstacle_in_reach_gets_its_own_slot_nearest_first():
+    domains = CollisionDomains(DomainSettings(colregs=False), max_obstacles=4)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    obstacles = np.array([[3 * NM, 0.0, 0.0, 0.0, RADIUS], [1 * NM, 0.0, 0.0, 0.0, RADIUS],
+                          [2 * NM, 0.5 * NM, 0.0, 0.0, RADIUS]])
+    slots, report = domains.parameters(obstacles, state, np.zeros(2), SPEED, 5.0, 230.0, et=True)
+    np.testing.assert_array_equal(slots[OBSTACLE_FIELDS - 1], [1.0, 1.0, 1.0, 0.0])
+    np.testing.assert_allclose(slots[0, :3] * 230.0, [1 * NM, 2 * NM, 3 * NM])
+    np.testing.assert_allclose(slots[1, :3] * 230.0, [0.0, 0.5 * NM, 0.0])
+    np.testing.assert_array_equal(report.active, [1.0, 1.0, 1.0])
+
+
+@pytest.mark.parametrize("acting, alters", [(False, False), (True, True)])
+def test_a_stand_on_ship_alters_only_once_it_acts(acting, alters):
+    """A stand-on target kept clear of (guarded, while the ship gives way to another) begins no
+    alteration of its own: only Rule 17's action does (with the CPA ahead)."""
+    from types import SimpleNamespace
+
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    if acting:
+        domains._acting.add(0)
+    encounter = SimpleNamespace(encounter_class="crossing_stand_on", tcpa_s=300.0, cpa_m=100.0, range_m=2 * NM,
+                                relative_bearing_deg=-60.0)
+    domains._update_alteration(0, encounter, 0.0, 0.0, 50.0, RADIUS)
+    assert (0 in domains._altering, domains.alterations) == (alters, int(alters))

@@ -158,3 +158,25 @@ def test_final_approach_from_the_goal_stays_on_it():
     goal = (30_000.0, 40_000.0)
     path = plan((0.0, 1.0), goal, goal, steps=4, final_approach=True)
     assert path.points.shape == (5, 2) and np.all(path.points == goal) and path.reached_goal
+
+
+class ValleyOverFlatGuidance:
+    """U a valley along x = const (y = 51 km at its floor), G flat: the second step down U
+    turns back, a local minimum, and G alone has no direction to offer."""
+
+    extent = (0.0, SIZE_M, 0.0, SIZE_M)
+
+    def __init__(self, goal):
+        self.goal = goal
+
+    def gradient_at(self, x, y, avoidance=False):
+        return (0.0, 0.0) if avoidance else (0.0, float(np.sign(y - 51_000.0)))
+
+
+def test_a_local_minimum_where_guidance_is_flat_is_left_along_the_bearing_to_the_goal():
+    goal = (90_000.0, 52_000.0)  # due north of the first step's end
+    path = plan_local_path(ValleyOverFlatGuidance(goal), (50_000.0, 50_000.0), STEP_M, 3)
+    assert path.trapped_at == 1
+    np.testing.assert_array_equal(path.points, [[50_000.0, 50_000.0], [50_000.0, 52_000.0],
+                                                [52_000.0, 52_000.0], [54_000.0, 52_000.0]])
+    assert path.flat_steps == 2 and path.border_steps == 0
