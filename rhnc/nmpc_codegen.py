@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import json
 import logging
 import os
 import shutil
@@ -99,11 +100,16 @@ def _compiler_identity(compiler: str) -> str:
     return f"{compiler}|{first}"
 
 
-def library_key(nlp: dict, plugin: str, compiler: str) -> str:
-    """Content hash of what the compiled library is made from (see the module docstring)."""
+def library_key(nlp: dict, plugin: str, compiler: str, options: dict | None = None) -> str:
+    """Content hash of what the compiled library is made from (see the module docstring):
+    the solver's options too, since they decide which derivatives are generated (a
+    limited-memory Hessian needs no ``nlp_hess_l``; a library built without it must not
+    serve a solver asking for the exact Hessian)."""
     oracle = ca.Function("nlp", [nlp["x"], nlp["p"]], [nlp["f"], nlp["g"]], ["x", "p"], ["f", "g"])
     digest = hashlib.sha256()
-    for part in (RECIPE_VERSION, ca.__version__, plugin, _compiler_identity(compiler), " ".join(COMPILER_FLAGS)):
+    settings = json.dumps(options or {}, sort_keys=True, default=repr)
+    for part in (RECIPE_VERSION, ca.__version__, plugin, _compiler_identity(compiler), " ".join(COMPILER_FLAGS),
+                 settings):
         digest.update(part.encode())
         digest.update(b"\0")
     digest.update(oracle.serialize().encode())
@@ -188,7 +194,7 @@ class NLPLibrary:
         directory = cache_dir()
         try:
             directory.mkdir(parents=True, exist_ok=True)
-            key = library_key(self.compact_nlp, self.plugin, compiler)
+            key = library_key(self.compact_nlp, self.plugin, compiler, self.options)
             path = directory / f"nlp_{self.plugin}_{key[:24]}.so"
             if not path.is_file():
                 with _exclusive(directory / f"{path.stem}.lock"):

@@ -112,6 +112,9 @@ def test_the_key_follows_the_problem_the_solver_and_the_compiler(tmp_path):
     assert library_key(tiny_nlp(2.0), "ipopt", str(one)) != key
     assert library_key(tiny_nlp(), "fatrop", str(one)) != key
     assert library_key(tiny_nlp(), "ipopt", str(two)) != key
+    # the solver's options decide which derivatives are compiled: they are part of the key
+    assert library_key(tiny_nlp(), "ipopt", str(one), {"ipopt.hessian_approximation": "limited-memory"}) != key
+    assert library_key(tiny_nlp(), "ipopt", str(one), {}) == key
 
 
 # -- building, loading, falling back -------------------------------------------------------------------
@@ -121,7 +124,7 @@ def test_a_library_is_built_once_named_by_solver_and_key_and_solves_as_interpret
     library = NLPLibrary(tiny_nlp(), "ipopt", OPTIONS)
     assert 0.0 < library.build_time_s <= time.perf_counter() - started
     assert library.mode == "compiled" and NLPLibrary.builds == builds + 1
-    key = library_key(tiny_nlp(), "ipopt", find_compiler())
+    key = library_key(tiny_nlp(), "ipopt", find_compiler(), OPTIONS)
     assert library.path == cache / f"nlp_ipopt_{key[:24]}.so" and library.path.is_file()
     assert library.build_time_s > 0.0 and library.reason == ""
     assert library.summary() == {"codegen": "compiled", "codegen_library": str(library.path),
@@ -227,7 +230,7 @@ def test_a_compact_form_is_what_gets_compiled_and_the_expressions_what_get_inter
     compact = tiny_nlp(2.0)  # another graph of the same problem's optimum
     library = NLPLibrary(tiny_nlp(), "ipopt", OPTIONS, compact_nlp=compact)
     assert library.nlp["f"] is not compact["f"] and library.compact_nlp is compact
-    assert library.path.name == f"nlp_ipopt_{library_key(compact, 'ipopt', find_compiler())[:24]}.so"
+    assert library.path.name == f"nlp_ipopt_{library_key(compact, 'ipopt', find_compiler(), OPTIONS)[:24]}.so"
 
 
 def test_an_error_is_told_in_one_line():
