@@ -198,3 +198,18 @@ def test_a_voyage_ends_at_the_crossing_of_the_arrival_radius_not_at_the_next_sam
     assert cut["cost"][-1] == pytest.approx(1.5)
     # a ship inside at the first sample has sailed nothing
     assert cut_at_crossing(series, distance, first_inside=0, radius_m=2000.0)["time_s"].tolist() == [0.0]
+
+
+def test_mean_speed_through_water_is_the_time_average_of_hypot_u_v():
+    from rhnc.voyage import mean_speed_through_water_kn
+
+    # two samples starting at t = 100 s: the average of 2 and 4 m/s
+    assert mean_speed_through_water_kn([100.0, 160.0], [2.0, 4.0], [0.0, 0.0]) == pytest.approx(3.0 / KNOT)
+    # sway counts: hypot(3, 4) = 5 m/s throughout
+    assert mean_speed_through_water_kn([0.0, 30.0, 60.0], [3.0, 3.0, 3.0], [4.0, 4.0, 4.0]) == pytest.approx(5.0 / KNOT)
+    # a repeated first sample adds no time
+    assert mean_speed_through_water_kn([100.0, 100.0, 160.0], [2.0, 2.0, 4.0], [0.0] * 3) == pytest.approx(3.0 / KNOT)
+    # no time elapsed: the speed at the only instant
+    assert mean_speed_through_water_kn([50.0, 50.0], [3.0, 5.0], [0.0, 0.0]) == pytest.approx(3.0 / KNOT)
+    assert mean_speed_through_water_kn([50.0], [3.0], [4.0]) == pytest.approx(5.0 / KNOT)
+    assert np.isnan(mean_speed_through_water_kn([], [], []))
