@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 
 import casadi as ca
+import numpy as np
 import pytest
 
 from rhnc import nmpc_codegen
@@ -115,6 +116,10 @@ def test_the_key_follows_the_problem_the_solver_and_the_compiler(tmp_path):
     # the solver's options decide which derivatives are compiled: they are part of the key
     assert library_key(tiny_nlp(), "ipopt", str(one), {"ipopt.hessian_approximation": "limited-memory"}) != key
     assert library_key(tiny_nlp(), "ipopt", str(one), {}) == key
+    # the same options in another order, or with numpy numbers, give one key
+    assert (library_key(tiny_nlp(), "ipopt", str(one), {"a": 1, "b": {"c": "d"}})
+            == library_key(tiny_nlp(), "ipopt", str(one), {"b": {"c": "d"}, "a": 1}))
+    assert library_key(tiny_nlp(), "ipopt", str(one), {"ipopt.max_iter": np.int64(200)}) != key
 
 
 # -- building, loading, falling back -------------------------------------------------------------------
