@@ -104,14 +104,14 @@ def markdown(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
-def write_between_markers(path, table: str) -> None:
-    """Replace the text between :data:`BEGIN` and :data:`END` in ``path`` by ``table``."""
-    path = Path(path)
-    text = path.read_text()
+def with_table(path, table: str) -> str:
+    """The text of ``path`` with ``table`` between :data:`BEGIN` and :data:`END` (ValueError
+    naming the file when they are missing)."""
+    text = Path(path).read_text()
     start, stop = text.find(BEGIN), text.find(END)
     if start < 0 or stop < start:
         raise ValueError(f"{path}: no '{BEGIN}' ... '{END}' lines to write the table between")
-    path.write_text(text[: start + len(BEGIN)] + "\n" + table + "\n" + text[stop:])
+    return text[: start + len(BEGIN)] + "\n" + table + "\n" + text[stop:]
 
 
 def main(argv=None) -> int:
@@ -127,11 +127,9 @@ def main(argv=None) -> int:
     table = markdown([summarise(folder) for folder in args.folders])
     if args.write:
         try:
-            for path in args.write:   # every file checked before one is written
-                if BEGIN not in Path(path).read_text() or END not in Path(path).read_text():
-                    raise ValueError(f"{path}: no '{BEGIN}' ... '{END}' lines to write the table between")
-            for path in args.write:
-                write_between_markers(path, table)
+            texts = {path: with_table(path, table) for path in args.write}   # every file before one is written
+            for path, text in texts.items():
+                Path(path).write_text(text)
         except (OSError, ValueError) as error:
             print(f"suite_report: {error}", file=sys.stderr)  # noqa: T201 - a command's error
             return 2
