@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 
 from rhnc import nmpc_codegen
-from rhnc.nmpc_codegen import (CACHE_ENV, CODEGEN_ENV, NLPLibrary, _compiler_identity, _one_line, cache_dir,
-                               codegen_disabled_by_environment, find_compiler, library_key)
+from rhnc.nmpc_codegen import (CACHE_ENV, CODEGEN_ENV, COMPILER_FLAGS, NATIVE_FLAGS, NLPLibrary, _compiler_identity,
+                               _one_line, cache_dir, codegen_disabled_by_environment, compiler_flags, find_compiler,
+                               library_key)
 
 OPTIONS = {"print_time": False, "ipopt": {"print_level": 0, "sb": "yes"}, "expand": True}
 
@@ -120,6 +121,42 @@ def test_the_key_follows_the_problem_the_solver_and_the_compiler(tmp_path):
     assert (library_key(tiny_nlp(), "ipopt", str(one), {"a": 1, "b": {"c": "d"}})
             == library_key(tiny_nlp(), "ipopt", str(one), {"b": {"c": "d"}, "a": 1}))
     assert library_key(tiny_nlp(), "ipopt", str(one), {"ipopt.max_iter": np.int64(200)}) != key
+
+
+def test_the_native_instruction_set_is_used_only_where_the_compiler_takes_it(tmp_path):
+    takes = script(tmp_path, "cc-native", "exit 0\n")
+    refuses = script(tmp_path, "cc-portable", 'for a in "$@"; do [ "$a" = "-march=native" ] && exit 1; done\nexit 0\n')
+    assert compiler_flags(str(takes)) == (*COMPILER_FLAGS, *NATIVE_FLAGS)
+    assert compiler_flags(str(refuses)) == COMPILER_FLAGS
+    assert compiler_flags(str(tmp_path / "missing")) == COMPILER_FLAGS
+
+
+def test_a_compiler_hanging_on_the_native_probe_gets_the_portable_flags(monkeypatch):
+    def hangs(command, **options):
+        assert options.get("timeout") is not None, "no time limit: a hanging compiler hangs the run"
+        raise subprocess.TimeoutExpired(command, options["timeout"])
+
+    monkeypatch.setattr(subprocess, "run", hangs)
+    assert compiler_flags("/hanging/cc") == COMPILER_FLAGS
+
+
+def test_a_library_for_the_native_instruction_set_is_keyed_by_the_processor(tmp_path, monkeypatch):
+    native = script(tmp_path, "cc-native", "echo 'cc 1'\n")
+    portable = script(tmp_path, "cc-portable", 'for a in "$@"; do [ "$a" = "-march=native" ] && exit 1; done\n'
+                                               "echo 'cc 1'\n")
+    keys = {}
+    for processor in ("model A|avx2 fma", "model B|sse2"):
+        monkeypatch.setattr(nmpc_codegen, "processor_identity", lambda processor=processor: processor)
+        keys[processor] = (library_key(tiny_nlp(), "fatrop", str(native)),
+                           library_key(tiny_nlp(), "fatrop", str(portable)))
+    (native_a, portable_a), (native_b, portable_b) = keys.values()
+    assert native_a != native_b, "a library built for one processor's instructions was offered to another"
+    assert portable_a == portable_b, "a portable library was keyed by the processor (needless rebuilds)"
+
+
+def test_the_processor_identity_names_model_and_features():
+    identity = nmpc_codegen.processor_identity()
+    assert identity and identity == nmpc_codegen.processor_identity()
 
 
 # -- building, loading, falling back -------------------------------------------------------------------
