@@ -159,6 +159,7 @@ class ControlParticipant(Participant):
         self._timeouts = 0
         self._speeds: list[float] = []
         self._cpu_times: list[float] = []
+        self._step_cpu_times: list[float] = []
 
     @classmethod
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "ControlParticipant":
@@ -193,6 +194,7 @@ class ControlParticipant(Participant):
         self._timeouts = 0
         self._speeds = []
         self._cpu_times = []
+        self._step_cpu_times = []
         slots = self.controller.settings.max_obstacles
         idle = SimpleNamespace(solve_time_s=0.0, solve_cpu_time_s=0.0, iterations=0, success=True, fallback=False,
                                cost=0.0, constraint_violation=0.0, collision_slack=0.0, timed_out=False,
@@ -222,6 +224,7 @@ class ControlParticipant(Participant):
         self._steps += 1
         self._solve_times.append(solution.solve_time_s)
         self._cpu_times.append(solution.solve_cpu_time_s)
+        self._step_cpu_times.append(solution.step_cpu_time_s)
         if solution.fallback:
             LOG.warning("%s: NMPC failed at t = %.1f s (%s), fallback applied", self.name, time, solution.status)
         self._slack_steps += int(solution.collision_slack > 0.0)
@@ -273,6 +276,8 @@ class ControlParticipant(Participant):
             "timeout_count": self._timeouts,
             "solve_cpu_time_median_s": float(np.median(self._cpu_times)) if self._cpu_times else None,
             "solve_cpu_time_max_s": float(np.max(self._cpu_times)) if self._cpu_times else None,
+            "step_cpu_time_median_s": float(np.median(self._step_cpu_times)) if self._step_cpu_times else None,
+            "step_cpu_time_max_s": float(np.max(self._step_cpu_times)) if self._step_cpu_times else None,
             "stand_on_actions": self.controller.domains.stand_on_actions,
             "apparent_alterations": self.controller.domains.alterations,
             "max_speed_kn": float(max(self._speeds)) / KNOT if self._speeds else None,

@@ -62,6 +62,7 @@ from __future__ import annotations
 
 import logging
 import math
+import time
 
 import numpy as np
 
@@ -229,6 +230,15 @@ class NMPCController:
         NMPCSolution
             Applied input, prediction and telemetry; on failure or time-out the fallback.
         """
+        cpu_start = time.process_time()
+        solution = self._step(time_s, state, reference, obstacles, et, previous_tau)
+        here = time.process_time() - cpu_start  # in-process solves: with their new solver objects
+        solution.step_cpu_time_s = (here + solution.solve_cpu_time_s if self.solvers.in_worker
+                                    else here - solution.preparation_cpu_s)
+        return solution
+
+    def _step(self, time_s, state, reference, obstacles, et, previous_tau) -> NMPCSolution:
+        """:meth:`solve` without its processor-time count."""
         s = self.settings
         N = s.horizon_steps
         state = np.asarray(state, dtype=float)

@@ -212,6 +212,11 @@ class NMPCSolution:
         Processor time [s] spent outside the solve on new solver objects (fatrop, after a
         difficult solve: built by the worker after its answer, see
         :mod:`rhnc.solver_watchdog`).
+    step_cpu_time_s : float
+        Processor time of the whole control step [s]: the controller's own work around the
+        solve (reference, domains, warm start, unpacking) in this process, plus the solver
+        calls wherever they ran (the watchdog's worker's share included, its preparation of
+        new solver objects left out as in ``solve_cpu_time_s``).
     """
 
     tau: np.ndarray
@@ -231,3 +236,4 @@ class NMPCSolution:
     domain_active: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     solve_cpu_time_s: float = 0.0
     preparation_cpu_s: float = 0.0
+    step_cpu_time_s: float = 0.0

@@ -250,9 +250,14 @@ class BoundedSolver:
             LOG.warning("no os.fork on this platform: NMPC solves are limited by iterations only")
             self.wall_time_s = self.cpu_time_s = None
 
+    @property
+    def in_worker(self) -> bool:
+        """Solves run in the forked worker (False: in this process)."""
+        return self.wall_time_s is not None or self.cpu_time_s is not None
+
     def solve(self, name: str, **arguments) -> SolveOutcome:
         """Call solver ``name`` with nlpsol arguments (x0, p, lbx, ubx, lbg, ubg, optionally lam_x0, lam_g0)."""
-        if self.wall_time_s is None and self.cpu_time_s is None:
+        if not self.in_worker:
             if name not in self._solvers:
                 self._solvers[name] = self.factories[name]()
             outcome = _timed_call(self._solvers[name], arguments)
