@@ -39,7 +39,7 @@ configuration starts from the same state, so its applied
 input tells whether both tools solve the same problem: the table gives its difference
 from ours with IPOPT (as a fraction of tau_max).
 
-Run: ``python bench/bench_nmpc.py [--steps 90] [--targets 1 3] [--do-mpc-compiled]``
+Run: ``python bench/bench_nmpc.py [--steps 90] [--targets 1 3] [--do-mpc-compiled] [--block K] [--only TEXT ...]``
 (needs ``pip install do-mpc``).  The machine's load (``os.getloadavg``) is printed with the
 figures: on a shared machine, compare configurations of the same run only.
 """
@@ -297,11 +297,19 @@ def main() -> None:
     parser.add_argument("--targets", type=int, nargs="+", default=[1, 3], choices=[1, 3])
     parser.add_argument("--do-mpc-compiled", action="store_true", help="also do-mpc with compile_nlp (gcc -O1)")
     parser.add_argument("--no-do-mpc", action="store_true")
+    parser.add_argument("--block", type=int, default=1,
+                        help="steps each configuration sails before the next takes its turn (1: step by step; "
+                             "the number of steps: each closed loop in one go, its caches its own)")
+    parser.add_argument("--only", nargs="+", metavar="TEXT",
+                        help="run only the configurations whose name contains one of these texts")
     args = parser.parse_args()
+    if args.block < 1:
+        parser.error(f"--block must be at least 1, got {args.block}")
     params = load_parameter_set("default")
     load_before = os.getloadavg()
-    print(f"NMPC N_c = {N}, interval {DT_S:.0f} s, {args.steps} closed-loop steps; {os.cpu_count()} cores; "
-          f"load average {load_before[0]:.1f} / {load_before[1]:.1f} / {load_before[2]:.1f} before")
+    turns = "step by step" if args.block == 1 else f"in blocks of {args.block} steps"
+    print(f"NMPC N_c = {N}, interval {DT_S:.0f} s, {args.steps} closed-loop steps, configurations in turn {turns}; "
+          f"{os.cpu_count()} cores; load average {load_before[0]:.1f} / {load_before[1]:.1f} / {load_before[2]:.1f} before")
     configurations = [
         # IPOPT on both sides, each tool at its defaults: no multipliers carried over
         ("ours ipopt interpreted, cold duals, in-process", lambda t: ours(params, "ipopt", t, False, False, False)),
@@ -316,6 +324,10 @@ def main() -> None:
         ("ours fatrop compiled, in-process", lambda t: ours(params, "fatrop", t, True, False)),
         ("ours fatrop interpreted, watchdog", lambda t: ours(params, "fatrop", t, False, True)),
     ]
+    if args.only:
+        configurations = [c for c in configurations if any(text in c[0] for text in args.only)]
+        if not configurations:
+            parser.error(f"--only {' '.join(args.only)}: no configuration's name contains it")
     if args.no_do_mpc:
         configurations = [c for c in configurations if not c[0].startswith("do-mpc")]
     elif args.do_mpc_compiled:
@@ -323,18 +335,19 @@ def main() -> None:
                                lambda t: do_mpc_run(params, t, True, True)))
     for targets in args.targets:
         loops = {name: build(targets) for name, build in configurations}
-        for _ in range(args.steps):
-            for loop in loops.values():  # in turn, step by step
-                loop.advance()
+        for first in range(0, args.steps, args.block):
+            for loop in loops.values():  # in turn, a block of steps each
+                for _ in range(min(args.block, args.steps - first)):
+                    loop.advance()
         results = {}
         for name, loop in loops.items():
             results[name] = loop.result()
             if loop.close is not None:
                 loop.close()
-        baseline = results[configurations[0][0]]["first_tau"]
+        baseline = next(iter(results.values()))["first_tau"]
         print(f"\n{targets} target(s); whole step [ms]: wall median, 95th percentile, max; solver-only wall median; "
               "processor time median and max (this process plus the watchdog's worker); prep: median processor "
-              "time of the fresh fatrop object, built outside the solve")
+              "time of the fresh fatrop object, built outside the solve; tau0 diff: first input against the first row's")
         print(f"{'configuration':48s} {'median':>8s} {'p95':>8s} {'max':>8s} {'solver':>8s} {'cpu med':>7s} {'cpu max':>7s} {'prep':>5s} {'iter med/max':>10s} "
               f"{'fails':>5s} {'min gap nm':>8s} {'tau0 diff':>9s}")
         for name, result in results.items():
