@@ -189,6 +189,7 @@ class ControlParticipant(Participant):
     def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         """Reset the controller; initial outputs are zero inputs (the first step decides)."""
         self.controller.reset()
+        self.controller.start()
         self._tau = np.zeros(2)
         self._slack_steps = 0
         self._timeouts = 0

@@ -175,6 +175,10 @@ class NMPCController:
         if self.observer is not None:
             self.observer.reset()
 
+    def start(self) -> None:
+        """Start the solver's worker process now: forking it took 10-40 ms in the first solve."""
+        self.solvers.start()
+
     def close(self) -> None:
         """Stop the solver's worker process (also done when the controller is collected)."""
         self.solvers.close()

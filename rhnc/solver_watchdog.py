@@ -250,6 +250,11 @@ class BoundedSolver:
             LOG.warning("no os.fork on this platform: NMPC solves are limited by iterations only")
             self.wall_time_s = self.cpu_time_s = None
 
+    def start(self) -> None:
+        """Fork the worker now (when solves run in one), so that the first solve does not pay for it."""
+        if self.in_worker:
+            self._ensure_worker()
+
     @property
     def in_worker(self) -> bool:
         """Solves run in the forked worker (False: in this process)."""

@@ -233,6 +233,16 @@ def test_participant_rejects_unknown_parameter_set():
         ControlParticipant.from_options("ctrl", {"parameter_set": "kcs"}, context())
 
 
+def test_the_solver_worker_is_started_at_set_up_not_in_the_first_step():
+    ctrl = ControlParticipant.from_options("ctrl", {"horizon_steps": 10}, context())
+    assert ctrl.controller.solvers.in_worker and ctrl.controller.solvers._pid is None
+    try:
+        ctrl.setup(0.0, {})
+        assert ctrl.controller.solvers._pid is not None, "the first solve would pay for forking the worker"
+    finally:
+        ctrl.terminate()
+
+
 def test_participant_step_outputs(kcs):
     ctrl = ControlParticipant.from_options("ctrl", {"horizon_steps": 10, "solver": "ipopt"}, context())
     ctrl.setup(0.0, {})
