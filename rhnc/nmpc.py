@@ -73,7 +73,7 @@ from rhnc.nmpc_codegen import NLPLibrary
 from rhnc.nmpc_alteration import heading_bounds
 from rhnc.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport
 from rhnc.nmpc_problem import (ACCEPTABLE_VIOLATION, DISTURBANCE_SIZE, FRESH_SOLVER_PLUGINS, OBSTACLE_FIELDS,
-                               build_problem, renew_solver_after, solver_options)
+                               StepEvaluator, build_problem, renew_solver_after, solver_options)
 from rhnc.nmpc_settings import SOLVERS, NMPCSettings, NMPCSolution
 from rhnc.nmpc_terminal import MIN_TERMINAL_SPEED_MPS, TerminalWeight
 from rhnc.nmpc_warm_start import PlanMemory, push_guess_clear
@@ -136,6 +136,7 @@ class NMPCController:
                                      s.q, s.r, s.r_rate, s.collision_slack_weight, self.state_scale,
                                      self.input_scale)
         self._F_scaled = self.problem.step
+        self._next_state = StepEvaluator(self.problem.step)
         self.terminal_weight = TerminalWeight(self.problem.step, params, s.q, s.r, U, self.input_scale,
                                               s.terminal_weight)
         options = solver_options(s.solver, self.problem.equality, s.max_iterations, s.wall_time_limit_s,
@@ -197,7 +198,7 @@ class NMPCController:
         z = self._to_scaled(state, origin)
         rows = [z]
         for w in np.asarray(inputs) / self.input_scale:
-            z = np.array(self._F_scaled(z, w, d)[0]).ravel()
+            z = self._next_state(z, w, d)
             rows.append(z)
         return self._from_scaled(np.array(rows), origin)
 
@@ -397,7 +398,7 @@ class NMPCController:
         guess[problem.w_index.ravel()] = np.clip(w, -1.0, 1.0).ravel()
         # the first interval from the measured state: a non-finite value here means the
         # model cannot predict from this state at all
-        z1 = np.array(self._F_scaled(z[0], np.clip(w[0], -1.0, 1.0), disturbance)[0]).ravel()
+        z1 = self._next_state(z[0], np.clip(w[0], -1.0, 1.0), disturbance)
         if not np.all(np.isfinite(z1)):
             guess[:] = np.nan
         return guess

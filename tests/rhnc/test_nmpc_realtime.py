@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from rhnc.nmpc import NMPCController, NMPCSettings
-from rhnc.nmpc_problem import build_problem
+from rhnc.nmpc_problem import StepEvaluator, build_problem
 from rhnc.nmpc_warm_start import PlanMemory
 from rhnc.reference_participant import line_or_turn_reference
 from rhnc.ship_model import load_parameter_set, rk4_step
@@ -41,6 +41,20 @@ def test_compact_nlp_is_the_inlined_nlp(kcs, slots, slack):
         assert float(f2) == pytest.approx(float(f1), rel=1e-12)
         np.testing.assert_allclose(np.array(g2).ravel(), np.array(g1).ravel(), rtol=1e-12, atol=1e-12)
         assert float(f1) != 0.0
+
+
+def test_the_buffered_model_step_is_the_casadi_step(kcs):
+    controller = NMPCController(kcs, NMPCSettings(horizon_steps=5, control_interval_s=20.0, max_obstacles=1))
+    step = controller.problem.step
+    evaluate = StepEvaluator(step)
+    rng = np.random.default_rng(3)
+    results = []
+    for _ in range(3):
+        z, w, d = rng.normal(size=6), rng.uniform(-1, 1, size=2), rng.normal(size=5) * [0.5, 0.5, 1e5, 1e5, 1e7]
+        expected = np.array(step(z, w, d)[0]).ravel()
+        results.append((evaluate(z, w, d), expected))
+    for got, expected in results:  # each result kept its values after the later calls
+        np.testing.assert_allclose(got, expected, rtol=1e-14, atol=0.0)
 
 
 def test_multipliers_shift_by_whole_stages_like_the_plan():
