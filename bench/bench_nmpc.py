@@ -150,7 +150,9 @@ def ours(params, solver: str, targets: int, codegen: bool, watchdog: bool, warm_
                 solution.preparation_cpu_s)
 
     step(0.0, np.array([0.0, 0.0, COURSE_RAD, SPEED_MPS, 0.0, 0.0]))  # fork the worker, load the solver
-    return ClosedLoop(step, targets, params, controller.library.mode, controller.close)
+    loop = ClosedLoop(step, targets, params, controller.library.mode, controller.close)
+    loop.controller = controller
+    return loop
 
 
 def do_mpc_controller(params, targets: int, compiled: bool, warm_duals: bool = False):
@@ -233,7 +235,9 @@ def do_mpc_controller(params, targets: int, compiled: bool, warm_duals: bool = F
         return template
 
     mpc.set_tvp_fun(tvp_fun)
-    mpc.setup()
+    with warnings.catch_warnings():  # do-mpc's own validity check calls numpy on CasADi values
+        warnings.filterwarnings("ignore", category=FutureWarning, module="casadi")
+        mpc.setup()
     if compiled:
         folder = cache_dir() / "do-mpc"
         folder.mkdir(parents=True, exist_ok=True)
