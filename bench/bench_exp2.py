@@ -65,7 +65,7 @@ def child(results: str) -> None:
     import orchestrator.analyses as analyses
     import orchestrator.master as master
     import orchestrator.run as run
-    from orchestrator.cli import main
+    from orchestrator.cli import console_main
 
     spent: dict[str, float] = {}
     first: dict[str, float] = {}
@@ -73,7 +73,11 @@ def child(results: str) -> None:
     _timed(master.CoSimulation, "run", "loop", spent, first)
     _timed(run, "_write", "results", spent, first)
     _timed(analyses, "draw_figure", "figures", spent, first)
-    code = main(["run", str(SCENARIO), "--results", results, "--no-progress"])
+    sys.argv = ["orchestrator", "run", str(SCENARIO), "--results", results, "--no-progress"]
+    try:
+        console_main()  # as python -m orchestrator, ending with SystemExit
+    except SystemExit as done:
+        code = done.code
     total = time.perf_counter() - STARTED
     phases = {
         "imports": first["build"] - STARTED,
@@ -87,6 +91,7 @@ def child(results: str) -> None:
     participants = json.loads(summary_path.read_text())["participants"]
     control = {name: s for name, s in participants.items() if "solve_time_median_s" in s}
     print(MARK + json.dumps({"code": code, "inside": total, "phases": phases, "control": control}), flush=True)
+    sys.exit(code)
 
 
 def one_run(env: dict) -> dict:

@@ -65,6 +65,18 @@ def test_subprocess_as_a_user_would(tmp_path):
     assert result.stderr.strip() == f"error: {tmp_path / 'none.toml'}: scenario file not found"
 
 
+def test_the_command_line_exits_without_collecting_its_objects_one_by_one():
+    """``python -m orchestrator`` freezes the objects still alive before it exits (the
+    interpreter's last collections skip them); exit handlers still run, the exit code is kept."""
+    probe = ("import atexit, gc, runpy, sys\n"
+             "atexit.register(lambda: print('frozen at exit:', gc.get_freeze_count() > 0))\n"
+             f"sys.argv = ['orchestrator', 'validate', {str(REPO / 'scenarios' / 'zigzag_10_10.toml')!r}]\n"
+             "runpy.run_module('orchestrator', run_name='__main__')\n")
+    result = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.startswith("ok: ") and result.stdout.splitlines()[-1] == "frozen at exit: True"
+
+
 def test_ctrl_c_in_a_terminal_run_keeps_the_results(tmp_path):
     """SIGINT to a running `orchestrator run`: exit 130, results written, status interrupted."""
     import signal
