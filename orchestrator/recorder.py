@@ -69,6 +69,7 @@ class Recorder:
         self._rows: list[list[float]] = []  # emitted rows not yet written (all rows without a spool)
         self._emitted = 0  # grid rows emitted so far
         self._parts: list[Path] = []  # complete Parquet files of CHUNK_ROWS rows each
+        self._cells: dict[tuple[str, tuple[int, ...]], list[str]] = {}  # array outputs' column names
 
     # -- the master's side -------------------------------------------------------------------
     def add(self, participant: str, time_s: float, outputs) -> None:
@@ -77,6 +78,9 @@ class Recorder:
             column = f"{participant}.{port}"
             if type(value) is float:
                 flat[column] = value
+            elif isinstance(value, np.ndarray) and value.ndim and value.dtype.kind in "fiub":
+                # a real array: its cells in C order, as np.ndindex names them, each as float(cell)
+                flat.update(zip(self._cell_columns(column, value.shape), map(float, value.ravel().tolist())))
             elif isinstance(value, np.ndarray):
                 if value.ndim == 0:
                     flat[column] = float(value)
@@ -87,6 +91,14 @@ class Recorder:
         stamp = round(float(time_s), TIME_DECIMALS)
         self._pending.append((stamp, flat))
         self._latest = max(self._latest, stamp)
+
+    def _cell_columns(self, column: str, shape: tuple[int, ...]) -> list[str]:
+        """``column[i,j]`` of every cell of an array output of ``shape``, in C order (named once per run)."""
+        names = self._cells.get((column, shape))
+        if names is None:
+            names = self._cells[(column, shape)] = [f"{column}[{','.join(map(str, index))}]"
+                                                    for index in np.ndindex(shape)]
+        return names
 
     @property
     def buffered_rows(self) -> int:

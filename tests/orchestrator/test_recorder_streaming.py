@@ -78,6 +78,32 @@ def test_in_memory_and_streamed_recorders_agree(tmp_path):
     pd.testing.assert_frame_equal(streamed.to_frame(), held.to_frame())
 
 
+def test_array_outputs_are_recorded_cell_by_cell_in_c_order_as_the_float_of_each_cell():
+    """``port[i,j]`` holds ``float(value[i, j])`` whatever the array's memory order and dtype;
+    a 0-d array gives ``port`` and ``port[]``."""
+    arrays = {
+        "plan": np.arange(12.0).reshape(3, 4).T,           # a transposed view: not C-contiguous
+        "count": np.array([[2**53 + 1, -3]], dtype=np.int64),
+        "flag": np.array([True, False]),
+        "byte": np.array([7, 250], dtype=np.uint8),
+        "single": np.array([0.1, 1e-5], dtype=np.float32),
+        "cube": np.linspace(-1.0, 1.0, 24).reshape(2, 3, 4)[:, ::-1, ::2],
+        "scalar": np.array(2.5),
+    }
+    expected = {"time_s": 0.0}
+    for port, value in arrays.items():
+        if value.ndim == 0:
+            expected[f"arr.{port}"] = float(value)
+        for index in np.ndindex(value.shape):
+            expected[f"arr.{port}[{','.join(map(str, index))}]"] = float(value[index])
+    recorder = Recorder(0.0, 1.0, 1)
+    recorder.add("arr", 0.0, arrays)
+    recorder.finish()
+    frame = recorder.to_frame()
+    assert list(frame.columns) == list(expected)
+    assert frame.iloc[0].tolist() == list(expected.values())  # exact: the same doubles
+
+
 LONG = """
 [simulation]
 name = "long"
