@@ -311,29 +311,35 @@ def navigation_fields_figure(frame, scenario, cosim, out_dir, panels: int = 6) -
     instants = [int(round(nav_steps * (i + 1) / panels)) * every for i in range(panels)]
     field = navigation.field
     x_nm, y_nm = field.weather.x / NM, field.weather.y / NM
+    # each column read once for the six panels
+    t, own_x, own_y = (frame[c].to_numpy() for c in ("time_s", f"{plant}.x", f"{plant}.y"))
+    et = frame[f"{navigation.name}.et"].to_numpy() if f"{navigation.name}.et" in frame.columns else np.zeros(len(t))
+    ref = f"{navigation.name}.reference"
+    plan = None  # (samples, points, north/east) of the local plan
+    if f"{ref}[0,1]" in frame.columns:
+        count = 1 + max(int(c.split("[")[1].split(",")[0]) for c in frame.columns if c.startswith(ref + "["))
+        plan = frame[[f"{ref}[{k},{c}]" for k in range(count) for c in (1, 2)]].to_numpy().reshape(len(t), count, 2)
+    obstacles = _obstacle_columns(frame) is not None
     fig = _figure(14, 9, (0.75, 0.4, 0.2, 0.7), wspace=0.2, hspace=0.2)
     axes = fig.subplots(2, 3)
     for ax, row in zip(axes.ravel(), instants):
         row = min(row, len(frame) - 1)
-        x, y = frame[f"{plant}.x"].iloc[row], frame[f"{plant}.y"].iloc[row]
-        avoidance = bool(frame.get(f"{navigation.name}.et", np.zeros(len(frame))).iloc[row] > 0.5)
+        avoidance = bool(et[row] > 0.5)
         if navigation.metocean.is_time_varying:  # the weather the navigation planned in then
             from rhnc.fields import resample_weather
 
-            field.set_weather(resample_weather(navigation.metocean, navigation.resolution_nm,
-                                               t_s=float(frame["time_s"].iloc[row])))
-        field.update((x, y), navigation.speed)
+            field.set_weather(resample_weather(navigation.metocean, navigation.resolution_nm, t_s=float(t[row])))
+        field.update((own_x[row], own_y[row]), navigation.speed)
         mesh = ax.pcolormesh(y_nm, x_nm, field.potential(avoidance), shading="auto", cmap="viridis")
-        ax.plot(frame[f"{plant}.y"].iloc[: row + 1] / NM, frame[f"{plant}.x"].iloc[: row + 1] / NM,
-                color="tab:red", lw=1.5)
-        ref = f"{navigation.name}.reference"
-        if f"{ref}[0,1]" in frame.columns:
-            count = 1 + max(int(c.split("[")[1].split(",")[0]) for c in frame.columns if c.startswith(ref + "["))
-            ax.plot([frame[f"{ref}[{k},2]"].iloc[row] / NM for k in range(count)],
-                    [frame[f"{ref}[{k},1]"].iloc[row] / NM for k in range(count)], "w.", ms=3)
-        _draw_obstacles(ax, frame.iloc[: row + 1])
-        minutes = frame["time_s"].iloc[row] / 60.0
-        ax.set_title(f"step {row // every} ({minutes:.0f} min){' ET = 1: G only' if avoidance else ''}", fontsize=10)
+        ax.plot(own_y[: row + 1] / NM, own_x[: row + 1] / NM, color="tab:red", lw=1.5)
+        if plan is not None:
+            ax.plot(plan[row, :, 1] / NM, plan[row, :, 0] / NM, "w.", ms=3)
+        if obstacles:
+            _draw_obstacles(ax, frame.iloc[: row + 1])
+        # y given: the title sits on the map's top edge, as the automatic placement would put
+        # it (no tick labels above), without measuring every tick label of the panel first
+        ax.set_title(f"step {row // every} ({t[row] / 60.0:.0f} min){' ET = 1: G only' if avoidance else ''}",
+                     fontsize=10, y=1.0)
         ax.set_xlabel("east [nm]")
         ax.set_ylabel("north [nm]")
         ax.set_aspect("equal")
