@@ -13,7 +13,8 @@ user.  Printed per repeat and as min and median over the repeats:
   solves, the KCS and MetOcean FMUs),
 * ``results``: writing the results, figures excluded (time series, weather, analyses,
   summary),
-* ``figures``: drawing the figures,
+* ``figures``: what the figures cost the run: starting their processes (after importing
+  their code) and waiting for them to end (:mod:`orchestrator.figure_processes`),
 * ``other``: the rest (closing the participants).
 
 Also printed: whether the NMPC ran compiled (:mod:`rhnc.nmpc_codegen`; the first run on a
@@ -62,7 +63,7 @@ def _timed(owner, name: str, phase: str, spent: dict, first: dict) -> None:
 
 def child(results: str) -> None:
     """One run as the command line does it, printing its phases as one JSON line."""
-    import orchestrator.analyses as analyses
+    import orchestrator.figure_processes as figure_processes
     import orchestrator.master as master
     import orchestrator.run as run
     from orchestrator.cli import console_main
@@ -72,7 +73,8 @@ def child(results: str) -> None:
     _timed(master.CoSimulation, "__init__", "build", spent, first)
     _timed(master.CoSimulation, "run", "loop", spent, first)
     _timed(run, "_write", "results", spent, first)
-    _timed(analyses, "draw_figure", "figures", spent, first)
+    _timed(figure_processes, "start", "figures", spent, first)
+    _timed(figure_processes.FigureDrawing, "collect", "figures", spent, first)
     sys.argv = ["orchestrator", "run", str(SCENARIO), "--results", results, "--no-progress"]
     try:
         console_main()  # as python -m orchestrator, ending with SystemExit

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import logging
 import math
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -12,6 +13,7 @@ import pandas as pd
 
 from orchestrator import acceptance, interrupts
 from orchestrator.errors import ResultsError, ToolchainError
+from orchestrator.figure_processes import FIGURE_SPOOL
 from orchestrator.master import CoSimulation
 from orchestrator.recorder import ColumnFrame
 from orchestrator.results import RunFolder, new_run_id, versions
@@ -97,6 +99,7 @@ def _write_emergency(scenario: Scenario, cosim: CoSimulation, folder: RunFolder,
         recorder.finish()  # the call in progress never returns: the rows up to the latest output are final
         recorder.write_csv(folder.path("timeseries.csv"))
         recorder.discard_spool()
+    shutil.rmtree(folder.path(FIGURE_SPOOL), ignore_errors=True)  # figures still being drawn are not kept
     folder.write_json("summary.json", {
         "scenario": str(scenario.path), "scenario_name": sim.name, "scenario_sha256": scenario.sha256,
         "overrides": dict(overrides or {}), "run_id": folder.final.name, "status": status,
@@ -110,7 +113,7 @@ def _write_emergency(scenario: Scenario, cosim: CoSimulation, folder: RunFolder,
 
 
 def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, overrides) -> RunReport:
-    from orchestrator import analyses
+    from orchestrator import figure_processes
 
     recorder = outcome.recorder
     recorder.finish()
@@ -122,6 +125,21 @@ def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, 
         recorder.write_csv(folder.path(series_name))
         recorder.write_parquet(folder.path(SPOOL) / "merged.parquet")
         frame = ColumnFrame(folder.path(SPOOL) / "merged.parquet")
+    # the figures are drawn aside while the rest is written
+    drawing = figure_processes.start(scenario.outputs.figures if outcome.steps_done else (), frame, scenario,
+                                     cosim, folder.staging)
+    try:
+        report = _write_rest(scenario, cosim, outcome, folder, overrides, series_name, frame, drawing)
+    finally:
+        drawing.cancel()  # nothing left to end once collected
+    return report
+
+
+def _write_rest(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, overrides, series_name: str,
+                frame, drawing) -> RunReport:
+    from orchestrator import analyses
+
+    recorder = outcome.recorder
     if cosim.metocean is not None:
         cosim.metocean.to_netcdf(folder.path("metocean.nc"))
     for name, rows in outcome.participant_tables.items():
@@ -140,13 +158,7 @@ def _write(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFolder, 
             figures[name] = {"error": text}
             if status == "finished":
                 status, reason = "failed", f"analysis '{name}': {text}"
-    figure_files, figure_errors = [], {}
-    for name in scenario.outputs.figures if outcome.steps_done else ():
-        try:
-            figure_files += analyses.draw_figure(name, frame, scenario, cosim, folder.staging)
-        except Exception as exc:  # a figure that cannot be drawn must not lose the results
-            log.warning("figure '%s' not drawn: %s", name, exc)
-            figure_errors[name] = f"{type(exc).__name__}: {exc}"
+    figure_files, figure_errors = drawing.collect()
     sim = scenario.simulation
     summary = {
         "scenario": str(scenario.path),

@@ -1,16 +1,23 @@
-"""Figures of a run (matplotlib, Agg backend): east on the horizontal axis, north vertical."""
+"""Figures of a run (matplotlib, Agg backend): east on the horizontal axis, north vertical.
+
+matplotlib is imported with this module: the orchestrator imports a figure's function
+before it forks the process drawing it (:mod:`orchestrator.figure_processes`), so that the
+figures of a run share one import.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
 from orchestrator.geometry import NM
 
 
 def _figure(width_in: float, height_in: float, margins_in: tuple[float, float, float, float] | None = None,
-            **spacing) -> "Figure":
+            **spacing) -> Figure:
     """A figure drawn by the Agg canvas alone (pyplot is never imported: no global figure list to close).
 
     ``margins_in``: (left, bottom, right, top) [in] fixed around the axes grid, with
@@ -18,9 +25,6 @@ def _figure(width_in: float, height_in: float, margins_in: tuple[float, float, f
     to draw, where ``tight_layout`` measures every text of the figure once more.  None:
     the caller lays the figure out itself.
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     figure = Figure(figsize=(width_in, height_in))
     FigureCanvasAgg(figure)
     if margins_in is not None:
