@@ -111,6 +111,9 @@ def start(names, frame, scenario, cosim, out_dir) -> FigureDrawing:
     """
     out_dir = Path(out_dir)
     fork = FORK and threading.current_thread() is threading.main_thread()
+    # the children's collections then leave the inherited objects (and so their memory pages)
+    # alone; when something is frozen already (a run freezes what it built), it stays as it is
+    freeze = fork and bool(names) and gc.get_freeze_count() == 0
     figures: list[_Figure] = []
     try:
         for name in names:
@@ -124,7 +127,7 @@ def start(names, frame, scenario, cosim, out_dir) -> FigureDrawing:
                 continue
             drawing = (function, frame, scenario, cosim, figure.folder)
             if fork:
-                figure.pid, figure.reader = _fork(drawing)
+                figure.pid, figure.reader = _fork(drawing, freeze)
             else:
                 figure.outcome = _draw(*drawing)
     except BaseException:
@@ -142,15 +145,15 @@ def _draw(function, frame, scenario, cosim, folder: Path) -> tuple[str, Any]:
         return "error", f"{type(exc).__name__}: {exc}"
 
 
-def _fork(drawing: tuple) -> tuple[int, int]:
-    """:func:`_draw` ``(*drawing)`` in a forked process; returns its pid and the pipe its outcome comes on."""
+def _fork(drawing: tuple, freeze: bool) -> tuple[int, int]:
+    """:func:`_draw` ``(*drawing)`` in a forked process; returns its pid and the pipe its outcome comes on.
+
+    ``freeze``: freeze this process's objects for the fork, unfrozen again here after it.
+    """
     reader, writer = os.pipe()
     parent = os.getpid()
     for stream in (sys.stdout, sys.stderr):  # the child must not write this process's buffered text again
         stream.flush()
-    # the child's collections leave the inherited objects (and so their memory pages) alone;
-    # objects someone else froze stay as they are
-    freeze = gc.get_freeze_count() == 0
     if freeze:
         gc.freeze()
     signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)  # no handler of this process may run in the child
