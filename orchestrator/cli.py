@@ -108,10 +108,23 @@ def own_loggers() -> tuple[str, ...]:
     return ("orchestrator", *sorted(packages - {"orchestrator"}))
 
 
+#: The loggers an earlier ``-v`` command of this process set to DEBUG.
+_verbose_loggers: tuple[str, ...] = ()
+
+
 def _configure_logging(verbose: bool) -> None:
+    """Warnings for everyone; with ``verbose`` our own debug lines too.
+
+    The toolchain's loggers are looked up (every entry-point group read) only for ``-v``:
+    a command without it just undoes what an earlier ``-v`` command of this process did.
+    """
+    global _verbose_loggers
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
-    for name in own_loggers():
-        logging.getLogger(name).setLevel(logging.DEBUG if verbose else logging.NOTSET)
+    for name in _verbose_loggers:
+        logging.getLogger(name).setLevel(logging.NOTSET)
+    _verbose_loggers = own_loggers() if verbose else ()
+    for name in _verbose_loggers:
+        logging.getLogger(name).setLevel(logging.DEBUG)
 
 
 def _run(args) -> int:

@@ -5,6 +5,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from orchestrator.cli import main
 
 REPO = Path(__file__).resolve().parents[2]
@@ -49,6 +51,19 @@ def test_validate(tmp_path, capsys):
     missing.write_text((REPO / "scenarios" / "zigzag_10_10.toml").read_text().replace('fmu = "KCS"', 'fmu = "x.fmu"'))
     assert main(["validate", str(missing)]) == 2
     assert "participants.ship.fmu: FMU file not found" in capsys.readouterr().err
+
+
+def test_debug_lines_are_the_v_commands_only_and_looked_up_only_for_them(monkeypatch, capsys):
+    import logging
+
+    from orchestrator import cli
+
+    scenario = str(REPO / "scenarios" / "zigzag_10_10.toml")
+    assert main(["-v", "validate", scenario]) == 0
+    assert {logging.getLogger(name).level for name in ("orchestrator", "rhnc")} == {logging.DEBUG}
+    monkeypatch.setattr(cli, "own_loggers", lambda: pytest.fail("the loggers were looked up without -v"))
+    assert main(["validate", scenario]) == 0
+    assert {logging.getLogger(name).level for name in ("orchestrator", "rhnc")} == {logging.NOTSET}
 
 
 def test_subprocess_as_a_user_would(tmp_path):
