@@ -175,10 +175,22 @@ class Recorder:
             shutil.rmtree(self.spool, ignore_errors=True)
 
     # -- writing ---------------------------------------------------------------------------------
-    def _buffered_frame(self) -> pd.DataFrame:
+    def _buffered_values(self) -> np.ndarray:
+        """The buffered rows as one (rows, columns) array, NaN where a column had not appeared yet."""
         width = len(self._columns)
-        rows = [row + [np.nan] * (width - len(row)) for row in self._rows]
-        return pd.DataFrame(rows, columns=self._columns, dtype=float)
+        return np.array([row + [np.nan] * (width - len(row)) for row in self._rows], dtype=float).reshape(-1, width)
+
+    def _buffered_frame(self) -> pd.DataFrame:
+        return pd.DataFrame(self._buffered_values(), columns=self._columns)
+
+    def _buffered_table(self):
+        """The buffered rows as an Arrow table, as ``pyarrow.Table.from_pandas`` of
+        :meth:`_buffered_frame` has them (NaN stored as null) without going through pandas."""
+        import pyarrow as pa
+
+        values = self._buffered_values()
+        return pa.Table.from_arrays([pa.array(values[:, k], from_pandas=True) for k in range(values.shape[1])],
+                                    names=self._columns)
 
     def _flush(self) -> None:
         """Write the buffered rows as one complete Parquet part (readable at once, even mid-run)."""
@@ -186,9 +198,11 @@ class Recorder:
             return
 
         def write() -> None:
+            import pyarrow.parquet as pq
+
             self.spool.mkdir(parents=True, exist_ok=True)
             part = self.spool / f"part-{len(self._parts):05d}.parquet"
-            self._buffered_frame().to_parquet(part, index=False)
+            pq.write_table(self._buffered_table(), part)
             self._parts.append(part)
             self._rows = []
 
@@ -202,7 +216,8 @@ class Recorder:
         with pq.ParquetWriter(target, schema) as writer:
             for part in self._parts:
                 table = pq.read_table(part)
-                columns = [table.column(name) if name in table.column_names
+                present = set(table.column_names)  # (each column_names is a new list)
+                columns = [table.column(name) if name in present
                            else pa.array(np.full(table.num_rows, np.nan)) for name in self._columns]
                 writer.write_table(pa.Table.from_arrays(columns, schema=schema))
 
