@@ -10,8 +10,8 @@ or why it was not drawn.
 
 Nothing of a figure is half-written:
 
-* a figure draws into a folder of its own, ``.figures-spool/<name>/`` in the staging
-  folder; its files join the run's when it has returned, and the spool is removed;
+* a figure draws into a folder of its own, ``.figures-spool/<number>-<name>/`` in the
+  staging folder; its files join the run's when it has returned, and the spool is removed;
 * a figure that raises, or whose process dies (a crash in native code, killed), is one
   entry of ``figure_errors``; what it had written is dropped and every other result is
   written all the same;
@@ -116,8 +116,8 @@ def start(names, frame, scenario, cosim, out_dir) -> FigureDrawing:
     freeze = fork and bool(names) and gc.get_freeze_count() == 0
     figures: list[_Figure] = []
     try:
-        for name in names:
-            figure = _Figure(name, out_dir / FIGURE_SPOOL / name)
+        for number, name in enumerate(names):  # a scenario may name a figure twice
+            figure = _Figure(name, out_dir / FIGURE_SPOOL / f"{number}-{name}")
             figures.append(figure)
             figure.folder.mkdir(parents=True)
             try:

@@ -137,6 +137,12 @@ def test_figures_are_drawn_at_the_same_time_in_processes_of_their_own(tmp_path, 
     assert not (report.folder / figure_processes.FIGURE_SPOOL).exists()
 
 
+def test_a_figure_named_twice_is_drawn_twice(tmp_path, probes):
+    report = run_scenario(_scenario(tmp_path, ["good", "good"]), tmp_path / "results", progress=False)
+    assert _summary(report.folder)["figures"] == ["good.txt", "good.txt"]
+    assert _summary(report.folder)["figure_errors"] == {}
+
+
 @pytest.mark.parametrize("fork", [True, False], ids=["forked", "here"])
 def test_a_figure_that_fails_loses_itself_only_and_leaves_no_half_written_file(tmp_path, probes, monkeypatch,
                                                                                fork):
