@@ -22,6 +22,9 @@ machine compiles it, about a minute), its solve times, and the load average befo
 after each run.
 
     python bench/bench_exp2.py [--repeat 5] [--compare-interpreted]
+
+Another checkout's code (an older commit, for a before/after comparison) is measured by
+putting it first on the path: ``PYTHONPATH=<checkout> python bench/bench_exp2.py``.
 """
 
 from __future__ import annotations
@@ -63,7 +66,6 @@ def _timed(owner, name: str, phase: str, spent: dict, first: dict) -> None:
 
 def child(results: str) -> None:
     """One run as the command line does it, printing its phases as one JSON line."""
-    import orchestrator.figure_processes as figure_processes
     import orchestrator.master as master
     import orchestrator.run as run
     from orchestrator.cli import console_main
@@ -73,8 +75,15 @@ def child(results: str) -> None:
     _timed(master.CoSimulation, "__init__", "build", spent, first)
     _timed(master.CoSimulation, "run", "loop", spent, first)
     _timed(run, "_write", "results", spent, first)
-    _timed(figure_processes, "start", "figures", spent, first)
-    _timed(figure_processes.FigureDrawing, "collect", "figures", spent, first)
+    try:
+        import orchestrator.figure_processes as figure_processes
+    except ImportError:  # a checkout from before figures were drawn aside: one after the other
+        import orchestrator.analyses as analyses
+
+        _timed(analyses, "draw_figure", "figures", spent, first)
+    else:
+        _timed(figure_processes, "start", "figures", spent, first)
+        _timed(figure_processes.FigureDrawing, "collect", "figures", spent, first)
     sys.argv = ["orchestrator", "run", str(SCENARIO), "--results", results, "--no-progress"]
     try:
         console_main()  # as python -m orchestrator, ending with SystemExit
