@@ -20,9 +20,9 @@ Nothing of a figure is half-written:
   run at once, the kernel ends the figure processes with it (``PR_SET_PDEATHSIG``) and the
   emergency writer removes the spool before it publishes the folder.
 
-Where ``os.fork`` does not exist, or when the run is not on the process's main thread (a
-Dask worker's thread: a fork takes no other thread along, and their locks could be held),
-the figures are drawn here, one after the other, through the same spool.
+Off Linux, or when the run is not on the process's main thread (a Dask worker's thread: a
+fork takes no other thread along, and their locks could be held), the figures are drawn
+here, one after the other, through the same spool.
 """
 
 from __future__ import annotations
@@ -47,8 +47,9 @@ log = logging.getLogger(__name__)
 
 #: Folder in the staging folder where figures are drawn before they join the results.
 FIGURE_SPOOL = ".figures-spool"
-#: Draw in forked processes where the platform can (tests switch it off to compare).
-FORK = hasattr(os, "fork")
+#: Draw in forked processes on Linux (tests switch it off to compare).  Elsewhere a fork
+#: is either missing (Windows) or unsafe once system libraries have started threads (macOS).
+FORK = sys.platform.startswith("linux") and hasattr(os, "fork")
 _STOP_SIGNALS = {signal.SIGINT, signal.SIGTERM}
 
 
