@@ -1,70 +1,162 @@
 """Wall time of the full Experiment 2 RHNC run (goal: at most 3 s on 2 cores).
 
-Prints the co-simulation loop time (480 macro steps: 120 navigation plans, 480 NMPC
-solves, the KCS and MetOcean FMUs), the whole ``run_scenario`` time including results,
-figures and set-up, the real-time factor, and whether the NMPC ran compiled
-(:mod:`rhnc.nmpc_codegen`; the first run on a machine compiles it, about a minute).
+Each repeat is a fresh process doing what ``python -m orchestrator run
+scenarios/exp2_rhnc.toml --no-progress`` does, so that imports count as they do for a
+user.  Printed per repeat and as min and median over the repeats:
 
-    python bench/bench_exp2.py [--repeat 3] [--compare-interpreted]
+* ``wall``: the whole process, from its start to its exit (measured from outside),
+* ``startup``: the interpreter's start and end (``wall`` less what the process measured),
+* ``imports``: from the process's first line to the building of the co-simulation
+  (module imports, command line, reading the scenario),
+* ``build``: building the participants (the weather, the FMUs, the NMPC),
+* ``loop``: the co-simulation loop (480 macro steps: 120 navigation plans, 480 NMPC
+  solves, the KCS and MetOcean FMUs),
+* ``results``: writing the results, figures excluded (time series, weather, analyses,
+  summary),
+* ``figures``: what the figures cost the run: starting their processes (after importing
+  their code) and waiting for them to end (:mod:`orchestrator.figure_processes`),
+* ``other``: the rest (closing the participants).
+
+Also printed: whether the NMPC ran compiled (:mod:`rhnc.nmpc_codegen`; the first run on a
+machine compiles it, about a minute), its solve times, and the load average before and
+after each run.
+
+    python bench/bench_exp2.py [--repeat 5] [--compare-interpreted]
+
+Another checkout's code (an older commit, for a before/after comparison) is measured by
+putting it first on the path: ``PYTHONPATH=<checkout> python bench/bench_exp2.py``.
 """
 
 from __future__ import annotations
 
-import argparse
-import os
-import tempfile
 import time
-from pathlib import Path
+
+STARTED = time.perf_counter()  # before any other import: the child's imports are measured from here
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import os  # noqa: E402
+import statistics  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+import tempfile  # noqa: E402
+from pathlib import Path  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 SCENARIO = REPO / "scenarios" / "exp2_rhnc.toml"
+PHASES = ("wall", "startup", "imports", "build", "loop", "results", "figures", "other")
+#: Prefix of the line a child process prints its measurements on.
+MARK = "BENCH_EXP2 "
 
 
-def measure(scenario, repeat: int) -> tuple[float, float, float, dict]:
-    """Best co-simulation loop time, best ``run_scenario`` time [s], simulated time [s], control summaries."""
-    from orchestrator.master import CoSimulation
-    from orchestrator.run import run_scenario
+def _timed(owner, name: str, phase: str, spent: dict, first: dict) -> None:
+    """Replace ``owner.name`` by a wrapper adding its duration to ``spent[phase]``."""
+    original = getattr(owner, name)
 
-    loops, totals, simulated, control = [], [], 0.0, {}
-    for _ in range(repeat):
-        cosim = CoSimulation(scenario)
+    def wrapper(*args, **kwargs):
         started = time.perf_counter()
-        outcome = cosim.run(progress=False)
-        loops.append(time.perf_counter() - started)
-        control = {p.name: p.summary() for p in cosim.participants if hasattr(p, "controller")}
-        cosim.close()
-        simulated = outcome.steps_done * scenario.simulation.dt_s
-        with tempfile.TemporaryDirectory() as results:
-            started = time.perf_counter()
-            run_scenario(SCENARIO, results, progress=False)
-            totals.append(time.perf_counter() - started)
-    return min(loops), min(totals), simulated, control
+        first.setdefault(phase, started)
+        try:
+            return original(*args, **kwargs)
+        finally:
+            spent[phase] = spent.get(phase, 0.0) + time.perf_counter() - started
+
+    setattr(owner, name, wrapper)
+
+
+def child(results: str) -> None:
+    """One run as the command line does it, printing its phases as one JSON line."""
+    import orchestrator.master as master
+    import orchestrator.run as run
+    from orchestrator.cli import console_main
+
+    spent: dict[str, float] = {}
+    first: dict[str, float] = {}
+    _timed(master.CoSimulation, "__init__", "build", spent, first)
+    _timed(master.CoSimulation, "run", "loop", spent, first)
+    _timed(run, "_write", "results", spent, first)
+    try:
+        import orchestrator.figure_processes as figure_processes
+    except ImportError:  # a checkout from before figures were drawn aside: one after the other
+        import orchestrator.analyses as analyses
+
+        _timed(analyses, "draw_figure", "figures", spent, first)
+    else:
+        _timed(figure_processes, "start", "figures", spent, first)
+        _timed(figure_processes.FigureDrawing, "collect", "figures", spent, first)
+    sys.argv = ["orchestrator", "run", str(SCENARIO), "--results", results, "--no-progress"]
+    try:
+        console_main()  # as python -m orchestrator, ending with SystemExit
+    except SystemExit as done:
+        code = done.code
+    total = time.perf_counter() - STARTED
+    phases = {
+        "imports": first["build"] - STARTED,
+        "build": spent["build"],
+        "loop": spent["loop"],
+        "results": spent["results"] - spent.get("figures", 0.0),
+        "figures": spent.get("figures", 0.0),
+    }
+    phases["other"] = total - sum(phases.values())
+    summary_path = next(Path(results).rglob("summary.json"))
+    participants = json.loads(summary_path.read_text())["participants"]
+    control = {name: s for name, s in participants.items() if "solve_time_median_s" in s}
+    print(MARK + json.dumps({"code": code, "inside": total, "phases": phases, "control": control}), flush=True)
+    sys.exit(code)
+
+
+def one_run(env: dict) -> dict:
+    """A fresh process running the scenario; its phases, wall time and load average."""
+    load = os.getloadavg()[0]
+    with tempfile.TemporaryDirectory() as results:
+        started = time.perf_counter()
+        done = subprocess.run([sys.executable, __file__, "--child", results], env=env, capture_output=True,
+                              text=True, cwd=REPO)
+        wall = time.perf_counter() - started
+    line = next((text for text in done.stdout.splitlines() if text.startswith(MARK)), None)
+    if done.returncode != 0 or line is None:
+        raise SystemExit(f"the run failed (exit {done.returncode}):\n{done.stdout[-2000:]}\n{done.stderr[-2000:]}")
+    measured = json.loads(line[len(MARK):])
+    measured["phases"] = {"wall": wall, "startup": wall - measured["inside"], **measured["phases"]}
+    measured["load"] = (load, os.getloadavg()[0])
+    return measured
+
+
+def report(runs: list[dict]) -> None:
+    print("run   " + " ".join(f"{p:>8}" for p in PHASES) + "   load before/after")
+    for i, run in enumerate(runs, 1):
+        print(f"{i:<5} " + " ".join(f"{run['phases'][p]:8.3f}" for p in PHASES)
+              + f"   {run['load'][0]:.2f} / {run['load'][1]:.2f}")
+    for label, pick in (("min", min), ("median", statistics.median)):
+        print(f"{label:<6}" + " ".join(f"{pick(r['phases'][p] for r in runs):8.3f}" for p in PHASES))
+    for name, summary in runs[-1]["control"].items():
+        print(f"{name}: NMPC {summary.get('codegen')}, median solve {summary['solve_time_median_s'] * 1e3:.1f} ms, "
+              f"max {summary['solve_time_max_s'] * 1e3:.1f} ms, {summary['solves']} solves (last run)")
+    best = min(r["phases"]["wall"] for r in runs)
+    print(f"whole run, best of {len(runs)}: {best:.2f} s (goal <= 3 s: {'met' if best <= 3.0 else 'not met'})")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--compare-interpreted", action="store_true",
                         help="then the same runs with the NMPC's functions interpreted (RHNC_NMPC_CODEGEN=0)")
+    parser.add_argument("--child", metavar="RESULTS", help=argparse.SUPPRESS)
     args = parser.parse_args()
-    from orchestrator.scenario import load_scenario
+    if args.child:
+        child(args.child)
+        return
     from rhnc.nmpc_codegen import CODEGEN_ENV
 
-    scenario = load_scenario(SCENARIO)
-    modes = [None, "0"] if args.compare_interpreted else [None]
-    print(f"load average before: {' / '.join(f'{v:.1f}' for v in os.getloadavg())} ({os.cpu_count()} cores)")
-    for mode in modes:
+    print(f"load average before: {' / '.join(f'{v:.2f}' for v in os.getloadavg())} ({os.cpu_count()} cores); "
+          "times in s")
+    for mode in [None, "0"] if args.compare_interpreted else [None]:
+        env = dict(os.environ)
         if mode is not None:
-            os.environ[CODEGEN_ENV] = mode
-        best, total, simulated, control = measure(scenario, args.repeat)
-        for name, summary in control.items():
-            print(f"{name}: NMPC {summary['codegen']}, median solve {summary['solve_time_median_s'] * 1e3:.1f} ms, "
-                  f"max {summary['solve_time_max_s'] * 1e3:.1f} ms, {summary['solves']} solves")
-        print(f"simulated time                     {simulated / 60:.0f} min")
-        print(f"co-simulation loop (best of {args.repeat})     {best:6.2f} s   real-time factor {simulated / best:,.0f}"
-              "   (goal <= 3 s)")
-        print(f"run_scenario incl. results+figures {total:6.2f} s")
-    print(f"load average after: {' / '.join(f'{v:.1f}' for v in os.getloadavg())}")
+            env[CODEGEN_ENV] = mode
+            print(f"-- {CODEGEN_ENV}={mode}")
+        report([one_run(env) for _ in range(args.repeat)])
+    print(f"load average after: {' / '.join(f'{v:.2f}' for v in os.getloadavg())}")
 
 
 if __name__ == "__main__":

@@ -1,7 +1,5 @@
 """``python -m orchestrator``: see :mod:`orchestrator.cli`."""
 
-import sys
+from orchestrator.cli import console_main
 
-from orchestrator.cli import main
-
-sys.exit(main())
+console_main()

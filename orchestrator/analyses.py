@@ -52,8 +52,9 @@ def run_analysis(name, frame, scenario, cosim, out_dir) -> dict:
     return function(frame, scenario, cosim, out_dir, **scenario.outputs.options.get(name, {}))
 
 
-def draw_figure(name, frame, scenario, cosim, out_dir) -> list[str]:
-    return _resolve("figures", name, "figures")(frame, scenario, cosim, out_dir)
+def figure_function(name):
+    """The function drawing figure ``name`` (imported on first use)."""
+    return _resolve("figures", name, "figures")
 
 
 def _resolve(kind, name, key):

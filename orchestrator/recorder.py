@@ -69,6 +69,7 @@ class Recorder:
         self._rows: list[list[float]] = []  # emitted rows not yet written (all rows without a spool)
         self._emitted = 0  # grid rows emitted so far
         self._parts: list[Path] = []  # complete Parquet files of CHUNK_ROWS rows each
+        self._cells: dict[tuple[str, tuple[int, ...]], list[str]] = {}  # array outputs' column names
 
     # -- the master's side -------------------------------------------------------------------
     def add(self, participant: str, time_s: float, outputs) -> None:
@@ -77,6 +78,9 @@ class Recorder:
             column = f"{participant}.{port}"
             if type(value) is float:
                 flat[column] = value
+            elif isinstance(value, np.ndarray) and value.ndim and value.dtype.kind in "fiub":
+                # a real array: its cells in C order, as np.ndindex names them, each as float(cell)
+                flat.update(zip(self._cell_columns(column, value.shape), map(float, value.ravel().tolist())))
             elif isinstance(value, np.ndarray):
                 if value.ndim == 0:
                     flat[column] = float(value)
@@ -87,6 +91,14 @@ class Recorder:
         stamp = round(float(time_s), TIME_DECIMALS)
         self._pending.append((stamp, flat))
         self._latest = max(self._latest, stamp)
+
+    def _cell_columns(self, column: str, shape: tuple[int, ...]) -> list[str]:
+        """``column[i,j]`` of every cell of an array output of ``shape``, in C order (named once per run)."""
+        names = self._cells.get((column, shape))
+        if names is None:
+            names = self._cells[(column, shape)] = [f"{column}[{','.join(map(str, index))}]"
+                                                    for index in np.ndindex(shape)]
+        return names
 
     @property
     def buffered_rows(self) -> int:
@@ -163,10 +175,22 @@ class Recorder:
             shutil.rmtree(self.spool, ignore_errors=True)
 
     # -- writing ---------------------------------------------------------------------------------
-    def _buffered_frame(self) -> pd.DataFrame:
+    def _buffered_values(self) -> np.ndarray:
+        """The buffered rows as one (rows, columns) array, NaN where a column had not appeared yet."""
         width = len(self._columns)
-        rows = [row + [np.nan] * (width - len(row)) for row in self._rows]
-        return pd.DataFrame(rows, columns=self._columns, dtype=float)
+        return np.array([row + [np.nan] * (width - len(row)) for row in self._rows], dtype=float).reshape(-1, width)
+
+    def _buffered_frame(self) -> pd.DataFrame:
+        return pd.DataFrame(self._buffered_values(), columns=self._columns)
+
+    def _buffered_table(self):
+        """The buffered rows as an Arrow table, as ``pyarrow.Table.from_pandas`` of
+        :meth:`_buffered_frame` has them (NaN stored as null) without going through pandas."""
+        import pyarrow as pa
+
+        values = self._buffered_values()
+        return pa.Table.from_arrays([pa.array(values[:, k], from_pandas=True) for k in range(values.shape[1])],
+                                    names=self._columns)
 
     def _flush(self) -> None:
         """Write the buffered rows as one complete Parquet part (readable at once, even mid-run)."""
@@ -174,9 +198,11 @@ class Recorder:
             return
 
         def write() -> None:
+            import pyarrow.parquet as pq
+
             self.spool.mkdir(parents=True, exist_ok=True)
             part = self.spool / f"part-{len(self._parts):05d}.parquet"
-            self._buffered_frame().to_parquet(part, index=False)
+            pq.write_table(self._buffered_table(), part)
             self._parts.append(part)
             self._rows = []
 
@@ -190,7 +216,8 @@ class Recorder:
         with pq.ParquetWriter(target, schema) as writer:
             for part in self._parts:
                 table = pq.read_table(part)
-                columns = [table.column(name) if name in table.column_names
+                present = set(table.column_names)  # (each column_names is a new list)
+                columns = [table.column(name) if name in present
                            else pa.array(np.full(table.num_rows, np.nan)) for name in self._columns]
                 writer.write_table(pa.Table.from_arrays(columns, schema=schema))
 

@@ -19,18 +19,17 @@ Unlike a generic process pool, the batch knows which run each worker is doing, s
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import logging
 import multiprocessing
 import multiprocessing.connection
 import os
 import signal
-import sys
-import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterator
 from typing import Any
+
+from orchestrator.child_processes import die_with_parent
 
 log = logging.getLogger(__name__)
 
@@ -40,27 +39,6 @@ POLL_S = 0.25
 DEADLINE_MARGIN_S = 5.0
 #: Signals that mean "killed from outside": the run itself did nothing wrong.
 INFRASTRUCTURE_SIGNALS = (signal.SIGKILL, signal.SIGTERM, signal.SIGINT, signal.SIGHUP)
-_PR_SET_PDEATHSIG = 1
-
-
-def die_with_parent(parent_pid: int) -> None:
-    """End this process when the process ``parent_pid`` ends (call first thing in a child)."""
-    if sys.platform.startswith("linux"):
-        try:
-            libc = ctypes.CDLL(None, use_errno=True)
-            if libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0) == 0:
-                if os.getppid() != parent_pid:  # the parent died before the request: too late for the kernel
-                    os._exit(1)
-                return
-        except (OSError, AttributeError):
-            log.debug("prctl unavailable; watching the parent's pid instead", exc_info=True)
-
-    def watch() -> None:
-        while os.getppid() == parent_pid:
-            time.sleep(1.0)
-        os._exit(1)
-
-    threading.Thread(target=watch, name="rhnc-parent-watch", daemon=True).start()
 
 
 def _worker_main(connection, deadline, reason, parent_pid: int, execute: Callable[[Any], dict]) -> None:

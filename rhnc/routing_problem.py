@@ -14,7 +14,6 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from scipy.optimize import brentq
 
 from orchestrator.geometry import NM
 from rhnc.energy import EnergyParameters, brake_power, fuel_rate_t_h
@@ -150,6 +149,8 @@ def speed_for_arrival(problem: RoutingProblem, polyline: np.ndarray, arrival_s: 
         raise ValueError(f"arrival at {arrival_s:.0f} s needs more than {high:.0f} m/s through water")
     if late_s(low) < 0:
         raise ValueError(f"arrival at {arrival_s:.0f} s needs less than {low:.1f} m/s through water")
+    from scipy.optimize import brentq  # here: importing scipy.optimize takes 0.1 s, most runs never get here
+
     return float(brentq(late_s, low, high, xtol=1e-6, rtol=1e-10))
 
 

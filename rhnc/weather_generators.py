@@ -33,6 +33,7 @@ from orchestrator.participant import is_finite_number
 from orchestrator.geometry import KNOT, NM
 from rhnc.metocean import MetOceanField, fetch_limited_hs
 from rhnc.metocean_grid import check_grid_nodes, map_axis
+from rhnc.weather_spline import bicubic_grid
 
 #: Draws of the storm set, fixed on 2026-11-22 before any routing result (docs/weather.md).
 STORM_SET_DRAWS = {
@@ -84,15 +85,13 @@ def paper_default(x_range_nm=(0.0, 100.0), y_range_nm=(0.0, 100.0), resolution_n
     current_kn, current_towards_deg : float
         Uniform current speed [kn] and the direction it sets towards [deg].
     """
-    from scipy.interpolate import RectBivariateSpline
-
     control = np.asarray(wind_control_points_ms, dtype=float)
     if control.ndim != 2 or min(control.shape) < 4:
         raise ValueError("wind_control_points_ms needs a 2-D lattice of at least 4 x 4 values")
     x, y = map_axis(x_range_nm, resolution_nm), map_axis(y_range_nm, resolution_nm)
     cx = np.linspace(x[0], x[-1], control.shape[0])
     cy = np.linspace(y[0], y[-1], control.shape[1])
-    speed = np.clip(RectBivariateSpline(cx, cy, control, kx=3, ky=3)(x, y), 0.0, None)
+    speed = np.clip(bicubic_grid(cx, cy, control, x, y), 0.0, None)
     towards = np.radians(wind_from_deg) + np.pi
     fields = _with_sea_and_current(speed, speed * np.cos(towards), speed * np.sin(towards), fetch_km,
                                    current_kn, current_towards_deg)

@@ -1,21 +1,37 @@
-"""Figures of a run (matplotlib, Agg backend): east on the horizontal axis, north vertical."""
+"""Figures of a run (matplotlib, Agg backend): east on the horizontal axis, north vertical.
+
+matplotlib is imported with this module: the orchestrator imports a figure's function
+before it forks the process drawing it (:mod:`orchestrator.figure_processes`), so that the
+figures of a run share one import.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
 from orchestrator.geometry import NM
 
 
-def _pyplot():
-    import matplotlib
+def _figure(width_in: float, height_in: float, margins_in: tuple[float, float, float, float] | None = None,
+            **spacing) -> Figure:
+    """A figure drawn by the Agg canvas alone (pyplot is never imported: no global figure list to close).
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    ``margins_in``: (left, bottom, right, top) [in] fixed around the axes grid, with
+    ``spacing`` (``wspace``, ``hspace``) between its cells: a fixed layout costs nothing
+    to draw, where ``tight_layout`` measures every text of the figure once more.  None:
+    the caller lays the figure out itself.
+    """
+    figure = Figure(figsize=(width_in, height_in))
+    FigureCanvasAgg(figure)
+    if margins_in is not None:
+        left, bottom, right, top = margins_in
+        figure.subplots_adjust(left=left / width_in, bottom=bottom / height_in, right=1.0 - right / width_in,
+                               top=1.0 - top / height_in, **spacing)
+    return figure
 
 
 def track_figure(frame, scenario, cosim, out_dir) -> list[str]:
@@ -32,9 +48,9 @@ def track_figure(frame, scenario, cosim, out_dir) -> list[str]:
         return []  # no ship in this scenario: no track to draw
     if f"{plant}.x" not in frame.columns:
         return []  # the run failed before the ship reported a position
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(7, 6))
     field = cosim.metocean
+    fig = _figure(7, 6, (0.75, 0.5, 0.2, 0.3))
+    ax = fig.subplots()
     if field is not None:
         departure_s = float(frame["time_s"].iloc[0])
         mesh = ax.pcolormesh(field.y / NM, field.x / NM, field.snapshot(departure_s).wind_speed, shading="auto",
@@ -60,9 +76,7 @@ def track_figure(frame, scenario, cosim, out_dir) -> list[str]:
         ax.set_aspect("equal", adjustable="datalim")
     ax.set_title(f"{scenario.simulation.name}: track")
     ax.legend(loc="best", fontsize=8, framealpha=0.8)
-    fig.tight_layout()
     fig.savefig(out_dir / "track.png", dpi=120)
-    plt.close(fig)
     return ["track.png"]
 
 
@@ -191,8 +205,8 @@ def _circle(x, y, radius):
 
 
 def manoeuvre_figure(frame, plant, figures, path, title) -> None:
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(6, 6))
+    fig = _figure(6, 6)
+    ax = fig.subplots()
     ax.plot(frame[f"{plant}.y"], frame[f"{plant}.x"], color="tab:blue")
     ax.set_xlabel("east [m]")
     ax.set_ylabel("north [m]")
@@ -205,14 +219,13 @@ def manoeuvre_figure(frame, plant, figures, path, title) -> None:
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
 
 
 def zigzag_figure(frame, plant, steering_column, path, kind: str = "yaw moment") -> None:
     """Heading change and what steered: the rudder angle [deg] (command and, when the plant
     reports it, the actual angle) or the yaw moment scaled to +-10."""
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(8, 4))
+    fig = _figure(8, 4)
+    ax = fig.subplots()
     t = frame["time_s"] / 60
     psi = np.degrees(np.unwrap(frame[f"{plant}.psi"].to_numpy()))
     ax.plot(t, psi - psi[0], label="heading change [deg]")
@@ -233,7 +246,6 @@ def zigzag_figure(frame, plant, steering_column, path, kind: str = "yaw moment")
     ax.set_title(title)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
 
 
 def controls_figure(frame, scenario, cosim, out_dir) -> list[str]:
@@ -253,10 +265,9 @@ def controls_figure(frame, scenario, cosim, out_dir) -> list[str]:
              if tau_column(scenario, port) in frame.columns]
     if not ports and not actuators:
         return []
-    plt = _pyplot()
     rows = len(ports) + len(actuators)
-    fig, axes = plt.subplots(rows, 1, figsize=(8, 2.5 * rows), sharex=True, squeeze=False)
-    axes = axes[:, 0]
+    fig = _figure(8, 2.5 * rows, (0.85, 0.6, 0.25, 0.45), hspace=0.15)
+    axes = fig.subplots(rows, 1, sharex=True, squeeze=False)[:, 0]
     t = frame["time_s"] / 60.0
     for ax, (name, unit, scale) in zip(axes[len(ports):], actuators):
         ax.plot(t, frame[f"{plant}.{name}"] * scale, label=f"{plant}.{name}")
@@ -279,9 +290,7 @@ def controls_figure(frame, scenario, cosim, out_dir) -> list[str]:
         ax.legend(loc="upper right", fontsize=8)
     axes[-1].set_xlabel("time [min]")
     fig.suptitle(f"{scenario.simulation.name}: control history")
-    fig.tight_layout()
     fig.savefig(out_dir / "controls.png", dpi=120)
-    plt.close(fig)
     return ["controls.png"]
 
 
@@ -301,42 +310,46 @@ def navigation_fields_figure(frame, scenario, cosim, out_dir, panels: int = 6) -
     plant = plant_name(cosim)
     if f"{plant}.x" not in frame.columns or len(frame) < 2:
         return []
-    plt = _pyplot()
     every = next(spec.every for spec in scenario.participants if spec.name == navigation.name)
     nav_steps = (len(frame) - 1) // every
     instants = [int(round(nav_steps * (i + 1) / panels)) * every for i in range(panels)]
     field = navigation.field
     x_nm, y_nm = field.weather.x / NM, field.weather.y / NM
-    fig, axes = plt.subplots(2, 3, figsize=(14, 9))
+    # each column read once for the six panels
+    t, own_x, own_y = (frame[c].to_numpy() for c in ("time_s", f"{plant}.x", f"{plant}.y"))
+    et = frame[f"{navigation.name}.et"].to_numpy() if f"{navigation.name}.et" in frame.columns else np.zeros(len(t))
+    ref = f"{navigation.name}.reference"
+    plan = None  # (samples, points, north/east) of the local plan
+    if f"{ref}[0,1]" in frame.columns:
+        count = 1 + max(int(c.split("[")[1].split(",")[0]) for c in frame.columns if c.startswith(ref + "["))
+        plan = frame[[f"{ref}[{k},{c}]" for k in range(count) for c in (1, 2)]].to_numpy().reshape(len(t), count, 2)
+    obstacles = _obstacle_columns(frame) is not None
+    fig = _figure(14, 9, (0.75, 0.4, 0.2, 0.7), wspace=0.2, hspace=0.2)
+    axes = fig.subplots(2, 3)
     for ax, row in zip(axes.ravel(), instants):
         row = min(row, len(frame) - 1)
-        x, y = frame[f"{plant}.x"].iloc[row], frame[f"{plant}.y"].iloc[row]
-        avoidance = bool(frame.get(f"{navigation.name}.et", np.zeros(len(frame))).iloc[row] > 0.5)
+        avoidance = bool(et[row] > 0.5)
         if navigation.metocean.is_time_varying:  # the weather the navigation planned in then
             from rhnc.fields import resample_weather
 
-            field.set_weather(resample_weather(navigation.metocean, navigation.resolution_nm,
-                                               t_s=float(frame["time_s"].iloc[row])))
-        field.update((x, y), navigation.speed)
+            field.set_weather(resample_weather(navigation.metocean, navigation.resolution_nm, t_s=float(t[row])))
+        field.update((own_x[row], own_y[row]), navigation.speed)
         mesh = ax.pcolormesh(y_nm, x_nm, field.potential(avoidance), shading="auto", cmap="viridis")
-        ax.plot(frame[f"{plant}.y"].iloc[: row + 1] / NM, frame[f"{plant}.x"].iloc[: row + 1] / NM,
-                color="tab:red", lw=1.5)
-        ref = f"{navigation.name}.reference"
-        if f"{ref}[0,1]" in frame.columns:
-            count = 1 + max(int(c.split("[")[1].split(",")[0]) for c in frame.columns if c.startswith(ref + "["))
-            ax.plot([frame[f"{ref}[{k},2]"].iloc[row] / NM for k in range(count)],
-                    [frame[f"{ref}[{k},1]"].iloc[row] / NM for k in range(count)], "w.", ms=3)
-        _draw_obstacles(ax, frame.iloc[: row + 1])
-        minutes = frame["time_s"].iloc[row] / 60.0
-        ax.set_title(f"step {row // every} ({minutes:.0f} min){' ET = 1: G only' if avoidance else ''}", fontsize=10)
+        ax.plot(own_y[: row + 1] / NM, own_x[: row + 1] / NM, color="tab:red", lw=1.5)
+        if plan is not None:
+            ax.plot(plan[row, :, 1] / NM, plan[row, :, 0] / NM, "w.", ms=3)
+        if obstacles:
+            _draw_obstacles(ax, frame.iloc[: row + 1])
+        # y given: the title sits on the map's top edge, as the automatic placement would put
+        # it (no tick labels above), without measuring every tick label of the panel first
+        ax.set_title(f"step {row // every} ({t[row] / 60.0:.0f} min){' ET = 1: G only' if avoidance else ''}",
+                     fontsize=10, y=1.0)
         ax.set_xlabel("east [nm]")
         ax.set_ylabel("north [nm]")
         ax.set_aspect("equal")
         fig.colorbar(mesh, ax=ax, shrink=0.8)
     fig.suptitle(f"{scenario.simulation.name}: superposed field U and track at six planning instants")
-    fig.tight_layout()
     fig.savefig(out_dir / "navigation_fields.png", dpi=110)
-    plt.close(fig)
     return ["navigation_fields.png"]
 
 
@@ -351,8 +364,8 @@ def comparison_tracks_figure(spec, reports, out_dir) -> list[str]:
     from rhnc.metocean_sources import from_netcdf
 
     target = Path(out_dir) / "tracks.png"
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(7, 6))
+    fig = _figure(7, 6)
+    ax = fig.subplots()
     first = next(iter(reports.values())).folder / "metocean.nc"
     if first.is_file():
         field = from_netcdf(first).snapshot(0.0)  # at departure when it varies in time
@@ -370,5 +383,4 @@ def comparison_tracks_figure(spec, reports, out_dir) -> list[str]:
     ax.set_title(f"{spec['name']}: tracks")
     fig.tight_layout()
     fig.savefig(target, dpi=120)
-    plt.close(fig)
     return [target.name]

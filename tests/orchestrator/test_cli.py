@@ -5,6 +5,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from orchestrator.cli import main
 
 REPO = Path(__file__).resolve().parents[2]
@@ -51,6 +53,19 @@ def test_validate(tmp_path, capsys):
     assert "participants.ship.fmu: FMU file not found" in capsys.readouterr().err
 
 
+def test_debug_lines_are_the_v_commands_only_and_looked_up_only_for_them(monkeypatch, capsys):
+    import logging
+
+    from orchestrator import cli
+
+    scenario = str(REPO / "scenarios" / "zigzag_10_10.toml")
+    assert main(["-v", "validate", scenario]) == 0
+    assert {logging.getLogger(name).level for name in ("orchestrator", "rhnc")} == {logging.DEBUG}
+    monkeypatch.setattr(cli, "own_loggers", lambda: pytest.fail("the loggers were looked up without -v"))
+    assert main(["validate", scenario]) == 0
+    assert {logging.getLogger(name).level for name in ("orchestrator", "rhnc")} == {logging.NOTSET}
+
+
 def test_subprocess_as_a_user_would(tmp_path):
     result = subprocess.run(
         [sys.executable, "-m", "orchestrator", "run", str(REPO / "scenarios" / "zigzag_10_10.toml"),
@@ -63,6 +78,18 @@ def test_subprocess_as_a_user_would(tmp_path):
                             capture_output=True, text=True, timeout=60)
     assert result.returncode == 2
     assert result.stderr.strip() == f"error: {tmp_path / 'none.toml'}: scenario file not found"
+
+
+def test_the_command_line_exits_without_collecting_its_objects_one_by_one():
+    """``python -m orchestrator`` freezes the objects still alive before it exits (the
+    interpreter's last collections skip them); exit handlers still run, the exit code is kept."""
+    probe = ("import atexit, gc, runpy, sys\n"
+             "atexit.register(lambda: print('frozen at exit:', gc.get_freeze_count() > 0))\n"
+             f"sys.argv = ['orchestrator', 'validate', {str(REPO / 'scenarios' / 'zigzag_10_10.toml')!r}]\n"
+             "runpy.run_module('orchestrator', run_name='__main__')\n")
+    result = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.startswith("ok: ") and result.stdout.splitlines()[-1] == "frozen at exit: True"
 
 
 def test_ctrl_c_in_a_terminal_run_keeps_the_results(tmp_path):

@@ -78,6 +78,47 @@ def test_in_memory_and_streamed_recorders_agree(tmp_path):
     pd.testing.assert_frame_equal(streamed.to_frame(), held.to_frame())
 
 
+def test_array_outputs_are_recorded_cell_by_cell_in_c_order_as_the_float_of_each_cell():
+    """``port[i,j]`` holds ``float(value[i, j])`` whatever the array's memory order and dtype;
+    a 0-d array gives ``port`` and ``port[]``."""
+    arrays = {
+        "plan": np.arange(12.0).reshape(3, 4).T,           # a transposed view: not C-contiguous
+        "count": np.array([[2**53 + 1, -3]], dtype=np.int64),
+        "flag": np.array([True, False]),
+        "byte": np.array([7, 250], dtype=np.uint8),
+        "single": np.array([0.1, 1e-5], dtype=np.float32),
+        "cube": np.linspace(-1.0, 1.0, 24).reshape(2, 3, 4)[:, ::-1, ::2],
+        "scalar": np.array(2.5),
+    }
+    expected = {"time_s": 0.0}
+    for port, value in arrays.items():
+        if value.ndim == 0:
+            expected[f"arr.{port}"] = float(value)
+        for index in np.ndindex(value.shape):
+            expected[f"arr.{port}[{','.join(map(str, index))}]"] = float(value[index])
+    recorder = Recorder(0.0, 1.0, 1)
+    recorder.add("arr", 0.0, arrays)
+    recorder.finish()
+    frame = recorder.to_frame()
+    assert list(frame.columns) == list(expected)
+    assert frame.iloc[0].tolist() == list(expected.values())  # exact: the same doubles
+
+
+def test_a_nan_output_is_stored_as_a_missing_value_and_a_late_column_as_nan(tmp_path):
+    """As pandas wrote the parts: NaN outputs are nulls in the file; the rows before a late
+    column appeared hold NaN values."""
+    recorder = Recorder(0.0, 1.0, 4, spool=tmp_path / "spool", chunk_rows=2)
+    for k in range(5):
+        recorder.add("p", float(k), {"a": float("nan") if k == 1 else float(k), **({"b": 1.0} if k >= 2 else {})})
+        recorder.advance(float(k))
+    recorder.finish()
+    recorder.write_parquet(tmp_path / "series.parquet")
+    table = pq.read_table(tmp_path / "series.parquet")
+    assert table.column("p.a").null_count == 1 and table.column("p.a").to_pylist()[1] is None
+    late = table.column("p.b").to_numpy(zero_copy_only=False)
+    assert table.column("p.b").null_count == 0 and np.isnan(late[:2]).all() and late[2:].tolist() == [1.0] * 3
+
+
 LONG = """
 [simulation]
 name = "long"
@@ -116,16 +157,16 @@ def test_a_run_writes_its_series_while_it_runs(write_scenario, tmp_path, monkeyp
 
 
 def test_a_full_disk_during_the_run_is_one_line_and_leaves_nothing(write_scenario, tmp_path, capsys, monkeypatch):
-    real = pd.DataFrame.to_parquet
+    real = pq.write_table
     written = []
 
-    def filling(self, path, *args, **kwargs):
+    def filling(table, path, *args, **kwargs):  # the writer of the spool's parts
         if len(written) == 2:
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
         written.append(path)
-        return real(self, path, *args, **kwargs)
+        return real(table, path, *args, **kwargs)
 
-    monkeypatch.setattr(pd.DataFrame, "to_parquet", filling)
+    monkeypatch.setattr(pq, "write_table", filling)
     code = main(["run", str(write_scenario(LONG)), "--results", str(tmp_path / "results"), "--no-progress"])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 4
