@@ -21,8 +21,6 @@ from __future__ import annotations
 import logging
 
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import dijkstra
 
 from rhnc.route_search import ShortestPathTree
 from rhnc.weather_routing import RouteSearch
@@ -61,6 +59,8 @@ class IncrementalCostToGo:
         graph = search.graph
         n = graph.node_count
         self._order = graph.reverse_order
+        from scipy.sparse import csr_matrix  # here, not with the module: most runs never route
+
         # the reversed graph: its structure never changes, only the weights
         self._matrix = csr_matrix((np.ones(self._order.size), graph.source[self._order].copy(),
                                    graph.reverse_indptr.copy()), shape=(n, n))
@@ -99,6 +99,8 @@ class IncrementalCostToGo:
             return False
         weights, _ = self.search.edge_weights(job["rate"], job["over_ground"])
         self._matrix.data = np.ascontiguousarray(weights[self._order], dtype=float)
+        from scipy.sparse.csgraph import dijkstra
+
         cost, successor = dijkstra(self._matrix, directed=True, indices=int(self.search.target),
                                    return_predecessors=True)
         self.tree = ShortestPathTree(source=int(self.search.target), cost=cost, predecessor=successor)

@@ -13,8 +13,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import dijkstra
 
 
 def _segment_clear(a: np.ndarray, b: np.ndarray, centres: np.ndarray, radii: np.ndarray) -> bool:
@@ -72,6 +70,9 @@ def shortest_route(start: Sequence[float], goal: Sequence[float], circles: Seque
                 rows.append(i)
                 cols.append(j)
                 weights.append(float(np.hypot(*(nodes[j] - nodes[i]))))
+    from scipy.sparse import csr_matrix  # here: scipy.sparse costs a run 0.1 s to import
+    from scipy.sparse.csgraph import dijkstra
+
     graph = csr_matrix((weights, (rows, cols)), shape=(len(nodes), len(nodes)))
     distances, predecessors = dijkstra(graph, directed=False, indices=0, return_predecessors=True)
     if not np.isfinite(distances[1]):
