@@ -295,6 +295,33 @@ def row(name: str, result: dict, baseline_tau: np.ndarray, tau_max: np.ndarray) 
             f"{result['clearance_m'] / NM:8.2f} {tau_gap:9.1e}")
 
 
+#: the default controller, whose step the absolute goals are about
+DEFAULT_CONFIGURATION = "ours fatrop compiled, watchdog"
+#: the like-for-like pair of the speed-up goal: IPOPT in both, each at its best settings
+SAME_SOLVER_PAIR = ("do-mpc ipopt make_step, warm duals", "ours ipopt compiled, warm duals, watchdog")
+
+
+def verdicts(targets: int, results: dict, others: bool) -> list[str]:
+    """The goals this run can judge, each with its figure (processor time) and met / not met."""
+    lines = []
+    ours = results.get(DEFAULT_CONFIGURATION)
+    if ours is not None:
+        median, largest = np.median(ours["cpu"]) * 1e3, np.max(ours["cpu"]) * 1e3
+        where = "beside other configurations' steps" if others else "our compiled fatrop alone"
+        if targets == 1:
+            lines.append(f"1 target, median <= 2 ms and max <= 20 ms ({where}): {median:.2f} / {largest:.1f} ms, "
+                         f"{'met' if median <= 2.0 and largest <= 20.0 else 'not met'}")
+        else:
+            lines.append(f"{targets} targets, max <= 100 ms ({where}): {largest:.1f} ms, "
+                         f"{'met' if largest <= 100.0 else 'not met'}")
+    theirs, mine = SAME_SOLVER_PAIR
+    if theirs in results and mine in results:
+        ratio = np.median(results[theirs]["cpu"]) / np.median(results[mine]["cpu"])
+        lines.append(f">= 5x faster than do-mpc with the same solver (IPOPT, best settings): {ratio:.1f}x, "
+                     f"{'met' if ratio >= 5.0 else 'not met'}")
+    return lines
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=90)
@@ -368,6 +395,9 @@ def main() -> None:
                 print(f"  median speed-up, {theirs} / {mine}: "
                       f"{np.median(results[theirs]['wall']) / np.median(results[mine]['wall']):.1f}x wall, "
                       f"{np.median(results[theirs]['cpu']) / np.median(results[mine]['cpu']):.1f}x processor time")
+        others = any(not name.startswith("ours fatrop compiled") for name in results)
+        for line in verdicts(targets, results, others):
+            print(f"  goal: {line}")
     load_after = os.getloadavg()
     print(f"\nload average {load_after[0]:.1f} / {load_after[1]:.1f} / {load_after[2]:.1f} after")
     reason = acados_available()
