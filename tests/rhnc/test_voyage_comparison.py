@@ -238,6 +238,25 @@ def test_goal_that_differs_from_a_run_is_refused_before_any_run(tmp_path):
     assert not (tmp_path / "results" / "fair").exists() or not any((tmp_path / "results" / "fair").iterdir())
 
 
+def test_control_options_naming_files_across_folders_are_refused_before_any_run(tmp_path, capsys, monkeypatch):
+    # the system's scenario in a folder of its own, its NMPC naming its model by a string:
+    # handed to the baseline in another folder, the name would point elsewhere
+    path = write(tmp_path)
+    (tmp_path / "systems").mkdir()
+    detour = (tmp_path / "detour.toml").read_text().replace("horizon_steps = 10",
+                                                            'horizon_steps = 10\nparameter_set = "default"')
+    (tmp_path / "systems" / "detour.toml").write_text(detour)
+    path.write_text(path.read_text().replace('scenario = "detour.toml"', 'scenario = "systems/detour.toml"'))
+    started = []
+    monkeypatch.setattr("orchestrator.compare.ScenarioRunner.__call__",
+                        lambda self, scenario, overrides, label: started.append(label))
+    assert main(["compare", str(path), "--results", str(tmp_path / "results")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "voyage.equal_arrival.same_control" in err and "different folders" in err
+    assert started == [], "runs were started before the input error"
+    assert not (tmp_path / "results" / "fair").exists() or not any((tmp_path / "results" / "fair").iterdir())
+
+
 def test_bad_voyage_table_exits_2_from_the_cli(tmp_path, capsys):
     path = write(tmp_path, voyage="arrival_radius_nm = 0")
     assert main(["compare", str(path), "--results", str(tmp_path / "results")]) == 2
