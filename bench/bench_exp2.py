@@ -18,7 +18,7 @@ user.  Printed per repeat and as min and median over the repeats:
 * ``other``: the rest (closing the participants).
 
 Also printed: whether the NMPC ran compiled (:mod:`rhnc.nmpc_codegen`; the first run on a
-machine compiles it, about a minute), its solve times, and the load average before and
+machine compiles it, 15-20 s), its solve times, and the load average before and
 after each run.
 
     python bench/bench_exp2.py [--repeat 5] [--compare-interpreted]
