@@ -33,20 +33,20 @@ solve itself does not wait for it; its processor time is reported apart
 
 from __future__ import annotations
 
-import ctypes
 import dataclasses
 import logging
 import math
 import multiprocessing
 import os
 import signal
-import sys
 import time
 import weakref
 from collections.abc import Callable, Mapping
 
 import casadi as ca
 import numpy as np
+
+from orchestrator.child_processes import die_with_parent
 
 LOG = logging.getLogger(__name__)
 
@@ -192,17 +192,6 @@ class SolverError(RuntimeError):
     with its message, as the call would raise without a worker."""
 
 
-def _die_with_parent() -> None:
-    """Linux: the kernel ends this worker when the controller's process dies (even by SIGKILL),
-    so that a solve looping in native code does not outlive it."""
-    if not sys.platform.startswith("linux"):
-        return  # elsewhere the worker ends at its next receive, when the pipe closes
-    try:
-        ctypes.CDLL(None).prctl(1, signal.SIGKILL, 0, 0, 0)  # 1: PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        LOG.debug("prctl unavailable", exc_info=True)
-
-
 def _kill(pid: int) -> None:
     try:
         os.kill(pid, signal.SIGKILL)
@@ -311,10 +300,13 @@ class BoundedSolver:
         if self._pid is not None:
             return
         parent_end, child_end = multiprocessing.Pipe()
+        parent = os.getpid()
         pid = os.fork()
         if pid == 0:  # child
             parent_end.close()
-            _die_with_parent()
+            # ends with the controller's process (even by SIGKILL): a solve looping in native
+            # code must not outlive it
+            die_with_parent(parent)
             try:
                 _serve(child_end, dict(self._solvers), self.factories, self.renew)
             finally:
