@@ -27,7 +27,6 @@ here, one after the other, through the same spool.
 
 from __future__ import annotations
 
-import gc
 import logging
 import os
 import pickle
@@ -108,13 +107,13 @@ def start(names, frame, scenario, cosim, out_dir) -> FigureDrawing:
     """Start drawing the figures ``names`` of a finished run into ``out_dir`` (the staging folder).
 
     Each figure function is imported here first (an import error is that figure's error),
-    so that the processes forked next share the import of the drawing library.
+    so that the processes forked next share the import of the drawing library.  A run calls
+    this with what it built frozen for the garbage collector (:mod:`orchestrator.run`), so
+    that the children's collections leave the inherited objects, and their memory pages,
+    alone.
     """
     out_dir = Path(out_dir)
     fork = FORK and threading.current_thread() is threading.main_thread()
-    # the children's collections then leave the inherited objects (and so their memory pages)
-    # alone; when something is frozen already (a run freezes what it built), it stays as it is
-    freeze = fork and bool(names) and gc.get_freeze_count() == 0
     figures: list[_Figure] = []
     try:
         for number, name in enumerate(names):  # a scenario may name a figure twice
@@ -128,7 +127,7 @@ def start(names, frame, scenario, cosim, out_dir) -> FigureDrawing:
                 continue
             drawing = (function, frame, scenario, cosim, figure.folder)
             if fork:
-                figure.pid, figure.reader = _fork(drawing, freeze)
+                figure.pid, figure.reader = _fork(drawing)
             else:
                 figure.outcome = _draw(*drawing)
     except BaseException:
@@ -146,17 +145,12 @@ def _draw(function, frame, scenario, cosim, folder: Path) -> tuple[str, Any]:
         return "error", f"{type(exc).__name__}: {exc}"
 
 
-def _fork(drawing: tuple, freeze: bool) -> tuple[int, int]:
-    """:func:`_draw` ``(*drawing)`` in a forked process; returns its pid and the pipe its outcome comes on.
-
-    ``freeze``: freeze this process's objects for the fork, unfrozen again here after it.
-    """
+def _fork(drawing: tuple) -> tuple[int, int]:
+    """:func:`_draw` ``(*drawing)`` in a forked process; returns its pid and the pipe its outcome comes on."""
     reader, writer = os.pipe()
     parent = os.getpid()
     for stream in (sys.stdout, sys.stderr):  # the child must not write this process's buffered text again
         stream.flush()
-    if freeze:
-        gc.freeze()
     signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)  # no handler of this process may run in the child
     try:
         pid = os.fork()
@@ -165,8 +159,6 @@ def _fork(drawing: tuple, freeze: bool) -> tuple[int, int]:
         os.close(writer)
         raise
     finally:
-        if freeze and os.getpid() == parent:
-            gc.unfreeze()
         if os.getpid() == parent:
             signal.pthread_sigmask(signal.SIG_UNBLOCK, _STOP_SIGNALS)
     if pid == 0:  # the figure's process: never returns
