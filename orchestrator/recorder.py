@@ -78,14 +78,14 @@ class Recorder:
             column = f"{participant}.{port}"
             if type(value) is float:
                 flat[column] = value
-            elif isinstance(value, np.ndarray) and value.ndim and value.dtype.kind in "fiub":
-                # a real array: its cells in C order, as np.ndindex names them, each as float(cell)
-                flat.update(zip(self._cell_columns(column, value.shape), map(float, value.ravel().tolist())))
             elif isinstance(value, np.ndarray):
                 if value.ndim == 0:
                     flat[column] = float(value)
-                for index in np.ndindex(value.shape):
-                    flat[f"{column}[{','.join(map(str, index))}]"] = float(value[index])
+                # its cells in C order, as np.ndindex names them, each as float(cell); a real
+                # array's in one pass
+                cells = (value.ravel().tolist() if value.dtype.kind in "fiub"
+                         else (value[index] for index in np.ndindex(value.shape)))
+                flat.update(zip(self._cell_columns(column, value.shape), map(float, cells)))
             else:
                 flat[column] = float(value)
         stamp = round(float(time_s), TIME_DECIMALS)
