@@ -160,7 +160,7 @@ class VoyageComparison:
         if equal is not None and equal.same_control and any(
                 Path(scenario).resolve() == self.run_scenarios[label].resolve() for label in equal.systems
                 if label in self.run_scenarios):
-            self._same_control(Path(scenario), overrides, {})  # its input error before any run
+            self._same_control(loaded, {})  # its input error before any run
         # one way to give the length: keep the scenario's own key (steps or stop_s)
         if "simulation.steps" in overrides or _uses_steps(scenario):
             result["simulation.steps"] = steps
@@ -255,25 +255,24 @@ class VoyageComparison:
         scenario = report.summary.get("scenario")
         if not scenario:
             return {}
-        return self._same_control(Path(scenario), dict(report.summary.get("overrides") or {}), overrides)
+        return self._same_control(load_scenario(Path(scenario), dict(report.summary.get("overrides") or {})),
+                                  overrides)
 
-    def _same_control(self, scenario: Path, system_overrides: Mapping[str, Any],
-                      baseline_overrides: Mapping[str, Any]) -> dict[str, Any]:
-        """:meth:`control_overrides` for a system sailed from ``scenario`` with ``system_overrides``.
+    def _same_control(self, system, baseline_overrides: Mapping[str, Any]) -> dict[str, Any]:
+        """:meth:`control_overrides` for a system sailed from the loaded scenario ``system``.
 
         Raises ScenarioError when the control options name files (strings) and the two
         scenarios lie in different folders, where those names would point elsewhere.
         """
         where = f"{self.path}: voyage.equal_arrival.same_control"
-        system = load_scenario(scenario, dict(system_overrides))
         baseline = load_scenario(self.equal_arrival.scenario, dict(baseline_overrides))
         controls = [[p for p in loaded.participants if p.type == "control"] for loaded in (system, baseline)]
         if any(len(found) != 1 for found in controls):
             return {}
         (own,), (theirs,) = controls
-        if scenario.resolve().parent != self.equal_arrival.scenario.resolve().parent and any(
+        if system.path.resolve().parent != self.equal_arrival.scenario.resolve().parent and any(
                 isinstance(value, str) for value in own.options.values()):
-            raise ScenarioError(f"{where}: {scenario} and {self.equal_arrival.scenario} lie in different "
+            raise ScenarioError(f"{where}: {system.path} and {self.equal_arrival.scenario} lie in different "
                                 "folders and the control options name files; put them side by side or "
                                 "set same_control = false")
         return {f"participants.{theirs.name}.options": copy.deepcopy(dict(own.options))}
