@@ -155,8 +155,11 @@ def ours(params, solver: str, targets: int, codegen: bool, watchdog: bool, warm_
     return loop
 
 
-def do_mpc_controller(params, targets: int, compiled: bool, warm_duals: bool = False):
-    """The same OCP in do-mpc (discrete model = our RK4 step, IPOPT), and its step function."""
+def do_mpc_controller(params, targets: int, compiled: bool, warm_duals: bool = False, ipopt_options: dict | None = None):
+    """The same OCP in do-mpc (discrete model = our RK4 step, IPOPT), and its step function.
+
+    ``ipopt_options``: further IPOPT options, set after the common ones.
+    """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         import do_mpc
@@ -202,7 +205,8 @@ def do_mpc_controller(params, targets: int, compiled: bool, warm_duals: bool = F
     mpc.settings.n_horizon = s.horizon_steps
     mpc.settings.t_step = s.control_interval_s
     mpc.settings.store_full_solution = False
-    ipopt = {**IPOPT_OPTIONS, **({"warm_start_init_point": "yes", **WARM_START_IPOPT} if warm_duals else {})}
+    ipopt = {**IPOPT_OPTIONS, **({"warm_start_init_point": "yes", **WARM_START_IPOPT} if warm_duals else {}),
+             **(ipopt_options or {})}
     mpc.settings.nlpsol_opts = {"print_time": False, **{f"ipopt.{k}": v for k, v in ipopt.items()}}
     mpc.set_objective(lterm=model.aux["stage"] + model.aux["input_cost"], mterm=model.aux["terminal"])
     mpc.set_rterm(w=np.array(s.r_rate))
@@ -265,8 +269,9 @@ def do_mpc_controller(params, targets: int, compiled: bool, warm_duals: bool = F
     return step
 
 
-def do_mpc_run(params, targets: int, compiled: bool, warm_duals: bool = False) -> ClosedLoop:
-    step = do_mpc_controller(params, targets, compiled, warm_duals)
+def do_mpc_run(params, targets: int, compiled: bool, warm_duals: bool = False,
+               ipopt_options: dict | None = None) -> ClosedLoop:
+    step = do_mpc_controller(params, targets, compiled, warm_duals, ipopt_options)
     step(0.0, np.array([0.0, 0.0, COURSE_RAD, SPEED_MPS, 0.0, 0.0]))
     return ClosedLoop(step, targets, params, "compiled" if compiled else "interpreted")
 
