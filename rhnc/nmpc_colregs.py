@@ -235,7 +235,11 @@ class CollisionDomains:
             order = order[: self.max_obstacles]
         own_velocity = own_speed * np.array([math.cos(own_course), math.sin(own_course)])
         heading_now = float(state[2]) if reference_heading_rad is None else float(reference_heading_rad)
-        no_port_turn = False
+        # Rules 14, 15, 17(c): no alteration to port while such a target's CPA is ahead; known
+        # before any alteration begins, so that an overtaking ship's turns to starboard then
+        no_port_turn = any(classes[i] is not None and classes[i].encounter_class in STARBOARD_CLASSES
+                           and classes[i].tcpa_s > 0.0 and s.own_radius_m + rows[i, 4] + s.clearance_margin_m > 0.0
+                           for i in order)
         locked = self.tracker.locked
         giving_way = any(locked.get(j) in GIVE_WAY_CLASSES for j in self._altering)
         slot = 0
@@ -247,8 +251,6 @@ class CollisionDomains:
             offset = np.zeros(2)
             encounter = classes[i]
             name = encounter.encounter_class if encounter is not None else "static"
-            if name in STARBOARD_CLASSES and encounter.tcpa_s > 0.0:
-                no_port_turn = True
             if name in STAND_ON_CLASSES and i not in self._acting:
                 cpa, tcpa = cpa_tcpa(state[:2], own_velocity, (x, y), (vx, vy))
                 if stand_on_must_act(cpa, tcpa, encounter.range_m, s.own_radius_m + radius,
@@ -267,7 +269,8 @@ class CollisionDomains:
                     continue  # keep course and speed: this target's constraint stays off
             if s.colregs and encounter is not None:
                 self._update_alteration(i, encounter, heading_now, float(state[2]), time_s,
-                                        s.own_radius_m + radius, (state[:2], own_speed, (x, y), (vx, vy)))
+                                        s.own_radius_m + radius, (state[:2], own_speed, (x, y), (vx, vy)),
+                                        port_allowed=not no_port_turn)
             if name in OFFSETS:
                 speed = math.hypot(vx, vy)
                 ahead = np.array([vx, vy]) / speed
@@ -296,7 +299,7 @@ class CollisionDomains:
         return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling)
 
     def _update_alteration(self, index: int, encounter, reference_heading_rad: float, heading_rad: float,
-                           time_s: float, separation_m: float, motion=None) -> None:
+                           time_s: float, separation_m: float, motion=None, port_allowed: bool = True) -> None:
         """Begin, keep or end the readily apparent alteration for one target (Rules 8, 16, 17).
 
         A give-way ship begins it once the target's CPA is at most
@@ -305,9 +308,12 @@ class CollisionDomains:
         the CPA forward, an overtaking ship's CPA most, as it closes slowly); a stand-on ship once it acts (Rule 17(b)).  It is
         to starboard, except when overtaking or being overtaken, where either side is
         allowed (Rule 13): then it continues a turn the plan has already begun (more than
-        ``PORT_ALLOWANCE_DEG`` off the reference), else it turns away from the other ship.
-        It ends, for the rest of the encounter, when the target is past and clear (Rule
-        13(d)): TCPA <= 0 and the range at least ``ALTERATION_CLEAR_FACTOR`` times R + R_i
+        ``PORT_ALLOWANCE_DEG`` off the reference), else it turns away from the other ship;
+        to starboard, though, when ``port_allowed`` is false (another target's Rule 14, 15
+        or 17(c) rules out a turn to port: a port alteration would be dropped, and with it
+        the give-way action).  It ends, for the rest of the encounter, when the target is
+        past and clear (Rule 13(d)): TCPA <= 0 and the range at least
+        ``ALTERATION_CLEAR_FACTOR`` times R + R_i
         (``separation_m``).  Ending it at TCPA <= 0 alone let a ship alongside an overtaken
         target, 1.3 nm off, turn back towards it, and the solver failed from that warm
         start; holding it until the tracker's 4 nm release made long detours.
@@ -331,6 +337,8 @@ class CollisionDomains:
                 side = math.copysign(1.0, deviation)
             elif encounter.relative_bearing_deg > 0.0:
                 side = -1.0  # the other ship is on our starboard side: pass it on its port side
+            if not port_allowed:
+                side = 1.0
         goal = reference_heading_rad + side * math.radians(s.alteration_deg)
         if name in GIVE_WAY_CLASSES:
             tcpa = encounter.tcpa_s

@@ -360,3 +360,19 @@ def test_a_stand_on_ship_alters_only_once_it_acts(acting, alters):
                                 relative_bearing_deg=-60.0)
     domains._update_alteration(0, encounter, 0.0, 0.0, 50.0, RADIUS)
     assert (0 in domains._altering, domains.alterations) == (alters, int(alters))
+
+
+def test_overtaking_ship_alters_to_starboard_when_another_target_rules_out_port():
+    # the overtaking situation above (the overtaken ship a little to starboard: alone, the
+    # alteration goes to port), plus a crossing ship from port that gives way to us: no turn
+    # to port (Rule 17(c)), so the give-way alteration goes to starboard instead of none
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    start, velocity = target_on_collision_course(90.0, 15.0)
+    targets = np.array([[1.9 * NM, 0.1 * NM, 12.0 * KNOT, 0.0, RADIUS], [*start, *velocity, RADIUS]])
+    _, report = domains.parameters(targets, state, np.zeros(2), SPEED, 5.0, 230.0, et=True,
+                                   reference_heading_rad=0.0, time_s=0.0)
+    assert [ENCOUNTER_CLASSES[int(code)] for code in report.class_codes] == ["overtaking", "crossing_stand_on"]
+    assert report.no_port_turn
+    assert report.alteration_ceiling is None
+    assert report.alteration_floor == pytest.approx((0.0, 0.0, math.radians(DomainSettings().alteration_deg)))
