@@ -8,7 +8,9 @@ fifth of do-mpc's step:
 1. our controller (IPOPT, compiled NLP, warm-started duals, in-process) and do-mpc (IPOPT,
    warm-started duals) each sail the closed loop of :mod:`bench_nmpc` (same problem, same
    plant), one after the other; every solver call of ours is recorded with its arguments,
-   its processor time and the share CasADi reports for the NLP's functions;
+   its processor time and the share CasADi reports for the NLP's functions (the recording,
+   a copy of the arguments and a second ``stats()`` call, adds a few hundredths of a
+   millisecond to our whole step's figure);
 2. ``bench/ipopt_floor.cpp`` is compiled against the IPOPT shipped in the casadi wheel
    and replays every recorded call on the same compiled NLP library, without CasADi:
    with a new IPOPT application per solve (what CasADi does) and with one application
