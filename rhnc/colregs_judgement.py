@@ -185,6 +185,7 @@ def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter
         "crossed": None,
         "manoeuvre_time_s": None,
         "manoeuvre_side": None,
+        "predicted_time_of_cpa_s": None,
         "max_course_change_deg": 0.0,
         "max_speed_reduction": 0.0,
     }
@@ -197,6 +198,9 @@ def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter
         result["crossed"] = None if ahead is None else ("ahead" if ahead else "astern")
     manoeuvre_time, side = first_manoeuvre(t, course_rad, onset_index, cpa_time, settings)
     result["manoeuvre_time_s"], result["manoeuvre_side"] = manoeuvre_time, side
+    if manoeuvre_time is not None:
+        result["predicted_time_of_cpa_s"] = predicted_time_of_cpa(t, own_xy, course_rad, target, onset_index,
+                                                                  manoeuvre_time, settings)
     before = (t >= t[onset_index]) & (t <= cpa_time)
     unwrapped = np.unwrap(course_rad)
     change = np.degrees(unwrapped[before] - unwrapped[onset_index])
@@ -223,6 +227,23 @@ def _side_correct(result: dict, encounter_class: str) -> bool | None:
     if encounter_class == "crossing_stand_on":
         return result["manoeuvre_side"] != "port"
     return None
+
+
+def predicted_time_of_cpa(t, own_xy, course_rad, target: np.ndarray, onset_index: int, manoeuvre_time_s: float,
+                          settings: JudgementSettings) -> float | None:
+    """When the CPA would have come had both ships kept the velocities they had as the
+    manoeuvre began (the last steady sample before it) [s]; None when the ships were not
+    closing then (or kept their distance).
+
+    Shown beside the verdicts, not judged: Rules 8 and 16 measure "early" against the CPA
+    of the sailed tracks, which the manoeuvre itself moves (an overtaking ship that turns
+    away meets its CPA as it turns).
+    """
+    k = int(np.searchsorted(t, manoeuvre_time_s))
+    k_before = _last_steady_sample(t, course_rad, onset_index, k, settings)
+    own_velocity = np.gradient(own_xy, t, axis=0)[k_before]
+    _, tcpa = cpa_tcpa(own_xy[k_before], own_velocity, target[k_before, :2], target[k_before, 2:4])
+    return float(t[k_before] + tcpa) if 0.0 < tcpa < math.inf else None
 
 
 def _last_steady_sample(t, course_rad, onset_index: int, index: int, settings: JudgementSettings) -> int:
@@ -253,9 +274,12 @@ def _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, targe
     manoeuvred = result["manoeuvre_time_s"] is not None
     early_s = settings.early_before_cpa_min * 60.0
     early = manoeuvred and result["time_of_cpa_s"] - result["manoeuvre_time_s"] >= early_s
+    predicted = result["predicted_time_of_cpa_s"]
+    then = ("" if predicted is None else
+            f"; {(predicted - result['manoeuvre_time_s']) / 60:.1f} min before the CPA predicted as it began")
     timing = [] if early else (["no alteration before the CPA"] if not manoeuvred else
                                [f"alteration {(result['time_of_cpa_s'] - result['manoeuvre_time_s']) / 60:.1f} min "
-                                f"before the CPA (< {settings.early_before_cpa_min:g} min)"])
+                                f"before the CPA (< {settings.early_before_cpa_min:g} min{then})"])
     give_way = encounter_class in GIVE_WAY_CLASSES
     # a stand-on ship's manoeuvre made while it gives way to another target is that
     # encounter's action (judged there, Rule 8 included), not one taken for this target

@@ -293,3 +293,28 @@ def test_target_starting_outside_counts_towards_separation():
     summary = judge_encounters(*track, target_states(track[0], (7.0, 0.5), 180.0, 18.0), 0.0, JudgementSettings())
     assert summary["started_inside"] == [] and summary["started_inside_range_kept"] is None
     assert summary["separation_kept"] is False and summary["targets"][0]["range_kept_from_start"] is None
+
+
+def test_cpa_predicted_as_the_manoeuvre_began_is_reported_beside_the_sailed_one():
+    # overtaking a 13 kn ship 1.5 nm ahead, 0.45 nm to port; the own ship turns away to
+    # starboard after 2 min: the range stops closing during the turn, so the sailed CPA comes
+    # early, while at the old velocities it lay about 16 min after the turn began
+    track = own_track(40, turns=[(2.0, 35.0)])
+    result = judge(track, target_states(track[0], (1.5, -0.45), 0.0, 13.0))
+    assert result["encounter_class"] == "overtaking"
+    began_s = 120.0
+    closing_kn = 18.0 - 13.0
+    expected_s = began_s + (1.5 * NM - 18.0 * KN * began_s + 13.0 * KN * began_s) / (closing_kn * KN)
+    # read at the last sample before the course has moved by half the 5 deg threshold: the
+    # velocity there is up to 2.5 deg into the turn, which moves a CPA 16 min off by < 1 min
+    assert result["predicted_time_of_cpa_s"] == pytest.approx(expected_s, abs=60.0)
+    assert result["time_of_cpa_s"] < began_s + 5 * 60  # the sailed CPA: within 5 min of the turn
+    assert result["rule_16"] == FAIL  # judged on the sailed CPA, as before
+    assert "min before the CPA predicted as it began" in result["reasons"]["rule_16"]
+    assert f"{(result['predicted_time_of_cpa_s'] - result['manoeuvre_time_s']) / 60:.1f}" in result["reasons"]["rule_16"]
+
+
+def test_no_predicted_cpa_without_a_manoeuvre():
+    track = own_track(20)
+    result = judge(track, target_states(track[0], (7.0, 0.5), 180.0, 18.0))
+    assert result["manoeuvre_time_s"] is None and result["predicted_time_of_cpa_s"] is None
