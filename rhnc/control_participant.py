@@ -153,6 +153,7 @@ class ControlParticipant(Participant):
         n = controller.settings.horizon_steps
         self._prediction = np.zeros((n + 1, 7))
         self._tau = np.zeros(2)
+        self._applied: np.ndarray | None = None  # the input of the last solve, None before the first
         self._solve_times: list[float] = []
         self._steps = 0
         self._slack_steps = 0
@@ -191,6 +192,7 @@ class ControlParticipant(Participant):
         self.controller.reset()
         self.controller.start()
         self._tau = np.zeros(2)
+        self._applied = None
         self._slack_steps = 0
         self._timeouts = 0
         self._speeds = []
@@ -219,8 +221,12 @@ class ControlParticipant(Participant):
             raise ModelError(f"{self.name}: input 'reference' at t = {time} s: {error}") from None
         obstacles = np.asarray(inputs.get("obstacles", np.zeros((0, 5))), dtype=float).reshape(-1, 5)
         et = float(inputs.get("et", self.et_default)) > 0.5
-        solution = self.controller.solve(time, state, reference, obstacles, et, previous_tau=self._tau)
-        self._tau = solution.tau
+        # before the first solve no input has been applied: the controller then assumes the
+        # one that holds the measured speed, not the zero outputs of set-up (a first solve
+        # that failed held a zero surge force, and the input-rate cost pulled the first plan
+        # towards it)
+        solution = self.controller.solve(time, state, reference, obstacles, et, previous_tau=self._applied)
+        self._tau = self._applied = solution.tau
         self._tau_r_history.append(float(solution.tau[1]))
         self._steps += 1
         self._solve_times.append(solution.solve_time_s)

@@ -221,3 +221,18 @@ def test_the_dual_warm_start_can_be_turned_off_by_option():
     assert ControlParticipant.from_options("ctrl", {}, context()).controller.settings.warm_start_duals is True
     with pytest.raises(ScenarioError, match=r"participants.ctrl: option 'warm_start_duals' must be true or false"):
         ControlParticipant.from_options("ctrl", {"warm_start_duals": 0}, context())
+
+
+def test_a_failed_first_solve_holds_the_surge_force_of_the_measured_speed(kcs):
+    # no input has been applied before the first solve: its fallback holds the force that
+    # keeps the measured speed (not the zero outputs of set-up, which stop the propeller)
+    ctrl = ControlParticipant.from_options("ctrl", {"horizon_steps": 10, "max_iterations": 1}, context())
+    ctrl.setup(0.0, {})
+    times = np.arange(0.0, 600.0, 20.0)
+    reference = np.column_stack([times, line_or_turn_reference(times, (0, 0), 0.0, 18 * KNOT)])
+    state = {"x": 0.0, "y": 0.0, "psi": 0.0, "u": 18 * KNOT, "v": 0.0, "r": 0.0}
+    out = ctrl.step(0.0, 20.0, {**state, "reference": reference})
+    assert out["fallback"] == 1.0
+    assert out["tau_u"] == pytest.approx(ctrl.controller.params.equilibrium_tau(18 * KNOT)[0])
+    assert out["tau_u"] > 0.0 and out["tau_r"] == 0.0
+    ctrl.terminate()
