@@ -239,11 +239,21 @@ def predicted_time_of_cpa(t, own_xy, course_rad, target: np.ndarray, onset_index
     of the sailed tracks, which the manoeuvre itself moves (an overtaking ship that turns
     away meets its CPA as it turns).
     """
+    k_before, _, tcpa = _prediction_before_manoeuvre(t, own_xy, course_rad, target, onset_index, manoeuvre_time_s,
+                                                     settings)
+    return float(t[k_before] + tcpa) if 0.0 < tcpa < math.inf else None
+
+
+def _prediction_before_manoeuvre(t, own_xy, course_rad, target: np.ndarray, onset_index: int,
+                                 manoeuvre_time_s: float, settings: JudgementSettings) -> tuple[int, float, float]:
+    """The last steady sample before the manoeuvre (it is detected once the course has moved
+    by the threshold) and the CPA [m] and TCPA [s] predicted there, with the velocity the
+    own ship had before it began."""
     k = int(np.searchsorted(t, manoeuvre_time_s))
     k_before = _last_steady_sample(t, course_rad, onset_index, k, settings)
     own_velocity = np.gradient(own_xy, t, axis=0)[k_before]
-    _, tcpa = cpa_tcpa(own_xy[k_before], own_velocity, target[k_before, :2], target[k_before, 2:4])
-    return float(t[k_before] + tcpa) if 0.0 < tcpa < math.inf else None
+    cpa, tcpa = cpa_tcpa(own_xy[k_before], own_velocity, target[k_before, :2], target[k_before, 2:4])
+    return k_before, cpa, tcpa
 
 
 def _last_steady_sample(t, course_rad, onset_index: int, index: int, settings: JudgementSettings) -> int:
@@ -304,12 +314,9 @@ def _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, targe
     if encounter_class in STAND_ON_CLASSES:
         failures = []
         if manoeuvred:
-            k = int(np.searchsorted(t, result["manoeuvre_time_s"]))
-            # the manoeuvre is detected once the course has moved by the threshold; judge
-            # the decision with the velocity the ship stood on with before it began
-            k_before = _last_steady_sample(t, course_rad, onset_index, k, settings)
-            own_velocity = np.gradient(own_xy, t, axis=0)[k_before]
-            cpa, tcpa = cpa_tcpa(own_xy[k_before], own_velocity, target[k_before, :2], target[k_before, 2:4])
+            # judge the decision with the velocity the ship stood on with before it began
+            k_before, cpa, tcpa = _prediction_before_manoeuvre(t, own_xy, course_rad, target, onset_index,
+                                                               result["manoeuvre_time_s"], settings)
             range_m = float(np.hypot(*(target[k_before, :2] - own_xy[k_before])))
             giving_way = any(onset <= result["manoeuvre_time_s"] for onset in give_way_onsets_s)
             if not giving_way and not stand_on_must_act(cpa, tcpa, range_m, result["required_nm"] * NM,
