@@ -152,7 +152,6 @@ class ControlParticipant(Participant):
         self.et_default = et_default
         n = controller.settings.horizon_steps
         self._prediction = np.zeros((n + 1, 7))
-        self._tau = np.zeros(2)
         self._applied: np.ndarray | None = None  # the input of the last solve, None before the first
         self._solve_times: list[float] = []
         self._steps = 0
@@ -191,7 +190,6 @@ class ControlParticipant(Participant):
         """Reset the controller; initial outputs are zero inputs (the first step decides)."""
         self.controller.reset()
         self.controller.start()
-        self._tau = np.zeros(2)
         self._applied = None
         self._slack_steps = 0
         self._timeouts = 0
@@ -203,7 +201,7 @@ class ControlParticipant(Participant):
                                cost=0.0, constraint_violation=0.0, collision_slack=0.0, timed_out=False,
                                disturbance=np.zeros(5), encounter_classes=np.full(slots, -1.0),
                                domain_active=np.zeros(slots))
-        return self._outputs(self._tau, self._prediction, idle)
+        return self._outputs(np.zeros(2), self._prediction, idle)
 
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         """Solve the NMPC at ``time`` from the measured state; return tau held over the step."""
@@ -226,7 +224,7 @@ class ControlParticipant(Participant):
         # that failed held a zero surge force, and the input-rate cost pulled the first plan
         # towards it)
         solution = self.controller.solve(time, state, reference, obstacles, et, previous_tau=self._applied)
-        self._tau = self._applied = solution.tau
+        self._applied = solution.tau
         self._tau_r_history.append(float(solution.tau[1]))
         self._steps += 1
         self._solve_times.append(solution.solve_time_s)
