@@ -233,21 +233,20 @@ class CollisionDomains:
         if len(order) > self.max_obstacles:
             LOG.warning("%d obstacles given, NMPC uses the %d nearest", len(order), self.max_obstacles)
             order = order[: self.max_obstacles]
+        rhos = s.own_radius_m + rows[:, 4] + s.clearance_margin_m
+        order = [i for i in order if rhos[i] > 0.0]  # a zero domain needs no constraint
         own_velocity = own_speed * np.array([math.cos(own_course), math.sin(own_course)])
         heading_now = float(state[2]) if reference_heading_rad is None else float(reference_heading_rad)
         # Rules 14, 15, 17(c): no alteration to port while such a target's CPA is ahead; known
         # before any alteration begins, so that an overtaking ship's turns to starboard then
         no_port_turn = any(classes[i] is not None and classes[i].encounter_class in STARBOARD_CLASSES
-                           and classes[i].tcpa_s > 0.0 and s.own_radius_m + rows[i, 4] + s.clearance_margin_m > 0.0
-                           for i in order)
+                           and classes[i].tcpa_s > 0.0 for i in order)
         locked = self.tracker.locked
         giving_way = any(locked.get(j) in GIVE_WAY_CLASSES for j in self._altering)
         slot = 0
         for i in order:
             x, y, vx, vy, radius = rows[i]
-            rho = s.own_radius_m + radius + s.clearance_margin_m
-            if rho <= 0.0:
-                continue
+            rho = rhos[i]
             offset = np.zeros(2)
             encounter = classes[i]
             name = encounter.encounter_class if encounter is not None else "static"
@@ -313,8 +312,7 @@ class CollisionDomains:
         or 17(c) rules out a turn to port: a port alteration would be dropped, and with it
         the give-way action).  It ends, for the rest of the encounter, when the target is
         past and clear (Rule 13(d)): TCPA <= 0 and the range at least
-        ``ALTERATION_CLEAR_FACTOR`` times R + R_i
-        (``separation_m``).  Ending it at TCPA <= 0 alone let a ship alongside an overtaken
+        ``ALTERATION_CLEAR_FACTOR`` times R + R_i (``separation_m``).  Ending it at TCPA <= 0 alone let a ship alongside an overtaken
         target, 1.3 nm off, turn back towards it, and the solver failed from that warm
         start; holding it until the tracker's 4 nm release made long detours.
         """
