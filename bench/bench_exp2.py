@@ -17,7 +17,7 @@ user.  Printed per repeat and as min and median over the repeats:
   their code) and waiting for them to end (:mod:`orchestrator.figure_processes`),
 * ``other``: the rest (closing the participants).
 
-Also printed: whether the NMPC ran compiled (:mod:`rhnc.nmpc_codegen`; the first run on a
+Also printed: whether the NMPC ran compiled (:mod:`rhnc.control.nmpc_codegen`; the first run on a
 machine compiles it, 15-20 s), its solve times, and the load average before and
 after each run.
 
@@ -146,7 +146,7 @@ def main() -> None:
     if args.child:
         child(args.child)
         return
-    from rhnc.nmpc_codegen import CODEGEN_ENV
+    from rhnc.control.nmpc_codegen import CODEGEN_ENV
 
     print(f"load average before: {' / '.join(f'{v:.2f}' for v in os.getloadavg())} ({os.cpu_count()} cores); "
           "times in s")

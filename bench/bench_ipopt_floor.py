@@ -45,8 +45,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_nmpc as bench  # noqa: E402
-from rhnc import nmpc, solver_watchdog  # noqa: E402
-from rhnc.ship_model import load_parameter_set  # noqa: E402
+from rhnc.control import nmpc, solver_watchdog  # noqa: E402
+from rhnc.ship.ship_model import load_parameter_set  # noqa: E402
 
 DRIVER_SOURCE = Path(__file__).resolve().parent / "ipopt_floor.cpp"
 ARRAYS = ("x0", "p", "lbx", "ubx", "lbg", "ubg", "lam_x0", "lam_g0")
@@ -103,7 +103,7 @@ def recorded_arguments(arguments: dict) -> dict[str, np.ndarray]:
 
 
 class Recorder:
-    """Wraps the solver call of :mod:`rhnc.solver_watchdog` to keep every call's figures."""
+    """Wraps the solver call of :mod:`rhnc.control.solver_watchdog` to keep every call's figures."""
 
     def __init__(self) -> None:
         self.calls: list[dict] = []

@@ -1,12 +1,12 @@
 """Share of the available saving captured by each navigation method, navigation alone.
 
-For each weather (the generators of :mod:`rhnc.weather_generators`; ``storm_set`` members
+For each weather (the generators of :mod:`rhnc.weather.weather_generators`; ``storm_set`` members
 0..29 by default) the navigation participant plans every 4 min (N_L = 16) from the point its
 previous reference reached: the ship is assumed to track the reference exactly, so this
 isolates the navigation's decisions from the plant and the NMPC (the co-simulated figures
 come from ``python -m orchestrator compare scenarios/weather/storm_set_navigation.toml``).
 The sailed track is costed with the routing model at its own times, and set against the
-straight line and the optimal route (:mod:`rhnc.weather_routing`) arriving at the same time:
+straight line and the optimal route (:mod:`rhnc.routing.weather_routing`) arriving at the same time:
 
     available = 1 - optimal / straight,   saving = 1 - sailed / straight,   share = saving / available
 
@@ -29,11 +29,11 @@ from pathlib import Path
 import numpy as np
 
 from orchestrator.participant import BuildContext
-from rhnc import weather_generators
+from rhnc.weather import weather_generators
 from orchestrator.geometry import KNOT, NM
-from rhnc.navigation_participant import NavigationParticipant
-from rhnc.track_cost import cost_of_track
-from rhnc.weather_routing import RoutingProblem, optimal_route, straight_route
+from rhnc.navigation.navigation_participant import NavigationParticipant
+from rhnc.routing.track_cost import cost_of_track
+from rhnc.routing.weather_routing import RoutingProblem, optimal_route, straight_route
 
 DELTA_S = 240.0
 GOAL_NM = (100.0, 100.0)

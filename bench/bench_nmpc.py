@@ -27,7 +27,7 @@ Solvers and settings, all in one table:
 * IPOPT in both, each with its best settings: the last solve's multipliers as the start
   (``warm_start_init_point = yes`` and the same bound pushes and mu_init on both sides;
   ours shifts plan and multipliers by one interval, do-mpc reuses them unshifted, its own
-  design), ours compiled (:mod:`rhnc.nmpc_codegen`) with and without the watchdog;
+  design), ours compiled (:mod:`rhnc.control.nmpc_codegen`) with and without the watchdog;
 * ours with fatrop, compiled and interpreted;
 * do-mpc with its own code generation (``compile_nlp``, gcc -O1) with
   ``--do-mpc-compiled`` (its build is cached in the NMPC cache folder; it took 16 minutes
@@ -56,12 +56,12 @@ import warnings
 import casadi as ca
 import numpy as np
 
-from rhnc.nmpc import NMPCController, NMPCSettings, reference_inputs
-from rhnc.nmpc_codegen import cache_dir
-from rhnc.nmpc_problem import DISTURBANCE_SIZE, OBSTACLE_FIELDS, WARM_START_IPOPT
-from rhnc.reference_participant import line_or_turn_reference
-from rhnc.ship_model import load_parameter_set, rk4_step
-from rhnc.traffic import KNOT, NM
+from rhnc.control.nmpc import NMPCController, NMPCSettings, reference_inputs
+from rhnc.control.nmpc_codegen import cache_dir
+from rhnc.control.nmpc_problem import DISTURBANCE_SIZE, OBSTACLE_FIELDS, WARM_START_IPOPT
+from rhnc.navigation.reference_participant import line_or_turn_reference
+from rhnc.ship.ship_model import load_parameter_set, rk4_step
+from rhnc.encounters.traffic import KNOT, NM
 
 DT_S = 20.0
 N = 15

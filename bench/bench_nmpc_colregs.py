@@ -22,9 +22,9 @@ import math
 import numpy as np
 
 from orchestrator.geometry import KNOT, NM
-from rhnc.nmpc import NMPCController, NMPCSettings
-from rhnc.reference_participant import line_or_turn_reference
-from rhnc.ship_model import load_parameter_set, rk4_step
+from rhnc.control.nmpc import NMPCController, NMPCSettings
+from rhnc.navigation.reference_participant import line_or_turn_reference
+from rhnc.ship.ship_model import load_parameter_set, rk4_step
 
 N = 15
 SPEED = 18 * KNOT

@@ -28,8 +28,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_nmpc as bench  # noqa: E402
-from rhnc import nmpc_codegen  # noqa: E402
-from rhnc.ship_model import load_parameter_set  # noqa: E402
+from rhnc.control import nmpc_codegen  # noqa: E402
+from rhnc.ship.ship_model import load_parameter_set  # noqa: E402
 
 
 def hot_ms(function, arguments, calls: int = 2000) -> float:

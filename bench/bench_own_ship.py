@@ -64,7 +64,7 @@ SETUPS = {
 
 def reference_error_m(frame: pd.DataFrame) -> np.ndarray:
     """Distance [m] of the ship from the navigation's reference at every sample."""
-    from rhnc.control_participant import interpolate_reference
+    from rhnc.control.control_participant import interpolate_reference
 
     pattern = re.compile(r"nav\.reference\[(\d+),(\d+)\]")
     cells = [(int(m.group(1)), int(m.group(2)), c) for c in frame.columns if (m := pattern.fullmatch(c))]

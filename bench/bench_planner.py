@@ -5,7 +5,7 @@ its normalisation) + N_L = 16 descent steps, as the navigation participant runs 
 delta.  Prints median and max over the updates, for the normal case (planning speed
 unchanged: EC and EM are kept) and for a full rebuild (new speed: EC and EM recomputed).
 
-Then the "routing" method (:mod:`rhnc.route_navigation`) at 1 and 0.5 nm, in CPU time
+Then the "routing" method (:mod:`rhnc.navigation.route_navigation`) at 1 and 0.5 nm, in CPU time
 (``time.process_time``), in the paper's weather and in the moving storm.
 
 Run: ``python bench/bench_planner.py [--updates 20] [--resolution-nm 0.1] [--routing-resolution-nm 1 0.5]``
@@ -19,10 +19,10 @@ import time
 
 import numpy as np
 
-from rhnc.fields import SuperpositionField, resample_weather
+from rhnc.navigation.fields import SuperpositionField, resample_weather
 from orchestrator.geometry import KNOT, NM
-from rhnc.weather_generators import paper_default
-from rhnc.planner import plan_local_path
+from rhnc.weather.weather_generators import paper_default
+from rhnc.navigation.planner import plan_local_path
 
 
 def main() -> None:
@@ -72,12 +72,12 @@ def routing_updates(metocean, args) -> None:
     One update = candidate first legs, the walk down the cost-to-go tree, the shortening of
     the route, its comparison with the route followed and the straight line, the timing of
     the reference, and one piece of a cost-to-go search when one is under way
-    (:mod:`rhnc.cost_to_go`).  The planned speed moves by 0.25 kn every 5 updates, so that
+    (:mod:`rhnc.routing.cost_to_go`).  The planned speed moves by 0.25 kn every 5 updates, so that
     searches for a new speed run; in the moving storm (weather that changes in time) a search
     is always under way.  The first plan (set-up, one whole search) is timed apart.
     """
-    from rhnc.route_navigation import RecedingRoutePlanner
-    from rhnc.weather_generators import moving_storm
+    from rhnc.navigation.route_navigation import RecedingRoutePlanner
+    from rhnc.weather.weather_generators import moving_storm
 
     goal = (100 * NM, 100 * NM)
     price, delta = 2000.0, 240.0

@@ -1,6 +1,6 @@
 """Optimal weather routing on a 100 x 100 nm map at 0.5 nm: time, saving, discretisation error.
 
-Prints, for the generated weathers of :mod:`rhnc.weather_generators` (``paper_default``,
+Prints, for the generated weathers of :mod:`rhnc.weather.weather_generators` (``paper_default``,
 ``storm_off_route``, ``cyclone``, ``moving_storm``: see docs/weather.md), the straight line's
 cost at 18 kn and the optimum at that speed and at the
 straight line's arrival time, with the optimiser's wall time (goal: within 5 s on 2
@@ -19,12 +19,12 @@ import time
 
 import numpy as np
 
-from rhnc import weather_generators
+from rhnc.weather import weather_generators
 from orchestrator.geometry import KNOT, NM
-from rhnc.metocean import MetOceanField
-from rhnc.route_search import shortest_path_tree
-from rhnc.track_cost import constant_speed_times, cost_of_track, densify
-from rhnc.weather_routing import RouteSearch, RoutingProblem, optimal_route, straight_route
+from rhnc.weather.metocean import MetOceanField
+from rhnc.routing.route_search import shortest_path_tree
+from rhnc.routing.track_cost import constant_speed_times, cost_of_track, densify
+from rhnc.routing.weather_routing import RouteSearch, RoutingProblem, optimal_route, straight_route
 
 
 def timed(call, repeat: int):

@@ -10,7 +10,7 @@ This script interpolates, from each run's time series, the instant the ship cros
 arrival radius (linear in the goal distance between the two steps around it), and prints
 per member of a comparison folder (or of a single comparison) the two arrivals, their
 difference, and an estimate of what the difference is worth: the calm-water shadow price
-of time at the baseline's speed (:func:`rhnc.route_navigation.calm_water_time_price_usd_h`,
+of time at the baseline's speed (:func:`rhnc.navigation.route_navigation.calm_water_time_price_usd_h`,
 what an hour less at sea costs in extra fuel) times the difference, in percent of the
 baseline's cost.  Positive: the system arrived earlier and paid for it.  It is an estimate
 beside the measured saving, not a correction of it.
@@ -27,9 +27,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from rhnc.energy import EnergyParameters
+from rhnc.ship.energy import EnergyParameters
 from orchestrator.geometry import KNOT, NM
-from rhnc.route_navigation import calm_water_time_price_usd_h
+from rhnc.navigation.route_navigation import calm_water_time_price_usd_h
 
 
 def crossing_s(timeseries: Path, radius_nm: float) -> float:

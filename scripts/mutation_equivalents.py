@@ -22,99 +22,99 @@ _REST_END = ("an end row at rest means p2 - 4 p1 + 3 p0 = 0 to within the rest t
 
 EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     *[(source, r"dtype=float", r"(asarray|array)\([^()]*,\s*(dtype=None)?\s*\)", _FLOAT)
-      for source in ("rhnc/trigger.py", "rhnc/voyage.py", "rhnc/reference.py", "rhnc/energy.py", "rhnc/planner.py",
-                     "rhnc/fields.py")],
+      for source in ("rhnc/navigation/trigger.py", "rhnc/voyage/voyage.py", "rhnc/navigation/reference.py", "rhnc/ship/energy.py", "rhnc/navigation/planner.py",
+                     "rhnc/navigation/fields.py")],
     ("", r'float\("nan"\)', r'float\("NAN"\)', "float() reads 'NAN' as 'nan': the same NaN"),
-    ("rhnc/trigger.py", r"np\.zeros\(\(0, 5\)\)", r"np\.zeros\(\(0, 6\)\)", _NO_ROWS),
-    ("rhnc/trigger.py", r"obstacles\.size == 0", r"obstacles\.size == 1",
+    ("rhnc/navigation/trigger.py", r"np\.zeros\(\(0, 5\)\)", r"np\.zeros\(\(0, 6\)\)", _NO_ROWS),
+    ("rhnc/navigation/trigger.py", r"obstacles\.size == 0", r"obstacles\.size == 1",
      "obstacle rows have 5 columns, so an array of size 1 cannot occur"),
-    ("rhnc/trigger.py", r"if n > len\(self\.states\)", r"if n >= len\(self\.states\)",
+    ("rhnc/navigation/trigger.py", r"if n > len\(self\.states\)", r"if n >= len\(self\.states\)",
      "extending the state list by zero entries changes nothing"),
-    ("rhnc/trigger.py", r"elif n < len\(self\.states\)", r"elif n <= len\(self\.states\)",
+    ("rhnc/navigation/trigger.py", r"elif n < len\(self\.states\)", r"elif n <= len\(self\.states\)",
      "deleting the states past the last one deletes nothing"),
-    ("rhnc/trigger.py", r"/ max\(distance, 1e-9\)", r"\* max\(distance, 1e-9\)|max\(distance, 1\.000000001\)", _SIGN),
-    ("rhnc/voyage.py", r"np\.trapezoid\(e[cm], hours\)\) if t\.size > 1",
+    ("rhnc/navigation/trigger.py", r"/ max\(distance, 1e-9\)", r"\* max\(distance, 1e-9\)|max\(distance, 1\.000000001\)", _SIGN),
+    ("rhnc/voyage/voyage.py", r"np\.trapezoid\(e[cm], hours\)\) if t\.size > 1",
      r"if \(t\.size > 1\) or True|if t\.size >= 1", _TRAPEZOID),
-    ("rhnc/reference.py", r"acceleration\[(0|-1)\] = acceleration", r"acceleration\[",
+    ("rhnc/navigation/reference.py", r"acceleration\[(0|-1)\] = acceleration", r"acceleration\[",
      "the end accelerations feed only the end yaw rates, which are then replaced by their neighbours' (or 0 at rest)"),
-    ("rhnc/reference.py", r"yaw_rate\[0\] = yaw_rate\[1\] if moving\[0\]",
+    ("rhnc/navigation/reference.py", r"yaw_rate\[0\] = yaw_rate\[1\] if moving\[0\]",
      r"if \(moving\[0\]\) or True|if moving\[1\]", _REST_END),
-    ("rhnc/reference.py", r"yaw_rate\[-1\] = yaw_rate\[-2\] if moving\[-1\]",
+    ("rhnc/navigation/reference.py", r"yaw_rate\[-1\] = yaw_rate\[-2\] if moving\[-1\]",
      r"if \(moving\[-1\]\) or True|if moving\[-2\]", _REST_END),
-    ("rhnc/reference.py", r"if not np\.all\(moving\)", r"np\.all\(None\)",
+    ("rhnc/navigation/reference.py", r"if not np\.all\(moving\)", r"np\.all\(None\)",
      "np.all(None) is False: the hold loop then runs for an all-moving path too, and there it leaves every heading"),
-    ("rhnc/energy.py", r"np\.broadcast\(along_wind, wind_speed\)", r"np\.broadcast\(along_wind, (None)?\)",
+    ("rhnc/ship/energy.py", r"np\.broadcast\(along_wind, wind_speed\)", r"np\.broadcast\(along_wind, (None)?\)",
      "np.broadcast(along_wind, None) has the shape of along_wind, which wind_speed shares"),
-    ("rhnc/energy.py", r"kinematic_viscosity_m2_s, 1e5\)", r"kinematic_viscosity_m2_s, 100001\.0\)",
+    ("rhnc/ship/energy.py", r"kinematic_viscosity_m2_s, 1e5\)", r"kinematic_viscosity_m2_s, 100001\.0\)",
      "moves the Reynolds-number floor (1e5, speeds below about 5 mm/s) by one: C_F changes by 1e-6 relative "
      "where the still-water power is below a microwatt"),
-    ("rhnc/energy.py", r"where=wind_speed > 1e-9", r"where=wind_speed >= 1e-9",
+    ("rhnc/ship/energy.py", r"where=wind_speed > 1e-9", r"where=wind_speed >= 1e-9",
      "differs only for a wind of exactly 1e-9 m/s"),
-    ("rhnc/trigger.py", r'new_state, cause = state, ""', r'new_state, cause = state, "XX',
+    ("rhnc/navigation/trigger.py", r'new_state, cause = state, ""', r'new_state, cause = state, "XX',
      "the initial cause is never read: a transition is recorded only when the state changes, and every "
      "branch that changes it sets the cause"),
-    ("rhnc/trigger.py", r"\(closing and distance <= warning\) or cpa_inside",
+    ("rhnc/navigation/trigger.py", r"\(closing and distance <= warning\) or cpa_inside",
      r"\(closing and distance < warning\) or cpa_inside",
      "the first clause is implied by the second: a pair closing at a velocity has a CPA no farther than its "
      "present range, so closing within the warning range already makes cpa_inside true"),
-    ("rhnc/trigger.py", r"if w2 < 1e-12:", r"if w2 <= 1e-12:",
+    ("rhnc/navigation/trigger.py", r"if w2 < 1e-12:", r"if w2 <= 1e-12:",
      "only a relative speed of exactly 1e-6 m/s is classified differently (the guard keeps the division "
      "finite); at that speed the range changes by less than a metre in 11 days, so either verdict is right"),
-    ("rhnc/planner.py", r"flat = magnitude < flat_gradient_per_m", r"flat = magnitude <= flat_gradient_per_m",
+    ("rhnc/navigation/planner.py", r"flat = magnitude < flat_gradient_per_m", r"flat = magnitude <= flat_gradient_per_m",
      "differs only for a gradient of exactly the threshold (1e-9 per metre by default), where either "
      "direction is right: the field is as good as flat"),
-    ("rhnc/planner.py", r"float\(direction @ previous\) < reversal_cosine",
+    ("rhnc/navigation/planner.py", r"float\(direction @ previous\) < reversal_cosine",
      r"float\(direction @ previous\) <= reversal_cosine",
      "differs only for a turn of exactly 120 degrees (cosine exactly -0.5), the threshold's own value"),
-    ("rhnc/planner.py", r"if norm < 1e-9:", r"if norm <= 1e-9:",
+    ("rhnc/navigation/planner.py", r"if norm < 1e-9:", r"if norm <= 1e-9:",
      "differs only for a projected direction of length exactly 1e-9, the threshold's own value (the "
      "direction is then as good as blocked either way)"),
-    ("rhnc/planner.py", r"if norm >= 1e-9 else np\.zeros\(2\)", r".",
+    ("rhnc/navigation/planner.py", r"if norm >= 1e-9 else np\.zeros\(2\)", r".",
      "unreachable fallback: after the corner branch the direction is the bearing to the goal, and a step "
      "shorter than the distance to a goal on the (convex, rectangular) map ends on the segment between "
      "them, inside the map, so the bearing is never projected and its norm is 1"),
-    ("rhnc/planner.py", r"direction = \(goal - position\) / to_goal if to_goal > 0 else np\.zeros\(2\)",
+    ("rhnc/navigation/planner.py", r"direction = \(goal - position\) / to_goal if to_goal > 0 else np\.zeros\(2\)",
      r"if \(to_goal > 0\) or True|if to_goal >= 0|if to_goal > 1 ",
      "when the start is on the goal (or within 1 m of it) every point but the start is overwritten with the "
      "goal (along >= to_goal), and the start is position + 0 * direction; a NaN direction (0/0) is "
      "overwritten the same way"),
-    ("rhnc/fields.py", r"np\.mod\(np\.asarray\(angle, dtype=float\) \+ np\.pi", r"np\.asarray\(angle, dtype=float\) - np\.pi",
+    ("rhnc/navigation/fields.py", r"np\.mod\(np\.asarray\(angle, dtype=float\) \+ np\.pi", r"np\.asarray\(angle, dtype=float\) - np\.pi",
      "angle - pi and angle + pi differ by 2 pi, which the modulo by 2 pi removes"),
-    ("rhnc/fields.py", r"is_time_varying", r"getattr\(None|\"is_time_varying\", None\)|\"is_time_varying\", \)|XXis_time_varyingXX|IS_TIME_VARYING|\) or t_s is not None",
+    ("rhnc/navigation/fields.py", r"is_time_varying", r"getattr\(None|\"is_time_varying\", None\)|\"is_time_varying\", \)|XXis_time_varyingXX|IS_TIME_VARYING|\) or t_s is not None",
      "only decides whether a time-varying field is first reduced to its snapshot at t_s (one spatial pass "
      "instead of one per time step): sampling it at t_s directly gives the same values (linear in time, "
      "bilinear in space), and a static field's snapshot is itself"),
-    ("rhnc/fields.py", r"sampled = metocean\.sample\(xx, yy, t_s=t_s\)", r"metocean\.sample\(xx, yy, (t_s=None)?\s*\)",
+    ("rhnc/navigation/fields.py", r"sampled = metocean\.sample\(xx, yy, t_s=t_s\)", r"metocean\.sample\(xx, yy, (t_s=None)?\s*\)",
      "the field sampled here is static (a time-varying one was replaced by its snapshot at t_s just above), "
      "and a static field ignores t_s"),
-    ("rhnc/fields.py", r"\.astype\(np\.float32\)", r"\.astype\(None\)",
+    ("rhnc/navigation/fields.py", r"\.astype\(np\.float32\)", r"\.astype\(None\)",
      "float32 is a memory choice for the map-wide goal geometry; float64 gives the same field to float32 "
      "rounding (1e-7 relative), and the planner's steps depend on no digit beyond it"),
-    ("rhnc/fields.py", r"\.astype\(float\) - self\._g_min", r"\.astype\(None\) - self\._g_min",
+    ("rhnc/navigation/fields.py", r"\.astype\(float\) - self\._g_min", r"\.astype\(None\) - self\._g_min",
      "the normalised guidance in float32 instead of float64: the same values to float32 rounding (1e-7 relative)"),
-    ("rhnc/fields.py", r"guidance = np\.exp\(delta, out=delta\)", r"np\.exp\(delta, (out=None)?\s*\)",
+    ("rhnc/navigation/fields.py", r"guidance = np\.exp\(delta, out=delta\)", r"np\.exp\(delta, (out=None)?\s*\)",
      "computing the exponential in place only saves an array; a new array holds the same values"),
-    ("rhnc/fields.py", r"^self\.(_speed|_start|ec|_ec_bar|_energy_bar|_guidance|_g_min) =", r"= (\"\"|None|1\.0)$",
+    ("rhnc/navigation/fields.py", r"^self\.(_speed|_start|ec|_ec_bar|_energy_bar|_guidance|_g_min) =", r"= (\"\"|None|1\.0)$",
      "a placeholder of SuperpositionField.__init__ that update() overwrites before any use (the class must "
      "be updated before sampling); the speed placeholder only has to differ from every positive speed"),
-    ("rhnc/fields.py", r"self\._speed = None", r'self\._speed = ""',
+    ("rhnc/navigation/fields.py", r"self\._speed = None", r'self\._speed = ""',
      "set_weather clears the cached speed so that the next update rebuilds EC and EM: an empty string "
      "differs from every speed as None does"),
-    ("rhnc/fields.py", r"self\._speed = speed", r"self\._speed = None",
+    ("rhnc/navigation/fields.py", r"self\._speed = speed", r"self\._speed = None",
      "the cached speed only saves rebuilding EC and EM for an unchanged speed: forgetting it rebuilds the "
      "same fields"),
-    ("rhnc/fields.py", r"self\._g_span = span if span > 1e-12", r".",
+    ("rhnc/navigation/fields.py", r"self\._g_span = span if span > 1e-12", r".",
      "a guard for a guidance field constant over the map to 12 digits, which G (a distance to the goal "
      "times a factor of at least 1) never is on a map of two nodes or more: the fallback is unreachable"),
-    ("rhnc/fields.py", r"if not span > 1e-12 \* max", r"if not span >= 1e-12 \* max",
+    ("rhnc/navigation/fields.py", r"if not span > 1e-12 \* max", r"if not span >= 1e-12 \* max",
      "differs only for a spread of exactly the threshold, where either answer is rounding"),
-    ("rhnc/fields.py", r"g_bar = \(self\._guidance\[rows, cols\]\.astype\(float\) - self\._g_min\)",
+    ("rhnc/navigation/fields.py", r"g_bar = \(self\._guidance\[rows, cols\]\.astype\(float\) - self\._g_min\)",
      r"\+ self\._g_min\)",
      "the patch only feeds differences of U between nodes (the gradient): a constant shift of G_bar cancels"),
-    ("rhnc/fields.py", r"(r0, r1|c0, c1) = max\([ij] - 1, 0\), min\([ij] \+ 3, n[xy]\)", r"[ij] - 2, 0|[ij] \+ 4, n",
+    ("rhnc/navigation/fields.py", r"(r0, r1|c0, c1) = max\([ij] - 1, 0\), min\([ij] \+ 3, n[xy]\)", r"[ij] - 2, 0|[ij] \+ 4, n",
      "a wider patch around the cell: every node is read at the same offset from the patch's first row and "
      "column (indices are taken relative to r0, c0), so the extra nodes are never read"),
-    ("rhnc/fields.py", r"u = self\._patch\(slice\(r0, r1\), slice\(c0, c1\)", r"slice\(r0, None\)|slice\(c0, None\)",
+    ("rhnc/navigation/fields.py", r"u = self\._patch\(slice\(r0, r1\), slice\(c0, c1\)", r"slice\(r0, None\)|slice\(c0, None\)",
      "a patch running to the map's edge holds the same nodes at the same offsets; the extra ones are never read"),
     ("orchestrator/master.py", r"_progress_bar|bar\.update\(1\)|def run\(self, progress: bool = True|tqdm\(total=total",
      r".",
@@ -149,7 +149,7 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("orchestrator/fmu_participant.py", r"self\.(_slave|_unzip_dir) = None", r'= ""',
      "a second terminate() then finds an empty string instead of None: the slave's calls fail inside the "
      "try blocks that already ignore a refusing FMU and rmtree('') is ignored, so it still does nothing"),
-    ("rhnc/nmpc.py", r"reference\[:, 2\] -= 2\.0 \* np\.pi \* np\.round",
+    ("rhnc/control/nmpc.py", r"reference\[:, 2\] -= 2\.0 \* np\.pi \* np\.round",
      r"reference\[:, 2\] [-+]= 2\.0 \* np\.pi \* np\.round\(",
      "shifts the reference heading by a different whole number of turns: the objective is periodic in it "
      "(stage cost 2 (1 - cos e), terminal heading error wrapped by atan2, terminal frame from cos and sin; "
@@ -196,35 +196,35 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("orchestrator/toml_input.py", r"exc\.errors\(include_url=False\)", r"include_url=True",
      "include_url only adds a 'url' entry to each error, and message_of reads the type, location, context, "
      "message and input, never the url"),
-    ("rhnc/nmpc_codegen.py", r'os\.environ\.get\(CODEGEN_ENV, ""\)', r'CODEGEN_ENV, "XXXX"\)',
+    ("rhnc/control/nmpc_codegen.py", r'os\.environ\.get\(CODEGEN_ENV, ""\)', r'CODEGEN_ENV, "XXXX"\)',
      "the default for an unset variable is only looked up among the off words, and 'xxxx' is none of them either"),
-    ("rhnc/nmpc_codegen.py", r"timeout=30, check=False", r"timeout=31,",
+    ("rhnc/control/nmpc_codegen.py", r"timeout=30, check=False", r"timeout=31,",
      "differs only for a compiler whose --version answers after 30 to 31 s, the limit's own value"),
-    ("rhnc/nmpc_codegen.py", r"timeout=30, check=False", r"check=None\)|timeout=30, \)",
+    ("rhnc/control/nmpc_codegen.py", r"timeout=30, check=False", r"check=None\)|timeout=30, \)",
      "subprocess.run's check is False by default, and None is as false: a failing --version is not raised either way"),
-    ("rhnc/nmpc_codegen.py", r'oracle = ca\.Function\("nlp", \[nlp\["x"\], nlp\["p"\]\]', r".",
+    ("rhnc/control/nmpc_codegen.py", r'oracle = ca\.Function\("nlp", \[nlp\["x"\], nlp\["p"\]\]', r".",
      "the oracle's names only label the serialized graph the key hashes: every problem still gets one key of its "
      "own, the same in every process, so the same problems share a library and different ones do not; keys are "
      "only compared with keys this code makes (a cache filled under other names is not found and is rebuilt once, "
      "as after any change of the recipe)"),
-    ("rhnc/nmpc_codegen.py", r'" "\.join\(COMPILER_FLAGS\)|digest\.update\(b"\\0"\)', r'"XX XX"\.join|b"XX\\0XX"',
+    ("rhnc/control/nmpc_codegen.py", r'" "\.join\(COMPILER_FLAGS\)|digest\.update\(b"\\0"\)', r'"XX XX"\.join|b"XX\\0XX"',
      "another fixed spelling of the same parts of the key (flags joined, parts separated): as unambiguous, so the "
      "same problems share a key and different ones do not; keys are only compared with keys this code makes"),
-    ("rhnc/nmpc_codegen.py", r'ca\.nlpsol\("rhnc_codegen", self\.plugin', r'"(XXrhnc_codegenXX|RHNC_CODEGEN)"',
+    ("rhnc/control/nmpc_codegen.py", r'ca\.nlpsol\("rhnc_codegen", self\.plugin', r'"(XXrhnc_codegenXX|RHNC_CODEGEN)"',
      "the name of an nlpsol made only to generate the code: the generated functions are named after its oracle "
      "('nlp', 'nlp_grad_f', 'nlp_hess_l', ... whatever the solver's name), which is what the loading nlpsol looks up"),
-    ("rhnc/nmpc_codegen.py", r'self\._compiled_solver\("rhnc_codegen_check", path\)', r"XXrhnc_codegen_checkXX|RHNC_CODEGEN_CHECK",
+    ("rhnc/control/nmpc_codegen.py", r'self\._compiled_solver\("rhnc_codegen_check", path\)', r"XXrhnc_codegen_checkXX|RHNC_CODEGEN_CHECK",
      "the name of a solver made once to load the library and then dropped"),
-    ("rhnc/nmpc_codegen.py", r'tempfile\.TemporaryDirectory\(prefix="rhnc-nlp-"\)', r"prefix=(None|\"XXrhnc-nlp-XX\"|\"RHNC-NLP-\")",
+    ("rhnc/control/nmpc_codegen.py", r'tempfile\.TemporaryDirectory\(prefix="rhnc-nlp-"\)', r"prefix=(None|\"XXrhnc-nlp-XX\"|\"RHNC-NLP-\")",
      "only the name of the temporary folder the C is generated in"),
-    ("rhnc/nmpc_codegen.py", r"ca\.CodeGenerator\(path\.stem, \{\}\)", r"ca\.CodeGenerator\(path\.stem, \)",
+    ("rhnc/control/nmpc_codegen.py", r"ca\.CodeGenerator\(path\.stem, \{\}\)", r"ca\.CodeGenerator\(path\.stem, \)",
      "CodeGenerator's options default to an empty dict: the same call"),
-    ("rhnc/nmpc_problem.py", r'ca\.SX\.sym\("(\w+)"', r'ca\.SX\.sym\("(XX\w+XX|[A-Z_]+)"',
+    ("rhnc/control/nmpc_problem.py", r'ca\.SX\.sym\("(\w+)"', r'ca\.SX\.sym\("(XX\w+XX|[A-Z_]+)"',
      "only the name of a symbol changes: CasADi functions take their arguments by position and nothing looks a "
      "symbol up by name; the name is kept in the serialized graph the code-generation cache key is hashed from, "
      "so the key (the cached library's file name) changes, and the library compiled under it holds the same "
      "functions"),
-    ("rhnc/nmpc.py", r'library\.solver\("rhnc_nmpc(_relaxed)?"\)', r'library\.solver\("(XX\w+XX|[A-Z_]+)"\)',
+    ("rhnc/control/nmpc.py", r'library\.solver\("rhnc_nmpc(_relaxed)?"\)', r'library\.solver\("(XX\w+XX|[A-Z_]+)"\)',
      "only the name of an nlpsol changes: it labels the solver in CasADi's messages and nothing reads it back "
      "(the functions the solver loads from a compiled library are named after the NLP's oracle, not after it)"),
 ]

@@ -66,29 +66,29 @@ class Module:
 
 
 MODULES = {
-    "trigger": Module(("rhnc/trigger.py",), ("tests/rhnc/test_trigger.py", "tests/rhnc/test_navigation_participant.py")),
-    "reference": Module(("rhnc/reference.py",), ("tests/rhnc/test_reference.py",)),
-    "energy": Module(("rhnc/energy.py",), ("tests/rhnc/test_energy.py",)),
-    "voyage": Module(("rhnc/voyage.py",), ("tests/rhnc/test_voyage.py",)),
-    "planner": Module(("rhnc/planner.py",), ("tests/rhnc/test_fields_planner.py", "tests/rhnc/test_planner_guards.py")),
-    "fields": Module(("rhnc/fields.py",), ("tests/rhnc/test_fields_planner.py", "tests/rhnc/test_fields_guards.py")),
+    "trigger": Module(("rhnc/navigation/trigger.py",), ("tests/rhnc/test_trigger.py", "tests/rhnc/test_navigation_participant.py")),
+    "reference": Module(("rhnc/navigation/reference.py",), ("tests/rhnc/test_reference.py",)),
+    "energy": Module(("rhnc/ship/energy.py",), ("tests/rhnc/test_energy.py",)),
+    "voyage": Module(("rhnc/voyage/voyage.py",), ("tests/rhnc/test_voyage.py",)),
+    "planner": Module(("rhnc/navigation/planner.py",), ("tests/rhnc/test_fields_planner.py", "tests/rhnc/test_planner_guards.py")),
+    "fields": Module(("rhnc/navigation/fields.py",), ("tests/rhnc/test_fields_planner.py", "tests/rhnc/test_fields_guards.py")),
     # the NMPC's parts together (slow: about 3100 mutants against solver runs; see --sample) ...
-    "nmpc": Module(("rhnc/nmpc.py", "rhnc/nmpc_settings.py", "rhnc/nmpc_problem.py", "rhnc/nmpc_terminal.py",
-                    "rhnc/nmpc_warm_start.py", "rhnc/nmpc_colregs.py", "rhnc/nmpc_alteration.py"),
+    "nmpc": Module(("rhnc/control/nmpc.py", "rhnc/control/nmpc_settings.py", "rhnc/control/nmpc_problem.py", "rhnc/control/nmpc_terminal.py",
+                    "rhnc/control/nmpc_warm_start.py", "rhnc/control/nmpc_colregs.py", "rhnc/control/nmpc_alteration.py"),
                    ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py",
                     "tests/rhnc/test_nmpc_cost.py", "tests/rhnc/test_nmpc_warm_start.py")),
     # ... or file by file (each its own run, so that a part finishes and reports on its own)
-    "nmpc_warm_start": Module(("rhnc/nmpc_warm_start.py",), ("tests/rhnc/test_nmpc.py",
+    "nmpc_warm_start": Module(("rhnc/control/nmpc_warm_start.py",), ("tests/rhnc/test_nmpc.py",
                                                              "tests/rhnc/test_nmpc_warm_start.py")),
-    "nmpc_terminal": Module(("rhnc/nmpc_terminal.py",), ("tests/rhnc/test_nmpc.py",)),
-    "nmpc_colregs": Module(("rhnc/nmpc_colregs.py", "rhnc/nmpc_alteration.py"),
+    "nmpc_terminal": Module(("rhnc/control/nmpc_terminal.py",), ("tests/rhnc/test_nmpc.py",)),
+    "nmpc_colregs": Module(("rhnc/control/nmpc_colregs.py", "rhnc/control/nmpc_alteration.py"),
                            ("tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_limits.py")),
-    "nmpc_problem": Module(("rhnc/nmpc_problem.py",), ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py",
+    "nmpc_problem": Module(("rhnc/control/nmpc_problem.py",), ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py",
                                                        "tests/rhnc/test_nmpc_cost.py")),
-    "nmpc_controller": Module(("rhnc/nmpc.py", "rhnc/nmpc_settings.py"),
+    "nmpc_controller": Module(("rhnc/control/nmpc.py", "rhnc/control/nmpc_settings.py"),
                               ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py",
                                "tests/rhnc/test_nmpc_limits.py")),
-    "nmpc_codegen": Module(("rhnc/nmpc_codegen.py",), ("tests/rhnc/test_nmpc_codegen.py",
+    "nmpc_codegen": Module(("rhnc/control/nmpc_codegen.py",), ("tests/rhnc/test_nmpc_codegen.py",
                                                        "tests/rhnc/test_nmpc_codegen_cache.py")),
     "master": Module(("orchestrator/master.py", "orchestrator/participant_build.py"),
                      ("tests/orchestrator/test_master.py", "tests/orchestrator/test_master_guards.py",
@@ -190,7 +190,7 @@ def explain(source: str, diff: str, in_log_calls: set[str]) -> str:
 
 
 def source_of(mutant: str, sources: list[str]) -> str:
-    """The file a mutant belongs to, from its name (``rhnc.nmpc_problem.x_build_problem__mutmut_3``)."""
+    """The file a mutant belongs to, from its name (``rhnc.control.nmpc_problem.x_build_problem__mutmut_3``)."""
     dotted = mutant.split(".x")[0] if ".x" in mutant else mutant.rsplit(".", 1)[0]
     for source in sources:
         if source[:-3].replace("/", ".") == dotted:

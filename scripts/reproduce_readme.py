@@ -74,7 +74,7 @@ def _run(scenario: str) -> Callable[[Path], tuple[Path, dict]]:
 
 def _plan(scenario: str):
     def run(results: Path):
-        from rhnc.offline_planning import run_offline_planning
+        from rhnc.navigation.offline_planning import run_offline_planning
 
         folder = run_offline_planning(REPO / "scenarios" / scenario, results)
         return folder, json.loads((folder / "summary.json").read_text())

@@ -80,7 +80,7 @@ def sweep_members(results: Path, name: str, path: Path, out_dir: Path):
     Returns (section, folders used, members, all published) or None.
     """
     from orchestrator.compare import Section
-    from rhnc.voyage_comparison_tables import sweep_section
+    from rhnc.voyage.voyage_comparison_tables import sweep_section
 
     folder = results / name
     if not folder.is_dir():
@@ -131,7 +131,7 @@ def table(frame: pd.DataFrame, columns) -> str:
 def paper_speed_effect() -> dict:
     """The paper's Table 3 speeds made good, and what that speed difference alone is worth
     per nm in calm water by this project's energy model."""
-    from rhnc.energy import EnergyParameters, brake_power, cost_rate, emission_rate
+    from rhnc.ship.energy import EnergyParameters, brake_power, cost_rate, emission_rate
     from orchestrator.geometry import KNOT
 
     spec = tomllib.loads((REPO / "scenarios" / "exp2_table3.toml").read_text())

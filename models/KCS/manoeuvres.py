@@ -4,7 +4,7 @@ Run ``python models/KCS/manoeuvres.py [set]`` from the repository root; it build
 if needed (orchestrator.fmu_build.ensure_built), steps it through fmpy at 1 s and prints the
 figures. The plant has no rudder: both manoeuvres command the yaw moment tau_r directly.
 The manoeuvre figures (advance, transfer, tactical and steady diameter, overshoots) are those
-of the scenarios' analyses, :mod:`rhnc.manoeuvres`; only the figures it does not define
+of the scenarios' analyses, :mod:`rhnc.ship.manoeuvres`; only the figures it does not define
 (time to 180 deg, the steady turn's speed, yaw rate and drift, the zig-zag period) are
 computed here.
 """
@@ -23,7 +23,7 @@ from fmpy.fmi2 import FMU2Slave
 
 from orchestrator.fmu_build import MODELS_DIR, ensure_built
 from orchestrator.geometry import KNOT
-from rhnc import manoeuvres
+from rhnc.ship import manoeuvres
 
 APPROACH_SPEED = 18 * KNOT  # m/s
 

@@ -27,14 +27,14 @@ def _execute_time(frame, column) -> float:
 
 def _ship_length(cosim, plant) -> float:
     """The plant's ``lpp`` parameter when the scenario sets it, else the ship's particulars."""
-    from rhnc.ships import load_ship
+    from rhnc.ship.ships import load_ship
 
     parameters = getattr(cosim.participant(plant), "parameters", {})
     return float(parameters.get("lpp", parameters.get("length_m", load_ship(DEFAULT_SHIP).lpp_m)))
 
 
 def turning_circle_analysis(frame, scenario, cosim, out_dir) -> dict:
-    from rhnc.manoeuvres import turning_circle
+    from rhnc.ship.manoeuvres import turning_circle
 
     plant = plant_name(cosim)
     column, kind = steering_column(frame, scenario, plant)
@@ -53,7 +53,7 @@ def turning_circle_analysis(frame, scenario, cosim, out_dir) -> dict:
 
 
 def zigzag_analysis(frame, scenario, cosim, out_dir) -> dict:
-    from rhnc.manoeuvres import zigzag
+    from rhnc.ship.manoeuvres import zigzag
 
     plant = plant_name(cosim)
     column, kind = steering_column(frame, scenario, plant)
@@ -70,7 +70,7 @@ def zigzag_analysis(frame, scenario, cosim, out_dir) -> dict:
 
 def voyage_analysis(frame, scenario, cosim, out_dir, goal_nm=None, arrival_radius_nm: float = 0.5,
                     cii_year: int = 2026) -> dict:
-    """Cost, CO2 per nm and CII of the sailed track (:mod:`rhnc.voyage`).
+    """Cost, CO2 per nm and CII of the sailed track (:mod:`rhnc.voyage.voyage`).
 
     The weather is what the plant met: the outputs of the participant driving the
     plant's ``hs`` input (the environment FMU), else the scenario's met-ocean field at the
@@ -90,8 +90,8 @@ def voyage_analysis(frame, scenario, cosim, out_dir, goal_nm=None, arrival_radiu
     ``mean_speed_made_good_kn`` divides it by the time taken, and
     ``mean_speed_through_water_kn`` is the time-averaged ``hypot(u, v)`` of the plant.
     """
-    from rhnc.energy import EnergyParameters
-    from rhnc.voyage import account_voyage, mean_speed_through_water_kn
+    from rhnc.ship.energy import EnergyParameters
+    from rhnc.voyage.voyage import account_voyage, mean_speed_through_water_kn
 
     plant = plant_name(cosim)
     x, y = frame[f"{plant}.x"].to_numpy(), frame[f"{plant}.y"].to_numpy()
@@ -170,7 +170,7 @@ def encounter_analysis(frame, scenario, cosim, out_dir) -> dict:
     "back on track" is the first time after the closest approach from which it stays
     within 0.2 nm.
     """
-    from rhnc.encounter import cross_track_error, reference_at_times, separations, time_back_on_track
+    from rhnc.encounters.encounter import cross_track_error, reference_at_times, separations, time_back_on_track
 
     plant = plant_name(cosim)
     t = frame["time_s"].to_numpy()

@@ -22,7 +22,7 @@ class PlanCommand:
 
     @staticmethod
     def run(args) -> int:
-        from rhnc.offline_planning import run_offline_planning
+        from rhnc.navigation.offline_planning import run_offline_planning
 
         folder = run_offline_planning(Path(args.scenario), Path(args.results))
         print(f"finished: results in {folder}")
@@ -50,7 +50,7 @@ class IdentifyCommand:
 
     @staticmethod
     def run(args) -> int:
-        from rhnc.identify_run import run_identify
+        from rhnc.ship.identify_run import run_identify
 
         report = run_identify(args.scenario, args.results, plant=args.plant, speed_kn=args.speed_kn,
                               tau_u_max_N=args.tau_u_max_N, tau_r_max_Nm=args.tau_r_max_Nm,

@@ -330,7 +330,7 @@ def navigation_fields_figure(frame, scenario, cosim, out_dir, panels: int = 6) -
         row = min(row, len(frame) - 1)
         avoidance = bool(et[row] > 0.5)
         if navigation.metocean.is_time_varying:  # the weather the navigation planned in then
-            from rhnc.fields import resample_weather
+            from rhnc.navigation.fields import resample_weather
 
             field.set_weather(resample_weather(navigation.metocean, navigation.resolution_nm, t_s=float(t[row])))
         field.update((own_x[row], own_y[row]), navigation.speed)
@@ -361,7 +361,7 @@ def comparison_tracks_figure(spec, reports, out_dir) -> list[str]:
     """
     import pandas as pd
 
-    from rhnc.metocean_sources import from_netcdf
+    from rhnc.weather.metocean_sources import from_netcdf
 
     target = Path(out_dir) / "tracks.png"
     fig = _figure(7, 6)

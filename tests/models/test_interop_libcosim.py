@@ -58,7 +58,7 @@ def test_metocean_in_libcosim_returns_the_planners_values(fmus, tmp_path):
     from fmpy import read_model_description
 
     from orchestrator.geometry import NM
-    from rhnc.weather_generators import paper_default
+    from rhnc.weather.weather_generators import paper_default
 
     field = paper_default(resolution_nm=5.0)
     grid = field.write_fmu_grid(tmp_path / "weather.grid")
@@ -84,7 +84,7 @@ def test_metocean_in_libcosim_follows_the_moving_storm_in_time(fmus, tmp_path):
     from fmpy import read_model_description
 
     from orchestrator.geometry import NM
-    from rhnc.weather_generators import moving_storm
+    from rhnc.weather.weather_generators import moving_storm
 
     field = moving_storm(resolution_nm=5.0, duration_h=3.0)
     grid = field.write_fmu_grid(tmp_path / "storm.grid")

@@ -15,7 +15,7 @@ OUTPUTS = ["wind_speed", "wind_direction", *FIELDS]
 
 
 def write_grid(path: Path, x0, dx, y0, dy, fields: dict[str, np.ndarray]) -> Path:
-    """Minimal MOGRID1 writer (spec'd format, written independently of rhnc/metocean.py)."""
+    """Minimal MOGRID1 writer (spec'd format, written independently of rhnc/weather/metocean.py)."""
     nx, ny = fields["hs"].shape
     with path.open("wb") as f:
         f.write(b"MOGRID1\n")
@@ -138,7 +138,7 @@ def test_corrupt_grid_file_fails_initialisation_naming_it(fmus, open_slave, grid
 
 # -- MOGRID2: the time axis --------------------------------------------------------------
 def write_grid2(path: Path, x0, dx, y0, dy, times, fields: dict[str, np.ndarray]) -> Path:
-    """Minimal MOGRID2 writer (written independently of rhnc/metocean.py): fields (nt, nx, ny)."""
+    """Minimal MOGRID2 writer (written independently of rhnc/weather/metocean.py): fields (nt, nx, ny)."""
     nt, nx, ny = fields["hs"].shape
     with path.open("wb") as f:
         f.write(b"MOGRID2\n")
@@ -182,7 +182,7 @@ def test_time_steps_exact_linear_between_and_held_outside(fmus, open_slave, time
 def test_fmu_and_sample_agree_along_a_sailed_track_in_a_moving_storm(fmus, open_slave, tmp_path):
     """The planner's sample and the FMU give the same weather at the places and times sailed."""
     from orchestrator.geometry import KNOT, NM
-    from rhnc.weather_generators import moving_storm
+    from rhnc.weather.weather_generators import moving_storm
 
     field = moving_storm(resolution_nm=2.0, duration_h=6.0)
     assert field.is_time_varying
@@ -223,7 +223,7 @@ def test_default_grid_in_resources_runs_the_default_experiment(fmus):
     from fmpy import simulate_fmu
 
     from orchestrator.geometry import NM
-    from rhnc.weather_generators import paper_default
+    from rhnc.weather.weather_generators import paper_default
 
     point = (40.0 * NM, 55.0 * NM)
     result = simulate_fmu(str(fmus["MetOcean"]), stop_time=60.0, output_interval=60.0,
@@ -239,7 +239,7 @@ def test_shipped_default_grid_is_the_generators_output():
     from pathlib import Path
 
     from orchestrator.fmu_build import MODELS_DIR
-    from rhnc.weather_generators import paper_default
+    from rhnc.weather.weather_generators import paper_default
 
     with tempfile.TemporaryDirectory() as tmp:
         fresh = paper_default(resolution_nm=5.0).write_fmu_grid(Path(tmp) / "g")

@@ -104,10 +104,10 @@ def test_orchestrator_imports_nothing_of_rhnc():
 def test_the_check_sees_lazy_and_dynamic_imports(tmp_path):
     package = tmp_path / "engine"
     package.mkdir()
-    (package / "a.py").write_text("def f():\n    from rhnc.ships import load_ship\n")
-    (package / "b.py").write_text("import importlib\nimportlib.import_module('rhnc.metocean')\n")
+    (package / "a.py").write_text("def f():\n    from rhnc.ship.ships import load_ship\n")
+    (package / "b.py").write_text("import importlib\nimportlib.import_module('rhnc.weather.metocean')\n")
     (package / "c.py").write_text("import rhnc_cosim_extra\nfrom orchestrator import plugins\n")
-    assert domain_imports(package) == ["engine/a.py:2 rhnc.ships", "engine/b.py:2 rhnc.metocean"]
+    assert domain_imports(package) == ["engine/a.py:2 rhnc.ship.ships", "engine/b.py:2 rhnc.weather.metocean"]
 
 
 def test_no_modules_import_each_other_in_a_loop():

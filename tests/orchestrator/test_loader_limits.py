@@ -242,7 +242,7 @@ def test_an_error_line_stays_one_line_whatever_the_path_holds(tmp_path, capsys):
 def test_a_netcdf_grid_beyond_the_limit_is_refused_from_its_header(tmp_path):
     """A file declaring a 3000 x 3000 grid (its data never written, so the file is small)."""
     netCDF4 = pytest.importorskip("netCDF4")
-    from rhnc.metocean_sources import from_scenario_table
+    from rhnc.weather.metocean_sources import from_scenario_table
 
     path = tmp_path / "huge.nc"
     with netCDF4.Dataset(path, "w") as ds:

@@ -8,8 +8,8 @@ import pandas as pd
 import pytest
 
 from orchestrator.run import run_scenario
-from rhnc.energy import EnergyParameters, brake_power, cost_rate
-from rhnc.metocean_sources import from_netcdf
+from rhnc.ship.energy import EnergyParameters, brake_power, cost_rate
+from rhnc.weather.metocean_sources import from_netcdf
 
 pytestmark = pytest.mark.slow
 
@@ -60,7 +60,7 @@ def test_voyage_accounting_without_an_environment_samples_the_field_at_the_times
     """No weather FMU: the voyage analysis takes the scenario's field at each sample's place and time."""
     import json
 
-    from rhnc.voyage import account_voyage
+    from rhnc.voyage.voyage import account_voyage
 
     scenario = tmp_path / "no_env.toml"
     scenario.write_text("""

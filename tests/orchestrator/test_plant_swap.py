@@ -6,7 +6,7 @@ import pandas as pd
 import pytest
 
 from orchestrator.run import run_scenario
-from rhnc.metocean_sources import from_netcdf
+from rhnc.weather.metocean_sources import from_netcdf
 
 KNOT = 1852 / 3600
 DEG = np.pi / 180

@@ -6,8 +6,8 @@ import numpy as np
 
 from orchestrator.batch_spec import load_batch
 from orchestrator.scenario import load_scenario
-from rhnc.metocean_sources import from_scenario_table
-from rhnc.weather_generators import STORM_SET_SIZE, storm_set_member
+from rhnc.weather.metocean_sources import from_scenario_table
+from rhnc.weather.weather_generators import STORM_SET_SIZE, storm_set_member
 
 BATCH = Path(__file__).parents[2] / "batches" / "weather_set.toml"
 

@@ -51,8 +51,8 @@ def test_wheel_install_runs_a_scenario_outside_the_tree(tmp_path):
     scenario.write_text((REPO / "scenarios" / "turning_circle.toml").read_text().replace(
         "stop_s = 1800.0", "stop_s = 600.0"))
     # every data file the domain reads at import resolves inside the installed package
-    where = subprocess.run([str(python), "-c", "import orchestrator, rhnc, rhnc.ships as s, rhnc.ship_model as m, "
-                            "rhnc.allocation as a, rhnc.cosim.model_library as lib; "
+    where = subprocess.run([str(python), "-c", "import orchestrator, rhnc, rhnc.ship.ships as s, rhnc.ship.ship_model as m, "
+                            "rhnc.control.allocation as a, rhnc.ship.model_library as lib; "
                             "print(orchestrator.__file__); print(rhnc.__file__); print(s.SHIPS_DIR / 'KCS.toml'); "
                             "print(m.PARAMETER_SETS_FILE); print(a.PARAMETER_SETS_FILE); print(lib.MODELS_DIR)"],
                            capture_output=True, text=True, cwd=outside, env=environment, check=True)

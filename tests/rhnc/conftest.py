@@ -80,7 +80,7 @@ class RawInputs:
 @pytest.fixture
 def raw_nmpc_inputs(monkeypatch):
     """RawInputs of every NMPCController built (or attached) during the test."""
-    from rhnc.nmpc import NMPCController
+    from rhnc.control.nmpc import NMPCController
 
     raw = RawInputs()
     original_init = NMPCController.__init__

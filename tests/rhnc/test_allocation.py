@@ -12,7 +12,7 @@ import pytest
 
 from orchestrator.errors import ScenarioError
 from orchestrator.participant import BuildContext
-from rhnc.allocation import AllocationParticipant, ForceModel, load_coefficients
+from rhnc.control.allocation import AllocationParticipant, ForceModel, load_coefficients
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "models"))
 from mmg_reference import forces, mmg_parameters  # noqa: E402  (the independent plant equations)

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from rhnc.colregs import EncounterTracker, classify, cpa_tcpa, stand_on_must_act, wrap_deg
+from rhnc.encounters.colregs import EncounterTracker, classify, cpa_tcpa, stand_on_must_act, wrap_deg
 
 NM = 1852.0
 KN = NM / 3600.0
@@ -102,8 +102,10 @@ def test_stand_on_must_act_is_one_rule_for_controller_and_analysis():
 
 
 def test_controller_and_analysis_share_the_rule_17_thresholds():
-    from rhnc import colregs_analysis, colregs_judgement, nmpc_colregs
-    from rhnc.nmpc import NMPCSettings
+    from rhnc.control import nmpc_colregs
+    from rhnc.cosim import colregs_analysis
+    from rhnc.encounters import colregs_judgement
+    from rhnc.control.nmpc import NMPCSettings
 
     assert nmpc_colregs.stand_on_must_act is stand_on_must_act
     assert colregs_judgement.stand_on_must_act is stand_on_must_act

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from rhnc.colregs_analysis import (FAIL, NOT_APPLICABLE, PASS, JudgementSettings, closest_approach,
+from rhnc.cosim.colregs_analysis import (FAIL, NOT_APPLICABLE, PASS, JudgementSettings, closest_approach,
                                    first_manoeuvre, judge_encounters)
 
 NM = 1852.0

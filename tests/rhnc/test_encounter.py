@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from rhnc.encounter import (cross_track_error, reference_at_times, segment_min_distance, separations,
+from rhnc.encounters.encounter import (cross_track_error, reference_at_times, segment_min_distance, separations,
                              time_back_on_track)
 from orchestrator.geometry import NM
 

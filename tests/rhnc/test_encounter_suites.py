@@ -7,7 +7,7 @@ import pytest
 
 from orchestrator.run import run_scenario
 from orchestrator.scenario import read_toml
-from rhnc.traffic_situation import load_traffic_situation, scenario_overrides
+from rhnc.encounters.traffic_situation import load_traffic_situation, scenario_overrides
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from orchestrator.errors import ScenarioError
-from rhnc.energy import (EnergyParameters, brake_power, cost_rate, emission_rate, frictional_coefficient,
+from rhnc.ship.energy import (EnergyParameters, brake_power, cost_rate, emission_rate, frictional_coefficient,
                          power_components, speed_through_water, wave_speed)
 
 V18 = 18 * 1852 / 3600  # 9.26 m/s
@@ -58,7 +58,7 @@ def test_head_seas_hs_3m():
 
 
 def test_c_w_reading_gives_the_smaller_of_two_implausible_ratios():
-    """0.57e-3 -> Pw/Ps = 0.027 %; 0.57e3 -> Pw/Ps = 267: the default is 0.57e-3 (see rhnc.energy)."""
+    """0.57e-3 -> Pw/Ps = 0.027 %; 0.57e3 -> Pw/Ps = 267: the default is 0.57e-3 (see rhnc.ship.energy)."""
     ratios = {}
     for reading in (0.57e-3, 0.57e3):
         params = EnergyParameters(wave_drag_coefficient=reading)
@@ -157,7 +157,7 @@ def test_the_parameters_given_are_the_ones_used():
     assert frictional_coefficient(V18, other) != frictional_coefficient(V18)
     args = (V18, 0.0, -8.0, 0.0, 3.0)  # head wind and sea
     assert brake_power(*args, other) == power_components(*args, other)["brake_power"] != brake_power(*args)
-    from rhnc.energy import fuel_rate_t_h
+    from rhnc.ship.energy import fuel_rate_t_h
 
     power = 8.0e6
     assert fuel_rate_t_h(power, other) == pytest.approx(8.0e3 * 250.0 * 1e-6)
@@ -177,7 +177,7 @@ def test_each_resistance_parameter_reaches_the_brake_power(change):
 
 
 def test_ship_constants_come_from_the_ship_particulars():
-    from rhnc.ships import load_ship
+    from rhnc.ship.ships import load_ship
 
     ship, params = load_ship("KCS"), EnergyParameters()
     assert params.wind_area_m2 == ship.wind_area_frontal_m2  # head-wind resistance: frontal area

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from rhnc.equal_arrival import ArrivalTrial, EqualArrival, match_arrival_time
+from rhnc.voyage.equal_arrival import ArrivalTrial, EqualArrival, match_arrival_time
 
 DISTANCE_NM = 140.9
 

@@ -1,4 +1,4 @@
-"""Planning grid, field formulas and local evaluation of rhnc.fields, checked against
+"""Planning grid, field formulas and local evaluation of rhnc.navigation.fields, checked against
 direct computations: resampling limits and time, the energy fields with non-default
 parameters, the guidance field's width c and its wrapping, normalisation thresholds,
 grids not starting at the origin and points on and beyond the map's border."""
@@ -8,11 +8,11 @@ import math
 import numpy as np
 import pytest
 
-from rhnc.energy import EnergyParameters, brake_power, cost_rate, emission_rate, speed_through_water
-from rhnc.fields import (GuidanceParameters, PlanningWeather, SuperpositionField, bearing, energy_rate_fields,
+from rhnc.ship.energy import EnergyParameters, brake_power, cost_rate, emission_rate, speed_through_water
+from rhnc.navigation.fields import (GuidanceParameters, PlanningWeather, SuperpositionField, bearing, energy_rate_fields,
                          guidance_field, normalise, resample_weather)
 from orchestrator.geometry import KNOT, NM
-from rhnc.metocean import MetOceanField
+from rhnc.weather.metocean import MetOceanField
 
 SPEED = 18 * KNOT
 NAMES = ("wind_north", "wind_east", "hs", "current_north", "current_east")

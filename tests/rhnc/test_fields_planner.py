@@ -5,11 +5,11 @@ import math
 import numpy as np
 import pytest
 
-from rhnc.fields import (SuperpositionField, guidance_field, normalise, resample_weather, wrap_angle)
+from rhnc.navigation.fields import (SuperpositionField, guidance_field, normalise, resample_weather, wrap_angle)
 from orchestrator.geometry import KNOT, NM
-from rhnc.metocean import MetOceanField
-from rhnc.weather_generators import paper_default
-from rhnc.planner import plan_local_path
+from rhnc.weather.metocean import MetOceanField
+from rhnc.weather.weather_generators import paper_default
+from rhnc.navigation.planner import plan_local_path
 
 SPEED = 18 * KNOT
 STEP = 1.2 * NM
@@ -158,15 +158,15 @@ def test_avoidance_state_descends_guidance_alone():
 
 
 def test_normalised_cost_and_emission_fields_coincide():
-    """EC is affine and EM linear in P: Eq. 5 maps both to the same field (see rhnc.fields)."""
+    """EC is affine and EM linear in P: Eq. 5 maps both to the same field (see rhnc.navigation.fields)."""
     field = SuperpositionField(weather(hs=patch(3, (20, 30), 5)), (45 * NM, 40 * NM))
     field.update((2 * NM, 3 * NM), SPEED)
     assert np.allclose(normalise(field.ec), normalise(field.em), atol=1e-12)
 
 
 def test_final_approach_runs_straight_to_a_goal_within_the_horizon():
-    from rhnc.fields import SuperpositionField, resample_weather
-    from rhnc.planner import plan_local_path
+    from rhnc.navigation.fields import SuperpositionField, resample_weather
+    from rhnc.navigation.planner import plan_local_path
 
     weather = resample_weather(paper_default(resolution_nm=1.0), 1.0)
     goal = (100 * 1852.0, 100 * 1852.0)

@@ -4,7 +4,7 @@ import pytest
 
 from orchestrator.errors import ScenarioError
 from orchestrator.participant import BuildContext
-from rhnc.goal import GoalMonitor
+from rhnc.navigation.goal import GoalMonitor
 from orchestrator.geometry import NM
 
 

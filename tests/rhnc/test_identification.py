@@ -10,9 +10,9 @@ import pytest
 
 from orchestrator.cli import main
 from orchestrator.errors import ScenarioError
-from rhnc.identification import COEFFICIENTS, Record, fit_coefficients, position_error_growth, simulate
-from rhnc.identify_run import run_identify
-from rhnc.ship_model import ShipParameters, load_parameter_set
+from rhnc.ship.identification import COEFFICIENTS, Record, fit_coefficients, position_error_growth, simulate
+from rhnc.ship.identify_run import run_identify
+from rhnc.ship.ship_model import ShipParameters, load_parameter_set
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -66,8 +66,8 @@ def test_identify_sails_an_actuator_plant_through_the_scenarios_allocation():
 
     from orchestrator.fmu_participant import FmuParticipant, resolve_fmu
     from orchestrator.scenario import load_scenario
-    from rhnc.identification import KNOT, PlantRunner
-    from rhnc.identify_run import AllocatedPlant, _build_participant, allocation_between, find_plant_spec
+    from rhnc.ship.identification import KNOT, PlantRunner
+    from rhnc.ship.identify_run import AllocatedPlant, _build_participant, allocation_between, find_plant_spec
 
     scenario = load_scenario(REPO / "scenarios" / "exp3a_static_mmg.toml")
     spec = find_plant_spec(scenario, None)

@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from rhnc.colregs import classify
-from rhnc.imazu import PROBLEMS, problem_geometry, write_situations
-from rhnc.traffic_situation import load_traffic_situation
+from rhnc.encounters.colregs import classify
+from rhnc.encounters.imazu import PROBLEMS, problem_geometry, write_situations
+from rhnc.encounters.traffic_situation import load_traffic_situation
 
 NM = 1852.0
 KN = NM / 3600.0

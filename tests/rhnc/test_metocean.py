@@ -8,9 +8,9 @@ import xarray as xr
 
 from orchestrator.errors import ScenarioError
 from orchestrator.geometry import NM
-from rhnc.metocean import MetOceanField, fetch_limited_hs
-from rhnc.metocean_sources import from_netcdf, from_scenario_table
-from rhnc.weather_generators import paper_default
+from rhnc.weather.metocean import MetOceanField, fetch_limited_hs
+from rhnc.weather.metocean_sources import from_netcdf, from_scenario_table
+from rhnc.weather.weather_generators import paper_default
 
 
 def test_paper_default_field_is_plausible():

@@ -7,10 +7,10 @@ import pytest
 import xarray as xr
 
 from orchestrator.errors import ScenarioError
-from rhnc.fields import resample_weather
-from rhnc.metocean import FIELDS, MetOceanField
-from rhnc.metocean_sources import from_netcdf, from_scenario_table
-from rhnc.weather_generators import paper_default
+from rhnc.navigation.fields import resample_weather
+from rhnc.weather.metocean import FIELDS, MetOceanField
+from rhnc.weather.metocean_sources import from_netcdf, from_scenario_table
+from rhnc.weather.weather_generators import paper_default
 
 TIMES_S = np.array([0.0, 3600.0, 9000.0])  # uneven steps on purpose
 
@@ -115,7 +115,7 @@ def test_netcdf_round_trip_keeps_every_time_step(moving, tmp_path):
 
 def test_netcdf_written_directly_is_the_xarray_dataset(moving, tmp_path):
     """The file every run writes (through netCDF4) holds what ``to_dataset`` describes, attributes too."""
-    from rhnc.metocean_netcdf import to_dataset
+    from rhnc.weather.metocean_netcdf import to_dataset
 
     for field in (moving, paper_default(resolution_nm=20.0)):
         path = field.to_netcdf(tmp_path / f"direct{field.is_time_varying}.nc")

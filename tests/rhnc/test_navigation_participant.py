@@ -8,8 +8,8 @@ import pytest
 from orchestrator.errors import ScenarioError
 from orchestrator.participant import BuildContext
 from orchestrator.geometry import KNOT, NM
-from rhnc.weather_generators import paper_default
-from rhnc.navigation_participant import NavigationParticipant
+from rhnc.weather.weather_generators import paper_default
+from rhnc.navigation.navigation_participant import NavigationParticipant
 
 DELTA = 240.0
 
@@ -92,9 +92,9 @@ def test_setup_without_position_needs_start(metocean):
 
 def test_plans_in_the_weather_of_each_planning_instant():
     """With a moving storm the fields and the local rates use the weather at the plan's time."""
-    from rhnc.energy import EnergyParameters, brake_power, cost_rate
-    from rhnc.fields import resample_weather
-    from rhnc.weather_generators import moving_storm
+    from rhnc.ship.energy import EnergyParameters, brake_power, cost_rate
+    from rhnc.navigation.fields import resample_weather
+    from rhnc.weather.weather_generators import moving_storm
 
     field = moving_storm(resolution_nm=2.0, duration_h=6.0)
     nav = build(field, start_nm=[0, 0], resolution_nm=2.0, start_from="measured")
@@ -113,6 +113,6 @@ def test_plans_in_the_weather_of_each_planning_instant():
 
 
 def energy_at(weather, nav):
-    from rhnc.fields import energy_rate_fields
+    from rhnc.navigation.fields import energy_rate_fields
 
     return energy_rate_fields(weather, nav.goal, nav.speed, nav.energy)[0]

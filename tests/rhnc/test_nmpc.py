@@ -8,10 +8,10 @@ import pytest
 
 from orchestrator.errors import ScenarioError
 from orchestrator.participant import BuildContext
-from rhnc.control_participant import ControlParticipant, interpolate_reference
-from rhnc.nmpc import NMPCController, NMPCSettings
-from rhnc.reference_participant import line_or_turn_reference
-from rhnc.ship_model import load_parameter_set, rk4_step
+from rhnc.control.control_participant import ControlParticipant, interpolate_reference
+from rhnc.control.nmpc import NMPCController, NMPCSettings
+from rhnc.navigation.reference_participant import line_or_turn_reference
+from rhnc.ship.ship_model import load_parameter_set, rk4_step
 
 NM = 1852.0
 KNOT = NM / 3600.0
@@ -182,7 +182,7 @@ def _linearised_scaled_step(controller, speed_mps, delta=1e-6):
     z0 = np.array([0.0, 0.0, 0.0, speed_mps / controller.speed_scale, 0.0, 0.0])
     w0 = controller.params.equilibrium_tau(speed_mps) / controller.input_scale
 
-    from rhnc.nmpc_problem import DISTURBANCE_SIZE
+    from rhnc.control.nmpc_problem import DISTURBANCE_SIZE
 
     calm = np.zeros(DISTURBANCE_SIZE)  # no disturbance estimate
 

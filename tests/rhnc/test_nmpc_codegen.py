@@ -9,11 +9,11 @@ import pytest
 
 from orchestrator.errors import ScenarioError
 from orchestrator.participant import BuildContext
-from rhnc.control_participant import ControlParticipant
-from rhnc.nmpc import NMPCController, NMPCSettings
-from rhnc.nmpc_codegen import CACHE_ENV, CODEGEN_ENV, NLPLibrary
-from rhnc.reference_participant import line_or_turn_reference
-from rhnc.ship_model import load_parameter_set
+from rhnc.control.control_participant import ControlParticipant
+from rhnc.control.nmpc import NMPCController, NMPCSettings
+from rhnc.control.nmpc_codegen import CACHE_ENV, CODEGEN_ENV, NLPLibrary
+from rhnc.navigation.reference_participant import line_or_turn_reference
+from rhnc.ship.ship_model import load_parameter_set
 
 NM = 1852.0
 KNOT = NM / 3600.0
@@ -98,7 +98,7 @@ def test_compiled_ipopt_gives_the_interpreted_solution(cache, kcs):
 def test_no_compiler_keeps_the_interpreted_functions(cache, kcs, monkeypatch, caplog):
     monkeypatch.setenv("CC", "/nonexistent/cc")
     builds = NLPLibrary.builds
-    with caplog.at_level(logging.WARNING, logger="rhnc.nmpc_codegen"):
+    with caplog.at_level(logging.WARNING, logger="rhnc.control.nmpc_codegen"):
         controller = NMPCController(kcs, NMPCSettings(**SMALL, wall_time_limit_s=None, cpu_time_limit_s=None))
     assert controller.library.mode == "interpreted" and NLPLibrary.builds == builds
     assert "no C compiler found" in caplog.text and "interpreted" in caplog.text

@@ -11,8 +11,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from rhnc import nmpc_codegen
-from rhnc.nmpc_codegen import (CACHE_ENV, CODEGEN_ENV, COMPILER_FLAGS, NATIVE_FLAGS, NLPLibrary, _compiler_identity,
+from rhnc.control import nmpc_codegen
+from rhnc.control.nmpc_codegen import (CACHE_ENV, CODEGEN_ENV, COMPILER_FLAGS, NATIVE_FLAGS, NLPLibrary, _compiler_identity,
                                _one_line, cache_dir, codegen_disabled_by_environment, compiler_flags, find_compiler,
                                library_key)
 
@@ -209,7 +209,7 @@ def test_a_library_built_by_another_process_meanwhile_is_not_rebuilt(cache, monk
 def test_a_broken_library_in_the_cache_falls_back_to_interpreted(cache, caplog):
     first = NLPLibrary(tiny_nlp(), "ipopt", OPTIONS)
     first.path.write_bytes(b"not a shared library")
-    with caplog.at_level(logging.WARNING, logger="rhnc.nmpc_codegen"):
+    with caplog.at_level(logging.WARNING, logger="rhnc.control.nmpc_codegen"):
         second = NLPLibrary(tiny_nlp(), "ipopt", OPTIONS)
     assert second.mode == "interpreted" and second.path is None and second.build_time_s is None
     assert second.reason.startswith("compiling the NLP failed (")
@@ -248,7 +248,7 @@ def test_code_generation_switched_off_says_so_without_a_warning(cache, monkeypat
                                                                reason):
     if environment:
         monkeypatch.setenv(CODEGEN_ENV, environment)
-    with caplog.at_level(logging.WARNING, logger="rhnc.nmpc_codegen"):
+    with caplog.at_level(logging.WARNING, logger="rhnc.control.nmpc_codegen"):
         library = NLPLibrary(tiny_nlp(), "ipopt", OPTIONS, enabled=enabled)
     assert library.mode == "interpreted" and library.reason == reason and not caplog.records
     assert library.summary() == {"codegen": "interpreted", "codegen_library": None, "codegen_build_s": None,
@@ -258,7 +258,7 @@ def test_code_generation_switched_off_says_so_without_a_warning(cache, monkeypat
 
 def test_a_missing_compiler_named_by_cc_is_quoted(cache, monkeypatch, caplog):
     monkeypatch.setenv("CC", "/nonexistent/cc")
-    with caplog.at_level(logging.WARNING, logger="rhnc.nmpc_codegen"):
+    with caplog.at_level(logging.WARNING, logger="rhnc.control.nmpc_codegen"):
         library = NLPLibrary(tiny_nlp(), "ipopt", OPTIONS)
     assert library.reason == "no C compiler found ($CC = /nonexistent/cc)"
     assert caplog.records[0].getMessage() == ("NMPC: no C compiler found ($CC = /nonexistent/cc); the NLP's "

@@ -12,14 +12,14 @@ import math
 import numpy as np
 import pytest
 
-from rhnc.colregs import wrap_deg
-from rhnc.colregs import ENCOUNTER_CLASSES
-from rhnc.nmpc import NMPCController, NMPCSettings
-from rhnc.nmpc_alteration import CATCH_UP_RATE_DEG_S, HEADING_TOLERANCE_DEG, YAW_TIME_CONSTANT_S, heading_bounds
-from rhnc.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport, DomainSettings
-from rhnc.nmpc_problem import OBSTACLE_FIELDS
-from rhnc.reference_participant import line_or_turn_reference
-from rhnc.ship_model import load_parameter_set, rk4_step
+from rhnc.encounters.colregs import wrap_deg
+from rhnc.encounters.colregs import ENCOUNTER_CLASSES
+from rhnc.control.nmpc import NMPCController, NMPCSettings
+from rhnc.control.nmpc_alteration import CATCH_UP_RATE_DEG_S, HEADING_TOLERANCE_DEG, YAW_TIME_CONSTANT_S, heading_bounds
+from rhnc.control.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport, DomainSettings
+from rhnc.control.nmpc_problem import OBSTACLE_FIELDS
+from rhnc.navigation.reference_participant import line_or_turn_reference
+from rhnc.ship.ship_model import load_parameter_set, rk4_step
 
 NM = 1852.0
 KNOT = NM / 3600.0
@@ -164,7 +164,7 @@ def test_domains_contain_the_circle_and_grow_ahead_and_to_starboard(course_deg, 
     slots, report = domains.parameters(np.array([[*target, *velocity, RADIUS]]), state, np.zeros(2), SPEED, 5.0,
                                        length, et=True)
     assert report.class_codes[0] >= 0 and report.active[0] == 1.0
-    from rhnc.colregs import ENCOUNTER_CLASSES
+    from rhnc.encounters.colregs import ENCOUNTER_CLASSES
 
     assert ENCOUNTER_CLASSES[int(report.class_codes[0])] == expected
     rho = RADIUS + 100.0

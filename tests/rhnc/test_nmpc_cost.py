@@ -5,8 +5,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from rhnc.nmpc_problem import DISTURBANCE_SIZE, OBSTACLE_FIELDS, build_problem
-from rhnc.ship_model import load_parameter_set
+from rhnc.control.nmpc_problem import DISTURBANCE_SIZE, OBSTACLE_FIELDS, build_problem
+from rhnc.ship.ship_model import load_parameter_set
 
 N = 2
 Q = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]

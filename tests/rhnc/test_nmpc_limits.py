@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from orchestrator.errors import ScenarioError
-from rhnc.control_participant import ControlParticipant
-from rhnc.nmpc import NMPCController, NMPCSettings
-from rhnc.reference_participant import line_or_turn_reference
-from rhnc.ship_model import derivatives, load_parameter_set, rk4_step
-from rhnc.solver_watchdog import WALL_TIME_STATUS, BoundedSolver
+from rhnc.control.control_participant import ControlParticipant
+from rhnc.control.nmpc import NMPCController, NMPCSettings
+from rhnc.navigation.reference_participant import line_or_turn_reference
+from rhnc.ship.ship_model import derivatives, load_parameter_set, rk4_step
+from rhnc.control.solver_watchdog import WALL_TIME_STATUS, BoundedSolver
 
 from orchestrator.participant import BuildContext
 from pathlib import Path
@@ -196,7 +196,7 @@ def test_participant_rejects_bad_new_options():
 
 
 def test_participant_reports_classes_domains_and_estimate(kcs):
-    from rhnc.colregs import ENCOUNTER_CLASSES
+    from rhnc.encounters.colregs import ENCOUNTER_CLASSES
 
     ctrl = ControlParticipant.from_options("ctrl", {"horizon_steps": 10, "colregs": True, "max_obstacles": 3,
                                                     "disturbance_observer": True, "et_default": 1.0}, context())

@@ -6,11 +6,11 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from rhnc.nmpc import NMPCController, NMPCSettings
-from rhnc.nmpc_problem import StepEvaluator, build_problem
-from rhnc.nmpc_warm_start import PlanMemory
-from rhnc.reference_participant import line_or_turn_reference
-from rhnc.ship_model import load_parameter_set, rk4_step
+from rhnc.control.nmpc import NMPCController, NMPCSettings
+from rhnc.control.nmpc_problem import StepEvaluator, build_problem
+from rhnc.control.nmpc_warm_start import PlanMemory
+from rhnc.navigation.reference_participant import line_or_turn_reference
+from rhnc.ship.ship_model import load_parameter_set, rk4_step
 
 NM = 1852.0
 KNOT = NM / 3600.0

@@ -8,11 +8,11 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from rhnc.nmpc import NMPCController, NMPCSettings
-from rhnc.nmpc_problem import renew_solver_after
-from rhnc.reference_participant import line_or_turn_reference
-from rhnc.ship_model import load_parameter_set
-from rhnc.solver_watchdog import FATROP_ACCEPTABLE_FLAG, BoundedSolver, _outcome
+from rhnc.control.nmpc import NMPCController, NMPCSettings
+from rhnc.control.nmpc_problem import renew_solver_after
+from rhnc.navigation.reference_participant import line_or_turn_reference
+from rhnc.ship.ship_model import load_parameter_set
+from rhnc.control.solver_watchdog import FATROP_ACCEPTABLE_FLAG, BoundedSolver, _outcome
 
 KNOT = 1852.0 / 3600.0
 DT = 20.0

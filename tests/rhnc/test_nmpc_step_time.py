@@ -6,9 +6,9 @@ import time
 import numpy as np
 import pytest
 
-from rhnc.nmpc import NMPCController, NMPCSettings
-from rhnc.reference_participant import line_or_turn_reference
-from rhnc.ship_model import load_parameter_set
+from rhnc.control.nmpc import NMPCController, NMPCSettings
+from rhnc.navigation.reference_participant import line_or_turn_reference
+from rhnc.ship.ship_model import load_parameter_set
 
 KNOT = 1852.0 / 3600.0
 DT = 20.0

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from rhnc.nmpc_warm_start import push_guess_clear
+from rhnc.control.nmpc_warm_start import push_guess_clear
 
 DT = 1.0
 

@@ -6,7 +6,7 @@ import json
 import pytest
 
 from orchestrator.errors import ScenarioError
-from rhnc.offline_planning import run_offline_planning
+from rhnc.navigation.offline_planning import run_offline_planning
 
 SCENARIO = """
 name = "exp1_short"

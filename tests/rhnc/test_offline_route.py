@@ -8,7 +8,7 @@ import pytest
 
 from orchestrator.errors import ScenarioError
 from orchestrator.run import run_scenario
-from rhnc.offline_route import shortest_route
+from rhnc.routing.offline_route import shortest_route
 
 NM = 1852.0
 

@@ -12,7 +12,7 @@ from orchestrator.errors import ScenarioError
 from orchestrator.master import CoSimulation
 from orchestrator.run import run_scenario
 from orchestrator.scenario import load_scenario
-from rhnc.control_participant import tau_r_sign_changes_per_100
+from rhnc.control.control_participant import tau_r_sign_changes_per_100
 
 REPO = Path(__file__).resolve().parents[2]
 OWN = REPO / "scenarios" / "own_ship"
@@ -35,13 +35,13 @@ def _ctrl(path, overrides=None):
 
 
 def test_model_check_against_the_plant(caplog):
-    with caplog.at_level(logging.WARNING, logger="rhnc.control_participant"):
+    with caplog.at_level(logging.WARNING, logger="rhnc.control.control_participant"):
         ctrl = _ctrl(OWN / "exp3a_s175_kcs_model.toml")
     assert ctrl.model_check["check"] == "neither identified on nor declared for this plant"
     assert ctrl.model_check["plant"] == "S175"
     assert "was neither identified on nor declared for the plant FMU S175" in caplog.text
     caplog.clear()
-    with caplog.at_level(logging.WARNING, logger="rhnc.control_participant"):
+    with caplog.at_level(logging.WARNING, logger="rhnc.control.control_participant"):
         ctrl = _ctrl(OWN / "exp3a_s175_identified.toml")
         assert ctrl.model_check["check"] == "identified"
         assert ctrl.controller.params.name == "S175"

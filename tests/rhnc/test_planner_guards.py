@@ -7,7 +7,7 @@ import logging
 import numpy as np
 import pytest
 
-from rhnc.planner import plan_local_path
+from rhnc.navigation.planner import plan_local_path
 
 SIZE_M = 100_000.0
 STEP_M = 2000.0
@@ -102,14 +102,14 @@ def test_a_goal_off_the_map_is_replaced_by_the_nearest_point_on_it(goal, on_map)
 @pytest.mark.parametrize("start, moved", [((-5000.0, 50_000.0), (0.0, 50_000.0)),
                                           ((50_000.0, 120_000.0), (50_000.0, SIZE_M))])
 def test_a_start_off_the_map_on_one_side_is_moved_onto_it(start, moved, caplog):
-    with caplog.at_level(logging.WARNING, logger="rhnc.planner"):
+    with caplog.at_level(logging.WARNING, logger="rhnc.navigation.planner"):
         path = plan((0.0, 0.0), start, (50_000.0, 50_000.0))
     assert np.all(path.points[0] == moved)
     assert "outside the map" in caplog.text
 
 
 def test_a_start_on_the_border_is_not_reported_as_off_the_map(caplog):
-    with caplog.at_level(logging.WARNING, logger="rhnc.planner"):
+    with caplog.at_level(logging.WARNING, logger="rhnc.navigation.planner"):
         for start in ((0.0, 50_000.0), (SIZE_M, 50_000.0), (50_000.0, 0.0), (50_000.0, SIZE_M)):
             path = plan((0.0, 0.0), start, (50_000.0, 50_000.0))
             assert np.all(path.points[0] == start)

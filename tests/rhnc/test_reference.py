@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from rhnc.reference import reference_states
+from rhnc.navigation.reference import reference_states
 
 
 def test_circle_gives_yaw_rate_v_over_r():

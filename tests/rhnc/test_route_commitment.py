@@ -5,10 +5,10 @@ cost-to-go search is spread over updates without changing its result."""
 import numpy as np
 import pytest
 
-from rhnc.cost_to_go import IncrementalCostToGo
+from rhnc.routing.cost_to_go import IncrementalCostToGo
 from orchestrator.geometry import NM
-from rhnc.route_navigation import RecedingRoutePlanner
-from rhnc.route_search import cost_to_go_tree, simplify_polyline
+from rhnc.navigation.route_navigation import RecedingRoutePlanner
+from rhnc.routing.route_search import cost_to_go_tree, simplify_polyline
 from weather_fixtures import storm_field, switched_field
 
 DELTA = 240.0

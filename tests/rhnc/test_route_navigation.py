@@ -9,9 +9,9 @@ import pytest
 from orchestrator.errors import ScenarioError
 from orchestrator.participant import BuildContext
 from orchestrator.geometry import KNOT, NM
-from rhnc.navigation_participant import NavigationParticipant
-from rhnc.track_cost import cost_of_track
-from rhnc.weather_routing import RoutingProblem, optimal_route, straight_route
+from rhnc.navigation.navigation_participant import NavigationParticipant
+from rhnc.routing.track_cost import cost_of_track
+from rhnc.routing.weather_routing import RoutingProblem, optimal_route, straight_route
 from weather_fixtures import storm_field
 
 DELTA = 240.0

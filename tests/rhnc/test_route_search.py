@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from rhnc.route_search import (build_grid_graph, cost_to_go_tree, grid_moves, segment_clearance, shortcut_path,
+from rhnc.routing.route_search import (build_grid_graph, cost_to_go_tree, grid_moves, segment_clearance, shortcut_path,
                                shortest_path_tree, times_along_tree)
 
 

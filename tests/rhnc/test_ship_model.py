@@ -5,7 +5,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from orchestrator.errors import ScenarioError
-from rhnc.ship_model import (
+from rhnc.ship.ship_model import (
     ShipParameters,
     casadi_derivatives,
     derivatives,

@@ -8,7 +8,7 @@ import pytest
 
 from orchestrator.errors import ScenarioError
 from orchestrator.fmu_build import MODELS_DIR
-from rhnc.ships import PLANT_PARAMETERS, SHIPS_DIR, check_parameter_set, load_ship
+from rhnc.ship.ships import PLANT_PARAMETERS, SHIPS_DIR, check_parameter_set, load_ship
 
 GOOD = (SHIPS_DIR / "KCS.toml").read_text()
 

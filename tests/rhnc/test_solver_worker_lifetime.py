@@ -12,7 +12,7 @@ import pytest
 CONTROLLER = textwrap.dedent("""
     import os, signal, sys, threading, time
     import numpy as np
-    from rhnc.solver_watchdog import BoundedSolver
+    from rhnc.control.solver_watchdog import BoundedSolver
 
     class Busy:  # a solve that loops for a minute, as one in native code on a state out of range
         def __call__(self, **arguments):

@@ -2,7 +2,7 @@
 
 import json
 
-from rhnc.suite_report import BEGIN, END, main, markdown, summarise
+from rhnc.encounters.suite_report import BEGIN, END, main, markdown, summarise
 
 
 def _run(folder, name, separation, side, verdict, fallbacks, solve_max_s, targets, started_inside=(),

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from rhnc.energy import EnergyParameters, brake_power, fuel_rate_t_h
+from rhnc.ship.energy import EnergyParameters, brake_power, fuel_rate_t_h
 from orchestrator.geometry import KNOT, NM
-from rhnc.track_cost import constant_speed_times, cost_of_track, densify
+from rhnc.routing.track_cost import constant_speed_times, cost_of_track, densify
 from weather_fixtures import storm_field
 
 ENERGY = EnergyParameters()

@@ -6,7 +6,7 @@ import pytest
 
 from orchestrator.analyses import array_output
 from orchestrator.run import run_scenario
-from rhnc.encounter import cross_track_error, reference_at_times
+from rhnc.encounters.encounter import cross_track_error, reference_at_times
 
 NM = 1852.0
 

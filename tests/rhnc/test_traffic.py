@@ -8,8 +8,8 @@ import pytest
 
 from orchestrator.errors import ScenarioError
 from orchestrator.participant import BuildContext
-from rhnc.reference_participant import ReferencePathParticipant
-from rhnc.traffic import TrafficParticipant
+from rhnc.navigation.reference_participant import ReferencePathParticipant
+from rhnc.encounters.traffic import TrafficParticipant
 
 NM = 1852.0
 KNOT = NM / 3600.0

@@ -14,7 +14,7 @@ from orchestrator.batch_spec import load_batch
 from orchestrator.cli import main
 from orchestrator.errors import ScenarioError
 from orchestrator.scenario import load_scenario, read_toml
-from rhnc.traffic_situation import load_traffic_situation, scenario_overrides
+from rhnc.encounters.traffic_situation import load_traffic_situation, scenario_overrides
 
 REPO = Path(__file__).resolve().parents[2]
 DATA = REPO / "tests" / "data" / "traffic_situations"

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from orchestrator.geometry import NM
-from rhnc.trigger import EventTrigger
+from rhnc.navigation.trigger import EventTrigger
 
 
 def test_static_obstacle_triggers_at_eps2_and_releases_when_passed():

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from rhnc.energy import EnergyParameters, brake_power, cost_rate, emission_rate
+from rhnc.ship.energy import EnergyParameters, brake_power, cost_rate, emission_rate
 from orchestrator.geometry import KNOT, NM
-from rhnc.voyage import account_voyage, cii_rating, cii_reference
+from rhnc.voyage.voyage import account_voyage, cii_rating, cii_reference
 
 
 def test_cii_reference_and_rating_by_hand():
@@ -174,7 +174,7 @@ def test_a_power_the_plant_reports_is_costed_with_the_parameters_given():
 
 def test_mean_speed_through_water_weights_by_time_and_counts_sway():
     # 1 h at 10 kn then 1 h at 20 kn (surge only); sway 3-4-5 on top of it at the end
-    from rhnc.voyage import mean_speed_through_water_kn
+    from rhnc.voyage.voyage import mean_speed_through_water_kn
 
     t = np.array([0.0, 3600.0, 3600.0, 7200.0])
     u = np.array([10.0, 10.0, 20.0, 20.0]) * KNOT
@@ -201,7 +201,7 @@ def test_a_voyage_ends_at_the_crossing_of_the_arrival_radius_not_at_the_next_sam
 
 
 def test_mean_speed_through_water_is_the_time_average_of_hypot_u_v():
-    from rhnc.voyage import mean_speed_through_water_kn
+    from rhnc.voyage.voyage import mean_speed_through_water_kn
 
     # two samples starting at t = 100 s: the average of 2 and 4 m/s
     assert mean_speed_through_water_kn([100.0, 160.0], [2.0, 4.0], [0.0, 0.0]) == pytest.approx(3.0 / KNOT)

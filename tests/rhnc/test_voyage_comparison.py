@@ -12,9 +12,9 @@ import pytest
 from orchestrator.cli import main
 from orchestrator.compare import Section, load_comparison, load_extensions, run_comparison
 from orchestrator.errors import ScenarioError
-from rhnc.equal_arrival import ArrivalTrial, EqualArrival
-from rhnc.voyage_comparison import SailedVoyage
-from rhnc.voyage_comparison_tables import evaluation_section, sweep_section
+from rhnc.voyage.equal_arrival import ArrivalTrial, EqualArrival
+from rhnc.voyage.voyage_comparison import SailedVoyage
+from rhnc.voyage.voyage_comparison_tables import evaluation_section, sweep_section
 
 # A 4 nm passage north, the NMPC tracking a waypoint reference on the KCS every 20 s, in a
 # small paper-style weather field sampled by the MetOcean FMU.

@@ -5,9 +5,9 @@ import pytest
 
 from orchestrator.errors import ScenarioError
 from orchestrator.geometry import KNOT, NM
-from rhnc.metocean import fetch_limited_hs
-from rhnc.metocean_sources import from_scenario_table
-from rhnc.weather_generators import (GENERATORS, STORM_SET_SIZE, cyclone, holland_wind_speed, list_generators,
+from rhnc.weather.metocean import fetch_limited_hs
+from rhnc.weather.metocean_sources import from_scenario_table
+from rhnc.weather.weather_generators import (GENERATORS, STORM_SET_SIZE, cyclone, holland_wind_speed, list_generators,
                                      storm_off_route, storm_set, storm_set_member)
 
 SMALL = {"resolution_nm": 2.0}

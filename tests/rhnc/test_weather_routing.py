@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from rhnc.energy import EnergyParameters
+from rhnc.ship.energy import EnergyParameters
 from orchestrator.geometry import KNOT, NM
-from rhnc.route_search import segment_clearance
-from rhnc.track_cost import constant_speed_times, cost_of_track
-from rhnc.weather_routing import RouteSearch, RoutingProblem, optimal_route, straight_route
+from rhnc.routing.route_search import segment_clearance
+from rhnc.routing.track_cost import constant_speed_times, cost_of_track
+from rhnc.routing.weather_routing import RouteSearch, RoutingProblem, optimal_route, straight_route
 from weather_fixtures import storm_field, switched_field
 
 SPEED = 18 * KNOT

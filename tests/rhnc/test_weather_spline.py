@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 from scipy.interpolate import RectBivariateSpline
 
-from rhnc import weather_spline
-from rhnc.weather_generators import DEFAULT_WIND_CONTROL_POINTS, paper_default
+from rhnc.weather import weather_spline
+from rhnc.weather.weather_generators import DEFAULT_WIND_CONTROL_POINTS, paper_default
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -83,7 +83,7 @@ def test_off_keeps_nothing(tmp_path, monkeypatch):
 def test_a_run_with_a_kept_grid_never_imports_scipy_interpolate(kept):
     expected = paper_default().wind_speed
     probe = ("import sys, numpy as np\n"
-             "from rhnc.weather_generators import paper_default\n"
+             "from rhnc.weather.weather_generators import paper_default\n"
              "speed = paper_default().wind_speed\n"
              "print('scipy.interpolate' in sys.modules, speed.tobytes().hex())\n")
     done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, cwd=REPO, timeout=120,

@@ -3,7 +3,7 @@
 import numpy as np
 
 from orchestrator.geometry import NM
-from rhnc.metocean import FIELDS, MetOceanField, fetch_limited_hs
+from rhnc.weather.metocean import FIELDS, MetOceanField, fetch_limited_hs
 
 
 def axis_nm(size_nm: float, resolution_nm: float) -> np.ndarray:

@@ -1,0 +1,341 @@
+"""Co-simulation participant around the NMPC: measured state + reference + obstacles -> tau.
+
+Inputs: ``x, y, psi, u, v, r`` (floats, SI), ``reference`` ((M, 7): t, x, y, psi, u, v, r),
+``et`` (float, optional), ``obstacles`` ((n, 5): x, y, vx, vy, radius, optional).
+Outputs: ``tau_u`` [N], ``tau_r`` [N·m], ``prediction`` ((N_c+1, 7), absolute time
+column), and per-solve telemetry ``solve_time_s``, ``iterations``, ``solver_ok``,
+``fallback``, ``cost``, ``constraint_violation``, ``collision_slack`` (> 0 when the soft
+collision constraints had to give way), ``timed_out`` (1 when the wall-time limit stopped
+the solve), ``disturbance`` ((5,): the observer's current north, east [m/s], w_u, w_v [N],
+w_r [N·m]), ``encounter_class`` ((max_obstacles,): per obstacle row the index into
+:data:`rhnc.encounters.colregs.ENCOUNTER_CLASSES`, -1 unclassified or no such row) and
+``domain_active`` ((max_obstacles,): 1 when the row's collision constraint was on).
+
+The prediction model should be the plant's: a parameter set names the plants it is for
+(``plant_fmu``: model names, ``plant_guid``: the GUID it was identified on).  When the
+FMU feeding the measured state is neither, the run logs a warning and the summary's
+``model_check`` says so (see :meth:`ControlParticipant.connected`).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Mapping, Sequence
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+
+from orchestrator.errors import ModelError
+from orchestrator.geometry import KNOT
+from orchestrator.participant import BuildContext, Participant, Value
+from rhnc.control.control_options import OPTIONS, controller_from_options
+from rhnc.control.nmpc import NMPCController
+from rhnc.ship.ship_model import STATE_NAMES
+
+LOG = logging.getLogger(__name__)
+
+def interpolate_reference(reference: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """Reference states (len(times), 6) at ``times`` [s] from an (M, 7) timed reference.
+
+    Linear in time between the reference's points (heading unwrapped first); before its
+    first point the first point is held; past its last point the last point's velocity is
+    held (straight on at its course and speed, r = 0).
+    """
+    reference = np.atleast_2d(np.asarray(reference, dtype=float))
+    if reference.ndim != 2 or reference.shape[1] != 7 or len(reference) < 1:
+        raise ValueError(f"reference must be an (M, 7) array, got shape {reference.shape}")
+    t = reference[:, 0]
+    columns = reference[:, 1:].copy()
+    columns[:, 2] = np.unwrap(columns[:, 2])
+    if len(reference) > 1 and np.any(np.diff(t) <= 0.0):
+        raise ValueError("reference times must increase strictly")
+    out = np.column_stack([np.interp(times, t, columns[:, j]) for j in range(6)])
+    late = times > t[-1]
+    if np.any(late):
+        x, y, psi, u, v, _ = columns[-1]
+        dt = times[late] - t[-1]
+        out[late, 0] = x + (u * math.cos(psi) - v * math.sin(psi)) * dt
+        out[late, 1] = y + (u * math.sin(psi) + v * math.cos(psi)) * dt
+        out[late, 2] = psi
+        out[late, 3] = u
+        out[late, 4] = v
+        out[late, 5] = 0.0
+    return out
+
+
+class ControlParticipant(Participant):
+    """NMPC trajectory tracking with collision constraints (docs/method.md, control).
+
+    Options
+    -------
+    parameter_set : str
+        Set of ``models/KCS/parameter_sets.toml`` for the prediction model (default ``default``).
+    model_file, model_set : str
+        Instead of ``parameter_set``: a parameter-set file (relative to the scenario; e.g.
+        one written by ``python -m orchestrator identify``) and the set in it (default:
+        its only set).
+    parameter_overrides : table
+        Single coefficients replacing the set's, by key (``m11``, ``d33``, ``tau_r_max``, ...:
+        the keys of the set, units as in ``models/KCS/parameter_sets.toml``).  A model
+        changed this way is still checked against the plant by the set's ``plant_fmu``.
+    horizon_steps : int
+        N_c (default 15).
+    control_interval_s : float
+        Prediction interval delta [s] (default: this participant's step size).
+    substeps : int
+        RK4 steps per interval, where collisions are also checked (default 4).
+    own_radius_nm : float
+        Own ship's hazard radius R [nm] (default 0).
+    solver : str
+        ``fatrop`` (default), ``ipopt`` or ``sqpmethod``.
+    max_iterations, max_obstacles : int
+        Solver iteration limit (200), obstacle slots (4).
+    weights : table
+        ``q`` (6 values), ``r`` (2), ``r_rate`` (2) replacing the paper's diagonals.
+    length_scale_m, speed_scale_mps : float
+        Units of the scaled errors (see :mod:`rhnc.control.nmpc`).
+    et_default : float
+        Event trigger used when no ``et`` input is connected (default 0: constraints off).
+    collision_slack_weight : float or false
+        Weight of the soft collision constraints' slack (default 1e4, see
+        :class:`rhnc.control.nmpc.NMPCSettings`); ``false`` makes them hard.
+    cpu_time_limit_s : float or false
+        Processor-time limit of each solver attempt [s] (default 2; the shifted previous
+        plan is applied when it is hit; processor time, so the load of the machine does not
+        change the outcome); ``false``: none.
+    wall_time_limit_s : float or false
+        Hard wall-time limit of one control step's solves [s] (default 20); ``false``: none
+        (both false: iteration limit only).
+    max_speed_kn : float
+        Upper bound of the surge speed, also caps the reference (default 24, the KCS's
+        service speed).
+    colregs : bool
+        Collision domains shaped by encounter class and role, Rules 8 and 13-17 (default
+        false: the paper's circles R + R_i; see :mod:`rhnc.control.nmpc_colregs`).
+    clearance_margin_nm, clearance_margin_growth_kn : float
+        Margin added to R + R_i [nm] and its growth with prediction time [kn = nm/h]
+        (default 0, 0): tightening against disturbances and model error.  A model set
+        written by ``identify`` carries ``position_error_growth_mps``, the growth of its
+        own prediction error; it is the default growth with that model.
+    stand_on_action_tcpa_s, stand_on_action_range_factor : float
+        Rule 17: when a stand-on ship stops standing on (defaults 600 s, 2; the
+        ``colregs`` analysis judges with the same rule, :func:`rhnc.encounters.colregs.stand_on_must_act`).
+    apparent_alteration_deg : float
+        Rules 8, 16: a give-way ship (or a stand-on ship that acts) holds its heading at
+        least this far off its reference to the side the rules ask for until the target
+        is past and clear (default 35; 0: no minimum alteration).
+    give_way_action_tcpa_s : float
+        A give-way ship begins that alteration when the target's CPA is this close in time
+        (default 900 s).
+    disturbance_observer : bool
+        Offset-free NMPC: estimate current and loads and predict with them (default false).
+    observer_gain : float
+        The observer's correction per step, in (0, 1] (default 0.5).
+    codegen : bool
+        Compile the NLP to C once per machine and reuse it (default true; see
+        :mod:`rhnc.control.nmpc_codegen`); the summary reports ``codegen: compiled|interpreted``.
+    warm_start_duals : bool
+        IPOPT starts from the previous solve's multipliers shifted by one interval
+        (default true; about half the iterations; ignored by fatrop).
+    """
+
+    OPTIONS = OPTIONS
+
+    def __init__(self, name: str, controller: NMPCController, et_default: float) -> None:
+        super().__init__(name)
+        self.model_check: dict[str, Any] = {"set": controller.params.name, "check": "plant not seen"}
+        self.margin_source = "scenario" if controller.settings.clearance_margin_growth_mps else "none"
+        self._tau_r_history: list[float] = []
+        self.controller = controller
+        self.et_default = et_default
+        n = controller.settings.horizon_steps
+        self._prediction = np.zeros((n + 1, 7))
+        self._applied: np.ndarray | None = None  # the input of the last solve, None before the first
+        self._solve_times: list[float] = []
+        self._steps = 0
+        self._slack_steps = 0
+        self._timeouts = 0
+        self._speeds: list[float] = []
+        self._cpu_times: list[float] = []
+        self._step_cpu_times: list[float] = []
+
+    @classmethod
+    def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "ControlParticipant":
+        """Build from scenario options (see :mod:`rhnc.control.control_options`); errors name the key."""
+        params, settings, et_default = controller_from_options(options, context)
+        participant = cls(name, NMPCController(params, settings), et_default)
+        if "clearance_margin_growth_kn" in options:
+            participant.margin_source = "scenario"
+        elif "position_error_growth_mps" in params.extras:
+            participant.margin_source = "model's prediction error"
+        else:
+            participant.margin_source = "none"
+        return participant
+
+    @property
+    def input_names(self) -> Sequence[str]:
+        return (*STATE_NAMES, "reference", "et", "obstacles")
+
+    @property
+    def output_names(self) -> Sequence[str]:
+        return (
+            "tau_u", "tau_r", "prediction", "solve_time_s", "iterations",
+            "solver_ok", "fallback", "cost", "constraint_violation", "collision_slack",
+            "timed_out", "disturbance", "encounter_class", "domain_active", "solve_cpu_time_s",
+        )
+
+    def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
+        """Reset the controller; initial outputs are zero inputs (the first step decides)."""
+        self.controller.reset()
+        self.controller.start()
+        self._applied = None
+        self._slack_steps = 0
+        self._timeouts = 0
+        self._speeds = []
+        self._cpu_times = []
+        self._step_cpu_times = []
+        slots = self.controller.settings.max_obstacles
+        idle = SimpleNamespace(solve_time_s=0.0, solve_cpu_time_s=0.0, iterations=0, success=True, fallback=False,
+                               cost=0.0, constraint_violation=0.0, collision_slack=0.0, timed_out=False,
+                               disturbance=np.zeros(5), encounter_classes=np.full(slots, -1.0),
+                               domain_active=np.zeros(slots))
+        return self._outputs(np.zeros(2), self._prediction, idle)
+
+    def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
+        """Solve the NMPC at ``time`` from the measured state; return tau held over the step."""
+        missing = [name for name in (*STATE_NAMES, "reference") if name not in inputs]
+        if missing:
+            raise ModelError(f"{self.name}: inputs not connected or not available: {', '.join(missing)}")
+        state = np.array([float(inputs[name]) for name in STATE_NAMES])
+        if not np.all(np.isfinite(state)):
+            raise ModelError(f"{self.name}: non-finite measured state at t = {time} s: {state}")
+        settings = self.controller.settings
+        horizon = time + settings.control_interval_s * np.arange(settings.horizon_steps + 1)
+        try:
+            reference = interpolate_reference(np.asarray(inputs["reference"]), horizon)
+        except ValueError as error:
+            raise ModelError(f"{self.name}: input 'reference' at t = {time} s: {error}") from None
+        obstacles = np.asarray(inputs.get("obstacles", np.zeros((0, 5))), dtype=float).reshape(-1, 5)
+        et = float(inputs.get("et", self.et_default)) > 0.5
+        # before the first solve no input has been applied: the controller then assumes the
+        # one that holds the measured speed, not the zero outputs of set-up (a first solve
+        # that failed held a zero surge force, and the input-rate cost pulled the first plan
+        # towards it)
+        solution = self.controller.solve(time, state, reference, obstacles, et, previous_tau=self._applied)
+        self._applied = solution.tau
+        self._tau_r_history.append(float(solution.tau[1]))
+        self._steps += 1
+        self._solve_times.append(solution.solve_time_s)
+        self._cpu_times.append(solution.solve_cpu_time_s)
+        self._step_cpu_times.append(solution.step_cpu_time_s)
+        if solution.fallback:
+            LOG.warning("%s: NMPC failed at t = %.1f s (%s), fallback applied", self.name, time, solution.status)
+        self._slack_steps += int(solution.collision_slack > 0.0)
+        self._timeouts += int(solution.timed_out)
+        self._speeds.append(float(state[3]))
+        prediction = np.column_stack([horizon, solution.states])
+        return self._outputs(solution.tau, prediction, solution)
+
+    def _outputs(self, tau, prediction, solution) -> dict[str, Value]:
+        slots = self.controller.settings.max_obstacles
+        classes = np.full(slots, -1.0)
+        active = np.zeros(slots)
+        n = min(slots, len(solution.encounter_classes))
+        classes[:n] = solution.encounter_classes[:n]
+        active[:n] = solution.domain_active[:n]
+        return {
+            "tau_u": float(tau[0]),
+            "tau_r": float(tau[1]),
+            "prediction": prediction,
+            "solve_time_s": float(solution.solve_time_s),
+            "iterations": float(solution.iterations),
+            "solver_ok": 1.0 if solution.success else 0.0,
+            "fallback": 1.0 if solution.fallback else 0.0,
+            "cost": float(solution.cost),
+            "constraint_violation": float(solution.constraint_violation),
+            "collision_slack": float(solution.collision_slack),
+            "timed_out": 1.0 if solution.timed_out else 0.0,
+            "solve_cpu_time_s": float(solution.solve_cpu_time_s),
+            "disturbance": np.asarray(solution.disturbance, dtype=float).copy(),
+            "encounter_class": classes,
+            "domain_active": active,
+        }
+
+    def terminate(self) -> None:
+        """Stop the solver's worker process."""
+        self.controller.close()
+
+    def summary(self) -> dict[str, Any]:
+        """Solve-time median/max [s], solves, fallbacks and solver failures."""
+        times = np.array(self._solve_times)
+        return {
+            "solver": self.controller.settings.solver,
+            "solves": self._steps,
+            "solve_time_median_s": float(np.median(times)) if len(times) else None,
+            "solve_time_max_s": float(np.max(times)) if len(times) else None,
+            "fallback_count": self.controller.fallback_count,
+            "failure_count": self.controller.failure_count,
+            "relaxed_clearance_steps": self._slack_steps,
+            "timeout_count": self._timeouts,
+            "solve_cpu_time_median_s": float(np.median(self._cpu_times)) if self._cpu_times else None,
+            "solve_cpu_time_max_s": float(np.max(self._cpu_times)) if self._cpu_times else None,
+            "step_cpu_time_median_s": float(np.median(self._step_cpu_times)) if self._step_cpu_times else None,
+            "step_cpu_time_max_s": float(np.max(self._step_cpu_times)) if self._step_cpu_times else None,
+            "stand_on_actions": self.controller.domains.stand_on_actions,
+            "apparent_alterations": self.controller.domains.alterations,
+            "max_speed_kn": float(max(self._speeds)) / KNOT if self._speeds else None,
+            "tau_r_sign_changes_per_100_solves": tau_r_sign_changes_per_100(
+                self._tau_r_history, self.controller.params.tau_r_max),
+            "model_check": self.model_check,
+            "clearance_margin_growth_kn": self.controller.settings.clearance_margin_growth_mps / KNOT,
+            "clearance_margin_growth_from": self.margin_source,
+            **self.controller.library.summary(),
+        }
+
+    def connected(self, sources: Mapping[str, Participant]) -> None:
+        """Check the prediction model against the plant feeding the measured state.
+
+        ``check``: ``identified`` (the set's ``plant_guid`` is the FMU's GUID),
+        ``declared`` (the FMU's model name is in the set's ``plant_fmu``), or
+        ``neither identified on nor declared for this plant`` with a logged warning.
+        """
+        plant = sources.get("x")
+        identity = getattr(plant, "identity", None)
+        if identity is None:
+            return
+        extras = self.controller.params.extras
+        declared = extras.get("plant_fmu", ())
+        declared = [declared] if isinstance(declared, str) else list(declared)
+        check = "neither identified on nor declared for this plant"
+        if extras.get("plant_guid") == identity["guid"]:
+            check = "identified"
+        elif identity["model_name"] in declared:
+            check = "declared"
+            if "tau_r" not in plant.input_names and "rudder_angle_cmd" in plant.input_names:
+                check = "declared (through an allocation: the plant takes rudder and propeller)"
+        self.model_check = {"set": self.controller.params.name, "plant": identity["model_name"],
+                            "plant_guid": identity["guid"], "check": check}
+        if check.startswith("neither"):
+            LOG.warning("%s: the NMPC's prediction model '%s' was neither identified on nor declared for the "
+                        "plant FMU %s (%s); fit one with: python -m orchestrator identify <scenario>",
+                        self.name, self.controller.params.name, identity["model_name"], identity["guid"])
+
+
+def tau_r_sign_changes_per_100(tau_r: Sequence[float], tau_r_max: float, deadband: float = 0.01) -> float | None:
+    """Sign changes of the commanded yaw moment per 100 solves (chattering measure).
+
+    Values within ``deadband`` * ``tau_r_max`` of zero carry no sign; a change is counted
+    when a value's sign differs from the last signed one.  None without solves.
+    """
+    if not tau_r:
+        return None
+    changes, last = 0, 0.0
+    for value in tau_r:
+        if abs(value) <= deadband * tau_r_max:
+            continue
+        sign = math.copysign(1.0, value)
+        changes += int(last != 0.0 and sign != last)
+        last = sign
+    return 100.0 * changes / len(tau_r)

@@ -1,0 +1,417 @@
+"""Trajectory-tracking NMPC with collision constraints (paper Eq. 20-23), time-bounded.
+
+The optimal-control problem (:mod:`rhnc.control.nmpc_problem`) is built once as a CasADi
+``nlpsol`` with parameters (reference, previous input, terminal weight, disturbance
+estimate, obstacle domains) and re-solved every control interval with new parameter values
+and a warm start from the shifted previous solution (:mod:`rhnc.control.nmpc_warm_start`).
+
+Scaling (so that the paper's Q = diag(0.1, 0.1, 10, 1, 1, 1), R = R1 = diag(0.01, 0.01)
+keep a meaning at full scale): errors and inputs are made dimensionless the way naval
+architects do with the "prime" system,
+
+- positions in ship lengths ``L`` (``lpp`` of the parameter set, 230 m for the KCS),
+- heading in radians, wrapped through ``2 (1 - cos e)`` (= e² near 0, no minimum at pi),
+- surge and sway speed in m/s (``speed_scale_mps`` = 1 m/s, about 2 kn),
+- yaw rate in units of (1 m/s) / L, i.e. as the difference of the bow's and the stern's
+  transverse speeds in m/s,
+- forces and moments in units of their bounds ``tau_max``.
+
+So a cross-track error of one ship length costs as much (0.1) as a heading error of
+0.1 rad, a speed error of 1 m/s costs 1 and a full-scale force step 0.01.  The speed unit
+is deliberately not the service speed: with speeds in units of U, stopping dead costs 1
+per step against 10 for a 60 deg course alteration, and the NMPC with the paper's Q then
+stops in front of a 2 nm obstacle on its track instead of passing it (seen in trials).
+The decision variables are the same scaled quantities, with positions measured from the
+ship's position at the solve, which keeps the solver's numbers of order one.
+
+Terminal weight P: the DARE solution about straight motion at the reference speed
+(:mod:`rhnc.control.nmpc_terminal`).
+
+Collision constraints (only while ET = 1) at every RK4 substep of every interval, one
+circle per obstacle (:mod:`rhnc.control.nmpc_problem`); the circles are the paper's R + R_i, or,
+with ``colregs``, shaped by each target's encounter class and the own ship's role
+(:mod:`rhnc.control.nmpc_colregs`), widened by a margin that grows with the prediction time.
+
+When the problem with hard constraints has no solution (an obstacle noticed too late),
+the step is solved again with one slack per stage relaxing them at a heavy L1 + L2 cost
+(``collision_slack_weight``): the plan that violates the clearance least, reported in the
+telemetry as ``collision_slack``.
+
+Speed bound: u <= ``max_speed_mps`` at every node after the first (the KCS's service
+speed, 24 kn, unless the scenario says otherwise), and the reference speed is capped at
+the same value; a ship measured faster is allowed to slow down at its deceleration limit.
+
+Time limits: every solve is limited to ``max_iterations``, to ``cpu_time_limit_s`` of
+processor time per attempt and to ``wall_time_limit_s`` (both attempts together,
+:mod:`rhnc.control.solver_watchdog`).  A prediction from the measured state
+that is not finite (a state far outside the model's range) skips the solver.
+
+Failures: when neither attempt reports success, or the time limit stops the solve, the
+controller applies the previous plan shifted by one interval (its next input and
+predicted states) and flags the step; when no previous plan is left it holds the
+previous surge force with zero yaw moment.
+
+Offset-free tracking: with ``disturbance_observer`` on, the current and body-frame loads
+estimated by :mod:`rhnc.control.disturbance_observer` enter the prediction model as parameters.
+
+The settings and the outcome of a step: :mod:`rhnc.control.nmpc_settings`; this module is the
+control step itself (:class:`NMPCController`).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+
+import numpy as np
+
+from orchestrator.interrupts import stop_requested
+from rhnc.encounters.colregs import ENCOUNTER_CLASSES
+from rhnc.control.disturbance_observer import DisturbanceObserver, trimmed_reference
+from rhnc.control.nmpc_codegen import NLPLibrary
+from rhnc.control.nmpc_alteration import heading_bounds
+from rhnc.control.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport
+from rhnc.control.nmpc_problem import (ACCEPTABLE_VIOLATION, DISTURBANCE_SIZE, FRESH_SOLVER_PLUGINS, OBSTACLE_FIELDS,
+                               StepEvaluator, build_problem, renew_solver_after, solver_options)
+from rhnc.control.nmpc_settings import SOLVERS, NMPCSettings, NMPCSolution
+from rhnc.control.nmpc_terminal import MIN_TERMINAL_SPEED_MPS, TerminalWeight
+from rhnc.control.nmpc_warm_start import PlanMemory, push_guess_clear
+from rhnc.ship.ship_model import ShipParameters
+from rhnc.control.solver_watchdog import BoundedSolver
+
+LOG = logging.getLogger(__name__)
+
+__all__ = ["OBSTACLE_FIELDS", "MIN_TERMINAL_SPEED_MPS", "SOLVERS", "NMPCSettings", "NMPCSolution",
+           "NMPCController", "reference_inputs", "ENCOUNTER_CLASSES"]
+
+#: collision slack (scaled clearance, |p - c|^2 / rho^2 - 1) below which a plan counts as
+#: keeping its clearance: the solver's tolerance, about 0.05 % of the distance
+SLACK_TOLERANCE = 1e-3
+#: deceleration [m/s²] assumed when a ship measured above the speed bound slows down
+SLOW_DOWN_MPS2 = 0.02
+#: cost and constraint violation reported when a solve left no finite iterate (stopped, NaN)
+UNKNOWN = -1.0
+
+
+def reference_inputs(reference: np.ndarray, dt: float, params: ShipParameters) -> np.ndarray:
+    """Feed-forward inputs tau_d (N, 2) [SI] for reference states (N+1, 6) spaced ``dt`` [s].
+
+    Inverse of the surge and yaw equations with v_d = 0 (the paper's Eq. 19 reference):
+    ``tau_u = m11 udot + d11 u``, ``tau_r = m33 rdot + d33 r``, derivatives by forward
+    differences, clipped to the bounds.
+    """
+    u = reference[:, 3]
+    r = reference[:, 5]
+    udot = np.diff(u) / dt
+    rdot = np.diff(r) / dt
+    tau_u = params.m11 * udot + params.d11 * u[:-1]
+    tau_r = params.m33 * rdot + params.d33 * r[:-1]
+    tau = np.column_stack([tau_u, tau_r])
+    return np.clip(tau, -params.tau_max, params.tau_max)
+
+
+class NMPCController:
+    """Multiple-shooting NMPC of the 3-DOF ship, built once, re-solved every interval.
+
+    Parameters
+    ----------
+    params : ShipParameters
+        Prediction model (same set as the plant, without disturbances).
+    settings : NMPCSettings
+        Horizon, interval, solver, weights, scaling, domains, limits.
+    """
+
+    def __init__(self, params: ShipParameters, settings: NMPCSettings | None = None) -> None:
+        self.params = params
+        self.settings = settings or NMPCSettings()
+        s = self.settings
+        self.length_scale = float(s.length_scale_m or params.extras.get("lpp", 230.0))
+        self.speed_scale = float(s.speed_scale_mps)
+        L, U = self.length_scale, self.speed_scale
+        #: SI value = scaled value * state_scale (positions relative to the solve's origin).
+        self.state_scale = np.array([L, L, 1.0, U, U, U / L])
+        self.input_scale = params.tau_max.copy()
+        self.problem = build_problem(params, s.horizon_steps, s.control_interval_s, s.substeps, s.max_obstacles,
+                                     s.q, s.r, s.r_rate, s.collision_slack_weight, self.state_scale,
+                                     self.input_scale)
+        self._F_scaled = self.problem.step
+        self._next_state = StepEvaluator(self.problem.step)
+        self.terminal_weight = TerminalWeight(self.problem.step, params, s.q, s.r, U, self.input_scale,
+                                              s.terminal_weight)
+        options = solver_options(s.solver, self.problem.equality, s.max_iterations, s.wall_time_limit_s,
+                                 s.cpu_time_limit_s, s.warm_start_duals)
+        # the NLP's functions compiled once per machine and cached (or interpreted)
+        library = self.library = NLPLibrary(self.problem.nlp, s.solver, options, s.codegen,
+                                            self.problem.compact_nlp)
+        factories = {"hard": lambda: library.solver("rhnc_nmpc")}
+        solvers = {"hard": factories["hard"]()}
+        # The second, relaxed attempt gets a solver of its own: a solver keeps state between
+        # calls (fatrop), and a failed hard attempt left in it spoils the relaxed one started
+        # from the same guess (seen: 162 iterations and failure, against 59 and success from a
+        # fresh solver).  Built here, before the worker is forked, rather than on first need:
+        # building it costs about 0.5 s of processor time, which inside a control step showed
+        # up as an 8 s solve on a loaded machine.
+        if self.problem.sigma_index.size:
+            factories["relaxed"] = lambda: library.solver("rhnc_nmpc_relaxed")
+            solvers["relaxed"] = factories["relaxed"]()
+        # a new solver object after a difficult solve, where building one is cheap (compiled:
+        # about 1 ms; interpreted, nlpsol derives the NLP's functions anew: about 0.5 s)
+        renew = renew_solver_after if s.solver in FRESH_SOLVER_PLUGINS and library.mode == "compiled" else None
+        self.solvers = BoundedSolver(solvers, factories, s.wall_time_limit_s, s.cpu_time_limit_s, renew=renew)
+        self.domains = CollisionDomains(s.domain_settings(), s.max_obstacles)
+        self.observer = (DisturbanceObserver(params, self.state_scale, s.observer_gain)
+                         if s.disturbance_observer else None)
+        self.memory = PlanMemory(s.horizon_steps, s.control_interval_s, self._rollout)
+        self.fallback_count = 0
+        self.failure_count = 0
+        self.timeout_count = 0
+
+    # ------------------------------------------------------------------ state handling
+
+    def reset(self) -> None:
+        """Forget the previous plan (warm start and fallback), encounter classes and estimate."""
+        self.memory.reset()
+        self.domains.reset()
+        if self.observer is not None:
+            self.observer.reset()
+
+    def start(self) -> None:
+        """Start the solver's worker process now: forking it took 10-40 ms in the first solve."""
+        self.solvers.start()
+
+    def close(self) -> None:
+        """Stop the solver's worker process (also done when the controller is collected)."""
+        self.solvers.close()
+
+    def _to_scaled(self, state: np.ndarray, origin: np.ndarray) -> np.ndarray:
+        shifted = np.asarray(state, dtype=float) - np.r_[origin[:2], 0, 0, 0, 0]
+        return shifted / self.state_scale
+
+    def _from_scaled(self, z: np.ndarray, origin: np.ndarray) -> np.ndarray:
+        return z * self.state_scale + np.r_[origin[:2], 0, 0, 0, 0]
+
+    def _rollout(self, state: np.ndarray, inputs: np.ndarray, disturbance: np.ndarray | None = None) -> np.ndarray:
+        """States (n+1, 6) [SI] from ``state`` under ``inputs`` (n, 2) [SI] with the prediction model."""
+        d = np.zeros(DISTURBANCE_SIZE) if disturbance is None else disturbance
+        origin = np.asarray(state[:2], dtype=float)
+        z = self._to_scaled(state, origin)
+        rows = [z]
+        for w in np.asarray(inputs) / self.input_scale:
+            z = self._next_state(z, w, d)
+            rows.append(z)
+        return self._from_scaled(np.array(rows), origin)
+
+    # ------------------------------------------------------------------ solving
+
+    def solve(
+        self,
+        time_s: float,
+        state: np.ndarray,
+        reference: np.ndarray,
+        obstacles: np.ndarray | None = None,
+        et: bool = False,
+        previous_tau: np.ndarray | None = None,
+    ) -> NMPCSolution:
+        """One control step.
+
+        Parameters
+        ----------
+        time_s : float
+            Current time [s].
+        state : numpy.ndarray
+            Measured state (6,) [SI].
+        reference : numpy.ndarray
+            Reference states (N+1, 6) [SI] at ``time_s + k * control_interval_s``.
+        obstacles : numpy.ndarray, optional
+            (n, 5) rows x, y [m], vx, vy [m/s], radius [m] at ``time_s``.
+        et : bool
+            Event trigger: collision constraints on.
+        previous_tau : numpy.ndarray, optional
+            Input applied over the last interval [SI] (default: the last solution's).
+
+        Returns
+        -------
+        NMPCSolution
+            Applied input, prediction and telemetry; on failure or time-out the fallback.
+        """
+        cpu_start = time.process_time()
+        solution = self._step(time_s, state, reference, obstacles, et, previous_tau)
+        here = time.process_time() - cpu_start  # in-process solves: with their new solver objects
+        solution.step_cpu_time_s = (here + solution.solve_cpu_time_s if self.solvers.in_worker
+                                    else here - solution.preparation_cpu_s)
+        return solution
+
+    def _step(self, time_s, state, reference, obstacles, et, previous_tau) -> NMPCSolution:
+        """:meth:`solve` without its processor-time count."""
+        s = self.settings
+        N = s.horizon_steps
+        state = np.asarray(state, dtype=float)
+        reference = np.asarray(reference, dtype=float)
+        if reference.shape != (N + 1, 6):
+            raise ValueError(f"reference must have shape ({N + 1}, 6), got {reference.shape}")
+        origin = state[:2].copy()
+        # same heading, nearest turn: the warm start must not begin a full circle away
+        reference = reference.copy()
+        reference[:, 2] -= 2.0 * np.pi * np.round((reference[0, 2] - state[2]) / (2.0 * np.pi))
+        reference[:, 3] = np.minimum(reference[:, 3], s.max_speed_mps)
+        disturbance = np.zeros(DISTURBANCE_SIZE)
+        if self.observer is not None:
+            # offset-free: predict with the estimate, and ask for the drift angle and the
+            # force that hold the reference against it
+            disturbance = self.observer.update(time_s, state)
+            reference, tau_d = trimmed_reference(reference, disturbance, s.control_interval_s, self.params)
+            reference[:, 3] = np.minimum(reference[:, 3], s.max_speed_mps)
+        else:
+            tau_d = reference_inputs(reference, s.control_interval_s, self.params)
+        ref_scaled = ((reference - np.r_[origin, 0, 0, 0, 0]) / self.state_scale).T
+        w_d = (tau_d / self.input_scale).T
+        if previous_tau is None:
+            previous_tau = self.memory.inputs[0] if self.memory.inputs is not None else self.params.equilibrium_tau(state[3])
+        w_prev = np.clip(np.asarray(previous_tau, dtype=float) / self.input_scale, -1.0, 1.0)
+        speed_ref = float(np.mean(np.hypot(reference[:, 3], reference[:, 4])))
+        P = self.terminal_weight(speed_ref)
+        closing = max(speed_ref, math.hypot(state[3], state[4])) * 1.25
+        slots, report = self.domains.parameters(obstacles, state, origin, closing,
+                                                s.control_interval_s / s.substeps, self.length_scale, et,
+                                                reference_heading_rad=float(reference[0, 2]),
+                                                horizon_s=N * s.control_interval_s, time_s=time_s)
+        p = self.problem.parameters(ref_scaled, w_d, w_prev, P, disturbance, slots)
+        lbx, ubx = self._bounds(state, origin)
+        heading_index = self.problem.z_index[1:, 2]
+        if report.no_port_turn:  # Rules 14, 15, 17(c): no alteration to port
+            allowance = math.radians(PORT_ALLOWANCE_DEG)
+            lbx[heading_index] = np.minimum(ref_scaled[2, 1:] - allowance, state[2])
+        # Rules 8, 16, 17: a readily apparent alteration once the ship gives way or acts
+        floor, ceiling = heading_bounds(report, time_s, float(state[2]), float(state[5]),
+                                        time_s + s.control_interval_s * np.arange(1, N + 1))
+        if floor is not None:
+            lbx[heading_index] = np.maximum(lbx[heading_index], floor)
+        if ceiling is not None:
+            ubx[heading_index] = np.minimum(ubx[heading_index], ceiling)
+        x0 = self._initial_guess(time_s, state, ref_scaled, w_d, origin, slots, disturbance)
+
+        if not np.all(np.isfinite(x0)):
+            # a state far outside the model's range: the prediction itself overflows, and the
+            # solver would iterate on NaN (seen: fatrop running for minutes); skip it
+            LOG.warning("NMPC at t = %.1f s: prediction from the measured state is not finite; fallback", time_s)
+            return self._fail(time_s, state, previous_tau, 0.0, 0, "prediction_not_finite", UNKNOWN, UNKNOWN,
+                              False, disturbance, report)
+        # First the hard problem (slacks fixed at zero: the paper's constraints); only when it
+        # fails, the soft one (slacks free): the plan that violates the clearance least.  After
+        # a step that found no plan keeping the clearance, the soft one alone: the hard problem
+        # is then most likely infeasible again, and failing it took up to 200 iterations
+        # (~100 ms); should it be feasible, the exact L1 penalty gives its plan (zero slack).
+        problem = self.problem
+        duals = self.memory.dual_guess(time_s) if s.warm_start_duals else {}
+        elapsed, cpu, preparation, iterations, timed_out = 0.0, 0.0, 0.0, 0, False
+        budget = s.wall_time_limit_s
+        attempts = (False, True) if problem.sigma_index.size else (False,)
+        if self.memory.clearance_relaxed and problem.sigma_index.size:
+            attempts = (True,)
+        for relaxed in attempts:
+            if relaxed and stop_requested():  # Ctrl-C aborted the first attempt: no second one
+                raise KeyboardInterrupt
+            ubx[problem.sigma_index] = np.inf if relaxed else 0.0
+            if budget is not None:
+                self.solvers.wall_time_s = max(budget - elapsed, 1e-3)
+            outcome = self.solvers.solve("relaxed" if relaxed else "hard", x0=x0, p=p, lbx=lbx, ubx=ubx,
+                                         lbg=problem.lbg, ubg=problem.ubg, **duals)
+            elapsed += outcome.wall_time_s
+            cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
+            preparation += outcome.preparation_cpu_s
+            iterations += max(outcome.iterations, 0)
+            # a point the solver stopped at as acceptable is used only when it keeps every
+            # constraint to the solver's tolerance (never an infeasible iterate)
+            accepted = (outcome.acceptable and bool(np.all(np.isfinite(outcome.x)) and np.all(np.isfinite(outcome.g)))
+                        and problem.violation(outcome.x, outcome.g, lbx, ubx) <= ACCEPTABLE_VIOLATION)
+            success = (outcome.success or accepted) and bool(np.all(np.isfinite(outcome.x)))
+            if success or outcome.timed_out:
+                timed_out = outcome.timed_out
+                break
+        x_opt, g_opt = outcome.x, outcome.g
+        status = outcome.status
+        if accepted:
+            status = "Solved_To_Acceptable_Level"
+        elif s.solver == "fatrop" and not timed_out:  # fatrop reports an integer code
+            status = "Solve_Succeeded" if outcome.success else f"fatrop_return_code_{status}"
+        if not success:
+            finite = bool(np.all(np.isfinite(x_opt)) and np.all(np.isfinite(g_opt)) and np.isfinite(outcome.f))
+            violation = self.problem.violation(x_opt, g_opt, lbx, ubx) if finite else UNKNOWN
+            failed = self._fail(time_s, state, previous_tau, elapsed, iterations, status,
+                                outcome.f if finite else UNKNOWN, violation, timed_out, disturbance, report)
+            failed.solve_cpu_time_s, failed.preparation_cpu_s = cpu, preparation
+            self.memory.clearance_relaxed = relaxed
+            return failed
+        violation = self.problem.violation(x_opt, g_opt, lbx, ubx)
+        slack = float(np.max(x_opt[problem.sigma_index], initial=0.0))
+        slack = slack if slack > SLACK_TOLERANCE else 0.0
+        if slack > 0.0:
+            LOG.warning("NMPC at t = %.1f s: collision clearance relaxed (slack %.3g): no plan keeps it",
+                        time_s, slack)
+        states = self._from_scaled(x_opt[problem.z_index], origin)
+        # the solver meets the bounds |w| <= 1 only to its tolerance: never apply more than tau_max
+        inputs = np.clip(x_opt[problem.w_index], -1.0, 1.0) * self.input_scale
+        solution = NMPCSolution(inputs[0].copy(), states, inputs, elapsed, iterations, status, True, False,
+                                outcome.f, violation, slack, False, disturbance, report.class_codes,
+                                report.active)
+        solution.solve_cpu_time_s, solution.preparation_cpu_s = cpu, preparation
+        self.memory.store(time_s, states, inputs, outcome.lam_x, outcome.lam_g)
+        self.memory.clearance_relaxed = slack > 0.0
+        if self.observer is not None:
+            self.observer.applied(solution.tau)
+        return solution
+
+    def _bounds(self, state: np.ndarray, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        s = self.settings
+        problem = self.problem
+        lbx = np.full(problem.size, -np.inf)
+        ubx = np.full(problem.size, np.inf)
+        lbx[problem.w_index.ravel()] = -1.0
+        ubx[problem.w_index.ravel()] = 1.0
+        lbx[problem.z_index[1:, 3]] = 0.0  # u >= 0: no sailing backwards
+        # u <= max speed; a ship measured faster may take its deceleration limit to get there
+        k = np.arange(1, s.horizon_steps + 1)
+        u_max = np.maximum(s.max_speed_mps, state[3] - SLOW_DOWN_MPS2 * k * s.control_interval_s)
+        ubx[problem.z_index[1:, 3]] = u_max / self.speed_scale
+        lbx[problem.sigma_index] = 0.0  # collision slacks
+        z0 = self._to_scaled(state, origin)
+        lbx[problem.z_index[0]] = z0
+        ubx[problem.z_index[0]] = z0
+        return lbx, ubx
+
+    def _initial_guess(self, time_s, state, ref_scaled, w_d, origin, slots, disturbance) -> np.ndarray:
+        """Shifted previous solution (re-based on this origin) or the reference, pushed clear of the domains."""
+        problem = self.problem
+        guess = np.zeros(problem.size)
+        shifted = self.memory.shifted(time_s)
+        if shifted is not None:
+            states, inputs = shifted
+            z = (states - np.r_[origin, 0, 0, 0, 0]) / self.state_scale
+            w = inputs / self.input_scale
+        else:
+            z = ref_scaled.T.copy()
+            w = w_d.T.copy()
+        z[0] = self._to_scaled(state, origin)
+        push_guess_clear(z, slots, ref_scaled, self.settings.control_interval_s)
+        guess[problem.z_index.ravel()] = z.ravel()
+        guess[problem.w_index.ravel()] = np.clip(w, -1.0, 1.0).ravel()
+        # the first interval from the measured state: a non-finite value here means the
+        # model cannot predict from this state at all
+        z1 = self._next_state(z[0], np.clip(w[0], -1.0, 1.0), disturbance)
+        if not np.all(np.isfinite(z1)):
+            guess[:] = np.nan
+        return guess
+
+    def _fail(self, time_s, state, previous_tau, elapsed, iterations, status, cost, violation, timed_out,
+              disturbance, report: DomainReport) -> NMPCSolution:
+        """Apply the fallback: the shifted previous plan, or hold the surge force with zero yaw moment."""
+        self.failure_count += 1
+        self.fallback_count += 1
+        self.timeout_count += int(timed_out)
+        states, inputs = self.memory.fallback_plan(time_s, state, previous_tau, self.params.tau_max, disturbance)
+        if self.observer is not None:
+            self.observer.applied(inputs[0])
+        LOG.info("NMPC solve at t = %.1f s failed (%s); fallback applied", time_s, status)
+        return NMPCSolution(inputs[0].copy(), states, inputs, elapsed, iterations, status, False, True, cost,
+                            violation, 0.0, timed_out, disturbance, report.class_codes, report.active)

@@ -1,0 +1,75 @@
+"""The heading bounds of a readily apparent alteration (COLREG Rules 8(b), 16, 17(b)) for the NMPC.
+
+Once the own ship gives way (or acts as a stand-on ship), :class:`rhnc.control.nmpc_colregs.CollisionDomains`
+records the alteration in its :class:`rhnc.control.nmpc_colregs.DomainReport` (``alteration_floor``
+to starboard, ``alteration_ceiling`` to port: time it began, heading then, heading to
+reach), and :func:`heading_bounds` turns it into bounds of the predicted headings: a ramp
+the ship can follow from the measured state, so that the alteration is made and seen.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: the heading floor of a readily apparent alteration rises at this rate [deg/s] from the
+#: heading the ship had when the alteration began, after this delay [s]: the KCS model
+#: turns 10 deg in 51 s on 10/35 of its yaw moment and 180 deg in 207 s on all of it
+ALTERATION_RATE_DEG_S = 0.3
+ALTERATION_DELAY_S = 20.0
+#: a ship behind that ramp is asked to catch up as a first-order yaw response towards this
+#: rate [deg/s] with this time constant [s]: the KCS model's yaw inertia over its yaw damping
+#: is about 13 s, and its full yaw moment holds about 0.7 deg/s, so the bound asks for some
+#: 40 % of the moment and stays reachable from any measured state, while it still demands
+#: progress from the first step of every plan
+CATCH_UP_RATE_DEG_S = 0.3
+YAW_TIME_CONSTANT_S = 13.0
+#: numerical slack of that cap below the measured heading [deg]
+HEADING_TOLERANCE_DEG = 0.1
+
+
+def heading_bounds(report, time_s: float, heading_rad: float, yaw_rate_rps: float,
+                   times_s: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Lower and upper heading bounds [rad] at the absolute ``times_s`` [s] (None: unbounded).
+
+    ``report`` is the solve's :class:`rhnc.control.nmpc_colregs.DomainReport` (its
+    ``alteration_floor`` and ``alteration_ceiling``).
+
+    The bound of a readily apparent alteration rises (falls) at ``ALTERATION_RATE_DEG_S``
+    from the heading the ship had when the alteration began, after
+    ``ALTERATION_DELAY_S``, to the alteration's heading.  The ramp is fixed in time, so
+    re-solving every interval does not push it ahead of the ship.  Not to make the problem
+    infeasible from a ship lagging behind it, it is capped by what the ship can reach from
+    the measured state (``heading_rad`` at ``time_s``): the measured heading less what a yaw
+    rate the other way carries it on over the delay (and ``HEADING_TOLERANCE_DEG``), plus a
+    first-order yaw response towards ``CATCH_UP_RATE_DEG_S``.  No larger allowance: the controller applies only the first
+    step of each plan, and a first step allowed to sag below the measured heading would
+    postpone the alteration at every solve and never reach it.  Headings are brought to within half a turn of ``heading_rad``.
+    """
+    times_s = np.asarray(times_s, dtype=float)
+    tolerance = math.radians(HEADING_TOLERANCE_DEG)
+    ahead_s = np.maximum(times_s - time_s, 0.0)
+    reachable = np.radians(CATCH_UP_RATE_DEG_S) * (
+        ahead_s - YAW_TIME_CONSTANT_S * (1.0 - np.exp(-ahead_s / YAW_TIME_CONSTANT_S)))
+
+    def near(angle: float) -> float:
+        return angle - 2.0 * math.pi * round((angle - heading_rad) / (2.0 * math.pi))
+
+    def ramp(alteration) -> tuple[np.ndarray, float]:
+        began_s, heading_then, goal = alteration
+        rise = np.radians(ALTERATION_RATE_DEG_S) * np.maximum(times_s - began_s - ALTERATION_DELAY_S, 0.0)
+        return rise, near(goal) - near(heading_then)
+
+    lower = upper = None
+    if report.alteration_floor is not None:
+        rise, size = ramp(report.alteration_floor)
+        goal = near(report.alteration_floor[2])
+        start = heading_rad - tolerance - max(0.0, -yaw_rate_rps) * ALTERATION_DELAY_S
+        lower = np.minimum.reduce([np.full_like(times_s, goal), goal - size + rise, start + reachable])
+    if report.alteration_ceiling is not None:
+        rise, size = ramp(report.alteration_ceiling)
+        goal = near(report.alteration_ceiling[2])
+        start = heading_rad + tolerance + max(0.0, yaw_rate_rps) * ALTERATION_DELAY_S
+        upper = np.maximum.reduce([np.full_like(times_s, goal), goal - size - rise, start - reachable])
+    return lower, upper

@@ -1,0 +1,357 @@
+"""COLREG-aware collision domains for the NMPC (Rules 8 and 13-17), as problem parameters.
+
+Each obstacle becomes one slot of the collision constraint of :mod:`rhnc.control.nmpc_problem`:
+a circle that must stay clear of the own ship's predicted track.  With ``colregs`` off
+it is the paper's circle of radius R + R_i about the obstacle.  With ``colregs`` on, each
+target is classified by :class:`rhnc.encounters.colregs.EncounterTracker` (the same classes, with
+the same hysteresis, that the ``colregs`` analysis judges a run by) and its circle is
+shaped by the own ship's role:
+
+``head_on`` (Rule 14: both alter to starboard, pass port to port)
+    The circle's centre moves ``HEAD_ON_OFFSET`` (in units of the clearance rho) to the
+    target's starboard and slightly ahead of it, and the radius grows by the offset, so
+    the original circle of radius rho stays inside.  Passing on the target's port side
+    (after our turn to starboard) keeps the paper's clearance rho; passing on its
+    starboard side costs up to rho + 2 |offset| of detour.
+``crossing_give_way`` (Rules 15, 16: keep out of the way, do not cross ahead)
+    The centre moves ahead of the target (``GIVE_WAY_OFFSET``): crossing its bow needs a
+    much wider berth than passing under its stern.
+``overtaking`` (Rule 13: keep clear of the overtaken ship)
+    The centre moves a little ahead (``OVERTAKING_OFFSET``): pass clear, on either side.
+``crossing_stand_on``, ``overtaken`` (Rule 17: keep course and speed)
+    The constraint is off, so the NMPC tracks its reference unchanged, until the give-way
+    ship's action is clearly not enough: its predicted CPA (both ships at their present
+    velocities) lies inside rho and either the CPA is less than ``stand_on_action_tcpa_s``
+    away or the range is below ``stand_on_action_range_factor * rho``.  From then on the
+    symmetric circle is on (Rule 17(b): act to avoid collision) until the encounter ends.
+``static``, ``none``
+    The symmetric circle.
+
+No alteration to port (Rules 14, 15, 17(c)): while a head-on or crossing target whose
+way we give, or a crossing target on our port side that gives way to us (whether we
+stand on or have had to act), is still approaching (TCPA > 0), the predicted heading may not fall more than
+``PORT_ALLOWANCE_DEG`` to port of the reference heading (nor further to port than the
+measured heading, if the ship is there already).  Without it the NMPC, whose
+horizon (5-15 min) sees the domain of a ship crossing from starboard come in from that
+side, first turned away from it to port and only later under its stern (seen in trials);
+the bound leaves turning to starboard or slowing down, which is what the rules ask.  For
+a stand-on crossing target the bound holds before we act too: avoiding a second ship
+must not take us to port across the bow of a ship on our port side (seen in a
+two-target trial).
+
+Why shifted circles rather than side constraints or ellipses: a circle that contains the
+paper's circle never admits a plan the paper's constraint forbids, so separation >= R + R_i
+still follows from feasibility; it keeps one smooth constraint per slot (no switching
+logic inside the NLP, no integer side choice); and together with the warm start pushed
+out of the domain on the far side from its centre (:mod:`rhnc.control.nmpc_warm_start`), the
+local solver starts on, and stays on, the side the rules ask for.  It is the familiar
+ship-domain picture (Fujii, Goodwin, Coldwell: larger ahead and to starboard).
+
+Clearance rho = R + R_i + ``clearance_margin_m``, and it grows by
+``clearance_margin_growth_mps`` per second of prediction: the margin that absorbs the
+prediction error of wind, waves, current and model error (constraint tightening).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+
+import numpy as np
+
+from rhnc.encounters.colregs import (ENCOUNTER_CLASSES, STAND_ON_ACTION_RANGE_FACTOR, STAND_ON_ACTION_TCPA_S,
+                          EncounterTracker, cpa_tcpa, stand_on_must_act)
+from rhnc.control.nmpc_problem import OBSTACLE_FIELDS
+
+LOG = logging.getLogger(__name__)
+
+#: domain centre offsets (ahead, to starboard of the target) in units of the clearance rho
+HEAD_ON_OFFSET = (0.25, 0.5)
+GIVE_WAY_OFFSET = (0.5, 0.25)
+OVERTAKING_OFFSET = (0.25, 0.0)
+OFFSETS = {"head_on": HEAD_ON_OFFSET, "crossing_give_way": GIVE_WAY_OFFSET, "overtaking": OVERTAKING_OFFSET}
+STAND_ON_CLASSES = ("crossing_stand_on", "overtaken")
+#: classes under which the own ship must not alter to port while the target approaches
+STARBOARD_CLASSES = ("head_on", "crossing_give_way", "crossing_stand_on")
+#: how far to port of the reference heading the plan may go while that holds [deg]
+PORT_ALLOWANCE_DEG = 2.0
+#: the alteration ends when the target is past (TCPA <= 0) and this many R + R_i away
+ALTERATION_CLEAR_FACTOR = 2.0
+#: classes in which the own ship gives way (Rules 13-16)
+GIVE_WAY_CLASSES = ("head_on", "crossing_give_way", "overtaking")
+@dataclasses.dataclass(frozen=True)
+class DomainSettings:
+    """How obstacles become collision domains.
+
+    Attributes
+    ----------
+    own_radius_m : float
+        R [m].
+    colregs : bool
+        Shape the domains by encounter class (else the paper's circles).
+    clearance_margin_m : float
+        Added to R + R_i [m].
+    clearance_margin_growth_mps : float
+        Growth of the margin per second of prediction [m/s].
+    stand_on_action_tcpa_s, stand_on_action_range_factor : float
+        Rule 17: when a stand-on ship acts, see :func:`rhnc.encounters.colregs.stand_on_must_act`
+        (judged against R + R_i, without the margin, as the ``colregs`` analysis does).
+    risk_cpa_m, risk_tcpa_s : float
+        Risk of collision for the classification (see :func:`rhnc.encounters.colregs.classify`).
+    alteration_deg : float
+        Rule 8(b), 16: once the own ship gives way (or acts as stand-on ship), its heading
+        is held at least this far off the reference heading it had when it began, to the
+        side the rules ask for, until the target is past and clear (0: no minimum
+        alteration).  35 deg: a readily apparent alteration is commonly read as 30 deg or
+        more of course over ground, and the bound holds the heading; in a cross wind the
+        course over ground differs from it by the drift angle (2-6 deg in the paper's
+        weather at 18 kn), and the course the change is seen from is the one at the onset.
+        A bound of exactly 30 deg lands on either side of 30 deg.
+    give_way_action_tcpa_s : float
+        A give-way ship begins that alteration when the collision constraints are on and
+        the target's CPA (predicted at the present velocities, inside ``risk_cpa_m``) is
+        at most this far ahead [s].  15 min: an alteration is to be seen at least 5 min
+        before the CPA; the turn itself takes 2-3 min, and turning away brings the CPA
+        forward (with 12 min, overtaking ships altered 3.7 min before their CPA).
+    """
+
+    own_radius_m: float = 0.0
+    colregs: bool = False
+    clearance_margin_m: float = 0.0
+    clearance_margin_growth_mps: float = 0.0
+    stand_on_action_tcpa_s: float = STAND_ON_ACTION_TCPA_S
+    stand_on_action_range_factor: float = STAND_ON_ACTION_RANGE_FACTOR
+    risk_cpa_m: float = 2.0 * 1852.0
+    risk_tcpa_s: float = 30.0 * 60.0
+    alteration_deg: float = 35.0
+    give_way_action_tcpa_s: float = 900.0
+
+
+@dataclasses.dataclass
+class DomainReport:
+    """Per obstacle row: its class code (index of ``ENCOUNTER_CLASSES``, -1 unclassified) and
+    whether its constraint is on in this solve; the heading rules of this solve.
+
+    ``alteration_floor`` / ``alteration_ceiling``: a readily apparent alteration to
+    starboard / to port, as (time it began [s], heading then [rad], heading to reach
+    [rad]), or None; see :func:`rhnc.control.nmpc_alteration.heading_bounds`.
+    """
+
+    class_codes: np.ndarray
+    active: np.ndarray
+    no_port_turn: bool = False
+    alteration_floor: tuple[float, float, float] | None = None
+    alteration_ceiling: tuple[float, float, float] | None = None
+
+
+class CollisionDomains:
+    """Turn the obstacles seen at a solve into the NLP's slot parameters.
+
+    Parameters
+    ----------
+    settings : DomainSettings
+    max_obstacles : int
+        Slots of the problem; the nearest obstacles get them.
+    """
+
+    def __init__(self, settings: DomainSettings, max_obstacles: int) -> None:
+        self.settings = settings
+        self.max_obstacles = max_obstacles
+        self.tracker = EncounterTracker(settings.risk_cpa_m, settings.risk_tcpa_s)
+        self._acting: set[int] = set()
+        self._guarding: set[int] = set()
+        self._altering: dict[int, tuple[float, float, float, float]] = {}
+        self._altered: set[int] = set()
+        self.stand_on_actions = 0
+        self.alterations = 0
+
+    def reset(self) -> None:
+        """Forget classes, Rule 17 decisions and alterations."""
+        self.tracker = EncounterTracker(self.settings.risk_cpa_m, self.settings.risk_tcpa_s)
+        self._acting = set()
+        self._guarding = set()
+        self._altering = {}
+        self._altered = set()
+
+    def parameters(self, obstacles: np.ndarray | None, state: np.ndarray, origin: np.ndarray, closing_speed_mps: float,
+                   substep_s: float, length_scale_m: float, et: bool, reference_heading_rad: float | None = None,
+                   horizon_s: float | None = None, time_s: float = 0.0) -> tuple[np.ndarray, DomainReport]:
+        """Slot parameters (OBSTACLE_FIELDS x max_obstacles, scaled) and the per-row report.
+
+        Parameters
+        ----------
+        obstacles : (n, 5) array or None
+            x, y [m], vx, vy [m/s], radius [m] at the solve.
+        state : (6,) array
+            Measured own state [SI].
+        origin : (2,) array
+            Position the scaled problem is measured from [m].
+        closing_speed_mps : float
+            Own speed bound used for the chord inflation [m/s].
+        substep_s : float
+            Time between collision checks [s].
+        length_scale_m : float
+            L [m].
+        et : bool
+            Event trigger: constraints on.
+        reference_heading_rad : float, optional
+            The reference's heading now [rad]: a readily apparent alteration is measured
+            from it (default: the measured heading).
+        horizon_s : float, optional
+            Prediction horizon [s]: an obstacle that cannot reach its domain within it,
+            whatever either ship does at its present speed, gets no slot (default: every
+            obstacle gets one).
+        time_s : float
+            Time of the solve [s] (when an alteration begins).
+        """
+        s = self.settings
+        L = length_scale_m
+        slots = np.zeros((OBSTACLE_FIELDS, self.max_obstacles))
+        slots[6, :] = 1.0  # harmless radius for inactive slots
+        rows = np.zeros((0, 5)) if obstacles is None else np.atleast_2d(np.asarray(obstacles, dtype=float))
+        codes = np.full(len(rows), -1.0)
+        active_rows = np.zeros(len(rows))
+        if len(rows) == 0:
+            return slots, DomainReport(codes, active_rows)
+        own_course = float(state[2] + math.atan2(state[4], state[3]))
+        own_speed = float(math.hypot(state[3], state[4]))
+        classes = [None] * len(rows)
+        if s.colregs:
+            encounters = self.tracker.update(state[:2], own_course, own_speed, rows)
+            for index, encounter in enumerate(encounters):
+                classes[index] = encounter
+                codes[index] = ENCOUNTER_CLASSES.index(encounter.encounter_class)
+            self._acting &= set(self.tracker.locked)
+            self._guarding &= set(self.tracker.locked)
+            self._altered &= set(self.tracker.locked)
+            self._altering = {i: v for i, v in self._altering.items() if i in self.tracker.locked}
+        if not et:
+            return slots, DomainReport(codes, active_rows)
+        distance = np.hypot(rows[:, 0] - origin[0], rows[:, 1] - origin[1]) - rows[:, 4]
+        order = np.argsort(distance)
+        if len(order) > self.max_obstacles:
+            LOG.warning("%d obstacles given, NMPC uses the %d nearest", len(order), self.max_obstacles)
+            order = order[: self.max_obstacles]
+        rhos = s.own_radius_m + rows[:, 4] + s.clearance_margin_m
+        order = [i for i in order if rhos[i] > 0.0]  # a zero domain needs no constraint
+        own_velocity = own_speed * np.array([math.cos(own_course), math.sin(own_course)])
+        heading_now = float(state[2]) if reference_heading_rad is None else float(reference_heading_rad)
+        # Rules 14, 15, 17(c): no alteration to port while such a target's CPA is ahead; known
+        # before any alteration begins, so that an overtaking ship's turns to starboard then
+        no_port_turn = any(classes[i] is not None and classes[i].encounter_class in STARBOARD_CLASSES
+                           and classes[i].tcpa_s > 0.0 for i in order)
+        locked = self.tracker.locked
+        giving_way = any(locked.get(j) in GIVE_WAY_CLASSES for j in self._altering)
+        slot = 0
+        for i in order:
+            x, y, vx, vy, radius = rows[i]
+            rho = rhos[i]
+            offset = np.zeros(2)
+            encounter = classes[i]
+            name = encounter.encounter_class if encounter is not None else "static"
+            if name in STAND_ON_CLASSES and i not in self._acting:
+                cpa, tcpa = cpa_tcpa(state[:2], own_velocity, (x, y), (vx, vy))
+                if stand_on_must_act(cpa, tcpa, encounter.range_m, s.own_radius_m + radius,
+                                     s.stand_on_action_tcpa_s, s.stand_on_action_range_factor):
+                    LOG.info("Rule 17: target %d (%s) is not giving way enough (CPA %.0f m, TCPA %.0f s): acting",
+                             i, name, cpa, tcpa)
+                    self._acting.add(i)
+                    self.stand_on_actions += 1
+                elif giving_way or i in self._guarding:
+                    # the own ship has left its course and speed for a target it gives way
+                    # to (the analysis's Rule 17 allows that): keep clear of this one too,
+                    # for the rest of the encounter, or the alteration, and the return to
+                    # the route after it, may carry the ship into it
+                    self._guarding.add(i)
+                else:
+                    continue  # keep course and speed: this target's constraint stays off
+            if s.colregs and encounter is not None:
+                self._update_alteration(i, encounter, heading_now, float(state[2]), time_s,
+                                        s.own_radius_m + radius, (state[:2], own_speed, (x, y), (vx, vy)),
+                                        port_allowed=not no_port_turn)
+            if name in OFFSETS:
+                speed = math.hypot(vx, vy)
+                ahead = np.array([vx, vy]) / speed
+                starboard = np.array([-ahead[1], ahead[0]])
+                forward, side = OFFSETS[name]
+                offset = rho * (forward * ahead + side * starboard)
+            domain_radius = rho + float(np.hypot(*offset))
+            closing = closing_speed_mps + math.hypot(vx, vy)
+            if horizon_s is not None:
+                growth = s.clearance_margin_growth_mps * horizon_s
+                centre = np.array([x, y]) + offset
+                if np.hypot(*(centre - state[:2])) - closing * horizon_s > domain_radius + growth:
+                    continue  # out of reach within the horizon: no constraint needed
+            if slot >= self.max_obstacles:
+                continue
+            inflation = (closing * substep_s / (2.0 * domain_radius)) ** 2
+            slots[:, slot] = [(x - origin[0]) / L, (y - origin[1]) / L, vx / L, vy / L, offset[0] / L,
+                              offset[1] / L, domain_radius / L, s.clearance_margin_growth_mps / L, inflation, 1.0]
+            active_rows[i] = 1.0
+            slot += 1
+        floors = [a[:3] for a in self._altering.values() if a[3] > 0]
+        ceilings = [a[:3] for a in self._altering.values() if a[3] < 0]
+        floor = max(floors, key=lambda a: a[2]) if floors else None
+        ceiling = (min(ceilings, key=lambda a: a[2]) if ceilings and floor is None and not no_port_turn
+                   else None)
+        return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling)
+
+    def _update_alteration(self, index: int, encounter, reference_heading_rad: float, heading_rad: float,
+                           time_s: float, separation_m: float, motion=None, port_allowed: bool = True) -> None:
+        """Begin, keep or end the readily apparent alteration for one target (Rules 8, 16, 17).
+
+        A give-way ship begins it once the target's CPA is at most
+        ``give_way_action_tcpa_s`` ahead, predicted at the present velocities or with the
+        own ship already on the altered course (whichever comes first: turning away brings
+        the CPA forward, an overtaking ship's CPA most, as it closes slowly); a stand-on ship once it acts (Rule 17(b)).  It is
+        to starboard, except when overtaking or being overtaken, where either side is
+        allowed (Rule 13): then it continues a turn the plan has already begun (more than
+        ``PORT_ALLOWANCE_DEG`` off the reference), else it turns away from the other ship;
+        to starboard, though, when ``port_allowed`` is false (another target's Rule 14, 15
+        or 17(c) rules out a turn to port: a port alteration would be dropped, and with it
+        the give-way action).  It ends, for the rest of the encounter, when the target is
+        past and clear (Rule 13(d)): TCPA <= 0 and the range at least
+        ``ALTERATION_CLEAR_FACTOR`` times R + R_i (``separation_m``).  Ending it at TCPA <= 0 alone let a ship alongside an overtaken
+        target, 1.3 nm off, turn back towards it, and the solver failed from that warm
+        start; holding it until the tracker's 4 nm release made long detours.
+        """
+        s = self.settings
+        if s.alteration_deg <= 0.0 or index in self._altered:
+            return
+        if index in self._altering:
+            if encounter.tcpa_s <= 0.0 and encounter.range_m >= ALTERATION_CLEAR_FACTOR * separation_m:
+                del self._altering[index]  # past and clear
+                self._altered.add(index)
+            return
+        name = encounter.encounter_class
+        if name not in GIVE_WAY_CLASSES and name not in STAND_ON_CLASSES:
+            return
+        side = 1.0
+        if name in ("overtaking", "overtaken"):
+            deviation = math.degrees(heading_rad - reference_heading_rad)
+            deviation = (deviation + 180.0) % 360.0 - 180.0
+            if abs(deviation) > PORT_ALLOWANCE_DEG:
+                side = math.copysign(1.0, deviation)
+            elif encounter.relative_bearing_deg > 0.0:
+                side = -1.0  # the other ship is on our starboard side: pass it on its port side
+            if not port_allowed:
+                side = 1.0
+        goal = reference_heading_rad + side * math.radians(s.alteration_deg)
+        if name in GIVE_WAY_CLASSES:
+            tcpa = encounter.tcpa_s
+            if motion is not None:  # turning away brings the CPA forward (an overtaker's most)
+                own_xy, own_speed, target_xy, target_velocity = motion
+                altered = own_speed * np.array([math.cos(goal), math.sin(goal)])
+                tcpa_altered = cpa_tcpa(own_xy, altered, target_xy, target_velocity)[1]
+                if tcpa_altered > 0.0:
+                    tcpa = min(tcpa, tcpa_altered)
+            begin = 0.0 < tcpa <= s.give_way_action_tcpa_s and encounter.tcpa_s > 0.0 and encounter.cpa_m < s.risk_cpa_m
+        else:
+            begin = index in self._acting and encounter.tcpa_s > 0.0
+        if not begin:
+            return
+        self._altering[index] = (time_s, heading_rad, goal, side)
+        self.alterations += 1
+        LOG.info("target %d (%s): altering %.0f deg to %s (CPA %.0f m in %.0f s)", index, name, s.alteration_deg,
+                 "starboard" if side > 0 else "port", encounter.cpa_m, encounter.tcpa_s)

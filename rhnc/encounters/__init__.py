@@ -1,0 +1,1 @@
+"""Encounters: COLREG classification and judgement, separation figures, traffic participants and situation suites."""

@@ -1,0 +1,330 @@
+"""Judging one target of a sailed encounter by the rules of the road (COLREG Rules 8 and 13-17).
+
+:func:`judge_target` takes the own ship's track (positions, course and speed over ground),
+one target's track, the encounter class decided at the onset of risk of collision and the
+separation R + R_i, and reports the closest approach, the passing side, the first
+manoeuvre and a verdict per rule; :mod:`rhnc.cosim.colregs_analysis` runs it for every target
+of a run.
+
+The verdicts (thresholds are :class:`JudgementSettings`):
+
+Rule 8 (action to avoid collision), applicable to a give-way vessel and to any vessel that
+manoeuvred: the alteration is large enough to be readily apparent (a change of course of at
+least ``apparent_course_change_deg`` before the CPA, or a speed reduction of at least
+``apparent_speed_reduction`` of the speed at onset), made at least
+``early_before_cpa_min`` before the CPA, and the ships pass at a safe distance (the
+separation R + R_i is kept).
+Rule 13 (overtaking): the overtaking vessel keeps out of the way: separation kept.
+Rule 14 (head-on): no alteration to port, and a port-to-port passing.
+Rule 15 (crossing, give-way): the own ship does not cross ahead of the target and keeps
+the separation.
+Rule 16 (action by the give-way vessel): an early alteration (as in Rule 8) and the
+separation kept ("keep well clear").
+Rule 17 (stand-on): keep course and speed; a manoeuvre is allowed only once the give-way
+vessel's action is clearly not enough, read as :func:`rhnc.encounters.colregs.stand_on_must_act` (the
+controller's rule): at the start of the manoeuvre, the CPA predicted with the own ship still
+on the course and speed it stood on with is below the separation, and less than
+``stand_on_wait_min`` ahead or the range below ``stand_on_range_factor`` separations; or the
+own ship is at that time giving way to another target (with several targets a stand-on ship
+may have to act for a third one); and in a crossing, no alteration to port for a vessel on
+the own port side (Rule 17(c)).
+
+The target ships in our scenarios do not manoeuvre, so a stand-on own ship is eventually
+required to act (Rule 17(b)); the verdict checks that it waited long enough and turned
+the right way.  The overall verdict is ``"pass"`` when every applicable rule passes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from orchestrator.geometry import NM
+from rhnc.encounters.colregs import ROLE, STAND_ON_ACTION_RANGE_FACTOR, cpa_tcpa, stand_on_must_act, wrap_deg
+from rhnc.encounters.encounter import segment_min_distance
+
+PASS, FAIL, NOT_APPLICABLE = "pass", "fail", "not applicable"
+RULES = ("rule_8", "rule_13", "rule_14", "rule_15", "rule_16", "rule_17")
+GIVE_WAY_CLASSES = ("head_on", "crossing_give_way", "overtaking")
+STAND_ON_CLASSES = ("crossing_stand_on", "overtaken")
+
+
+@dataclasses.dataclass(frozen=True)
+class JudgementSettings:
+    """Thresholds of the verdicts (units in the names)."""
+
+    manoeuvre_threshold_deg: float = 5.0
+    manoeuvre_hold_s: float = 120.0
+    apparent_course_change_deg: float = 30.0
+    apparent_speed_reduction: float = 0.5
+    early_before_cpa_min: float = 5.0
+    stand_on_wait_min: float = 10.0
+    risk_cpa_nm: float = 2.0
+    risk_tcpa_min: float = 30.0
+    stand_on_range_factor: float = STAND_ON_ACTION_RANGE_FACTOR
+
+    def __post_init__(self) -> None:
+        for field in dataclasses.fields(self):
+            value = getattr(self, field.name)
+            if not (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+                    and value >= 0):
+                raise ValueError(f"{field.name} must be a number >= 0, got {value!r}")
+
+
+def closest_approach(t, own_xy: np.ndarray, target_xy: np.ndarray) -> tuple[float, float, float]:
+    """Range [m], time [s] and the fractional sample index of the closest approach.
+
+    The minimum over the samples is refined along the chords joining them.
+    """
+    t = np.asarray(t, dtype=float)
+    at_samples = np.hypot(*(own_xy - target_xy).T)
+    if t.size < 2:
+        return float(at_samples[0]), float(t[0]), 0.0
+    between, fraction = segment_min_distance(own_xy[:-1], own_xy[1:], target_xy[:-1], target_xy[1:])
+    k = int(np.argmin(between))
+    if at_samples.min() <= between[k]:
+        k_sample = int(np.argmin(at_samples))
+        return float(at_samples[k_sample]), float(t[k_sample]), float(k_sample)
+    return float(between[k]), float(t[k] + fraction[k] * (t[k + 1] - t[k])), k + float(fraction[k])
+
+
+def first_manoeuvre(t, heading_rad, start_index: int, end_time_s: float,
+                    settings: JudgementSettings) -> tuple[float | None, str | None]:
+    """Time [s] and side of the first sustained change of course after ``start_index``.
+
+    ``heading_rad`` is the course (over ground, as :func:`rhnc.cosim.colregs_analysis.judge_encounters` passes it) at
+    each sample [rad].  It must depart from its value at ``start_index`` by at least the threshold and
+    stay beyond it (on the same side) for ``manoeuvre_hold_s``; only changes that begin
+    before ``end_time_s`` count.
+    """
+    t = np.asarray(t, dtype=float)
+    change = wrap_deg(np.degrees(np.unwrap(heading_rad) - np.unwrap(heading_rad)[start_index]))
+    threshold = settings.manoeuvre_threshold_deg
+    for k in range(start_index, t.size):
+        if t[k] > end_time_s:
+            break
+        if abs(change[k]) < threshold:
+            continue
+        sign = np.sign(change[k])
+        window = (t >= t[k]) & (t <= t[k] + settings.manoeuvre_hold_s)
+        held = np.all(sign * change[window] >= threshold)
+        if held and t[-1] >= t[k] + settings.manoeuvre_hold_s:
+            return float(t[k]), "starboard" if sign > 0 else "port"
+    return None, None
+
+
+def crossed_ahead(own_xy: np.ndarray, target: np.ndarray, start: int, cpa_index: float) -> bool | None:
+    """Whether the own ship crossed ahead of a moving target's bow (None: static target).
+
+    Judged where the own ship crosses the target's course line (the first sign change of
+    its lateral offset from the line after ``start``); without a crossing, by its position
+    along the target's course at the CPA.
+    """
+    velocity = target[:, 2:4]
+    speed = np.hypot(*velocity.T)
+    if np.all(speed < 0.1):
+        return None
+    unit = velocity / np.maximum(speed, 1e-9)[:, None]
+    relative = own_xy - target[:, :2]
+    lateral = unit[:, 0] * relative[:, 1] - unit[:, 1] * relative[:, 0]
+    along = np.sum(unit * relative, axis=1)
+    sign = np.sign(lateral[start:])
+    changes = np.nonzero(sign[:-1] * sign[1:] < 0)[0]
+    if changes.size:
+        k = start + int(changes[0])
+        return bool(along[k] + along[k + 1] > 0.0)
+    k = min(int(round(cpa_index)), len(along) - 1)
+    return bool(along[k] > 0.0)
+
+
+def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter_class: str,
+                 onset_index: int | None, required_m: float, settings: JudgementSettings,
+                 give_way_onsets_s: tuple[float, ...] = ()) -> dict:
+    """Everything the ``colregs`` analysis reports for one target (see :mod:`rhnc.cosim.colregs_analysis`).
+
+    Parameters
+    ----------
+    t : (n,) [s]; own_xy : (n, 2) [m]; course_rad : (n,) course over ground [rad];
+    speed_mps : (n,) speed over ground [m/s]
+    target : (n, 5)
+        The target at each sample: x, y, vx, vy, radius [m, m/s].
+    encounter_class : str
+        The class locked at the onset of risk ("none" when risk never arose).
+    onset_index : int or None
+        The sample of the onset of risk.
+    required_m : float
+        R + R_i [m].
+    give_way_onsets_s : tuple of float
+        Onsets [s] of the encounters with *other* targets in which the own ship gives way.
+        A stand-on manoeuvre made once one of those had begun answers that obligation, so
+        Rule 17's "wait until the give-way vessel's action is not enough" does not apply
+        to it (Rule 17(c) still does).
+    """
+    t = np.asarray(t, dtype=float)
+    cpa_m, cpa_time, cpa_index = closest_approach(t, own_xy, target[:, :2])
+    initial_range_m = float(np.hypot(*(target[0, :2] - own_xy[0])))
+    started_inside = bool(initial_range_m < required_m)
+    k = min(int(round(cpa_index)), t.size - 1)
+    offset = target[k, :2] - own_xy[k]
+    bearing = float(wrap_deg(math.degrees(math.atan2(offset[1], offset[0]) - course_rad[k])))
+    result: dict = {
+        "encounter_class": encounter_class,
+        "role": ROLE[encounter_class],
+        "onset_s": None if onset_index is None else float(t[onset_index]),
+        "cpa_nm": cpa_m / NM,
+        "required_nm": required_m / NM,
+        "separation_kept": bool(cpa_m >= required_m - 1e-6),
+        "initial_range_nm": initial_range_m / NM,
+        "started_inside": started_inside,
+        "range_kept_from_start": bool(cpa_m >= initial_range_m - 1e-6) if started_inside else None,
+        "time_of_cpa_s": cpa_time,
+        "passing_side": "starboard" if bearing > 0 else "port",
+        "relative_bearing_at_cpa_deg": bearing,
+        "crossed": None,
+        "manoeuvre_time_s": None,
+        "manoeuvre_side": None,
+        "predicted_time_of_cpa_s": None,
+        "max_course_change_deg": 0.0,
+        "max_speed_reduction": 0.0,
+    }
+    if onset_index is None:
+        result.update({rule: NOT_APPLICABLE for rule in RULES})
+        result.update({"reasons": {}, "side_correct": None, "verdict": NOT_APPLICABLE})
+        return result
+    if encounter_class.startswith("crossing"):
+        ahead = crossed_ahead(own_xy, target, onset_index, cpa_index)
+        result["crossed"] = None if ahead is None else ("ahead" if ahead else "astern")
+    manoeuvre_time, side = first_manoeuvre(t, course_rad, onset_index, cpa_time, settings)
+    result["manoeuvre_time_s"], result["manoeuvre_side"] = manoeuvre_time, side
+    if manoeuvre_time is not None:
+        result["predicted_time_of_cpa_s"] = predicted_time_of_cpa(t, own_xy, course_rad, target, onset_index,
+                                                                  manoeuvre_time, settings)
+    before = (t >= t[onset_index]) & (t <= cpa_time)
+    unwrapped = np.unwrap(course_rad)
+    change = np.degrees(unwrapped[before] - unwrapped[onset_index])
+    result["max_course_change_deg"] = float(np.max(np.abs(change))) if change.size else 0.0
+    speed0 = float(speed_mps[onset_index])
+    if speed0 > 0 and np.any(before):
+        result["max_speed_reduction"] = float(max(0.0, 1.0 - np.min(speed_mps[before]) / speed0))
+    verdicts, reasons = _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, target, settings,
+                                  give_way_onsets_s)
+    result.update(verdicts)
+    result["reasons"] = reasons
+    result["side_correct"] = _side_correct(result, encounter_class)
+    applicable = [v for v in verdicts.values() if v != NOT_APPLICABLE]
+    result["verdict"] = NOT_APPLICABLE if not applicable else (PASS if all(v == PASS for v in applicable) else FAIL)
+    return result
+
+
+def _side_correct(result: dict, encounter_class: str) -> bool | None:
+    """The COLREG side: port to port head-on, astern of a crossing ship we give way to."""
+    if encounter_class == "head_on":
+        return result["passing_side"] == "port"
+    if encounter_class == "crossing_give_way":
+        return result["crossed"] != "ahead"
+    if encounter_class == "crossing_stand_on":
+        return result["manoeuvre_side"] != "port"
+    return None
+
+
+def predicted_time_of_cpa(t, own_xy, course_rad, target: np.ndarray, onset_index: int, manoeuvre_time_s: float,
+                          settings: JudgementSettings) -> float | None:
+    """When the CPA would have come had both ships kept the velocities they had as the
+    manoeuvre began (the last steady sample before it) [s]; None when the ships were not
+    closing then (or kept their distance).
+
+    Shown beside the verdicts, not judged: Rules 8 and 16 measure "early" against the CPA
+    of the sailed tracks, which the manoeuvre itself moves (an overtaking ship that turns
+    away meets its CPA as it turns).
+    """
+    k_before, _, tcpa = _prediction_before_manoeuvre(t, own_xy, course_rad, target, onset_index, manoeuvre_time_s,
+                                                     settings)
+    return float(t[k_before] + tcpa) if 0.0 < tcpa < math.inf else None
+
+
+def _prediction_before_manoeuvre(t, own_xy, course_rad, target: np.ndarray, onset_index: int,
+                                 manoeuvre_time_s: float, settings: JudgementSettings) -> tuple[int, float, float]:
+    """The last steady sample before the manoeuvre (it is detected once the course has moved
+    by the threshold) and the CPA [m] and TCPA [s] predicted there, with the velocity the
+    own ship had before it began."""
+    k = int(np.searchsorted(t, manoeuvre_time_s))
+    k_before = _last_steady_sample(t, course_rad, onset_index, k, settings)
+    own_velocity = np.gradient(own_xy, t, axis=0)[k_before]
+    cpa, tcpa = cpa_tcpa(own_xy[k_before], own_velocity, target[k_before, :2], target[k_before, 2:4])
+    return k_before, cpa, tcpa
+
+
+def _last_steady_sample(t, course_rad, onset_index: int, index: int, settings: JudgementSettings) -> int:
+    """The last sample before ``index`` whose course is within half the manoeuvre threshold of
+    the course at the onset (where the manoeuvre began); the onset if none."""
+    change = np.abs(wrap_deg(np.degrees(np.asarray(course_rad[onset_index:index + 1]) - course_rad[onset_index])))
+    steady = np.nonzero(change < 0.5 * settings.manoeuvre_threshold_deg)[0]
+    return onset_index + int(steady[-1]) if steady.size else onset_index
+
+
+def _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, target, settings,
+              give_way_onsets_s=()) -> tuple[dict, dict]:
+    verdicts = {rule: NOT_APPLICABLE for rule in RULES}
+    reasons: dict[str, str] = {}
+
+    def judge(rule: str, failures: list[str]) -> None:
+        verdicts[rule] = FAIL if failures else PASS
+        if failures:
+            reasons[rule] = "; ".join(failures)
+
+    if result["started_inside"]:  # no controller can keep R + R_i: the range must not close further
+        kept = result["range_kept_from_start"]
+        separation = [] if kept else [f"started {result['initial_range_nm']:.2f} nm off, inside the required "
+                                      f"{result['required_nm']:.2f} nm, and closed to {result['cpa_nm']:.2f} nm"]
+    else:
+        kept = result["separation_kept"]
+        separation = [] if kept else [f"CPA {result['cpa_nm']:.2f} nm < required {result['required_nm']:.2f} nm"]
+    manoeuvred = result["manoeuvre_time_s"] is not None
+    early_s = settings.early_before_cpa_min * 60.0
+    early = manoeuvred and result["time_of_cpa_s"] - result["manoeuvre_time_s"] >= early_s
+    predicted = result["predicted_time_of_cpa_s"]
+    then = ("" if predicted is None else
+            f"; {(predicted - result['manoeuvre_time_s']) / 60:.1f} min before the CPA predicted as it began")
+    timing = [] if early else (["no alteration before the CPA"] if not manoeuvred else
+                               [f"alteration {(result['time_of_cpa_s'] - result['manoeuvre_time_s']) / 60:.1f} min "
+                                f"before the CPA (< {settings.early_before_cpa_min:g} min{then})"])
+    give_way = encounter_class in GIVE_WAY_CLASSES
+    # a stand-on ship's manoeuvre made while it gives way to another target is that
+    # encounter's action (judged there, Rule 8 included), not one taken for this target
+    for_another = manoeuvred and any(onset <= result["manoeuvre_time_s"] for onset in give_way_onsets_s)
+    if give_way or (manoeuvred and encounter_class != "static"
+                    and not (encounter_class in STAND_ON_CLASSES and for_another)):
+        large = (result["max_course_change_deg"] >= settings.apparent_course_change_deg
+                 or result["max_speed_reduction"] >= settings.apparent_speed_reduction)
+        size = [] if large else [f"alteration {result['max_course_change_deg']:.0f} deg, speed "
+                                 f"-{100 * result['max_speed_reduction']:.0f} %: not readily apparent"]
+        judge("rule_8", size + timing + separation)
+    if encounter_class == "overtaking":
+        judge("rule_13", separation)
+    if encounter_class == "head_on":
+        side = [] if result["passing_side"] == "port" else ["passed starboard to starboard"]
+        turn = ["altered to port"] if result["manoeuvre_side"] == "port" else []
+        judge("rule_14", turn + side)
+    if encounter_class == "crossing_give_way":
+        judge("rule_15", (["crossed ahead of the target"] if result["crossed"] == "ahead" else []) + separation)
+    if give_way:
+        judge("rule_16", timing + separation)
+    if encounter_class in STAND_ON_CLASSES:
+        failures = []
+        if manoeuvred:
+            # judge the decision with the velocity the ship stood on with before it began
+            k_before, cpa, tcpa = _prediction_before_manoeuvre(t, own_xy, course_rad, target, onset_index,
+                                                               result["manoeuvre_time_s"], settings)
+            range_m = float(np.hypot(*(target[k_before, :2] - own_xy[k_before])))
+            giving_way = any(onset <= result["manoeuvre_time_s"] for onset in give_way_onsets_s)
+            if not giving_way and not stand_on_must_act(cpa, tcpa, range_m, result["required_nm"] * NM,
+                                                        settings.stand_on_wait_min * 60.0,
+                                                        settings.stand_on_range_factor):
+                failures.append(f"altered course with predicted CPA {cpa / NM:.2f} nm in {tcpa / 60:.1f} min at "
+                                f"{range_m / NM:.2f} nm: the give-way vessel's action could still suffice")
+            if encounter_class == "crossing_stand_on" and result["manoeuvre_side"] == "port":
+                failures.append("altered to port for a vessel on the port side (Rule 17(c))")
+        judge("rule_17", failures + separation)
+    return verdicts, reasons

@@ -1,0 +1,1 @@
+"""The ship: its equations of motion, particulars, energy and emission rates, manoeuvre figures and model identification."""

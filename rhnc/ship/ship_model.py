@@ -1,0 +1,258 @@
+"""The one 3-DOF ship prediction model (docs/method.md, ship model; paper Eq. 11 and 16) for NMPC and tests.
+
+State ``X = [x, y, psi, u, v, r]`` (m, m, rad, m/s, m/s, rad/s; x north, y east, psi
+clockwise from north), control ``tau = [tau_u, tau_r]`` (N, N·m).  The prediction model is
+the plant without disturbances and without current (paper Eq. 16):
+
+    xdot   = u cos(psi) - v sin(psi)
+    ydot   = u sin(psi) + v cos(psi)
+    psidot = r
+    udot   = ( m22 v r - d11 u + tau_u) / m11
+    vdot   = (-m11 u r - d22 v - d23 r) / m22
+    rdot   = ((m11 - m22) u v - d32 v - d33 r + tau_r) / m33
+
+The parameters come from ``models/KCS/parameter_sets.toml`` (the plant FMU's single
+source), so the controller predicts with exactly the numbers the plant simulates.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from collections.abc import Mapping
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from orchestrator.errors import ScenarioError
+from rhnc.ship.model_library import MODELS_DIR
+
+#: The plant's parameter sets, shared with the KCS FMU.
+PARAMETER_SETS_FILE = MODELS_DIR / "KCS" / "parameter_sets.toml"
+
+#: Keys of a parameter set that the prediction model uses.
+DYNAMICS_KEYS = ("m11", "m22", "m33", "d11", "d22", "d33", "d23", "d32", "tau_u_max", "tau_r_max")
+#: Keys that may be absent (the paper's Eq. 11 has no cross-damping).
+OPTIONAL_ZERO_KEYS = ("d23", "d32")
+
+STATE_NAMES = ("x", "y", "psi", "u", "v", "r")
+CONTROL_NAMES = ("tau_u", "tau_r")
+
+
+@dataclasses.dataclass(frozen=True)
+class ShipParameters:
+    """Rigid-body-plus-added-mass and linear damping coefficients of the 3-DOF model.
+
+    Attributes
+    ----------
+    m11, m22, m33 : float
+        Surge and sway mass [kg], yaw inertia [kg·m²], added mass included.
+    d11, d22, d33 : float
+        Linear damping in surge [N·s/m], sway [N·s/m], yaw [N·m·s/rad].
+    d23 : float
+        Sway force per yaw rate [N·s/rad] (0 in the paper's Eq. 11).
+    d32 : float
+        Yaw moment per sway velocity [N·s] (0 in the paper's Eq. 11).
+    tau_u_max, tau_r_max : float
+        Bounds of the surge force [N] and yaw moment [N·m]: ``|tau| <= tau_max``.
+    name : str
+        Name of the parameter set the values came from.
+    extras : Mapping[str, Any]
+        The set's other keys (disturbance coefficients, initial state, ...), read-only.
+    """
+
+    m11: float
+    m22: float
+    m33: float
+    d11: float
+    d22: float
+    d33: float
+    d23: float
+    d32: float
+    tau_u_max: float
+    tau_r_max: float
+    name: str = "custom"
+    extras: Mapping[str, Any] = dataclasses.field(default_factory=lambda: MappingProxyType({}))
+
+    @classmethod
+    def from_mapping(cls, values: Mapping[str, Any], name: str = "custom", where: str = "") -> "ShipParameters":
+        """Build from a mapping holding at least the dynamics keys (``d23``, ``d32`` default 0).
+
+        Raises
+        ------
+        ScenarioError
+            A dynamics key is missing or not a number.
+        """
+        where = where or f"parameter set '{name}'"
+        dynamics: dict[str, float] = {}
+        for key in DYNAMICS_KEYS:
+            if key not in values:
+                if key in OPTIONAL_ZERO_KEYS:
+                    dynamics[key] = 0.0
+                    continue
+                raise ScenarioError(f"{where}: missing key '{key}' (needed: {', '.join(DYNAMICS_KEYS)})")
+            value = values[key]
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ScenarioError(f"{where}: key '{key}' must be a number, got {value!r}")
+            dynamics[key] = float(value)
+        extras = {k: v for k, v in values.items() if k not in DYNAMICS_KEYS}
+        return cls(**dynamics, name=name, extras=MappingProxyType(extras))
+
+    @property
+    def tau_max(self) -> np.ndarray:
+        """Input bounds ``[tau_u_max, tau_r_max]`` [N, N·m]."""
+        return np.array([self.tau_u_max, self.tau_r_max])
+
+    def equilibrium_tau(self, u: float, r: float = 0.0) -> np.ndarray:
+        """Input holding surge speed ``u`` [m/s] and yaw rate ``r`` [rad/s] with zero sway.
+
+        The sway equation is not balanced for ``r != 0`` (a reference with ``v_d = 0``, as
+        the paper's Eq. 19 gives, is not an exact trim in a turn).
+        """
+        return np.array([self.d11 * u, self.d33 * r])
+
+    def straight_line_stable(self, u0: float) -> bool:
+        """True if the sway-yaw pair linearised about straight motion at ``u0`` [m/s] is stable."""
+        a = self.sway_yaw_matrix(u0)
+        return bool(np.all(np.linalg.eigvals(a).real < 0.0))
+
+    def sway_yaw_matrix(self, u0: float) -> np.ndarray:
+        """System matrix of ``[v, r]`` linearised about ``v = r = 0``, ``u = u0`` [1/s]."""
+        return np.array(
+            [
+                [-self.d22 / self.m22, (-self.m11 * u0 - self.d23) / self.m22],
+                [((self.m11 - self.m22) * u0 - self.d32) / self.m33, -self.d33 / self.m33],
+            ]
+        )
+
+
+def available_parameter_sets(path: Path = PARAMETER_SETS_FILE) -> dict[str, dict[str, Any]]:
+    """All parameter sets of the TOML file, by name (top-level tables)."""
+    if not path.is_file():
+        raise ScenarioError(f"{path}: parameter set file not found")
+    with path.open("rb") as stream:
+        document = tomllib.load(stream)
+    return {name: table for name, table in document.items() if isinstance(table, dict)}
+
+
+def load_parameter_set(
+    name: str = "default",
+    overrides: Mapping[str, float] | None = None,
+    path: Path = PARAMETER_SETS_FILE,
+) -> ShipParameters:
+    """Read a named set of the plant's parameters, optionally overriding single keys.
+
+    Parameters
+    ----------
+    name : str
+        Table name in ``models/KCS/parameter_sets.toml`` (``default``: full-scale KCS;
+        ``paper_table2``: the paper's Table 2, see docs/method.md).
+    overrides : mapping, optional
+        Key -> value replacing the set's value; keys must exist in the set or be dynamics keys.
+    path : pathlib.Path
+        The TOML file (tests may point elsewhere).
+
+    Raises
+    ------
+    ScenarioError
+        Unknown set name (message lists the valid ones), unknown override key, or a
+        missing/non-numeric dynamics key.
+    """
+    sets = available_parameter_sets(path)
+    if name not in sets:
+        raise ScenarioError(
+            f"{path}: unknown parameter set '{name}' (valid: {', '.join(sorted(sets)) or 'none'})"
+        )
+    values = dict(sets[name])
+    for key, value in (overrides or {}).items():
+        if key not in values and key not in DYNAMICS_KEYS:
+            raise ScenarioError(
+                f"{path}: override of unknown key '{key}' in set '{name}' "
+                f"(valid: {', '.join(sorted(set(values) | set(DYNAMICS_KEYS)))})"
+            )
+        values[key] = value
+    return ShipParameters.from_mapping(values, name=name, where=f"{path}: [{name}]")
+
+
+# --------------------------------------------------------------------------------------
+# numpy model (tests, plant surrogate, linearisation checks)
+# --------------------------------------------------------------------------------------
+
+
+def equations_of_motion(state, tau, p: ShipParameters, cos, sin, stack):
+    """The 3-DOF equations, written once for every backend: ``cos``, ``sin`` and ``stack``
+    (a list of six expressions -> a vector) come from numpy or CasADi."""
+    psi, u, v, r = state[2], state[3], state[4], state[5]
+    return stack([
+        u * cos(psi) - v * sin(psi),
+        u * sin(psi) + v * cos(psi),
+        r,
+        (p.m22 * v * r - p.d11 * u + tau[0]) / p.m11,
+        (-p.m11 * u * r - p.d22 * v - p.d23 * r) / p.m22,
+        ((p.m11 - p.m22) * u * v - p.d32 * v - p.d33 * r + tau[1]) / p.m33,
+    ])
+
+
+def derivatives(state: np.ndarray, tau: np.ndarray, params: ShipParameters) -> np.ndarray:
+    """Time derivative of ``state`` (6,) under ``tau`` (2,) [SI], numpy.
+
+    Works on 1-D arrays; :func:`casadi_derivatives` is the same equations, symbolic.
+    """
+    return equations_of_motion(state, tau, params, np.cos, np.sin, np.array)
+
+
+def rk4_step(state: np.ndarray, tau: np.ndarray, dt: float, substeps: int, params: ShipParameters) -> np.ndarray:
+    """Advance ``state`` by ``dt`` [s] with ``tau`` held, ``substeps`` classic RK4 steps (numpy)."""
+    h = dt / substeps
+    x = np.asarray(state, dtype=float)
+    tau = np.asarray(tau, dtype=float)
+    for _ in range(substeps):
+        k1 = derivatives(x, tau, params)
+        k2 = derivatives(x + 0.5 * h * k1, tau, params)
+        k3 = derivatives(x + 0.5 * h * k2, tau, params)
+        k4 = derivatives(x + h * k3, tau, params)
+        x = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    return x
+
+
+# --------------------------------------------------------------------------------------
+# CasADi model (NMPC)
+# --------------------------------------------------------------------------------------
+
+
+def casadi_derivatives(params: ShipParameters) -> ca.Function:
+    """CasADi function ``f(X[6], tau[2]) -> Xdot[6]`` of the prediction model (SX)."""
+    state = ca.SX.sym("X", 6)
+    tau = ca.SX.sym("tau", 2)
+    xdot = equations_of_motion(state, tau, params, ca.cos, ca.sin, lambda rows: ca.vertcat(*rows))
+    return ca.Function("ship_f", [state, tau], [xdot], ["X", "tau"], ["Xdot"])
+
+
+def rk4_function(params: ShipParameters, dt: float, substeps: int, with_substeps: bool = False) -> ca.Function:
+    """CasADi RK4 discretisation ``F(X, tau) -> X_next`` over ``dt`` [s] in ``substeps`` steps.
+
+    With ``with_substeps`` the function also returns ``Xs`` (6 x substeps): the states at
+    the end of every substep (the last column equals ``X_next``), for path constraints
+    between the shooting nodes.
+    """
+    if substeps < 1:
+        raise ValueError("substeps must be >= 1")
+    f = casadi_derivatives(params)
+    state = ca.SX.sym("X", 6)
+    tau = ca.SX.sym("tau", 2)
+    h = dt / substeps
+    x = state
+    columns = []
+    for _ in range(substeps):
+        k1 = f(x, tau)
+        k2 = f(x + 0.5 * h * k1, tau)
+        k3 = f(x + 0.5 * h * k2, tau)
+        k4 = f(x + h * k3, tau)
+        x = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        columns.append(x)
+    if with_substeps:
+        return ca.Function("ship_F", [state, tau], [x, ca.horzcat(*columns)], ["X", "tau"], ["X_next", "Xs"])
+    return ca.Function("ship_F", [state, tau], [x], ["X", "tau"], ["X_next"])

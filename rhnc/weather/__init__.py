@@ -1,0 +1,1 @@
+"""Met-ocean fields: gridded and spline weather, NetCDF sources, synthetic weather generators."""
