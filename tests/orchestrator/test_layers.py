@@ -126,3 +126,42 @@ def test_the_loop_check_sees_lazy_imports_and_submodules(tmp_path):
     graph = import_graph([package])
     assert graph["pkg.top"] == {"pkg.field", "pkg.inner.writer"}
     assert import_cycles(graph) == [["pkg.field", "pkg.inner.writer"]]
+
+
+#: The wings of the domain, lowest first: a wing imports only the wings before it (and
+#: itself); ``cosim`` registers them all with the engine and may import any of them.
+WINGS = ("ship", "weather", "routing", "voyage", "navigation", "encounters", "control", "cosim")
+
+
+def wing_violations(graph: dict[str, set[str]], domain: str = DOMAIN, wings=WINGS) -> list[str]:
+    """``importer -> imported`` for every import from a lower wing into a higher one."""
+    rank = {wing: position for position, wing in enumerate(wings)}
+
+    def wing_of(module: str) -> str | None:
+        parts = module.split(".")
+        return parts[1] if len(parts) > 1 and parts[0] == domain else None
+
+    found = []
+    for module, imported in sorted(graph.items()):
+        if wing_of(module) is None:
+            continue
+        for other in sorted(imported):
+            if wing_of(other) is not None and rank[wing_of(other)] > rank[wing_of(module)]:
+                found.append(f"{module} -> {other}")
+    return found
+
+
+def test_every_domain_module_lives_in_a_wing():
+    loose = [module for module in import_graph([ENGINE.parent / DOMAIN])
+             if module != DOMAIN and module.split(".")[1] not in WINGS]
+    assert loose == [], f"modules outside the wings {WINGS}: {loose}"
+
+
+def test_wings_import_one_way():
+    violations = wing_violations(import_graph([ENGINE.parent / DOMAIN]))
+    assert violations == [], f"a lower wing imports a higher one: {violations}"
+
+
+def test_the_wing_check_sees_an_import_upwards():
+    graph = {"rhnc.ship.ship_model": {"rhnc.control.nmpc"}, "rhnc.control.nmpc": {"rhnc.ship.ship_model"}}
+    assert wing_violations(graph) == ["rhnc.ship.ship_model -> rhnc.control.nmpc"]
