@@ -46,6 +46,9 @@ DEFAULT_STEP_TIMEOUT_S = 300.0
 EXIT_TIMED_OUT = 3
 #: Status of a run stopped at a time limit.
 TIMED_OUT = "timed out"
+#: How often the watchdog looks at the call in progress [s]: a call is interrupted at most
+#: this long after its limit.
+POLL_S = 0.05
 
 
 class StepTimeout(BaseException):
@@ -75,7 +78,8 @@ class CallWatch:
         self.emergency = emergency
         self.expired: str | None = None  # the reason, once a call timed out
         self._lock = threading.Condition()
-        self._call: tuple[int, float, str] | None = None  # (generation, deadline, reason)
+        # (generation, deadline, (participant, phase, time_s, limit_s)) of the call in progress
+        self._call: tuple[int, float, tuple[str, str, float, float]] | None = None
         self._generation = 0
         self._closed = False
         self._thread_id = threading.get_ident()
@@ -96,19 +100,20 @@ class CallWatch:
             yield
             return
         deadline = time.monotonic() + limit_s
-        reason = describe(participant, phase, time_s, limit_s)
-        with self._lock:
-            self._generation += 1
-            self._call = (self._generation, deadline, reason)
-            self._lock.notify_all()
-        _publish_deadline(deadline + self.grace_s, reason)
+        # No lock and no wake-up of the watchdog per call: it polls (every POLL_S at most)
+        # and reads this tuple, which the master alone writes.  Waking the watchdog thread
+        # at every call made it compete for the interpreter lock with every FMU call, which
+        # releases it: that tripled the master's overhead per step.
+        self._generation += 1
+        self._call = (self._generation, deadline, (participant, phase, time_s, limit_s))
+        if _deadline_sink is not None:
+            _publish_deadline(deadline + self.grace_s, describe(participant, phase, time_s, limit_s))
         try:
             yield
         finally:
-            with self._lock:
-                self._call = None
-                self._lock.notify_all()
-            _publish_deadline(0.0, "")
+            self._call = None
+            if _deadline_sink is not None:
+                _publish_deadline(0.0, "")
         if self.expired is not None:
             raise StepTimeout(self.expired)
 
@@ -135,24 +140,30 @@ class CallWatch:
     def _watch(self) -> None:
         with self._lock:
             while not self._closed:
-                if self._call is None:
-                    self._lock.wait()
+                call = self._call
+                if call is None:
+                    self._lock.wait(POLL_S)
                     continue
-                generation, deadline, reason = self._call
+                generation, deadline, what = call
                 remaining = deadline - time.monotonic()
                 if remaining > 0:
-                    self._lock.wait(remaining)
+                    self._lock.wait(min(remaining, POLL_S))
                     continue
                 # the call is over its limit: interrupt it, then give it grace_s to return
+                reason = describe(*what)
                 self.expired = reason
                 log.warning("%s: interrupting it", reason)
                 self._interrupt()
                 end = time.monotonic() + self.grace_s
-                while self._call is not None and self._call[0] == generation and time.monotonic() < end:
-                    self._lock.wait(end - time.monotonic())
-                if self._call is not None and self._call[0] == generation and not self._closed:
+                while self._is_watching(generation) and time.monotonic() < end:
+                    self._lock.wait(min(end - time.monotonic(), POLL_S))
+                if self._is_watching(generation) and not self._closed:
                     self._end_process(reason)
                 return
+
+    def _is_watching(self, generation: int) -> bool:
+        call = self._call
+        return call is not None and call[0] == generation
 
     def _interrupt(self) -> None:
         from orchestrator import interrupts
