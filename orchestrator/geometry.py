@@ -20,6 +20,10 @@ EARTH_RADIUS_M = 6_371_000.0  #: mean radius of the Earth [m], for the local pro
 def wrap_angle(angle, half_turn: float = np.pi):
     """Wrap angles to (-half_turn, half_turn]: radians by default, degrees with
     ``half_turn = 180`` (numpy; arrays element-wise)."""
+    if type(angle) is float:  # a plain number, as a port's value every step: no array round trip
+        # Python's float % is numpy's np.mod to the bit (fmod, then the divisor's sign)
+        scalar = (angle + half_turn) % (2.0 * half_turn) - half_turn
+        return np.float64(half_turn if scalar == -half_turn else scalar)
     wrapped = np.mod(np.asarray(angle, dtype=float) + half_turn, 2.0 * half_turn) - half_turn
     return np.where(wrapped == -half_turn, half_turn, wrapped)
 

@@ -61,3 +61,14 @@ def test_degrees_wrap_to_the_half_open_interval_like_radians():
     from orchestrator.geometry import wrap_deg
 
     assert wrap_deg([-180.0, 180.0, 540.0, -190.0, 359.0]).tolist() == [180.0, 180.0, 180.0, 170.0, -1.0]
+
+
+@pytest.mark.parametrize("half_turn", [math.pi, 180.0])
+def test_a_plain_number_wraps_to_the_same_bits_as_an_array(half_turn):
+    rng = np.random.default_rng(7)
+    angles = np.concatenate([rng.normal(0.0, 20.0 * half_turn, 5000), rng.normal(0.0, 1e6, 500),
+                             [half_turn, -half_turn, 3 * half_turn, -3 * half_turn, 0.0, -0.0, 2 * half_turn]])
+    as_numbers = np.array([wrap_angle(float(angle), half_turn) for angle in angles])
+    as_array = wrap_angle(angles, half_turn)
+    assert as_numbers.tobytes() == as_array.tobytes()
+    assert wrap_angle(-half_turn, half_turn) == half_turn
