@@ -237,22 +237,13 @@ class CoSimulation:
         if status == "failed" and interrupts.stop_requested():
             # a library turned the interrupt into an error of its own
             status, reason = "interrupted", interrupts.reason()
-        problems = self._terminate_all()
+        problems, stopped_in = self._terminate_all()
         if results_error is not None:
             raise results_error
-        summaries, tables = {}, {}
-        for participant in self.participants:
-            try:
-                summary = participant.summary()
-                json.dumps(summary, default=json_default)  # what summary.json will hold
-                summaries[participant.name] = summary
-                for table, rows in participant.tables().items():
-                    tables[f"{participant.name}_{table}"] = rows
-            except (Exception, SystemExit) as exc:  # a summary must not hide the run's own outcome
-                text = (f"its summary cannot be written to JSON ({exc})" if isinstance(exc, TypeError)
-                        else f"summary raised {type(exc).__name__}: {exc}")
-                summaries[participant.name] = {"error": text}
-                problems.append(f"{participant.name}: {text}")
+        summaries, tables, stopped_while = self._collect_summaries(problems)
+        stopped_in = stopped_in or stopped_while
+        if stopped_in and status == "finished":  # every step is done and kept: only the summaries may lack
+            status, reason = "interrupted", f"{interrupts.reason()} after the last step, while {stopped_in}"
         if problems:
             log.warning("after the run: %s", "; ".join(problems))
             if status == "finished":
@@ -260,16 +251,46 @@ class CoSimulation:
         return RunOutcome(status, reason, steps_done, wallclock.perf_counter() - started, recorder, summaries,
                           tables)
 
-    def _terminate_all(self) -> list[str]:
-        """Terminate every participant (also after a failure); returns what went wrong."""
-        problems = []
+    def _terminate_all(self) -> tuple[list[str], str]:
+        """Terminate every participant (also after a failure).
+
+        Returns what went wrong, and what was being done when Ctrl-C or SIGTERM arrived ("" if
+        none did): an interrupted ``terminate()`` does not keep the others from theirs.
+        """
+        problems, stopped_in = [], ""
         for participant in self.participants:
             try:
                 participant.terminate()
+            except KeyboardInterrupt:
+                interrupts.acknowledge()  # handled here: the last-resort timer must not end the writing
+                stopped_in = stopped_in or f"participant '{participant.name}' was terminated"
             except (Exception, SystemExit) as exc:  # the other participants are terminated all the same
                 log.debug("terminate raised", exc_info=True)
                 problems.append(f"{participant.name}: terminate() raised {type(exc).__name__}: {exc}")
-        return problems
+        return problems, stopped_in
+
+    def _collect_summaries(self, problems: list[str]) -> tuple[dict, dict, str]:
+        """Every participant's summary and tables; a failing one is an ``{"error": ...}`` entry
+        (appended to ``problems``).  A Ctrl-C in one of them is that one's entry and the others
+        are still collected; the third value says where it arrived ("" if it did not)."""
+        summaries, tables, stopped_in = {}, {}, ""
+        for participant in self.participants:
+            try:
+                summary = participant.summary()
+                json.dumps(summary, default=json_default)  # what summary.json will hold
+                summaries[participant.name] = summary
+                for table, rows in participant.tables().items():
+                    tables[f"{participant.name}_{table}"] = rows
+            except KeyboardInterrupt:
+                interrupts.acknowledge()  # handled here: the last-resort timer must not end the writing
+                summaries[participant.name] = {"error": f"not collected: {interrupts.reason()}"}
+                stopped_in = stopped_in or f"the summary of participant '{participant.name}' was collected"
+            except (Exception, SystemExit) as exc:  # a summary must not hide the run's own outcome
+                text = (f"its summary cannot be written to JSON ({exc})" if isinstance(exc, TypeError)
+                        else f"summary raised {type(exc).__name__}: {exc}")
+                summaries[participant.name] = {"error": text}
+                problems.append(f"{participant.name}: {text}")
+        return summaries, tables, stopped_in
 
     @staticmethod
     def _check_stop() -> None:

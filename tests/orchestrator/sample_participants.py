@@ -247,13 +247,25 @@ class Sleeper(Participant):
         return {"ok": 1.0}
 
 
+def ctrl_c() -> None:
+    """Send SIGINT to this process, as Ctrl-C in its terminal does, and wait for it to arrive."""
+    import os
+    import signal
+    import time
+
+    os.kill(os.getpid(), signal.SIGINT)
+    for _ in range(500):  # the handler raises KeyboardInterrupt at the next bytecode
+        time.sleep(0.01)
+
+
 class Misbehaving(Participant):
     """Fails in one of the ways a participant can fail outside a plain exception in its step.
 
     ``how``: ``"exit"`` (sys.exit(5) in its step at ``at_s``), ``"terminate"`` (terminate()
     raises), ``"summary"`` (summary() raises), ``"unserialisable"`` (a summary JSON cannot
     hold), ``"options"`` (from_options raises ValueError), ``"nan_setup"`` (a NaN output at
-    set-up, past the checks a scenario file gets).
+    set-up, past the checks a scenario file gets), ``"interrupt_terminate"`` and
+    ``"interrupt_summary"`` (Ctrl-C arrives while terminate() or summary() runs).
     """
 
     @classmethod
@@ -288,8 +300,12 @@ class Misbehaving(Participant):
     def terminate(self):
         if self.how == "terminate":
             raise OSError("device busy")
+        if self.how == "interrupt_terminate":
+            ctrl_c()
 
     def summary(self):
+        if self.how == "interrupt_summary":
+            ctrl_c()
         if self.how == "summary":
             raise ZeroDivisionError("division by zero")
         if self.how == "unserialisable":
