@@ -130,12 +130,18 @@ def _configure_logging(verbose: bool) -> None:
 def _run(args) -> int:
     from orchestrator.run import run_scenario
 
+    from orchestrator import interrupts
+
     report = run_scenario(args.scenario, args.results, progress=not args.no_progress)
     print(f"{report.status}: results in {report.folder}")
     for line in _key_lines(report.summary):
         print(f"  {line}")
     if report.status == "interrupted":
         print(f"error: {report.reason}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    if interrupts.stop_requested():  # the signal came while the results were written: they are complete
+        print(f"error: {interrupts.reason()} while the results were written; they were completed first",
+              file=sys.stderr)
         return EXIT_INTERRUPTED
     if not report.ok:
         print(f"error: {report.reason}", file=sys.stderr)

@@ -173,6 +173,10 @@ def test_ctrl_c_while_figures_are_drawn_completes_the_results(tmp_path, probes):
     summary = _summary(folder)
     assert summary["figures"] == ["drawn.txt", "good.txt"] and summary["figure_errors"] == {}
     assert (folder / "drawn.txt").read_text() == "a whole figure"
+    assert summary["status"] == "finished" and summary["simulation"]["steps_done"] == 2
+    assert process.returncode == 130  # the command was interrupted, whatever the results hold
+    assert err.strip().splitlines()[-1] == ("error: interrupted by the user (Ctrl-C) while the results were "
+                                            "written; they were completed first")
 
 
 def test_a_second_ctrl_c_while_figures_are_drawn_stops_at_once_and_ends_the_drawing(tmp_path, probes):
