@@ -265,3 +265,34 @@ def test_a_file_name_that_cannot_name_the_results_folder_needs_simulation_name(t
         load_scenario(path)
     path.write_text(BASE)
     assert load_scenario(path).simulation.name == "trial"
+
+
+@pytest.mark.parametrize("text, message", [
+    ("[" + ".".join(["a"] * 100_000) + "]\n", r"line 1: the key 'a\.a\.a.*' has more than the limit of 24 dotted parts"),
+    (BASE + "x." * 200_000 + "y = 1\n", r"line \d+: the key 'x\.x\.x.*' has more than the limit of 24 dotted parts"),
+    (BASE + '[participants."a". b ."c".' + ".".join(["d"] * 22) + "]\n", r"line 16: the key 'participants\.\"a\"\. b \.\"c\"\.d\.d.*' has more"),
+    (BASE + "".join(f"[t{i}]\n" for i in range(25_000)),
+     r"holds 250\d\d keys, values and tables \(counted by '=', ',', '\[', '\{'\), more than the limit of 20000"),
+], ids=["deep header", "deep dotted key", "quoted parts", "too many tables"])
+def test_text_the_parser_would_take_long_over_is_refused_before_it_is_parsed(write_scenario, capsys, monkeypatch,
+                                                                                 text, message):
+    """Python's TOML parser is quadratic in the parts of one dotted key (a 200 kB header took
+    17-20 s to refuse): the pre-scan refuses it without calling the parser."""
+    import tomllib
+
+    def parser_called(*args, **kwargs):
+        raise AssertionError("the parser was called")
+
+    monkeypatch.setattr(tomllib, "loads", parser_called)
+    _refused(write_scenario, capsys, text, message)
+
+
+def test_keys_of_the_largest_depth_still_reach_the_parser(write_scenario):
+    text = BASE + "[participants.helm.options.deep." + ".".join(["d"] * 20) + "]\n"
+    with pytest.raises(ScenarioError, match="unknown option 'deep'|unknown key 'participants.helm.options.deep'"):
+        CoSimulation(load_scenario(write_scenario(text))).close()
+
+
+def test_an_integer_of_thousands_of_digits_is_one_line(write_scenario, capsys):
+    _refused(write_scenario, capsys, _edit(BASE, "u0 = 9.26", "u0 = " + "9" * 5000),
+             r"not valid TOML: Exceeds the limit \(4300 digits\) for integer string conversion")
