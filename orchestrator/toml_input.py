@@ -45,6 +45,9 @@ MAX_NESTING = 24
 #: Most keys, values and tables in an input file, counted before it is parsed (the shipped
 #: files hold fewer than 200).
 MAX_ITEMS = 20_000
+#: Largest distance or coordinate a key in nautical miles may hold [nm]: half the Earth's
+#: circumference, farther than any two points at sea are apart.
+MAX_DISTANCE_NM = 10_800.0
 #: Longest value shown in a message [characters].
 SHOWN_CHARS = 60
 #: Longest name of a results folder (``simulation.name``, ``batch.name``) [characters].
@@ -284,7 +287,30 @@ def _text(value: Any) -> str:
 def _pair(value: Any) -> tuple[float, float]:
     if not (isinstance(value, list) and len(value) == 2 and all(is_finite_number(v) for v in value)):
         raise fail(f"must be [north, east] in nm, got {shown(value)}")
+    if any(abs(v) > MAX_DISTANCE_NM for v in value):
+        raise fail(f"must lie within +-{MAX_DISTANCE_NM:g} nm (half the Earth's circumference), got {shown(value)}")
     return float(value[0]), float(value[1])
+
+
+def check_distances_nm(table: Any, where: str, prefix: str) -> None:
+    """Refuse a number beyond +-:data:`MAX_DISTANCE_NM` under any key ending in ``_nm``.
+
+    Keys carry their unit in their name (``start_nm``, ``goal_nm``, ``x_range_nm``), so the
+    bound holds for every participant type and domain table, whether or not it checks the
+    value itself; numbers in lists and tables under such a key are checked too.  What is
+    not a finite number is left to the table's own checks.
+    """
+    stack = [(table, prefix, False)]
+    while stack:
+        node, key, in_nm = stack.pop()
+        if isinstance(node, dict):
+            stack.extend((value, f"{key}.{k}" if key else str(k), in_nm or str(k).endswith("_nm"))
+                         for k, value in node.items())
+        elif isinstance(node, list):
+            stack.extend((value, f"{key}[{k}]", in_nm) for k, value in enumerate(node))
+        elif in_nm and is_finite_number(node) and abs(node) > MAX_DISTANCE_NM:
+            raise ScenarioError(f"{where}: '{shown_text(key)}' must lie within +-{MAX_DISTANCE_NM:g} nm (half the "
+                                f"Earth's circumference), got {shown(node)}")
 
 
 _RESERVED_NAMES = re.compile(r"^(con|prn|aux|nul|com\d|lpt\d)(\..*)?$", re.IGNORECASE)

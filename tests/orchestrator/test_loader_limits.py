@@ -296,3 +296,26 @@ def test_keys_of_the_largest_depth_still_reach_the_parser(write_scenario):
 def test_an_integer_of_thousands_of_digits_is_one_line(write_scenario, capsys):
     _refused(write_scenario, capsys, _edit(BASE, "u0 = 9.26", "u0 = " + "9" * 5000),
              r"not valid TOML: Exceeds the limit \(4300 digits\) for integer string conversion")
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda t: t.replace("tau_u_N = 7.7e5", "tau_u_N = 7.7e5\nstart_nm = [0, -1e308]"),
+     r"'participants\.helm\.options\.start_nm\[1\]' must lie within \+-10800 nm \(half the Earth's circumference\), "
+     r"got -1e\+308"),
+    (lambda t: t + "\n[participants.helm.options.route]\nwaypoints_nm = [[0.0, 0.0], [20000.0, 5.0]]\n",
+     r"'participants\.helm\.options\.route\.waypoints_nm\[1\]\[0\]' must lie within \+-10800 nm"),
+    (lambda t: t + "\n[metocean]\ngenerator = \"paper_default\"\nx_range_nm = [0.0, 1e9]\n",
+     r"'metocean\.x_range_nm\[1\]' must lie within \+-10800 nm"),
+], ids=["start", "nested waypoint", "weather map"])
+def test_absurd_distances_in_nautical_miles_are_refused(write_scenario, capsys, edit, message):
+    """Every key that names its unit nm is bounded, whichever participant reads it."""
+    _refused(write_scenario, capsys, edit(BASE), message)
+
+
+def test_a_batch_start_beyond_the_bound_is_refused():
+    from orchestrator.batch_model import OwnShipTable
+    from orchestrator.toml_input import checked
+
+    with pytest.raises(ScenarioError, match=r"'own_ship\.start_nm' must lie within \+-10800 nm"):
+        checked(OwnShipTable, {"start_nm": [0.0, -1e308], "course_deg": 45.0, "speed_kn": 16.0}, "b.toml",
+                ("own_ship",))
