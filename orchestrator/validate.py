@@ -80,6 +80,10 @@ def local_module_folder(class_path: str, scenario_dir: Path) -> Path | None:
     """The folder a participant class would be imported from, when it is the scenario's folder
     or the current folder and the module is not imported yet; otherwise None.
 
+    A module that cannot be imported from here at all (say, it lies beside the scenario but
+    the command was started from another folder) is not local: building it fails as the run
+    would, so that ``validate`` and ``run`` agree.
+
     Found with :func:`importlib.util.find_spec` on the top-level name, which runs no code.
     """
     module_name = class_path.partition(":")[0]
@@ -92,9 +96,8 @@ def local_module_folder(class_path: str, scenario_dir: Path) -> Path | None:
         spec = importlib.util.find_spec(top)
     except (ImportError, ValueError):
         spec = None
-    if spec is None:
-        candidates = [scenario_dir / f"{top}.py", scenario_dir / top / "__init__.py"]
-        return scenario_dir.resolve() if any(c.is_file() for c in candidates) else None
+    if spec is None:  # not importable from here: the build fails as the run would (importing nothing)
+        return None
     if not spec.origin or spec.origin in ("built-in", "frozen"):
         return None
     folder = Path(spec.origin).resolve().parent

@@ -319,3 +319,23 @@ def test_a_batch_start_beyond_the_bound_is_refused():
     with pytest.raises(ScenarioError, match=r"'own_ship\.start_nm' must lie within \+-10800 nm"):
         checked(OwnShipTable, {"start_nm": [0.0, -1e308], "course_deg": 45.0, "speed_kn": 16.0}, "b.toml",
                 ("own_ship",))
+
+
+@pytest.mark.parametrize("command", [["validate"], ["validate", "--trust-code"], ["run", "--no-progress"]])
+def test_a_module_beside_the_scenario_started_from_elsewhere_is_refused_alike(tmp_path, capsys, monkeypatch,
+                                                                              command):
+    """The run cannot import it (the scenario's folder is not on the import path): validate must
+    not say ok, with or without --trust-code, and all three give the same line."""
+    folder = tmp_path / "downloaded"
+    folder.mkdir()
+    (folder / "local_helm_elsewhere.py").write_text(LOCAL_CODE)
+    path = folder / "s.toml"
+    path.write_text(_edit(BASE, 'type = "scripted_tau"', 'type = "python"\nclass = "local_helm_elsewhere:Helm"'))
+    monkeypatch.chdir(tmp_path)
+    results = ["--results", str(tmp_path / "results")] if command[0] == "run" else []
+    assert main([*command, *results, str(path)]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"error: {path}: participants.helm.class: cannot import module 'local_helm_elsewhere': No module named "
+        f"'local_helm_elsewhere' (it lies in the scenario's folder {folder}, which is not on the import path: start "
+        "the command from that folder, or install the module)"]
+    assert not (folder / "imported.marker").exists() and not (tmp_path / "results").exists()
