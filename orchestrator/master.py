@@ -13,7 +13,6 @@ from __future__ import annotations
 import json
 import logging
 import math
-import tempfile
 import time as wallclock
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -22,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from orchestrator import interrupts, time_limits
+from orchestrator import interrupts, leftovers, time_limits
 from orchestrator.errors import ModelError, ResultsError, ScenarioError, ToolchainError
 from orchestrator.participant import Participant, Value
 from orchestrator.participant_build import build_participant, build_scenario_table
@@ -69,7 +68,12 @@ class CoSimulation:
         check_outputs(scenario)
         self.scenario = scenario
         self._own_work_dir = work_dir is None
-        self.work_dir = Path(tempfile.mkdtemp(prefix="rhnc-run-")) if work_dir is None else Path(work_dir)
+        self._work_lock = None
+        if work_dir is None:
+            leftovers.remove_abandoned_temp_folders()  # of runs whose process died
+            self.work_dir, self._work_lock = leftovers.owned_temp_folder("rhnc-run-")
+        else:
+            self.work_dir = Path(work_dir)
         try:
             self._build_all(scenario)
         except BaseException:  # a participant that fails to build leaves no temporary folder
@@ -326,6 +330,8 @@ class CoSimulation:
             import shutil
 
             shutil.rmtree(self.work_dir, ignore_errors=True)
+            if self._work_lock is not None:
+                self._work_lock.release(remove_file=False)
 
 
 def _naming(message: str, participant: str | None) -> str:

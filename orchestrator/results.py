@@ -11,7 +11,8 @@ Nothing is half-written: a crash while writing leaves only the staging folder
 ``.<run-id>.<process>-<token>.partial``, never a run folder that looks complete.  Each
 attempt stages in a folder of its own, so two processes writing the same run id never
 write into each other's files; the first to publish keeps the id, a later one gets
-``<run-id>-2`` (``-3``, ...).
+``<run-id>-2`` (``-3``, ...).  The staging folder holds a lock of its process
+(:mod:`orchestrator.leftovers`), so that a later run removes it if the process dies.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from orchestrator.errors import ResultsError
+from orchestrator.leftovers import OwnerLock
 
 log = logging.getLogger(__name__)
 
@@ -71,6 +73,8 @@ class RunFolder:
         except OSError as exc:
             raise ResultsError(f"{self.final.parent}: cannot write results here: "
                                f"{exc.strerror or exc}") from exc
+        # held while this process lives: a later run removes the folder only once it is gone
+        self._owner = OwnerLock(self.staging)
 
     def path(self, name: str) -> Path:
         """Where to write ``name`` while staging."""
@@ -101,11 +105,14 @@ class RunFolder:
             if attempt > 1:
                 log.warning("run folder %s was published by another process: this run is in %s", wanted, target)
             self.final = target
+            self._owner.folder = target  # renamed with its lock held: never a staging folder without one
+            self._owner.release()
             return target
         raise OSError(f"no free run folder name next to {wanted}")
 
     def discard(self) -> None:
         shutil.rmtree(self.staging, ignore_errors=True)
+        self._owner.release(remove_file=False)
 
 
 def stale_staging(parent: Path, run_id: str) -> list[Path]:

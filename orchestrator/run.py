@@ -14,7 +14,7 @@ from typing import Any
 
 import pandas as pd
 
-from orchestrator import acceptance, interrupts
+from orchestrator import acceptance, interrupts, leftovers
 from orchestrator.errors import ResultsError, ToolchainError, is_disk_full
 from orchestrator.figure_processes import FIGURE_SPOOL
 from orchestrator.master import CoSimulation
@@ -67,6 +67,7 @@ def run_scenario(path, results_root="results", progress: bool = True, run_id: st
     scenario = load_scenario(path, overrides)
     # build first: input refused before the run leaves no folder behind
     cosim = CoSimulation(scenario, work_dir=None)
+    leftovers.remove_abandoned_staging(Path(results_root))  # of runs whose process died
     try:
         folder = RunFolder(Path(results_root), group or scenario.simulation.name,
                            run_id or new_run_id(scenario.sha256))
