@@ -68,6 +68,8 @@ class RunFolder:
     def __init__(self, results_root: Path, scenario_name: str, run_id: str) -> None:
         self.final = Path(results_root) / scenario_name / run_id
         self.staging = self.final.parent / f".{run_id}.{os.getpid()}-{secrets.token_hex(4)}.partial"
+        # the folders this run makes above its staging folder: removed again if it keeps nothing
+        self._made = [folder for folder in (self.final.parent, self.final.parent.parent) if not folder.exists()]
         try:
             self.staging.mkdir(parents=True, exist_ok=False)
         except OSError as exc:
@@ -111,8 +113,14 @@ class RunFolder:
         raise OSError(f"no free run folder name next to {wanted}")
 
     def discard(self) -> None:
+        """Remove the staging folder, and the folders made for it that nothing else has used since."""
         shutil.rmtree(self.staging, ignore_errors=True)
         self._owner.release(remove_file=False)
+        for folder in self._made:
+            try:
+                folder.rmdir()  # only when empty: another run may be writing there by now
+            except OSError:
+                break
 
 
 def stale_staging(parent: Path, run_id: str) -> list[Path]:
