@@ -32,6 +32,10 @@ from orchestrator.scenario import Scenario
 log = logging.getLogger(__name__)
 
 
+class StopConditionError(ScenarioError):
+    """A ``stop_when`` condition names an output that is not one number."""
+
+
 @dataclass
 class RunOutcome:
     """What a run produced, finished or not."""
@@ -131,6 +135,46 @@ class CoSimulation:
                     f"{self.scenario.path}: simulation.stop_when '{condition}': no output "
                     f"'{condition.port}' of a participant '{condition.participant}'")
 
+    def _check_stop_values(self, bus: dict) -> None:
+        """Every ``stop_when`` port seen so far holds one number (not an array)."""
+        for condition in self.scenario.simulation.stop_when:
+            value = bus.get((condition.participant, condition.port))
+            if value is not None and np.ndim(value) != 0:
+                raise StopConditionError(
+                    f"{self.scenario.path}: simulation.stop_when '{condition}': output '{condition.port}' of "
+                    f"'{condition.participant}' is an array of shape {tuple(np.shape(value))}; a stop condition "
+                    "needs an output that is one number")
+
+    def check_stop_ports(self) -> None:
+        """Set the participants up as a run does, without stepping, and check the ``stop_when``
+        ports of their initial outputs (what ``validate`` does); every one set up is terminated.
+
+        Only the participants up to the last one a condition names are set up (a set-up sees
+        only the outputs of those before it).  Raises :class:`StopConditionError`.
+        """
+        sim = self.scenario.simulation
+        named = {c.participant for c in sim.stop_when}
+        if not named:
+            return
+        last = max(i for i, p in enumerate(self.participants) if p.name in named)
+        bus: dict[tuple[str, str], Value] = {}
+        started = []
+        try:
+            for participant in self.participants[:last + 1]:
+                inputs = {} if sim.exchange == "jacobi" else {
+                    c.target_port: bus[(c.source, c.source_port)] for c in self.scenario.connections
+                    if c.target == participant.name and (c.source, c.source_port) in bus}
+                started.append(participant)
+                outputs = participant.setup(sim.start_s, inputs)
+                bus.update({(participant.name, port): value for port, value in outputs.items()})
+            self._check_stop_values(bus)
+        finally:
+            for participant in started:
+                try:
+                    participant.terminate()
+                except Exception:  # the probe's own clean-up: what it checks is already decided
+                    log.debug("terminate after the set-up probe raised", exc_info=True)
+
     def participant(self, name: str) -> Participant:
         for participant in self.participants:
             if participant.name == name:
@@ -153,7 +197,7 @@ class CoSimulation:
         """
         sim = self.scenario.simulation
         recorder = Recorder(sim.start_s, sim.dt_s, sim.steps, spool=spool)
-        results_error = None
+        results_error = refused = None
         self.recorder, self.steps_done = recorder, 0
         bus: dict[tuple[str, str], Value] = {}
         # per participant: (its input port, the bus key that drives it)
@@ -183,6 +227,8 @@ class CoSimulation:
                     with watch.call(participant.name, "set-up", sim.start_s, limits[participant.name]):
                         outputs = participant.setup(sim.start_s, inputs)
                     self._publish(participant, sim.start_s, outputs, bus, recorder)
+                current[1] = None
+                self._check_stop_values(bus)  # an array port refused before the first step (bad input)
                 current[0] = "stepping"
                 for k in range(sim.steps):
                     t = sim.start_s + k * sim.dt_s
@@ -213,6 +259,8 @@ class CoSimulation:
                         bar.update(1)
                     if on_step is not None:
                         on_step(k)
+                    current[1] = None
+                    self._check_stop_values(bus)
                     met = [c for c in sim.stop_when if (c.participant, c.port) in bus
                            and c.holds(float(bus[(c.participant, c.port)]))]
                     if met:
@@ -222,6 +270,10 @@ class CoSimulation:
                 self._check_stop()
         except KeyboardInterrupt:
             status, reason = "interrupted", interrupts.reason()
+        except StopConditionError as exc:
+            if steps_done == 0:  # found at set-up: bad input, refused as before a run (nothing written)
+                refused = exc
+            status, reason = "failed", str(exc)
         except ResultsError as exc:  # the disk, not a participant: no run status can be written
             status, reason, results_error = "failed", str(exc), exc
         except time_limits.StepTimeout:
@@ -244,6 +296,8 @@ class CoSimulation:
         problems, stopped_in = self._terminate_all()
         if results_error is not None:
             raise results_error
+        if refused is not None:
+            raise refused
         summaries, tables, stopped_while = self._collect_summaries(problems)
         stopped_in = stopped_in or stopped_while
         if stopped_in and status == "finished":  # every step is done and kept: only the summaries may lack

@@ -117,3 +117,37 @@ def test_an_interrupted_batch_counts_the_runs_that_ended_after_the_interrupt(sma
     assert captured.out.startswith("0/6 runs passed (")
     assert "; ran 1, skipped 0 already done" in captured.out.splitlines()[0]
     assert "interrupted: rerun the same command to finish the batch" in captured.err
+
+
+ARRAY_STOP = """
+[simulation]
+name = "array_stop"
+steps = 5
+dt_s = 1.0
+stop_when = "clock.vector > 0"
+[participants.clock]
+type = "python"
+class = "sample_participants:Clock"
+[participants.after]
+type = "python"
+class = "sample_participants:Misbehaving"
+[participants.after.options]
+how = "none"
+[outputs]
+figures = []
+"""
+
+
+@pytest.mark.parametrize("command", [["validate"], ["run", "--no-progress"]])
+def test_a_stop_condition_on_an_array_port_is_refused_before_the_run(write_scenario, tmp_path, capsys, monkeypatch,
+                                                                     command):
+    """It used to pass validate and fail the run after one step with a TypeError blamed on the
+    participant stepped last."""
+    monkeypatch.syspath_prepend(str(Path(__file__).parent))
+    path = write_scenario(ARRAY_STOP)
+    results = ["--results", str(tmp_path / "results")] if command[0] == "run" else []
+    assert main([*command, *results, str(path)]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"error: {path}: simulation.stop_when 'clock.vector > 0': output 'vector' of 'clock' is an array of shape "
+        "(2,); a stop condition needs an output that is one number"]
+    assert not (tmp_path / "results").exists()
