@@ -103,9 +103,7 @@ def own_loggers() -> tuple[str, ...]:
     """
     from orchestrator import plugins
 
-    packages = {registration.target.split(":")[0].split(".")[0].strip()
-                for kind in plugins.GROUPS for registration in plugins.registrations(kind).values()}
-    return ("orchestrator", *sorted(packages - {"orchestrator"}))
+    return plugins.toolchain_loggers()
 
 
 #: The loggers an earlier ``-v`` command of this process set to DEBUG.

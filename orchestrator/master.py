@@ -10,18 +10,19 @@ every m macro steps with a step of ``m * dt_s`` and holds its outputs in between
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import math
 import time as wallclock
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from orchestrator import interrupts, leftovers, time_limits
+from orchestrator import interrupts, leftovers, plugins, time_limits
 from orchestrator.errors import ModelError, ResultsError, ScenarioError, ToolchainError
 from orchestrator.participant import Participant, Value
 from orchestrator.participant_build import build_participant, build_scenario_table
@@ -95,7 +96,12 @@ class CoSimulation:
         self.every: dict[str, int] = {}
         self.step_timeout_s: dict[str, float] = {}
         for spec in scenario.participants:
-            self.participants.append(build_participant(spec, self.scenario, self.metocean, substitutions))
+            with _build_notes_shown():
+                started = wallclock.perf_counter()
+                self.participants.append(build_participant(spec, self.scenario, self.metocean, substitutions))
+                took = wallclock.perf_counter() - started
+                if took > SLOW_BUILD_S:
+                    log.info("participant '%s' was built in %.1f s", spec.name, took)
             self.every[spec.name] = spec.every
             self.step_timeout_s[spec.name] = (scenario.simulation.step_timeout_s if spec.step_timeout_s is None
                                               else spec.step_timeout_s)
@@ -386,6 +392,32 @@ class CoSimulation:
             shutil.rmtree(self.work_dir, ignore_errors=True)
             if self._work_lock is not None:
                 self._work_lock.release(remove_file=False)
+
+
+#: A participant built more slowly than this [s] is named with its build time on stderr.
+SLOW_BUILD_S = 10.0
+
+
+@contextlib.contextmanager
+def _build_notes_shown() -> Iterator[None]:
+    """Let the toolchain's INFO lines reach the console while a participant is built.
+
+    Building is where a participant does its once-per-machine work (the NMPC compiles its
+    NLP to C on first use, a minute or more; an FMU is built from its sources on demand), and
+    the packages say so at INFO, which the command line otherwise hides.  Loggers already
+    showing more (``-v``) are left as they are.
+    """
+    raised = []
+    for name in plugins.toolchain_loggers():
+        logger = logging.getLogger(name)
+        if logger.getEffectiveLevel() > logging.INFO:
+            raised.append((logger, logger.level))
+            logger.setLevel(logging.INFO)
+    try:
+        yield
+    finally:
+        for logger, level in raised:
+            logger.setLevel(level)
 
 
 def _naming(message: str, participant: str | None) -> str:

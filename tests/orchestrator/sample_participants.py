@@ -422,3 +422,28 @@ class NotAParticipant:
     @classmethod
     def from_options(cls, name, options, context):
         return object()
+
+
+class Compiling(Participant):
+    """Says at INFO, as the NMPC does on a fresh machine, that it compiles while it is built;
+    and at INFO again in each step (a line the console must not show)."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        import logging
+
+        logging.getLogger("orchestrator.sample_build").info("compiling its model into /cache/model.so (once per "
+                                                            "machine)")
+        return cls(name)
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["ok"])
+
+    def setup(self, start_time, inputs):
+        return {"ok": 1.0}
+
+    def step(self, time, step_size, inputs):
+        import logging
+
+        logging.getLogger("orchestrator.sample_build").info("stepping at %g s", time)
+        return {"ok": 1.0}

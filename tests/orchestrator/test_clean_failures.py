@@ -151,3 +151,27 @@ def test_a_stop_condition_on_an_array_port_is_refused_before_the_run(write_scena
         f"error: {path}: simulation.stop_when 'clock.vector > 0': output 'vector' of 'clock' is an array of shape "
         "(2,); a stop condition needs an output that is one number"]
     assert not (tmp_path / "results").exists()
+
+
+@pytest.mark.parametrize("command", [["validate"], ["run", "--no-progress"]])
+def test_what_a_participant_compiles_while_it_is_built_is_said_on_stderr(tmp_path, command):
+    """A first validate on a fresh machine compiles the NMPC for a minute or more: the line
+    the participant logs about it is shown, the toolchain's other INFO lines are not."""
+    path = tmp_path / "compiling.toml"
+    path.write_text(textwrap.dedent("""\
+        [simulation]
+        name = "compiling"
+        steps = 3
+        dt_s = 1.0
+        [participants.model]
+        type = "python"
+        class = "sample_participants:Compiling"
+        [outputs]
+        figures = []
+        """))
+    results = ["--results", str(tmp_path / "results")] if command[0] == "run" else []
+    done = subprocess.run([sys.executable, "-m", "orchestrator", *command, *results, str(path)], capture_output=True,
+                          text=True, env={**os.environ, "PYTHONPATH": f"{HERE}:{REPO}"}, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.splitlines() == [
+        "INFO orchestrator.sample_build: compiling its model into /cache/model.so (once per machine)"]
