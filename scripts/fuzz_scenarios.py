@@ -5,20 +5,27 @@ Each generated scenario is a shipped scenario (``scenarios/**/*.toml`` with a
 (NaN, infinities, 1e308, the smallest subnormal, empty, NUL, 300-character and ``..``
 strings, arrays nested 500 deep, wrong types), a key deleted or added, one of the inputs
 known to have broken the loader before, or the text itself damaged.  ``validate`` runs on
-every one (and ``run``, with the scenario cut to a few steps, on every tenth) in a child
-process with a time limit, and each answer is put in one class:
+every one (and ``run``, with the scenario cut to a few steps, on every tenth) with a time
+limit, and each answer is put in one class:
 
 ``exit 2, one line``    refused with one ``error:`` line (what bad input must get)
 ``exit 0``              accepted (the mutation left a valid scenario)
 ``exit 3``              ``run`` only: a run that failed, with its results written
+``exit 4``              ``run`` only: the results could not be written, nothing kept
 ``traceback``           a Python traceback on stderr (a bug)
 ``several lines``       exit 2 but more than one ``error:`` line or other stderr text
 ``hang``                no answer within the time limit (a bug)
 ``crash``               killed by a signal or another exit code (a bug)
 
+Each command is forked from this process once it has imported the toolchain, and runs as
+``python -m orchestrator`` would (its own folder first on the import path, its own
+temporary folder); a fresh interpreter per command would spend some 2 s on imports alone.
+Then the cases of ``reliability_cases.py`` run (Ctrl-C at every phase of a run, doctored
+FMUs, a full disk, participants that end the process), each judged on what it must do.
+
 Usage::
 
-    python scripts/fuzz_scenarios.py --count 1200 --jobs 2          # the campaign
+    nice python scripts/fuzz_scenarios.py --count 2000 --jobs 2 --report campaign.jsonl
     python scripts/fuzz_scenarios.py --count 50 --keep /tmp/fuzz    # keep the files
 
 The generator (:func:`generate`) is deterministic for a seed; ``tests/orchestrator/
@@ -273,9 +280,16 @@ def classify(returncode: int | None, stderr: str, command: str) -> str:
     return "exit 2, one line" if returncode == 2 and len(errors) == 1 else "several lines"
 
 
-def warm_up() -> None:
-    """Import what the commands use, once, in the process every command is forked from."""
+def warm_up(codegen: bool = False) -> None:
+    """Import what the commands use, once, in the process every command is forked from.
+
+    Without ``codegen`` the NMPC's NLP is not compiled to C (``RHNC_NMPC_CODEGEN=0``): a
+    mutated weight or horizon is a new problem, whose compile (a minute or more, once per
+    problem and machine) would otherwise dominate the campaign and count as over the limit.
+    """
     os.environ.setdefault("MPLBACKEND", "Agg")
+    if not codegen:
+        os.environ["RHNC_NMPC_CODEGEN"] = "0"
     sys.path.insert(0, str(REPO))
     from orchestrator import cli, plugins, run, validate  # noqa: F401
 
@@ -428,6 +442,8 @@ def main(argv=None) -> int:
     parser.add_argument("--run-every", type=int, default=10, help="also 'run' every n-th case (0: never)")
     parser.add_argument("--no-cases", action="store_true", help="only the fuzzed scenarios (no interrupts, "
                         "bad FMUs, full disks, crashes)")
+    parser.add_argument("--codegen", action="store_true", help="let the NMPC compile its NLP to C (a minute or "
+                        "more for each new problem; off by default)")
     parser.add_argument("--keep", default=None, help="work in this folder and keep the failing cases there")
     parser.add_argument("--report", default=None, help="write every outcome as JSON lines here")
     args = parser.parse_args(argv)
@@ -436,7 +452,7 @@ def main(argv=None) -> int:
     if (folder / "scenarios").exists():
         shutil.rmtree(folder / "scenarios")
     shutil.copytree(REPO / "scenarios", folder / "scenarios")
-    warm_up()
+    warm_up(args.codegen)
     started = time.perf_counter()
     cases = generate(args.count, args.seed, run_every=args.run_every)
     commands = fuzz_commands(cases, folder)
