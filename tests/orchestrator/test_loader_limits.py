@@ -116,8 +116,8 @@ BUILD_CASES = {
     "x_range_nm = [0, inf]": ('generator = "paper_default"', 'generator = "paper_default"\nx_range_nm = [0, inf]',
                               r"metocean.x_range_nm: expected two numbers \[a, b\], got \[0, inf\]"),
     "x_range_nm = [0, 1e308]": ('generator = "paper_default"', 'generator = "paper_default"\nx_range_nm = [0, 1e308]',
-                                r"metocean: resolution_nm gives 1e\+308 grid nodes along an axis, more than the limit "
-                                r"of 2001"),
+                                r"'metocean\.x_range_nm\[1\]' must lie within \+-10800 nm \(half the Earth's "
+                                r"circumference\), got 1e\+308"),
     "resolution_nm = 1e-4": ('generator = "paper_default"', 'generator = "paper_default"\nresolution_nm = 1e-4',
                              r"metocean: resolution_nm gives 1e\+06 grid nodes along an axis"),
     "resolution_nm = 0.02": ('generator = "paper_default"', 'generator = "paper_default"\nresolution_nm = 0.02',
