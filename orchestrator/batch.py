@@ -105,13 +105,23 @@ def run_batch(path, results_root="results", workers: int | None = None, schedule
     runs = spec.runs()
     check_against_scenario(spec, runs)
     root = Path(results_root) / spec.name
+    executor = (DaskExecutor(scheduler, tls_files) if scheduler is not None
+                else LocalPool(workers or os.cpu_count() or 1))
+    executor.connect()  # a scheduler that cannot be reached or refuses: nothing is written yet
+    try:
+        return _run_pending(spec, runs, root, executor, progress, retry_failed, started)
+    finally:
+        executor.close()
+
+
+def _run_pending(spec: BatchSpec, runs: list[RunSpec], root: Path, executor, progress: bool, retry_failed: bool,
+                 started: float) -> BatchReport:
+    """Run the runs of ``spec`` not yet done into ``root`` with ``executor``; the table after."""
     (root / "runs").mkdir(parents=True, exist_ok=True)
     with results_lock(root):
         _write_json_atomic(root / "batch.json", _manifest(spec, runs))
         todo = pending_runs(root, runs, retry_failed)
         tasks = [RunTask(str(spec.scenario), str(root.resolve()), run.run_id, run.overrides) for run in todo]
-        executor = (DaskExecutor(scheduler, tls_files) if scheduler is not None
-                    else LocalPool(workers or os.cpu_count() or 1))
         bar = _progress_bar(len(runs), len(runs) - len(todo), spec.name, progress)
         interrupted = False
         results = executor.run(tasks)
@@ -212,6 +222,12 @@ class LocalPool:
 
     def __init__(self, workers: int) -> None:
         self.workers = max(1, int(workers))
+
+    def connect(self) -> None:
+        """Nothing to reach: the workers start with the first run."""
+
+    def close(self) -> None:
+        """The pool ends with its runs."""
 
     def run(self, tasks: list[RunTask]) -> Iterator[tuple[RunTask, dict]]:
         """Yield ``(task, record)`` as runs complete; closing the generator stops the pool."""

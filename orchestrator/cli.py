@@ -103,9 +103,7 @@ def own_loggers() -> tuple[str, ...]:
     """
     from orchestrator import plugins
 
-    packages = {registration.target.split(":")[0].split(".")[0].strip()
-                for kind in plugins.GROUPS for registration in plugins.registrations(kind).values()}
-    return ("orchestrator", *sorted(packages - {"orchestrator"}))
+    return plugins.toolchain_loggers()
 
 
 #: The loggers an earlier ``-v`` command of this process set to DEBUG.
@@ -130,12 +128,18 @@ def _configure_logging(verbose: bool) -> None:
 def _run(args) -> int:
     from orchestrator.run import run_scenario
 
+    from orchestrator import interrupts
+
     report = run_scenario(args.scenario, args.results, progress=not args.no_progress)
     print(f"{report.status}: results in {report.folder}")
     for line in _key_lines(report.summary):
         print(f"  {line}")
     if report.status == "interrupted":
         print(f"error: {report.reason}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    if interrupts.stop_requested():  # the signal came while the results were written: they are complete
+        print(f"error: {interrupts.reason()} while the results were written; they were completed first",
+              file=sys.stderr)
         return EXIT_INTERRUPTED
     if not report.ok:
         print(f"error: {report.reason}", file=sys.stderr)

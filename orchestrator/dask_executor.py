@@ -61,12 +61,40 @@ def check_scheduler(address: str, ca=None, cert=None, key=None) -> TlsFiles | No
     return TlsFiles(Path(ca), Path(cert), Path(key))
 
 
+#: How long the client waits for the scheduler to answer.
+CONNECT_TIMEOUT = "10s"
+
+
 class DaskExecutor:
-    """Runs on a Dask distributed cluster at ``address`` (a worker that dies is Dask's ``KilledWorker``)."""
+    """Runs on a Dask distributed cluster at ``address`` (a worker that dies is Dask's ``KilledWorker``).
+
+    :meth:`connect` first, before anything of the batch is written: a scheduler that cannot
+    be reached, or refuses this client, leaves nothing behind.
+    """
 
     def __init__(self, address: str, tls: TlsFiles | None = None) -> None:
         self.address = address
         self.tls = tls
+        self.client = None
+
+    def connect(self) -> None:
+        """Connect to the scheduler; ``BatchError`` (one line) when it cannot be reached or refuses."""
+        from distributed import Client
+
+        from orchestrator.batch_run import BatchError
+
+        try:
+            self.client = Client(self.address, timeout=CONNECT_TIMEOUT, set_as_default=False,
+                                 security=self._security())
+        except (OSError, TimeoutError, ValueError, TypeError) as exc:
+            raise BatchError(f"cannot reach the Dask scheduler at {self.address}: {type(exc).__name__}: "
+                             f"{exc}") from exc
+
+    def close(self) -> None:
+        """Close the connection (also when the batch ended before it ran)."""
+        if self.client is not None:
+            self.client.close()
+            self.client = None
 
     def _security(self):
         if self.tls is None:
@@ -78,16 +106,14 @@ class DaskExecutor:
 
     def run(self, tasks: list) -> Iterator[tuple]:
         """Yield ``(task, record)`` as runs complete; closing the generator cancels the rest."""
-        from distributed import CancelledError, Client, KilledWorker, as_completed
+        from distributed import CancelledError, KilledWorker, as_completed
 
         from orchestrator import interrupts
-        from orchestrator.batch_run import WORKER_DIED, BatchError, execute_run
+        from orchestrator.batch_run import WORKER_DIED, execute_run
 
-        try:
-            client = Client(self.address, timeout="10s", set_as_default=False, security=self._security())
-        except (OSError, TimeoutError, ValueError, TypeError) as exc:
-            raise BatchError(f"cannot reach the Dask scheduler at {self.address}: {type(exc).__name__}: "
-                             f"{exc}") from exc
+        if self.client is None:
+            self.connect()
+        client = self.client
         futures = {}
         try:
             for task in tasks:
@@ -111,4 +137,4 @@ class DaskExecutor:
             if interrupts.stop_requested():
                 interrupts.acknowledge()
             client.cancel(list(futures))
-            client.close()
+            self.close()

@@ -1,5 +1,10 @@
 """Errors a user can act on; the CLI prints them as one line and exits non-zero."""
 
+import errno
+
+#: OS error numbers that mean the disk (or the user's quota) is full.
+DISK_FULL_ERRNOS = (errno.ENOSPC, errno.EDQUOT)
+
 
 class ToolchainError(Exception):
     """Base class of every error the CLI reports as one clear line."""
@@ -35,3 +40,8 @@ class ResultsError(ToolchainError):
     """The results cannot be written (read-only folder, disk full): nothing half-written is left."""
 
     exit_code = 4
+
+
+def is_disk_full(exc: BaseException) -> bool:
+    """True for an ``OSError`` saying that the disk or the quota is full."""
+    return isinstance(exc, OSError) and exc.errno in DISK_FULL_ERRNOS

@@ -10,6 +10,9 @@ or why it was not drawn.
 
 Nothing of a figure is half-written:
 
+* a figure that meets a full disk fails the writing of the whole run (the run's writer
+  discards its staging folder and reports that nothing was kept), as the time series would;
+
 * a figure draws into a folder of its own, ``.figures-spool/<number>-<name>/`` in the
   staging folder; its files join the run's when it has returned, and the spool is removed;
 * a figure that raises, or whose process dies (a crash in native code, killed), is one
@@ -27,6 +30,7 @@ here, one after the other, through the same spool.
 
 from __future__ import annotations
 
+import errno
 import logging
 import os
 import pickle
@@ -40,6 +44,7 @@ from typing import Any
 
 from orchestrator import analyses
 from orchestrator.child_processes import die_with_parent
+from orchestrator.errors import is_disk_full
 from orchestrator.recorder import ColumnFrame
 
 log = logging.getLogger(__name__)
@@ -81,6 +86,11 @@ class FigureDrawing:
         for figure in self._figures:
             if figure.pid is not None:
                 figure.outcome = _wait(figure)
+        full = [(figure.name, figure.outcome[1]) for figure in self._figures if figure.outcome[0] == "disk full"]
+        if full:  # a run folder without its figures must not look complete: the run's writer discards it
+            shutil.rmtree(self.out_dir / FIGURE_SPOOL, ignore_errors=True)
+            raise OSError(errno.ENOSPC, f"{full[0][1]} (figure '{full[0][0]}')")
+        for figure in self._figures:
             kind, value = figure.outcome
             if kind == "drawn":
                 _move_contents(figure.folder, self.out_dir)
@@ -137,10 +147,13 @@ def start(names, frame, scenario, cosim, out_dir) -> FigureDrawing:
 
 
 def _draw(function, frame, scenario, cosim, folder: Path) -> tuple[str, Any]:
-    """Draw one figure into ``folder``: ("drawn", file names) or ("error", what went wrong)."""
+    """Draw one figure into ``folder``: ("drawn", file names), ("error", what went wrong) or
+    ("disk full", the error's text)."""
     try:
         return "drawn", list(function(frame, scenario, cosim, folder))
     except Exception as exc:  # a figure that cannot be drawn must not lose the results
+        if is_disk_full(exc):  # not the figure's fault: the results as a whole cannot be written
+            return "disk full", exc.strerror or str(exc)
         log.debug("figure raised", exc_info=True)
         return "error", f"{type(exc).__name__}: {exc}"
 

@@ -7,11 +7,18 @@ their number are checked against the limits below, and every name must stay insi
 archive's folder.  Python's :mod:`zipfile` never returns more than an entry declares (a
 longer stream fails its CRC check), so checking the declared sizes bounds what is
 written; the copy counts the bytes all the same.
+
+Then, still before a run (``validate`` and ``run`` alike), every entry is read through once
+within those limits: an entry whose data does not match its declared size or CRC (a
+damaged or doctored archive) is refused, and so is a symbolic link or another special
+file, which an FMU has no use for.  What the run unpacks later is thus what was checked.
 """
 
 from __future__ import annotations
 
+import stat
 import zipfile
+import zlib
 from pathlib import Path, PurePosixPath
 
 from orchestrator.errors import FmuError
@@ -29,8 +36,12 @@ def _size(count: int) -> str:
     return f"{count / 1024**3:.1f} GiB" if count >= 1024**3 else f"{count / 1024**2:.0f} MiB"
 
 
-def check_archive(path: Path, where: str) -> list[zipfile.ZipInfo]:
-    """The entries of the FMU ``path``; :class:`FmuError` naming ``where`` if it is unsafe to unpack."""
+def check_archive(path: Path, where: str, read: bool = True) -> list[zipfile.ZipInfo]:
+    """The entries of the FMU ``path``; :class:`FmuError` naming ``where`` if it is unsafe to unpack.
+
+    With ``read``, every entry is also read through once to check its data (see the module
+    docstring); :func:`extract_fmu` checks them while it copies instead.
+    """
     try:
         with zipfile.ZipFile(path) as archive:
             entries = archive.infolist()
@@ -50,19 +61,52 @@ def check_archive(path: Path, where: str) -> list[zipfile.ZipInfo]:
         if total > MAX_TOTAL_BYTES:
             raise FmuError(f"{where}: {path.name} unpacks to more than {_size(MAX_TOTAL_BYTES)} in all "
                            "(a zip bomb?)")
+        kind = stat.S_IFMT(entry.external_attr >> 16)  # 0 when the archiver recorded no file type
+        if kind not in (0, stat.S_IFREG, stat.S_IFDIR):
+            kind = "a symbolic link" if kind == stat.S_IFLNK else "a special file"
+            raise FmuError(f"{where}: {path.name}: entry '{entry.filename}' is {kind}; an FMU may hold only "
+                           "files and folders (rebuild the FMU without it)")
+    if read:
+        _read_through(path, entries, where)
     return entries
+
+
+#: What :mod:`zipfile` raises for an entry whose data do not match its header.
+_DAMAGED = (zipfile.BadZipFile, zlib.error, EOFError, NotImplementedError, RuntimeError, ValueError)
+
+
+def _read_through(path: Path, entries: list[zipfile.ZipInfo], where: str) -> None:
+    """Read every entry once (CRC and size checked by :mod:`zipfile`), at most what it declares."""
+    entry = None
+    try:
+        with zipfile.ZipFile(path) as archive:
+            for entry in entries:
+                if entry.is_dir():
+                    continue
+                read = 0
+                with archive.open(entry) as source:
+                    while chunk := source.read(_COPY_CHUNK):
+                        read += len(chunk)
+                if read != entry.file_size:
+                    raise zipfile.BadZipFile(f"{read} bytes where the archive declares {entry.file_size}")
+    except _DAMAGED as exc:
+        named = f"entry '{entry.filename}'" if entry is not None else "the archive"
+        raise FmuError(f"{where}: {path.name}: {named} is damaged ({exc}); rebuild the FMU or copy it "
+                       "again") from None
+    except OSError as exc:
+        raise FmuError(f"{where}: {path} cannot be read: {exc.strerror or exc}") from None
 
 
 def extract_fmu(path: Path, target: Path, where: str) -> Path:
     """Unpack the FMU ``path`` into the folder ``target`` within the limits; returns ``target``."""
-    entries = check_archive(Path(path), where)
+    entries = check_archive(Path(path), where, read=False)
     target = Path(target)
     written = 0
     try:
         with zipfile.ZipFile(path) as archive:
             for entry in entries:
                 written = _extract_entry(archive, entry, target, written, path, where)
-    except zipfile.BadZipFile as exc:  # an entry longer than it declares fails its CRC check
+    except _DAMAGED as exc:  # an entry longer than it declares fails its CRC check
         raise FmuError(f"{where}: {Path(path).name} is not a valid FMU: {exc}") from exc
     return target
 

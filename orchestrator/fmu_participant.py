@@ -12,7 +12,6 @@ from __future__ import annotations
 import logging
 import math
 import shutil
-import tempfile
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
@@ -21,6 +20,7 @@ from fmpy.fmi1 import FMICallException
 
 from orchestrator.errors import FmuError, ModelError, ScenarioError
 from orchestrator.fmu_archive import check_archive, extract_fmu
+from orchestrator.leftovers import owned_temp_folder
 from orchestrator.fmi_slave import REAL_TYPES, SUPPORTED_VERSIONS, FmiSlave
 from orchestrator.participant import Participant, Value, is_finite_number
 from orchestrator.plant_ports import PLANT_PORTS
@@ -162,6 +162,7 @@ class FmuParticipant(Participant):
         self._output_refs = [self.variables[v].valueReference for v in self._output_variables]
         self._slave = None
         self._unzip_dir = None
+        self._unzip_lock = None
         self._messages: list[str] = []
 
     # -- ports -------------------------------------------------------------------------
@@ -207,7 +208,8 @@ class FmuParticipant(Participant):
 
     # -- lifecycle -----------------------------------------------------------------------
     def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
-        self._unzip_dir = tempfile.mkdtemp(prefix=f"fmu-{self.name}-")
+        unzip_dir, self._unzip_lock = owned_temp_folder("rhnc-fmu-")
+        self._unzip_dir = str(unzip_dir)
         extract_fmu(self.fmu_path, Path(self._unzip_dir), f"{self.where}.fmu")
         self._slave = FmiSlave(self.model_description, self._unzip_dir, self.name, self._on_message)
         self._slave.instantiate()
@@ -236,6 +238,7 @@ class FmuParticipant(Participant):
             self._slave = None
         if self._unzip_dir is not None:
             shutil.rmtree(self._unzip_dir, ignore_errors=True)
+            self._unzip_lock.release(remove_file=False)
             self._unzip_dir = None
 
     def remove_files(self) -> None:

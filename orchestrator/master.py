@@ -10,19 +10,19 @@ every m macro steps with a step of ``m * dt_s`` and holds its outputs in between
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import math
-import tempfile
 import time as wallclock
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from orchestrator import interrupts, time_limits
+from orchestrator import interrupts, leftovers, plugins, time_limits
 from orchestrator.errors import ModelError, ResultsError, ScenarioError, ToolchainError
 from orchestrator.participant import Participant, Value
 from orchestrator.participant_build import build_participant, build_scenario_table
@@ -31,6 +31,10 @@ from orchestrator.results import json_default
 from orchestrator.scenario import Scenario
 
 log = logging.getLogger(__name__)
+
+
+class StopConditionError(ScenarioError):
+    """A ``stop_when`` condition names an output that is not one number."""
 
 
 @dataclass
@@ -69,7 +73,12 @@ class CoSimulation:
         check_outputs(scenario)
         self.scenario = scenario
         self._own_work_dir = work_dir is None
-        self.work_dir = Path(tempfile.mkdtemp(prefix="rhnc-run-")) if work_dir is None else Path(work_dir)
+        self._work_lock = None
+        if work_dir is None:
+            leftovers.remove_abandoned_temp_folders()  # of runs whose process died
+            self.work_dir, self._work_lock = leftovers.owned_temp_folder("rhnc-run-")
+        else:
+            self.work_dir = Path(work_dir)
         try:
             self._build_all(scenario)
         except BaseException:  # a participant that fails to build leaves no temporary folder
@@ -87,7 +96,12 @@ class CoSimulation:
         self.every: dict[str, int] = {}
         self.step_timeout_s: dict[str, float] = {}
         for spec in scenario.participants:
-            self.participants.append(build_participant(spec, self.scenario, self.metocean, substitutions))
+            with _build_notes_shown():
+                started = wallclock.perf_counter()
+                self.participants.append(build_participant(spec, self.scenario, self.metocean, substitutions))
+                took = wallclock.perf_counter() - started
+                if took > SLOW_BUILD_S:
+                    log.info("participant '%s' was built in %.1f s", spec.name, took)
             self.every[spec.name] = spec.every
             self.step_timeout_s[spec.name] = (scenario.simulation.step_timeout_s if spec.step_timeout_s is None
                                               else spec.step_timeout_s)
@@ -127,6 +141,46 @@ class CoSimulation:
                     f"{self.scenario.path}: simulation.stop_when '{condition}': no output "
                     f"'{condition.port}' of a participant '{condition.participant}'")
 
+    def _check_stop_values(self, bus: dict) -> None:
+        """Every ``stop_when`` port seen so far holds one number (not an array)."""
+        for condition in self.scenario.simulation.stop_when:
+            value = bus.get((condition.participant, condition.port))
+            if value is not None and np.ndim(value) != 0:
+                raise StopConditionError(
+                    f"{self.scenario.path}: simulation.stop_when '{condition}': output '{condition.port}' of "
+                    f"'{condition.participant}' is an array of shape {tuple(np.shape(value))}; a stop condition "
+                    "needs an output that is one number")
+
+    def check_stop_ports(self) -> None:
+        """Set the participants up as a run does, without stepping, and check the ``stop_when``
+        ports of their initial outputs (what ``validate`` does); every one set up is terminated.
+
+        Only the participants up to the last one a condition names are set up (a set-up sees
+        only the outputs of those before it).  Raises :class:`StopConditionError`.
+        """
+        sim = self.scenario.simulation
+        named = {c.participant for c in sim.stop_when}
+        if not named:
+            return
+        last = max(i for i, p in enumerate(self.participants) if p.name in named)
+        bus: dict[tuple[str, str], Value] = {}
+        started = []
+        try:
+            for participant in self.participants[:last + 1]:
+                inputs = {} if sim.exchange == "jacobi" else {
+                    c.target_port: bus[(c.source, c.source_port)] for c in self.scenario.connections
+                    if c.target == participant.name and (c.source, c.source_port) in bus}
+                started.append(participant)
+                outputs = participant.setup(sim.start_s, inputs)
+                bus.update({(participant.name, port): value for port, value in outputs.items()})
+            self._check_stop_values(bus)
+        finally:
+            for participant in started:
+                try:
+                    participant.terminate()
+                except Exception:  # the probe's own clean-up: what it checks is already decided
+                    log.debug("terminate after the set-up probe raised", exc_info=True)
+
     def participant(self, name: str) -> Participant:
         for participant in self.participants:
             if participant.name == name:
@@ -149,7 +203,7 @@ class CoSimulation:
         """
         sim = self.scenario.simulation
         recorder = Recorder(sim.start_s, sim.dt_s, sim.steps, spool=spool)
-        results_error = None
+        results_error = refused = None
         self.recorder, self.steps_done = recorder, 0
         bus: dict[tuple[str, str], Value] = {}
         # per participant: (its input port, the bus key that drives it)
@@ -179,6 +233,8 @@ class CoSimulation:
                     with watch.call(participant.name, "set-up", sim.start_s, limits[participant.name]):
                         outputs = participant.setup(sim.start_s, inputs)
                     self._publish(participant, sim.start_s, outputs, bus, recorder)
+                current[1] = None
+                self._check_stop_values(bus)  # an array port refused before the first step (bad input)
                 current[0] = "stepping"
                 for k in range(sim.steps):
                     t = sim.start_s + k * sim.dt_s
@@ -209,6 +265,8 @@ class CoSimulation:
                         bar.update(1)
                     if on_step is not None:
                         on_step(k)
+                    current[1] = None
+                    self._check_stop_values(bus)
                     met = [c for c in sim.stop_when if (c.participant, c.port) in bus
                            and c.holds(float(bus[(c.participant, c.port)]))]
                     if met:
@@ -218,6 +276,10 @@ class CoSimulation:
                 self._check_stop()
         except KeyboardInterrupt:
             status, reason = "interrupted", interrupts.reason()
+        except StopConditionError as exc:
+            if steps_done == 0:  # found at set-up: bad input, refused as before a run (nothing written)
+                refused = exc
+            status, reason = "failed", str(exc)
         except ResultsError as exc:  # the disk, not a participant: no run status can be written
             status, reason, results_error = "failed", str(exc), exc
         except time_limits.StepTimeout:
@@ -237,22 +299,15 @@ class CoSimulation:
         if status == "failed" and interrupts.stop_requested():
             # a library turned the interrupt into an error of its own
             status, reason = "interrupted", interrupts.reason()
-        problems = self._terminate_all()
+        problems, stopped_in = self._terminate_all()
         if results_error is not None:
             raise results_error
-        summaries, tables = {}, {}
-        for participant in self.participants:
-            try:
-                summary = participant.summary()
-                json.dumps(summary, default=json_default)  # what summary.json will hold
-                summaries[participant.name] = summary
-                for table, rows in participant.tables().items():
-                    tables[f"{participant.name}_{table}"] = rows
-            except (Exception, SystemExit) as exc:  # a summary must not hide the run's own outcome
-                text = (f"its summary cannot be written to JSON ({exc})" if isinstance(exc, TypeError)
-                        else f"summary raised {type(exc).__name__}: {exc}")
-                summaries[participant.name] = {"error": text}
-                problems.append(f"{participant.name}: {text}")
+        if refused is not None:
+            raise refused
+        summaries, tables, stopped_while = self._collect_summaries(problems)
+        stopped_in = stopped_in or stopped_while
+        if stopped_in and status == "finished":  # every step is done and kept: only the summaries may lack
+            status, reason = "interrupted", f"{interrupts.reason()} after the last step, while {stopped_in}"
         if problems:
             log.warning("after the run: %s", "; ".join(problems))
             if status == "finished":
@@ -260,16 +315,46 @@ class CoSimulation:
         return RunOutcome(status, reason, steps_done, wallclock.perf_counter() - started, recorder, summaries,
                           tables)
 
-    def _terminate_all(self) -> list[str]:
-        """Terminate every participant (also after a failure); returns what went wrong."""
-        problems = []
+    def _terminate_all(self) -> tuple[list[str], str]:
+        """Terminate every participant (also after a failure).
+
+        Returns what went wrong, and what was being done when Ctrl-C or SIGTERM arrived ("" if
+        none did): an interrupted ``terminate()`` does not keep the others from theirs.
+        """
+        problems, stopped_in = [], ""
         for participant in self.participants:
             try:
                 participant.terminate()
+            except KeyboardInterrupt:
+                interrupts.acknowledge()  # handled here: the last-resort timer must not end the writing
+                stopped_in = stopped_in or f"participant '{participant.name}' was terminated"
             except (Exception, SystemExit) as exc:  # the other participants are terminated all the same
                 log.debug("terminate raised", exc_info=True)
                 problems.append(f"{participant.name}: terminate() raised {type(exc).__name__}: {exc}")
-        return problems
+        return problems, stopped_in
+
+    def _collect_summaries(self, problems: list[str]) -> tuple[dict, dict, str]:
+        """Every participant's summary and tables; a failing one is an ``{"error": ...}`` entry
+        (appended to ``problems``).  A Ctrl-C in one of them is that one's entry and the others
+        are still collected; the third value says where it arrived ("" if it did not)."""
+        summaries, tables, stopped_in = {}, {}, ""
+        for participant in self.participants:
+            try:
+                summary = participant.summary()
+                json.dumps(summary, default=json_default)  # what summary.json will hold
+                summaries[participant.name] = summary
+                for table, rows in participant.tables().items():
+                    tables[f"{participant.name}_{table}"] = rows
+            except KeyboardInterrupt:
+                interrupts.acknowledge()  # handled here: the last-resort timer must not end the writing
+                summaries[participant.name] = {"error": f"not collected: {interrupts.reason()}"}
+                stopped_in = stopped_in or f"the summary of participant '{participant.name}' was collected"
+            except (Exception, SystemExit) as exc:  # a summary must not hide the run's own outcome
+                text = (f"its summary cannot be written to JSON ({exc})" if isinstance(exc, TypeError)
+                        else f"summary raised {type(exc).__name__}: {exc}")
+                summaries[participant.name] = {"error": text}
+                problems.append(f"{participant.name}: {text}")
+        return summaries, tables, stopped_in
 
     @staticmethod
     def _check_stop() -> None:
@@ -305,6 +390,34 @@ class CoSimulation:
             import shutil
 
             shutil.rmtree(self.work_dir, ignore_errors=True)
+            if self._work_lock is not None:
+                self._work_lock.release(remove_file=False)
+
+
+#: A participant built more slowly than this [s] is named with its build time on stderr.
+SLOW_BUILD_S = 10.0
+
+
+@contextlib.contextmanager
+def _build_notes_shown() -> Iterator[None]:
+    """Let the toolchain's INFO lines reach the console while a participant is built.
+
+    Building is where a participant does its once-per-machine work (the NMPC compiles its
+    NLP to C on first use, a minute or more; an FMU is built from its sources on demand), and
+    the packages say so at INFO, which the command line otherwise hides.  Loggers already
+    showing more (``-v``) are left as they are.
+    """
+    raised = []
+    for name in plugins.toolchain_loggers():
+        logger = logging.getLogger(name)
+        if logger.getEffectiveLevel() > logging.INFO:
+            raised.append((logger, logger.level))
+            logger.setLevel(logging.INFO)
+    try:
+        yield
+    finally:
+        for logger, level in raised:
+            logger.setLevel(level)
 
 
 def _naming(message: str, participant: str | None) -> str:

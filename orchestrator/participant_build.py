@@ -38,7 +38,7 @@ def build_participant(spec, scenario, metocean, substitutions: dict[str, str]) -
         path = resolve_fmu(spec.fmu, scenario.directory, where, spec.fmi_version)
         return FmuParticipant(spec, path, where, substitutions)
     target = participant_target(spec, where)
-    cls = participant_class(target, f"{where}.class")
+    cls = participant_class(target, f"{where}.class", scenario.directory)
     context = BuildContext(
         where=where,
         scenario_dir=scenario.directory,
@@ -86,15 +86,25 @@ def build_scenario_table(name: str, table: dict, scenario_dir: Path, where: str)
     return handler.from_scenario_table(table, scenario_dir, where)
 
 
-def participant_class(target: str, where: str):
-    """The participant class ``target`` (``package.module:Class``) names, imported; errors name ``where``."""
+def participant_class(target: str, where: str, scenario_dir: Path | None = None):
+    """The participant class ``target`` (``package.module:Class``) names, imported; errors name ``where``.
+
+    When the module is not found but lies in ``scenario_dir``, the error says so: the scenario's
+    folder is not on the import path unless the command is started from it.
+    """
     module_name, _, class_name = target.partition(":")
     if not module_name or not class_name:
         raise ScenarioError(f"{where}: '{target}' must read 'package.module:Class'")
     try:
         module = importlib.import_module(module_name)
     except ImportError as exc:
-        raise ScenarioError(f"{where}: cannot import module '{module_name}': {exc}") from exc
+        hint = ""
+        top = module_name.partition(".")[0]
+        if (isinstance(exc, ModuleNotFoundError) and scenario_dir is not None
+                and any((Path(scenario_dir) / name).is_file() for name in (f"{top}.py", f"{top}/__init__.py"))):
+            hint = (f" (it lies in the scenario's folder {scenario_dir}, which is not on the import path: start "
+                    "the command from that folder, or install the module)")
+        raise ScenarioError(f"{where}: cannot import module '{module_name}': {exc}{hint}") from exc
     cls = getattr(module, class_name, None)
     if cls is None or not hasattr(cls, "from_options"):
         raise ScenarioError(f"{where}: '{target}' is not a participant class with from_options()")

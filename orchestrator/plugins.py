@@ -197,3 +197,10 @@ class LazyModule:
             raise ScenarioError(f"no installed package provides '{self._name}' (entry-point group "
                                 f"{GROUPS[self._kind]})") from None
         return getattr(module, attribute)
+
+
+def toolchain_loggers() -> tuple[str, ...]:
+    """Loggers of this toolchain: the master's and every package registering entry points."""
+    packages = {registration.target.split(":")[0].split(".")[0].strip()
+                for kind in GROUPS for registration in registrations(kind).values()}
+    return ("orchestrator", *sorted(packages - {"orchestrator"}))

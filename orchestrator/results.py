@@ -11,7 +11,8 @@ Nothing is half-written: a crash while writing leaves only the staging folder
 ``.<run-id>.<process>-<token>.partial``, never a run folder that looks complete.  Each
 attempt stages in a folder of its own, so two processes writing the same run id never
 write into each other's files; the first to publish keeps the id, a later one gets
-``<run-id>-2`` (``-3``, ...).
+``<run-id>-2`` (``-3``, ...).  The staging folder holds a lock of its process
+(:mod:`orchestrator.leftovers`), so that a later run removes it if the process dies.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from orchestrator.errors import ResultsError
+from orchestrator.leftovers import OwnerLock
 
 log = logging.getLogger(__name__)
 
@@ -66,11 +68,15 @@ class RunFolder:
     def __init__(self, results_root: Path, scenario_name: str, run_id: str) -> None:
         self.final = Path(results_root) / scenario_name / run_id
         self.staging = self.final.parent / f".{run_id}.{os.getpid()}-{secrets.token_hex(4)}.partial"
+        # the folders this run makes above its staging folder: removed again if it keeps nothing
+        self._made = [folder for folder in (self.final.parent, self.final.parent.parent) if not folder.exists()]
         try:
             self.staging.mkdir(parents=True, exist_ok=False)
         except OSError as exc:
             raise ResultsError(f"{self.final.parent}: cannot write results here: "
                                f"{exc.strerror or exc}") from exc
+        # held while this process lives: a later run removes the folder only once it is gone
+        self._owner = OwnerLock(self.staging)
 
     def path(self, name: str) -> Path:
         """Where to write ``name`` while staging."""
@@ -101,11 +107,20 @@ class RunFolder:
             if attempt > 1:
                 log.warning("run folder %s was published by another process: this run is in %s", wanted, target)
             self.final = target
+            self._owner.folder = target  # renamed with its lock held: never a staging folder without one
+            self._owner.release()
             return target
         raise OSError(f"no free run folder name next to {wanted}")
 
     def discard(self) -> None:
+        """Remove the staging folder, and the folders made for it that nothing else has used since."""
         shutil.rmtree(self.staging, ignore_errors=True)
+        self._owner.release(remove_file=False)
+        for folder in self._made:
+            try:
+                folder.rmdir()  # only when empty: another run may be writing there by now
+            except OSError:
+                break
 
 
 def stale_staging(parent: Path, run_id: str) -> list[Path]:

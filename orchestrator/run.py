@@ -14,8 +14,8 @@ from typing import Any
 
 import pandas as pd
 
-from orchestrator import acceptance, interrupts
-from orchestrator.errors import ResultsError, ToolchainError
+from orchestrator import acceptance, interrupts, leftovers
+from orchestrator.errors import ResultsError, ToolchainError, is_disk_full
 from orchestrator.figure_processes import FIGURE_SPOOL
 from orchestrator.master import CoSimulation
 from orchestrator.recorder import ColumnFrame
@@ -67,6 +67,7 @@ def run_scenario(path, results_root="results", progress: bool = True, run_id: st
     scenario = load_scenario(path, overrides)
     # build first: input refused before the run leaves no folder behind
     cosim = CoSimulation(scenario, work_dir=None)
+    leftovers.remove_abandoned_staging(Path(results_root))  # of runs whose process died
     try:
         folder = RunFolder(Path(results_root), group or scenario.simulation.name,
                            run_id or new_run_id(scenario.sha256))
@@ -176,6 +177,8 @@ def _write_rest(scenario: Scenario, cosim: CoSimulation, outcome, folder: RunFol
         try:
             figures[name] = analyses.run_analysis(name, frame, scenario, cosim, folder.staging)
         except Exception as exc:  # an analysis of a failed run's partial series, or its own bug
+            if is_disk_full(exc):  # the disk, not the analysis: nothing of the run is kept
+                raise
             text = str(exc) if isinstance(exc, ToolchainError) else f"{type(exc).__name__}: {exc}"
             log.debug("analysis '%s' raised", name, exc_info=True)
             figures[name] = {"error": text}

@@ -18,8 +18,9 @@ from pydantic import PlainValidator, model_validator
 from orchestrator.errors import ScenarioError
 from orchestrator.scenario_participants import ScenarioTable, participant_specs
 from orchestrator.scenario_spec import Connection, OutputSpec, SimulationSpec, StopCondition
-from orchestrator.toml_input import (FolderName, Positive, PositiveInt, checked, default_folder_name, fail, fail_whole,
-                                     is_finite_number, one_of, shown, shown_text)
+from orchestrator.toml_input import (FolderName, Positive, PositiveInt, check_distances_nm, checked,
+                                     default_folder_name, fail, fail_whole, is_finite_number, one_of, shown,
+                                     shown_text)
 
 #: Exchange orders: participants due at a communication point step one after another, each
 #: seeing the outputs of those before it ("gauss-seidel"), or all from the values published
@@ -195,6 +196,9 @@ def build_scenario_parts(data: dict, where: str, default_name: str):
     table = checked(SimulationTable, top.simulation, where, ("simulation",))
     simulation = table.spec(table.name or default_folder_name(default_name, "simulation.name", where))
     participants = participant_specs(top.participants, where)
+    for spec in participants:
+        check_distances_nm(spec.options, where, f"participants.{spec.name}.options")
+    check_distances_nm(top.metocean or {}, where, "metocean")
     connections = _connections(top.connections, participants, where)
     outputs = checked(OutputsTable, top.outputs or {}, where, ("outputs",)).spec()
     return simulation, participants, connections, top.metocean, outputs, top.acceptance

@@ -2,7 +2,8 @@
 
 Every input file (scenario, batch, comparison, offline planning) is read by
 :func:`read_toml`, which refuses what could exhaust the machine before anything is
-allocated from it: a file over :data:`MAX_FILE_BYTES`, arrays or tables nested deeper than
+allocated from it: a file over :data:`MAX_FILE_BYTES`, text the parser would take too long
+over (:func:`prescan_toml`, before it is parsed), arrays or tables nested deeper than
 :data:`MAX_NESTING`.  The tables are then checked by pydantic models derived from
 :class:`TomlTable` (unknown keys forbidden, strict types, finite numbers) and a pydantic
 ``ValidationError`` becomes one :class:`~orchestrator.errors.ScenarioError` line naming the
@@ -41,6 +42,12 @@ def is_finite_number(value) -> bool:
 MAX_FILE_BYTES = 16 * 1024 * 1024
 #: Deepest nesting of arrays and tables in an input file (the shipped files nest 6 deep).
 MAX_NESTING = 24
+#: Most keys, values and tables in an input file, counted before it is parsed (the shipped
+#: files hold fewer than 200).
+MAX_ITEMS = 20_000
+#: Largest distance or coordinate a key in nautical miles may hold [nm]: half the Earth's
+#: circumference, farther than any two points at sea are apart.
+MAX_DISTANCE_NM = 10_800.0
 #: Longest value shown in a message [characters].
 SHOWN_CHARS = 60
 #: Longest name of a results folder (``simulation.name``, ``batch.name``) [characters].
@@ -67,14 +74,49 @@ def read_toml(path: Path, kind: str) -> tuple[dict, bytes]:
         raise ScenarioError(f"{path}: {kind} file of {size} bytes is larger than the limit of {MAX_FILE_BYTES}")
     raw = path.read_bytes()
     try:
-        data = tomllib.loads(raw.decode("utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(f"{path}: not valid TOML: {shown_text(str(exc), 200)}") from exc
+    prescan_toml(text, str(path))
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{path}: not valid TOML: {shown_text(str(exc), 200)}") from exc
     except RecursionError as exc:  # the parser recurses once per nesting level
         raise ScenarioError(f"{path}: not valid TOML: arrays or tables nested deeper than the limit of "
                             f"{MAX_NESTING} levels") from exc
+    except ValueError as exc:  # an integer of thousands of digits (Python's limit on int conversion)
+        raise ScenarioError(f"{path}: not valid TOML: {shown_text(str(exc), 120)}") from exc
     check_nesting(data, str(path))
     return data, raw
+
+
+#: One part of a TOML key: bare, or a basic or literal string on one line.
+_KEY_PART = r"""(?:[A-Za-z0-9_-]++|"(?:[^"\\\n]|\\.)*+"|'[^'\n]*+')"""
+#: A key of more than MAX_NESTING dotted parts, starting where no key character precedes.
+_DEEP_KEY = re.compile(rf"""(?<![A-Za-z0-9_\-"'])(?:{_KEY_PART}[ \t]*+\.[ \t]*+){{{MAX_NESTING}}}{_KEY_PART}""")
+
+
+def prescan_toml(text: str, where: str) -> None:
+    """Refuse, before it is parsed, TOML text the parser would take too long over.
+
+    Python's TOML parser takes time quadratic in the number of parts of one dotted key or
+    table header (a 40 kB key of 20,000 parts took 7.6 s, one of 80 kB 30 s), and a few
+    seconds per megabyte of keys and values.  Two counts that cost one pass over the text
+    each bound both: no dotted key or header of more than :data:`MAX_NESTING` parts, and no
+    more than :data:`MAX_ITEMS` of the characters that open or separate keys, values and
+    tables (``=``, ``,``, ``[``, ``{``; counted in strings and comments too, so the count is
+    an upper bound).
+    """
+    items = text.count("=") + text.count(",") + text.count("[") + text.count("{")
+    if items > MAX_ITEMS:
+        raise ScenarioError(f"{where}: holds {items} keys, values and tables (counted by '=', ',', '[', '{{'), "
+                            f"more than the limit of {MAX_ITEMS}")
+    deep = _DEEP_KEY.search(text)
+    if deep is not None:
+        line = text.count("\n", 0, deep.start()) + 1
+        raise ScenarioError(f"{where}: line {line}: the key '{shown_text(deep.group())}' has more than the limit of "
+                            f"{MAX_NESTING} dotted parts")
 
 
 def check_nesting(data: Any, where: str, limit: int = MAX_NESTING) -> None:
@@ -245,7 +287,30 @@ def _text(value: Any) -> str:
 def _pair(value: Any) -> tuple[float, float]:
     if not (isinstance(value, list) and len(value) == 2 and all(is_finite_number(v) for v in value)):
         raise fail(f"must be [north, east] in nm, got {shown(value)}")
+    if any(abs(v) > MAX_DISTANCE_NM for v in value):
+        raise fail(f"must lie within +-{MAX_DISTANCE_NM:g} nm (half the Earth's circumference), got {shown(value)}")
     return float(value[0]), float(value[1])
+
+
+def check_distances_nm(table: Any, where: str, prefix: str) -> None:
+    """Refuse a number beyond +-:data:`MAX_DISTANCE_NM` under any key ending in ``_nm``.
+
+    Keys carry their unit in their name (``start_nm``, ``goal_nm``, ``x_range_nm``), so the
+    bound holds for every participant type and domain table, whether or not it checks the
+    value itself; numbers in lists and tables under such a key are checked too.  What is
+    not a finite number is left to the table's own checks.
+    """
+    stack = [(table, prefix, False)]
+    while stack:
+        node, key, in_nm = stack.pop()
+        if isinstance(node, dict):
+            stack.extend((value, f"{key}.{k}" if key else str(k), in_nm or str(k).endswith("_nm"))
+                         for k, value in node.items())
+        elif isinstance(node, list):
+            stack.extend((value, f"{key}[{k}]", in_nm) for k, value in enumerate(node))
+        elif in_nm and is_finite_number(node) and abs(node) > MAX_DISTANCE_NM:
+            raise ScenarioError(f"{where}: '{shown_text(key)}' must lie within +-{MAX_DISTANCE_NM:g} nm (half the "
+                                f"Earth's circumference), got {shown(node)}")
 
 
 _RESERVED_NAMES = re.compile(r"^(con|prn|aux|nul|com\d|lpt\d)(\..*)?$", re.IGNORECASE)

@@ -2,6 +2,8 @@
 
 Validation builds every participant, so every option, parameter (against the ranges the
 FMU declares), mapping and connection is checked, and runs fmpy's validation on each FMU.
+When ``[simulation] stop_when`` names outputs, the participants are also set up (not
+stepped) to see that those outputs are numbers, as the run checks before its first step.
 It does not run code that came with the scenario: a ``type = "python"`` participant whose
 module lies in the scenario's folder or in the current folder (where ``python -m`` finds
 it first) is not imported unless ``trust_code`` is given; its ports and the connections to
@@ -71,14 +73,33 @@ def check_scenario(path, trust_code: bool = False) -> ValidationReport:
             if isinstance(participant, FmuParticipant):
                 for problem in validate_fmu(str(participant.fmu_path)):
                     report.problems.append(f"{participant.fmu_path.name}: {problem}")
+        _check_stop_ports(cosim, report)
     finally:
         cosim.close()
     return report
 
 
+def _check_stop_ports(cosim, report: ValidationReport) -> None:
+    """The ``stop_when`` ports are numbers: seen in the participants' set-up outputs, as the run
+    sees them before its first step.  A set-up that fails is the run's to report (exit 3): a note."""
+    from orchestrator.master import StopConditionError
+
+    try:
+        cosim.check_stop_ports()
+    except StopConditionError as exc:
+        report.problems.append(str(exc))
+    except Exception as exc:  # a participant's set-up: not a property of the scenario file
+        report.notes.append(f"{cosim.scenario.path}: simulation.stop_when: not checked, a participant's set-up "
+                            f"raised {type(exc).__name__}: {exc}")
+
+
 def local_module_folder(class_path: str, scenario_dir: Path) -> Path | None:
     """The folder a participant class would be imported from, when it is the scenario's folder
     or the current folder and the module is not imported yet; otherwise None.
+
+    A module that cannot be imported from here at all (say, it lies beside the scenario but
+    the command was started from another folder) is not local: building it fails as the run
+    would, so that ``validate`` and ``run`` agree.
 
     Found with :func:`importlib.util.find_spec` on the top-level name, which runs no code.
     """
@@ -92,9 +113,8 @@ def local_module_folder(class_path: str, scenario_dir: Path) -> Path | None:
         spec = importlib.util.find_spec(top)
     except (ImportError, ValueError):
         spec = None
-    if spec is None:
-        candidates = [scenario_dir / f"{top}.py", scenario_dir / top / "__init__.py"]
-        return scenario_dir.resolve() if any(c.is_file() for c in candidates) else None
+    if spec is None:  # not importable from here: the build fails as the run would (importing nothing)
+        return None
     if not spec.origin or spec.origin in ("built-in", "frozen"):
         return None
     folder = Path(spec.origin).resolve().parent

@@ -247,13 +247,25 @@ class Sleeper(Participant):
         return {"ok": 1.0}
 
 
+def ctrl_c() -> None:
+    """Send SIGINT to this process, as Ctrl-C in its terminal does, and wait for it to arrive."""
+    import os
+    import signal
+    import time
+
+    os.kill(os.getpid(), signal.SIGINT)
+    for _ in range(500):  # the handler raises KeyboardInterrupt at the next bytecode
+        time.sleep(0.01)
+
+
 class Misbehaving(Participant):
     """Fails in one of the ways a participant can fail outside a plain exception in its step.
 
     ``how``: ``"exit"`` (sys.exit(5) in its step at ``at_s``), ``"terminate"`` (terminate()
     raises), ``"summary"`` (summary() raises), ``"unserialisable"`` (a summary JSON cannot
     hold), ``"options"`` (from_options raises ValueError), ``"nan_setup"`` (a NaN output at
-    set-up, past the checks a scenario file gets).
+    set-up, past the checks a scenario file gets), ``"interrupt_terminate"`` and
+    ``"interrupt_summary"`` (Ctrl-C arrives while terminate() or summary() runs).
     """
 
     @classmethod
@@ -288,8 +300,12 @@ class Misbehaving(Participant):
     def terminate(self):
         if self.how == "terminate":
             raise OSError("device busy")
+        if self.how == "interrupt_terminate":
+            ctrl_c()
 
     def summary(self):
+        if self.how == "interrupt_summary":
+            ctrl_c()
         if self.how == "summary":
             raise ZeroDivisionError("division by zero")
         if self.how == "unserialisable":
@@ -299,7 +315,8 @@ class Misbehaving(Participant):
 
 class SelfKiller(Participant):
     """At ``at_s`` sends SIGKILL to its own process unless the file ``unless_exists`` exists
-    (what the out-of-memory killer or an operator does to a worker)."""
+    (what the out-of-memory killer or an operator does to a worker); with ``exit``, calls
+    ``os._exit(7)`` instead."""
 
     @classmethod
     def from_options(cls, name, options, context):
@@ -307,6 +324,7 @@ class SelfKiller(Participant):
         participant.at = options.get("at_s", 0.0)
         participant.unless_exists = options.get("unless_exists")
         participant.crash = options.get("crash", False)
+        participant.exit = options.get("exit", False)
         return participant
 
     input_names = property(lambda self: [])
@@ -322,6 +340,8 @@ class SelfKiller(Participant):
         if time >= self.at and self.crash:
             raise RuntimeError("a bug of its own")
         if time >= self.at and not (self.unless_exists and os.path.exists(self.unless_exists)):
+            if self.exit:  # a library ending the process without unwinding
+                os._exit(7)
             os.kill(os.getpid(), signal.SIGKILL)
         return {"ok": 1.0}
 
@@ -402,3 +422,28 @@ class NotAParticipant:
     @classmethod
     def from_options(cls, name, options, context):
         return object()
+
+
+class Compiling(Participant):
+    """Says at INFO, as the NMPC does on a fresh machine, that it compiles while it is built;
+    and at INFO again in each step (a line the console must not show)."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        import logging
+
+        logging.getLogger("orchestrator.sample_build").info("compiling its model into /cache/model.so (once per "
+                                                            "machine)")
+        return cls(name)
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["ok"])
+
+    def setup(self, start_time, inputs):
+        return {"ok": 1.0}
+
+    def step(self, time, step_size, inputs):
+        import logging
+
+        logging.getLogger("orchestrator.sample_build").info("stepping at %g s", time)
+        return {"ok": 1.0}

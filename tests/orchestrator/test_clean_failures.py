@@ -117,3 +117,61 @@ def test_an_interrupted_batch_counts_the_runs_that_ended_after_the_interrupt(sma
     assert captured.out.startswith("0/6 runs passed (")
     assert "; ran 1, skipped 0 already done" in captured.out.splitlines()[0]
     assert "interrupted: rerun the same command to finish the batch" in captured.err
+
+
+ARRAY_STOP = """
+[simulation]
+name = "array_stop"
+steps = 5
+dt_s = 1.0
+stop_when = "clock.vector > 0"
+[participants.clock]
+type = "python"
+class = "sample_participants:Clock"
+[participants.after]
+type = "python"
+class = "sample_participants:Misbehaving"
+[participants.after.options]
+how = "none"
+[outputs]
+figures = []
+"""
+
+
+@pytest.mark.parametrize("command", [["validate"], ["run", "--no-progress"]])
+def test_a_stop_condition_on_an_array_port_is_refused_before_the_run(write_scenario, tmp_path, capsys, monkeypatch,
+                                                                     command):
+    """It used to pass validate and fail the run after one step with a TypeError blamed on the
+    participant stepped last."""
+    monkeypatch.syspath_prepend(str(Path(__file__).parent))
+    path = write_scenario(ARRAY_STOP)
+    results = ["--results", str(tmp_path / "results")] if command[0] == "run" else []
+    assert main([*command, *results, str(path)]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"error: {path}: simulation.stop_when 'clock.vector > 0': output 'vector' of 'clock' is an array of shape "
+        "(2,); a stop condition needs an output that is one number"]
+    assert not (tmp_path / "results").exists()
+
+
+@pytest.mark.parametrize("command", [["validate"], ["run", "--no-progress"]])
+def test_what_a_participant_compiles_while_it_is_built_is_said_on_stderr(tmp_path, command):
+    """A first validate on a fresh machine compiles the NMPC for a minute or more: the line
+    the participant logs about it is shown, the toolchain's other INFO lines are not."""
+    path = tmp_path / "compiling.toml"
+    path.write_text(textwrap.dedent("""\
+        [simulation]
+        name = "compiling"
+        steps = 3
+        dt_s = 1.0
+        [participants.model]
+        type = "python"
+        class = "sample_participants:Compiling"
+        [outputs]
+        figures = []
+        """))
+    results = ["--results", str(tmp_path / "results")] if command[0] == "run" else []
+    done = subprocess.run([sys.executable, "-m", "orchestrator", *command, *results, str(path)], capture_output=True,
+                          text=True, env={**os.environ, "PYTHONPATH": f"{HERE}:{REPO}"}, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.splitlines() == [
+        "INFO orchestrator.sample_build: compiling its model into /cache/model.so (once per machine)"]

@@ -78,3 +78,21 @@ def test_a_scheduler_that_cannot_work_is_one_line_and_writes_nothing(small_batch
     assert code == 2
     assert capsys.readouterr().err.strip().splitlines() == [message]
     assert not (tmp_path / "results").exists()
+
+
+def test_a_scheduler_that_cannot_be_reached_leaves_nothing(small_batch, tmp_path, capsys, monkeypatch):
+    """Refused before anything of the batch is written: no batch.json, lock or empty runs/."""
+    import socket
+
+    from orchestrator import dask_executor
+
+    monkeypatch.setattr(dask_executor, "CONNECT_TIMEOUT", "1s")
+    with socket.socket() as probe:  # a port nobody listens on
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    code = main(["batch", str(small_batch), "--results", str(tmp_path / "results"), "--no-progress",
+                 "--scheduler", f"tcp://127.0.0.1:{port}"])
+    assert code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"error: cannot reach the Dask scheduler at tcp://127.0.0.1:{port}: ")
+    assert not (tmp_path / "results").exists()

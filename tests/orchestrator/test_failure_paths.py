@@ -161,5 +161,23 @@ def test_a_full_disk_while_writing_leaves_nothing_half_written(write_scenario, t
     lines = captured.err.strip().splitlines()
     assert len(lines) == 1 and "the results could not be written (No space left on device); nothing was kept " \
                                "(the run itself: finished)" in lines[0]
-    assert list((tmp_path / "results" / "misbehaving").iterdir()) == []  # no staging folder, no run folder
+    assert not (tmp_path / "results").exists()  # no staging folder, no run folder, no folder made for them
+    assert list(private_tmp.iterdir()) == []
+
+
+@pytest.mark.parametrize("how, where", [
+    ("interrupt_summary", "while the summary of participant 'bad' was collected"),
+    ("interrupt_terminate", "while participant 'bad' was terminated"),
+])
+def test_ctrl_c_after_the_last_step_keeps_every_step(write_scenario, tmp_path, capsys, private_tmp, how, where):
+    """Ctrl-C while the participants are terminated or their summaries collected: every step is
+    kept, the other participants' summaries too, exit 130."""
+    code, captured = run(write_scenario(MISBEHAVING.format(how=how)), tmp_path / "results", capsys)
+    assert code == 130
+    assert captured.err.strip().splitlines()[-1] == f"error: interrupted by the user (Ctrl-C) after the last step, {where}"
+    folder, summary = published(captured)
+    assert summary["status"] == "interrupted"
+    assert summary["simulation"]["steps_done"] == 10
+    assert len((folder / "timeseries.csv").read_text().splitlines()) == 1 + 10
+    assert summary["participants"]["clock"] == {"steps": 10}
     assert list(private_tmp.iterdir()) == []

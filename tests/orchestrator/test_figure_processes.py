@@ -74,6 +74,12 @@ def stops_the_run(frame, scenario, cosim, out_dir):
     return ["half.txt"]
 
 
+def fills_the_disk(frame, scenario, cosim, out_dir):
+    import errno
+    (out_dir / "half.png").write_text("half a figure")
+    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+
 def interrupted_once(frame, scenario, cosim, out_dir):
     """Ctrl-C once while this figure is drawn: the results are completed all the same."""
     os.killpg(os.getpgid(0), signal.SIGINT)
@@ -81,7 +87,7 @@ def interrupted_once(frame, scenario, cosim, out_dir):
     (out_dir / "drawn.txt").write_text("a whole figure")
     return ["drawn.txt"]
 '''
-NAMES = ("good", "first", "second", "raises", "dies", "stops_the_run", "interrupted_once")
+NAMES = ("good", "first", "second", "raises", "dies", "stops_the_run", "interrupted_once", "fills_the_disk")
 
 
 @pytest.fixture
@@ -158,6 +164,31 @@ def test_a_figure_that_fails_loses_itself_only_and_leaves_no_half_written_file(t
     assert sorted(p.name for p in report.folder.iterdir()) == ["good.txt", "summary.json", "timeseries.parquet"]
 
 
+@pytest.mark.parametrize("fork", [True, False], ids=["forked", "here"])
+def test_a_full_disk_while_a_figure_is_written_keeps_nothing(tmp_path, probes, monkeypatch, capsys, fork):
+    """Exit 4 and no run folder, as for a full disk while the time series is written: a folder
+    without its figures must not be published as a finished run."""
+    from orchestrator.cli import main
+
+    monkeypatch.setattr(figure_processes, "FORK", fork)
+    code = main(["run", str(_scenario(tmp_path, ["good", "fills_the_disk"])), "--results", str(tmp_path / "results"),
+                 "--no-progress"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 4
+    assert len(err) == 1 and err[0].endswith("the results could not be written (No space left on device (figure "
+                                             "'fills_the_disk')); nothing was kept (the run itself: finished)")
+    assert not (tmp_path / "results").exists()
+
+
+def test_a_full_disk_while_a_figure_is_written_is_redone_by_a_batch_resume(tmp_path, probes):
+    from orchestrator.batch_run import RunTask, execute_run, needs_redo, read_summary
+
+    task = RunTask(str(_scenario(tmp_path, ["fills_the_disk"])), str(tmp_path / "batch"), "run-0", {})
+    record = execute_run(task)
+    assert record["status"] == "failed" and record["infrastructure"] is True
+    assert needs_redo(read_summary(tmp_path / "batch" / "runs" / "run-0"))
+
+
 def _command(tmp_path, figures) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "orchestrator", "run", str(_scenario(tmp_path, figures)),
                              "--results", str(tmp_path / "results"), "--no-progress"],
@@ -173,6 +204,10 @@ def test_ctrl_c_while_figures_are_drawn_completes_the_results(tmp_path, probes):
     summary = _summary(folder)
     assert summary["figures"] == ["drawn.txt", "good.txt"] and summary["figure_errors"] == {}
     assert (folder / "drawn.txt").read_text() == "a whole figure"
+    assert summary["status"] == "finished" and summary["simulation"]["steps_done"] == 2
+    assert process.returncode == 130  # the command was interrupted, whatever the results hold
+    assert err.strip().splitlines()[-1] == ("error: interrupted by the user (Ctrl-C) while the results were "
+                                            "written; they were completed first")
 
 
 def test_a_second_ctrl_c_while_figures_are_drawn_stops_at_once_and_ends_the_drawing(tmp_path, probes):

@@ -116,8 +116,8 @@ BUILD_CASES = {
     "x_range_nm = [0, inf]": ('generator = "paper_default"', 'generator = "paper_default"\nx_range_nm = [0, inf]',
                               r"metocean.x_range_nm: expected two numbers \[a, b\], got \[0, inf\]"),
     "x_range_nm = [0, 1e308]": ('generator = "paper_default"', 'generator = "paper_default"\nx_range_nm = [0, 1e308]',
-                                r"metocean: resolution_nm gives 1e\+308 grid nodes along an axis, more than the limit "
-                                r"of 2001"),
+                                r"'metocean\.x_range_nm\[1\]' must lie within \+-10800 nm \(half the Earth's "
+                                r"circumference\), got 1e\+308"),
     "resolution_nm = 1e-4": ('generator = "paper_default"', 'generator = "paper_default"\nresolution_nm = 1e-4',
                              r"metocean: resolution_nm gives 1e\+06 grid nodes along an axis"),
     "resolution_nm = 0.02": ('generator = "paper_default"', 'generator = "paper_default"\nresolution_nm = 0.02',
@@ -265,3 +265,77 @@ def test_a_file_name_that_cannot_name_the_results_folder_needs_simulation_name(t
         load_scenario(path)
     path.write_text(BASE)
     assert load_scenario(path).simulation.name == "trial"
+
+
+@pytest.mark.parametrize("text, message", [
+    ("[" + ".".join(["a"] * 100_000) + "]\n", r"line 1: the key 'a\.a\.a.*' has more than the limit of 24 dotted parts"),
+    (BASE + "x." * 200_000 + "y = 1\n", r"line \d+: the key 'x\.x\.x.*' has more than the limit of 24 dotted parts"),
+    (BASE + '[participants."a". b ."c".' + ".".join(["d"] * 22) + "]\n", r"line 16: the key 'participants\.\"a\"\. b \.\"c\"\.d\.d.*' has more"),
+    (BASE + "".join(f"[t{i}]\n" for i in range(25_000)),
+     r"holds 250\d\d keys, values and tables \(counted by '=', ',', '\[', '\{'\), more than the limit of 20000"),
+], ids=["deep header", "deep dotted key", "quoted parts", "too many tables"])
+def test_text_the_parser_would_take_long_over_is_refused_before_it_is_parsed(write_scenario, capsys, monkeypatch,
+                                                                                 text, message):
+    """Python's TOML parser is quadratic in the parts of one dotted key (a 200 kB header took
+    17-20 s to refuse): the pre-scan refuses it without calling the parser."""
+    import tomllib
+
+    def parser_called(*args, **kwargs):
+        raise AssertionError("the parser was called")
+
+    monkeypatch.setattr(tomllib, "loads", parser_called)
+    _refused(write_scenario, capsys, text, message)
+
+
+def test_keys_of_the_largest_depth_still_reach_the_parser(write_scenario):
+    text = BASE + "[participants.helm.options.deep." + ".".join(["d"] * 20) + "]\n"
+    with pytest.raises(ScenarioError, match="unknown option 'deep'|unknown key 'participants.helm.options.deep'"):
+        CoSimulation(load_scenario(write_scenario(text))).close()
+
+
+def test_an_integer_of_thousands_of_digits_is_one_line(write_scenario, capsys):
+    _refused(write_scenario, capsys, _edit(BASE, "u0 = 9.26", "u0 = " + "9" * 5000),
+             r"not valid TOML: Exceeds the limit \(4300 digits\) for integer string conversion")
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda t: t.replace("tau_u_N = 7.7e5", "tau_u_N = 7.7e5\nstart_nm = [0, -1e308]"),
+     r"'participants\.helm\.options\.start_nm\[1\]' must lie within \+-10800 nm \(half the Earth's circumference\), "
+     r"got -1e\+308"),
+    (lambda t: t + "\n[participants.helm.options.route]\nwaypoints_nm = [[0.0, 0.0], [20000.0, 5.0]]\n",
+     r"'participants\.helm\.options\.route\.waypoints_nm\[1\]\[0\]' must lie within \+-10800 nm"),
+    (lambda t: t + "\n[metocean]\ngenerator = \"paper_default\"\nx_range_nm = [0.0, 1e9]\n",
+     r"'metocean\.x_range_nm\[1\]' must lie within \+-10800 nm"),
+], ids=["start", "nested waypoint", "weather map"])
+def test_absurd_distances_in_nautical_miles_are_refused(write_scenario, capsys, edit, message):
+    """Every key that names its unit nm is bounded, whichever participant reads it."""
+    _refused(write_scenario, capsys, edit(BASE), message)
+
+
+def test_a_batch_start_beyond_the_bound_is_refused():
+    from orchestrator.batch_model import OwnShipTable
+    from orchestrator.toml_input import checked
+
+    with pytest.raises(ScenarioError, match=r"'own_ship\.start_nm' must lie within \+-10800 nm"):
+        checked(OwnShipTable, {"start_nm": [0.0, -1e308], "course_deg": 45.0, "speed_kn": 16.0}, "b.toml",
+                ("own_ship",))
+
+
+@pytest.mark.parametrize("command", [["validate"], ["validate", "--trust-code"], ["run", "--no-progress"]])
+def test_a_module_beside_the_scenario_started_from_elsewhere_is_refused_alike(tmp_path, capsys, monkeypatch,
+                                                                              command):
+    """The run cannot import it (the scenario's folder is not on the import path): validate must
+    not say ok, with or without --trust-code, and all three give the same line."""
+    folder = tmp_path / "downloaded"
+    folder.mkdir()
+    (folder / "local_helm_elsewhere.py").write_text(LOCAL_CODE)
+    path = folder / "s.toml"
+    path.write_text(_edit(BASE, 'type = "scripted_tau"', 'type = "python"\nclass = "local_helm_elsewhere:Helm"'))
+    monkeypatch.chdir(tmp_path)
+    results = ["--results", str(tmp_path / "results")] if command[0] == "run" else []
+    assert main([*command, *results, str(path)]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"error: {path}: participants.helm.class: cannot import module 'local_helm_elsewhere': No module named "
+        f"'local_helm_elsewhere' (it lies in the scenario's folder {folder}, which is not on the import path: start "
+        "the command from that folder, or install the module)"]
+    assert not (folder / "imported.marker").exists() and not (tmp_path / "results").exists()
