@@ -85,7 +85,12 @@ def test_a_baseline_whose_arrival_jumps_over_the_target_is_read_between_the_two_
     assert equal.bracket == (trials[0], trials[1])
     weight = (28689.6 - 28686.7) / (28708.8 - 28686.7)
     assert equal.at_target(lambda t: t.run) == pytest.approx(100.0 - 10.0 * weight)
-    assert equal.at_target(lambda t: t.arrival_s) == pytest.approx(28689.6)
+    # the speed read at the target: 0.13 of the way from the early trial's to the late one's
+    assert equal.at_target(lambda t: t.speed_kn) == pytest.approx(17.6778 - 0.0002 * weight, abs=1e-9)
+    assert 0.1 < weight < 0.2
+    # the same reading whatever order the trials were run in
+    shuffled = EqualArrival(target_s=28689.6, tolerance_s=2.0, trials=trials[::-1])
+    assert shuffled.at_target(lambda t: t.run) == pytest.approx(100.0 - 10.0 * weight)
     # a bracket wider than a macro step does not stand in for a trial at the target
     wide = EqualArrival(target_s=28689.6, tolerance_s=2.0, trials=[trials[2], ArrivalTrial(17.5, 28760.0, 80.0)])
     assert not wide.interpolated and not wide.usable
