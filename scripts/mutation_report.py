@@ -118,6 +118,22 @@ MODULES = {
                                                                      "tests/orchestrator/test_fmu_participant_guards.py",
                                                                      "tests/orchestrator/test_fmu_participant_types.py",
                                                                      "tests/orchestrator/test_fmu_participant_values.py")),
+    # core modules first mutated after the wings split (each against the tests that exercise it)
+    "weather_routing": Module(("rhnc/routing/weather_routing.py",), ("tests/rhnc/test_weather_routing.py",)),
+    "route_search": Module(("rhnc/routing/route_search.py",), ("tests/rhnc/test_route_search.py",
+                                                               "tests/rhnc/test_weather_routing.py")),
+    "equal_arrival": Module(("rhnc/voyage/equal_arrival.py",), ("tests/rhnc/test_equal_arrival.py",
+                                                                "tests/rhnc/test_voyage_comparison.py")),
+    "disturbance_observer": Module(("rhnc/control/disturbance_observer.py",),
+                                   ("tests/rhnc/test_own_ship_control.py", "tests/rhnc/test_nmpc_limits.py")),
+    "solver_watchdog": Module(("rhnc/control/solver_watchdog.py",),
+                              ("tests/rhnc/test_solver_worker_lifetime.py", "tests/rhnc/test_nmpc_solve_attempts.py",
+                               "tests/rhnc/test_nmpc_limits.py")),
+    "colregs": Module(("rhnc/encounters/colregs.py",), ("tests/rhnc/test_colregs.py", "tests/rhnc/test_imazu.py",
+                                                        "tests/rhnc/test_nmpc_colregs.py")),
+    "batch_run": Module(("orchestrator/batch_run.py",), ("tests/orchestrator/test_batch_lost_runs.py",
+                                                         "tests/orchestrator/test_crash_safe_batch.py",
+                                                         "tests/orchestrator/test_batch.py")),
 }
 
 
