@@ -205,3 +205,14 @@ def test_batch_that_passes_exits_0(batch_file, tmp_path, capsys):
     path = batch_file(BATCH.replace("value = 15.0", "value = 5.0"))
     assert main(["batch", str(path), "--workers", "1", "--results", str(tmp_path / "results"), "--no-progress"]) == 0
     assert capsys.readouterr().out.startswith("6/6 runs passed (6 finished); ran 6, skipped 0 already done")
+
+
+@pytest.mark.slow
+def test_the_shipped_turning_grid_passes_its_own_criteria(tmp_path):
+    # a shipped example whose runs fail its own acceptance would teach a new user nothing
+    spec = load_batch(REPO / "batches" / "turning_grid.toml")
+    assert len(spec.runs()) == 12
+    assert main(["batch", str(REPO / "batches" / "turning_grid.toml"), "--workers", "1",
+                 "--results", str(tmp_path), "--no-progress"]) == 0
+    table = pd.read_parquet(tmp_path / "turning_grid" / "summary.parquet")
+    assert len(table) == 12 and table["passed"].all()
