@@ -124,16 +124,19 @@ MODULES = {
                                                                "tests/rhnc/test_weather_routing.py")),
     "equal_arrival": Module(("rhnc/voyage/equal_arrival.py",), ("tests/rhnc/test_equal_arrival.py",
                                                                 "tests/rhnc/test_voyage_comparison.py")),
+    # (slow tests included: the closed-loop offset removal is the observer's behaviour)
     "disturbance_observer": Module(("rhnc/control/disturbance_observer.py",),
-                                   ("tests/rhnc/test_own_ship_control.py", "tests/rhnc/test_nmpc_limits.py")),
+                                   ("tests/rhnc/test_own_ship_control.py", "tests/rhnc/test_nmpc_limits.py"),
+                                   ("-m", "slow or not slow")),
     "solver_watchdog": Module(("rhnc/control/solver_watchdog.py",),
                               ("tests/rhnc/test_solver_worker_lifetime.py", "tests/rhnc/test_nmpc_solve_attempts.py",
                                "tests/rhnc/test_nmpc_limits.py")),
     "colregs": Module(("rhnc/encounters/colregs.py",), ("tests/rhnc/test_colregs.py", "tests/rhnc/test_imazu.py",
                                                         "tests/rhnc/test_nmpc_colregs.py")),
+    # (slow tests included: the killed-worker resume is the batch runner's behaviour)
     "batch_run": Module(("orchestrator/batch_run.py",), ("tests/orchestrator/test_batch_lost_runs.py",
                                                          "tests/orchestrator/test_crash_safe_batch.py",
-                                                         "tests/orchestrator/test_batch.py")),
+                                                         "tests/orchestrator/test_batch.py"), ("-m", "slow or not slow")),
 }
 
 
@@ -340,8 +343,8 @@ def run_module(key: str, children: int, timeout_multiplier: float, timeout_const
         diffs = json.loads(shown)
         survivors = []
         for name in left:
-            diff = "\n".join(l for l in diffs[name].splitlines()
-                             if l.startswith(("-", "+")) and not l.startswith(("---", "+++")))
+            diff = "\n".join(line for line in diffs[name].splitlines()
+                             if line.startswith(("-", "+")) and not line.startswith(("---", "+++")))
             survivors.append({"name": name, "source": source_of(name, list(module.sources)),
                               "status": statuses[name], "diff": diff})
     if not counts:
@@ -430,12 +433,12 @@ def section(v: Verdicts) -> str:
     if open_:
         lines += [f"Survivors not yet killed or explained ({len(open_)}):", ""]
         lines += [f"- `{s['name']}` ({s['status']})\n\n  ```diff\n"
-                  + "\n".join(f"  {l}" for l in s["diff"].splitlines()) + "\n  ```" for s in open_]
+                  + "\n".join(f"  {line}" for line in s["diff"].splitlines()) + "\n  ```" for s in open_]
         lines.append("")
     if equivalent:
         lines += [f"Survivors explained ({len(equivalent)}):", ""]
         for s, why in equivalent:
-            changed = [l for l in s["diff"].splitlines() if l.startswith("+")]
+            changed = [line for line in s["diff"].splitlines() if line.startswith("+")]
             lines.append(f"- `{s['name']}`" + (f" (`{changed[0][1:].strip()[:90]}`)" if changed else "") + f": {why}")
         lines.append("")
     return "\n".join(lines)
@@ -466,7 +469,9 @@ def write_report(verdicts: dict[str, Verdicts]) -> None:
         sampled = v.settings.get("sample")
         rows.append(f"| {key}" + (" **(stale)**" if stale_sources(v) else "")
                     + (" (previous report)" if v.settings.get("legacy") else "")
-                    + (" (survivors retested)" if v.settings.get("survivors_retested") else "") + f" | {v.total}" + (f" (sample of {sampled['of']})" if sampled else "") + f" | {v.counts.get('killed', 0)} | {v.counts.get('timeout', 0)} | "
+                    + (" (survivors retested)" if v.settings.get("survivors_retested") else "") + f" | {v.total}"
+                    + (f" (sample of {sampled['of']})" if sampled else "")
+                    + f" | {v.counts.get('killed', 0)} | {v.counts.get('timeout', 0)} | "
                     f"{equivalent} | {len(explained) - equivalent} | {v.score():.0f} % | "
                     f"{100.0 * v.killed / max(v.total - equivalent, 1):.0f} % |")
         sections.append(section(v))

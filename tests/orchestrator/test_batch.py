@@ -88,6 +88,7 @@ def _mtimes(root: Path) -> dict[str, int]:
     return {p.name: (p / "summary.json").stat().st_mtime_ns for p in (root / "runs").iterdir() if not p.name.startswith(".")}
 
 
+@pytest.mark.slow
 def test_local_pool_and_dask_cluster_give_identical_tables(batch_file, tmp_path):
     from distributed import LocalCluster
 
@@ -108,6 +109,7 @@ def test_local_pool_and_dask_cluster_give_identical_tables(batch_file, tmp_path)
     assert sorted(p.name for p in (tmp_path / "one" / "small" / "runs").iterdir()) == sorted(one.table["run_id"])
 
 
+@pytest.mark.slow
 def test_rerun_skips_finished_runs_and_redoes_only_the_rest(batch_file, tmp_path):
     path = batch_file()
     first = run_batch(path, tmp_path, workers=2, progress=False)
@@ -141,6 +143,7 @@ def test_run_ids_are_stable_and_draws_do_not_shift(batch_file, tmp_path):
     assert not {r.run_id for r in runs} & {r.run_id for r in other_seed}
 
 
+@pytest.mark.slow
 def test_crashed_worker_and_failing_scenario_are_recorded_and_the_batch_completes(batch_file, tmp_path):
     path = batch_file(BATCH.replace('"participants.helm.options.tau_u_N" = [5.0e5, 9.0e5]',
                                     '"participants.helm.options.tau_u_N" = [5.0e5, 9.0e5]\n'
