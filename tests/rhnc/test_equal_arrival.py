@@ -99,3 +99,33 @@ def test_a_baseline_whose_arrival_jumps_over_the_target_is_read_between_the_two_
     # matched: the best trial's own figure
     exact = EqualArrival(target_s=28686.0, tolerance_s=2.0, trials=trials)
     assert exact.matched and not exact.interpolated and exact.at_target(lambda t: t.run) == 100.0
+
+
+def test_the_speeds_tried_follow_the_secant_in_one_over_v():
+    # an arrival affine in 1/v (a fixed lag plus distance over speed): the first guess scales
+    # the first trial's speed by its arrival over the target (arrival taken as 1/v alone);
+    # the secant in 1/v through two trials is then exact, and the third trial lands on it
+    lag_s, target_s = 600.0, 30_000.0
+
+    def arrival_of(speed_kn):
+        return lag_s + DISTANCE_NM / speed_kn * 3600.0, None
+
+    first = 16.0
+    result = match_arrival_time(arrival_of, target_s, tolerance_s=1.0, first_speed_kn=first, aim_s=1e-6)
+    speeds = [t.speed_kn for t in result.trials]
+    first_arrival = arrival_of(first)[0]
+    exact = DISTANCE_NM * 3600.0 / (target_s - lag_s)
+    assert speeds == pytest.approx([first, first * first_arrival / target_s, exact], rel=1e-12)
+    assert result.matched and abs(result.trials[-1].arrival_s - target_s) < 1e-6
+
+
+def test_a_trial_that_does_not_arrive_is_followed_by_a_quarter_faster_one():
+    tried = []
+
+    def arrival_of(speed_kn):
+        tried.append(speed_kn)
+        return (None, None) if speed_kn < 20.0 else (DISTANCE_NM / speed_kn * 3600.0, None)
+
+    match_arrival_time(arrival_of, 25_000.0, tolerance_s=60.0, first_speed_kn=12.0, max_trials=3)
+    assert tried[:3] == pytest.approx([12.0, 15.0, 18.75])
+
