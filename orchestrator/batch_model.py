@@ -66,7 +66,7 @@ class ObstacleSpec:
 class MonteCarloSpec:
     seed: int
     runs: int
-    own_ship: encounters.ShipMotion | None
+    own_ship: encounters.ShipMotion | None  # type: ignore[name-defined]  # the domain's type, reached through the plug-in registry
     encounters: tuple[EncounterSpec, ...]
     obstacles: ObstacleSpec | None
     targets_key: str
@@ -128,7 +128,7 @@ class OwnShipTable(TomlTable):
     course_deg: Finite
     speed_kn: Positive
 
-    def motion(self) -> encounters.ShipMotion:
+    def motion(self) -> encounters.ShipMotion:  # type: ignore[name-defined]  # the domain's type, reached through the plug-in registry
         return encounters.ShipMotion.from_course(self.start_nm, self.course_deg, self.speed_kn)
 
 
@@ -162,7 +162,7 @@ class EncounterTable(TomlTable):
             raise fail_whole("'{prefix}': need cpa_nm >= 0, tcpa_min > 0, speed_kn > 0 and radius_nm >= 0")
         return self
 
-    def spec(self, own: encounters.ShipMotion | None, where: str, key: str) -> EncounterSpec:
+    def spec(self, own: encounters.ShipMotion | None, where: str, key: str) -> EncounterSpec:  # type: ignore[name-defined]  # the domain's type, reached through the plug-in registry
         if own is not None and "overtaking" in self.type and self.speed_kn.high >= own.speed_kn:
             raise ScenarioError(f"{where}: '{key}.speed_kn': an overtaken target must be slower than the own ship "
                                 f"({own.speed_kn:g} kn)")

@@ -139,10 +139,11 @@ def write_failure(batch_root: Path, task: RunTask, reason: str, status: str = "f
     for staging in stale_staging(batch_root / "runs", task.run_id):
         shutil.rmtree(staging, ignore_errors=True)
     # an earlier attempt of this run cut short (e.g. its worker stopped by the broken pool's
-    # shutdown) is stale, as pending_runs treats it on a resume: this record replaces it
+    # shutdown) is stale, as pending_runs treats it on a resume, and so is a summary that says
+    # nothing of how the run ended: this record replaces it
     earlier = batch_root / "runs" / task.run_id
     summary = read_summary(earlier)
-    if summary is not None and summary.get("status") == "interrupted":
+    if summary is not None and summary.get("status") in ("interrupted", None):
         shutil.rmtree(earlier, ignore_errors=True)
     folder = RunFolder(batch_root, "runs", task.run_id)
     folder.write_json("summary.json", {"scenario": task.scenario, "overrides": task.overrides,

@@ -17,6 +17,7 @@ import sys
 from typing import NoReturn
 
 from orchestrator import __version__
+from orchestrator.fmu_sources import FMI_VERSIONS
 
 log = logging.getLogger("orchestrator")
 
@@ -28,7 +29,8 @@ MAX_FAILURES_SHOWN = 20
 
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m orchestrator",
-                                     description="RHNC co-simulation toolchain (FMI 2.0 co-simulation master).")
+                                     description="RHNC co-simulation toolchain (FMI " + " and ".join(FMI_VERSIONS)
+                                     + " co-simulation master).")
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -43,7 +45,7 @@ def _parser() -> argparse.ArgumentParser:
                                "(its folder or the current folder); only for code you trust")
     build = sub.add_parser("build", help="compile the FMUs in models/ into fmus/ (FMI 2.0) or fmus/fmi3/")
     build.add_argument("models", nargs="*", help="model names (default: all)")
-    build.add_argument("--fmi-version", choices=("2.0", "3.0", "all"), default="2.0",
+    build.add_argument("--fmi-version", choices=(*FMI_VERSIONS, "all"), default="2.0",
                        help="FMI standard of the FMUs (default 2.0; 'all' builds both)")
     compare = sub.add_parser("compare", help="run several scenarios side by side (Table 3; fair voyage comparisons "
                              "at equal arrival time with [voyage], docs/compare-format.md)")

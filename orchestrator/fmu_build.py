@@ -47,7 +47,7 @@ from pathlib import Path
 from orchestrator import fmu_sources
 from orchestrator.errors import FmuError
 # FMI_VERSIONS, model_names, source_hash, default_fmu_dir: also this module's interface
-from orchestrator.fmu_sources import (COMMON, FMI_VERSIONS, RESOURCES, _check_name, _models_dir,
+from orchestrator.fmu_sources import (COMMON, FMI_VERSIONS, RESOURCES, _check_name, _models_dir,  # noqa: F401 (re-exported)
                                       _own_parameter_sets, _resources, _shared_parameter_file, _shared_set,
                                       _sources, default_fmu_dir, fmu_path, model_library, model_names,
                                       source_hash)

@@ -69,7 +69,7 @@ def export_osp_system(scenario_path, out_dir) -> Path:
             if spec.is_fmu:
                 continue
             fmu = export_participant(scenario_path, spec.name, out_dir)
-            for kind, entries in exported_layout(fmu).items():
+            for entries in exported_layout(fmu).values():
                 for entry in entries:
                     shapes[(spec.name, entry["port"])] = entry["shape"]
         root = ET.Element("OspSystemStructure", {"xmlns": NAMESPACE, "version": "0.1"})

@@ -156,11 +156,14 @@ def _owner_alive(staging: Path, run_id: str) -> bool:
 def _is_zombie(pid: int) -> bool:
     """The process has ended but nobody has reaped it (a container whose first process does
     not reap orphans keeps a killed worker so): it will never write again."""
+    import psutil
+
     try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except (OSError, IndexError):
-        return False  # no /proc (not Linux): the signal check above is all there is
-    return state == "Z"
+        return psutil.Process(pid).status() == psutil.STATUS_ZOMBIE
+    except psutil.ZombieProcess:
+        return True
+    except psutil.Error:
+        return False  # gone meanwhile, or not to be read: the signal check above is all there is
 
 
 def json_default(value):

@@ -80,7 +80,9 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      "overwritten the same way"),
     ("rhnc/navigation/fields.py", r"np\.mod\(np\.asarray\(angle, dtype=float\) \+ np\.pi", r"np\.asarray\(angle, dtype=float\) - np\.pi",
      "angle - pi and angle + pi differ by 2 pi, which the modulo by 2 pi removes"),
-    ("rhnc/navigation/fields.py", r"is_time_varying", r"getattr\(None|\"is_time_varying\", None\)|\"is_time_varying\", \)|XXis_time_varyingXX|IS_TIME_VARYING|\) or t_s is not None",
+    ("rhnc/navigation/fields.py", r"is_time_varying",
+     (r"getattr\(None|\"is_time_varying\", None\)|\"is_time_varying\", \)|XXis_time_varyingXX|IS_TIME_VARYING"
+      r"|\) or t_s is not None"),
      "only decides whether a time-varying field is first reduced to its snapshot at t_s (one spatial pass "
      "instead of one per time step): sampling it at t_s directly gives the same values (linear in time, "
      "bilinear in space), and a static field's snapshot is itself"),

@@ -13,6 +13,12 @@ killed by a new test (commit it, rerun the module) or explained:
   the explanation follows the code, not mutmut's numbering, which moves when a module
   changes).  After editing it, ``--report-only`` re-renders the report without rerunning.
 
+A module's verdicts hold for the code they were made on: the run stores the SHA-256 of each
+mutated file as committed (the copy mutmut worked on), and the report marks the module
+**stale** when a file's content differs today (runs stored before the hashes were: the
+file as of the run's commit, stale when that path did not exist then).  A stale module
+needs a new run, not a retest of its survivors (which keeps the run's hashes).
+
 Each mutant gets a time limit of ``(t + timeout_constant) * timeout_multiplier`` seconds,
 ``t`` being the clean run time of the tests that cover it; a mutant that runs out of it
 (an endless loop, a solver that no longer converges) counts as killed, as mutmut does.
@@ -33,6 +39,7 @@ from __future__ import annotations
 import argparse
 import ast
 import datetime as dt
+import hashlib
 import json
 import random
 import re
@@ -111,6 +118,25 @@ MODULES = {
                                                                      "tests/orchestrator/test_fmu_participant_guards.py",
                                                                      "tests/orchestrator/test_fmu_participant_types.py",
                                                                      "tests/orchestrator/test_fmu_participant_values.py")),
+    # core modules first mutated after the wings split (each against the tests that exercise it)
+    "weather_routing": Module(("rhnc/routing/weather_routing.py",), ("tests/rhnc/test_weather_routing.py",)),
+    "route_search": Module(("rhnc/routing/route_search.py",), ("tests/rhnc/test_route_search.py",
+                                                               "tests/rhnc/test_weather_routing.py")),
+    "equal_arrival": Module(("rhnc/voyage/equal_arrival.py",), ("tests/rhnc/test_equal_arrival.py",
+                                                                "tests/rhnc/test_voyage_comparison.py")),
+    # (slow tests included: the closed-loop offset removal is the observer's behaviour)
+    "disturbance_observer": Module(("rhnc/control/disturbance_observer.py",),
+                                   ("tests/rhnc/test_own_ship_control.py", "tests/rhnc/test_nmpc_limits.py"),
+                                   ("-m", "slow or not slow")),
+    "solver_watchdog": Module(("rhnc/control/solver_watchdog.py",),
+                              ("tests/rhnc/test_solver_worker_lifetime.py", "tests/rhnc/test_nmpc_solve_attempts.py",
+                               "tests/rhnc/test_nmpc_limits.py")),
+    "colregs": Module(("rhnc/encounters/colregs.py",), ("tests/rhnc/test_colregs.py", "tests/rhnc/test_imazu.py",
+                                                        "tests/rhnc/test_nmpc_colregs.py")),
+    # (slow tests included: the killed-worker resume is the batch runner's behaviour)
+    "batch_run": Module(("orchestrator/batch_run.py",), ("tests/orchestrator/test_batch_lost_runs.py",
+                                                         "tests/orchestrator/test_crash_safe_batch.py",
+                                                         "tests/orchestrator/test_batch.py"), ("-m", "slow or not slow")),
 }
 
 
@@ -198,6 +224,42 @@ def source_of(mutant: str, sources: list[str]) -> str:
     return sources[0]
 
 
+def content_hash(data: bytes) -> str:
+    """Short SHA-256 of a file's bytes (what the report compares to tell a stale verdict)."""
+    return hashlib.sha256(data).hexdigest()[:16]
+
+
+def committed_hash(source: str, commit: str, root: Path | None = None) -> str | None:
+    """:func:`content_hash` of ``source`` as of ``commit``, None where it did not exist (or no git)."""
+    root = REPO if root is None else root
+    try:
+        shown = subprocess.run(["git", "show", f"{commit}:{source}"], cwd=root, capture_output=True)
+    except OSError:
+        return None
+    return content_hash(shown.stdout) if shown.returncode == 0 else None
+
+
+def run_hashes(v: "Verdicts", root: Path | None = None) -> dict[str, str | None]:
+    """Hashes of the files as they were mutated: stored with the run, else from its commit."""
+    stored = v.settings.get("source_hashes")
+    if stored:
+        return dict(stored)
+    return {source: committed_hash(source, v.commit, root) if v.commit else None for source in v.sources}
+
+
+def stale_sources(v: "Verdicts", root: Path | None = None) -> list[str]:
+    """The module's files whose content today is not what was mutated (or is not known)."""
+    root = REPO if root is None else root
+    then = run_hashes(v, root)
+    stale = []
+    for source in v.sources:
+        path = root / source
+        now = content_hash(path.read_bytes()) if path.is_file() else None
+        if then.get(source) is None or now != then.get(source):
+            stale.append(source)
+    return stale
+
+
 #: run in the mutmut copy: the diffs of the mutants named on stdin, as JSON (one process for all,
 #: instead of one ``mutmut show`` each)
 SHOW_DIFFS = """
@@ -233,7 +295,8 @@ def run_module(key: str, children: int, timeout_multiplier: float, timeout_const
         data_folders = sorted(p.name for p in work.iterdir() if p.is_dir() and p.name not in ("tests", ".ci"))
         settings = {"tests": list(module.tests), "pytest_args": ["-m", "not slow", *module.pytest_args],
                     "timeout_multiplier": timeout_multiplier, "timeout_constant": timeout_constant,
-                    "children": children}
+                    "children": children,
+                    "source_hashes": {source: committed_hash(source, "HEAD") for source in module.sources}}
         config = (f"\n[tool.mutmut]\nsource_paths = {json.dumps(list(module.sources))}\n"
                   f"pytest_add_cli_args_test_selection = {json.dumps(list(module.tests))}\n"
                   f"pytest_add_cli_args = {json.dumps(['-p', 'no:cacheprovider', *settings['pytest_args']])}\n"
@@ -280,8 +343,8 @@ def run_module(key: str, children: int, timeout_multiplier: float, timeout_const
         diffs = json.loads(shown)
         survivors = []
         for name in left:
-            diff = "\n".join(l for l in diffs[name].splitlines()
-                             if l.startswith(("-", "+")) and not l.startswith(("---", "+++")))
+            diff = "\n".join(line for line in diffs[name].splitlines()
+                             if line.startswith(("-", "+")) and not line.startswith(("---", "+++")))
             survivors.append({"name": name, "source": source_of(name, list(module.sources)),
                               "status": statuses[name], "diff": diff})
     if not counts:
@@ -309,6 +372,8 @@ def run_module(key: str, children: int, timeout_multiplier: float, timeout_const
         counts = {status: n for status, n in counts.items() if n}
         settings["survivors_retested"] = {"commit": commit, "date": stamp, "count": len(statuses) - len(unchecked),
                                           "minutes": round(seconds / 60, 1)}
+        # the verdicts not retested are the full run's: its hashes say what they hold for
+        settings.pop("source_hashes")
         return Verdicts(key, list(module.sources), counts, survivors, previous.seconds, previous.commit,
                         previous.date, {**previous.settings, **settings})
     return Verdicts(key, list(module.sources), counts, survivors, seconds, commit, stamp, settings)
@@ -354,6 +419,11 @@ def section(v: Verdicts) -> str:
         carried += ("Carried over from the previous report (mutmut's own diffs not kept then): "
                     + (v.settings["changed"] if "changed" in v.settings else
                        f"the module has not changed since commit {v.commit}") + ". ")
+    stale = stale_sources(v)
+    if stale:
+        carried += ("**Stale**: " + ", ".join(f"`{source}`" for source in stale)
+                    + " changed since this run (or its content then is not known); these verdicts need a new "
+                      "run before they speak for today's code. ")
     lines = [f"## {v.module} (" + ", ".join(f"`{s}`" for s in v.sources) + ")", "",
              (f"A random sample (seed {sampled['seed']}) of {sampled['size']} of the {sampled['of']} mutants. "
               if sampled else "") + carried + f"{v.total} mutants: {v.counts.get('killed', 0)} killed" + (f", {others}" if others else "")
@@ -363,12 +433,12 @@ def section(v: Verdicts) -> str:
     if open_:
         lines += [f"Survivors not yet killed or explained ({len(open_)}):", ""]
         lines += [f"- `{s['name']}` ({s['status']})\n\n  ```diff\n"
-                  + "\n".join(f"  {l}" for l in s["diff"].splitlines()) + "\n  ```" for s in open_]
+                  + "\n".join(f"  {line}" for line in s["diff"].splitlines()) + "\n  ```" for s in open_]
         lines.append("")
     if equivalent:
         lines += [f"Survivors explained ({len(equivalent)}):", ""]
         for s, why in equivalent:
-            changed = [l for l in s["diff"].splitlines() if l.startswith("+")]
+            changed = [line for line in s["diff"].splitlines() if line.startswith("+")]
             lines.append(f"- `{s['name']}`" + (f" (`{changed[0][1:].strip()[:90]}`)" if changed else "") + f": {why}")
         lines.append("")
     return "\n".join(lines)
@@ -381,7 +451,9 @@ def write_report(verdicts: dict[str, Verdicts]) -> None:
               "`docs/mutation-verdicts.json`). Score = (killed + timeout) / all mutants. A survivor is listed "
               "with its diff until a test kills it or it is explained as equivalent: a log message's wording "
               "automatically, anything else by hand in `scripts/mutation_equivalents.py`. The last column "
-              "counts the explained survivors as equivalent (left out of the total).", "",
+              "counts the explained survivors as equivalent (left out of the total). A module marked stale "
+              "was run on files that have changed since (their SHA-256 then and now differ): its "
+              "verdicts need a new run.", "",
               "| module | mutants | killed | timeout | survived: equivalent | survived: open | score | "
               "score without equivalents |", "|---|---|---|---|---|---|---|---|"]
     rows, sections = [], []
@@ -395,8 +467,11 @@ def write_report(verdicts: dict[str, Verdicts]) -> None:
         explained = v.explained()
         equivalent = sum(1 for _, why in explained if why)
         sampled = v.settings.get("sample")
-        rows.append(f"| {key}" + (" (previous report)" if v.settings.get("legacy") else "")
-                    + (" (survivors retested)" if v.settings.get("survivors_retested") else "") + f" | {v.total}" + (f" (sample of {sampled['of']})" if sampled else "") + f" | {v.counts.get('killed', 0)} | {v.counts.get('timeout', 0)} | "
+        rows.append(f"| {key}" + (" **(stale)**" if stale_sources(v) else "")
+                    + (" (previous report)" if v.settings.get("legacy") else "")
+                    + (" (survivors retested)" if v.settings.get("survivors_retested") else "") + f" | {v.total}"
+                    + (f" (sample of {sampled['of']})" if sampled else "")
+                    + f" | {v.counts.get('killed', 0)} | {v.counts.get('timeout', 0)} | "
                     f"{equivalent} | {len(explained) - equivalent} | {v.score():.0f} % | "
                     f"{100.0 * v.killed / max(v.total - equivalent, 1):.0f} % |")
         sections.append(section(v))

@@ -19,6 +19,7 @@ import argparse
 import datetime as dt
 import json
 import logging
+import math
 import shutil
 import sys
 import tempfile
@@ -143,13 +144,30 @@ def _exp4(folder, summary):
     transitions = [{"time_min": round(t["time"] / 60.0, 1), "obstacle": t["kind"],
                     "range_nm": round(t["range_m"] / 1852.0, 2), "state": t["state"]}
                    for t in summary["participants"]["nav"]["et_transitions"]]
-    import pandas as pd
-
-    frame = pd.read_parquet(folder / "timeseries.parquet", columns=["goal.goal_distance_m"])
     return {"et_transitions": transitions,
             "min_distance_nm": encounter["min_distance_nm"], "required_nm": encounter["required_nm"],
-            "goal_distance_end_nm": round(float(frame["goal.goal_distance_m"].iloc[-1]) / 1852.0, 2), **counts,
+            "goal_distance_end_nm": round(final_goal_distance_m(folder, summary) / 1852.0, 2), **counts,
             "measured_on_this_machine": timing}
+
+
+def final_goal_distance_m(folder: Path, summary: dict) -> float:
+    """Distance [m] from the ship's position in the last recorded row to the goal monitor's goal.
+
+    Not the monitor's own output in that row: a participant's output is what it computed at
+    its last step, from the position one macro step earlier, so the last row holds the
+    distance of the step before the end.
+    """
+    import pandas as pd
+
+    from orchestrator.scenario import load_scenario
+
+    scenario = load_scenario(summary["scenario"])
+    goal = next(spec for spec in scenario.participants if spec.type == "goal")
+    north_nm, east_nm = goal.options["goal_nm"]
+    x, y = (next(f"{c.source}.{c.source_port}" for c in scenario.connections
+                 if (c.target, c.target_port) == (goal.name, port)) for port in ("x", "y"))
+    frame = pd.read_parquet(folder / "timeseries.parquet", columns=[x, y])
+    return float(math.hypot(frame[x].iloc[-1] - north_nm * 1852.0, frame[y].iloc[-1] - east_nm * 1852.0))
 
 
 def _exp2(folder, summary):

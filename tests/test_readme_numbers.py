@@ -77,3 +77,20 @@ def test_readme_quotes_the_committed_numbers():
     ]
     for text in quoted:
         assert text in readme, text
+
+
+def test_the_final_goal_distance_is_the_ships_last_position_not_the_monitors_held_output(tmp_path):
+    # the goal monitor's output in the last row was computed a macro step earlier (its
+    # input then): the distance at the end is read from the ship's position in that row
+    import pandas as pd
+
+    script = load_script()
+    scenario = tmp_path / "voyage.toml"
+    scenario.write_text((REPO / "scenarios" / "exp4_full.toml").read_text())
+    folder = tmp_path / "run"
+    folder.mkdir()
+    goal_m = 100.0 * 1852.0
+    pd.DataFrame({"time": [0.0, 60.0, 120.0], "ship.x": [0.0, goal_m - 4000.0, goal_m - 3000.0],
+                  "ship.y": [0.0, goal_m, goal_m - 4000.0],
+                  "goal.goal_distance_m": [2e5, 6000.0, 4000.0]}).to_parquet(folder / "timeseries.parquet")
+    assert script.final_goal_distance_m(folder, {"scenario": str(scenario)}) == pytest.approx(5000.0)

@@ -8,12 +8,12 @@ process, forked from the controller after the problem is built (the child inheri
 compiled solvers, nothing is rebuilt or pickled): each solve sends the numeric arguments
 through a pipe and waits for the answer under two limits,
 
-* ``cpu_time_s``: the processor time the worker spends on this solve (read from
-  ``/proc/<pid>/stat`` on Linux), so that the verdict does not depend on how many other
+* ``cpu_time_s``: the processor time the worker spends on this solve (read with
+  psutil), so that the verdict does not depend on how many other
   processes share the machine: on a loaded machine a solve of a few hundred ms of CPU
   can take seconds of wall time, and a wall-clock limit would then cut normal solves;
 * ``wall_time_s``: a hard cap on the wall time, for a worker that gets no CPU at all
-  and for platforms without ``/proc``.
+  and for a process whose times cannot be read.
 
 When a limit is hit, the child is killed, the call reports ``wall_time_exceeded`` and
 the next call forks a fresh worker.  The pipe adds some 0.1-0.3 ms per solve.  Where
@@ -45,6 +45,7 @@ from collections.abc import Callable, Mapping
 
 import casadi as ca
 import numpy as np
+import psutil
 
 from orchestrator.child_processes import die_with_parent
 
@@ -54,17 +55,16 @@ LOG = logging.getLogger(__name__)
 WALL_TIME_STATUS = "wall_time_exceeded"
 #: how often the parent checks the worker's processor time [s]
 POLL_S = 0.02
-_TICKS_PER_S = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
 
 
 def process_cpu_time_s(pid: int) -> float | None:
-    """User + system processor time [s] of process ``pid`` so far, or None without /proc."""
+    """User + system processor time [s] of process ``pid`` so far, or None when it cannot be read
+    (the process is gone, or the platform does not tell)."""
     try:
-        with open(f"/proc/{pid}/stat", "rb") as stream:
-            fields = stream.read().rsplit(b")", 1)[1].split()
-    except (OSError, IndexError):
+        times = psutil.Process(pid).cpu_times()
+    except psutil.Error:
         return None
-    return (int(fields[11]) + int(fields[12])) / _TICKS_PER_S
+    return times.user + times.system
 
 
 @dataclasses.dataclass

@@ -347,10 +347,28 @@ def navigation_fields_figure(frame, scenario, cosim, out_dir, panels: int = 6) -
         ax.set_xlabel("east [nm]")
         ax.set_ylabel("north [nm]")
         ax.set_aspect("equal")
-        fig.colorbar(mesh, ax=ax, shrink=0.8)
+        fig.colorbar(mesh, ax=ax, shrink=0.8,
+                     label="normalised guidance field G [-]" if avoidance else "superposed field U [-]")
     fig.suptitle(f"{scenario.simulation.name}: superposed field U and track at six planning instants")
     fig.savefig(out_dir / "navigation_fields.png", dpi=110)
     return ["navigation_fields.png"]
+
+
+#: colours of the compared runs' tracks: none white or in viridis's own hues, so each stands
+#: out from the wind-speed map and from the others
+TRACK_COLOURS = ("tab:red", "black", "magenta", "tab:cyan", "tab:orange", "tab:brown")
+
+
+def comparison_track_styles(count: int) -> list[dict]:
+    """Line styles of ``count`` compared tracks, drawn in that order.
+
+    Each is narrower than the one before, so where tracks run together (at the start and
+    the goal, or along a common stretch) the earlier ones still show on both sides of the
+    later ones; colours repeat past :data:`TRACK_COLOURS`, dashed then.
+    """
+    widths = np.linspace(3.5, 1.2, count) if count > 1 else np.array([2.0])
+    return [{"color": TRACK_COLOURS[i % len(TRACK_COLOURS)], "lw": float(widths[i]),
+             "ls": "-" if i < len(TRACK_COLOURS) else "--"} for i in range(count)]
 
 
 def comparison_tracks_figure(spec, reports, out_dir) -> list[str]:
@@ -371,11 +389,11 @@ def comparison_tracks_figure(spec, reports, out_dir) -> list[str]:
         field = from_netcdf(first).snapshot(0.0)  # at departure when it varies in time
         mesh = ax.pcolormesh(field.y / NM, field.x / NM, field.wind_speed, shading="auto", cmap="viridis")
         fig.colorbar(mesh, ax=ax, label="wind speed [m/s]")
-    for (label, report), colour in zip(reports.items(), ("tab:red", "white", "tab:orange", "tab:cyan")):
+    for (label, report), style in zip(reports.items(), comparison_track_styles(len(reports))):
         frame = pd.read_parquet(report.folder / "timeseries.parquet") if (
             report.folder / "timeseries.parquet").is_file() else pd.read_csv(report.folder / "timeseries.csv")
         plant = next(c[:-2] for c in frame.columns if c.endswith(".x") and f"{c[:-2]}.psi" in frame.columns)
-        ax.plot(frame[f"{plant}.y"] / NM, frame[f"{plant}.x"] / NM, color=colour, lw=2, label=label)
+        ax.plot(frame[f"{plant}.y"] / NM, frame[f"{plant}.x"] / NM, label=label, **style)
     ax.set_xlabel("east [nm]")
     ax.set_ylabel("north [nm]")
     ax.set_aspect("equal")

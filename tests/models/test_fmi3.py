@@ -21,12 +21,14 @@ from orchestrator.run import run_scenario
 from orchestrator.scenario import load_scenario
 
 MODELS = ("KCS", "KCSVendorB", "MetOcean")
+#: every model `python -m orchestrator build --fmi-version 3.0` builds, each validated
+ALL_MODELS = tuple(fmu_build.model_names())
 
 
 @pytest.fixture(scope="module")
 def fmus3(tmp_path_factory):
     out = tmp_path_factory.mktemp("fmus")
-    return {name: fmu_build.build_fmu(name, out, fmi_version="3.0") for name in MODELS}
+    return {name: fmu_build.build_fmu(name, out, fmi_version="3.0") for name in ALL_MODELS}
 
 
 @pytest.fixture(scope="module")
@@ -35,7 +37,11 @@ def fmus2(tmp_path_factory):
     return {name: fmu_build.build_fmu(name, out, fmi_version="2.0") for name in MODELS}
 
 
-@pytest.mark.parametrize("name", MODELS)
+def test_every_model_is_built_for_fmi3_and_validated():
+    assert set(MODELS) < set(ALL_MODELS) and len(ALL_MODELS) == 5
+
+
+@pytest.mark.parametrize("name", ALL_MODELS)
 def test_fmi3_fmu_passes_fmpy_validation(fmus3, name):
     assert validate_fmu(str(fmus3[name])) == []
     description = read_model_description(str(fmus3[name]))

@@ -9,12 +9,14 @@ import shutil
 
 import numpy as np
 import pytest
+from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 from scipy.integrate import solve_ivp
 
 from mmg_reference import STATES, equilibrium_rps, forces, make_rhs, mmg_parameters
 from orchestrator import fmu_build
-from orchestrator.errors import FmuError
+from orchestrator.errors import FmuError, ScenarioError
+from orchestrator.fmu_participant import check_parameter_value
 
 KNOT = 1852.0 / 3600.0
 
@@ -105,3 +107,21 @@ def test_fmu_state_round_trip_repeats_a_step_exactly(fmus, open_slave):
     assert 0.0 < first[6] < 0.3 and 1.0 < first[7] < 1.4  # actuators still moving at their rates
     slave.fmu.freeFMUstate(state)
     slave.fmu.freeFMUstate(restored)
+
+
+def test_a_fraction_above_its_declared_maximum_is_refused_naming_it(fmus, open_slave):
+    # the wake fraction and the thrust deduction are fractions of the inflow and the thrust:
+    # both declare [0, 1], the only declared maxima, and the shared layer refuses either side
+    slave = open_slave(fmus["KCSMMG"])
+    slave.set({"t_p": 1.0, "w_p0": 0.0})  # the ends of the range are inside it
+    with pytest.raises(FMICallException):
+        slave.set({"t_p": 1.5})
+    assert "fmi2SetReal: t_p (value reference 58) = 1.5 is outside its range [0, 1]" in slave.errors()
+    with pytest.raises(FMICallException):
+        slave.set({"w_p0": -0.1})
+    assert "fmi2SetReal: w_p0 (value reference 57) = -0.1 is outside its range [0, 1]" in slave.errors()
+    # and a scenario is refused before the FMU sees the value, naming the key
+    variable = next(v for v in slave.description.modelVariables if v.name == "t_p")
+    with pytest.raises(ScenarioError, match=r"^s.toml: participants.ship.parameters.t_p: 1.5 is outside the range "
+                                            r"\[0, 1\] that KCSMMG.fmu declares for 't_p'$"):
+        check_parameter_value(variable, 1.5, "s.toml: participants.ship.parameters.t_p", "KCSMMG.fmu")

@@ -88,6 +88,7 @@ def _mtimes(root: Path) -> dict[str, int]:
     return {p.name: (p / "summary.json").stat().st_mtime_ns for p in (root / "runs").iterdir() if not p.name.startswith(".")}
 
 
+@pytest.mark.slow
 def test_local_pool_and_dask_cluster_give_identical_tables(batch_file, tmp_path):
     from distributed import LocalCluster
 
@@ -108,6 +109,7 @@ def test_local_pool_and_dask_cluster_give_identical_tables(batch_file, tmp_path)
     assert sorted(p.name for p in (tmp_path / "one" / "small" / "runs").iterdir()) == sorted(one.table["run_id"])
 
 
+@pytest.mark.slow
 def test_rerun_skips_finished_runs_and_redoes_only_the_rest(batch_file, tmp_path):
     path = batch_file()
     first = run_batch(path, tmp_path, workers=2, progress=False)
@@ -141,6 +143,7 @@ def test_run_ids_are_stable_and_draws_do_not_shift(batch_file, tmp_path):
     assert not {r.run_id for r in runs} & {r.run_id for r in other_seed}
 
 
+@pytest.mark.slow
 def test_crashed_worker_and_failing_scenario_are_recorded_and_the_batch_completes(batch_file, tmp_path):
     path = batch_file(BATCH.replace('"participants.helm.options.tau_u_N" = [5.0e5, 9.0e5]',
                                     '"participants.helm.options.tau_u_N" = [5.0e5, 9.0e5]\n'
@@ -205,3 +208,14 @@ def test_batch_that_passes_exits_0(batch_file, tmp_path, capsys):
     path = batch_file(BATCH.replace("value = 15.0", "value = 5.0"))
     assert main(["batch", str(path), "--workers", "1", "--results", str(tmp_path / "results"), "--no-progress"]) == 0
     assert capsys.readouterr().out.startswith("6/6 runs passed (6 finished); ran 6, skipped 0 already done")
+
+
+@pytest.mark.slow
+def test_the_shipped_turning_grid_passes_its_own_criteria(tmp_path):
+    # a shipped example whose runs fail its own acceptance would teach a new user nothing
+    spec = load_batch(REPO / "batches" / "turning_grid.toml")
+    assert len(spec.runs()) == 12
+    assert main(["batch", str(REPO / "batches" / "turning_grid.toml"), "--workers", "1",
+                 "--results", str(tmp_path), "--no-progress"]) == 0
+    table = pd.read_parquet(tmp_path / "turning_grid" / "summary.parquet")
+    assert len(table) == 12 and table["passed"].all()

@@ -117,3 +117,14 @@ def test_ctrl_c_in_a_terminal_run_keeps_the_results(tmp_path):
     assert summary["status"] == "interrupted"
     assert 0 < summary["simulation"]["steps_done"] < summary["simulation"]["steps_planned"]
     assert (folder / "timeseries.parquet").is_file()
+
+
+def test_the_help_names_every_fmi_version_the_master_runs(capsys):
+    from orchestrator.scenario_participants import FMI_VERSIONS
+
+    with pytest.raises(SystemExit) as done:
+        main(["--help"])
+    assert done.value.code == 0
+    out = " ".join(capsys.readouterr().out.split())
+    assert f"(FMI {' and '.join(FMI_VERSIONS)} co-simulation master)" in out
+    assert FMI_VERSIONS == ("2.0", "3.0")

@@ -5,12 +5,12 @@ reasons (a killed worker, a full disk) and keeps those that failed on their own.
 import errno
 import json
 import os
-import signal
 import subprocess
 import sys
 import time
 from pathlib import Path
 
+import psutil
 import pytest
 
 from orchestrator.batch import RunTask, execute_run, pending_runs, run_batch
@@ -54,26 +54,23 @@ value = "finished"
 
 def children(pid: int) -> list[int]:
     """The batch's worker processes (not multiprocessing's resource tracker)."""
-    try:
-        text = Path(f"/proc/{pid}/task/{pid}/children").read_text()
-    except OSError:
-        return []
     found = []
-    for child in map(int, text.split()):
-        command = Path(f"/proc/{child}/cmdline").read_bytes()
-        if b"resource_tracker" not in command:
-            found.append(child)
+    try:
+        for child in psutil.Process(pid).children():
+            try:
+                if not any("resource_tracker" in part for part in child.cmdline()):
+                    found.append(child.pid)
+            except psutil.Error:  # ended meanwhile
+                continue
+    except psutil.Error:
+        return []
     return found
 
 
 def alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
     try:  # a zombie has ended
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
-    except OSError:
+        return psutil.Process(pid).status() != psutil.STATUS_ZOMBIE
+    except psutil.Error:
         return False
 
 
@@ -277,7 +274,7 @@ def test_a_staging_folder_of_an_ended_but_unreaped_process_is_stale(tmp_path):
         os._exit(0)
     try:
         for _ in range(200):  # until the child has ended
-            if Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z":
+            if psutil.Process(pid).status() == psutil.STATUS_ZOMBIE:
                 break
             time.sleep(0.01)
         ended = tmp_path / f".run1.{pid}-abcd.partial"

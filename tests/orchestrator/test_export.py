@@ -7,7 +7,6 @@ libcosim's exchange order (``exchange = "jacobi"``).
 
 from __future__ import annotations
 
-import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -87,6 +86,7 @@ SHIP_STATE = ("x", "y", "psi", "u", "v", "r")
     ("exp3b_head_on", {"ref", "traffic", "ctrl", "ship"}, "steps = 320"),
     ("exp2_rhnc", {"nav", "ctrl", "goal", "ship", "env"}, "steps = 480"),
 ])
+@pytest.mark.slow
 def test_osp_system_in_libcosim_gives_our_trajectory(name, fmus, steps_key, tmp_path):
     """The committed OspSystemStructure.xml is what export writes, and libcosim running it gives
     our own run's trajectory (first 40 macro steps) to 1e-6."""

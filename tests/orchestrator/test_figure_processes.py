@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 import pandas as pd
+import psutil
 import pytest
 
 from orchestrator import figure_processes, plugins
@@ -228,8 +229,6 @@ def test_a_second_ctrl_c_while_figures_are_drawn_stops_at_once_and_ends_the_draw
 
 def _alive(pid: int) -> bool:
     try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
+        return psutil.Process(pid).status() != psutil.STATUS_ZOMBIE
+    except psutil.Error:  # gone
         return False
-    state = Path(f"/proc/{pid}/stat")
-    return not (state.is_file() and state.read_text().rsplit(")", 1)[1].split()[0] == "Z")

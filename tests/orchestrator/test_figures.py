@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rhnc.cosim.figures import closest_approach_rows, time_mark_interval_min
+from rhnc.cosim.figures import closest_approach_rows, comparison_track_styles, time_mark_interval_min
 
 NM = 1852.0
 
@@ -39,3 +39,36 @@ def test_each_obstacle_is_taken_at_the_own_ships_closest_approach_to_it():
 @pytest.mark.parametrize("duration_min, expected", [(20, 2.0), (45, 5.0), (120, 10.0), (480, 60.0)])
 def test_time_marks_are_round_and_few(duration_min, expected):
     assert time_mark_interval_min(duration_min * 60.0) == expected
+
+
+@pytest.mark.parametrize("count", [2, 3, 4, 7])
+def test_compared_tracks_stay_visible_where_they_overlap(count):
+    # on a viridis wind map, one after another: no white or map-coloured track, every colour
+    # its own, and each track narrower than the one drawn before it, so that an earlier track
+    # shows on both sides of a later one running over it
+    from matplotlib.colors import to_rgb
+
+    styles = comparison_track_styles(count)
+    assert len(styles) == count
+    looks = [(to_rgb(style["color"]), style["ls"]) for style in styles]
+    assert len(set(looks)) == count
+    assert all(min(rgb) < 0.9 for rgb, _ in looks)  # nothing white
+    widths = [style["lw"] for style in styles]
+    assert all(later < earlier for earlier, later in zip(widths, widths[1:]))
+    assert widths[-1] >= 1.0
+
+
+def test_every_colour_bar_says_what_it_shows():
+    # a colour bar without a label leaves the reader to guess the quantity and its unit
+    import ast
+    from pathlib import Path
+
+    repo = Path(__file__).resolve().parents[2]
+    unlabelled = []
+    for path in [*repo.joinpath("rhnc").rglob("*.py"), *repo.joinpath("orchestrator").rglob("*.py"),
+                 *repo.joinpath("scripts").rglob("*.py")]:
+        for node in ast.walk(ast.parse(path.read_text())):
+            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "colorbar"
+                    and not any(keyword.arg == "label" for keyword in node.keywords)):
+                unlabelled.append(f"{path.relative_to(repo)}:{node.lineno}")
+    assert unlabelled == []

@@ -66,3 +66,13 @@ def test_installed_plugin_runs_its_participant_and_analysis(tmp_path):
     swing = summary["analyses"]["heading_swing"]
     assert swing["samples"] == (600 - 60) // 5 + 1
     assert swing["heading_swing_deg"] > 1.0  # the sine yaw moment turned the ship both ways
+
+
+@pytest.mark.parametrize("left_by_pip", ["build/lib/sine_helm/helm.py", "build/bdist.linux-x86_64/x",
+                                         "sine_helm_plugin.egg-info/PKG-INFO"])
+def test_installing_the_example_leaves_nothing_untracked_in_the_checkout(left_by_pip):
+    # `python -m pip install examples/sine_helm_plugin` (the readme's command) builds in the
+    # example's folder: what setuptools leaves there is ignored, not shown as untracked
+    path = (EXAMPLE / left_by_pip).relative_to(REPO)
+    ignored = subprocess.run(["git", "check-ignore", "-q", "--no-index", str(path)], cwd=REPO)
+    assert ignored.returncode == 0, f"{path} would be left untracked"

@@ -2,7 +2,6 @@
 
 from pathlib import Path
 
-import numpy as np
 
 from orchestrator.batch_spec import load_batch
 from orchestrator.scenario import load_scenario

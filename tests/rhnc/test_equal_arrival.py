@@ -85,7 +85,12 @@ def test_a_baseline_whose_arrival_jumps_over_the_target_is_read_between_the_two_
     assert equal.bracket == (trials[0], trials[1])
     weight = (28689.6 - 28686.7) / (28708.8 - 28686.7)
     assert equal.at_target(lambda t: t.run) == pytest.approx(100.0 - 10.0 * weight)
-    assert equal.at_target(lambda t: t.arrival_s) == pytest.approx(28689.6)
+    # the speed read at the target: 0.13 of the way from the early trial's to the late one's
+    assert equal.at_target(lambda t: t.speed_kn) == pytest.approx(17.6778 - 0.0002 * weight, abs=1e-9)
+    assert 0.1 < weight < 0.2
+    # the same reading whatever order the trials were run in
+    shuffled = EqualArrival(target_s=28689.6, tolerance_s=2.0, trials=trials[::-1])
+    assert shuffled.at_target(lambda t: t.run) == pytest.approx(100.0 - 10.0 * weight)
     # a bracket wider than a macro step does not stand in for a trial at the target
     wide = EqualArrival(target_s=28689.6, tolerance_s=2.0, trials=[trials[2], ArrivalTrial(17.5, 28760.0, 80.0)])
     assert not wide.interpolated and not wide.usable
@@ -94,3 +99,33 @@ def test_a_baseline_whose_arrival_jumps_over_the_target_is_read_between_the_two_
     # matched: the best trial's own figure
     exact = EqualArrival(target_s=28686.0, tolerance_s=2.0, trials=trials)
     assert exact.matched and not exact.interpolated and exact.at_target(lambda t: t.run) == 100.0
+
+
+def test_the_speeds_tried_follow_the_secant_in_one_over_v():
+    # an arrival affine in 1/v (a fixed lag plus distance over speed): the first guess scales
+    # the first trial's speed by its arrival over the target (arrival taken as 1/v alone);
+    # the secant in 1/v through two trials is then exact, and the third trial lands on it
+    lag_s, target_s = 600.0, 30_000.0
+
+    def arrival_of(speed_kn):
+        return lag_s + DISTANCE_NM / speed_kn * 3600.0, None
+
+    first = 16.0
+    result = match_arrival_time(arrival_of, target_s, tolerance_s=1.0, first_speed_kn=first, aim_s=1e-6)
+    speeds = [t.speed_kn for t in result.trials]
+    first_arrival = arrival_of(first)[0]
+    exact = DISTANCE_NM * 3600.0 / (target_s - lag_s)
+    assert speeds == pytest.approx([first, first * first_arrival / target_s, exact], rel=1e-12)
+    assert result.matched and abs(result.trials[-1].arrival_s - target_s) < 1e-6
+
+
+def test_a_trial_that_does_not_arrive_is_followed_by_a_quarter_faster_one():
+    tried = []
+
+    def arrival_of(speed_kn):
+        tried.append(speed_kn)
+        return (None, None) if speed_kn < 20.0 else (DISTANCE_NM / speed_kn * 3600.0, None)
+
+    match_arrival_time(arrival_of, 25_000.0, tolerance_s=60.0, first_speed_kn=12.0, max_trials=3)
+    assert tried[:3] == pytest.approx([12.0, 15.0, 18.75])
+

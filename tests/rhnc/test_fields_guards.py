@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from rhnc.ship.energy import EnergyParameters, brake_power, cost_rate, emission_rate, speed_through_water
-from rhnc.navigation.fields import (GuidanceParameters, PlanningWeather, SuperpositionField, bearing, energy_rate_fields,
+from rhnc.navigation.fields import (GuidanceParameters, SuperpositionField, energy_rate_fields,
                          guidance_field, normalise, resample_weather)
 from orchestrator.geometry import KNOT, NM
 from rhnc.weather.metocean import MetOceanField

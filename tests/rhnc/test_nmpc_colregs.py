@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from rhnc.encounters.colregs import wrap_deg
-from rhnc.encounters.colregs import ENCOUNTER_CLASSES
+from rhnc.encounters.colregs import ENCOUNTER_CLASSES, cpa_tcpa
 from rhnc.control.nmpc import NMPCController, NMPCSettings
 from rhnc.control.nmpc_alteration import CATCH_UP_RATE_DEG_S, HEADING_TOLERANCE_DEG, YAW_TIME_CONSTANT_S, heading_bounds
 from rhnc.control.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport, DomainSettings
@@ -376,3 +376,64 @@ def test_overtaking_ship_alters_to_starboard_when_another_target_rules_out_port(
     assert report.no_port_turn
     assert report.alteration_ceiling is None
     assert report.alteration_floor == pytest.approx((0.0, 0.0, math.radians(DomainSettings().alteration_deg)))
+
+
+def test_a_target_in_reach_gets_its_slot_behind_a_nearer_one_out_of_reach():
+    # the reach test is per target: a static buoy 2.5 nm ahead cannot be reached in 200 s,
+    # a 25 kn ship 3.5 nm off (farther, so sorted after it) can; the buoy's verdict must not
+    # end the look at the rest.  The slot holds the target's position and velocity in the
+    # problem's scaled units (L = 230 m), so that its predicted centre is (x + vx t) / L.
+    domains = CollisionDomains(DomainSettings(own_radius_m=0.0, colregs=False), max_obstacles=2)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    origin = np.array([100.0, -50.0])
+    velocity = 25 * KNOT * np.array([-math.sqrt(0.5), math.sqrt(0.5)])
+    rows = np.array([[2.5 * NM, 0.0, 0.0, 0.0, 0.1 * NM], [3.5 * NM, -0.5 * NM, *velocity, RADIUS]])
+    slots, report = domains.parameters(rows, state, origin, 1.25 * SPEED, 5.0, 230.0, et=True, horizon_s=200.0)
+    np.testing.assert_array_equal(report.active, [0.0, 1.0])
+    for t in (0.0, 120.0):
+        centre = (slots[0:2, 0] + slots[2:4, 0] * t) * 230.0 + origin
+        np.testing.assert_allclose(centre, rows[1, :2] + velocity * t, rtol=0, atol=1e-6)
+    assert slots[6, 0] * 230.0 == pytest.approx(RADIUS)
+
+
+def test_a_target_past_its_cpa_no_longer_rules_out_a_turn_to_port():
+    # a crossing ship from starboard (we give way): while it approaches, no turn to port;
+    # once its CPA is past (still held in its class until 4 nm off), the bound is lifted
+    domains = CollisionDomains(DomainSettings(colregs=True, alteration_deg=0.0), max_obstacles=1)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    start, velocity = target_on_collision_course(270.0, 15.0)
+    _, report = domains.parameters(np.array([[*start, *velocity, RADIUS]]), state, np.zeros(2), SPEED, 5.0, 230.0,
+                                   et=True)
+    assert report.class_codes[0] == ENCOUNTER_CLASSES.index("crossing_give_way") and report.no_port_turn
+    past = np.array([[-1.5 * NM * math.sqrt(0.5), -1.5 * NM * math.sqrt(0.5), *velocity, RADIUS]])
+    _, report = domains.parameters(past, state, np.zeros(2), SPEED, 5.0, 230.0, et=True)
+    assert report.class_codes[0] == ENCOUNTER_CLASSES.index("crossing_give_way")  # held: past, within 4 nm
+    assert not report.no_port_turn
+
+
+def test_a_give_way_alteration_needs_the_cpa_inside_the_risk_distance():
+    # a crossing ship from starboard, classified at 20 min with a CPA of nil, then seen on a
+    # track that passes 2.5 nm off with its CPA 10 min away: the class is held, but there is
+    # no longer a risk of collision to give way to, so no alteration begins
+    settings = DomainSettings(colregs=True)
+    domains = CollisionDomains(settings, max_obstacles=1)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    start, velocity = target_on_collision_course(270.0, 15.0)
+    behind = state.copy()
+    behind[0] = -SPEED * 300.0
+    _, report = domains.parameters(np.array([[*(start - velocity * 300.0), *velocity, RADIUS]]), behind, behind[:2],
+                                   SPEED, 5.0, 230.0, et=True, reference_heading_rad=0.0, time_s=0.0)
+    assert report.class_codes[0] == ENCOUNTER_CLASSES.index("crossing_give_way") and report.alteration_floor is None
+    moved = state.copy()
+    moved[0] = SPEED * 60.0
+    # still heading west, placed so that its CPA is 2.5 nm (beyond the 2 nm of risk) in 10 min
+    altered_velocity = velocity
+    relative = altered_velocity - np.array([SPEED, 0.0])
+    across = np.array([-relative[1], relative[0]]) / np.hypot(*relative)
+    target = moved[:2] - 600.0 * relative + 2.5 * NM * across
+    cpa, tcpa = cpa_tcpa(moved[:2], np.array([SPEED, 0.0]), target, altered_velocity)
+    assert cpa > settings.risk_cpa_m and 0.0 < tcpa <= settings.give_way_action_tcpa_s
+    _, report = domains.parameters(np.array([[*target, *altered_velocity, RADIUS]]), moved, moved[:2], SPEED, 5.0,
+                                   230.0, et=True, reference_heading_rad=0.0, time_s=360.0)
+    assert report.class_codes[0] == ENCOUNTER_CLASSES.index("crossing_give_way")
+    assert report.alteration_floor is None and report.alteration_ceiling is None and domains.alterations == 0

@@ -3,11 +3,12 @@
 import numpy as np
 import pytest
 
-from rhnc.ship.energy import EnergyParameters
+from rhnc.ship.energy import EnergyParameters, brake_power, fuel_rate_t_h
 from orchestrator.geometry import KNOT, NM
 from rhnc.routing.route_search import segment_clearance
 from rhnc.routing.track_cost import constant_speed_times, cost_of_track
-from rhnc.routing.weather_routing import RouteSearch, RoutingProblem, optimal_route, straight_route
+from rhnc.routing.routing_problem import costed_route
+from rhnc.routing.weather_routing import RouteSearch, RoutingProblem, _refine, optimal_route, straight_route
 from weather_fixtures import storm_field, switched_field
 
 SPEED = 18 * KNOT
@@ -88,9 +89,30 @@ def test_the_arrival_time_is_met_and_later_is_cheaper_in_fuel():
 def test_the_reported_cost_is_the_cost_of_the_returned_track():
     field = storm_field(storms=[(6.0, 14.0, 3.0, 15.0)], current_ms=(0.3, 0.2))
     problem = RoutingProblem((0.0, 0.0), (18 * NM, 20 * NM), field)
-    route = optimal_route(problem, speed_mps=15 * KNOT)
+    speed = 15 * KNOT
+    route = optimal_route(problem, speed_mps=speed)
+    # the cost integrated here on its own, not through cost_of_track: midpoint rule over
+    # 40 pieces a leg, at the route's speed through water and each leg's course; the time of a
+    # piece is its length over the speed over ground (speed through water + current along)
+    energy = problem.energy
+    fuel_t = hours = 0.0
+    for a, b in zip(route.waypoints_m[:-1], route.waypoints_m[1:]):
+        leg = b - a
+        course = np.arctan2(leg[1], leg[0])
+        middles = a + ((np.arange(40) + 0.5) / 40)[:, None] * leg
+        weather = field.sample(middles[:, 0], middles[:, 1])
+        along = weather["current_north"] * np.cos(course) + weather["current_east"] * np.sin(course)
+        piece_h = np.hypot(*leg) / 40 / (speed + along) / 3600.0
+        power = brake_power(speed, course, weather["wind_north"], weather["wind_east"], weather["hs"], energy)
+        fuel_t += float(np.sum(fuel_rate_t_h(power, energy) * piece_h))
+        hours += float(np.sum(piece_h))
+    expected = fuel_t * energy.fuel_price_usd_t + energy.running_cost_usd_day / 24.0 * hours
+    assert route.duration_s == pytest.approx(hours * 3600.0, rel=1e-6)
+    assert route.fuel_t == pytest.approx(fuel_t, rel=1e-5)
+    assert route.cost_usd == pytest.approx(expected, rel=1e-5)
+    # the route really goes round the storm (a straight line would check less)
+    assert np.max(np.abs(offset_from_line_nm(route.waypoints_m, problem.start_m, problem.goal_m))) > 0.5
     account = cost_of_track(field, problem.energy, route.waypoints_m, route.times_s)
-    assert route.cost_usd == pytest.approx(account["cost_usd"], rel=1e-12)
     assert account["mean_speed_through_water_kn"] == pytest.approx(15.0, rel=2e-3)
 
 
@@ -195,3 +217,53 @@ def test_a_detour_does_not_pay_when_time_is_dear_enough():
     assert np.max(np.abs(offsets)) < 0.5
     route = optimal_route(problem, speed_mps=SPEED)
     assert route.distance_nm == pytest.approx(straight_route(problem, speed_mps=SPEED).distance_nm, rel=2e-3)
+
+
+def hours_at_sea(legs, current_ms=(0.3, 0.2)):
+    """Hours [h] each leg (north, east [m]) takes at SPEED through water in a uniform current."""
+    course = np.arctan2(legs[:, 1], legs[:, 0])
+    along = current_ms[0] * np.cos(course) + current_ms[1] * np.sin(course)
+    return np.hypot(*legs.T) / (SPEED + along) / 3600.0
+
+
+def test_a_shortcut_is_priced_with_the_hours_it_takes():
+    # the objective of a straight segment is fuel plus the price of each hour it takes: the
+    # difference between two prices is that price times the segment's duration, at the speed
+    # over ground (speed through water plus the current along the segment)
+    field = storm_field(storms=[(10.0, 10.0, 3.0, 15.0)], current_ms=(0.3, 0.2))
+    problem = RoutingProblem((0.0, 0.0), (20 * NM, 20 * NM), field)
+    search = RouteSearch(problem)
+    start = np.array([1.0, 2.0]) * NM
+    ends = np.array([[15.0, 3.0], [10.0, 12.0], [2.0, 18.0]]) * NM
+    price = 1000.0
+    fuel_only = search.segment_costs(start, ends, 0.0, SPEED, 0.0)
+    assert np.all(fuel_only > 0)
+    priced = search.segment_costs(start, ends, 0.0, SPEED, price)
+    assert priced - fuel_only == pytest.approx(price * hours_at_sea(ends - start), rel=1e-9)
+    polyline = np.vstack([start, ends])
+    leg_priced = search.leg_costs(polyline, 0.0, SPEED, price) - search.leg_costs(polyline, 0.0, SPEED, 0.0)
+    leg_hours = hours_at_sea(np.diff(polyline, axis=0))
+    assert leg_priced == pytest.approx(price * leg_hours, rel=1e-9)
+    # the grid search's rates too: each hour at the price on top of the fuel
+    priced_rate, _ = search.node_rates(SPEED, price, slice(None), None)
+    fuel_rate, _ = search.node_rates(SPEED, 0.0, slice(None), None)
+    assert priced_rate - fuel_rate == pytest.approx(np.full_like(fuel_rate, price), rel=1e-12)
+
+
+def test_refining_moves_the_last_turning_point_too():
+    # a storm on the last leg, three quarters of the way along it: only moving the turning
+    # point inserted midway along that leg takes the route off the storm's centre
+    last_from, goal = np.array([10.0, 15.0]), np.array([20.0, 20.0])
+    centre = last_from + 0.75 * (goal - last_from)
+    field = storm_field(storms=[(*centre, 1.0, 20.0)])
+    problem = RoutingProblem((0.0, 0.0), tuple(goal * NM), field)
+    polyline = np.array([[0.0, 0.0], last_from, goal]) * NM
+
+    def evaluate(points):
+        return costed_route(problem, points, SPEED, "optimal")
+
+    before = evaluate(polyline)
+    after = _refine(problem, polyline, before, evaluate)
+    assert after.cost_usd < before.cost_usd
+    clearance_nm = np.min(np.hypot(*(after.waypoints_m - centre * NM).T)) / NM
+    assert clearance_nm > 0.7

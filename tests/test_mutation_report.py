@@ -1,0 +1,67 @@
+"""The mutation report marks a module's verdicts stale when a mutated file changed since its run."""
+
+import importlib.util
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "mutation_report.py"
+
+
+@pytest.fixture(scope="module")
+def report():
+    spec = importlib.util.spec_from_file_location("mutation_report_under_test", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up by name
+    spec.loader.exec_module(module)
+    yield module
+    del sys.modules[spec.name]
+
+
+def verdicts(report, commit="", hashes=None):
+    settings = {"tests": ["tests/test_a.py"]} | ({"source_hashes": hashes} if hashes is not None else {})
+    return report.Verdicts(module="a", sources=["pkg/a.py", "pkg/b.py"], counts={"killed": 9, "survived": 1},
+                           survivors=[], seconds=60.0, commit=commit, date="today", settings=settings)
+
+
+def test_a_file_changed_since_the_run_makes_its_verdicts_stale(report, tmp_path, monkeypatch):
+    (tmp_path / "pkg").mkdir()
+    (tmp_path / "pkg" / "a.py").write_text("x = 1\n")
+    (tmp_path / "pkg" / "b.py").write_text("y = 2\n")
+    hashes = {name: report.content_hash((tmp_path / name).read_bytes()) for name in ("pkg/a.py", "pkg/b.py")}
+    v = verdicts(report, hashes=hashes)
+    assert report.stale_sources(v, tmp_path) == []
+    (tmp_path / "pkg" / "b.py").write_text("y = 3\n")
+    assert report.stale_sources(v, tmp_path) == ["pkg/b.py"]
+    (tmp_path / "pkg" / "a.py").unlink()
+    assert report.stale_sources(v, tmp_path) == ["pkg/a.py", "pkg/b.py"]
+    # and the rendered section says so, naming the file
+    monkeypatch.setattr(report, "REPO", tmp_path)
+    text = report.section(v)
+    assert "**Stale**: `pkg/a.py`, `pkg/b.py` changed since this run" in text
+    (tmp_path / "pkg" / "a.py").write_text("x = 1\n")
+    (tmp_path / "pkg" / "b.py").write_text("y = 2\n")
+    assert "Stale" not in report.section(v)
+
+
+def test_a_run_stored_without_hashes_is_judged_by_its_commit(report, tmp_path):
+    def git(*args):
+        return subprocess.run(["git", *args], cwd=tmp_path, check=True, capture_output=True, text=True).stdout.strip()
+
+    git("init", "-q")
+    (tmp_path / "pkg").mkdir()
+    (tmp_path / "pkg" / "a.py").write_text("x = 1\n")
+    (tmp_path / "pkg" / "b.py").write_text("y = 2\n")
+    git("add", "-A")
+    git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "first")
+    v = verdicts(report, commit=git("rev-parse", "--short", "HEAD"))
+    assert report.stale_sources(v, tmp_path) == []
+    (tmp_path / "pkg" / "a.py").write_text("x = 10\n")
+    assert report.stale_sources(v, tmp_path) == ["pkg/a.py"]
+    # a file the run's commit did not have (moved since), or no commit at all: not known, stale
+    moved = report.Verdicts(**{**verdicts(report, commit=v.commit).__dict__, "sources": ["pkg/b.py", "pkg/c.py"]})
+    (tmp_path / "pkg" / "c.py").write_text("z = 3\n")
+    assert report.stale_sources(moved, tmp_path) == ["pkg/c.py"]
+    assert report.stale_sources(verdicts(report), tmp_path) == ["pkg/a.py", "pkg/b.py"]
