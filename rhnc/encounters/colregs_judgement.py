@@ -97,10 +97,14 @@ def first_manoeuvre(t, heading_rad, start_index: int, end_time_s: float,
     ``heading_rad`` is the course (over ground, as :func:`rhnc.cosim.colregs_analysis.judge_encounters` passes it) at
     each sample [rad].  It must depart from its value at ``start_index`` by at least the threshold and
     stay beyond it (on the same side) for ``manoeuvre_hold_s``; only changes that begin
-    before ``end_time_s`` count.
+    before ``end_time_s`` count.  The change is the accumulated (unwrapped) one, so the side
+    of a turn through more than 180 deg stays the side it began on.
     """
     t = np.asarray(t, dtype=float)
-    change = wrap_deg(np.degrees(np.unwrap(heading_rad) - np.unwrap(heading_rad)[start_index]))
+    unwrapped = np.unwrap(np.asarray(heading_rad, dtype=float))
+    # the accumulated change, not wrapped: a turn to starboard that passes 180 deg is still
+    # a turn to starboard (wrapped, it read as a turn to port from there on)
+    change = np.degrees(unwrapped - unwrapped[start_index])
     threshold = settings.manoeuvre_threshold_deg
     for k in range(start_index, t.size):
         if t[k] > end_time_s:
@@ -258,8 +262,10 @@ def _prediction_before_manoeuvre(t, own_xy, course_rad, target: np.ndarray, onse
 
 def _last_steady_sample(t, course_rad, onset_index: int, index: int, settings: JudgementSettings) -> int:
     """The last sample before ``index`` whose course is within half the manoeuvre threshold of
-    the course at the onset (where the manoeuvre began); the onset if none."""
-    change = np.abs(wrap_deg(np.degrees(np.asarray(course_rad[onset_index:index + 1]) - course_rad[onset_index])))
+    the course at the onset (where the manoeuvre began); the onset if none.  The change is
+    accumulated, as in :func:`first_manoeuvre` (a full round turn is not steady)."""
+    unwrapped = np.unwrap(np.asarray(course_rad[onset_index:index + 1], dtype=float))
+    change = np.abs(np.degrees(unwrapped - unwrapped[0]))
     steady = np.nonzero(change < 0.5 * settings.manoeuvre_threshold_deg)[0]
     return onset_index + int(steady[-1]) if steady.size else onset_index
 

@@ -318,3 +318,10 @@ def test_no_predicted_cpa_without_a_manoeuvre():
     track = own_track(20)
     result = judge(track, target_states(track[0], (7.0, 0.5), 180.0, 18.0))
     assert result["manoeuvre_time_s"] is None and result["predicted_time_of_cpa_s"] is None
+
+
+def test_a_round_turn_to_starboard_stays_a_starboard_manoeuvre():
+    # 350 deg to starboard at 2 deg/s: from 180 deg on, the wrapped change reads as a turn to port
+    t = np.arange(0.0, 900.0, 5.0)
+    course = np.radians(np.clip(2.0 * (t - 100.0), 0.0, 350.0))
+    assert first_manoeuvre(t, course, 0, 900.0, JudgementSettings()) == (105.0, "starboard")
