@@ -29,11 +29,27 @@ Classes (own ship's view), checked in this order:
     and avoid crossing ahead of it, Rule 16)
 ``crossing_stand_on`` (Rule 15 for the target; Rule 17 for us)
 
-Rule 14 speaks of "reciprocal or nearly reciprocal courses" and of seeing the other ship
-"ahead or nearly ahead"; we take 10 deg for the bearing and 15 deg for the course
-difference (a mast-head light pair is seen in line within about 6 deg; radar plotting
-practice allows more).  The thresholds are module constants, not options, so the analysis
-and the controller always agree.
+The rules' own words and the tolerances we read them with:
+
+* Rule 13(b): a vessel is overtaking "when coming up with another vessel from a direction
+  more than 22.5 degrees abaft her beam": the aspect ``|alpha|`` (or, for a ship coming up on
+  us, the bearing ``|beta|``) strictly more than 90 + 22.5 = ``ABAFT_BEAM_DEG`` deg.
+  Checked before head-on and crossing (Rule 13(a): "notwithstanding anything contained
+  in the Rules of Part B, Sections I and II").
+* Rule 14(a): "meeting on reciprocal or nearly reciprocal courses", 14(b): seeing the
+  other "ahead or nearly ahead".  Nearly reciprocal: the courses differ from 180 deg by at
+  most ``HEAD_ON_COURSE_DEG`` = 15 deg; nearly ahead: ``|beta| <= HEAD_ON_BEARING_DEG`` = 10 deg
+  (a mast-head light pair is seen in line within about 6 deg; radar plotting practice
+  allows more).
+* Rule 15: any other crossing with risk of collision; the target on our starboard side
+  (``beta > 0``) is the one we give way to.
+
+The thresholds are module constants, not options, so the analysis and the controller
+always agree.  A class decided within ``BORDERLINE_DEG`` of one of these boundaries (the
+angle that decided it lies that close to its threshold) is a borderline class: another
+observer, with another sensor or another reading of "nearly", may well classify it the
+other way.  :attr:`Encounter.borderline` names the boundary; the ``colregs`` analysis
+reports such targets as borderline.
 
 Hysteresis: a class is decided when the risk of collision first appears and is kept for
 the whole encounter (COLREG roles do not change as the geometry evolves during the
@@ -56,6 +72,8 @@ STATIC_SPEED_MPS = 0.1
 HEAD_ON_BEARING_DEG = 10.0
 HEAD_ON_COURSE_DEG = 15.0
 ABAFT_BEAM_DEG = 112.5
+#: a class decided within this many degrees of a boundary is borderline
+BORDERLINE_DEG = 2.5
 #: Rule 17(b): a stand-on ship may act once the CPA predicted at the present velocities lies
 #: inside the required separation and is at most this far ahead [s] ...
 STAND_ON_ACTION_TCPA_S = 600.0
@@ -108,6 +126,7 @@ class Encounter:
     range_m: float
     cpa_m: float
     tcpa_s: float
+    borderline: str = ""
 
     @property
     def role(self) -> str:
@@ -139,20 +158,40 @@ def classify(own_xy: Sequence[float], own_course_rad: float, own_speed_mps: floa
         return Encounter("static", beta, 0.0, range_m, cpa, tcpa)
     target_course_deg = math.degrees(math.atan2(target_velocity[1], target_velocity[0]))
     alpha = float(wrap_deg(bearing_deg(target_xy[0], target_xy[1], own_xy[0], own_xy[1]) - target_course_deg))
+    course_difference = abs(float(wrap_deg(target_course_deg - own_course_deg - 180.0)))
     if not (0.0 < tcpa <= tcpa_limit_s) or cpa > cpa_limit_m:
         name = "none"
     elif abs(alpha) > ABAFT_BEAM_DEG:
         name = "overtaking"
     elif abs(beta) > ABAFT_BEAM_DEG:
         name = "overtaken"
-    elif (abs(beta) <= HEAD_ON_BEARING_DEG
-          and abs(float(wrap_deg(target_course_deg - own_course_deg - 180.0))) <= HEAD_ON_COURSE_DEG):
+    elif abs(beta) <= HEAD_ON_BEARING_DEG and course_difference <= HEAD_ON_COURSE_DEG:
         name = "head_on"
     elif beta > 0.0:
         name = "crossing_give_way"
     else:
         name = "crossing_stand_on"
-    return Encounter(name, beta, alpha, range_m, cpa, tcpa)
+    borderline = "" if name == "none" else _borderline(name, alpha, beta, course_difference)
+    return Encounter(name, beta, alpha, range_m, cpa, tcpa, borderline)
+
+
+def _borderline(name: str, alpha: float, beta: float, course_difference: float) -> str:
+    """The boundary a class was decided within ``BORDERLINE_DEG`` of ("" if none)."""
+    near = []
+    if abs(abs(alpha) - ABAFT_BEAM_DEG) <= BORDERLINE_DEG:
+        near.append(f"overtaking: own ship {abs(alpha):.1f} deg from the target's bow (22.5 deg abaft the beam is "
+                    f"{ABAFT_BEAM_DEG:g})")
+    if name != "overtaking" and abs(abs(beta) - ABAFT_BEAM_DEG) <= BORDERLINE_DEG:
+        near.append(f"overtaken: target {abs(beta):.1f} deg from our bow (22.5 deg abaft the beam is "
+                    f"{ABAFT_BEAM_DEG:g})")
+    if name in ("head_on", "crossing_give_way", "crossing_stand_on"):
+        ahead = abs(beta) <= HEAD_ON_BEARING_DEG + BORDERLINE_DEG
+        reciprocal = course_difference <= HEAD_ON_COURSE_DEG + BORDERLINE_DEG
+        if ahead and reciprocal and (abs(abs(beta) - HEAD_ON_BEARING_DEG) <= BORDERLINE_DEG
+                                     or abs(course_difference - HEAD_ON_COURSE_DEG) <= BORDERLINE_DEG):
+            near.append(f"head-on: bearing {abs(beta):.1f} deg (nearly ahead: <= {HEAD_ON_BEARING_DEG:g}), courses "
+                        f"{course_difference:.1f} deg from reciprocal (nearly: <= {HEAD_ON_COURSE_DEG:g})")
+    return "; ".join(near)
 
 
 def stand_on_must_act(cpa_m: float, tcpa_s: float, range_m: float, separation_m: float,
@@ -202,6 +241,7 @@ class EncounterTracker:
         self.tcpa_limit_s = float(tcpa_limit_s)
         self.release_range_m = float(release_range_m)
         self._locked: dict[int, str] = {}
+        self._borderline: dict[int, str] = {}
 
     def update(self, own_xy: Sequence[float], own_course_rad: float, own_speed_mps: float,
                obstacles: np.ndarray) -> list[Encounter]:
@@ -215,10 +255,12 @@ class EncounterTracker:
             if locked is not None:
                 if now.tcpa_s <= 0.0 and now.range_m > self.release_range_m:
                     del self._locked[index]
-                else:
-                    now = dataclasses.replace(now, encounter_class=locked)
+                    self._borderline.pop(index, None)
+                else:  # the class and its borderline note as decided at the onset
+                    now = dataclasses.replace(now, encounter_class=locked, borderline=self._borderline[index])
             elif now.encounter_class not in ("none", "static"):
                 self._locked[index] = now.encounter_class
+                self._borderline[index] = now.borderline
             result.append(now)
         return result
 

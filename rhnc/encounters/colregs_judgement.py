@@ -64,6 +64,7 @@ class JudgementSettings:
     risk_cpa_nm: float = 2.0
     risk_tcpa_min: float = 30.0
     stand_on_range_factor: float = STAND_ON_ACTION_RANGE_FACTOR
+    inside_open_within_s: float = 60.0
 
     def __post_init__(self) -> None:
         for field in dataclasses.fields(self):
@@ -183,6 +184,8 @@ def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter
         "initial_range_nm": initial_range_m / NM,
         "started_inside": started_inside,
         "range_kept_from_start": bool(cpa_m >= initial_range_m - 1e-6) if started_inside else None,
+        "range_opening_s": float(cpa_time - t[0]) if started_inside else None,
+        "range_opened_in_time": bool(cpa_time - t[0] <= settings.inside_open_within_s) if started_inside else None,
         "time_of_cpa_s": cpa_time,
         "passing_side": "starboard" if bearing > 0 else "port",
         "relative_bearing_at_cpa_deg": bearing,
@@ -280,10 +283,12 @@ def _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, targe
         if failures:
             reasons[rule] = "; ".join(failures)
 
-    if result["started_inside"]:  # no controller can keep R + R_i: the range must not close further
-        kept = result["range_kept_from_start"]
+    if result["started_inside"]:  # no controller can keep R + R_i: the range must open at once
+        kept = result["range_opened_in_time"]
         separation = [] if kept else [f"started {result['initial_range_nm']:.2f} nm off, inside the required "
-                                      f"{result['required_nm']:.2f} nm, and closed to {result['cpa_nm']:.2f} nm"]
+                                      f"{result['required_nm']:.2f} nm, and closed to {result['cpa_nm']:.2f} nm "
+                                      f"{result['range_opening_s']:.0f} s after the start (> "
+                                      f"{settings.inside_open_within_s:g} s)"]
     else:
         kept = result["separation_kept"]
         separation = [] if kept else [f"CPA {result['cpa_nm']:.2f} nm < required {result['required_nm']:.2f} nm"]

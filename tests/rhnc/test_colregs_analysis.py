@@ -325,3 +325,27 @@ def test_a_round_turn_to_starboard_stays_a_starboard_manoeuvre():
     t = np.arange(0.0, 900.0, 5.0)
     course = np.radians(np.clip(2.0 * (t - 100.0), 0.0, 350.0))
     assert first_manoeuvre(t, course, 0, 900.0, JudgementSettings()) == (105.0, "starboard")
+
+
+def test_a_borderline_class_is_reported_as_such():
+    track = own_track(30, turns=[(8.0, 40.0)])
+    b = math.radians(10.0)
+    edge = judge_encounters(*track, target_states(track[0], (6.0 * math.cos(b), 6.0 * math.sin(b)), 180.0, 18.0),
+                            0.0, JudgementSettings())
+    assert edge["targets"][0]["encounter_class"] == "head_on"
+    assert edge["targets"][0]["borderline"].startswith("head-on") and edge["borderline"] == [0]
+    clear = judge_encounters(*track, target_states(track[0], (6.0, 0.05), 180.0, 18.0), 0.0, JudgementSettings())
+    assert clear["targets"][0]["borderline"] == "" and clear["borderline"] == []
+
+
+def test_a_target_starting_inside_must_see_the_range_open_within_60_s():
+    # 0.8 nm off on the starboard beam, sailing north-west at 10 kn across our track behind
+    # us: the range closes for a while although it ends up wide
+    track = own_track(20)
+    slow_to_open = judge_encounters(*track, target_states(track[0], (0.0, 0.8), 300.0, 10.0), 0.0,
+                                    JudgementSettings())["targets"][0]
+    assert slow_to_open["started_inside"] and slow_to_open["range_opening_s"] > 60.0
+    assert slow_to_open["range_opened_in_time"] is False and slow_to_open["verdict"] == FAIL
+    at_once = judge_encounters(*track, target_states(track[0], (0.0, 0.8), 120.0, 10.0), 0.0,
+                               JudgementSettings())
+    assert at_once["targets"][0]["range_opening_s"] <= 60.0 and at_once["started_inside_opened"] is True
