@@ -80,6 +80,16 @@ STAND_ON_ACTION_TCPA_S = 600.0
 #: ... or the range has fallen below this many times the required separation
 STAND_ON_ACTION_RANGE_FACTOR = 2.0
 
+#: a readily apparent alteration (Rules 8(b), 16): this many degrees of course [deg] ...
+APPARENT_ALTERATION_DEG = 35.0
+#: ... made in this time [s] (20 s before the rudder bites, then 0.3 deg/s: the KCS model
+#: on 10/35 of its yaw moment); the course is taken to change at the turn's midpoint
+APPARENT_ALTERATION_TURN_S = 20.0 + 35.0 / 0.3
+#: the time a ship keeps in hand before the last moment such an alteration still opens
+#: the CPA to the separation [s]: the turn is slower in a seaway and the ship must see the
+#: need first (two 60 s navigation or three 20 s control intervals)
+ACTION_BUFFER_S = 180.0
+
 ENCOUNTER_CLASSES = ("static", "none", "head_on", "crossing_give_way", "crossing_stand_on",
                      "overtaking", "overtaken")
 
@@ -194,16 +204,76 @@ def _borderline(name: str, alpha: float, beta: float, course_difference: float) 
     return "; ".join(near)
 
 
+def latest_alteration_s(own_xy, own_velocity, target_xy, target_velocity, separation_m: float,
+                        side: float = 1.0, alteration_deg: float = APPARENT_ALTERATION_DEG,
+                        turn_s: float = APPARENT_ALTERATION_TURN_S, step_s: float = 10.0) -> float:
+    """How long the own ship can wait before a readily apparent alteration still opens the CPA
+    to ``separation_m`` [s] (collision risk by time, not by range).
+
+    The own ship holds its velocity for the wait, then alters ``alteration_deg`` to ``side``
+    (+1 starboard, -1 port) over ``turn_s`` (the course taken to change at the turn's
+    midpoint) and holds the new course; the target keeps its velocity.  Returns the longest
+    such wait (a multiple of ``step_s``) after which the CPA is at least the separation:
+    ``inf`` when the ships are opening or pass clear anyway, ``-inf`` when even an alteration
+    begun now is not enough (a larger one, or a change of speed, is needed: act now).
+
+    Parameters
+    ----------
+    own_xy, own_velocity, target_xy, target_velocity : (2,) [m, m/s]
+    separation_m : float
+        R + R_i plus any margin [m].
+    """
+    own_xy = np.asarray(own_xy, dtype=float)
+    own_velocity = np.asarray(own_velocity, dtype=float)
+    target_xy = np.asarray(target_xy, dtype=float)
+    target_velocity = np.asarray(target_velocity, dtype=float)
+    cpa, tcpa = cpa_tcpa(own_xy, own_velocity, target_xy, target_velocity)
+    if cpa >= separation_m or not 0.0 < tcpa < math.inf:
+        return math.inf
+    angle = side * math.radians(alteration_deg)
+    c, s = math.cos(angle), math.sin(angle)
+    altered = np.array([c * own_velocity[0] - s * own_velocity[1], s * own_velocity[0] + c * own_velocity[1]])
+    waits = np.arange(0.0, tcpa + step_s, step_s)
+    switch = waits + 0.5 * turn_s
+    relative = (target_xy - own_xy)[None, :] + np.outer(switch, target_velocity - own_velocity)
+    w = target_velocity - altered
+    w2 = float(w @ w)
+    if w2 < 1e-12:
+        closest = np.hypot(relative[:, 0], relative[:, 1])
+    else:
+        ahead = np.maximum(-(relative @ w) / w2, 0.0)
+        closest = np.hypot(relative[:, 0] + ahead * w[0], relative[:, 1] + ahead * w[1])
+    # the range during the wait and the turn matters too: before the switch it is the straight approach
+    straight_min = np.where(switch >= tcpa, cpa, np.inf)
+    closest = np.minimum(closest, straight_min)
+    short = np.nonzero(closest < separation_m)[0]
+    if short.size == 0:
+        return float(waits[-1])
+    return -math.inf if short[0] == 0 else float(waits[short[0] - 1])
+
+
+def stand_on_latest_s(encounter_class: str, relative_bearing_deg: float, own_xy, own_velocity, target_xy,
+                      target_velocity, separation_m: float) -> float:
+    """:func:`latest_alteration_s` for a stand-on ship: to starboard for a crossing ship on
+    our port side (Rule 17(c)), away from the other ship when it overtakes us [s]."""
+    side = 1.0 if encounter_class == "crossing_stand_on" or relative_bearing_deg < 0.0 else -1.0
+    return latest_alteration_s(own_xy, own_velocity, target_xy, target_velocity, separation_m, side)
+
+
 def stand_on_must_act(cpa_m: float, tcpa_s: float, range_m: float, separation_m: float,
                       action_tcpa_s: float = STAND_ON_ACTION_TCPA_S,
-                      action_range_factor: float = STAND_ON_ACTION_RANGE_FACTOR) -> bool:
+                      action_range_factor: float = STAND_ON_ACTION_RANGE_FACTOR,
+                      latest_s: float = math.inf) -> bool:
     """Rule 17(b): the give-way vessel's action is clearly not enough, so the stand-on ship acts.
 
     Read as: the closest approach predicted with both ships at their present velocities
     (the stand-on ship keeping its course and speed) lies inside ``separation_m`` and
     either it is at most ``action_tcpa_s`` ahead, or the ships are already within
     ``action_range_factor * separation_m`` (a ship closing slowly, e.g. overtaking from
-    astern, whose TCPA stays long while it is close).  The controller decides with this
+    astern, whose TCPA stays long while it is close), or a readily apparent alteration
+    would open the CPA to the separation only if begun within ``ACTION_BUFFER_S`` from now
+    (``latest_s``, from :func:`stand_on_latest_s`: a fast ship, whose TCPA is still long
+    while the time to act runs out).  The controller decides with this
     function when to stop standing on, and the ``colregs`` analysis judges with it whether
     a stand-on manoeuvre came too early: one definition for both.
 
@@ -215,10 +285,12 @@ def stand_on_must_act(cpa_m: float, tcpa_s: float, range_m: float, separation_m:
         Present range [m].
     separation_m : float
         The separation to keep, R + R_i [m].
+    latest_s : float
+        :func:`stand_on_latest_s` [s] (default: not considered).
     """
     if not (cpa_m < separation_m and tcpa_s > 0.0):
         return False
-    return tcpa_s <= action_tcpa_s or range_m <= action_range_factor * separation_m
+    return tcpa_s <= action_tcpa_s or range_m <= action_range_factor * separation_m or latest_s <= ACTION_BUFFER_S
 
 
 class EncounterTracker:

@@ -42,7 +42,8 @@ import math
 import numpy as np
 
 from orchestrator.geometry import NM
-from rhnc.encounters.colregs import ROLE, STAND_ON_ACTION_RANGE_FACTOR, cpa_tcpa, stand_on_must_act, wrap_deg
+from rhnc.encounters.colregs import (ROLE, STAND_ON_ACTION_RANGE_FACTOR, cpa_tcpa, stand_on_latest_s, stand_on_must_act,
+                                    wrap_deg)
 from rhnc.encounters.encounter import segment_min_distance
 
 PASS, FAIL, NOT_APPLICABLE = "pass", "fail", "not applicable"
@@ -330,9 +331,14 @@ def _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, targe
                                                                result["manoeuvre_time_s"], settings)
             range_m = float(np.hypot(*(target[k_before, :2] - own_xy[k_before])))
             giving_way = any(onset <= result["manoeuvre_time_s"] for onset in give_way_onsets_s)
+            offset = target[k_before, :2] - own_xy[k_before]
+            bearing = float(wrap_deg(math.degrees(math.atan2(offset[1], offset[0]) - course_rad[k_before])))
+            latest = stand_on_latest_s(encounter_class, bearing, own_xy[k_before],
+                                       np.gradient(own_xy, t, axis=0)[k_before], target[k_before, :2],
+                                       target[k_before, 2:4], result["required_nm"] * NM)
             if not giving_way and not stand_on_must_act(cpa, tcpa, range_m, result["required_nm"] * NM,
                                                         settings.stand_on_wait_min * 60.0,
-                                                        settings.stand_on_range_factor):
+                                                        settings.stand_on_range_factor, latest):
                 failures.append(f"altered course with predicted CPA {cpa / NM:.2f} nm in {tcpa / 60:.1f} min at "
                                 f"{range_m / NM:.2f} nm: the give-way vessel's action could still suffice")
             if encounter_class == "crossing_stand_on" and result["manoeuvre_side"] == "port":

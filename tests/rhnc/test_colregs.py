@@ -150,3 +150,26 @@ def test_the_tracker_keeps_the_borderline_note_of_the_onset():
     # later the geometry is far from any boundary: the class and its note stay as decided
     later = tracker.update((0.0, 3.0 * NM), 0.0, 18.0 * KN, target)[0]
     assert later.encounter_class == "head_on" and later.borderline == first.borderline
+
+
+def test_the_last_moment_of_a_readily_apparent_alteration_comes_sooner_the_faster_the_closing():
+    from rhnc.encounters.colregs import latest_alteration_s
+    own_velocity = np.array([18.0 * KN, 0.0])
+
+    def latest(range_nm, target_kn):
+        return latest_alteration_s((0.0, 0.0), own_velocity, (range_nm * NM, 0.0), (-target_kn * KN, 0.0), 1.05 * NM)
+
+    # head-on at 40.6 kn closing: at 8 nm there are some 5 min left, at 4.7 nm none
+    assert 200.0 < latest(8.0, 22.6) < 400.0
+    assert latest(4.7, 22.6) == -math.inf
+    assert latest(8.0, 8.0) > latest(8.0, 22.6)  # a slower target leaves more time
+    # a target passing clear anyway needs no alteration
+    assert latest_alteration_s((0.0, 0.0), own_velocity, (5.0 * NM, 2.0 * NM), (-9.0 * KN, 0.0), NM) == math.inf
+
+
+def test_a_stand_on_ship_acts_when_its_time_to_alter_runs_out_even_while_the_cpa_is_far_in_time():
+    # a fast ship from astern: TCPA 15 min, range 3 nm, but only 60 s left for an alteration
+    assert not stand_on_must_act(0.1 * NM, 900.0, 3.0 * NM, NM)
+    assert stand_on_must_act(0.1 * NM, 900.0, 3.0 * NM, NM, latest_s=60.0)
+    assert not stand_on_must_act(0.1 * NM, 900.0, 3.0 * NM, NM, latest_s=600.0)
+    assert not stand_on_must_act(1.5 * NM, 900.0, 3.0 * NM, NM, latest_s=60.0)  # no risk: CPA outside
