@@ -162,7 +162,8 @@ class DomainReport:
     whether its constraint is on in this solve; the heading rules of this solve.
 
     ``risk``: the controller's own collision-risk assessment turned the constraints on
-    (``colregs`` only; see :meth:`CollisionDomains.parameters`).
+    (``colregs`` only; see :meth:`CollisionDomains.parameters`); ``danger``: a target is
+    inside its clearance and closing.
     ``alteration_floor`` / ``alteration_ceiling``: a readily apparent alteration to
     starboard / to port, as (time it began [s], heading then [rad], heading to reach
     [rad]), or None; see :func:`rhnc.control.nmpc_alteration.heading_bounds`.
@@ -174,6 +175,7 @@ class DomainReport:
     alteration_floor: tuple[float, float, float] | None = None
     alteration_ceiling: tuple[float, float, float] | None = None
     risk: bool = False
+    danger: bool = False
 
 
 class CollisionDomains:
@@ -346,7 +348,7 @@ class CollisionDomains:
         floor = max(floors, key=lambda a: a[2]) if floors and not danger else None
         ceiling = (min(ceilings, key=lambda a: a[2]) if ceilings and floor is None and not no_port_turn
                    and not danger else None)
-        return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling, bool(risk and not et))
+        return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling, bool(risk and not et), danger)
 
     def _collision_risk(self, rows: np.ndarray, rhos: np.ndarray, own_xy, own_velocity) -> bool:
         """Collision risk by time as well as range, at every solve (``colregs``).

@@ -43,9 +43,10 @@ import math
 import numpy as np
 
 from orchestrator.geometry import NM
-from rhnc.encounters.colregs import STAND_ON_ACTION_RANGE_FACTOR, EncounterTracker, wrap_deg
-from rhnc.encounters.colregs_judgement import (FAIL, GIVE_WAY_CLASSES, NOT_APPLICABLE, PASS, RULES, JudgementSettings,
-                                    closest_approach, first_manoeuvre, judge_target)
+from rhnc.encounters.colregs import (STAND_ON_ACTION_RANGE_FACTOR, EncounterTracker, cpa_tcpa, stand_on_latest_s,
+                                    stand_on_must_act, wrap_deg)
+from rhnc.encounters.colregs_judgement import (FAIL, GIVE_WAY_CLASSES, NOT_APPLICABLE, PASS, RULES, STAND_ON_CLASSES,
+                                               JudgementSettings, closest_approach, first_manoeuvre, judge_target)
 
 __all__ = ["PASS", "FAIL", "NOT_APPLICABLE", "RULES", "JudgementSettings", "closest_approach", "first_manoeuvre",
            "ground_velocity", "judge_target", "judge_encounters", "colregs_analysis"]
@@ -98,12 +99,18 @@ def judge_encounters(t, x, y, heading_rad, obstacles: np.ndarray, own_radius_m: 
             if i not in classes and encounter.encounter_class not in ("none",):
                 classes[i] = (encounter.encounter_class, k)
                 borderline[i] = encounter.borderline
+    must_act = {j: time for j, (other, k) in classes.items() if other in STAND_ON_CLASSES
+                and (time := _stand_on_action_time(t, own_xy, np.column_stack([vx, vy]), obstacles[:, j], other, k,
+                                                   own_radius_m, settings)) is not None}
     targets = []
     for i in range(obstacles.shape[1]):
         name, onset = classes.get(i, ("none", None))
         required = own_radius_m + float(np.max(obstacles[:, i, 4]))
+        # the times the own ship had to act for another target: as its give-way vessel, or
+        # as a stand-on vessel whose time to stand on had run out (Rule 17(b))
         give_way_onsets = tuple(float(t[k]) for j, (other, k) in classes.items()
                                 if j != i and other in GIVE_WAY_CLASSES)
+        give_way_onsets += tuple(must_act[j] for j in must_act if j != i)
         judged = judge_target(t, own_xy, course, speed, obstacles[:, i], name, onset, required, settings,
                               give_way_onsets)
         judged["max_drift_angle_deg"] = None
@@ -130,6 +137,26 @@ def judge_encounters(t, x, y, heading_rad, obstacles: np.ndarray, own_radius_m: 
         "targets_failed": sum(1 for v in verdicts if v == FAIL),
         "rules_failed": sorted({rule for target in targets for rule in RULES if target[rule] == FAIL}),
     }
+
+
+def _stand_on_action_time(t, own_xy, own_velocity, target: np.ndarray, encounter_class: str, onset: int,
+                          own_radius_m: float, settings: JudgementSettings) -> float | None:
+    """The first time [s] after the onset at which a stand-on ship must act for this target
+    (:func:`rhnc.encounters.colregs.stand_on_must_act`, as the controller decides it), None if never."""
+    required = own_radius_m + float(np.max(target[:, 4]))
+    for k in range(onset, t.size):
+        cpa, tcpa = cpa_tcpa(own_xy[k], own_velocity[k], target[k, :2], target[k, 2:4])
+        if not (cpa < required and tcpa > 0.0):
+            continue
+        offset = target[k, :2] - own_xy[k]
+        bearing = float(wrap_deg(math.degrees(math.atan2(offset[1], offset[0])
+                                              - math.atan2(own_velocity[k, 1], own_velocity[k, 0]))))
+        latest = stand_on_latest_s(encounter_class, bearing, own_xy[k], own_velocity[k], target[k, :2],
+                                   target[k, 2:4], required)
+        if stand_on_must_act(cpa, tcpa, float(np.hypot(*offset)), required, settings.stand_on_wait_min * 60.0,
+                             settings.stand_on_range_factor, latest):
+            return float(t[k])
+    return None
 
 
 def colregs_analysis(frame, scenario, cosim, out_dir, manoeuvre_threshold_deg: float = 5.0,

@@ -163,7 +163,8 @@ def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter
     required_m : float
         R + R_i [m].
     give_way_onsets_s : tuple of float
-        Onsets [s] of the encounters with *other* targets in which the own ship gives way.
+        Onsets [s] of the encounters with *other* targets in which the own ship gives way,
+        and the times at which it had to act, as a stand-on ship, for another target.
         A stand-on manoeuvre made once one of those had begun answers that obligation, so
         Rule 17's "wait until the give-way vessel's action is not enough" does not apply
         to it (Rule 17(c) still does).

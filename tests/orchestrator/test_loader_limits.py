@@ -265,3 +265,15 @@ def test_a_file_name_that_cannot_name_the_results_folder_needs_simulation_name(t
         load_scenario(path)
     path.write_text(BASE)
     assert load_scenario(path).simulation.name == "trial"
+
+
+@pytest.mark.parametrize("value, message", [
+    ("0", r"option 'iteration_budget' must be an integer from 1 to 100000, got 0"),
+    ("500", r"participants.ctrl: iteration_budget must be from 2 to max_iterations \(200\), got 500"),
+])
+def test_an_nmpc_iteration_budget_out_of_range_is_refused(write_scenario, value, message):
+    text = (REPO / "scenarios" / "exp3b_head_on.toml").read_text()
+    path = write_scenario(_edit(text, "horizon_steps = 15\nown_radius_nm",
+                                f"horizon_steps = 15\niteration_budget = {value}\nown_radius_nm"), "b.toml")
+    with pytest.raises(ScenarioError, match=message):
+        CoSimulation(load_scenario(path)).close()
