@@ -273,7 +273,9 @@ def stand_on_must_act(cpa_m: float, tcpa_s: float, range_m: float, separation_m:
     astern, whose TCPA stays long while it is close), or a readily apparent alteration
     would open the CPA to the separation only if begun within ``ACTION_BUFFER_S`` from now
     (``latest_s``, from :func:`stand_on_latest_s`: a fast ship, whose TCPA is still long
-    while the time to act runs out).  The controller decides with this
+    while the time to act runs out; when no such alteration would do even now, ``-inf``, the
+    other criteria decide: a ship crossing from port on a course near ours is not helped
+    by a turn to starboard, and acting early would only break Rule 17(a)).  The controller decides with this
     function when to stop standing on, and the ``colregs`` analysis judges with it whether
     a stand-on manoeuvre came too early: one definition for both.
 
@@ -290,7 +292,10 @@ def stand_on_must_act(cpa_m: float, tcpa_s: float, range_m: float, separation_m:
     """
     if not (cpa_m < separation_m and tcpa_s > 0.0):
         return False
-    return tcpa_s <= action_tcpa_s or range_m <= action_range_factor * separation_m or latest_s <= ACTION_BUFFER_S
+    # -inf: no 35 deg alteration opens the CPA now; acting now is then no better than
+    # acting later with a larger one, so the other criteria decide
+    running_out = -math.inf < latest_s <= ACTION_BUFFER_S
+    return tcpa_s <= action_tcpa_s or range_m <= action_range_factor * separation_m or running_out
 
 
 class EncounterTracker:

@@ -173,3 +173,9 @@ def test_a_stand_on_ship_acts_when_its_time_to_alter_runs_out_even_while_the_cpa
     assert stand_on_must_act(0.1 * NM, 900.0, 3.0 * NM, NM, latest_s=60.0)
     assert not stand_on_must_act(0.1 * NM, 900.0, 3.0 * NM, NM, latest_s=600.0)
     assert not stand_on_must_act(1.5 * NM, 900.0, 3.0 * NM, NM, latest_s=60.0)  # no risk: CPA outside
+
+
+def test_a_stand_on_ship_that_no_apparent_alteration_helps_still_stands_on():
+    # latest -inf: a 35 deg turn would not open the CPA even now; the TCPA and range decide
+    assert not stand_on_must_act(0.1 * NM, 900.0, 3.5 * NM, NM, latest_s=-math.inf)
+    assert stand_on_must_act(0.1 * NM, 500.0, 3.5 * NM, NM, latest_s=-math.inf)
