@@ -368,7 +368,11 @@ class NMPCController:
             failed = self._fail(time_s, state, previous_tau, elapsed, iterations, status,
                                 outcome.f if finite else UNKNOWN, violation, timed_out, disturbance, report)
             failed.solve_cpu_time_s, failed.preparation_cpu_s = cpu, preparation
-            self.memory.clearance_relaxed = relaxed
+            # with an iteration budget, a relaxed attempt that ran out says nothing of the hard
+            # problem's feasibility, and the relaxed problem is the slower one: the next step
+            # tries the hard one first (solving the relaxed one alone after such a step failed
+            # twenty steps in a row, Imazu 14)
+            self.memory.clearance_relaxed = relaxed and s.iteration_budget is None
             return failed
         violation = self.problem.violation(x_opt, g_opt, lbx, ubx)
         slack = float(np.max(x_opt[problem.sigma_index], initial=0.0))

@@ -245,3 +245,21 @@ def test_a_budget_outside_its_range_is_refused():
         NMPCSettings(iteration_budget=1)
     with pytest.raises(ValueError, match="iteration_budget must be from 2 to max_iterations"):
         NMPCSettings(iteration_budget=500)
+
+
+def test_with_a_budget_a_step_that_failed_in_the_relaxed_attempt_tries_the_hard_problem_next(budgeted):
+    state, reference_at = straight()
+    budgeted.reset()
+    real = dict(budgeted.solvers._solvers)
+    for name, solver in real.items():  # both attempts run out at an infeasible point
+        budgeted.solvers._solvers[name] = OutOfIterations(solver, 1e-3, budgeted.attempt_iterations[name])
+    log = CallLog(budgeted)
+    try:
+        assert budgeted.solve(0.0, state, reference_at(0.0)).fallback
+        assert log.names == ["hard", "relaxed"]
+        log.names.clear()
+        budgeted.solve(DT, state, reference_at(DT))
+        assert log.names == ["hard", "relaxed"]  # not the relaxed problem alone
+    finally:
+        log.detach()
+        budgeted.solvers._solvers.update(real)
