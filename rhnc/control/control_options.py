@@ -30,6 +30,7 @@ OPTIONS = (
     "own_radius_nm",
     "solver",
     "max_iterations",
+    "iteration_budget",
     "max_obstacles",
     "weights",
     "length_scale_m",
@@ -54,7 +55,8 @@ OPTIONS = (
 WEIGHT_KEYS = ("q", "r", "r_rate")
 #: Largest values of the integer options: bounds on the size of the NLP built from them
 #: (checked before it is built; the shipped scenarios use 15-120 intervals).
-INTEGER_LIMITS = {"horizon_steps": 400, "substeps": 50, "max_iterations": 100_000, "max_obstacles": 64}
+INTEGER_LIMITS = {"horizon_steps": 400, "substeps": 50, "max_iterations": 100_000, "iteration_budget": 100_000,
+                  "max_obstacles": 64}
 
 
 

@@ -92,6 +92,10 @@ class ControlParticipant(Participant):
         ``fatrop`` (default), ``ipopt`` or ``sqpmethod``.
     max_iterations, max_obstacles : int
         Solver iteration limit (200), obstacle slots (4).
+    iteration_budget : int
+        Iterations of one control step, both solver attempts together (default: none,
+        ``max_iterations`` each); an attempt that runs out of them at a feasible point
+        applies that plan (see :class:`rhnc.control.nmpc_settings.NMPCSettings`).
     weights : table
         ``q`` (6 values), ``r`` (2), ``r_rate`` (2) replacing the paper's diagonals.
     length_scale_m, speed_scale_mps : float

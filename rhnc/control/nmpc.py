@@ -144,7 +144,22 @@ class NMPCController:
         # the NLP's functions compiled once per machine and cached (or interpreted)
         library = self.library = NLPLibrary(self.problem.nlp, s.solver, options, s.codegen,
                                             self.problem.compact_nlp)
-        factories = {"hard": lambda: library.solver("rhnc_nmpc")}
+        # with an iteration budget, each attempt's solver gets its share as its iteration
+        # limit (the compiled library is the same: only the solver's options differ)
+        budget = s.iteration_budget
+        self.attempt_iterations = {"hard": s.max_iterations, "relaxed": s.max_iterations,
+                                   "relaxed_alone": s.max_iterations}
+        if budget is not None:
+            self.attempt_iterations = {"hard": budget // 2, "relaxed": budget - budget // 2, "relaxed_alone": budget}
+
+        def factory(nlp_name: str, attempt: str):
+            if budget is None:
+                return lambda: library.solver(nlp_name)
+            capped = solver_options(s.solver, self.problem.equality, self.attempt_iterations[attempt],
+                                    s.wall_time_limit_s, s.cpu_time_limit_s, s.warm_start_duals)
+            return lambda: library.solver(nlp_name, capped)
+
+        factories = {"hard": factory("rhnc_nmpc", "hard")}
         solvers = {"hard": factories["hard"]()}
         # The second, relaxed attempt gets a solver of its own: a solver keeps state between
         # calls (fatrop), and a failed hard attempt left in it spoils the relaxed one started
@@ -153,8 +168,11 @@ class NMPCController:
         # building it costs about 0.5 s of processor time, which inside a control step showed
         # up as an 8 s solve on a loaded machine.
         if self.problem.sigma_index.size:
-            factories["relaxed"] = lambda: library.solver("rhnc_nmpc_relaxed")
+            factories["relaxed"] = factory("rhnc_nmpc_relaxed", "relaxed")
             solvers["relaxed"] = factories["relaxed"]()
+            if budget is not None:
+                factories["relaxed_alone"] = factory("rhnc_nmpc_relaxed", "relaxed_alone")
+                solvers["relaxed_alone"] = factories["relaxed_alone"]()
         # a new solver object after a difficult solve, where building one is cheap (compiled:
         # about 1 ms; interpreted, nlpsol derives the NLP's functions anew: about 0.5 s)
         renew = renew_solver_after if s.solver in FRESH_SOLVER_PLUGINS and library.mode == "compiled" else None
@@ -307,7 +325,10 @@ class NMPCController:
         elapsed, cpu, preparation, iterations, timed_out = 0.0, 0.0, 0.0, 0, False
         budget = s.wall_time_limit_s
         attempts = (False, True) if problem.sigma_index.size else (False,)
-        if self.memory.clearance_relaxed and problem.sigma_index.size:
+        # a target inside its clearance and closing: the hard problem asks the range to
+        # open at once and is most likely infeasible; the relaxed one alone, as after a
+        # relaxed step
+        if (self.memory.clearance_relaxed or report.danger) and problem.sigma_index.size:
             attempts = (True,)
         for relaxed in attempts:
             if relaxed and stop_requested():  # Ctrl-C aborted the first attempt: no second one
@@ -315,15 +336,21 @@ class NMPCController:
             ubx[problem.sigma_index] = np.inf if relaxed else 0.0
             if budget is not None:
                 self.solvers.wall_time_s = max(budget - elapsed, 1e-3)
-            outcome = self.solvers.solve("relaxed" if relaxed else "hard", x0=x0, p=p, lbx=lbx, ubx=ubx,
+            attempt = "hard" if not relaxed else ("relaxed_alone" if len(attempts) == 1 and "relaxed_alone"
+                                                  in self.solvers.factories else "relaxed")
+            outcome = self.solvers.solve(attempt, x0=x0, p=p, lbx=lbx, ubx=ubx,
                                          lbg=problem.lbg, ubg=problem.ubg, **duals)
             elapsed += outcome.wall_time_s
             cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
             preparation += outcome.preparation_cpu_s
             iterations += max(outcome.iterations, 0)
-            # a point the solver stopped at as acceptable is used only when it keeps every
-            # constraint to the solver's tolerance (never an infeasible iterate)
-            accepted = (outcome.acceptable and bool(np.all(np.isfinite(outcome.x)) and np.all(np.isfinite(outcome.g)))
+            # a point the solver stopped at as acceptable, or at the end of its share of the
+            # iteration budget, is used only when it keeps every constraint to the solver's
+            # tolerance (never an infeasible iterate)
+            out_of_budget = (s.iteration_budget is not None and not outcome.timed_out
+                             and outcome.iterations >= self.attempt_iterations[attempt])
+            accepted = ((outcome.acceptable or out_of_budget)
+                        and bool(np.all(np.isfinite(outcome.x)) and np.all(np.isfinite(outcome.g)))
                         and problem.violation(outcome.x, outcome.g, lbx, ubx) <= ACCEPTABLE_VIOLATION)
             success = (outcome.success or accepted) and bool(np.all(np.isfinite(outcome.x)))
             if success or outcome.timed_out:
@@ -332,7 +359,7 @@ class NMPCController:
         x_opt, g_opt = outcome.x, outcome.g
         status = outcome.status
         if accepted:
-            status = "Solved_To_Acceptable_Level"
+            status = "Solved_To_Acceptable_Level" if outcome.acceptable else "Iteration_Budget_Feasible_Point"
         elif s.solver == "fatrop" and not timed_out:  # fatrop reports an integer code
             status = "Solve_Succeeded" if outcome.success else f"fatrop_return_code_{status}"
         if not success:
@@ -341,7 +368,11 @@ class NMPCController:
             failed = self._fail(time_s, state, previous_tau, elapsed, iterations, status,
                                 outcome.f if finite else UNKNOWN, violation, timed_out, disturbance, report)
             failed.solve_cpu_time_s, failed.preparation_cpu_s = cpu, preparation
-            self.memory.clearance_relaxed = relaxed
+            # with an iteration budget, a relaxed attempt that ran out says nothing of the hard
+            # problem's feasibility, and the relaxed problem is the slower one: the next step
+            # tries the hard one first (solving the relaxed one alone after such a step failed
+            # twenty steps in a row, Imazu 14)
+            self.memory.clearance_relaxed = relaxed and s.iteration_budget is None
             return failed
         violation = self.problem.violation(x_opt, g_opt, lbx, ubx)
         slack = float(np.max(x_opt[problem.sigma_index], initial=0.0))

@@ -39,6 +39,25 @@ a stand-on crossing target the bound holds before we act too: avoiding a second 
 must not take us to port across the bow of a ship on our port side (seen in a
 two-target trial).
 
+Collision risk at the control rate (``colregs`` only): the constraints are on while the
+navigation's trigger is set *or* any obstacle has a risk of collision by time (a CPA inside
+``risk_cpa_m`` at most ``risk_tcpa_s`` ahead) or is within ``CLOSE_QUARTERS_FACTOR``
+clearances, judged at every solve.  The paper's mode (``colregs`` off) keeps the paper's
+4-min distance trigger alone.  A give-way ship begins its alteration when the CPA is
+``give_way_action_tcpa_s`` ahead or, sooner, when a readily apparent alteration would open
+the CPA to the clearance only if begun within ``ACTION_BUFFER_S``
+(:func:`rhnc.encounters.colregs.latest_alteration_s`): a fast target is acted on early
+enough wherever it comes from.  A stand-on ship acts by the same measure
+(:func:`rhnc.encounters.colregs.stand_on_must_act`).
+
+A target inside its clearance rho (it started there, or came in): its domain is a plain
+circle of the present range, less what the range closes in ``INSIDE_RESPONSE_S``, growing
+at ``INSIDE_OPENING_MPS``: the range must open at once, by turning and slowing together
+(the NMPC's speed is free down to zero).  While such a target is still closing, the
+heading rules (no turn to port, the alteration's bounds) are off: immediate danger comes
+first (Rules 2(b), 17(b)).  A target outside rho but with the own ship inside its shifted
+domain gets the plain circle.
+
 Why shifted circles rather than side constraints or ellipses: a circle that contains the
 paper's circle never admits a plan the paper's constraint forbids, so separation >= R + R_i
 still follows from feasibility; it keeps one smooth constraint per slot (no switching
@@ -60,8 +79,9 @@ import math
 
 import numpy as np
 
-from rhnc.encounters.colregs import (ENCOUNTER_CLASSES, STAND_ON_ACTION_RANGE_FACTOR, STAND_ON_ACTION_TCPA_S,
-                          EncounterTracker, cpa_tcpa, stand_on_must_act)
+from rhnc.encounters.colregs import (ACTION_BUFFER_S, ENCOUNTER_CLASSES, STAND_ON_ACTION_RANGE_FACTOR,
+                                    STAND_ON_ACTION_TCPA_S, EncounterTracker, cpa_tcpa, latest_alteration_s,
+                                    stand_on_latest_s, stand_on_must_act)
 from rhnc.control.nmpc_problem import OBSTACLE_FIELDS
 
 LOG = logging.getLogger(__name__)
@@ -80,6 +100,14 @@ PORT_ALLOWANCE_DEG = 2.0
 ALTERATION_CLEAR_FACTOR = 2.0
 #: classes in which the own ship gives way (Rules 13-16)
 GIVE_WAY_CLASSES = ("head_on", "crossing_give_way", "overtaking")
+#: collision risk at the control rate: an obstacle closer than this many clearances rho
+#: turns the collision constraints on whatever its CPA
+CLOSE_QUARTERS_FACTOR = 2.0
+#: a target inside its clearance rho: the domain is the present range, less what the range
+#: closes at its present rate in this time [s], growing at this rate [m/s]: the range must
+#: open at once, by turning and slowing together
+INSIDE_RESPONSE_S = 20.0
+INSIDE_OPENING_MPS = 1.0
 @dataclasses.dataclass(frozen=True)
 class DomainSettings:
     """How obstacles become collision domains.
@@ -133,6 +161,9 @@ class DomainReport:
     """Per obstacle row: its class code (index of ``ENCOUNTER_CLASSES``, -1 unclassified) and
     whether its constraint is on in this solve; the heading rules of this solve.
 
+    ``risk``: the controller's own collision-risk assessment turned the constraints on
+    (``colregs`` only; see :meth:`CollisionDomains.parameters`); ``danger``: a target is
+    inside its clearance and closing.
     ``alteration_floor`` / ``alteration_ceiling``: a readily apparent alteration to
     starboard / to port, as (time it began [s], heading then [rad], heading to reach
     [rad]), or None; see :func:`rhnc.control.nmpc_alteration.heading_bounds`.
@@ -143,6 +174,8 @@ class DomainReport:
     no_port_turn: bool = False
     alteration_floor: tuple[float, float, float] | None = None
     alteration_ceiling: tuple[float, float, float] | None = None
+    risk: bool = False
+    danger: bool = False
 
 
 class CollisionDomains:
@@ -226,21 +259,29 @@ class CollisionDomains:
             self._guarding &= set(self.tracker.locked)
             self._altered &= set(self.tracker.locked)
             self._altering = {i: v for i, v in self._altering.items() if i in self.tracker.locked}
-        if not et:
+        rhos = s.own_radius_m + rows[:, 4] + s.clearance_margin_m
+        own_velocity = own_speed * np.array([math.cos(own_course), math.sin(own_course)])
+        risk = s.colregs and self._collision_risk(rows, rhos, state[:2], own_velocity)
+        if not (et or risk):
             return slots, DomainReport(codes, active_rows)
         distance = np.hypot(rows[:, 0] - origin[0], rows[:, 1] - origin[1]) - rows[:, 4]
         order = np.argsort(distance)
         if len(order) > self.max_obstacles:
             LOG.warning("%d obstacles given, NMPC uses the %d nearest", len(order), self.max_obstacles)
             order = order[: self.max_obstacles]
-        rhos = s.own_radius_m + rows[:, 4] + s.clearance_margin_m
         order = [i for i in order if rhos[i] > 0.0]  # a zero domain needs no constraint
-        own_velocity = own_speed * np.array([math.cos(own_course), math.sin(own_course)])
+        ranges = np.hypot(rows[:, 0] - state[0], rows[:, 1] - state[1])
+        range_rates = np.array([(row[:2] - state[:2]) @ (row[2:4] - own_velocity) / max(r, 1e-9)
+                                for row, r in zip(rows, ranges)])
+        # inside the clearance and closing: immediate danger, the range must open at once
+        # (Rules 2(b), 17(b): the heading rules below give way to it)
+        inside = {i for i in order if s.colregs and ranges[i] < rhos[i]}
+        danger = any(range_rates[i] < 0.0 for i in inside)
         heading_now = float(state[2]) if reference_heading_rad is None else float(reference_heading_rad)
         # Rules 14, 15, 17(c): no alteration to port while such a target's CPA is ahead; known
         # before any alteration begins, so that an overtaking ship's turns to starboard then
-        no_port_turn = any(classes[i] is not None and classes[i].encounter_class in STARBOARD_CLASSES
-                           and classes[i].tcpa_s > 0.0 for i in order)
+        no_port_turn = not danger and any(classes[i] is not None and classes[i].encounter_class in STARBOARD_CLASSES
+                                          and classes[i].tcpa_s > 0.0 for i in order)
         locked = self.tracker.locked
         giving_way = any(locked.get(j) in GIVE_WAY_CLASSES for j in self._altering)
         slot = 0
@@ -252,8 +293,11 @@ class CollisionDomains:
             name = encounter.encounter_class if encounter is not None else "static"
             if name in STAND_ON_CLASSES and i not in self._acting:
                 cpa, tcpa = cpa_tcpa(state[:2], own_velocity, (x, y), (vx, vy))
-                if stand_on_must_act(cpa, tcpa, encounter.range_m, s.own_radius_m + radius,
-                                     s.stand_on_action_tcpa_s, s.stand_on_action_range_factor):
+                latest = stand_on_latest_s(name, encounter.relative_bearing_deg, state[:2], own_velocity, (x, y),
+                                           (vx, vy), s.own_radius_m + radius)
+                if i in inside or stand_on_must_act(cpa, tcpa, encounter.range_m, s.own_radius_m + radius,
+                                                    s.stand_on_action_tcpa_s, s.stand_on_action_range_factor,
+                                                    latest):
                     LOG.info("Rule 17: target %d (%s) is not giving way enough (CPA %.0f m, TCPA %.0f s): acting",
                              i, name, cpa, tcpa)
                     self._acting.add(i)
@@ -268,15 +312,24 @@ class CollisionDomains:
                     continue  # keep course and speed: this target's constraint stays off
             if s.colregs and encounter is not None:
                 self._update_alteration(i, encounter, heading_now, float(state[2]), time_s,
-                                        s.own_radius_m + radius, (state[:2], own_speed, (x, y), (vx, vy)),
+                                        s.own_radius_m + radius, (state[:2], own_speed, (x, y), (vx, vy), own_velocity),
                                         port_allowed=not no_port_turn)
-            if name in OFFSETS:
+            growth_mps = s.clearance_margin_growth_mps
+            if i in inside:
+                # no shifted domain: the present range, less what it closes in the response
+                # time, and growing: the range opens at once
+                domain_radius = max(ranges[i] + min(range_rates[i], 0.0) * INSIDE_RESPONSE_S, 0.25 * ranges[i])
+                growth_mps = INSIDE_OPENING_MPS
+            elif name in OFFSETS:
                 speed = math.hypot(vx, vy)
                 ahead = np.array([vx, vy]) / speed
                 starboard = np.array([-ahead[1], ahead[0]])
                 forward, side = OFFSETS[name]
                 offset = rho * (forward * ahead + side * starboard)
-            domain_radius = rho + float(np.hypot(*offset))
+                if np.hypot(*(np.array([x, y]) + offset - state[:2])) < rho + float(np.hypot(*offset)):
+                    offset = np.zeros(2)  # already inside the shifted domain: the plain circle
+            if i not in inside:
+                domain_radius = rho + float(np.hypot(*offset))
             closing = closing_speed_mps + math.hypot(vx, vy)
             if horizon_s is not None:
                 growth = s.clearance_margin_growth_mps * horizon_s
@@ -287,15 +340,35 @@ class CollisionDomains:
                 continue
             inflation = (closing * substep_s / (2.0 * domain_radius)) ** 2
             slots[:, slot] = [(x - origin[0]) / L, (y - origin[1]) / L, vx / L, vy / L, offset[0] / L,
-                              offset[1] / L, domain_radius / L, s.clearance_margin_growth_mps / L, inflation, 1.0]
+                              offset[1] / L, domain_radius / L, growth_mps / L, inflation, 1.0]
             active_rows[i] = 1.0
             slot += 1
         floors = [a[:3] for a in self._altering.values() if a[3] > 0]
         ceilings = [a[:3] for a in self._altering.values() if a[3] < 0]
-        floor = max(floors, key=lambda a: a[2]) if floors else None
+        floor = max(floors, key=lambda a: a[2]) if floors and not danger else None
         ceiling = (min(ceilings, key=lambda a: a[2]) if ceilings and floor is None and not no_port_turn
-                   else None)
-        return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling)
+                   and not danger else None)
+        return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling, bool(risk and not et), danger)
+
+    def _collision_risk(self, rows: np.ndarray, rhos: np.ndarray, own_xy, own_velocity) -> bool:
+        """Collision risk by time as well as range, at every solve (``colregs``).
+
+        Any obstacle whose CPA, both ships at their present velocities, lies inside
+        ``risk_cpa_m`` and at most ``risk_tcpa_s`` ahead, or that is within
+        ``CLOSE_QUARTERS_FACTOR`` clearances, turns the collision constraints on, whatever
+        the navigation's distance trigger says (it looks every 4 min, and a target closing at
+        40 kn covers 2.7 nm between two looks).  Which obstacles get a constraint is then
+        decided by whether they can reach their domain within the horizon.
+        """
+        s = self.settings
+        for row, rho in zip(rows, rhos):
+            range_m = math.hypot(row[0] - own_xy[0], row[1] - own_xy[1])
+            if range_m < CLOSE_QUARTERS_FACTOR * rho:
+                return True
+            cpa, tcpa = cpa_tcpa(own_xy, own_velocity, row[:2], row[2:4])
+            if cpa < s.risk_cpa_m and 0.0 < tcpa <= s.risk_tcpa_s:
+                return True
+        return False
 
     def _update_alteration(self, index: int, encounter, reference_heading_rad: float, heading_rad: float,
                            time_s: float, separation_m: float, motion=None, port_allowed: bool = True) -> None:
@@ -341,12 +414,18 @@ class CollisionDomains:
         if name in GIVE_WAY_CLASSES:
             tcpa = encounter.tcpa_s
             if motion is not None:  # turning away brings the CPA forward (an overtaker's most)
-                own_xy, own_speed, target_xy, target_velocity = motion
+                own_xy, own_speed, target_xy, target_velocity, _ = motion
                 altered = own_speed * np.array([math.cos(goal), math.sin(goal)])
                 tcpa_altered = cpa_tcpa(own_xy, altered, target_xy, target_velocity)[1]
                 if tcpa_altered > 0.0:
                     tcpa = min(tcpa, tcpa_altered)
-            begin = 0.0 < tcpa <= s.give_way_action_tcpa_s and encounter.tcpa_s > 0.0 and encounter.cpa_m < s.risk_cpa_m
+            latest = math.inf
+            if motion is not None:  # the last moment the alteration still opens the CPA (plus margin)
+                own_xy, _, target_xy, target_velocity, own_velocity = motion
+                latest = latest_alteration_s(own_xy, own_velocity, target_xy, target_velocity,
+                                             separation_m + s.clearance_margin_m, side)
+            begin = ((0.0 < tcpa <= s.give_way_action_tcpa_s or latest <= ACTION_BUFFER_S)
+                     and encounter.tcpa_s > 0.0 and encounter.cpa_m < s.risk_cpa_m)
         else:
             begin = index in self._acting and encounter.tcpa_s > 0.0
         if not begin:

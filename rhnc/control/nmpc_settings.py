@@ -38,6 +38,12 @@ class NMPCSettings:
         ``"ipopt"``, ``"fatrop"`` or ``"sqpmethod"``.
     max_iterations : int
         Iteration limit of the NLP solver (each attempt).
+    iteration_budget : int or None
+        Iterations of one control step, both attempts together (None: ``max_iterations``
+        each): the hard attempt gets half, the relaxed one the rest, or all of it when it is
+        the only attempt.  An attempt that runs out of iterations at a point that keeps
+        every constraint to the solver's tolerance has found a plan (feasible, not yet
+        optimal; the next step goes on from it): bounded solves at the control rate.
     cpu_time_limit_s : float or None
         Limit of the processor time of each solver attempt [s] (Linux, see
         :mod:`rhnc.control.solver_watchdog`): set far above the normal solve (tens of ms) so that
@@ -102,6 +108,7 @@ class NMPCSettings:
     substeps: int = 4
     solver: str = "fatrop"
     max_iterations: int = 200
+    iteration_budget: int | None = None
     cpu_time_limit_s: float | None = 2.0
     wall_time_limit_s: float | None = 20.0
     max_obstacles: int = 4
@@ -127,6 +134,9 @@ class NMPCSettings:
     warm_start_duals: bool = True
 
     def __post_init__(self) -> None:
+        if self.iteration_budget is not None and not 2 <= self.iteration_budget <= self.max_iterations:
+            raise ValueError(f"iteration_budget must be from 2 to max_iterations ({self.max_iterations}), "
+                             f"got {self.iteration_budget}")
         if self.horizon_steps < 1:
             raise ValueError(f"horizon_steps must be >= 1, got {self.horizon_steps}")
         if self.control_interval_s <= 0.0:

@@ -42,7 +42,8 @@ import math
 import numpy as np
 
 from orchestrator.geometry import NM
-from rhnc.encounters.colregs import ROLE, STAND_ON_ACTION_RANGE_FACTOR, cpa_tcpa, stand_on_must_act, wrap_deg
+from rhnc.encounters.colregs import (ROLE, STAND_ON_ACTION_RANGE_FACTOR, cpa_tcpa, stand_on_latest_s, stand_on_must_act,
+                                    wrap_deg)
 from rhnc.encounters.encounter import segment_min_distance
 
 PASS, FAIL, NOT_APPLICABLE = "pass", "fail", "not applicable"
@@ -64,6 +65,7 @@ class JudgementSettings:
     risk_cpa_nm: float = 2.0
     risk_tcpa_min: float = 30.0
     stand_on_range_factor: float = STAND_ON_ACTION_RANGE_FACTOR
+    inside_open_within_s: float = 60.0
 
     def __post_init__(self) -> None:
         for field in dataclasses.fields(self):
@@ -97,10 +99,14 @@ def first_manoeuvre(t, heading_rad, start_index: int, end_time_s: float,
     ``heading_rad`` is the course (over ground, as :func:`rhnc.cosim.colregs_analysis.judge_encounters` passes it) at
     each sample [rad].  It must depart from its value at ``start_index`` by at least the threshold and
     stay beyond it (on the same side) for ``manoeuvre_hold_s``; only changes that begin
-    before ``end_time_s`` count.
+    before ``end_time_s`` count.  The change is the accumulated (unwrapped) one, so the side
+    of a turn through more than 180 deg stays the side it began on.
     """
     t = np.asarray(t, dtype=float)
-    change = wrap_deg(np.degrees(np.unwrap(heading_rad) - np.unwrap(heading_rad)[start_index]))
+    unwrapped = np.unwrap(np.asarray(heading_rad, dtype=float))
+    # the accumulated change, not wrapped: a turn to starboard that passes 180 deg is still
+    # a turn to starboard (wrapped, it read as a turn to port from there on)
+    change = np.degrees(unwrapped - unwrapped[start_index])
     threshold = settings.manoeuvre_threshold_deg
     for k in range(start_index, t.size):
         if t[k] > end_time_s:
@@ -157,7 +163,8 @@ def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter
     required_m : float
         R + R_i [m].
     give_way_onsets_s : tuple of float
-        Onsets [s] of the encounters with *other* targets in which the own ship gives way.
+        Onsets [s] of the encounters with *other* targets in which the own ship gives way,
+        and the times at which it had to act, as a stand-on ship, for another target.
         A stand-on manoeuvre made once one of those had begun answers that obligation, so
         Rule 17's "wait until the give-way vessel's action is not enough" does not apply
         to it (Rule 17(c) still does).
@@ -179,6 +186,8 @@ def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter
         "initial_range_nm": initial_range_m / NM,
         "started_inside": started_inside,
         "range_kept_from_start": bool(cpa_m >= initial_range_m - 1e-6) if started_inside else None,
+        "range_opening_s": float(cpa_time - t[0]) if started_inside else None,
+        "range_opened_in_time": bool(cpa_time - t[0] <= settings.inside_open_within_s) if started_inside else None,
         "time_of_cpa_s": cpa_time,
         "passing_side": "starboard" if bearing > 0 else "port",
         "relative_bearing_at_cpa_deg": bearing,
@@ -258,8 +267,10 @@ def _prediction_before_manoeuvre(t, own_xy, course_rad, target: np.ndarray, onse
 
 def _last_steady_sample(t, course_rad, onset_index: int, index: int, settings: JudgementSettings) -> int:
     """The last sample before ``index`` whose course is within half the manoeuvre threshold of
-    the course at the onset (where the manoeuvre began); the onset if none."""
-    change = np.abs(wrap_deg(np.degrees(np.asarray(course_rad[onset_index:index + 1]) - course_rad[onset_index])))
+    the course at the onset (where the manoeuvre began); the onset if none.  The change is
+    accumulated, as in :func:`first_manoeuvre` (a full round turn is not steady)."""
+    unwrapped = np.unwrap(np.asarray(course_rad[onset_index:index + 1], dtype=float))
+    change = np.abs(np.degrees(unwrapped - unwrapped[0]))
     steady = np.nonzero(change < 0.5 * settings.manoeuvre_threshold_deg)[0]
     return onset_index + int(steady[-1]) if steady.size else onset_index
 
@@ -274,10 +285,12 @@ def _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, targe
         if failures:
             reasons[rule] = "; ".join(failures)
 
-    if result["started_inside"]:  # no controller can keep R + R_i: the range must not close further
-        kept = result["range_kept_from_start"]
+    if result["started_inside"]:  # no controller can keep R + R_i: the range must open at once
+        kept = result["range_opened_in_time"]
         separation = [] if kept else [f"started {result['initial_range_nm']:.2f} nm off, inside the required "
-                                      f"{result['required_nm']:.2f} nm, and closed to {result['cpa_nm']:.2f} nm"]
+                                      f"{result['required_nm']:.2f} nm, and closed to {result['cpa_nm']:.2f} nm "
+                                      f"{result['range_opening_s']:.0f} s after the start (> "
+                                      f"{settings.inside_open_within_s:g} s)"]
     else:
         kept = result["separation_kept"]
         separation = [] if kept else [f"CPA {result['cpa_nm']:.2f} nm < required {result['required_nm']:.2f} nm"]
@@ -319,9 +332,14 @@ def _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, targe
                                                                result["manoeuvre_time_s"], settings)
             range_m = float(np.hypot(*(target[k_before, :2] - own_xy[k_before])))
             giving_way = any(onset <= result["manoeuvre_time_s"] for onset in give_way_onsets_s)
+            offset = target[k_before, :2] - own_xy[k_before]
+            bearing = float(wrap_deg(math.degrees(math.atan2(offset[1], offset[0]) - course_rad[k_before])))
+            latest = stand_on_latest_s(encounter_class, bearing, own_xy[k_before],
+                                       np.gradient(own_xy, t, axis=0)[k_before], target[k_before, :2],
+                                       target[k_before, 2:4], result["required_nm"] * NM)
             if not giving_way and not stand_on_must_act(cpa, tcpa, range_m, result["required_nm"] * NM,
                                                         settings.stand_on_wait_min * 60.0,
-                                                        settings.stand_on_range_factor):
+                                                        settings.stand_on_range_factor, latest):
                 failures.append(f"altered course with predicted CPA {cpa / NM:.2f} nm in {tcpa / 60:.1f} min at "
                                 f"{range_m / NM:.2f} nm: the give-way vessel's action could still suffice")
             if encounter_class == "crossing_stand_on" and result["manoeuvre_side"] == "port":

@@ -28,7 +28,7 @@ import json
 import math
 from pathlib import Path
 
-from orchestrator.geometry import NM
+from rhnc.encounters.traffic_situation import situation_document
 
 #: Target courses [deg] per problem (own ship on 000 deg); "slow" marks a ship overtaken.
 PROBLEMS: dict[int, tuple[tuple[float, bool], ...]] = {
@@ -76,28 +76,11 @@ def problem_geometry(number: int, speed_kn: float = 18.0, overtaken_speed_kn: fl
 
 def situation_json(number: int, latitude_deg: float = 57.0, longitude_deg: float = 3.0, **geometry) -> dict:
     """Problem ``number`` as a maritime-schema traffic situation (own ship at the given position)."""
-    from pyproj import Transformer
-
-    to_geographic = Transformer.from_crs(
-        f"+proj=aeqd +lat_0={latitude_deg} +lon_0={longitude_deg} +datum=WGS84 +units=m", "EPSG:4326",
-        always_xy=True)
-
-    def ship(entry: dict, identifier: int, name: str) -> dict:
-        lon, lat = to_geographic.transform(entry["start_nm"][1] * NM, entry["start_nm"][0] * NM)
-        return {"initial": {"position": {"lat": round(lat, 9), "lon": round(lon, 9)},
-                            "sog": entry["speed_kn"], "cog": entry["course_deg"], "heading": entry["course_deg"]},
-                "static": {"id": identifier, "name": name}}
-
     ships = problem_geometry(number, **geometry)
     courses = ", ".join(f"{entry['course_deg']:g}" for entry in ships[1:])
-    return {
-        "schemaVersion": "0.2.0",
-        "title": f"imazu-{number:02d}",
-        "description": f"Imazu (1987) problem {number}: {len(ships) - 1} target(s) meeting the own ship at one "
-                       f"point; courses {courses} deg",
-        "ownShip": ship(ships[0], 1, "own ship"),
-        "targetShips": [ship(entry, k + 2, f"target {k + 1}") for k, entry in enumerate(ships[1:])],
-    }
+    return situation_document(ships, f"imazu-{number:02d}",
+                              f"Imazu (1987) problem {number}: {len(ships) - 1} target(s) meeting the own ship at "
+                              f"one point; courses {courses} deg", latitude_deg, longitude_deg)
 
 
 def write_situations(folder, **geometry) -> list[Path]:

@@ -10,13 +10,14 @@ With ``--write docs/encounters.md`` (repeatable: ``--write README.md`` too) the 
 file is left untouched if either marker is missing).
 
 Columns: runs; runs that met their stop condition (the suites' ``stop_when``: the goal
-reached) before the step limit; runs keeping R + R_i from every obstacle that started outside it; runs with a
-target that started inside R + R_i (the situation begins inside the domain: no controller can
-then keep R + R_i), judged apart by their own criterion, the range never falling below its
-value at the start; runs passed on the COLREG side (every target with a side rule: head-on
+reached) before the step limit; runs keeping R + R_i from every obstacle that started outside it, and
+the same per target; runs with a target that started inside R + R_i (the situation begins inside
+the domain: no controller can then keep R + R_i), judged apart by their own criterion, the range
+opening at once (its closest approach within 60 s of the start), and the same per target; runs passed on the COLREG side (every target with a side rule: head-on
 port to port, astern of a crossing ship we give way to, no turn to port as stand-on) out of
 the runs with such a target, and the same per target; runs whose every applicable rule
-verdict passed; per rule, the targets it passed out of those it applied to; runs with a
+verdict passed; per rule, the targets it passed out of those it applied to; targets whose class
+was decided within the borderline band of a boundary; runs with a
 solver fallback and the fallbacks in all; the median and largest NMPC solve time [ms, wall
 clock] and the largest solve CPU time [ms].
 """
@@ -55,11 +56,20 @@ def summarise(folder) -> dict:
             counts["separation"] += bool(encounter.get("separation_respected"))
         if colregs.get("started_inside"):
             counts["inside_runs"] += 1
-            counts["inside_kept"] += bool(colregs.get("started_inside_range_kept"))
+            opened = colregs.get("started_inside_opened")
+            counts["inside_kept"] += bool(colregs.get("started_inside_range_kept") if opened is None else opened)
         side = colregs.get("side_correct")
         counts["side_runs"] += side is not None
         counts["side_ok"] += side is True
         for target in targets:
+            if target.get("started_inside"):
+                counts["inside_targets"] += 1
+                counts["inside_targets_opened"] += bool(target.get("range_opened_in_time",
+                                                                   target.get("range_kept_from_start")))
+            else:
+                counts["outside_targets"] += 1
+                counts["outside_targets_kept"] += bool(target.get("separation_kept"))
+            counts["borderline_targets"] += bool(target.get("borderline"))
             if target.get("side_correct") is not None:
                 counts["side_targets"] += 1
                 counts["side_targets_ok"] += bool(target["side_correct"])
@@ -87,20 +97,25 @@ def summarise(folder) -> dict:
 def markdown(rows: list[dict]) -> str:
     """One Markdown table, a row per batch summary (:func:`summarise`)."""
     rule_heads = " | ".join(rule.replace("rule_", "R") for rule in RULES)
-    lines = ["| batch | runs | arrived | separation >= R + R_i (started outside) | started inside: range kept "
+    lines = ["| batch | runs | arrived | separation >= R + R_i (started outside): runs | targets "
+             "| started inside: range opened within 60 s (runs) | targets "
              "| COLREG side (runs) | COLREG side (targets) | all verdicts pass | " + rule_heads
-             + " | runs with fallback (fallbacks) | NMPC solve median / max [ms] | max solve CPU [ms] |",
-             "|---|---|---|---|---|---|---|---|" + "---|" * len(RULES) + "---|---|---|"]
+             + " | borderline classes (targets) | runs with fallback (fallbacks) | NMPC solve median / max [ms] "
+             "| max solve CPU [ms] |",
+             "|---|---|---|---|---|---|---|---|---|---|" + "---|" * len(RULES) + "---|---|---|---|"]
     for r in rows:
         solve = (f"{r['solve_median_ms']:.0f} / {r['solve_max_ms']:.0f}" if r["solve_max_ms"] is not None else "-")
         cpu = f"{r['solve_cpu_max_ms']:.0f}" if r.get("solve_cpu_max_ms") is not None else "-"
         inside = f"{r.get('inside_kept', 0)}/{r.get('inside_runs', 0)}" if r.get("inside_runs") else "-"
         rules = " | ".join(f"{p}/{a}" if a else "-" for p, a in (r["rules"][rule] for rule in RULES))
+        inside_targets = (f"{r.get('inside_targets_opened', 0)}/{r['inside_targets']}" if r.get("inside_targets")
+                          else "-")
         lines.append(f"| {r['batch']} | {r['runs']} | {r.get('stopped', 0)}/{r['runs']} "
-                     f"| {r['separation']}/{r['runs']} | {inside} "
+                     f"| {r['separation']}/{r['runs']} | {r.get('outside_targets_kept', 0)}/{r.get('outside_targets', 0)} "
+                     f"| {inside} | {inside_targets} "
                      f"| {r['side_ok']}/{r['side_runs']} | {r['side_targets_ok']}/{r['side_targets']} "
-                     f"| {r['verdict_ok']}/{r['runs']} | {rules} | {r['fallback_runs']} ({r.get('fallbacks', 0)}) "
-                     f"| {solve} | {cpu} |")
+                     f"| {r['verdict_ok']}/{r['runs']} | {rules} | {r.get('borderline_targets', 0)} "
+                     f"| {r['fallback_runs']} ({r.get('fallbacks', 0)}) | {solve} | {cpu} |")
     return "\n".join(lines)
 
 

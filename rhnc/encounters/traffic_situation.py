@@ -299,3 +299,33 @@ def _along_route(ship: SituationShip, distance_nm: float) -> tuple[float, float]
         remaining -= length
     a, b = points[-2], points[-1]
     return tuple(b + (b - a) / np.hypot(*(b - a)) * remaining)
+
+
+def situation_document(ships: list[dict], title: str, description: str, latitude_deg: float = 57.0,
+                       longitude_deg: float = 3.0) -> dict:
+    """A maritime-schema traffic situation of ships sailing straight (the format this module reads).
+
+    ``ships``: the own ship first, each a dict with ``start_nm`` (north, east) [nm] relative to
+    the own ship's start, ``course_deg`` and ``speed_kn``.  Positions are written in WGS-84
+    through the inverse of the azimuthal equidistant projection about the own ship's start
+    at (``latitude_deg``, ``longitude_deg``).
+    """
+    from pyproj import Transformer
+
+    to_geographic = Transformer.from_crs(
+        f"+proj=aeqd +lat_0={latitude_deg} +lon_0={longitude_deg} +datum=WGS84 +units=m", "EPSG:4326",
+        always_xy=True)
+
+    def ship(entry: dict, identifier: int, name: str) -> dict:
+        lon, lat = to_geographic.transform(entry["start_nm"][1] * NM, entry["start_nm"][0] * NM)
+        return {"initial": {"position": {"lat": round(lat, 9), "lon": round(lon, 9)},
+                            "sog": entry["speed_kn"], "cog": entry["course_deg"], "heading": entry["course_deg"]},
+                "static": {"id": identifier, "name": name}}
+
+    return {
+        "schemaVersion": "0.2.0",
+        "title": title,
+        "description": description,
+        "ownShip": ship(ships[0], 1, "own ship"),
+        "targetShips": [ship(entry, k + 2, f"target {k + 1}") for k, entry in enumerate(ships[1:])],
+    }

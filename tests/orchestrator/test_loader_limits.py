@@ -350,3 +350,15 @@ def test_a_module_beside_the_scenario_started_from_elsewhere_is_refused_alike(tm
         f"'local_helm_elsewhere' (it lies in the scenario's folder {folder}, which is not on the import path: start "
         "the command from that folder, or install the module)"]
     assert not (folder / "imported.marker").exists() and not (tmp_path / "results").exists()
+
+
+@pytest.mark.parametrize("value, message", [
+    ("0", r"option 'iteration_budget' must be an integer from 1 to 100000, got 0"),
+    ("500", r"participants.ctrl: iteration_budget must be from 2 to max_iterations \(200\), got 500"),
+])
+def test_an_nmpc_iteration_budget_out_of_range_is_refused(write_scenario, value, message):
+    text = (REPO / "scenarios" / "exp3b_head_on.toml").read_text()
+    path = write_scenario(_edit(text, "horizon_steps = 15\nown_radius_nm",
+                                f"horizon_steps = 15\niteration_budget = {value}\nown_radius_nm"), "b.toml")
+    with pytest.raises(ScenarioError, match=message):
+        CoSimulation(load_scenario(path)).close()

@@ -113,3 +113,69 @@ def test_controller_and_analysis_share_the_rule_17_thresholds():
     analysis = colregs_analysis.JudgementSettings()
     assert settings.stand_on_action_tcpa_s == analysis.stand_on_wait_min * 60.0
     assert settings.stand_on_action_range_factor == analysis.stand_on_range_factor
+
+
+def _at_bearing(range_nm, bearing_deg):
+    b = math.radians(bearing_deg)
+    return (range_nm * math.cos(b), range_nm * math.sin(b))
+
+
+def test_overtaken_only_from_more_than_22_5_deg_abaft_the_beam():
+    # a faster ship on a course converging with ours, at exactly 112.5 deg and just beyond
+    at_boundary = _classify(_at_bearing(1.5, 112.5), 350.0, 30.0)
+    beyond = _classify(_at_bearing(1.5, 113.5), 350.0, 30.0)
+    assert at_boundary.encounter_class == "crossing_give_way"
+    assert beyond.encounter_class == "overtaken"
+    assert "overtaken" in at_boundary.borderline and "overtaken" in beyond.borderline
+
+
+def test_a_class_decided_near_a_boundary_is_borderline_and_a_clear_one_is_not():
+    edge = _classify(_at_bearing(6.0, 10.0), 180.0, 18.0)  # nearly ahead at the limit
+    assert edge.encounter_class == "head_on" and edge.borderline.startswith("head-on")
+    just_outside = _classify(_at_bearing(6.0, 11.0), 180.0, 18.0)
+    assert just_outside.encounter_class == "crossing_give_way" and just_outside.borderline.startswith("head-on")
+    clear = _classify((6.0, 0.1), 180.0, 18.0)
+    assert clear.encounter_class == "head_on" and clear.borderline == ""
+    crossing = _classify((4.0, 4.0), 270.0, 15.0)
+    assert crossing.borderline == ""
+    far_from_head_on = _classify(_at_bearing(6.0, 10.0), 215.0, 18.0)  # ahead, but 35 deg off reciprocal
+    assert far_from_head_on.encounter_class == "crossing_give_way" and far_from_head_on.borderline == ""
+
+
+def test_the_tracker_keeps_the_borderline_note_of_the_onset():
+    tracker = EncounterTracker()
+    target = np.array([[*(np.array(_at_bearing(6.0, 10.0)) * NM), *_velocity(180.0, 18.0), NM]])
+    first = tracker.update((0.0, 0.0), 0.0, 18.0 * KN, target)[0]
+    assert first.borderline
+    # later the geometry is far from any boundary: the class and its note stay as decided
+    later = tracker.update((0.0, 3.0 * NM), 0.0, 18.0 * KN, target)[0]
+    assert later.encounter_class == "head_on" and later.borderline == first.borderline
+
+
+def test_the_last_moment_of_a_readily_apparent_alteration_comes_sooner_the_faster_the_closing():
+    from rhnc.encounters.colregs import latest_alteration_s
+    own_velocity = np.array([18.0 * KN, 0.0])
+
+    def latest(range_nm, target_kn):
+        return latest_alteration_s((0.0, 0.0), own_velocity, (range_nm * NM, 0.0), (-target_kn * KN, 0.0), 1.05 * NM)
+
+    # head-on at 40.6 kn closing: at 8 nm there are some 5 min left, at 4.7 nm none
+    assert 200.0 < latest(8.0, 22.6) < 400.0
+    assert latest(4.7, 22.6) == -math.inf
+    assert latest(8.0, 8.0) > latest(8.0, 22.6)  # a slower target leaves more time
+    # a target passing clear anyway needs no alteration
+    assert latest_alteration_s((0.0, 0.0), own_velocity, (5.0 * NM, 2.0 * NM), (-9.0 * KN, 0.0), NM) == math.inf
+
+
+def test_a_stand_on_ship_acts_when_its_time_to_alter_runs_out_even_while_the_cpa_is_far_in_time():
+    # a fast ship from astern: TCPA 15 min, range 3 nm, but only 60 s left for an alteration
+    assert not stand_on_must_act(0.1 * NM, 900.0, 3.0 * NM, NM)
+    assert stand_on_must_act(0.1 * NM, 900.0, 3.0 * NM, NM, latest_s=60.0)
+    assert not stand_on_must_act(0.1 * NM, 900.0, 3.0 * NM, NM, latest_s=600.0)
+    assert not stand_on_must_act(1.5 * NM, 900.0, 3.0 * NM, NM, latest_s=60.0)  # no risk: CPA outside
+
+
+def test_a_stand_on_ship_that_no_apparent_alteration_helps_still_stands_on():
+    # latest -inf: a 35 deg turn would not open the CPA even now; the TCPA and range decide
+    assert not stand_on_must_act(0.1 * NM, 900.0, 3.5 * NM, NM, latest_s=-math.inf)
+    assert stand_on_must_act(0.1 * NM, 500.0, 3.5 * NM, NM, latest_s=-math.inf)

@@ -318,3 +318,55 @@ def test_no_predicted_cpa_without_a_manoeuvre():
     track = own_track(20)
     result = judge(track, target_states(track[0], (7.0, 0.5), 180.0, 18.0))
     assert result["manoeuvre_time_s"] is None and result["predicted_time_of_cpa_s"] is None
+
+
+def test_a_round_turn_to_starboard_stays_a_starboard_manoeuvre():
+    # 350 deg to starboard at 2 deg/s: from 180 deg on, the wrapped change reads as a turn to port
+    t = np.arange(0.0, 900.0, 5.0)
+    course = np.radians(np.clip(2.0 * (t - 100.0), 0.0, 350.0))
+    assert first_manoeuvre(t, course, 0, 900.0, JudgementSettings()) == (105.0, "starboard")
+
+
+def test_a_borderline_class_is_reported_as_such():
+    track = own_track(30, turns=[(8.0, 40.0)])
+    b = math.radians(10.0)
+    edge = judge_encounters(*track, target_states(track[0], (6.0 * math.cos(b), 6.0 * math.sin(b)), 180.0, 18.0),
+                            0.0, JudgementSettings())
+    assert edge["targets"][0]["encounter_class"] == "head_on"
+    assert edge["targets"][0]["borderline"].startswith("head-on") and edge["borderline"] == [0]
+    clear = judge_encounters(*track, target_states(track[0], (6.0, 0.05), 180.0, 18.0), 0.0, JudgementSettings())
+    assert clear["targets"][0]["borderline"] == "" and clear["borderline"] == []
+
+
+def test_a_target_starting_inside_must_see_the_range_open_within_60_s():
+    # 0.8 nm off on the starboard beam, sailing north-west at 10 kn across our track behind
+    # us: the range closes for a while although it ends up wide
+    track = own_track(20)
+    slow_to_open = judge_encounters(*track, target_states(track[0], (0.0, 0.8), 300.0, 10.0), 0.0,
+                                    JudgementSettings())["targets"][0]
+    assert slow_to_open["started_inside"] and slow_to_open["range_opening_s"] > 60.0
+    assert slow_to_open["range_opened_in_time"] is False and slow_to_open["verdict"] == FAIL
+    at_once = judge_encounters(*track, target_states(track[0], (0.0, 0.8), 120.0, 10.0), 0.0,
+                               JudgementSettings())
+    assert at_once["targets"][0]["range_opening_s"] <= 60.0 and at_once["started_inside_opened"] is True
+
+
+def test_stand_on_manoeuvre_made_when_another_stand_on_target_required_it_is_allowed():
+    # two faster ships coming up from astern: the nearer one's time to stand on runs out
+    # first, and the own ship acts for it; that turn breaks no obligation to the farther one
+    probe_t = own_track(40)[0]
+    near = target_states(probe_t, (-1.5, 0.15), 0.0, 27.0)
+    far = target_states(probe_t, (-4.5, -0.25), 0.0, 26.0)
+    from rhnc.cosim.colregs_analysis import _stand_on_action_time
+    own = own_track(40)
+    own_xy = np.column_stack(own[1:3])
+    velocity = np.column_stack(np.gradient(own_xy, own[0], axis=0).T)
+    act_near = _stand_on_action_time(own[0], own_xy, velocity, near[:, 0], "overtaken", 0, 0.0, JudgementSettings())
+    act_far = _stand_on_action_time(own[0], own_xy, velocity, far[:, 0], "overtaken", 0, 0.0, JudgementSettings())
+    assert act_near is not None and act_far is not None and act_near + 120.0 < act_far
+    track = own_track(40, turns=[(act_near / 60.0, -40.0)])
+    both = judge_encounters(*track, np.concatenate([near, far], axis=1))["targets"]
+    assert both[1]["encounter_class"] == "overtaken" and both[1]["manoeuvre_time_s"] < act_far
+    assert both[1]["rule_17"] == PASS, both[1]["reasons"]
+    alone = judge(track, far)  # the same turn with no other ship to act for
+    assert alone["rule_17"] == FAIL

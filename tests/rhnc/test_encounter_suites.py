@@ -30,3 +30,22 @@ def test_imazu_head_on_through_the_nmpc_is_judged_from_its_tracks(tmp_path):
     assert target["rule_14"] in ("pass", "fail") and target["rule_15"] == "not applicable"
     assert summary["analyses"]["colregs"]["verdict"] == target["verdict"]
     assert "track.png" in summary["figures"]
+
+
+@pytest.mark.parametrize("suite", ["imazu", "trafficgen", "drawn"])
+def test_every_colregs_suite_has_a_calm_twin_and_runs_until_arrival(suite):
+    from orchestrator.batch_spec import load_batch
+
+    weather = load_batch(REPO / "batches" / f"{suite}_rhnc_colregs.toml").runs()
+    calm = load_batch(REPO / "batches" / f"{suite}_rhnc_colregs_calm.toml").runs()
+    assert [run.parameters["situation"] for run in calm] == [run.parameters["situation"] for run in weather]
+    for run in weather:
+        assert run.overrides["simulation.steps"] == 450  # 150 min: every run ends on arrival
+        assert run.overrides["participants.ctrl.options.iteration_budget"] == 90
+        assert "metocean.current_kn" not in run.overrides
+    for run in calm:
+        assert run.overrides["metocean.current_kn"] == 0.0
+        assert all(value == 0.0 for row in run.overrides["metocean.wind_control_points_ms"] for value in row)
+        same = {key: value for key, value in run.overrides.items() if not key.startswith("metocean.")}
+        twin = next(other for other in weather if other.parameters["situation"] == run.parameters["situation"])
+        assert same == twin.overrides

@@ -195,7 +195,9 @@ def test_stand_on_target_has_no_constraint_until_its_action_is_not_enough():
     domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=1)
     state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
     start, velocity = target_on_collision_course(90.0, 15.0)
-    for t, expected_active in ((0.0, 0.0), (240.0, 0.0), (320.0, 1.0)):  # TCPA 900, 660, 580 s
+    # TCPA 900, 720, 660 s; a 35 deg alteration to starboard still opens the CPA to R + R_i if
+    # begun within 420, 240, 180 s: the stand-on ship acts once that is down to ACTION_BUFFER_S
+    for t, expected_active in ((0.0, 0.0), (180.0, 0.0), (240.0, 1.0)):
         own = state.copy()
         own[0] = SPEED * t
         slots, report = domains.parameters(np.array([[*(start + velocity * t), *velocity, RADIUS]]), own, own[:2],
@@ -437,3 +439,62 @@ def test_a_give_way_alteration_needs_the_cpa_inside_the_risk_distance():
                                    230.0, et=True, reference_heading_rad=0.0, time_s=360.0)
     assert report.class_codes[0] == ENCOUNTER_CLASSES.index("crossing_give_way")
     assert report.alteration_floor is None and report.alteration_ceiling is None and domains.alterations == 0
+
+
+def test_collision_risk_is_assessed_at_every_solve_without_the_navigation_trigger():
+    # head-on at 40.6 kn closing, 6 nm off: the navigation's 4.5 nm trigger has not fired
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    target = np.array([[6.0 * NM, 0.05 * NM, -22.6 * KNOT, 0.0, RADIUS]])
+    colregs = CollisionDomains(DomainSettings(colregs=True), max_obstacles=1)
+    _, report = colregs.parameters(target, state, state[:2], SPEED, 5.0, 230.0, et=False, horizon_s=300.0)
+    assert report.risk and report.alteration_floor is not None  # the alteration to starboard begins
+    assert report.active[0] == 0.0  # its domain is still out of reach within the 5 min horizon ...
+    state[0] = 1.0 * NM
+    target[0, 0] -= 1.0 * NM * 22.6 / 18.0
+    _, report = colregs.parameters(target, state, state[:2], SPEED, 5.0, 230.0, et=False, horizon_s=300.0, time_s=100.0)
+    assert report.active[0] == 1.0  # ... and constrained as soon as it is within reach
+    # the paper's mode keeps the paper's trigger
+    paper = CollisionDomains(DomainSettings(colregs=False), max_obstacles=1)
+    _, report = paper.parameters(target, state, state[:2], SPEED, 5.0, 230.0, et=False, horizon_s=300.0)
+    assert report.active[0] == 0.0 and not report.risk and report.alteration_floor is None
+    # a target passing far off raises no risk
+    far = np.array([[6.0 * NM, 3.0 * NM, -22.6 * KNOT, 0.0, RADIUS]])
+    _, report = CollisionDomains(DomainSettings(colregs=True), 1).parameters(far, state, state[:2], SPEED, 5.0, 230.0,
+                                                                             et=False, horizon_s=300.0)
+    assert report.active[0] == 0.0 and not report.risk
+
+
+def test_a_give_way_ship_alters_once_its_time_to_alter_runs_out_even_with_a_long_tcpa():
+    # a crossing ship from starboard at 30 kn: with the action TCPA set far
+    # below, only the time a readily apparent alteration needs can start the alteration
+    settings = DomainSettings(colregs=True, give_way_action_tcpa_s=60.0)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    start, velocity = target_on_collision_course(250.0, 30.0)
+    domains = CollisionDomains(settings, max_obstacles=1)
+    began = None
+    for t in np.arange(0.0, 900.0, 20.0):
+        own = state.copy()
+        own[0] = SPEED * t
+        _, report = domains.parameters(np.array([[*(start + velocity * t), *velocity, RADIUS]]), own, own[:2], SPEED,
+                                       5.0, 230.0, et=True, time_s=float(t))
+        if report.alteration_floor is not None:
+            began = t
+            break
+    assert began is not None and 900.0 - began > 300.0  # more than 5 min before the CPA
+
+
+def test_a_target_inside_the_clearance_must_see_the_range_open_and_may_be_left_to_port():
+    # a crossing ship 0.8 nm off on the starboard bow, closing: inside R + R_i
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=1)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    bearing = math.radians(40.0)
+    target = np.array([[0.8 * NM * math.cos(bearing), 0.8 * NM * math.sin(bearing),
+                        *(12.0 * KNOT * np.array([math.cos(math.radians(300.0)), math.sin(math.radians(300.0))])),
+                        RADIUS]])
+    slots, report = domains.parameters(target, state, state[:2], SPEED, 5.0, 230.0, et=True, horizon_s=300.0)
+    radius_m = slots[6, 0] * 230.0
+    assert report.active[0] == 1.0
+    assert 0.5 * NM < radius_m < 0.8 * NM  # within the present range: the range may not close further ...
+    assert slots[7, 0] * 230.0 > 0.5  # ... and it must open
+    assert np.allclose(slots[4:6, 0], 0.0)  # a plain circle about the target
+    assert not report.no_port_turn and report.alteration_floor is None  # immediate danger: any way out

@@ -182,3 +182,84 @@ def test_a_solver_that_raises_reports_its_error_with_or_without_the_worker(wall_
         with pytest.raises(RuntimeError, match="Fatrop option not supported: tol_acceptable"):
             bounded.solve("nlp", x0=np.zeros(2))
     bounded.close()
+
+
+class OutOfIterations:
+    """Wraps a solver: reports a stop at the iteration limit ``cap`` (not converged), optionally
+    moving the point off the dynamics."""
+
+    def __init__(self, solver, offset, cap):
+        self.solver, self.offset, self.cap = solver, offset, cap
+
+    def __call__(self, **arguments):
+        result = dict(self.solver(**arguments))
+        result["x"] = np.array(result["x"]).ravel() + self.offset
+        return result
+
+    def stats(self):
+        return {**self.solver.stats(), "success": False, "return_status": 1, "iter_count": self.cap,
+                "fatrop": {"return_flag": 1}}
+
+
+@pytest.fixture(scope="module")
+def budgeted(kcs):
+    return NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=DT, max_obstacles=1,
+                                            wall_time_limit_s=None, cpu_time_limit_s=None, iteration_budget=30))
+
+
+def test_the_iteration_budget_is_shared_by_the_attempts(budgeted):
+    assert budgeted.attempt_iterations == {"hard": 15, "relaxed": 15, "relaxed_alone": 30}
+
+
+@pytest.mark.parametrize("offset, used", [(0.0, True), (1e-3, False)])
+def test_a_point_at_the_end_of_the_budget_is_used_only_when_it_keeps_the_constraints(budgeted, offset, used):
+    state, reference_at = straight()
+    budgeted.reset()
+    real = dict(budgeted.solvers._solvers)
+    for name, solver in real.items():
+        budgeted.solvers._solvers[name] = OutOfIterations(solver, offset, budgeted.attempt_iterations[name])
+    try:
+        solution = budgeted.solve(0.0, state, reference_at(0.0))
+    finally:
+        budgeted.solvers._solvers.update(real)
+    assert solution.success is used and solution.fallback is not used
+    if used:
+        assert solution.status == "Iteration_Budget_Feasible_Point"
+
+
+def test_without_a_budget_a_point_at_the_iteration_limit_is_not_used(controller):
+    state, reference_at = straight()
+    controller.reset()
+    real = dict(controller.solvers._solvers)
+    for name, solver in real.items():
+        controller.solvers._solvers[name] = OutOfIterations(solver, 0.0, controller.settings.max_iterations)
+    try:
+        solution = controller.solve(0.0, state, reference_at(0.0))
+    finally:
+        controller.solvers._solvers.update(real)
+    assert solution.fallback
+
+
+def test_a_budget_outside_its_range_is_refused():
+    with pytest.raises(ValueError, match="iteration_budget must be from 2 to max_iterations"):
+        NMPCSettings(iteration_budget=1)
+    with pytest.raises(ValueError, match="iteration_budget must be from 2 to max_iterations"):
+        NMPCSettings(iteration_budget=500)
+
+
+def test_with_a_budget_a_step_that_failed_in_the_relaxed_attempt_tries_the_hard_problem_next(budgeted):
+    state, reference_at = straight()
+    budgeted.reset()
+    real = dict(budgeted.solvers._solvers)
+    for name, solver in real.items():  # both attempts run out at an infeasible point
+        budgeted.solvers._solvers[name] = OutOfIterations(solver, 1e-3, budgeted.attempt_iterations[name])
+    log = CallLog(budgeted)
+    try:
+        assert budgeted.solve(0.0, state, reference_at(0.0)).fallback
+        assert log.names == ["hard", "relaxed"]
+        log.names.clear()
+        budgeted.solve(DT, state, reference_at(DT))
+        assert log.names == ["hard", "relaxed"]  # not the relaxed problem alone
+    finally:
+        log.detach()
+        budgeted.solvers._solvers.update(real)

@@ -22,22 +22,29 @@ def _run(folder, name, separation, side, verdict, fallbacks, solve_max_s, target
 
 
 def test_counts_of_a_batch(tmp_path):
-    _run(tmp_path, "a", True, True, "pass", 0, 0.05, [{"side_correct": True, "rule_8": "pass", "rule_14": "pass"}])
-    _run(tmp_path, "b", False, False, "fail", 2, 0.30, [{"side_correct": False, "rule_15": "fail", "rule_8": "fail"},
-                                                        {"side_correct": True, "rule_8": "not applicable"}])
+    _run(tmp_path, "a", True, True, "pass", 0, 0.05, [{"side_correct": True, "rule_8": "pass", "rule_14": "pass",
+                                                       "separation_kept": True}])
+    _run(tmp_path, "b", False, False, "fail", 2, 0.30, [{"side_correct": False, "rule_15": "fail", "rule_8": "fail",
+                                                         "separation_kept": False},
+                                                        {"side_correct": True, "rule_8": "not applicable",
+                                                         "separation_kept": True, "borderline": "head-on: ..."}])
     # a target that started inside R + R_i: the separation over the others holds, and the
     # run is counted apart by its own criterion
-    _run(tmp_path, "c", True, None, "not applicable", 0, 0.02, [{"side_correct": None}], started_inside=[0],
-         inside_kept=True)
+    _run(tmp_path, "c", True, None, "not applicable", 0, 0.02,
+         [{"side_correct": None, "started_inside": True, "range_opened_in_time": True, "separation_kept": False}],
+         started_inside=[0], inside_kept=True)
     row = summarise(tmp_path)
     assert row["runs"] == 3 and row["separation"] == 2 and row["stopped"] == 2
     assert (row["inside_kept"], row["inside_runs"]) == (1, 1)
+    assert (row["inside_targets_opened"], row["inside_targets"]) == (1, 1)
+    assert (row["outside_targets_kept"], row["outside_targets"]) == (2, 3) and row["borderline_targets"] == 1
     assert (row["side_ok"], row["side_runs"]) == (1, 2)
     assert (row["side_targets_ok"], row["side_targets"]) == (2, 3)
     assert row["verdict_ok"] == 2 and row["fallback_runs"] == 1 and row["fallbacks"] == 2
     assert row["rules"]["rule_8"] == (1, 2) and row["rules"]["rule_15"] == (0, 1) and row["rules"]["rule_13"] == (0, 0)
     assert row["solve_max_ms"] == 300.0 and row["solve_cpu_max_ms"] == 150.0 and row["rules_failed"] == {"rule_15": 1}
-    assert "| 2/3 | 2/3 | 1/1 | 1/2 | 2/3 | 2/3 | 1/2 | - | 1/1 | 0/1 | - | - | 1 (2) | 5 / 300 | 150 |" in markdown([row])
+    assert ("| 2/3 | 2/3 | 2/3 | 1/1 | 1/1 | 1/2 | 2/3 | 2/3 | 1/2 | - | 1/1 | 0/1 | - | - | 1 | 1 (2) | 5 / 300 | 150 |"
+            in markdown([row]))
 
 
 def test_table_is_written_between_the_markers(tmp_path, capsys):
