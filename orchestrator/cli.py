@@ -237,18 +237,23 @@ def _compare(args) -> int:
 
 def _export(args) -> int:
     from orchestrator.errors import ScenarioError
-    from orchestrator.export import export_participant
+    from orchestrator.export import check_exportable, export_participant, nothing_left_on_failure
     from orchestrator.osp_export import export_osp_system
+    from orchestrator.scenario import load_scenario
 
     if args.osp:
         if args.participants:
             raise ScenarioError("export --osp exports every participant; name none")
-        print(export_osp_system(args.scenario, args.out))
+        with nothing_left_on_failure(args.out):
+            print(export_osp_system(args.scenario, args.out))
         return 0
     if not args.participants:
         raise ScenarioError("export: name the participants to export, or give --osp for the whole scenario")
-    for name in args.participants:
-        print(export_participant(args.scenario, name, args.out))
+    check_exportable(load_scenario(args.scenario), args.scenario, args.participants)  # all refused before one is built
+    with nothing_left_on_failure(args.out):
+        written = [export_participant(args.scenario, name, args.out) for name in args.participants]
+    for path in written:
+        print(path)
     return 0
 
 
