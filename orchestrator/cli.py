@@ -59,6 +59,13 @@ def _parser() -> argparse.ArgumentParser:
     export.add_argument("--out", default="fmus/exported", help="folder for the FMUs (default: fmus/exported)")
     export.add_argument("--osp", action="store_true",
                         help="export every participant and write OspSystemStructure.xml for OSP's libcosim")
+    check = sub.add_parser("check", help="judge another FMI master's results (libcosim's or FMPy's CSV files) by "
+                                         "a scenario's acceptance criteria")
+    check.add_argument("results", nargs="+", help="CSV files: libcosim's (one per simulator), FMPy's, or ours")
+    check.add_argument("--scenario", required=True, help="the scenario whose [[acceptance]] criteria judge")
+    check.add_argument("--participant", default=None,
+                       help="the participant a single FMPy CSV file belongs to (default: the file's name)")
+    check.add_argument("--summary", default=None, metavar="FILE", help="also write the summary as JSON")
     batch = sub.add_parser("batch", help="run a batch of scenario variations into results/<batch>/ (resumable)")
     batch.add_argument("batch", help="batch TOML file")
     batch.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
@@ -243,23 +250,51 @@ def _compare(args) -> int:
 
 def _export(args) -> int:
     from orchestrator.errors import ScenarioError
-    from orchestrator.export import export_participant
+    from orchestrator.export import check_exportable, export_participant, nothing_left_on_failure
     from orchestrator.osp_export import export_osp_system
+    from orchestrator.scenario import load_scenario
 
     if args.osp:
         if args.participants:
             raise ScenarioError("export --osp exports every participant; name none")
-        print(export_osp_system(args.scenario, args.out))
+        with nothing_left_on_failure(args.out):
+            print(export_osp_system(args.scenario, args.out))
         return 0
     if not args.participants:
         raise ScenarioError("export: name the participants to export, or give --osp for the whole scenario")
-    for name in args.participants:
-        print(export_participant(args.scenario, name, args.out))
+    check_exportable(load_scenario(args.scenario), args.scenario, args.participants)  # all refused before one is built
+    with nothing_left_on_failure(args.out):
+        written = [export_participant(args.scenario, name, args.out) for name in args.participants]
+    for path in written:
+        print(path)
     return 0
 
 
+def _check(args) -> int:
+    import json
+    from pathlib import Path
+
+    from orchestrator.foreign_results import judge
+    from orchestrator.results import json_default
+
+    summary = judge(args.results, args.scenario, args.participant)
+    criteria = summary["acceptance"]["criteria"]
+    width = max(len(c["name"]) for c in criteria)
+    for criterion in criteria:
+        verdict = "pass" if criterion["passed"] else "FAIL"
+        value = criterion["value"]
+        shown = f"{value:.6g}" if isinstance(value, float) else json.dumps(value, default=json_default)
+        print(f"{verdict}  {criterion['name']:<{width}}  {criterion['criterion']}  (value: {shown})"
+              + (f"  {criterion['reason']}" if not criterion["passed"] else ""))
+    if args.summary:
+        Path(args.summary).write_text(json.dumps(summary, indent=1, default=json_default))
+    passed = summary["acceptance"]["passed"]
+    print("accepted" if passed else "not accepted")
+    return 0 if passed else EXIT_RUN_FAILED
+
+
 _COMMANDS = {"run": _run, "validate": _validate, "build": _build, "batch": _batch,
-             "compare": _compare, "export": _export}
+             "compare": _compare, "export": _export, "check": _check}
 
 
 def _plugin_commands() -> dict:

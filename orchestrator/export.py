@@ -29,10 +29,12 @@ compare like with like.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import shutil
 import tempfile
+from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -58,6 +60,8 @@ class _ShapeProbe(Participant):
         self.inner = inner
         self.outputs_at_step_end = inner.outputs_at_step_end
         self.shapes: dict[str, dict[str, list[int]]] = {"inputs": {}, "outputs": {}}
+        #: each input's value at the participant's first step: the FMU's start values
+        self.first_inputs: dict[str, list[float]] = {}
 
     @property
     def input_names(self):
@@ -79,12 +83,51 @@ class _ShapeProbe(Participant):
 
     def step(self, time, step_size, inputs):
         self._record("inputs", inputs)
+        for port, value in inputs.items():
+            self.first_inputs.setdefault(port, [float(v) for v in np.ravel(value)])
         outputs = self.inner.step(time, step_size, inputs)
         self._record("outputs", outputs)
         return outputs
 
     def terminate(self):
         self.inner.terminate()
+
+
+@contextlib.contextmanager
+def nothing_left_on_failure(out_dir) -> Iterator[None]:
+    """Remove what the block wrote into ``out_dir`` (and the folder, if it made it) when it raises.
+
+    An export that is refused half-way (the second of two participants unknown, a port of
+    unknown size) leaves the folder as it found it, not one FMU of several.
+    """
+    out_dir = Path(out_dir)
+    existed = out_dir.exists()
+    before = {path.name for path in out_dir.iterdir()} if existed and out_dir.is_dir() else set()
+    try:
+        yield
+    except BaseException:
+        if not existed:
+            shutil.rmtree(out_dir, ignore_errors=True)
+        elif out_dir.is_dir():
+            for path in out_dir.iterdir():
+                if path.name in before:
+                    continue
+                if path.is_dir():
+                    shutil.rmtree(path, ignore_errors=True)
+                else:
+                    path.unlink(missing_ok=True)
+        raise
+
+
+def check_exportable(scenario, scenario_path, names) -> None:
+    """Refuse names that are not Python participants of the scenario, before anything is built."""
+    specs = {spec.name: spec for spec in scenario.participants}
+    for name in names:
+        if name not in specs:
+            raise ScenarioError(f"{scenario_path}: no participant '{name}' (participants: {', '.join(specs)})")
+        if specs[name].is_fmu:
+            raise ScenarioError(f"{scenario_path}: participants.{name} is an FMU already ({specs[name].fmu})")
+        _check_json(specs[name].options, f"{scenario_path}: participants.{name}.options")
 
 
 def export_participant(scenario_path, participant: str, out_dir=".") -> Path:
@@ -101,18 +144,15 @@ def export_participant(scenario_path, participant: str, out_dir=".") -> Path:
 
     scenario_path = Path(scenario_path)
     scenario = load_scenario(scenario_path)
-    specs = {spec.name: spec for spec in scenario.participants}
-    if participant not in specs:
-        raise ScenarioError(f"{scenario_path}: no participant '{participant}' (participants: {', '.join(specs)})")
-    spec = specs[participant]
-    if spec.is_fmu:
-        raise ScenarioError(f"{scenario_path}: participants.{participant} is an FMU already ({spec.fmu})")
-    _check_json(spec.options, f"{scenario_path}: participants.{participant}.options")
+    check_exportable(scenario, scenario_path, [participant])
+    spec = next(spec for spec in scenario.participants if spec.name == participant)
     probe_steps = min(scenario.simulation.steps,
                       PROBE_STEPS_PER_PARTICIPANT_STEP * max(s.every for s in scenario.participants))
+    # in Jacobi order, as most FMI masters step: the participant's defaults that depend on
+    # the exchange order (the NMPC's loop delay) are then those the FMU declares
     probe_scenario = replace(scenario, simulation=replace(
         scenario.simulation, stop_s=scenario.simulation.start_s + probe_steps * scenario.simulation.dt_s,
-        stop_when=()))
+        stop_when=(), exchange="jacobi"))
     cosim = CoSimulation(probe_scenario)
     try:
         index = [p.name for p in cosim.participants].index(participant)
@@ -137,18 +177,24 @@ def export_participant(scenario_path, participant: str, out_dir=".") -> Path:
                 "metocean": "metocean.nc" if cosim.metocean is not None else None,
                 "inputs": layout["inputs"],
                 "outputs": layout["outputs"],
+                "parameters": [{"name": name, **entry} for name, entry in probe.inner.fmu_parameters().items()],
                 "scenario": scenario_path.name,
             }
             (bundle / "export.json").write_text(json.dumps(description, indent=1))
             script = tmp / f"{participant}.py"
             script.write_text(SLAVE_TEMPLATE.read_text().replace("class ExportedParticipant(",
                                                                  f"class {participant}("))
-            return _build(script, [bundle], Path(out_dir), participant)
+            units = {name: entry.get("units", {}).get(name, entry.get("unit", ""))
+                     for kind in ("inputs", "outputs") for entry in description[kind]
+                     for name in entry.get("descriptions", {})}
+            units.update({entry["name"]: entry.get("unit", "") for entry in description["parameters"]})
+            return _build(script, [bundle], Path(out_dir), participant, units)
     finally:
         cosim.close()
 
 
-def _build(script: Path, files: list[Path], out_dir: Path, participant: str) -> Path:
+def _build(script: Path, files: list[Path], out_dir: Path, participant: str,
+           units: dict[str, str] | None = None) -> Path:
     from pythonfmu.builder import FmuBuilder
 
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -157,15 +203,16 @@ def _build(script: Path, files: list[Path], out_dir: Path, participant: str) -> 
     built = FmuBuilder.build_FMU(script, dest=partial.with_suffix(".fmu"), project_files=files,
                                  needsExecutionTool="true", canGetAndSetFMUstate="false",
                                  canSerializeFMUstate="false")
-    _complete_model_structure(Path(built), target)
+    _complete_model_structure(Path(built), target, units)
     Path(built).unlink()
     log.info("exported %s", target)
     return target
 
 
-def _complete_model_structure(source: Path, target: Path) -> None:
+def _complete_model_structure(source: Path, target: Path, units: dict[str, str] | None = None) -> None:
     """Copy the FMU, listing every output among the InitialUnknowns (PythonFMU leaves them out,
-    which FMI 2.0 requires for outputs computed at initialisation)."""
+    which FMI 2.0 requires for outputs computed at initialisation), and giving each variable
+    of ``units`` (variable name -> unit) its unit, declared in UnitDefinitions."""
     import xml.etree.ElementTree as ET
     import zipfile
 
@@ -182,6 +229,17 @@ def _complete_model_structure(source: Path, target: Path) -> None:
                 for index, variable in enumerate(variables, start=1):
                     if variable.get("causality") == "output":
                         ET.SubElement(initial, "Unknown", {"index": str(index)})
+                    unit = (units or {}).get(variable.get("name"))
+                    if unit:
+                        variable.find("Real").set("unit", unit)
+                used = sorted({unit for unit in (units or {}).values() if unit})
+                if used:
+                    definitions = ET.Element("UnitDefinitions")
+                    for unit in used:
+                        ET.SubElement(ET.SubElement(definitions, "Unit", {"name": unit}), "BaseUnit",
+                                      {k: str(v) for k, v in BASE_UNITS.get(unit, {}).items()})
+                    position = list(root).index(root.find("CoSimulation")) + 1
+                    root.insert(position, definitions)
                 ET.indent(root)
                 data = b'<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root)
             new.writestr(item, data)
@@ -204,8 +262,43 @@ def _layout(probe: _ShapeProbe, scenario_path: Path) -> dict[str, list[dict[str,
                 raise ScenarioError(
                     f"{scenario_path}: participants.{probe.name}: output '{port}' was never produced "
                     "in the probe run, so its size is unknown")
-            layout[kind].append({"port": port, "shape": shape})
+            entry = {"port": port, "shape": shape, **_port_meaning(probe.inner, port, shape)}
+            if kind == "inputs":
+                entry["start"] = probe.first_inputs.get(port)
+            layout[kind].append(entry)
     return layout
+
+
+#: Base-unit exponents of the units ports declare (FMI 2.0 UnitDefinitions).
+BASE_UNITS = {"m": {"m": 1}, "s": {"s": 1}, "rad": {"rad": 1}, "m/s": {"m": 1, "s": -1},
+              "rad/s": {"rad": 1, "s": -1}, "N": {"kg": 1, "m": 1, "s": -2}, "N.m": {"kg": 1, "m": 2, "s": -2}}
+
+
+def _port_meaning(participant, port: str, shape: list[int]) -> dict[str, Any]:
+    """Unit, description and a description per element (``port[i,j]``) from ``participant.port_info``."""
+    info = participant.port_info(port)
+    if not info:
+        return {}
+    text = info.get("description", "")
+    meaning: dict[str, Any] = {"unit": info.get("unit", ""), "description": text}
+    columns = info.get("columns")
+    descriptions, units = {}, {}
+    for index in np.ndindex(*shape):
+        name = port + (f"[{','.join(map(str, index))}]" if shape else "")
+        if not index:
+            descriptions[name] = text
+            continue
+        column = columns[index[-1]] if columns and index[-1] < len(columns) else None
+        position = ", ".join(map(str, index))
+        where = f"row {index[0]}, {column}" if len(index) == 2 and column else (column or f"element {position}")
+        descriptions[name] = f"{where}: {text}"
+        unit = column.rpartition("[")[2].rstrip("]") if column and column.endswith("]") else ""
+        if unit in BASE_UNITS:  # a column's own unit, "u surge [m/s]"
+            units[name] = unit
+    meaning["descriptions"] = descriptions
+    if units:
+        meaning["units"] = units
+    return meaning
 
 
 def _resources(spec, scenario, cosim, folder: Path) -> None:

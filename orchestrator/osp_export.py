@@ -8,6 +8,10 @@ macro step as base step, each participant's step (``every`` times ``dt_s``), its
 values, and the connections element by element (an array port ``reference`` of shape
 (16, 7) becomes 112 variable connections ``reference[i,j]``).
 
+When the scenario has ``[[acceptance]]`` criteria it is copied beside the system as
+``scenario.toml``: ``python -m orchestrator check <libcosim's CSV files> --scenario
+DIR/scenario.toml`` judges libcosim's run by them (:mod:`orchestrator.foreign_results`).
+
 libcosim steps every simulator of a communication point at once (Jacobi), so the system
 reproduces the scenario run with ``[simulation] exchange = "jacobi"``; with our default
 order (Gauss-Seidel) a decision reaches the ship one step earlier.
@@ -28,6 +32,8 @@ log = logging.getLogger(__name__)
 
 NAMESPACE = "http://opensimulationplatform.com/MSMI/OSPSystemStructure"
 CONFIG_NAME = "OspSystemStructure.xml"
+#: The scenario, with its acceptance criteria, beside the system (``check --scenario``).
+SCENARIO_COPY = "scenario.toml"
 #: Name of the scenario's met-ocean grid inside the environment FMU's resources.
 GRID_RESOURCE = "scenario.grid"
 
@@ -96,6 +102,8 @@ def export_osp_system(scenario_path, out_dir) -> Path:
                 ET.SubElement(pair, "Variable", {"simulator": source[0], "name": source[1] + suffix})
                 ET.SubElement(pair, "Variable", {"simulator": target[0], "name": target[1] + suffix})
         ET.indent(root)
+        if scenario.acceptance:  # the criteria travel with the system: python -m orchestrator check ... --scenario
+            shutil.copyfile(scenario_path, out_dir / SCENARIO_COPY)
         config = out_dir / CONFIG_NAME
         config.write_text('<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n")
         return config

@@ -89,6 +89,27 @@ class Participant(abc.ABC):
         """Event logs for the results folder: each written as ``<participant>_<name>.csv``."""
         return {}
 
+    def summary_from_outputs(self, outputs: Mapping[str, np.ndarray]) -> dict[str, Any]:
+        """The figures of :meth:`summary` that its recorded outputs determine, from them alone.
+
+        ``outputs`` maps output ports to their samples at this participant's steps (arrays
+        flattened to ``port[i,j]`` keys).  Used to judge a run made by another FMI master
+        (``python -m orchestrator check``), where only the recorded outputs are known.
+        """
+        return {}
+
+    def fmu_parameters(self) -> dict[str, dict[str, Any]]:
+        """Options an exported FMU offers as FMI parameters: name -> ``start`` (its value here),
+        ``unit``, ``description``.  The FMU passes their values as options when it builds
+        the participant.  None by default."""
+        return {}
+
+    def port_info(self, port: str) -> dict[str, Any]:
+        """What a port means, for an exported FMU's description: ``unit`` (SI, "" for none),
+        ``description``, and for array ports ``columns`` (the meaning of each column, or of
+        each element of a vector).  Empty when the participant says nothing."""
+        return {}
+
 
 def reject_unknown_options(options: Mapping[str, Any], allowed: Sequence[str], where: str) -> None:
     """Raise ``ScenarioError`` naming the first option key not in ``allowed``.
@@ -143,10 +164,22 @@ class BuildContext:
         What the package registered for the scenario's ``[metocean]`` table built from it
         (``rhnc_cosim.scenario_tables``): the one met-ocean source, the same data the
         environment FMU reads.
+    output_delay_s : float
+        How long after its step from ``t`` this participant's outputs reach the others [s]:
+        0 in the master's Gauss-Seidel order, its own step in Jacobi order (as in an FMI
+        master that steps every FMU at once).  A controller compensates its loop by it.
+    input_ages_s : dict
+        Per connected input port, how old its value is when this participant steps at ``t``
+        [s]: in Jacobi order the step of a sampled source (its outputs describe the start
+        of its step and arrive at its end), 0 from an FMU (its outputs describe the end of
+        its step); 0 in Gauss-Seidel order.
     """
 
-    def __init__(self, where, scenario_dir, step_size, start_time, stop_time, metocean=None):
+    def __init__(self, where, scenario_dir, step_size, start_time, stop_time, metocean=None, output_delay_s=0.0,
+                 input_ages_s=None):
         self.where = where
+        self.output_delay_s = output_delay_s
+        self.input_ages_s = dict(input_ages_s or {})
         self.scenario_dir = scenario_dir
         self.step_size = step_size
         self.start_time = start_time

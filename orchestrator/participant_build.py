@@ -22,6 +22,17 @@ from orchestrator.participant import BuildContext, Participant
 log = logging.getLogger(__name__)
 
 
+def input_ages(scenario, name: str) -> dict[str, float]:
+    """How old each connected input of participant ``name`` is when it steps [s] (see
+    :class:`~orchestrator.participant.BuildContext`): in Jacobi order a sampled (Python)
+    source's step, 0 from an FMU; 0 in Gauss-Seidel order."""
+    if scenario.simulation.exchange != "jacobi":
+        return {}
+    specs = {spec.name: spec for spec in scenario.participants}
+    return {c.target_port: 0.0 if specs[c.source].is_fmu else specs[c.source].every * scenario.simulation.dt_s
+            for c in scenario.connections if c.target == name}
+
+
 def build_participant(spec, scenario, metocean, substitutions: dict[str, str]) -> Participant:
     """The participant ``spec`` of ``scenario`` describes, built as a run needs it.
 
@@ -46,6 +57,8 @@ def build_participant(spec, scenario, metocean, substitutions: dict[str, str]) -
         start_time=scenario.simulation.start_s,
         stop_time=scenario.simulation.stop_s,
         metocean=metocean,
+        output_delay_s=spec.every * scenario.simulation.dt_s if scenario.simulation.exchange == "jacobi" else 0.0,
+        input_ages_s=input_ages(scenario, spec.name),
     )
     try:
         participant = cls.from_options(spec.name, spec.options, context)

@@ -51,6 +51,8 @@ OPTIONS = (
     "observer_gain",
     "codegen",
     "warm_start_duals",
+    "loop_delay_s",
+    "obstacle_age_s",
 )
 WEIGHT_KEYS = ("q", "r", "r_rate")
 #: Largest values of the integer options: bounds on the size of the NLP built from them
@@ -70,6 +72,11 @@ def controller_from_options(options: Mapping[str, Any], context: BuildContext):
     settings : NMPCSettings
     et_default : float
         Value of the ``et`` input until one is connected.
+    delays : tuple of float
+        ``loop_delay_s``, time from a step to its input acting on the plant [s]: the option,
+        else the master's (``context.output_delay_s``: 0 in Gauss-Seidel order, one step in
+        Jacobi); ``obstacle_age_s``, age of the ``obstacles`` input [s]: the option, else
+        the master's (``context.input_ages_s``).
 
     Raises
     ------
@@ -148,7 +155,15 @@ def controller_from_options(options: Mapping[str, Any], context: BuildContext):
     except ValueError as error:
         raise ScenarioError(f"{where}: {error}") from None
     et_default = _number(options, "et_default", where, 0.0)
-    return params, settings, et_default
+    defaults = {"loop_delay_s": float(getattr(context, "output_delay_s", 0.0)),
+                "obstacle_age_s": float(getattr(context, "input_ages_s", {}).get("obstacles", 0.0))}
+    delays = []
+    for key, default in defaults.items():
+        value = _number(options, key, where, default)
+        if value < 0.0:
+            raise ScenarioError(f"{where}: option '{key}' must be a number of seconds >= 0, got {value!r}")
+        delays.append(value)
+    return params, settings, et_default, tuple(delays)
 
 
 

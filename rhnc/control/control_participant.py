@@ -31,10 +31,54 @@ from orchestrator.errors import ModelError
 from orchestrator.geometry import KNOT
 from orchestrator.participant import BuildContext, Participant, Value
 from rhnc.control.control_options import OPTIONS, controller_from_options
+from rhnc.control.loop_delay import LoopDelay
 from rhnc.control.nmpc import NMPCController
 from rhnc.ship.ship_model import STATE_NAMES
 
 LOG = logging.getLogger(__name__)
+
+_STATE_INFO = {"x": ("m", "measured position north of the scenario's origin"),
+               "y": ("m", "measured position east of the scenario's origin"),
+               "psi": ("rad", "measured heading, clockwise from north"),
+               "u": ("m/s", "measured surge speed through the water"),
+               "v": ("m/s", "measured sway speed through the water (to starboard)"),
+               "r": ("rad/s", "measured yaw rate (clockwise)")}
+_TIMED_STATE = ["t [s]", "x north [m]", "y east [m]", "psi heading [rad]", "u surge [m/s]", "v sway [m/s]",
+                "r yaw rate [rad/s]"]
+#: unit, description and the meaning of each column (array ports) of every port
+PORT_INFO = {
+    **{name: {"unit": unit, "description": text} for name, (unit, text) in _STATE_INFO.items()},
+    "reference": {"unit": "", "columns": _TIMED_STATE,
+                  "description": "reference trajectory, one row per point: (t [s], x [m], y [m], psi [rad], "
+                                 "u [m/s], v [m/s], r [rad/s]); times increasing and covering the horizon"},
+    "et": {"unit": "", "description": "event trigger: 1 turns the collision constraints on, 0 off"},
+    "obstacles": {"unit": "", "columns": ["x north [m]", "y east [m]", "vx north [m/s]", "vy east [m/s]",
+                                          "radius R_i [m]"],
+                  "description": "obstacles now, one row each: (x [m], y [m], vx [m/s], vy [m/s], radius [m]); "
+                                 "rows of radius 0 are empty"},
+    "tau_u": {"unit": "N", "description": "commanded surge force, held over the step"},
+    "tau_r": {"unit": "N.m", "description": "commanded yaw moment (clockwise), held over the step"},
+    "prediction": {"unit": "", "columns": _TIMED_STATE,
+                   "description": "the NMPC's predicted states over its horizon: (t [s], x [m], y [m], psi [rad], "
+                                  "u [m/s], v [m/s], r [rad/s])"},
+    "solve_time_s": {"unit": "s", "description": "wall time of this step's solves"},
+    "solve_cpu_time_s": {"unit": "s", "description": "processor time of this step's solves"},
+    "iterations": {"unit": "", "description": "solver iterations of this step"},
+    "solver_ok": {"unit": "", "description": "1 when the solver found a plan, else 0"},
+    "fallback": {"unit": "", "description": "1 when the shifted previous plan was applied instead of a new one"},
+    "cost": {"unit": "", "description": "optimal cost of the plan (scaled, dimensionless)"},
+    "constraint_violation": {"unit": "", "description": "largest constraint violation of the plan (scaled)"},
+    "collision_slack": {"unit": "", "description": "> 0 when the soft collision constraints had to give way"},
+    "timed_out": {"unit": "", "description": "1 when the time limit stopped the solve"},
+    "disturbance": {"unit": "", "columns": ["current north [m/s]", "current east [m/s]", "w_u [N]", "w_v [N]",
+                                            "w_r [N.m]"],
+                    "description": "the disturbance observer's estimate (zero when it is off)"},
+    "encounter_class": {"unit": "", "columns": None,
+                        "description": "per obstacle row: index into the encounter classes (head-on, crossing, "
+                                       "overtaking, ...), -1 unclassified or no such row"},
+    "domain_active": {"unit": "", "columns": None,
+                      "description": "per obstacle row: 1 when its collision constraint was on"},
+}
 
 def interpolate_reference(reference: np.ndarray, times: np.ndarray) -> np.ndarray:
     """Reference states (len(times), 6) at ``times`` [s] from an (M, 7) timed reference.
@@ -63,6 +107,40 @@ def interpolate_reference(reference: np.ndarray, times: np.ndarray) -> np.ndarra
         out[late, 4] = v
         out[late, 5] = 0.0
     return out
+
+
+#: largest plausible speed [m/s] and yaw rate [rad/s] in a reference: far above any ship's, far
+#: below a position or a time read as a speed
+REFERENCE_SPEED_LIMIT_MPS = 50.0
+REFERENCE_YAW_RATE_LIMIT = 1.0
+REFERENCE_LAYOUT = "(t [s], x [m], y [m], psi [rad], u [m/s], v [m/s], r [rad/s])"
+
+
+def check_reference(reference: np.ndarray, time: float, span_s: float) -> None:
+    """Refuse a reference that cannot be rows of :data:`REFERENCE_LAYOUT` around ``time``.
+
+    Its times must reach within ``span_s`` of ``time`` on both sides (a reference that ends
+    long before now, or starts long after, is stale or has another column first), and its
+    speeds and yaw rates must be those of a ship (a position or a time in the speed column
+    is not).  A wrong layout otherwise gives a plan towards an absurd state: saturated
+    forces, silently.
+
+    Raises
+    ------
+    ValueError
+        Naming the layout and what does not fit.
+    """
+    reference = np.atleast_2d(np.asarray(reference, dtype=float))
+    t = reference[:, 0]
+    if t[0] > time + span_s or t[-1] < time - span_s:
+        raise ValueError(f"rows must be {REFERENCE_LAYOUT}; its times {t[0]:g} .. {t[-1]:g} s do not reach "
+                         f"within {span_s:g} s of now")
+    for column, name, limit, unit in ((4, "u", REFERENCE_SPEED_LIMIT_MPS, "m/s"), (5, "v", REFERENCE_SPEED_LIMIT_MPS, "m/s"),
+                                      (6, "r", REFERENCE_YAW_RATE_LIMIT, "rad/s")):
+        worst = int(np.argmax(np.abs(reference[:, column])))
+        if abs(reference[worst, column]) > limit:
+            raise ValueError(f"rows must be {REFERENCE_LAYOUT}; row {worst} has {name} = "
+                             f"{reference[worst, column]:g} {unit} (more than {limit:g})")
 
 
 class ControlParticipant(Participant):
@@ -143,12 +221,25 @@ class ControlParticipant(Participant):
     warm_start_duals : bool
         IPOPT starts from the previous solve's multipliers shifted by one interval
         (default true; about half the iterations; ignored by fatrop).
+    loop_delay_s : float
+        Time from a step at ``t`` to its input acting on the plant [s] (default: the
+        master's, 0 in our Gauss-Seidel order, one step of this participant in Jacobi
+        order; an exported FMU declares it as a parameter, default one communication
+        step).  The measured state is carried over it with the inputs already sent and
+        the NMPC solves from there (:mod:`rhnc.control.loop_delay`).
+    obstacle_age_s : float
+        How old the ``obstacles`` input is when it arrives [s] (default: the master's, one
+        step of a Python source in Jacobi order, else 0); the obstacles are carried over
+        it and the loop delay at their velocity.
     """
 
     OPTIONS = OPTIONS
 
-    def __init__(self, name: str, controller: NMPCController, et_default: float) -> None:
+    def __init__(self, name: str, controller: NMPCController, et_default: float, loop_delay_s: float = 0.0,
+                 obstacle_age_s: float = 0.0) -> None:
         super().__init__(name)
+        self.delay = LoopDelay(loop_delay_s, controller.params)
+        self.obstacle_age_s = obstacle_age_s
         self.model_check: dict[str, Any] = {"set": controller.params.name, "check": "plant not seen"}
         self.margin_source = "scenario" if controller.settings.clearance_margin_growth_mps else "none"
         self._tau_r_history: list[float] = []
@@ -168,8 +259,8 @@ class ControlParticipant(Participant):
     @classmethod
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "ControlParticipant":
         """Build from scenario options (see :mod:`rhnc.control.control_options`); errors name the key."""
-        params, settings, et_default = controller_from_options(options, context)
-        participant = cls(name, NMPCController(params, settings), et_default)
+        params, settings, et_default, delays = controller_from_options(options, context)
+        participant = cls(name, NMPCController(params, settings), et_default, *delays)
         if "clearance_margin_growth_kn" in options:
             participant.margin_source = "scenario"
         elif "position_error_growth_mps" in params.extras:
@@ -195,6 +286,8 @@ class ControlParticipant(Participant):
         self.controller.reset()
         self.controller.start()
         self._applied = None
+        self.delay.reset()
+        self.delay.hold(start_time, np.zeros(2))  # the set-up's zero forces act until the first decision does
         self._slack_steps = 0
         self._timeouts = 0
         self._speeds = []
@@ -216,19 +309,25 @@ class ControlParticipant(Participant):
         if not np.all(np.isfinite(state)):
             raise ModelError(f"{self.name}: non-finite measured state at t = {time} s: {state}")
         settings = self.controller.settings
-        horizon = time + settings.control_interval_s * np.arange(settings.horizon_steps + 1)
+        # the input decided now acts from time + delay: plan from the state it will meet
+        decision_time, state = self.delay.predict(time, state)
+        horizon = decision_time + settings.control_interval_s * np.arange(settings.horizon_steps + 1)
         try:
             reference = interpolate_reference(np.asarray(inputs["reference"]), horizon)
+            check_reference(np.asarray(inputs["reference"]), time, horizon[-1] - time)
         except ValueError as error:
             raise ModelError(f"{self.name}: input 'reference' at t = {time} s: {error}") from None
-        obstacles = np.asarray(inputs.get("obstacles", np.zeros((0, 5))), dtype=float).reshape(-1, 5)
+        obstacles = np.asarray(inputs.get("obstacles", np.zeros((0, 5))), dtype=float).reshape(-1, 5).copy()
+        # constant velocity over their age and the loop delay
+        obstacles[:, :2] += obstacles[:, 2:4] * (self.obstacle_age_s + decision_time - time)
         et = float(inputs.get("et", self.et_default)) > 0.5
         # before the first solve no input has been applied: the controller then assumes the
         # one that holds the measured speed, not the zero outputs of set-up (a first solve
         # that failed held a zero surge force, and the input-rate cost pulled the first plan
         # towards it)
-        solution = self.controller.solve(time, state, reference, obstacles, et, previous_tau=self._applied)
+        solution = self.controller.solve(decision_time, state, reference, obstacles, et, previous_tau=self._applied)
         self._applied = solution.tau
+        self.delay.sent(time, solution.tau)
         self._tau_r_history.append(float(solution.tau[1]))
         self._steps += 1
         self._solve_times.append(solution.solve_time_s)
@@ -271,6 +370,31 @@ class ControlParticipant(Participant):
         """Stop the solver's worker process."""
         self.controller.close()
 
+    def fmu_parameters(self) -> dict[str, dict[str, Any]]:
+        """The loop delay and the obstacles' age, which depend on the master's exchange order."""
+        return {
+            "loop_delay_s": {"start": self.delay.delay_s, "unit": "s",
+                             "description": "time from a step at t to its tau acting on the ship (one communication "
+                                            "step in a master that steps all FMUs at once, 0 when this FMU steps "
+                                            "before the ship and hands tau on at once)"},
+            "obstacle_age_s": {"start": self.obstacle_age_s, "unit": "s",
+                               "description": "age of the obstacles input when it arrives; obstacles are carried over "
+                                              "it at their velocity"},
+        }
+
+    def port_info(self, port: str) -> dict[str, Any]:
+        """Unit, description and column meanings of a port (:data:`PORT_INFO`)."""
+        return dict(PORT_INFO.get(port, {}))
+
+    def summary_from_outputs(self, outputs: Mapping[str, np.ndarray]) -> dict[str, Any]:
+        """Solves and yaw-moment sign changes per 100 solves from the recorded ``tau_r``."""
+        if "tau_r" not in outputs:
+            return {}
+        tau_r = [float(value) for value in np.asarray(outputs["tau_r"], dtype=float)]
+        return {"solves": len(tau_r),
+                "tau_r_sign_changes_per_100_solves": tau_r_sign_changes_per_100(tau_r,
+                                                                                self.controller.params.tau_r_max)}
+
     def summary(self) -> dict[str, Any]:
         """Solve-time median/max [s], solves, fallbacks and solver failures."""
         times = np.array(self._solve_times)
@@ -293,6 +417,8 @@ class ControlParticipant(Participant):
             "tau_r_sign_changes_per_100_solves": tau_r_sign_changes_per_100(
                 self._tau_r_history, self.controller.params.tau_r_max),
             "model_check": self.model_check,
+            "loop_delay_s": self.delay.delay_s,
+            "obstacle_age_s": self.obstacle_age_s,
             "clearance_margin_growth_kn": self.controller.settings.clearance_margin_growth_mps / KNOT,
             "clearance_margin_growth_from": self.margin_source,
             **self.controller.library.summary(),
