@@ -8,7 +8,9 @@ parameter-set file there.
 
 A plant at actuator level (it takes rudder angle and propeller revolutions, not tau) is
 identified through the scenario's ``allocation`` participant, as the NMPC sees it in a run
-(:class:`AllocatedPlant`).
+(:class:`AllocatedPlant`).  Before the manoeuvres a short probe
+(:mod:`rhnc.ship.plant_probe`) refuses a mapping whose signs, angle convention or units
+contradict the canonical frame.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from orchestrator.results import RunFolder, new_run_id, versions
 from orchestrator.scenario import ParticipantSpec, load_scenario
 from rhnc.ship.identification import COEFFICIENTS, VALIDATION_MANOEUVRE, PlantRunner, check_bounds, identify_model
 from rhnc.ship.identification_report import parameter_set_toml, write_figures
+from rhnc.ship.plant_probe import probe_plant
 from rhnc.ship.ship_model import STATE_NAMES, load_parameter_set
 
 LOG = logging.getLogger(__name__)
@@ -152,7 +155,7 @@ def run_identify(scenario_path, results_root="results", plant: str | None = None
     ------
     ScenarioError
         Bad scenario, no unique plant, missing bounds, a plant without start parameters
-        for the initial state.
+        for the initial state, a mapping the probe finds against the canonical frame.
     ToolchainError
         The plant cannot be identified (see :func:`rhnc.ship.identification.identify_model`).
     """
@@ -187,6 +190,7 @@ def run_identify(scenario_path, results_root="results", plant: str | None = None
     missing = [port for port in (*STATE_NAMES, "tau_u", "tau_r") if port not in (*seen.output_names, *seen.input_names)]
     if missing:
         raise ScenarioError(f"{where}: identify needs the plant ports {', '.join(missing)} (map them)")
+    probe_report = probe_plant(build, speed_kn * KNOT, tau_u_max, tau_r_max, where)
     name = set_name or identity["model_name"]
     kcs = load_parameter_set("default")
     fit = identify_model(PlantRunner(build, speed_kn * KNOT), tau_u_max, tau_r_max, name, reference=kcs)
@@ -201,6 +205,7 @@ def run_identify(scenario_path, results_root="results", plant: str | None = None
             "plant": {"participant": spec.name, "fmu": str(path), **identity,
                       "through": allocation[0].name if allocation is not None else None},
             "speed_kn": speed_kn,
+            "probe": probe_report,
             "trim_tau_u_N": fit.trim_tau_u,
             "set": name,
             "coefficients": {k: getattr(fit.parameters, k) for k in COEFFICIENTS},
