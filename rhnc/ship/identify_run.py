@@ -24,7 +24,7 @@ from orchestrator.errors import ScenarioError
 from orchestrator.geometry import KNOT
 from orchestrator.results import RunFolder, new_run_id, versions
 from orchestrator.scenario import ParticipantSpec, load_scenario
-from rhnc.ship.identification import COEFFICIENTS, VALIDATION_MANOEUVRE, PlantRunner, check_bounds, identify_model
+from rhnc.ship.identification import ALL_COEFFICIENTS, COEFFICIENTS, VALIDATION_MANOEUVRE, PlantRunner, check_bounds, identify_model
 from rhnc.ship.identification_report import parameter_set_toml, write_figures
 from rhnc.ship.plant_probe import probe_plant
 from rhnc.ship.ship_model import STATE_NAMES, load_parameter_set
@@ -208,7 +208,11 @@ def run_identify(scenario_path, results_root="results", plant: str | None = None
             "probe": probe_report,
             "trim_tau_u_N": fit.trim_tau_u,
             "set": name,
-            "coefficients": {k: getattr(fit.parameters, k) for k in COEFFICIENTS},
+            "model_class": fit.model_class,
+            "held_out_cost_per_class": fit.class_errors,
+            "notes": fit.notes,
+            "coefficients": {k: getattr(fit.parameters, k) for k in ALL_COEFFICIENTS
+                             if k in COEFFICIENTS or getattr(fit.parameters, k) != 0.0},
             "bounds": {"tau_u_max_N": tau_u_max, "tau_r_max_Nm": tau_r_max},
             "residual_rms": fit.residual_rms,
             "r_squared": fit.r_squared,
@@ -237,6 +241,10 @@ def _markdown(report: dict) -> str:
     lines = [f"# Identification of {report['set']} on {report['plant']['model_name']}", "",
              f"Plant `{report['plant']['participant']}` of `{report['scenario']}`, from {report['speed_kn']} kn, "
              f"weather off; surge force at trim {report['trim_tau_u_N']:.4g} N.", "",
+             f"Model class: {report['model_class']} (held-out weighted error per class: " + ", ".join(
+                 f"{k} {v:.4g}" if v is not None else f"{k} no physical fit"
+                 for k, v in report["held_out_cost_per_class"].items()) + ").", "",
+             *[f"- {note}" for note in report["notes"]], "",
              "| coefficient | value |", "|---|---|"]
     lines += [f"| {k} | {v:.6g} |" for k, v in report["coefficients"].items()]
     lines += [f"| {k} | {v:.6g} |" for k, v in report["bounds"].items()]
