@@ -30,7 +30,7 @@ def parameter_set_toml(fit: Fit, identity: dict[str, str], source: str) -> str:
         f"[{p.name}]",
         f"description = \"Identified on {identity['model_name']}{through} from {source}; held-out "
         f"{VALIDATION_MANOEUVRE}: heading RMS "
-        f"{fit.validation['held_out: ' + VALIDATION_MANOEUVRE]['heading_rms_deg']:.2f} deg\"",
+        f"{fit.validation['held_out: ' + VALIDATION_MANOEUVRE]['heading_rms_deg']:.3f} deg; model class {p.extras.get('model_class', 'linear')}\"",
         f"plant_fmu = \"{identity['model_name']}\"",
         f"plant_guid = \"{identity['guid']}\"",
     ]
