@@ -186,6 +186,27 @@ class ForceModel:
         return 0.5 * math.asin(ratio)
 
 
+def tau_rate_limits(coefficients: Mapping[str, float], speed_mps: float) -> tuple[float, float]:
+    """Largest rates [N/s, N m/s] at which the actuators can change tau at ``speed_mps``.
+
+    Surge force: the thrust's slope with the revolutions at full revolutions times their
+    largest rate, or the full thrust over the shaft's time constant when that is slower.
+    Yaw moment: the moment's slope with the rudder angle at midships, in the slipstream of
+    full revolutions (the largest slope), times the steering gear's rate.  Upper bounds of
+    what the actuators can do, so the NMPC's bounds never make a feasible plan infeasible.
+    """
+    model = ForceModel(coefficients)
+    c = model.c
+    full = c["propeller_rps_max"]
+    step = 1e-3 * full
+    slope = (model.tau(0.0, full, speed_mps)[0] - model.tau(0.0, full - step, speed_mps)[0]) / step
+    surge = slope * c["propeller_rate_max"]
+    if "shaft_time_constant" in c:
+        surge = min(surge, model.tau(0.0, full, speed_mps)[0] / c["shaft_time_constant"])
+    yaw = model._moment_per_sin2(full, speed_mps) * c["rudder_rate_max"]   # d/d(delta) of sin(2 delta)/2 at 0: 1
+    return float(surge), float(yaw)
+
+
 def _rate_limited(target: float, previous: float, rate: float, step_s: float) -> float:
     return previous + min(max(target - previous, -rate * step_s), rate * step_s)
 

@@ -280,6 +280,12 @@ class NMPCController:
                                                 horizon_s=N * s.control_interval_s, time_s=time_s)
         p = self.problem.parameters(ref_scaled, w_d, w_prev, P, disturbance, slots)
         lbx, ubx = self._bounds(state, origin)
+        if s.tau_rate_max is not None:   # what the actuators can reach from the last applied input
+            reach = (np.arange(1, N + 1)[:, None] * s.control_interval_s * np.asarray(s.tau_rate_max)
+                     / self.input_scale)
+            index = self.problem.w_index
+            lbx[index] = np.maximum(lbx[index], w_prev - reach)
+            ubx[index] = np.minimum(ubx[index], w_prev + reach)
         heading_index = self.problem.z_index[1:, 2]
         if report.no_port_turn:  # Rules 14, 15, 17(c): no alteration to port
             allowance = math.radians(PORT_ALLOWANCE_DEG)
