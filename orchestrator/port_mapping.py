@@ -7,12 +7,13 @@ of a vendor's FMU.  Each binding converts values both ways:
   given in the mapping, or follow from the unit the FMU declares for the variable (or the
   mapping's ``unit``), converted to the port's SI unit;
 - a *geodetic* binding: latitude and longitude projected to local north/east metres about
-  the scenario's origin (transverse Mercator on WGS84, see :class:`GeodeticBinding`);
+  the scenario's origin (transverse Mercator on WGS84 or a sphere, see :class:`GeodeticBinding`);
 - a *vector* binding: a current or wind the FMU takes as speed and direction ("set",
   towards; or "from") or as north/east components, fed from the canonical ports.
 
 Mistakes are refused before a run with one line naming the port, the FMU variable and
-the units involved: a declared unit of another dimension than the port's, an angle port
+the units involved: a declared unit of another dimension than the port's, a mapping ``unit``
+that contradicts the unit the FMU declares, an angle port
 bound to a variable that declares no unit and has no scale, one FMU variable feeding two
 ports.
 """
@@ -54,8 +55,9 @@ class ScalarBinding:
 class GeodeticBinding:
     """Ports ``x`` (north) and ``y`` (east) [m] from an FMU's latitude and longitude.
 
-    The projection is a transverse Mercator on the WGS84 ellipsoid whose central meridian
-    and origin are the scenario's origin (scale 1 on that meridian): it is conformal, so
+    The projection is a transverse Mercator on the plant's earth model (the WGS84 ellipsoid,
+    or a sphere of the given radius for a plant that integrates its position on one) whose
+    central meridian and origin are the scenario's origin (scale 1 on that meridian): it is conformal, so
     headings and turning circles keep their shape, and its scale error stays below 5e-4
     within 100 nm east or west of the origin.  (An azimuthal equidistant projection keeps
     distances from the origin exact instead, but distorts angles away from it.)  Grid north
@@ -64,15 +66,21 @@ class GeodeticBinding:
     """
 
     def __init__(self, variables: tuple[str, str], to_degrees: tuple[tuple[float, float], tuple[float, float]],
-                 origin_deg: tuple[float, float]) -> None:
+                 origin_deg: tuple[float, float], earth: tuple[str, float | None] = ("wgs84", None)) -> None:
         from pyproj import Transformer
 
         self.ports = ("x", "y")
         self.variables = variables
         self.to_degrees = to_degrees
         lat0, lon0 = origin_deg
-        projection = f"+proj=tmerc +lat_0={lat0!r} +lon_0={lon0!r} +k=1 +x_0=0 +y_0=0 +ellps=WGS84 +units=m"
-        self._forward = Transformer.from_crs("EPSG:4326", projection, always_xy=True)
+        model, radius = earth
+        if model == "sphere":
+            surface = f"+R={float(radius)!r}"
+            geographic = f"+proj=longlat {surface} +no_defs +type=crs"
+        else:
+            surface, geographic = "+ellps=WGS84", "EPSG:4326"
+        projection = f"+proj=tmerc +lat_0={lat0!r} +lon_0={lon0!r} +k=1 +x_0=0 +y_0=0 {surface} +units=m +no_defs +type=crs"
+        self._forward = Transformer.from_crs(geographic, projection, always_xy=True)
 
     def to_canonical(self, values: Mapping[str, float]) -> dict[str, float]:
         (lat_scale, lat_offset), (lon_scale, lon_offset) = self.to_degrees
@@ -129,13 +137,16 @@ def scalar_conversion(port: str, entry: VariableMapping, variable, model_descrip
     dimension than the port's, and an angle port without unit and without scale.
     """
     spec = PLANT_PORTS.get(port)
-    unit_name = entry.unit or declared_unit(variable, model_description)
+    declared = declared_unit(variable, model_description)
+    unit_name = entry.unit or declared
     si = None
     if unit_name is not None:
         try:
             si = resolve_unit(unit_name, model_description)
         except UnitParseError as exc:
             raise _fail(where, f"FMU variable '{variable.name}': {exc}") from None
+    if entry.unit is not None and declared is not None and entry.unit != declared:
+        _check_same_unit(entry.unit, si, declared, variable.name, model_description, where)
     if spec is not None:
         if si is not None and spec.revolutions and si.dimension == ANGULAR_RATE:
             # rpm, rad/s: 2 pi rad per revolution
@@ -159,6 +170,26 @@ def scalar_conversion(port: str, entry: VariableMapping, variable, model_descrip
     else:
         offset = si.offset if converts and entry.scale is None else 0.0
     return scale, offset
+
+
+def _check_same_unit(given: str, given_si: SiUnit, declared: str, variable: str, model_description,
+                     where: str) -> None:
+    """Refuse a mapping ``unit`` that means something else than the unit the FMU declares.
+
+    The FMU's declaration describes what it computes; a mapping that states another unit
+    (m/s on a variable in knots, rad on one in degrees) would scale every value by the
+    ratio of the two without a word.  Another name for the same unit (``knot`` for ``kn``)
+    is accepted.
+    """
+    try:
+        own = resolve_unit(declared, model_description)
+    except UnitParseError:
+        return  # the FMU's own name is unreadable: the mapping's unit is what we have
+    same = (given_si.dimension == own.dimension and math.isclose(given_si.factor, own.factor, rel_tol=1e-9)
+            and math.isclose(given_si.offset, own.offset, rel_tol=1e-9, abs_tol=1e-12))
+    if not same:
+        raise _fail(where, f"unit '{given}' contradicts the unit '{declared}' that the FMU declares for variable "
+                           f"'{variable}'; remove unit (the declared one is used) or fix the FMU's modelDescription")
 
 
 def _degree_conversion(entry: VariableMapping, variable, model_description, where: str) -> tuple[float, float]:
@@ -264,7 +295,8 @@ def _geodetic_binding(spec: ParticipantSpec, geodetic: dict, variables, model_de
         raise ScenarioError(f"{where}.geodetic: give origin_deg = [lat, lon] for the geodetic mapping of x and y")
     conversions = tuple(_degree_conversion(geodetic[port], variables[geodetic[port].variable], model_description,
                                            f"{where}.mapping.{port}") for port in ("x", "y"))
-    return GeodeticBinding((geodetic["x"].variable, geodetic["y"].variable), conversions, spec.geodetic_origin_deg)
+    return GeodeticBinding((geodetic["x"].variable, geodetic["y"].variable), conversions, spec.geodetic_origin_deg,
+                           spec.geodetic_earth)
 
 
 def initial_start_values(spec: ParticipantSpec, outputs: list, variables: Mapping[str, object], model_description,

@@ -19,6 +19,10 @@ from orchestrator.toml_input import (Finite, Positive, Text, TomlTable, checked,
                                      shown, shown_text)
 
 GEODETIC_ROLES = ("latitude", "longitude")
+#: Earth models of a geodetic mapping: the WGS84 ellipsoid, or a sphere (``sphere_radius_m``)
+EARTH_MODELS = ("wgs84", "sphere")
+#: IUGG mean earth radius [m], the sphere's radius unless the mapping gives the plant's own
+MEAN_EARTH_RADIUS_M = 6371008.8
 DIRECTION_SENSES = ("towards", "from")
 FMI_VERSIONS = ("2.0", "3.0")
 #: Largest ``every``: a participant steps at least once in this many macro steps (the step limit).
@@ -91,6 +95,16 @@ def _origin(value: Any) -> tuple[float, float]:
 
 class GeodeticTable(ScenarioTable):
     origin_deg: Annotated[tuple[float, float], PlainValidator(_origin)]
+    #: the surface the plant integrates its latitude and longitude on
+    earth: Annotated[str, one_of(EARTH_MODELS)] = "wgs84"
+    #: radius of the sphere [m] (only with earth = "sphere")
+    sphere_radius_m: Positive | None = None
+
+    @model_validator(mode="after")
+    def _radius_with_sphere(self):
+        if self.sphere_radius_m is not None and self.earth != "sphere":
+            raise fail_whole("'{prefix}sphere_radius_m' needs earth = \"sphere\"")
+        return self
 
 
 def _table_of(value: Any) -> dict:
@@ -223,6 +237,13 @@ def participant_specs(table: dict, where: str) -> tuple[ParticipantSpec, ...]:
     return tuple(specs)
 
 
+def _earth(table: GeodeticTable | None) -> tuple[str, float | None]:
+    """``(model, radius [m])`` of a geodetic table: ``("wgs84", None)`` or ``("sphere", R)``."""
+    if table is None or table.earth == "wgs84":
+        return ("wgs84", None)
+    return ("sphere", float(table.sphere_radius_m or MEAN_EARTH_RADIUS_M))
+
+
 def _fmu_participant(name: str, model: FmuParticipantTable, where: str, at: tuple) -> ParticipantSpec:
     from orchestrator.plant_ports import INITIAL_KEYS
 
@@ -239,5 +260,6 @@ def _fmu_participant(name: str, model: FmuParticipantTable, where: str, at: tupl
     return ParticipantSpec(name=name, every=model.every, fmu=model.fmu, parameter_set=model.parameter_set,
                            parameters=dict(model.parameters), mapping=mapping,
                            geodetic_origin_deg=model.geodetic.origin_deg if model.geodetic else None,
+                           geodetic_earth=_earth(model.geodetic),
                            fmi_version=model.fmi_version, initial=initial,
                            step_timeout_s=model.step_timeout_s)

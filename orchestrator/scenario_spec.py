@@ -57,6 +57,8 @@ class ParticipantSpec:
     parameters: dict[str, Any] = field(default_factory=dict)
     mapping: dict[str, VariableMapping | VectorMapping] = field(default_factory=dict)
     geodetic_origin_deg: tuple[float, float] | None = None
+    #: earth model of the geodetic mapping: ("wgs84", None) or ("sphere", radius [m])
+    geodetic_earth: tuple[str, float | None] = ("wgs84", None)
     initial: dict[str, float] = field(default_factory=dict)
     fmi_version: str = "2.0"   # of a built-in model; an FMU file's own description decides
     type: str | None = None

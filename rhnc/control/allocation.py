@@ -20,6 +20,20 @@ participant), so a command never asks more of the plant than it can do.  The ach
 connected, else at the commands) is an output, so the analyses show demanded against
 achieved.  Every coefficient is an option; the defaults are the ``[default]`` set of
 ``models/KCSMMG/parameter_sets.toml`` (the plant this participant is meant for).
+
+For another ship the option ``ship`` takes the coefficients from the ``[actuators]`` table
+of its ship file (``ships/<name>.toml`` or a path; keys and units in
+:data:`rhnc.ship.ships.ACTUATOR_KEYS` and docs/actuator-plants.md): rudder area, lift slope,
+stall angle, lever, steering-gear limits, propeller diameter and thrust curve, wake and
+thrust deduction, revolutions and their rate.  The rudder then **stalls**: its normal-force
+coefficient ``f_alpha sin(delta)`` holds up to the stall angle and beyond it falls, over
+5 deg, to ``rudder_post_stall_fraction`` of its peak::
+
+    C_N(delta) = f_alpha sin(delta)                                   |delta| <= delta_s
+               = f_alpha sin(delta_s) (1 - (1 - f_post) min((|delta| - delta_s) / 5 deg, 1)) sign(delta)
+
+so the largest yaw moment is the one at the stall angle, and the allocation never commands
+beyond it (a larger angle would give less).
 """
 
 from __future__ import annotations
@@ -43,7 +57,36 @@ COEFFICIENTS = (
 )
 POSITIVE = ("lpp", "rho_water", "prop_diameter", "rudder_area", "f_alpha", "k_t0", "rudder_max",
             "rudder_rate_max", "propeller_rps_max", "propeller_rate_max")
-OPTIONS = ("parameter_set", *COEFFICIENTS)
+OPTIONS = ("parameter_set", "ship", *COEFFICIENTS)
+#: Post-stall drop of the rudder's normal force: over this angle beyond the stall [rad].
+STALL_DROP_RAD = math.radians(5.0)
+
+
+def coefficients_from_ship(ship: str, where: str, base=None) -> dict[str, float]:
+    """The force model's coefficients from the ``[actuators]`` of a ship file (module header)."""
+    from rhnc.ship.ships import load_actuators
+
+    _, a = load_actuators(ship, base=base)
+    k0, k1, k2 = (float(v) for v in a["thrust_coefficients"])
+    values = {
+        "lpp": 1.0, "x_r": 0.0, "a_h": 0.0, "x_h": 0.0,        # the lever is given whole
+        "rudder_lever": float(a["rudder_lever_m"]),
+        "rho_water": 1025.0,
+        "prop_diameter": float(a["propeller_diameter_m"]),
+        "w_p0": float(a["wake_fraction"]), "t_p": float(a["thrust_deduction"]),
+        "k_t0": k0, "k_t1": k1, "k_t2": k2,
+        "rudder_area": float(a["rudder_area_m2"]), "f_alpha": float(a["rudder_lift_slope_per_rad"]),
+        "rudder_eta": float(a.get("rudder_in_slipstream", 0.8)), "epsilon": float(a.get("rudder_inflow_factor", 1.0)),
+        "kappa": float(a.get("slipstream_factor", 0.5)),
+        "rudder_max": math.radians(float(a["rudder_max_deg"])),
+        "rudder_rate_max": math.radians(float(a["rudder_rate_deg_s"])),
+        "rudder_stall": math.radians(float(a["rudder_stall_deg"])),
+        "rudder_post_stall_fraction": float(a.get("rudder_post_stall_fraction", 0.6)),
+        "propeller_rps_max": float(a["propeller_rpm_max"]) / 60.0,
+        "propeller_rate_max": float(a["propeller_rate_rpm_s"]) / 60.0,
+        "shaft_time_constant": float(a["shaft_time_constant_s"]),
+    }
+    return values
 
 
 def load_coefficients(set_name: str = "default", overrides: Mapping[str, Any] | None = None,
@@ -91,16 +134,35 @@ class ForceModel:
         inner = ua + c["kappa"] * (slip - ua)
         return c["epsilon"] * math.sqrt(c["rudder_eta"] * inner * inner + (1.0 - c["rudder_eta"]) * ua * ua)
 
+    @property
+    def stall(self) -> float:
+        """Angle of the rudder's largest normal force [rad] (the largest angle when no stall is given)."""
+        return self.c.get("rudder_stall", self.c["rudder_max"])
+
+    @property
+    def usable_rudder(self) -> float:
+        """Largest angle the allocation commands [rad]: the range, or the stall angle if smaller."""
+        return min(self.c["rudder_max"], self.stall)
+
+    def normal_force_shape(self, rudder_angle: float) -> float:
+        """C_N(delta) / f_alpha [-]: sin(delta) up to the stall, then falling (module header)."""
+        size = abs(rudder_angle)
+        if size <= self.stall:
+            return math.sin(rudder_angle)
+        drop = min((size - self.stall) / STALL_DROP_RAD, 1.0)
+        fraction = self.c.get("rudder_post_stall_fraction", 0.6)
+        return math.copysign(math.sin(self.stall) * (1.0 - (1.0 - fraction) * drop), rudder_angle)
+
     def _moment_per_sin2(self, rps: float, u: float) -> float:
-        """tau_r = this * sin(2 delta) / 2 [N m]."""
+        """tau_r = this * sin(2 delta) / 2 [N m] below the stall."""
         c = self.c
-        lever = -(c["x_r"] + c["a_h"] * c["x_h"]) * c["lpp"]
+        lever = c["rudder_lever"] if "rudder_lever" in c else -(c["x_r"] + c["a_h"] * c["x_h"]) * c["lpp"]
         return lever * 0.5 * c["rho_water"] * c["rudder_area"] * self.rudder_inflow(rps, u) ** 2 * c["f_alpha"]
 
     def tau(self, rudder_angle: float, rps: float, u: float) -> tuple[float, float]:
         """[tau_u N, tau_r N m] of the actuators at ``rudder_angle`` [rad] and ``rps``."""
         return ((1.0 - self.c["t_p"]) * self.thrust(rps, u),
-                self._moment_per_sin2(rps, u) * math.sin(2.0 * rudder_angle) / 2.0)
+                self._moment_per_sin2(rps, u) * self.normal_force_shape(rudder_angle) * math.cos(rudder_angle))
 
     def rps_for(self, tau_u: float, u: float) -> float:
         """Revolutions [1/s] whose thrust gives ``tau_u``, within [0, propeller_rps_max]."""
@@ -114,7 +176,7 @@ class ForceModel:
 
     def rudder_for(self, tau_r: float, rps: float, u: float) -> float:
         """Rudder angle [rad] whose moment gives ``tau_r`` at ``rps``, within +-rudder_max."""
-        limit = self.c["rudder_max"]
+        limit = self.usable_rudder
         scale = self._moment_per_sin2(rps, u)
         if scale <= 0.0:
             return math.copysign(limit, tau_r) if tau_r else 0.0
@@ -122,6 +184,27 @@ class ForceModel:
         if abs(ratio) >= math.sin(2.0 * limit):
             return math.copysign(limit, tau_r)
         return 0.5 * math.asin(ratio)
+
+
+def tau_rate_limits(coefficients: Mapping[str, float], speed_mps: float) -> tuple[float, float]:
+    """Largest rates [N/s, N m/s] at which the actuators can change tau at ``speed_mps``.
+
+    Surge force: the thrust's slope with the revolutions at full revolutions times their
+    largest rate, or the full thrust over the shaft's time constant when that is slower.
+    Yaw moment: the moment's slope with the rudder angle at midships, in the slipstream of
+    full revolutions (the largest slope), times the steering gear's rate.  Upper bounds of
+    what the actuators can do, so the NMPC's bounds never make a feasible plan infeasible.
+    """
+    model = ForceModel(coefficients)
+    c = model.c
+    full = c["propeller_rps_max"]
+    step = 1e-3 * full
+    slope = (model.tau(0.0, full, speed_mps)[0] - model.tau(0.0, full - step, speed_mps)[0]) / step
+    surge = slope * c["propeller_rate_max"]
+    if "shaft_time_constant" in c:
+        surge = min(surge, model.tau(0.0, full, speed_mps)[0] / c["shaft_time_constant"])
+    yaw = model._moment_per_sin2(full, speed_mps) * c["rudder_rate_max"]   # d/d(delta) of sin(2 delta)/2 at 0: 1
+    return float(surge), float(yaw)
 
 
 def _rate_limited(target: float, previous: float, rate: float, step_s: float) -> float:
@@ -154,6 +237,14 @@ class AllocationParticipant(Participant):
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "AllocationParticipant":
         where = context.where
         reject_unknown_options(options, OPTIONS, where)
+        if "ship" in options:
+            others = sorted(key for key in options if key != "ship")
+            if others:
+                raise ScenarioError(f"{where}: option 'ship' takes every coefficient from the ship file; "
+                                    f"give it alone (also given: {', '.join(others)})")
+            if not isinstance(options["ship"], str):
+                raise ScenarioError(f"{where}: option 'ship' must be a ship name or a ship file path")
+            return cls(name, coefficients_from_ship(options["ship"], where, context.scenario_dir), context.step_size)
         set_name = options.get("parameter_set", "default")
         if not isinstance(set_name, str):
             raise ScenarioError(f"{where}: option 'parameter_set' must be a string")

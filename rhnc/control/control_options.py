@@ -53,6 +53,7 @@ OPTIONS = (
     "warm_start_duals",
     "loop_delay_s",
     "obstacle_age_s",
+    "actuators_ship",
 )
 WEIGHT_KEYS = ("q", "r", "r_rate")
 #: Largest values of the integer options: bounds on the size of the NLP built from them
@@ -150,6 +151,15 @@ def controller_from_options(options: Mapping[str, Any], context: BuildContext):
             ):
                 raise ScenarioError(f"{where}.weights: '{key}' must be a list of {size} finite numbers >= 0")
             kwargs[key] = tuple(float(v) for v in values)
+    if "actuators_ship" in options:
+        # the steering gear's and the shaft's rates bound how fast the planned tau may change
+        from rhnc.control.allocation import coefficients_from_ship, tau_rate_limits
+
+        ship = options["actuators_ship"]
+        if not isinstance(ship, str) or not ship:
+            raise ScenarioError(f"{where}: option 'actuators_ship' must be a ship name or a ship file path")
+        speed = kwargs.get("max_speed_mps", NMPCSettings.max_speed_mps)
+        kwargs["tau_rate_max"] = tau_rate_limits(coefficients_from_ship(ship, where, context.scenario_dir), speed)
     try:
         settings = NMPCSettings(**kwargs)
     except ValueError as error:

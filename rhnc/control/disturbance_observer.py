@@ -171,7 +171,8 @@ def trimmed_reference(reference: np.ndarray, disturbance: np.ndarray, dt_s: floa
     udot = np.diff(surge) / dt_s
     rdot = np.diff(r) / dt_s
     su, sv, sr = surge[:-1], sway[:-1], r[:-1]
-    tau_u = p.m11 * udot + p.d11 * su - p.m22 * sv * sr - w_u
-    tau_r = p.m33 * rdot + p.d33 * sr - (p.m11 - p.m22) * su * sv + p.d32 * sv - w_r
+    tau_u = p.m11 * udot + p.d11 * su + p.d11q * np.abs(su) * su - (p.m22 * sv + p.m23 * sr) * sr - w_u
+    tau_r = (p.m33 * rdot + p.d33 * sr + p.d33q * np.abs(sr) * sr - (p.m11 - p.m22) * su * sv + p.m23 * su * sr
+             + p.d32 * sv - w_r)
     tau = np.clip(np.column_stack([tau_u, tau_r]), -p.tau_max, p.tau_max)
     return trimmed, tau

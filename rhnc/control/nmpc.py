@@ -98,15 +98,17 @@ def reference_inputs(reference: np.ndarray, dt: float, params: ShipParameters) -
     """Feed-forward inputs tau_d (N, 2) [SI] for reference states (N+1, 6) spaced ``dt`` [s].
 
     Inverse of the surge and yaw equations with v_d = 0 (the paper's Eq. 19 reference):
-    ``tau_u = m11 udot + d11 u``, ``tau_r = m33 rdot + d33 r``, derivatives by forward
-    differences, clipped to the bounds.
+    ``tau_u = m11 udot + d11 u``, ``tau_r = m33 rdot + d33 r`` (plus the quadratic damping
+    and the sway-yaw coupling of a wider model), derivatives by forward differences,
+    clipped to the bounds.
     """
     u = reference[:, 3]
     r = reference[:, 5]
     udot = np.diff(u) / dt
     rdot = np.diff(r) / dt
-    tau_u = params.m11 * udot + params.d11 * u[:-1]
-    tau_r = params.m33 * rdot + params.d33 * r[:-1]
+    tau_u = params.m11 * udot + params.d11 * u[:-1] + params.d11q * np.abs(u[:-1]) * u[:-1] - params.m23 * r[:-1] ** 2
+    tau_r = (params.m33 * rdot + params.d33 * r[:-1] + params.d33q * np.abs(r[:-1]) * r[:-1]
+             + params.m23 * u[:-1] * r[:-1])
     tau = np.column_stack([tau_u, tau_r])
     return np.clip(tau, -params.tau_max, params.tau_max)
 
@@ -296,6 +298,12 @@ class NMPCController:
                                                 horizon_s=N * s.control_interval_s, time_s=time_s)
         p = self.problem.parameters(ref_scaled, w_d, w_prev, P, disturbance, slots)
         lbx, ubx = self._bounds(state, origin)
+        if s.tau_rate_max is not None:   # what the actuators can reach from the last applied input
+            reach = (np.arange(1, N + 1)[:, None] * s.control_interval_s * np.asarray(s.tau_rate_max)
+                     / self.input_scale)
+            index = self.problem.w_index
+            lbx[index] = np.maximum(lbx[index], w_prev - reach)
+            ubx[index] = np.minimum(ubx[index], w_prev + reach)
         heading_index = self.problem.z_index[1:, 2]
         if report.no_port_turn:  # Rules 14, 15, 17(c): no alteration to port
             allowance = math.radians(PORT_ALLOWANCE_DEG)

@@ -87,7 +87,8 @@ def disturbed_derivatives(params: ShipParameters) -> ca.Function:
     state = ca.SX.sym("X", 6)
     tau = ca.SX.sym("tau", 2)
     d = ca.SX.sym("d", DISTURBANCE_SIZE)
-    extra = ca.vertcat(d[0], d[1], 0.0, d[2] / params.m11, d[3] / params.m22, d[4] / params.m33)
+    sway, yaw = params.sway_yaw_accelerations(d[3], d[4])
+    extra = ca.vertcat(d[0], d[1], 0.0, d[2] / params.m11, sway, yaw)
     return ca.Function("ship_fd", [state, tau, d], [f(state, tau) + extra])
 
 

@@ -101,6 +101,12 @@ class NMPCSettings:
         Start IPOPT from the previous solve's multipliers, shifted by one interval like
         the plan (``warm_start_init_point``): about half the iterations.  fatrop's
         interface takes no multipliers, so it is ignored there.
+    tau_rate_max : tuple of float or None
+        Largest rates of the surge force [N/s] and yaw moment [N m/s] the actuators can
+        follow (from the ship's steering gear and shaft, :func:`rhnc.control.allocation.tau_rate_limits`):
+        the k-th planned input stays within k intervals' worth of change from the last
+        applied one, so the first, applied one never asks more than one interval's.
+        None: no rate bound (only the R1 weight).
     """
 
     horizon_steps: int = 15
@@ -132,6 +138,7 @@ class NMPCSettings:
     observer_gain: float = 0.5
     codegen: bool = True
     warm_start_duals: bool = True
+    tau_rate_max: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         if self.iteration_budget is not None and not 2 <= self.iteration_budget <= self.max_iterations:
@@ -139,6 +146,8 @@ class NMPCSettings:
                              f"got {self.iteration_budget}")
         if self.horizon_steps < 1:
             raise ValueError(f"horizon_steps must be >= 1, got {self.horizon_steps}")
+        if self.tau_rate_max is not None and not (len(self.tau_rate_max) == 2 and min(self.tau_rate_max) > 0.0):
+            raise ValueError(f"tau_rate_max must be two positive rates [N/s, N m/s], got {self.tau_rate_max}")
         if self.control_interval_s <= 0.0:
             raise ValueError(f"control_interval_s must be > 0, got {self.control_interval_s}")
         if self.substeps < 1:

@@ -6,26 +6,41 @@ manoeuvres are sailed from straight motion at the service speed:
 
 - ``trim``: a PI speed controller finds the surge force holding the service speed;
 - ``speed_steps``: surge force stepped to 130 %, 60 % and back to 100 % of that trim;
-- ``turn_starboard``, ``turn_port``: full yaw moment either way;
-- ``zigzag_10``: a 10/10 zig-zag, yaw moment 10/35 of the bound switched at +-10 deg;
-- ``zigzag_20``: a 20/20 zig-zag, held out for validation.
+- ``turn_starboard``, ``turn_port``: turning circles at full helm either way;
+- ``zigzag_10``: a 10/10 zig-zag, helm 10/35 of full switched at +-10 deg;
+- ``zigzag_20``: a 20/20 zig-zag, held out to choose the model class and to validate.
 
-The model of :mod:`rhnc.ship.ship_model` is linear in its eight coefficients once the
+These are the trials a captain runs, and they stay in the ship's real range: the helm
+is a fraction of the largest yaw moment *at the service speed*, and like a rudder's it
+falls with the square of the speed the ship keeps (:func:`helm_moment`), so a turning
+circle does not spin a ship that has slowed in it under the moment its rudder gave at
+full speed.  A manoeuvre is cut short, not failed, when the plant leaves the range the
+model is for (non-finite states, the ship slower than a fifth of the service speed).
+
+The model of :mod:`rhnc.ship.ship_model` is linear in its coefficients once the
 accelerations are known::
 
-    m11 udot - m22 v r + d11 u                    = tau_u
-    m22 vdot + m11 u r + d22 v + d23 r            = 0
-    m33 rdot - (m11 - m22) u v + d32 v + d33 r    = tau_r
+    m11 udot - (m22 v + m23 r) r + d11 u + d11q |u| u                 = tau_u
+    m22 vdot + m23 rdot + m11 u r + d22 v + d23 r + d22q |v| v        = 0
+    m23 vdot + m33 rdot - (m11 - m22) u v + m23 u r + d32 v + d33 r
+                                                      + d33q |r| r    = tau_r
 
-so they are fitted by one linear least-squares problem over all samples of the fitting
-manoeuvres, the rows of each equation divided by its force scale (the bounds).  The
+so each model class (:data:`MODEL_CLASSES`: the paper's diagonal linear model; with the
+sway-yaw mass coupling m23; with it and the quadratic damping) is fitted by one
+bounded linear least-squares problem over all samples of the fitting manoeuvres (masses
+and direct damping positive, quadratic damping not negative; the rows of each equation
+divided by its force scale, the columns by their norms).  The
 accelerations and the states in the rows come from a Savitzky-Golay filter (cubic, 21 s
 window) over the FMU's 1 s outputs; samples within half a window of an input switch are
 left out.  The bounds are the user's (the largest surge force and yaw moment the ship can
 give: they cannot be seen in motions that stay inside them).
 
-Validation: the fitted model is integrated open loop with the recorded inputs of the
-held-out manoeuvre, from its first sample, and compared with what the plant did.
+Validation: each fitted class is integrated open loop with the recorded inputs of the
+held-out manoeuvre, from its first sample, and compared with what the plant did; the
+class with the smallest held-out error is kept (a wider class only when it is better by
+more than 2 %), and within a class the refined coefficients or the equation-error ones,
+whichever predict the held-out manoeuvre better.  A fit that cannot be made (too few samples, no class that stays finite
+on the held-out manoeuvre) is refused with one line saying what to change.
 
 Prediction error: from every 20 s of every manoeuvre the fitted model predicts 300 s ahead
 from the measured state, as the NMPC does; the growth of its position error with the
@@ -50,6 +65,21 @@ from rhnc.ship.ship_model import STATE_NAMES, ShipParameters, equations_of_motio
 
 LOG = logging.getLogger(__name__)
 COEFFICIENTS = ("m11", "m22", "m33", "d11", "d22", "d33", "d23", "d32")
+#: Every coefficient a class may fit, in the order of the regression's columns.
+ALL_COEFFICIENTS = COEFFICIENTS + ("m23", "d11q", "d22q", "d33q")
+#: Model classes, narrowest first: name -> the coefficients it fits (the others are 0).
+MODEL_CLASSES = {
+    "linear": COEFFICIENTS,
+    "coupled mass": COEFFICIENTS + ("m23",),
+    "coupled mass, quadratic damping": ALL_COEFFICIENTS,
+}
+#: Coefficients that must be positive (masses, direct damping) and not negative (quadratic damping).
+POSITIVE = ("m11", "m22", "m33", "d11", "d22", "d33")
+NOT_NEGATIVE = ("d11q", "d22q", "d33q")
+#: A wider class is kept only when its held-out error is smaller by this fraction.
+WIDER_CLASS_GAIN = 0.02
+#: A manoeuvre stops when the ship is slower than this fraction of the service speed.
+SLOWEST_FRACTION = 0.2
 WEATHER_PORTS = ("current_north", "current_east", "wind_speed", "wind_direction", "hs")
 FIT_MANOEUVRES = ("speed_steps", "turn_starboard", "turn_port", "zigzag_10")
 VALIDATION_MANOEUVRE = "zigzag_20"
@@ -79,6 +109,9 @@ class Fit:
     records: dict[str, Record]
     predictions: dict[str, np.ndarray]
     prediction_error: dict[str, float] = dataclasses.field(default_factory=dict)
+    model_class: str = "linear"
+    class_errors: dict[str, float | None] = dataclasses.field(default_factory=dict)
+    notes: list[str] = dataclasses.field(default_factory=list)
 
 
 class PlantRunner:
@@ -96,6 +129,7 @@ class PlantRunner:
     def __init__(self, build: Callable, speed_mps: float) -> None:
         self.build = build
         self.speed_mps = speed_mps
+        self.notes: list[str] = []
 
     def sail(self, name: str, duration_s: float, policy: Callable[[float, np.ndarray], tuple[float, float]]) -> Record:
         plant = self.build({"x_m": 0.0, "y_m": 0.0, "psi_rad": 0.0, "u_mps": self.speed_mps})
@@ -107,6 +141,11 @@ class PlantRunner:
             for k in range(steps + 1):
                 t = k * SAMPLE_S
                 state = np.array([outputs[port] for port in STATE_NAMES], dtype=float)
+                if not np.all(np.isfinite(state)) or state[3] < SLOWEST_FRACTION * self.speed_mps:
+                    self.notes.append(f"{name}: stopped after {t:.0f} s (the ship "
+                                      + ("reported non-finite states)" if not np.all(np.isfinite(state)) else
+                                         f"slowed to {state[3]:.2f} m/s)"))
+                    break
                 tau = policy(t, state)
                 times.append(t)
                 states.append(state)
@@ -118,6 +157,13 @@ class PlantRunner:
         states = np.array(states)
         states[:, 2] = np.unwrap(states[:, 2])
         return Record(name, np.array(times), states, np.array(taus, dtype=float))
+
+
+def helm_moment(helm: float, u: float, service_speed: float, tau_r_max: float) -> float:
+    """Yaw moment [N m] of a helm order as a rudder gives it: ``helm`` (1 = hard over) of the
+    largest moment at the service speed, falling with the square of the surge speed ``u``
+    [m/s] (a rudder's lift goes with its inflow speed squared), never above the largest."""
+    return helm * tau_r_max * min((max(u, 0.0) / service_speed) ** 2, 1.0)
 
 
 def sail_manoeuvres(runner: PlantRunner, tau_u_max: float, tau_r_max: float) -> tuple[float, dict[str, Record]]:
@@ -142,10 +188,10 @@ def sail_manoeuvres(runner: PlantRunner, tau_u_max: float, tau_r_max: float) -> 
         return min(factor * trim, tau_u_max), 0.0
 
     def turn(sign):
-        return lambda t, x: (trim, 0.0 if t < 60 else sign * tau_r_max)
+        return lambda t, x: (trim, 0.0 if t < 60 else sign * helm_moment(1.0, x[3], speed, tau_r_max))
 
     def zigzag(angle_deg):
-        moment = angle_deg / 35.0 * tau_r_max
+        helm = angle_deg / 35.0
         limit = math.radians(angle_deg)
         memory = {"sign": 1.0}
 
@@ -156,7 +202,7 @@ def sail_manoeuvres(runner: PlantRunner, tau_u_max: float, tau_r_max: float) -> 
                 memory["sign"] = -1.0
             elif memory["sign"] < 0 and x[2] <= -limit:
                 memory["sign"] = 1.0
-            return trim, memory["sign"] * moment
+            return trim, memory["sign"] * helm_moment(helm, x[3], speed, tau_r_max)
         return policy
 
     records = {
@@ -170,7 +216,7 @@ def sail_manoeuvres(runner: PlantRunner, tau_u_max: float, tau_r_max: float) -> 
 
 
 def _smoothed(record: Record) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Filtered (u, v, r), their time derivatives, and a mask of samples clear of input switches."""
+    """Filtered (u, v, r), their time derivatives, and a mask of samples clear of input steps."""
     from scipy.signal import savgol_filter
 
     body = record.states[:, 3:6]
@@ -179,7 +225,9 @@ def _smoothed(record: Record) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     keep = np.ones(len(record.t), dtype=bool)
     half = FILTER_WINDOW // 2
     keep[:half + 1] = keep[-half - 1:] = False
-    switches = np.flatnonzero(np.any(np.diff(record.tau, axis=0) != 0.0, axis=1))
+    # a step of the input (not the slow change of a helm moment with speed): 5 % of its range
+    size = np.maximum(np.max(np.abs(record.tau), axis=0), 1e-9)
+    switches = np.flatnonzero(np.any(np.abs(np.diff(record.tau, axis=0)) > 0.05 * size, axis=1))
     for index in switches:  # tau[index] acts over (t[index], t[index + 1]]
         keep[max(0, index + 1 - half - 1):index + 1 + half + 1] = False
     return values, rates, keep
@@ -192,24 +240,34 @@ def regression_rows(record: Record, scales: tuple[float, float, float]):
     du, dv, dr = rates[keep].T
     tau = record.tau[keep]  # the same before and after a kept sample (switches are left out)
     zero = np.zeros_like(u)
-    #           m11     m22     m33   d11   d22   d33   d23   d32
-    surge = np.column_stack([du, -v * r, zero, u, zero, zero, zero, zero])
-    sway = np.column_stack([u * r, dv, zero, zero, v, zero, r, zero])
-    yaw = np.column_stack([-u * v, u * v, dr, zero, zero, r, zero, v])
+    #           m11     m22     m33   d11   d22   d33   d23   d32  m23           d11q      d22q      d33q
+    surge = np.column_stack([du, -v * r, zero, u, zero, zero, zero, zero, -r * r, np.abs(u) * u, zero, zero])
+    sway = np.column_stack([u * r, dv, zero, zero, v, zero, r, zero, dr, zero, np.abs(v) * v, zero])
+    yaw = np.column_stack([-u * v, u * v, dr, zero, zero, r, zero, v, dv + u * r, zero, zero, np.abs(r) * r])
     a = np.vstack([surge / scales[0], sway / scales[1], yaw / scales[2]])
     b = np.concatenate([tau[:, 0] / scales[0], zero, tau[:, 1] / scales[2]])
     return a, b, len(u)
 
 
-def fit_coefficients(records: dict[str, Record], tau_u_max: float, tau_r_max: float) -> tuple[np.ndarray, dict, dict]:
-    """Least-squares coefficients (in :data:`COEFFICIENTS` order), residual RMS and R² per equation."""
+def fit_coefficients(records: dict[str, Record], tau_u_max: float, tau_r_max: float,
+                     names: tuple[str, ...] = COEFFICIENTS) -> tuple[np.ndarray, dict, dict]:
+    """Bounded least-squares coefficients (in the order of ``names``), residual RMS and R² per equation.
+
+    Masses and direct damping are kept positive (at least 1e-6 of the scale of their
+    column), quadratic damping not negative; the columns are scaled by their norms, so the
+    problem is well conditioned whatever the ship's size.
+    """
+    from scipy.optimize import lsq_linear
+
     scales = (tau_u_max, tau_u_max, tau_r_max)
-    blocks = [regression_rows(records[name], scales) for name in FIT_MANOEUVRES]
-    a = np.vstack([block[0] for block in blocks])
+    blocks = [regression_rows(records[name], scales) for name in FIT_MANOEUVRES if name in records]
+    columns = [ALL_COEFFICIENTS.index(name) for name in names]
+    a = np.vstack([block[0] for block in blocks])[:, columns]
     b = np.concatenate([block[1] for block in blocks])
     norms = np.linalg.norm(a, axis=0)
     norms[norms == 0.0] = 1.0
-    solution, *_ = np.linalg.lstsq(a / norms, b, rcond=None)
+    lower = np.array([1e-6 if n in POSITIVE else 0.0 if n in NOT_NEGATIVE else -np.inf for n in names])
+    solution = lsq_linear(a / norms, b, bounds=(lower, np.full(len(names), np.inf)), method="bvls").x
     theta = solution / norms
     residual = a @ theta - b
     counts = [block[2] for block in blocks]
@@ -233,27 +291,76 @@ def fit_coefficients(records: dict[str, Record], tau_u_max: float, tau_r_max: fl
     return theta, rms, r2
 
 
-def refine_output_error(records: dict[str, Record], theta: np.ndarray) -> np.ndarray:
-    """Coefficients improving ``theta`` on the simulation error of the fitting manoeuvres.
+def _coefficient_scales(theta: dict[str, float], speed_mps: float) -> dict[str, float]:
+    """Typical magnitude of every coefficient, from the linear ones: the unit of the
+    refinement's variables (so all are of order one) and the floor of a zero start."""
+    u = max(speed_mps, 0.1)
+    return {
+        **{name: abs(theta[name]) for name in COEFFICIENTS},
+        "m23": 0.05 * math.sqrt(theta["m22"] * theta["m33"]),
+        "d11q": theta["d11"] / u,                     # as much drag at service speed as d11
+        "d22q": theta["d22"] / (0.1 * u),             # at a sway of a tenth of it
+        "d33q": theta["d33"] / math.radians(0.5),     # at half a degree per second
+    }
+
+
+def refine_output_error(records: dict[str, Record], theta: np.ndarray,
+                        names: tuple[str, ...] = COEFFICIENTS) -> tuple[np.ndarray, str]:
+    """Coefficients improving ``theta`` (in the order of ``names``) on the simulation error
+    of the fitting manoeuvres, and a note on how it went.
 
     The equation-error fit is biased where the plant's structure differs from the model's
     (a quadratic hull resistance, say), and a prediction model is judged by what it
     predicts over a horizon.  So each fitting manoeuvre is integrated open loop with its
-    recorded inputs (RK4, the sampling step in two substeps) and the coefficients are scaled
-    by factors in [0.2, 5] that minimise the errors of heading (per degree), surge and
-    sway speed (per 0.1 m/s) and yaw rate (per 0.06 deg/s), with exact CasADi Jacobians
-    (scipy's trust-region least squares).
+    recorded inputs (RK4, the sampling step in two substeps) and the coefficients are
+    moved, within bounds, to minimise the errors of heading (per degree), surge and sway
+    speed (per 0.1 m/s) and yaw rate (per 0.06 deg/s), with exact CasADi Jacobians
+    (scipy's trust-region least squares).  The variables are the coefficients divided by
+    their typical magnitudes; masses, direct and cross damping stay within a factor 5 of
+    the start (sign kept), quadratic damping in [0, 5 x its typical value], m23 within half
+    the geometric mean of m22 and m33.  A model that diverges on a manoeuvre counts as a
+    large error there instead of stopping the fit; if the optimiser still fails the start
+    is kept.
     """
     import casadi as ca
     from scipy.optimize import least_squares
 
-    factors = ca.SX.sym("k", len(COEFFICIENTS))
-    scaled = SimpleNamespace(**{name: factors[i] * float(theta[i]) for i, name in enumerate(COEFFICIENTS)})
+    start = dict(zip(names, (float(v) for v in theta)))
+    full = {name: start.get(name, 0.0) for name in ALL_COEFFICIENTS}
+    speed = float(np.median(np.concatenate([records[n].states[:, 3] for n in FIT_MANOEUVRES if n in records])))
+    unit = _coefficient_scales(full, speed)
+    z0, lower, upper = [], [], []
+    for name in names:
+        scale = max(unit[name], 1e-12)
+        value = start[name] / scale
+        z0.append(value)
+        if name in NOT_NEGATIVE:
+            lower.append(0.0)
+            upper.append(5.0 * max(start[name], unit[name]) / scale)
+        elif name == "m23":
+            bound = 0.5 * math.sqrt(full["m22"] * full["m33"]) / scale
+            lower.append(-bound)
+            upper.append(bound)
+        elif value >= 0.0:
+            lower.append(0.2 * value)
+            upper.append(5.0 * value)
+        else:
+            lower.append(5.0 * value)
+            upper.append(0.2 * value)
+    z0 = np.clip(np.array(z0), lower, upper)
+    if np.any(np.array(lower) >= np.array(upper)):
+        return np.asarray(theta, dtype=float), "not refined: a coefficient is zero"
+    variables = ca.SX.sym("z", len(names))
+    symbolic = dict(full)
+    for i, name in enumerate(names):
+        symbolic[name] = variables[i] * max(unit[name], 1e-12)
+    scaled = SimpleNamespace(**symbolic)
+    scaled.sway_yaw_accelerations = lambda fv, fr: ShipParameters.sway_yaw_accelerations(scaled, fv, fr)
     state, tau = ca.SX.sym("X", 4), ca.SX.sym("tau", 2)   # psi, u, v, r
 
     def f(x):   # the ship's equations (rows psi, u, v, r) with the scaled coefficients
-        full = ca.vertcat(0.0, 0.0, x)
-        return equations_of_motion(full, tau, scaled, ca.cos, ca.sin, lambda rows: ca.vertcat(*rows))[2:]
+        full_state = ca.vertcat(0.0, 0.0, x)
+        return equations_of_motion(full_state, tau, scaled, ca.cos, ca.sin, lambda rows: ca.vertcat(*rows))[2:]
 
     h = SAMPLE_S / 2.0
     x = state
@@ -263,34 +370,63 @@ def refine_output_error(records: dict[str, Record], theta: np.ndarray) -> np.nda
         k3 = f(x + 0.5 * h * k2)
         k4 = f(x + h * k3)
         x = x + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-    step = ca.Function("step", [state, tau, factors], [x])
+    step = ca.Function("step", [state, tau, variables], [x])
     weights = np.array([1.0 / math.radians(1.0), 10.0, 10.0, 1.0 / math.radians(0.06)])
     residuals = []
     for name in FIT_MANOEUVRES:
+        if name not in records:
+            continue
         record = records[name]
         measured = record.states[:, 2:6]
         n = len(record.t) - 1
-        trajectory = step.mapaccum(n)(ca.DM(measured[0]), ca.DM(record.tau[:n].T), ca.repmat(factors, 1, n))
+        trajectory = step.mapaccum(n)(ca.DM(measured[0]), ca.DM(record.tau[:n].T), ca.repmat(variables, 1, n))
         error = (trajectory - ca.DM(measured[1:].T)) * ca.DM(weights)
         residuals.append(ca.vec(error) / math.sqrt(n))
     stacked = ca.vertcat(*residuals)
-    evaluate = ca.Function("residual", [factors], [stacked])
-    jacobian = ca.Function("jacobian", [factors], [ca.jacobian(stacked, factors)])
-    result = least_squares(lambda k: np.asarray(evaluate(k)).ravel(), np.ones(len(COEFFICIENTS)),
-                           jac=lambda k: np.asarray(jacobian(k)), bounds=(0.2, 5.0), x_scale=1.0,
-                           max_nfev=100)
+    evaluate = ca.Function("residual", [variables], [stacked])
+    jacobian = ca.Function("jacobian", [variables], [ca.jacobian(stacked, variables)])
+    large = 1e4   # a diverged simulation: a large error, not a NaN that stops the optimiser
+
+    def residual(z):
+        return np.nan_to_num(np.asarray(evaluate(z)).ravel(), nan=large, posinf=large, neginf=-large)
+
+    def jac(z):
+        return np.nan_to_num(np.asarray(jacobian(z)), nan=0.0, posinf=0.0, neginf=0.0)
+
+    try:
+        result = least_squares(residual, z0, jac=jac, bounds=(lower, upper), x_scale=1.0, max_nfev=100)
+    except (ValueError, np.linalg.LinAlgError, RuntimeError) as exc:
+        return np.asarray(theta, dtype=float), f"not refined ({exc})"
+    before = 0.5 * float(np.sum(residual(z0) ** 2))
+    if not (np.isfinite(result.cost) and result.cost <= before):
+        return np.asarray(theta, dtype=float), "not refined: the optimiser found nothing better"
     LOG.info("output-error refinement: %s after %d evaluations, cost %.4g -> %.4g", result.message,
-             result.nfev, 0.5 * float(np.sum(np.asarray(evaluate(np.ones(len(COEFFICIENTS)))) ** 2)), result.cost)
-    return theta * result.x
+             result.nfev, before, result.cost)
+    return result.x * np.array([max(unit[name], 1e-12) for name in names]), \
+        f"refined: cost {before:.4g} -> {result.cost:.4g} in {result.nfev} evaluations"
 
 
 def simulate(parameters: ShipParameters, record: Record) -> np.ndarray:
-    """Open-loop states (n, 6) of the model under the record's inputs, from its first sample."""
-    states = np.empty_like(record.states)
+    """Open-loop states (n, 6) of the model under the record's inputs, from its first sample
+    (NaN from the first step where a diverging model leaves the finite numbers)."""
+    states = np.full_like(record.states, np.nan)
     states[0] = record.states[0]
-    for k in range(len(record.t) - 1):
-        states[k + 1] = rk4_step(states[k], record.tau[k], record.t[k + 1] - record.t[k], 4, parameters)
+    with np.errstate(over="ignore", invalid="ignore"):
+        for k in range(len(record.t) - 1):
+            states[k + 1] = rk4_step(states[k], record.tau[k], record.t[k + 1] - record.t[k], 4, parameters)
+            if not np.all(np.isfinite(states[k + 1])):
+                states[k + 1:] = np.nan
+                break
     return states
+
+
+def held_out_cost(record: Record, predicted: np.ndarray) -> float:
+    """Weighted RMS open-loop error of a prediction (heading per degree, surge and sway per
+    0.1 m/s, yaw rate per 0.06 deg/s: the refinement's weights); inf when it diverged."""
+    weights = np.array([1.0 / math.radians(1.0), 10.0, 10.0, 1.0 / math.radians(0.06)])
+    error = (predicted[:, 2:6] - record.states[:, 2:6]) * weights
+    value = float(np.sqrt(np.mean(error ** 2)))
+    return value if math.isfinite(value) else math.inf
 
 
 def validation_errors(record: Record, predicted: np.ndarray) -> dict[str, float]:
@@ -309,45 +445,95 @@ def validation_errors(record: Record, predicted: np.ndarray) -> dict[str, float]
     }
 
 
+def _fit_class(records, tau_u_max, tau_r_max, names, refine):
+    """One class fitted: (equation-error parameters, final parameters, rms, r2, note) or a reason it failed."""
+    equation_error, rms, r2 = fit_coefficients(records, tau_u_max, tau_r_max, names)
+    note = "equation error only"
+    theta = equation_error
+    if refine:
+        theta, note = refine_output_error(records, equation_error, names)
+
+    def parameters(values, label):
+        coefficients = {name: 0.0 for name in ALL_COEFFICIENTS}
+        coefficients.update(zip(names, (float(v) for v in values)))
+        if not all(math.isfinite(v) for v in coefficients.values()):
+            return None
+        if coefficients["m22"] * coefficients["m33"] <= coefficients["m23"] ** 2:
+            return None   # the mass matrix must be positive definite
+        return ShipParameters(**coefficients, tau_u_max=float(tau_u_max), tau_r_max=float(tau_r_max), name=label)
+
+    return parameters(equation_error, "equation error only"), parameters(theta, "fitted"), rms, r2, note
+
+
 def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_name: str,
-                   reference: ShipParameters | None = None, refine: bool = True) -> Fit:
-    """Sail the manoeuvres, fit the coefficients, validate on the held-out manoeuvre.
+                   reference: ShipParameters | None = None, refine: bool = True,
+                   classes: tuple[str, ...] = tuple(MODEL_CLASSES)) -> Fit:
+    """Sail the manoeuvres, fit every model class, keep the one best on the held-out manoeuvre.
 
     ``reference`` (a model to compare with, e.g. the one the NMPC used before) is
-    validated the same way under ``validation["reference: <name>"]``.
+    validated the same way under ``validation["held_out with <name>"]``.
 
     Raises
     ------
     ToolchainError
-        The plant cannot hold the service speed, or the fit gives a non-physical
-        coefficient (a mass or a direct damping that is not positive).
+        The plant cannot hold the service speed, the manoeuvres leave too few samples,
+        or no model class stays finite on the held-out manoeuvre (one line saying what to
+        change).
     """
     trim, records = sail_manoeuvres(runner, tau_u_max, tau_r_max)
-    equation_error, rms, r2 = fit_coefficients(records, tau_u_max, tau_r_max)
-    theta = refine_output_error(records, equation_error) if refine else equation_error
-    values = dict(zip(COEFFICIENTS, (float(v) for v in theta)))
-    bad = [k for k in ("m11", "m22", "m33", "d11", "d22", "d33") if not values[k] > 0.0]
-    if bad:
-        raise ToolchainError(f"identify: the fit gives non-positive {', '.join(bad)} "
-                             f"({', '.join(f'{k} = {values[k]:.4g}' for k in bad)}): the manoeuvres do not "
-                             "excite the plant enough, or its dynamics are far from the 3-DOF model")
-    parameters = ShipParameters(**values, tau_u_max=float(tau_u_max), tau_r_max=float(tau_r_max), name=set_name)
+    short = [name for name, record in records.items() if len(record.t) < 3 * FILTER_WINDOW]
+    if VALIDATION_MANOEUVRE in short or len(short) > 1:
+        raise ToolchainError(f"identify: the manoeuvres {', '.join(short)} ended after less than "
+                             f"{3 * FILTER_WINDOW} s ({'; '.join(runner.notes) or 'the plant stopped'}): give a "
+                             "smaller --tau-r-max-Nm (the yaw moment at full rudder and service speed) or a lower "
+                             "--speed-kn")
+    records = {name: record for name, record in records.items() if name not in short}
+    held_out = records[VALIDATION_MANOEUVRE]
+    candidates = {}
+    for class_name in classes:
+        names = MODEL_CLASSES[class_name]
+        equation_error, fitted, rms, r2, note = _fit_class(records, tau_u_max, tau_r_max, names, refine)
+        if fitted is None:
+            LOG.info("model class %s: no physical fit", class_name)
+            continue
+        cost = held_out_cost(held_out, simulate(fitted, held_out))
+        if refine and equation_error is not None:
+            # the refinement fits the fitting manoeuvres; where the class lacks the plant's
+            # structure that can cost on others, and the held-out manoeuvre decides
+            plain = held_out_cost(held_out, simulate(equation_error, held_out))
+            if plain < cost:
+                cost, fitted, note = plain, equation_error, f"equation error kept: held-out {plain:.4g} against " \
+                                                            f"{cost:.4g} refined ({note})"
+        LOG.info("model class %s: held-out cost %.4g (%s)", class_name, cost, note)
+        candidates[class_name] = (cost, equation_error, fitted, rms, r2, note)
+    class_errors = {name: (candidates[name][0] if name in candidates else None) for name in classes}
+    finite = [name for name in candidates if math.isfinite(candidates[name][0])]
+    if not finite:
+        raise ToolchainError("identify: no model class predicts the held-out zig-zag without diverging (classes "
+                             f"tried: {', '.join(classes)}): the manoeuvres may leave the ship's real range; give the "
+                             "yaw moment of full rudder at service speed as --tau-r-max-Nm and check the probe's figures")
+    chosen = finite[0]
+    for name in finite[1:]:   # narrowest first: a wider class must earn its coefficients
+        if candidates[name][0] < (1.0 - WIDER_CLASS_GAIN) * candidates[chosen][0]:
+            chosen = name
+    _, equation_error, parameters, rms, r2, note = candidates[chosen]
+    parameters = dataclasses.replace(parameters, name=set_name)
     predictions, validation = {}, {}
     for name, record in records.items():
         predictions[name] = simulate(parameters, record)
         key = "held_out: " + name if name == VALIDATION_MANOEUVRE else name
         validation[key] = validation_errors(record, predictions[name])
-    if refine:
-        ls = ShipParameters(**dict(zip(COEFFICIENTS, (float(v) for v in equation_error))), tau_u_max=float(tau_u_max),
-                            tau_r_max=float(tau_r_max), name="equation error only")
+    if refine and equation_error is not None:
         validation["held_out with the equation-error fit alone"] = validation_errors(
-            records[VALIDATION_MANOEUVRE], simulate(ls, records[VALIDATION_MANOEUVRE]))
+            held_out, simulate(equation_error, held_out))
     if reference is not None:
-        predicted = simulate(reference, records[VALIDATION_MANOEUVRE])
-        validation[f"held_out with {reference.name}"] = validation_errors(records[VALIDATION_MANOEUVRE], predicted)
+        predicted = simulate(reference, held_out)
+        validation[f"held_out with {reference.name}"] = validation_errors(held_out, predicted)
     error = position_error_growth(parameters, records)
-    parameters = dataclasses.replace(parameters, extras={"position_error_growth_mps": error["growth_mps"]})
-    return Fit(parameters, trim, rms, r2, validation, records, predictions, error)
+    parameters = dataclasses.replace(parameters, extras={"position_error_growth_mps": error["growth_mps"],
+                                                         "model_class": chosen})
+    notes = list(runner.notes) + [f"{chosen}: {note}"]
+    return Fit(parameters, trim, rms, r2, validation, records, predictions, error, chosen, class_errors, notes)
 
 
 def check_bounds(tau_u_max: float | None, tau_r_max: float | None) -> tuple[float, float]:

@@ -13,7 +13,7 @@ import numpy as np
 
 from orchestrator.geometry import KNOT
 from rhnc.ship.identification import VALIDATION_MANOEUVRE, Fit
-from rhnc.ship.ship_model import DYNAMICS_KEYS
+from rhnc.ship.ship_model import DYNAMICS_KEYS, WIDE_MODEL_KEYS
 
 
 def parameter_set_toml(fit: Fit, identity: dict[str, str], source: str) -> str:
@@ -24,16 +24,21 @@ def parameter_set_toml(fit: Fit, identity: dict[str, str], source: str) -> str:
         "# Identified by `python -m orchestrator identify` (rhnc/ship/identification.py): the NMPC's",
         "# 3-DOF prediction model fitted by least squares on the plant's manoeuvres, weather off.",
         "# units: m11, m22 kg; m33 kg m^2; d11, d22 kg/s; d23, d32 kg m/s; d33 kg m^2/s;",
-        "#        tau_u_max N; tau_r_max N m (the bounds given to identify).",
+        "#        tau_u_max N; tau_r_max N m (the bounds given to identify); when the wider model class",
+        "#        is chosen: m23 kg m (sway-yaw mass coupling); d11q, d22q kg/m; d33q kg m^2 (quadratic damping).",
         "",
         f"[{p.name}]",
         f"description = \"Identified on {identity['model_name']}{through} from {source}; held-out "
         f"{VALIDATION_MANOEUVRE}: heading RMS "
-        f"{fit.validation['held_out: ' + VALIDATION_MANOEUVRE]['heading_rms_deg']:.2f} deg\"",
+        f"{fit.validation['held_out: ' + VALIDATION_MANOEUVRE]['heading_rms_deg']:.3f} deg; model class {p.extras.get('model_class', 'linear')}\"",
         f"plant_fmu = \"{identity['model_name']}\"",
         f"plant_guid = \"{identity['guid']}\"",
     ]
-    lines += [f"{key} = {getattr(p, key)!r}" for key in DYNAMICS_KEYS]
+    lines += [f"{key} = {getattr(p, key)!r}" for key in DYNAMICS_KEYS
+              if key not in WIDE_MODEL_KEYS or getattr(p, key) != 0.0]
+    if "model_class" in p.extras:
+        lines += ["# the model class chosen by its error on the held-out manoeuvre (rhnc/ship/identification.py)",
+                  f"model_class = \"{p.extras['model_class']}\""]
     if "position_error_growth_mps" in p.extras:
         lines += ["# m/s: growth of the model's position error with prediction time on the manoeuvres; the",
                   "# NMPC widens its collision domains by it unless the scenario sets clearance_margin_growth_kn",

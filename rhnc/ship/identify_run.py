@@ -8,7 +8,9 @@ parameter-set file there.
 
 A plant at actuator level (it takes rudder angle and propeller revolutions, not tau) is
 identified through the scenario's ``allocation`` participant, as the NMPC sees it in a run
-(:class:`AllocatedPlant`).
+(:class:`AllocatedPlant`).  Before the manoeuvres a short probe
+(:mod:`rhnc.ship.plant_probe`) refuses a mapping whose signs, angle convention or units
+contradict the canonical frame.
 """
 
 from __future__ import annotations
@@ -22,8 +24,9 @@ from orchestrator.errors import ScenarioError
 from orchestrator.geometry import KNOT
 from orchestrator.results import RunFolder, new_run_id, versions
 from orchestrator.scenario import ParticipantSpec, load_scenario
-from rhnc.ship.identification import COEFFICIENTS, VALIDATION_MANOEUVRE, PlantRunner, check_bounds, identify_model
+from rhnc.ship.identification import ALL_COEFFICIENTS, COEFFICIENTS, VALIDATION_MANOEUVRE, PlantRunner, check_bounds, identify_model
 from rhnc.ship.identification_report import parameter_set_toml, write_figures
+from rhnc.ship.plant_probe import probe_plant
 from rhnc.ship.ship_model import STATE_NAMES, load_parameter_set
 
 LOG = logging.getLogger(__name__)
@@ -152,7 +155,7 @@ def run_identify(scenario_path, results_root="results", plant: str | None = None
     ------
     ScenarioError
         Bad scenario, no unique plant, missing bounds, a plant without start parameters
-        for the initial state.
+        for the initial state, a mapping the probe finds against the canonical frame.
     ToolchainError
         The plant cannot be identified (see :func:`rhnc.ship.identification.identify_model`).
     """
@@ -187,6 +190,7 @@ def run_identify(scenario_path, results_root="results", plant: str | None = None
     missing = [port for port in (*STATE_NAMES, "tau_u", "tau_r") if port not in (*seen.output_names, *seen.input_names)]
     if missing:
         raise ScenarioError(f"{where}: identify needs the plant ports {', '.join(missing)} (map them)")
+    probe_report = probe_plant(build, speed_kn * KNOT, tau_u_max, tau_r_max, where)
     name = set_name or identity["model_name"]
     kcs = load_parameter_set("default")
     fit = identify_model(PlantRunner(build, speed_kn * KNOT), tau_u_max, tau_r_max, name, reference=kcs)
@@ -201,9 +205,14 @@ def run_identify(scenario_path, results_root="results", plant: str | None = None
             "plant": {"participant": spec.name, "fmu": str(path), **identity,
                       "through": allocation[0].name if allocation is not None else None},
             "speed_kn": speed_kn,
+            "probe": probe_report,
             "trim_tau_u_N": fit.trim_tau_u,
             "set": name,
-            "coefficients": {k: getattr(fit.parameters, k) for k in COEFFICIENTS},
+            "model_class": fit.model_class,
+            "held_out_cost_per_class": fit.class_errors,
+            "notes": fit.notes,
+            "coefficients": {k: getattr(fit.parameters, k) for k in ALL_COEFFICIENTS
+                             if k in COEFFICIENTS or getattr(fit.parameters, k) != 0.0},
             "bounds": {"tau_u_max_N": tau_u_max, "tau_r_max_Nm": tau_r_max},
             "residual_rms": fit.residual_rms,
             "r_squared": fit.r_squared,
@@ -232,6 +241,10 @@ def _markdown(report: dict) -> str:
     lines = [f"# Identification of {report['set']} on {report['plant']['model_name']}", "",
              f"Plant `{report['plant']['participant']}` of `{report['scenario']}`, from {report['speed_kn']} kn, "
              f"weather off; surge force at trim {report['trim_tau_u_N']:.4g} N.", "",
+             f"Model class: {report['model_class']} (held-out weighted error per class: " + ", ".join(
+                 f"{k} {v:.4g}" if v is not None else f"{k} no physical fit"
+                 for k, v in report["held_out_cost_per_class"].items()) + ").", "",
+             *[f"- {note}" for note in report["notes"]], "",
              "| coefficient | value |", "|---|---|"]
     lines += [f"| {k} | {v:.6g} |" for k, v in report["coefficients"].items()]
     lines += [f"| {k} | {v:.6g} |" for k, v in report["bounds"].items()]

@@ -13,6 +13,17 @@ the plant without disturbances and without current (paper Eq. 16):
 
 The parameters come from ``models/KCS/parameter_sets.toml`` (the plant FMU's single
 source), so the controller predicts with exactly the numbers the plant simulates.
+
+Real hulls need more than the paper's diagonal, linear model, and a set may say so with
+optional coefficients (zero when absent, giving the equations above): ``m23``, the
+sway-yaw coupling of the (symmetric) mass matrix, and the quadratic damping ``d11q``,
+``d22q``, ``d33q`` (a resistance ``d11q |u| u``, cross-flow ``d22q |v| v``, ``d33q |r| r``)::
+
+    m11 udot               = (m22 v + m23 r) r - d11 u - d11q |u| u + tau_u
+    m22 vdot + m23 rdot    = -m11 u r - d22 v - d23 r - d22q |v| v
+    m23 vdot + m33 rdot    = (m11 - m22) u v - m23 u r - d32 v - d33 r - d33q |r| r + tau_r
+
+(the Coriolis terms of Fossen's 3-DOF model with that mass matrix).
 """
 
 from __future__ import annotations
@@ -34,9 +45,13 @@ from rhnc.ship.model_library import MODELS_DIR
 PARAMETER_SETS_FILE = MODELS_DIR / "KCS" / "parameter_sets.toml"
 
 #: Keys of a parameter set that the prediction model uses.
-DYNAMICS_KEYS = ("m11", "m22", "m33", "d11", "d22", "d33", "d23", "d32", "tau_u_max", "tau_r_max")
-#: Keys that may be absent (the paper's Eq. 11 has no cross-damping).
-OPTIONAL_ZERO_KEYS = ("d23", "d32")
+DYNAMICS_KEYS = ("m11", "m22", "m33", "d11", "d22", "d33", "d23", "d32", "tau_u_max", "tau_r_max",
+                 "m23", "d11q", "d22q", "d33q")
+#: Keys that may be absent (the paper's Eq. 11 has no cross-damping, no coupled mass and
+#: no quadratic damping).
+OPTIONAL_ZERO_KEYS = ("d23", "d32", "m23", "d11q", "d22q", "d33q")
+#: The optional keys of the wider model class, written into a set only when not zero.
+WIDE_MODEL_KEYS = ("m23", "d11q", "d22q", "d33q")
 
 STATE_NAMES = ("x", "y", "psi", "u", "v", "r")
 CONTROL_NAMES = ("tau_u", "tau_r")
@@ -58,6 +73,10 @@ class ShipParameters:
         Yaw moment per sway velocity [N·s] (0 in the paper's Eq. 11).
     tau_u_max, tau_r_max : float
         Bounds of the surge force [N] and yaw moment [N·m]: ``|tau| <= tau_max``.
+    m23 : float
+        Sway-yaw coupling of the mass matrix [kg·m] (symmetric: m32 = m23).
+    d11q, d22q, d33q : float
+        Quadratic damping in surge [N·s²/m²], sway [N·s²/m²], yaw [N·m·s²/rad²].
     name : str
         Name of the parameter set the values came from.
     extras : Mapping[str, Any]
@@ -74,6 +93,10 @@ class ShipParameters:
     d32: float
     tau_u_max: float
     tau_r_max: float
+    m23: float = 0.0
+    d11q: float = 0.0
+    d22q: float = 0.0
+    d33q: float = 0.0
     name: str = "custom"
     extras: Mapping[str, Any] = dataclasses.field(default_factory=lambda: MappingProxyType({}))
 
@@ -112,7 +135,15 @@ class ShipParameters:
         The sway equation is not balanced for ``r != 0`` (a reference with ``v_d = 0``, as
         the paper's Eq. 19 gives, is not an exact trim in a turn).
         """
-        return np.array([self.d11 * u, self.d33 * r])
+        return np.array([self.d11 * u + self.d11q * abs(u) * u - self.m23 * r * r,
+                         self.d33 * r + self.d33q * abs(r) * r + self.m23 * u * r])
+
+    def sway_yaw_accelerations(self, sway_force, yaw_moment):
+        """``(vdot, rdot)`` from the sway force [N] and yaw moment [N·m] on the right-hand
+        side: the inverse of the sway-yaw block of the mass matrix (numpy or CasADi)."""
+        det = self.m22 * self.m33 - self.m23 * self.m23
+        return ((self.m33 * sway_force - self.m23 * yaw_moment) / det,
+                (self.m22 * yaw_moment - self.m23 * sway_force) / det)
 
     def straight_line_stable(self, u0: float) -> bool:
         """True if the sway-yaw pair linearised about straight motion at ``u0`` [m/s] is stable."""
@@ -121,12 +152,14 @@ class ShipParameters:
 
     def sway_yaw_matrix(self, u0: float) -> np.ndarray:
         """System matrix of ``[v, r]`` linearised about ``v = r = 0``, ``u = u0`` [1/s]."""
-        return np.array(
+        mass = np.array([[self.m22, self.m23], [self.m23, self.m33]])
+        forces = np.array(
             [
-                [-self.d22 / self.m22, (-self.m11 * u0 - self.d23) / self.m22],
-                [((self.m11 - self.m22) * u0 - self.d32) / self.m33, -self.d33 / self.m33],
+                [-self.d22, -self.m11 * u0 - self.d23],
+                [(self.m11 - self.m22) * u0 - self.d32, -self.m23 * u0 - self.d33],
             ]
         )
+        return np.linalg.solve(mass, forces)
 
 
 def available_parameter_sets(path: Path = PARAMETER_SETS_FILE) -> dict[str, dict[str, Any]]:
@@ -182,17 +215,39 @@ def load_parameter_set(
 # --------------------------------------------------------------------------------------
 
 
+def _present(coefficient) -> bool:
+    """False for a coefficient that is the number zero (its terms are left out); True for
+    any other number or a symbol (the identification's scaled coefficients)."""
+    return not (isinstance(coefficient, (int, float)) and coefficient == 0.0)
+
+
 def equations_of_motion(state, tau, p: ShipParameters, cos, sin, stack):
     """The 3-DOF equations, written once for every backend: ``cos``, ``sin`` and ``stack``
     (a list of six expressions -> a vector) come from numpy or CasADi."""
     psi, u, v, r = state[2], state[3], state[4], state[5]
+    surge = p.m22 * v * r - p.d11 * u + tau[0]
+    sway = -p.m11 * u * r - p.d22 * v - p.d23 * r
+    yaw = (p.m11 - p.m22) * u * v - p.d32 * v - p.d33 * r + tau[1]
+    if _present(p.m23):
+        surge = surge + p.m23 * r * r
+        yaw = yaw - p.m23 * u * r
+    if _present(p.d11q):
+        surge = surge - p.d11q * abs(u) * u
+    if _present(p.d22q):
+        sway = sway - p.d22q * abs(v) * v
+    if _present(p.d33q):
+        yaw = yaw - p.d33q * abs(r) * r
+    if _present(p.m23):
+        vdot, rdot = p.sway_yaw_accelerations(sway, yaw)
+    else:   # the paper's diagonal mass: the same numbers, fewer operations
+        vdot, rdot = sway / p.m22, yaw / p.m33
     return stack([
         u * cos(psi) - v * sin(psi),
         u * sin(psi) + v * cos(psi),
         r,
-        (p.m22 * v * r - p.d11 * u + tau[0]) / p.m11,
-        (-p.m11 * u * r - p.d22 * v - p.d23 * r) / p.m22,
-        ((p.m11 - p.m22) * u * v - p.d32 * v - p.d33 * r + tau[1]) / p.m33,
+        surge / p.m11,
+        vdot,
+        rdot,
     ])
 
 

@@ -101,6 +101,9 @@ def load_ship(name: str = "KCS", ships_dir: Path = SHIPS_DIR) -> ShipParticulars
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{path}: {exc}") from None
     values.pop("description", None)
+    actuators = values.pop("actuators", None)
+    if actuators is not None:
+        check_actuators(actuators, path)
     fields = [f.name for f in dataclasses.fields(ShipParticulars)]
     for key in values:
         if key not in fields:
@@ -134,3 +137,86 @@ def check_parameter_set(values: Mapping[str, object], ship: ShipParticulars, whe
                 f"{where}: {parameter} = {value:g} differs from {attribute} = {declared:g} in "
                 f"{ship_file(ship.name)} (the particulars are declared once, there)"
             )
+
+
+#: ``[actuators]`` of a ship file: key -> (meaning with its unit, required).  The allocation
+#: participant builds its force model from them (``rhnc/control/allocation.py``).
+ACTUATOR_KEYS = {
+    "rudder_area_m2": ("rudder area (movable part) [m^2]", True),
+    "rudder_lift_slope_per_rad": ("slope of the rudder normal-force coefficient with the angle of attack [1/rad]", True),
+    "rudder_stall_deg": ("angle of the largest normal force; beyond it the force falls [deg]", True),
+    "rudder_post_stall_fraction": ("normal force beyond stall as a fraction of its peak [-] (default 0.6)", False),
+    "rudder_max_deg": ("largest rudder angle of the steering gear [deg]", True),
+    "rudder_rate_deg_s": ("largest rudder rate of the steering gear [deg/s]", True),
+    "rudder_lever_m": ("lever of the rudder normal force about midship, hull interaction included [m]", True),
+    "rudder_inflow_factor": ("rudder inflow over the propeller's advance speed outside the slipstream [-] "
+                             "(default 1)", False),
+    "rudder_in_slipstream": ("share of the rudder span in the propeller slipstream [-] (default 0.8)", False),
+    "slipstream_factor": ("slipstream speed-up at the rudder, kappa of the MMG form [-] (default 0.5)", False),
+    "propeller_diameter_m": ("propeller diameter [m]", True),
+    "thrust_coefficients": ("K_T(J) = k0 + k1 J + k2 J^2: [k0, k1, k2] [-]", True),
+    "wake_fraction": ("effective wake fraction at the propeller in straight motion [-]", True),
+    "thrust_deduction": ("thrust deduction fraction [-]", True),
+    "propeller_rpm_max": ("largest propeller revolutions, ahead [1/min]", True),
+    "shaft_time_constant_s": ("time constant of the shaft's revolutions following a command [s]", True),
+    "propeller_rate_rpm_s": ("largest rate of change of the revolutions [1/min per s]", True),
+}
+
+
+def check_actuators(table: object, path: Path) -> dict:
+    """The ``[actuators]`` table of a ship file, checked: every key known, every required one
+    given, numbers finite (angles, areas, times positive; fractions within [0, 1))."""
+    import math
+
+    if not isinstance(table, dict):
+        raise ScenarioError(f"{path}: 'actuators' must be a table")
+    for key in table:
+        if key not in ACTUATOR_KEYS:
+            raise ScenarioError(f"{path}: unknown key 'actuators.{key}' (valid: {', '.join(ACTUATOR_KEYS)})")
+    for key, (_, required) in ACTUATOR_KEYS.items():
+        if key not in table:
+            if required:
+                raise ScenarioError(f"{path}: missing key 'actuators.{key}' ({ACTUATOR_KEYS[key][0]})")
+            continue
+        value = table[key]
+        if key == "thrust_coefficients":
+            if (not isinstance(value, list) or len(value) != 3
+                    or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                               for v in value) or not value[0] > 0):
+                raise ScenarioError(f"{path}: 'actuators.thrust_coefficients' must be [k0, k1, k2], finite, k0 > 0, "
+                                    f"got {value!r}")
+            continue
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ScenarioError(f"{path}: 'actuators.{key}' must be a finite number, got {value!r}")
+        fraction = key in ("wake_fraction", "thrust_deduction", "rudder_in_slipstream", "rudder_post_stall_fraction")
+        if fraction and not 0.0 <= value < 1.0 + (key == "rudder_in_slipstream"):
+            raise ScenarioError(f"{path}: 'actuators.{key}' must be within [0, 1), got {value!r}")
+        if not fraction and not value > 0:
+            raise ScenarioError(f"{path}: 'actuators.{key}' must be positive, got {value!r}")
+    return dict(table)
+
+
+def load_actuators(name_or_path: str, ships_dir: Path = SHIPS_DIR, base: Path | None = None) -> tuple[Path, dict]:
+    """``(file, table)``: the ``[actuators]`` of ship ``name`` (``ships/<name>.toml``) or of a
+    ship file given by path (relative to ``base``).
+
+    Raises
+    ------
+    ScenarioError
+        The file is missing, has no ``[actuators]`` table, or a key is wrong (named).
+    """
+    candidate = Path(name_or_path)
+    if candidate.suffix == ".toml":
+        path = candidate if candidate.is_absolute() or base is None else Path(base) / candidate
+    else:
+        path = ship_file(name_or_path, ships_dir)
+    if not path.is_file():
+        raise ScenarioError(f"{path}: ship file not found")
+    try:
+        with path.open("rb") as handle:
+            values = tomllib.load(handle)
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{path}: {exc}") from None
+    if "actuators" not in values:
+        raise ScenarioError(f"{path}: no [actuators] table (rudder and propeller data: {', '.join(ACTUATOR_KEYS)})")
+    return path, check_actuators(values["actuators"], path)

@@ -197,8 +197,29 @@ MISTAKES = {
         r"mapping\.v: FMU variable 'sway_speed': unknown unit 'furlongs/fortnite'"),
     "unknown initial key": (lambda m: m, "u_mph = 3.0", r"unknown key 'participants\.ship\.initial\.u_mph'"),
     "a port mapped twice": (
-        lambda m: m.replace('hs = "wave_height"', 'current_north = { variable = "wave_height", unit = "kn" }'), "",
-        r"mapping: port 'current_north' is mapped twice"),
+        lambda m: m.replace('current = { speed = "current_drift", direction = "current_set", direction_is = "towards" }',
+                            'wind_direction = "current_set"'), "",
+        r"mapping: port 'wind_direction' is mapped twice"),
+    "m/s stated on a variable declared in knots": (
+        lambda m: m.replace('u = { variable = "stw", start = "start_stw" }',
+                            'u = { variable = "stw", unit = "m/s", start = "start_stw" }'), "",
+        r"mapping\.u: unit 'm/s' contradicts the unit 'kn' that the FMU declares for variable 'stw'"),
+    "rad stated on a heading declared in degrees (through its type)": (
+        lambda m: m.replace('psi = { variable = "heading", start = "start_heading" }',
+                            'psi = { variable = "heading", unit = "rad", start = "start_heading" }'), "",
+        r"mapping\.psi: unit 'rad' contradicts the unit 'deg' that the FMU declares for variable 'heading'"),
+    "deg/s stated on a rate of turn declared in deg/min": (
+        lambda m: m.replace('r = "rot"', 'r = { variable = "rot", unit = "deg/s" }'), "",
+        r"mapping\.r: unit 'deg/s' contradicts the unit 'deg/min' that the FMU declares for variable 'rot'"),
+    "a vector part's unit against the declared one": (
+        lambda m: m.replace('direction_is = "towards" }', 'direction_is = "towards", units = { speed = "m/s" } }'),
+        "", r"mapping\.current\.speed: unit 'm/s' contradicts the unit 'kn'"),
+    "sphere radius without the sphere": (
+        lambda m: m.replace("origin_deg = [35.0, 140.0]", "origin_deg = [35.0, 140.0]\nsphere_radius_m = 6.371e6"),
+        "", r"geodetic\.sphere_radius_m' needs earth = \"sphere\""),
+    "unknown earth model": (
+        lambda m: m.replace("origin_deg = [35.0, 140.0]", "origin_deg = [35.0, 140.0]\nearth = \"flat\""),
+        "", r"geodetic\.earth"),
 }
 
 
@@ -230,6 +251,42 @@ def test_angle_without_unit_or_scale_is_refused(s175_without_heading_unit, write
         assert ship.setup(0.0, {})["psi"] == pytest.approx(math.pi / 2)
     finally:
         ship.terminate()
+
+
+def test_a_unit_named_otherwise_but_meaning_the_declared_one_is_accepted(write_scenario):
+    mapping = S175_MAPPING.replace('u = { variable = "stw", start = "start_stw" }',
+                                   'u = { variable = "stw", unit = "knot", start = "start_stw" }')
+    ship = build(write_scenario(s175_scenario("u_kn = 18.0", mapping=mapping)))
+    try:
+        assert ship.setup(0.0, {})["u"] == pytest.approx(18.0 * KNOT)
+    finally:
+        ship.terminate()
+
+
+def test_geodetic_mapping_on_a_sphere(write_scenario):
+    """A plant integrating on a sphere: one degree of latitude is R pi / 180 along the meridian,
+    where the WGS84 projection would make it 0.1-0.4 % longer or shorter."""
+    from orchestrator.port_mapping import GeodeticBinding
+
+    radius = 6.371e6
+    sphere = GeodeticBinding(("lat", "lon"), ((1.0, 0.0), (1.0, 0.0)), (35.0, 140.0), ("sphere", radius))
+    wgs84 = GeodeticBinding(("lat", "lon"), ((1.0, 0.0), (1.0, 0.0)), (35.0, 140.0))
+    north = sphere.to_canonical({"lat": 36.0, "lon": 140.0})
+    assert north["x"] == pytest.approx(radius * math.pi / 180.0, rel=1e-9) and north["y"] == pytest.approx(0.0, abs=1e-6)
+    assert abs(wgs84.to_canonical({"lat": 36.0, "lon": 140.0})["x"] / north["x"] - 1.0) > 1e-3
+    # small offsets east: a sphere's parallel at 35 deg has radius R cos(35 deg)
+    east = sphere.to_canonical({"lat": 35.0, "lon": 140.01})
+    assert east["y"] == pytest.approx(radius * math.cos(math.radians(35.0)) * math.radians(0.01), rel=1e-6)
+    assert sphere.latitude_longitude(north["x"], 0.0) == pytest.approx((36.0, 140.0), abs=1e-12)
+    # the scenario chooses it; the mean earth radius unless given
+    path = write_scenario(s175_scenario("u_kn = 18.0", mapping=S175_MAPPING.replace(
+        "origin_deg = [35.0, 140.0]", 'origin_deg = [35.0, 140.0]\nearth = "sphere"\nsphere_radius_m = 6.371e6')))
+    assert load_scenario(path).participant("ship").geodetic_earth == ("sphere", 6.371e6)
+    path.write_text(s175_scenario("u_kn = 18.0", mapping=S175_MAPPING.replace(
+        "origin_deg = [35.0, 140.0]", 'origin_deg = [35.0, 140.0]\nearth = "sphere"')))
+    assert load_scenario(path).participant("ship").geodetic_earth == ("sphere", 6371008.8)
+    path.write_text(s175_scenario("u_kn = 18.0"))
+    assert load_scenario(path).participant("ship").geodetic_earth == ("wgs84", None)
 
 
 def test_initial_state_given_twice_is_refused(write_scenario):

@@ -98,3 +98,69 @@ def test_first_step_starts_from_the_actuators_the_plant_reports():
     rate = load_coefficients()["propeller_rate_max"]
     assert abs(out["propeller_rps_cmd"] - 1.08) <= 5.0 * rate + 1e-12
     assert out["propeller_rps_cmd"] == pytest.approx(wanted, abs=5.0 * rate)
+
+
+# --------------------------------------------------------------------------------------
+# the force model from a ship file's [actuators], with stall
+# --------------------------------------------------------------------------------------
+
+def _ship_file(tmp_path, **changes):
+    import tomllib
+
+    from rhnc.ship.ships import SHIPS_DIR
+
+    text = (SHIPS_DIR / "KCS.toml").read_text()
+    table = tomllib.loads(text)["actuators"]
+    lines = []
+    for key, value in {**table, **changes}.items():
+        if value is not None:
+            lines.append(f"{key} = {value!r}")
+    path = tmp_path / "vendor_ship.toml"
+    path.write_text(text.split("[actuators]")[0] + "[actuators]\n" + "\n".join(lines) + "\n")
+    return path
+
+
+def test_the_kcs_ship_file_gives_the_kcsmmg_allocation():
+    by_set = AllocationParticipant.from_options("a", {}, context())
+    by_ship = AllocationParticipant.from_options("a", {"ship": "KCS"}, context())
+    for delta in (0.05, 0.3, 0.6):
+        for rps in (0.8, 1.4):
+            assert by_ship.model.tau(delta, rps, 9.0) == pytest.approx(by_set.model.tau(delta, rps, 9.0), rel=1e-9)
+    assert by_ship.model.rudder_for(1.2e8, 1.4, 9.0) == pytest.approx(by_set.model.rudder_for(1.2e8, 1.4, 9.0))
+    assert by_ship.model.c["rudder_rate_max"] == pytest.approx(math.radians(2.32))
+    assert by_ship.model.c["propeller_rate_max"] == pytest.approx(0.05)
+
+
+def test_a_stalling_rudder_gives_less_beyond_its_stall_and_is_never_commanded_there(tmp_path):
+    path = _ship_file(tmp_path, rudder_stall_deg=22.0, rudder_post_stall_fraction=0.5)
+    allocation = AllocationParticipant.from_options("a", {"ship": str(path)}, context())
+    model = allocation.model
+    at_stall = model.tau(math.radians(22.0), 1.4, 9.0)[1]
+    hard_over = model.tau(math.radians(35.0), 1.4, 9.0)[1]
+    assert hard_over < 0.6 * at_stall                                    # beyond the stall the force falls
+    assert model.tau(math.radians(27.0), 1.4, 9.0)[1] < model.tau(math.radians(24.0), 1.4, 9.0)[1] < at_stall
+    # the largest demand gets the stall angle, not the range's 35 deg
+    assert model.rudder_for(10 * at_stall, 1.4, 9.0) == pytest.approx(math.radians(22.0))
+    assert model.rudder_for(-10 * at_stall, 1.4, 9.0) == pytest.approx(-math.radians(22.0))
+    # below the stall the inverse is exact
+    assert model.tau(model.rudder_for(0.5 * at_stall, 1.4, 9.0), 1.4, 9.0)[1] == pytest.approx(0.5 * at_stall)
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"rudder_area_m2": None}, r"missing key 'actuators\.rudder_area_m2' \(rudder area"),
+    ({"rudder_chord_m": 5.0}, r"unknown key 'actuators\.rudder_chord_m'"),
+    ({"rudder_stall_deg": -3.0}, r"'actuators\.rudder_stall_deg' must be positive"),
+    ({"wake_fraction": 1.2}, r"'actuators\.wake_fraction' must be within \[0, 1\)"),
+    ({"thrust_coefficients": [0.5, -0.4]}, r"'actuators\.thrust_coefficients' must be \[k0, k1, k2\]"),
+])
+def test_ship_actuator_mistakes_name_the_file_and_key(tmp_path, change, message):
+    path = _ship_file(tmp_path, **change)
+    with pytest.raises(ScenarioError, match=message) as caught:
+        AllocationParticipant.from_options("a", {"ship": str(path)}, context())
+    assert str(path) in str(caught.value)
+
+
+def test_the_ship_option_stands_alone():
+    with pytest.raises(ScenarioError, match=r"option 'ship' takes every coefficient from the ship file; give it alone "
+                                            r"\(also given: rudder_max\)"):
+        AllocationParticipant.from_options("a", {"ship": "KCS", "rudder_max": 0.5}, context())

@@ -127,3 +127,145 @@ def test_identify_on_the_kcs_fmu_finds_its_coefficients(tmp_path):
     assert saved["held_out"] == "zigzag_20" and (folder / "fit_zigzag_20.png").is_file()
     assert (folder / "parameter_sets.toml").read_text() == out.read_text()
     assert isinstance(fitted, ShipParameters)
+
+
+# --------------------------------------------------------------------------------------
+# the wider model class, the choice by held-out error, and fitting that never raises
+# --------------------------------------------------------------------------------------
+
+def _wide(base: ShipParameters, **changes) -> ShipParameters:
+    import dataclasses
+
+    return dataclasses.replace(base, **changes)
+
+
+class ModelPlant:
+    """A plant that is the prediction model itself (numpy), with the participant calls identify uses."""
+
+    input_names = ("tau_u", "tau_r")
+    output_names = ("x", "y", "psi", "u", "v", "r")
+
+    def __init__(self, params: ShipParameters, initial: dict, corrupt=None) -> None:
+        self.params = params
+        self.state = np.array([initial.get("x_m", 0.0), initial.get("y_m", 0.0), initial.get("psi_rad", 0.0),
+                               initial.get("u_mps", 0.0), 0.0, 0.0])
+        self.corrupt = corrupt or (lambda state: state)
+
+    def _outputs(self):
+        return dict(zip(self.output_names, self.corrupt(self.state.copy())))
+
+    def setup(self, start_time, inputs):
+        return self._outputs()
+
+    def step(self, time, step_size, inputs):
+        from rhnc.ship.ship_model import rk4_step
+
+        self.state = rk4_step(self.state, np.array([inputs["tau_u"], inputs["tau_r"]]), step_size, 2, self.params)
+        return self._outputs()
+
+    def terminate(self):
+        pass
+
+
+def _wide_kcs() -> ShipParameters:
+    """The KCS with the sway-yaw coupling and quadratic damping a real hull has."""
+    kcs = load_parameter_set("default")
+    return _wide(kcs, m23=0.08 * np.sqrt(kcs.m22 * kcs.m33), d11=0.2 * kcs.d11, d11q=0.8 * kcs.d11 / 9.26,
+                 d22q=3.0 * kcs.d22, d33q=2.0 * kcs.d33 / np.radians(1.0))
+
+
+def test_the_wide_class_recovers_coupled_mass_and_quadratic_damping():
+    from rhnc.ship.identification import ALL_COEFFICIENTS
+
+    true = _wide_kcs()
+    trim = true.equilibrium_tau(9.26)[0]
+    records = {
+        "speed_steps": _record("speed_steps", true, lambda t: (trim * (1.3 if t < 600 else 0.6), 0.0), 1200),
+        "turn_starboard": _record("turn_starboard", true, lambda t: (trim, true.tau_r_max if t >= 60 else 0.0), 600),
+        "turn_port": _record("turn_port", true, lambda t: (trim, -true.tau_r_max if t >= 60 else 0.0), 600),
+        "zigzag_10": _record("zigzag_10", true, lambda t: (trim, 0.3 * true.tau_r_max * np.sign(np.sin(t / 90))), 900),
+    }
+    theta, _, r2 = fit_coefficients(records, true.tau_u_max, true.tau_r_max, ALL_COEFFICIENTS)
+    for key, value in zip(ALL_COEFFICIENTS, theta):
+        assert value == pytest.approx(getattr(true, key), rel=0.03), key
+    assert r2["surge"] > 0.999 and r2["yaw"] > 0.999
+
+
+@pytest.mark.parametrize("plant_class", ["linear", "coupled mass, quadratic damping"])
+def test_the_model_class_is_chosen_by_held_out_error(plant_class):
+    """A plant of the paper's class keeps the narrow model; a real hull gets the wide one."""
+    from rhnc.ship.identification import PlantRunner, identify_model
+
+    true = load_parameter_set("default") if plant_class == "linear" else _wide_kcs()
+    fit = identify_model(PlantRunner(lambda initial: ModelPlant(true, initial), 9.26), true.tau_u_max,
+                         true.tau_r_max, "fitted", refine=False)
+    assert fit.model_class == plant_class
+    assert fit.validation["held_out: zigzag_20"]["heading_rms_deg"] < 0.2
+    if plant_class != "linear":
+        assert fit.class_errors["linear"] > 5 * fit.class_errors[plant_class]
+        assert fit.parameters.m23 == pytest.approx(true.m23, rel=0.05)
+
+
+def test_helm_falls_with_the_square_of_the_speed_like_a_rudder():
+    from rhnc.ship.identification import helm_moment
+
+    assert helm_moment(1.0, 9.26, 9.26, 1.65e8) == pytest.approx(1.65e8)
+    assert helm_moment(1.0, 4.63, 9.26, 1.65e8) == pytest.approx(1.65e8 / 4)
+    assert helm_moment(20 / 35, 12.0, 9.26, 1.65e8) == pytest.approx(20 / 35 * 1.65e8)   # never above the largest
+    assert helm_moment(1.0, -1.0, 9.26, 1.65e8) == 0.0
+
+
+def test_a_turn_that_stops_the_ship_is_cut_short_not_a_traceback():
+    """A ship that slows hard in a turn: the manoeuvre ends when it is slower than a fifth of
+    the service speed, with a note, and keeps what it sailed."""
+    from rhnc.ship.identification import PlantRunner
+
+    kcs = load_parameter_set("default")
+
+    class BrakingInTurns(ModelPlant):   # loses 3 % of its speed a second once turned by 90 deg
+        def step(self, time, step_size, inputs):
+            outputs = super().step(time, step_size, inputs)
+            if abs(self.state[2]) > np.radians(90.0):
+                self.state[3] *= 0.97
+            return outputs
+
+    runner = PlantRunner(lambda initial: BrakingInTurns(kcs, initial), 9.26)
+    record = runner.sail("turn_starboard", 660.0, lambda t, x: (kcs.d11 * 9.26, kcs.tau_r_max))
+    assert 100 < len(record.t) < 600 and record.states[-1, 3] >= 0.2 * 9.26
+    assert np.all(np.isfinite(record.states)) and len(record.tau) == len(record.t)
+    assert runner.notes == [f"turn_starboard: stopped after {len(record.t):.0f} s (the ship slowed to "
+                            f"{runner.notes[0].split('slowed to ')[1]}"]
+
+
+def test_a_plant_that_diverges_is_refused_in_one_line_saying_what_to_change(capsys):
+    from orchestrator.errors import ToolchainError
+    from rhnc.ship.identification import PlantRunner, identify_model
+
+    kcs = load_parameter_set("default")
+
+    def nan_in_turns(state):
+        return np.where(abs(state[5]) > 1e-3, np.nan, state)
+
+    runner = PlantRunner(lambda initial: ModelPlant(kcs, initial, nan_in_turns), 9.26)
+    with pytest.raises(ToolchainError, match=r"^identify: the manoeuvres .* ended after less than 63 s .*non-finite"
+                                             r".*give a smaller --tau-r-max-Nm"):
+        identify_model(runner, kcs.tau_u_max, kcs.tau_r_max, "fitted", refine=False)
+
+
+def test_the_wide_model_is_the_one_the_nmpc_predicts_with():
+    """numpy and CasADi evaluate the same equations; the coupled mass matrix is inverted exactly."""
+    from rhnc.ship.ship_model import casadi_derivatives, derivatives
+
+    p = _wide_kcs()
+    state = np.array([10.0, -5.0, 0.3, 8.5, -0.4, 0.006])
+    tau = np.array([9e5, 1.2e8])
+    expected = derivatives(state, tau, p)
+    assert np.allclose(np.asarray(casadi_derivatives(p)(state, tau)).ravel(), expected, rtol=1e-12)
+    psi, u, v, r = state[2:]
+    mass = np.array([[p.m11, 0, 0], [0, p.m22, p.m23], [0, p.m23, p.m33]])
+    rhs = np.array([(p.m22 * v + p.m23 * r) * r - p.d11 * u - p.d11q * abs(u) * u + tau[0],
+                    -p.m11 * u * r - p.d22 * v - p.d23 * r - p.d22q * abs(v) * v,
+                    (p.m11 - p.m22) * u * v - p.m23 * u * r - p.d32 * v - p.d33 * r - p.d33q * abs(r) * r + tau[1]])
+    assert np.allclose(expected[3:], np.linalg.solve(mass, rhs), rtol=1e-10)
+    # the trim the NMPC's feed-forward uses holds the speed of the quadratic hull
+    assert derivatives(np.array([0, 0, 0, 9.26, 0, 0]), p.equilibrium_tau(9.26), p)[3] == pytest.approx(0.0, abs=1e-12)

@@ -236,3 +236,36 @@ def test_a_failed_first_solve_holds_the_surge_force_of_the_measured_speed(kcs):
     assert out["tau_u"] == pytest.approx(ctrl.controller.params.equilibrium_tau(18 * KNOT)[0])
     assert out["tau_u"] > 0.0 and out["tau_r"] == 0.0
     ctrl.terminate()
+
+
+def test_the_planned_tau_changes_no_faster_than_the_actuators_can(kcs):
+    """A hard turn asked of a ship whose steering gear gives 2 MN m/s: the applied moment moves
+    at most one interval's worth from the last one, the k-th planned one k intervals' worth."""
+    dt = 20.0
+    rate = (2.0e4, 2.0e6)
+    reference = line_or_turn_reference(np.arange(N + 1) * dt, (0.0, 0.0), 0.0, 18 * KNOT, turn_radius_m=1500.0)
+    state = np.array([0.0, 0.0, 0.0, 18 * KNOT, 0.0, 0.0])
+    previous = kcs.equilibrium_tau(18 * KNOT)
+    free = NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=dt, codegen=False))
+    bounded = NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=dt, codegen=False,
+                                               tau_rate_max=rate))
+    unbounded = free.solve(0.0, state, reference, previous_tau=previous)
+    limited = bounded.solve(0.0, state, reference, previous_tau=previous)
+    assert abs(unbounded.tau[1] - previous[1]) > 3 * rate[1] * dt     # the turn wants a fast change
+    assert abs(limited.tau[1] - previous[1]) <= rate[1] * dt * 1.001
+    assert abs(limited.tau[0] - previous[0]) <= rate[0] * dt * 1.001
+    change = np.abs(np.asarray(limited.inputs) - previous)
+    assert np.all(change <= np.arange(1, N + 1)[:, None] * dt * np.array(rate) * 1.001)
+
+
+def test_the_ships_actuator_rates_reach_the_nmpc():
+    from rhnc.control.allocation import coefficients_from_ship, tau_rate_limits
+    from rhnc.control.control_options import controller_from_options
+
+    _, settings, _ = controller_from_options({"actuators_ship": "KCS"}, context())
+    expected = tau_rate_limits(coefficients_from_ship("KCS", "x"), settings.max_speed_mps)
+    assert settings.tau_rate_max == pytest.approx(expected)
+    # the steering gear: dtau_r/ddelta at midships times 2.32 deg/s; the shaft: 0.05 1/s^2 at full revolutions
+    assert 5e7 < expected[1] < 1.2e8 and 1e5 < expected[0] < 1.8e6
+    with pytest.raises(ScenarioError, match=r"option 'actuators_ship' must be a ship name or a ship file path"):
+        controller_from_options({"actuators_ship": 3}, context())
