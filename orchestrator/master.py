@@ -6,6 +6,12 @@ the latest outputs of all others. With ``[simulation] exchange = "jacobi"`` the 
 hands on data as one that steps all FMUs at once (OSP's libcosim): set-ups see no other
 outputs, and the outputs of a step from ``t`` reach the others at ``t + step_size``.  A participant declared with ``every = m`` steps
 every m macro steps with a step of ``m * dt_s`` and holds its outputs in between.
+
+Stop conditions (``[simulation] stop_when``) are checked as soon as the participant whose
+output they read has stepped: once one holds, the participants after it in that round are
+not stepped (a ship is never stepped past its arrival), and the row of that time is the
+last.  With Jacobi exchange an output reaches the bus one round later, so a condition met
+there ends the run before the next round.
 """
 
 from __future__ import annotations
@@ -180,6 +186,7 @@ class CoSimulation:
                         outputs = participant.setup(sim.start_s, inputs)
                     self._publish(participant, sim.start_s, outputs, bus, recorder)
                 current[0] = "stepping"
+                met: list = []
                 for k in range(sim.steps):
                     t = sim.start_s + k * sim.dt_s
                     current[2] = t
@@ -187,9 +194,17 @@ class CoSimulation:
                         for _, name, outputs in [item for item in pending if item[0] <= k]:
                             bus.update({(name, port): value for port, value in outputs.items()})
                         pending = [item for item in pending if item[0] > k]
+                        met = _met(sim.stop_when, bus)
+                        if met:  # Jacobi: what the last round handed on ends the run before this one
+                            reason = f"stopped at t = {t:g} s: {met[0]}"
+                            break
+                    skipped: list[str] = []
                     for participant in self.participants:
                         every = self.every[participant.name]
                         if k % every:
+                            continue
+                        if met:  # Gauss-Seidel: met earlier in this round, nobody steps past it
+                            skipped.append(participant.name)
                             continue
                         current[1] = participant.name
                         self._check_stop()
@@ -203,16 +218,17 @@ class CoSimulation:
                             pending.append((k + every, participant.name, outputs))
                         else:
                             self._publish(participant, stamp, outputs, bus, recorder)
+                            met = _met(sim.stop_when, bus, participant.name)
                     steps_done = self.steps_done = k + 1
                     recorder.advance(t)  # every participant due at t has stepped: the row of t is final
                     if bar is not None:
                         bar.update(1)
                     if on_step is not None:
                         on_step(k)
-                    met = [c for c in sim.stop_when if (c.participant, c.port) in bus
-                           and c.holds(float(bus[(c.participant, c.port)]))]
+                    met = met or _met(sim.stop_when, bus)
                     if met:
-                        reason = f"stopped at t = {t + sim.dt_s:g} s: {met[0]}"
+                        reason = (f"stopped at t = {t:g} s before the step of {', '.join(skipped)}: {met[0]}"
+                                  if skipped else f"stopped at t = {t + sim.dt_s:g} s: {met[0]}")
                         break
                 current[1] = None
                 self._check_stop()
@@ -305,6 +321,12 @@ class CoSimulation:
             import shutil
 
             shutil.rmtree(self.work_dir, ignore_errors=True)
+
+
+def _met(conditions, bus, participant: str | None = None) -> list:
+    """The stop conditions (of ``participant``'s outputs, or any) that hold on the bus."""
+    return [c for c in conditions if (participant is None or c.participant == participant)
+            and (c.participant, c.port) in bus and c.holds(float(bus[(c.participant, c.port)]))]
 
 
 def _naming(message: str, participant: str | None) -> str:
