@@ -330,3 +330,19 @@ def test_same_control_must_be_true_or_false(tmp_path):
     with pytest.raises(ScenarioError, match=r"compare.toml: voyage.equal_arrival.same_control: expected true or "
                                             r"false, got 'yes'"):
         load_extensions(load_comparison(path), path)
+
+
+def test_a_failed_equal_arrival_trial_is_reported(tmp_path):
+    """A trial that failed (the ship left the weather map) is named in the trials table and
+    handed to the comparison as a failed run, even when the search found its speed."""
+    system = voyage("RHNC", 17.5)
+    equal = matched(system)
+    left = SailedVoyage(**{**voyage("RHNC equal-arrival baseline", 17.0, arrival_s=None, arrived=False).__dict__,
+                           "status": "failed", "reason": "env (MetOcean.fmu): point x is outside the grid"})
+    equal.trials.insert(0, ArrivalTrial(16.0, None, left))
+    section = evaluation_section(COMPARISON_STUB, {"RHNC": system}, {"RHNC": equal}, {}, tmp_path)
+    assert section.failed_runs == {"RHNC equal-arrival baseline at 16.0000 kn":
+                                   "failed: env (MetOcean.fmu): point x is outside the grid"}
+    trials = section.tables["voyage_trials"]
+    assert list(trials["status"]) == ["failed", "finished"]
+    assert "## Equal-arrival trials" in section.markdown and "point x is outside the grid" in section.markdown
