@@ -163,3 +163,22 @@ def test_an_extensions_failed_runs_join_the_comparisons(tmp_path, monkeypatch):
     summary = json.loads((folder / "summary.json").read_text())
     assert summary["status"] == "failed" and summary["failed_runs"] == {"a trial": "failed: left the map"}
     assert compare.failed_runs_of(folder) == {"a trial": "failed: left the map"}
+
+
+def test_file_names_in_overrides_are_resolved_against_the_comparison_file(tmp_path):
+    """A NetCDF file named in [set] lies beside the comparison, whatever folder the scenarios are in."""
+    (tmp_path / "storm.nc").write_bytes(b"")
+    (tmp_path / "scenarios").mkdir()
+    path = write(tmp_path / "scenarios")
+    comparison = tmp_path / "compare.toml"
+    text = path.read_text().replace('scenario = "', 'scenario = "scenarios/')
+    comparison.write_text(text + '[set]\n"metocean" = { file = "storm.nc" }\n"participants.helm.options.plan" = "storm.nc"\n'
+                                 '"participants.helm.options.method" = "routing"\n')
+    spec = load_comparison(comparison)
+    assert spec["set"]["metocean"] == {"file": str((tmp_path / "storm.nc").resolve())}
+    assert spec["set"]["participants.helm.options.plan"] == str((tmp_path / "storm.nc").resolve())
+    assert spec["set"]["participants.helm.options.method"] == "routing"   # not a file name: left as it is
+    comparison.write_text(comparison.read_text().replace('file = "storm.nc"', 'file = "gale.nc"'))
+    with pytest.raises(ScenarioError, match=r"compare.toml: set.metocean.file: file not found relative to the "
+                                            r"comparison file: .*gale.nc"):
+        load_comparison(comparison)
