@@ -13,6 +13,9 @@ its formula, its parameters and why they have the values they have: ``docs/weath
 ``moving_storm``   the same vortex crossing the direct route, hourly steps over 24 h
 ``storm_set``      member k of a seeded set of gales drawn over position, size, strength
                    and wind direction (:func:`storm_set_member`)
+``current_jet``    a band of current parallel to a route (:mod:`rhnc.weather.routing_weather_set`)
+``routing_set``    member k of a seeded set of gales, moving gales and current jets about
+                   any route and map (:mod:`rhnc.weather.routing_weather_set`)
 =================  ====================================================================
 
 Keys are checked against the generator's table before it runs: an unknown key or a value
@@ -272,7 +275,7 @@ def holland_wind_speed(r_m, max_wind_ms: float, radius_max_wind_m: float, hollan
 class Generator:
     """One registered generator: its builder, a one-line summary and its keys -> kinds.
 
-    Kinds: ``number`` (int or float), ``integer``, ``point`` ([north, east] numbers),
+    Kinds: ``number`` (int or float), ``integer``, ``boolean``, ``point`` ([north, east] numbers),
     ``lattice`` (2-D list of numbers), ``text``.
     """
 
@@ -303,6 +306,29 @@ GENERATORS: dict[str, Generator] = {
                            {**_MAP_KEYS, "seed": "integer", "member": "integer", "route_start_nm": "point",
                             "route_goal_nm": "point", **_SEA_KEYS}),
 }
+
+
+def _current_jet(**options) -> MetOceanField:
+    from rhnc.weather.routing_weather_set import current_jet
+
+    return current_jet(**options)
+
+
+def _routing_set(**options) -> MetOceanField:
+    from rhnc.weather.routing_weather_set import routing_set
+
+    return routing_set(**options)
+
+
+GENERATORS["current_jet"] = Generator(
+    _current_jet, "a Gaussian band of current parallel to the route, under a uniform wind",
+    {**_MAP_KEYS, "route_start_nm": "point", "route_goal_nm": "point", "offset_nm": "number", "width_nm": "number",
+     "peak_kn": "number", "towards_goal": "boolean", "background_wind_ms": "number", "wind_from_deg": "number",
+     "fetch_km": "number"})
+GENERATORS["routing_set"] = Generator(
+    _routing_set, "member k of a seeded set of gales, moving gales and current jets about any route",
+    {**_MAP_KEYS, "seed": "integer", "member": "integer", "route_start_nm": "point", "route_goal_nm": "point",
+     "fetch_km": "number"})
 
 
 def list_generators() -> dict[str, str]:
@@ -346,6 +372,10 @@ def checked_option(value: Any, kind: str, where: str) -> Any:
         if not is_finite_number(value):
             raise ScenarioError(f"{where}: expected a number, got {value!r}")
         return float(value)
+    if kind == "boolean":
+        if not isinstance(value, bool):
+            raise ScenarioError(f"{where}: expected true or false, got {value!r}")
+        return value
     if kind == "integer":
         if isinstance(value, bool) or not isinstance(value, int):
             raise ScenarioError(f"{where}: expected an integer, got {value!r}")
