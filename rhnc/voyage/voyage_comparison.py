@@ -15,9 +15,10 @@ speed from the comparison:
   radius within ``ARRIVAL_TOLERANCE_S`` of the system (:mod:`rhnc.voyage.equal_arrival`);
 * the **headline** is the total cost and CO2 of the passage against that baseline, at equal
   arrival time, never per nm sailed;
-* the **available saving**: the optimal weather route (:mod:`rhnc.routing.weather_routing`, over
-  the same met-ocean field and energy model) against the straight route, both arriving
-  when the system arrived; each system's saving is reported as a share of it;
+* the **available saving**: the optimal weather route and speed profile
+  (:mod:`rhnc.routing.weather_routing` with :mod:`rhnc.routing.speed_profile`, over the same
+  met-ocean field and energy model) against the straight route at constant speed, both
+  arriving when the system arrived; each system's saving is reported as a share of it;
 * the **sailed track at equal speed**: the system's track and the straight line costed by
   the routing model at one constant speed through water (the baseline's mean), which
   isolates the route from the speed;
@@ -237,7 +238,7 @@ class VoyageComparison:
         problem = RoutingProblem(self.start_m, self.goal_m, metocean, energy=EnergyParameters(),
                                  resolution_nm=settings.resolution_nm, avoid=settings.avoid_m)
         straight = straight_route(problem, speed_mps=speed_kn * KNOT)
-        optimal = optimal_route(problem, arrival_s=straight.arrival_s)
+        optimal = optimal_route(problem, arrival_s=straight.arrival_s, speed_profile=True)
         return {"speed_kn": speed_kn, "arrival_min": straight.duration_s / 60.0,
                 "straight_cost_usd": straight.cost_usd, "optimal_cost_usd": optimal.cost_usd,
                 "available_cost_percent": 100.0 * (straight.cost_usd - optimal.cost_usd) / straight.cost_usd,
@@ -328,7 +329,7 @@ class VoyageComparison:
             if self.optimal_route is not None:
                 try:
                     entry["straight"] = straight_route(problem, arrival_s=system.arrival_s)
-                    entry["optimal"] = optimal_route(problem, arrival_s=system.arrival_s)
+                    entry["optimal"] = optimal_route(problem, arrival_s=system.arrival_s, speed_profile=True)
                 except ValueError as exc:   # e.g. no speed arrives then: reported, the comparison goes on
                     log.warning("%s: no optimal route at %s's arrival: %s", self.path, label, exc)
                     entry.pop("straight", None)
