@@ -345,9 +345,15 @@ class RecedingRoutePlanner:
         return max(round(price / 50.0) * 50.0, 0.0)
 
     def mean_current_along_mps(self, route: np.ndarray, time_s: float) -> float:
-        """Current component along ``route`` [m/s], averaged over its vertices' legs."""
+        """Current component along ``route`` [m/s], averaged over its length.
+
+        Sampled every half grid step along the legs: taken at the turning points alone, a
+        straight leg from inside a current jet to the goal was credited with the jet's
+        current all the way, looked cheaper than staying in the jet, and the ship left
+        the jet's core early."""
         if len(route) < 2:
             return 0.0
+        route = densify(np.asarray(route, dtype=float), 0.5 * self.resolution_m)
         legs = np.diff(route, axis=0)
         length = np.hypot(*legs.T)
         weather = sample_weather(self.metocean, route[:-1, 0], route[:-1, 1], time_s)

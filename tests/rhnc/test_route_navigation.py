@@ -161,3 +161,24 @@ def test_the_route_switch_margin_is_checked():
         build(field, goal_nm=[10, 10], method="paper", route_switch_margin_pct=0.1)
     nav = build(field, goal_nm=[10, 10], route_switch_margin_pct=0.5)
     assert nav.route_planner.switch_margin == pytest.approx(0.005)
+
+
+def test_the_current_along_a_leg_out_of_a_jet_is_the_current_along_the_whole_leg():
+    """A ship in a current jet weighing a straight leg out of it to the goal: the leg meets the
+    jet's current only near its start, and is costed so (it must not look cheaper than
+    staying in the jet because the current was read at the leg's start alone)."""
+    from rhnc.navigation.route_navigation import RecedingRoutePlanner
+    from rhnc.ship.energy import EnergyParameters
+    from rhnc.weather.routing_weather_set import current_jet
+
+    field = current_jet(x_range_nm=(0.0, 60.0), y_range_nm=(0.0, 40.0), route_start_nm=(0.0, 10.0),
+                        route_goal_nm=(60.0, 10.0), offset_nm=10.0, width_nm=2.0, peak_kn=3.0,
+                        background_wind_ms=0.0)
+    planner = RecedingRoutePlanner(field, (60.0 * NM, 10.0 * NM), EnergyParameters(), 1.0)
+    leg = np.array([[10.0 * NM, 20.0 * NM], [60.0 * NM, 10.0 * NM]])   # from the jet's core to the goal
+    points = np.linspace(leg[0], leg[1], 2001)
+    weather = field.sample(points[:, 0], points[:, 1])
+    direction = (leg[1] - leg[0]) / np.hypot(*(leg[1] - leg[0]))
+    expected = np.mean(weather["current_north"] * direction[0] + weather["current_east"] * direction[1])
+    assert planner.mean_current_along_mps(leg, 0.0) == pytest.approx(expected, abs=0.02)
+    assert expected < 0.4 * 3.0 * KNOT   # far from the 3 kn at the leg's start
