@@ -182,3 +182,31 @@ def test_the_current_along_a_leg_out_of_a_jet_is_the_current_along_the_whole_leg
     expected = np.mean(weather["current_north"] * direction[0] + weather["current_east"] * direction[1])
     assert planner.mean_current_along_mps(leg, 0.0) == pytest.approx(expected, abs=0.02)
     assert expected < 0.4 * 3.0 * KNOT   # far from the 3 kn at the leg's start
+
+
+def test_the_speed_profiled_plan_is_the_constant_speed_plan_in_uniform_weather_and_eases_in_a_head_sea():
+    from rhnc.navigation.route_navigation import RecedingRoutePlanner
+    from rhnc.ship.energy import EnergyParameters
+    from rhnc.weather.weather_generators import storm_off_route
+
+    goal = (40.0 * NM, 0.0)
+    route = np.array([[0.0, 0.0], goal])
+    arrival = 40.0 / 16.0 * 3600.0
+
+    calm = storm_off_route(x_range_nm=(-2.0, 42.0), y_range_nm=(-10.0, 10.0), peak_wind_ms=0.0,
+                           background_wind_ms=0.0, current_kn=0.0)
+    planner = RecedingRoutePlanner(calm, goal, EnergyParameters(), 1.0)
+    profiled = planner.profiled_plan(route, 0.0, 16.0 * KNOT, arrival, 240.0, 16, (1.0, 12.0))
+    constant = planner.timed_plan(route, 0.0, 16.0 * KNOT, 16.0 * KNOT, 240.0, 16)
+    assert np.max(np.hypot(*(profiled.points - constant.points).T)) < 20.0
+    assert profiled.speed_through_water_mps == pytest.approx(16.0 * KNOT, abs=0.03)
+
+    # a head gale over the first half: the profile eases into it and makes the time up after
+    gale = storm_off_route(x_range_nm=(-2.0, 42.0), y_range_nm=(-10.0, 10.0), centre_nm=(10.0, 0.0), radius_nm=6.0,
+                           peak_wind_ms=25.0, background_wind_ms=0.0, wind_from_deg=0.0, current_kn=0.0)
+    planner = RecedingRoutePlanner(gale, goal, EnergyParameters(), 1.0)
+    profiled = planner.profiled_plan(route, 0.0, 16.0 * KNOT, arrival, 240.0, 16, (1.0, 12.0))
+    spacing = np.diff(profiled.points[:, 0])
+    in_gale = int(np.searchsorted(profiled.points[:, 0], 10.0 * NM)) - 1
+    assert spacing[in_gale] < 0.97 * spacing[1]                  # slower in the gale than before it
+    assert profiled.speed_through_water_mps > 16.05 * KNOT       # the time made up ahead of it
