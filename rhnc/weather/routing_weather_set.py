@@ -15,6 +15,8 @@ Everything is placed relative to ``route_start_nm`` -> ``route_goal_nm``, so the
 serves any heading and map.  Each member draws from its own stream
 ``numpy.random.default_rng([seed, member])``, in the order of its table.  The tables were
 fixed on 2026-11-26, before any routing result on them was seen (``docs/weather.md``).
+The generator ``routing_set`` (:func:`rhnc.weather.weather_generators.routing_set`) builds a
+member's field from :func:`routing_set_member`.
 """
 
 from __future__ import annotations
@@ -146,25 +148,6 @@ def routing_set_member(seed: int, member: int, route_start_nm=(0.0, 0.0), route_
                   "peak_kn": round(draw["peak_kn"], 6), "towards_goal": draw["with_passage"] < 0.75,
                   "background_wind_ms": round(draw["background_wind_ms"], 6),
                   "wind_from_deg": round(draw["wind_from_deg"], 6)}
-
-
-def routing_set(seed: int = 2611, member: int = 0, route_start_nm=(0.0, 0.0), route_goal_nm=(100.0, 100.0),
-                x_range_nm=(0.0, 100.0), y_range_nm=(0.0, 100.0), resolution_nm: float = 1.0,
-                fetch_km: float = 100.0) -> MetOceanField:
-    """Member ``member`` of the routing set (see the module docstring) over the given map."""
-    from rhnc.weather.weather_generators import cyclone, storm_off_route
-
-    kind, arguments = routing_set_member(seed, member, route_start_nm, route_goal_nm)
-    described = ", ".join(f"{name} {value}" for name, value in arguments.items()
-                          if name not in ("route_start_nm", "route_goal_nm"))
-    source = f"generated: routing_set seed {seed} member {member}: {kind} ({described})"
-    grid = {"x_range_nm": x_range_nm, "y_range_nm": y_range_nm, "resolution_nm": resolution_nm,
-            "fetch_km": fetch_km, "source": source}
-    if kind == "gale":
-        return storm_off_route(**grid, **arguments, current_kn=0.0)
-    if kind == "moving gale":
-        return cyclone(**grid, **arguments, current_kn=0.0)
-    return current_jet(**grid, **arguments)
 
 
 def _route_frame(start_nm, goal_nm) -> tuple[np.ndarray, np.ndarray]:

@@ -6,7 +6,8 @@ import pytest
 from orchestrator.errors import ScenarioError
 from orchestrator.geometry import KNOT, NM
 from rhnc.weather.metocean_sources import from_scenario_table
-from rhnc.weather.routing_weather_set import KINDS, current_jet, routing_set, routing_set_member
+from rhnc.weather.routing_weather_set import KINDS, current_jet, routing_set_member
+from rhnc.weather.weather_generators import routing_set
 
 SOUTH_WEST = {"route_start_nm": (130.0, 80.0), "route_goal_nm": (15.0, 10.0)}
 
