@@ -234,7 +234,7 @@ def _batch(args) -> int:
 
 
 def _compare(args) -> int:
-    from orchestrator.compare import run_comparison
+    from orchestrator.compare import failed_runs_of, run_comparison
 
     from orchestrator import interrupts
 
@@ -243,8 +243,13 @@ def _compare(args) -> int:
         print(f"interrupted: results in {folder}")
         print(f"error: {interrupts.reason()}", file=sys.stderr)
         return EXIT_INTERRUPTED
-    print(f"finished: results in {folder}")
+    failed = failed_runs_of(folder)
+    print(f"{'failed' if failed else 'finished'}: results in {folder}")
     print((folder / "table.md").read_text())
+    if failed:
+        listing = "; ".join(f"{label} ({reason})" for label, reason in failed.items())
+        print(f"error: {len(failed)} run(s) of the comparison failed: {one_line(listing)}", file=sys.stderr)
+        return EXIT_RUN_FAILED
     return 0
 
 

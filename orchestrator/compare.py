@@ -64,13 +64,17 @@ class Section:
 
     ``markdown`` is appended to ``table.md``; each table in ``tables`` is written as
     ``<name>.csv``; ``summary`` goes into ``summary.json`` under the extension's name;
-    ``flags`` are warnings printed under the tables and kept in ``summary.json``.
+    ``flags`` are warnings printed under the tables and kept in ``summary.json``;
+    ``failed_runs`` names every run the extension made that failed (its label and trial)
+    with the reason: they join the comparison's own failed runs in the table, the summary
+    and on stderr, and the command exits 3.
     """
 
     markdown: str = ""
     tables: dict[str, pd.DataFrame] = field(default_factory=dict)
     summary: dict[str, Any] = field(default_factory=dict)
     flags: list[str] = field(default_factory=list)
+    failed_runs: dict[str, str] = field(default_factory=dict)
 
 
 class ScenarioRunner:
@@ -136,7 +140,7 @@ def run_comparison(path, results_root="results", progress: bool = True) -> Path:
         else:
             key = spec["sweep"]["key"]
             per_member = {name: [] for name in extensions}
-            statuses = {}
+            statuses, failed_runs = {}, {}
             for value, overrides in zip(members, member_overrides):
                 log.info("comparison %s: %s = %s", spec["name"], key, value)
                 target = folder.path("members") / slug(f"{key}={value}")
@@ -144,18 +148,22 @@ def run_comparison(path, results_root="results", progress: bool = True) -> Path:
                 sections, summary = _compare_once(spec, extensions, path, overrides, target, progress)
                 (target / "summary.json").write_text(json.dumps(summary, indent=2, default=str) + "\n")
                 statuses[str(value)] = summary["status"]
+                failed_runs.update({f"{key}={value}: {label}": reason
+                                    for label, reason in summary["failed_runs"].items()})
                 for name in extensions:
                     per_member[name].append((value, sections[name]))
             markdown = [f"# {spec['name']}: sweep over {key} ({len(members)} values)", ""]
             sweep_summary: dict[str, Any] = {"comparison": str(path.resolve()), "sweep_key": key,
                                              "members": statuses,
                                              "status": "finished" if all(
-                                                 s == "finished" for s in statuses.values()) else "failed"}
+                                                 s == "finished" for s in statuses.values()) else "failed",
+                                             "failed_runs": failed_runs}
             for name, extension in extensions.items():
                 section = extension.summarise_sweep(key, per_member[name], folder.staging)
                 _write_section(section, folder.staging)
                 markdown.append(section.markdown)
                 sweep_summary[name] = section.summary
+            markdown += failed_runs_markdown(failed_runs)
             folder.path("table.md").write_text("\n".join(markdown) + "\n")
             folder.write_json("summary.json", sweep_summary)
     except BaseException:
@@ -180,16 +188,20 @@ def _compare_once(spec, extensions, path: Path, overrides: dict, out_dir: Path, 
     table.to_csv(out_dir / "table.csv", index=False)
     markdown = [f"# {spec['name']}", "", markdown_table(table), ""]
     sections, flags = {}, []
+    failed = {label: f"{r.status}: {r.reason}" for label, r in reports.items() if not r.ok}
     for name, extension in extensions.items():
         section = extension.evaluate(reports, runner, overrides, out_dir)
         _write_section(section, out_dir)
         sections[name] = section
         flags += section.flags
+        failed.update(section.failed_runs)
         markdown.append(section.markdown)
+    markdown += failed_runs_markdown(failed)
     (out_dir / "table.md").write_text("\n".join(markdown) + "\n")
     for draw in plugins.load_all("comparison_figures").values():
         draw(spec, reports, out_dir)
-    failed = {label: r.reason for label, r in reports.items() if not r.ok}
+    for label, reason in failed.items():
+        log.error("comparison %s: run '%s' %s", spec["name"], label, reason)
     summary = {
         "runs": {label: str(r.folder.relative_to(out_dir)) for label, r in reports.items()},
         "overrides": overrides,
@@ -200,6 +212,20 @@ def _compare_once(spec, extensions, path: Path, overrides: dict, out_dir: Path, 
     }
     summary.update({name: section.summary for name, section in sections.items()})
     return sections, summary
+
+
+def failed_runs_markdown(failed: dict[str, str]) -> list[str]:
+    """The ``table.md`` lines naming every failed run (none when every run finished)."""
+    if not failed:
+        return []
+    rows = pd.DataFrame([{"run": label, "outcome": reason} for label, reason in failed.items()])
+    return [f"## Failed runs ({len(failed)})", "", markdown_table(rows), ""]
+
+
+def failed_runs_of(folder: Path) -> dict[str, str]:
+    """The failed runs a published comparison folder's ``summary.json`` names."""
+    summary = json.loads((Path(folder) / "summary.json").read_text())
+    return dict(summary.get("failed_runs") or {})
 
 
 def _check_runs(spec, extensions, path: Path, overrides: dict) -> None:

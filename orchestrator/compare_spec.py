@@ -1,6 +1,7 @@
 """Comparison files checked by pydantic models (the format: ``docs/compare-format.md``).
 
-The file's own keys are checked here; a table named after a comparison extension
+The file's own keys are checked here, and file names in its overrides are resolved against
+the comparison file's folder (:func:`resolve_paths`); a table named after a comparison extension
 (``[voyage]``) is handed to that extension, which checks it.  Messages name the file and
 the key; a sweep is bounded (:data:`MAX_SWEEP_MEMBERS`) before it is expanded.
 """
@@ -135,6 +136,42 @@ class ComparisonFile(TomlTable):
         return self
 
 
+def resolve_paths(value: Any, folder: Path, where: str) -> Any:
+    """``value`` with the relative file names in it made absolute against ``folder``.
+
+    An override in a comparison file is written there, so a file it names is found beside
+    the comparison, not beside each scenario it is applied to.  A string counts as a file
+    name when it has a suffix or a folder part (``"storms/gale.nc"``) and names a file
+    relative to ``folder``, or when its key is ``file``, which must then exist (an error
+    naming ``where`` and the key otherwise).  Tables and lists are searched through.
+    """
+    if isinstance(value, dict):
+        return {key: (_file_value(item, folder, f"{where}.{key}") if key == "file"
+                      else resolve_paths(item, folder, f"{where}.{key}")) for key, item in value.items()}
+    if isinstance(value, list):
+        return [resolve_paths(item, folder, f"{where}[{i}]") for i, item in enumerate(value)]
+    if isinstance(value, str) and value and "\0" not in value and not Path(value).is_absolute():
+        candidate = folder / value
+        if (Path(value).suffix or len(Path(value).parts) > 1) and candidate.exists():
+            return str(candidate.resolve())
+    return value
+
+
+def _file_value(value: Any, folder: Path, where: str) -> Any:
+    if not isinstance(value, str) or not value or "\0" in value or Path(value).is_absolute():
+        return value
+    candidate = folder / value
+    if not candidate.is_file():
+        raise ScenarioError(f"{where}: file not found relative to the comparison file: "
+                            f"{shown_text(str(candidate), 300)}")
+    return str(candidate.resolve())
+
+
+def _resolved_overrides(overrides: dict, folder: Path, where: str) -> dict:
+    return {key: (_file_value(value, folder, f"{where}.{key}") if key.split(".")[-1] == "file"
+                  else resolve_paths(value, folder, f"{where}.{key}")) for key, value in overrides.items()}
+
+
 def load_comparison(path, extensions: tuple[str, ...] = ()) -> dict[str, Any]:
     """Read and check a comparison file; errors name the file and the key.
 
@@ -161,13 +198,18 @@ def load_comparison(path, extensions: tuple[str, ...] = ()) -> dict[str, Any]:
         for key in run.paper:
             if key not in top.metrics:
                 raise ScenarioError(f"{at}.paper: '{shown_text(key)}' is not one of the metrics")
-        runs.append({**entry, "set": run.set})
+        runs.append({**entry, "set": _resolved_overrides(run.set, path.parent, f"{at}.set")})
         labels.append(run.label)
     if top.baseline is not None and top.baseline not in labels:
         raise ScenarioError(f"{path}: baseline '{shown_text(top.baseline)}' is not a run label "
                             f"({', '.join(labels)})")
-    spec = {**data, "runs": runs, "set": top.set}
+    spec = {**data, "runs": runs, "set": _resolved_overrides(top.set, path.parent, f"{path}: set")}
     if "sweep" in data:
         sweep = checked(SweepTable, data["sweep"], where, ("sweep",))
-        spec["sweep"] = {"key": sweep.key, "values": sweep.values if sweep.values is not None else sweep.range}
+        values = sweep.values if sweep.values is not None else sweep.range
+        if sweep.key.split(".")[-1] == "file":
+            values = [_file_value(v, path.parent, f"{path}: sweep.values[{i}]") for i, v in enumerate(values)]
+        else:
+            values = resolve_paths(values, path.parent, f"{path}: sweep.values")
+        spec["sweep"] = {"key": sweep.key, "values": values}
     return spec

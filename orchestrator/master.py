@@ -6,6 +6,12 @@ the latest outputs of all others. With ``[simulation] exchange = "jacobi"`` the 
 hands on data as one that steps all FMUs at once (OSP's libcosim): set-ups see no other
 outputs, and the outputs of a step from ``t`` reach the others at ``t + step_size``.  A participant declared with ``every = m`` steps
 every m macro steps with a step of ``m * dt_s`` and holds its outputs in between.
+
+Stop conditions (``[simulation] stop_when``) are checked as soon as the participant whose
+output they read has stepped: once one holds, the participants after it in that round are
+not stepped (a ship is never stepped past its arrival), and the row of that time is the
+last.  With Jacobi exchange an output reaches the bus one round later, so a condition met
+there ends the run before the next round.
 """
 
 from __future__ import annotations
@@ -141,6 +147,12 @@ class CoSimulation:
                     f"{self.scenario.path}: simulation.stop_when '{condition}': no output "
                     f"'{condition.port}' of a participant '{condition.participant}'")
 
+    def _stop_conditions_met(self, bus: dict, participant: str | None = None) -> list:
+        """The stop conditions (of ``participant``'s outputs, or any) that hold on the bus; an
+        array where a condition needs one number is refused (:class:`StopConditionError`)."""
+        self._check_stop_values(bus)
+        return _met(self.scenario.simulation.stop_when, bus, participant)
+
     def _check_stop_values(self, bus: dict) -> None:
         """Every ``stop_when`` port seen so far holds one number (not an array)."""
         for condition in self.scenario.simulation.stop_when:
@@ -236,6 +248,7 @@ class CoSimulation:
                 current[1] = None
                 self._check_stop_values(bus)  # an array port refused before the first step (bad input)
                 current[0] = "stepping"
+                met: list = []
                 for k in range(sim.steps):
                     t = sim.start_s + k * sim.dt_s
                     current[2] = t
@@ -243,9 +256,17 @@ class CoSimulation:
                         for _, name, outputs in [item for item in pending if item[0] <= k]:
                             bus.update({(name, port): value for port, value in outputs.items()})
                         pending = [item for item in pending if item[0] > k]
+                        met = self._stop_conditions_met(bus)
+                        if met:  # Jacobi: what the last round handed on ends the run before this one
+                            reason = f"stopped at t = {t:g} s: {met[0]}"
+                            break
+                    skipped: list[str] = []
                     for participant in self.participants:
                         every = self.every[participant.name]
                         if k % every:
+                            continue
+                        if met:  # Gauss-Seidel: met earlier in this round, nobody steps past it
+                            skipped.append(participant.name)
                             continue
                         current[1] = participant.name
                         self._check_stop()
@@ -259,18 +280,17 @@ class CoSimulation:
                             pending.append((k + every, participant.name, outputs))
                         else:
                             self._publish(participant, stamp, outputs, bus, recorder)
+                            met = self._stop_conditions_met(bus, participant.name)
                     steps_done = self.steps_done = k + 1
                     recorder.advance(t)  # every participant due at t has stepped: the row of t is final
                     if bar is not None:
                         bar.update(1)
                     if on_step is not None:
                         on_step(k)
-                    current[1] = None
-                    self._check_stop_values(bus)
-                    met = [c for c in sim.stop_when if (c.participant, c.port) in bus
-                           and c.holds(float(bus[(c.participant, c.port)]))]
+                    met = met or self._stop_conditions_met(bus)
                     if met:
-                        reason = f"stopped at t = {t + sim.dt_s:g} s: {met[0]}"
+                        reason = (f"stopped at t = {t:g} s before the step of {', '.join(skipped)}: {met[0]}"
+                                  if skipped else f"stopped at t = {t + sim.dt_s:g} s: {met[0]}")
                         break
                 current[1] = None
                 self._check_stop()
@@ -418,6 +438,12 @@ def _build_notes_shown() -> Iterator[None]:
     finally:
         for logger, level in raised:
             logger.setLevel(level)
+
+
+def _met(conditions, bus, participant: str | None = None) -> list:
+    """The stop conditions (of ``participant``'s outputs, or any) that hold on the bus."""
+    return [c for c in conditions if (participant is None or c.participant == participant)
+            and (c.participant, c.port) in bus and c.holds(float(bus[(c.participant, c.port)]))]
 
 
 def _naming(message: str, participant: str | None) -> str:

@@ -132,7 +132,15 @@ class RoutingMethod:
                               arrival_speed=None if self.arrival_s is None else (
                                   lambda candidate: self.planned_speed(time, candidate)))
         speed = self.planned_speed(time, route)
-        plan = planner.timed_plan(route, time, start_u, speed, self.delta, self.horizon_steps)
+        plan = None
+        if self.arrival_s is not None and self.arrival_s - time > self.delta:
+            try:   # speed along the route decided with it: the least-fuel profile that arrives on time
+                plan = planner.profiled_plan(route, time, start_u, self.arrival_s, self.delta, self.horizon_steps,
+                                             (MIN_PLANNED_SPEED_MPS, self.max_speed))
+            except ValueError as exc:   # no profile within the bounds arrives then: as fast as allowed
+                log.debug("participant '%s': no speed profile (%s)", self.name, exc)
+        if plan is None:
+            plan = planner.timed_plan(route, time, start_u, speed, self.delta, self.horizon_steps)
         self._route = plan.route
         self._planned_speed = speed
         return plan

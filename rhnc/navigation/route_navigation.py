@@ -325,6 +325,30 @@ class RecedingRoutePlanner:
         return RoutePlan(points=points, route=route, remaining_nm=float(along[-1]) / NM, reached_goal=reached,
                          speed_through_water_mps=float(speed_mps))
 
+    def profiled_plan(self, route: np.ndarray, time_s: float, start_speed_mps: float, arrival_s: float,
+                      delta_s: float, horizon_steps: int, bounds_mps: tuple[float, float]) -> RoutePlan:
+        """Reference points along ``route`` timed by the least-fuel speed profile that arrives
+        at ``arrival_s`` (:func:`rhnc.routing.speed_profile.profile_times`): speed along the
+        route decided with it, easing where the weather makes speed dear and making the time
+        up where it is cheap or a current helps.  The plan's speed through water is that of
+        its first interval."""
+        from rhnc.routing.speed_profile import profile_times
+
+        dense = densify(route, self.resolution_m / 2.0)
+        times = profile_times(self.metocean, self.energy, dense, time_s, arrival_s, bounds_mps)
+        first = min(delta_s, times[-1] - time_s)
+        reach = np.interp(time_s + first, times, np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(dense, axis=0).T))]))
+        start = np.array([np.interp(time_s + first, times, dense[:, 0]), np.interp(time_s + first, times, dense[:, 1])])
+        along = self.mean_current_along_mps(np.vstack([dense[0], start]), time_s) if reach > 1.0 else 0.0
+        speed_mps = float(min(max(reach / max(first, 1e-9) - along, bounds_mps[0]), bounds_mps[1]))
+        ramp_s = 0.5 * delta_s * (speed_mps - min(max(start_speed_mps, 0.0), speed_mps)) / max(speed_mps, 1e-9)
+        wanted = time_s + delta_s * np.arange(horizon_steps + 1) - np.where(np.arange(horizon_steps + 1) > 0,
+                                                                             ramp_s, 0.0)
+        points = np.column_stack([np.interp(wanted, times, dense[:, 0]), np.interp(wanted, times, dense[:, 1])])
+        total = float(np.sum(np.hypot(*np.diff(route, axis=0).T)))
+        return RoutePlan(points=points, route=route, remaining_nm=total / NM, reached_goal=bool(wanted[-1] >= times[-1]),
+                         speed_through_water_mps=speed_mps)
+
     def time_price_usd_h(self, route: np.ndarray, speed_mps: float, time_s: float) -> float:
         """Shadow price of time at fixed arrival [USD/h] along ``route``: v dF/dv - F,
         F the fuel cost rate with each leg's course and weather, averaged over the legs'
@@ -345,9 +369,15 @@ class RecedingRoutePlanner:
         return max(round(price / 50.0) * 50.0, 0.0)
 
     def mean_current_along_mps(self, route: np.ndarray, time_s: float) -> float:
-        """Current component along ``route`` [m/s], averaged over its vertices' legs."""
+        """Current component along ``route`` [m/s], averaged over its length.
+
+        Sampled every half grid step along the legs: taken at the turning points alone, a
+        straight leg from inside a current jet to the goal was credited with the jet's
+        current all the way, looked cheaper than staying in the jet, and the ship left
+        the jet's core early."""
         if len(route) < 2:
             return 0.0
+        route = densify(np.asarray(route, dtype=float), 0.5 * self.resolution_m)
         legs = np.diff(route, axis=0)
         length = np.hypot(*legs.T)
         weather = sample_weather(self.metocean, route[:-1, 0], route[:-1, 1], time_s)

@@ -124,6 +124,22 @@ def costed_route(problem: RoutingProblem, polyline: np.ndarray, speed_mps: float
                        method=method)
 
 
+def profiled_route(problem: RoutingProblem, polyline: np.ndarray, arrival_s: float, method: str) -> RouteResult:
+    """``polyline`` densified, timed by the least-fuel speed profile that arrives at ``arrival_s``
+    (:func:`rhnc.routing.speed_profile.profile_times`) and costed; its speed through water
+    is the passage's mean."""
+    from rhnc.routing.speed_profile import profile_times
+
+    points = densify(polyline, problem.resolution_nm * NM / 2.0)
+    times = profile_times(problem.metocean, problem.energy, points, problem.departure_s, arrival_s)
+    account = cost_of_track(problem.metocean, problem.energy, points, times)
+    return RouteResult(waypoints_m=points, times_s=times,
+                       speed_through_water_mps=account["mean_speed_through_water_kn"] * 1852.0 / 3600.0,
+                       duration_s=account["duration_s"], distance_nm=account["distance_nm"],
+                       cost_usd=account["cost_usd"], co2_t=account["co2_t"], fuel_t=account["fuel_t"],
+                       method=method)
+
+
 def speed_for_arrival(problem: RoutingProblem, polyline: np.ndarray, arrival_s: float) -> float:
     """Constant speed through water [m/s] that sails ``polyline`` to arrive at ``arrival_s``."""
     points = densify(polyline, problem.resolution_nm * NM / 2.0)

@@ -42,8 +42,9 @@ from rhnc.ship.energy import brake_power, fuel_rate_t_h
 from rhnc.weather.metocean_grid import axis_node_count
 from rhnc.routing.route_search import (IMPASSABLE, GridGraph, build_grid_graph, segment_clearance, shortcut_path,
                                shortest_path_tree, times_along_tree)
-from rhnc.routing.routing_problem import (RouteResult, RoutingProblem, check_problem, costed_route, speed_for_arrival,
-                                  straight_route, time_price_usd_h)
+from rhnc.routing.offline_route import shortest_route
+from rhnc.routing.routing_problem import (RouteResult, RoutingProblem, check_problem, costed_route, profiled_route,
+                                          speed_for_arrival, straight_route, time_price_usd_h)
 from rhnc.routing.track_cost import constant_speed_times, cost_of_track, is_time_varying, sample_weather
 
 log = logging.getLogger(__name__)
@@ -228,7 +229,7 @@ PRICE_MULTIPLES = (0.2, 0.3, 0.45, 0.65, 1.0, 1.4)
 
 def optimal_route(problem: RoutingProblem, *, speed_mps: float | None = None,
                   arrival_s: float | None = None, price_multiples=PRICE_MULTIPLES, time_passes: int = 2,
-                  refine: bool = True) -> RouteResult:
+                  refine: bool = True, speed_profile: bool = False) -> RouteResult:
     """The cheapest route at a constant speed through water.
 
     Parameters
@@ -247,6 +248,10 @@ def optimal_route(problem: RoutingProblem, *, speed_mps: float | None = None,
         Time-varying weather: searches per price with node times from the previous one.
     refine : bool
         Move the turning points of the best route sideways while that lowers the cost.
+    speed_profile : bool
+        Fixed arrival time: speed along the route is a decision too; every candidate
+        (the straight route among them) is sailed at its least-fuel speed profile that
+        arrives on time (:mod:`rhnc.routing.speed_profile`) instead of one constant speed.
 
     Returns
     -------
@@ -267,16 +272,33 @@ def optimal_route(problem: RoutingProblem, *, speed_mps: float | None = None,
         base_price = time_price_usd_h(problem, straight)
         prices = [base_price * multiple for multiple in price_multiples]
     best, best_polyline, best_price = straight, None, float("nan")
+    candidates = [(shortest_route(problem.start_m, problem.goal_m, problem.avoid), float("nan"))]
     for price in prices:
         polyline = search.route(straight.speed_through_water_mps, price, time_passes)
+        candidates.append((polyline, price))
         result = evaluate(polyline)
         if result.cost_usd < best.cost_usd:
             best, best_polyline, best_price = result, polyline, price
     if refine and best_polyline is not None and len(best_polyline) > 2:
         best = _refine(problem, best_polyline, best, evaluate)
+        candidates.append((_corners(best.waypoints_m), best_price))
+    if speed_profile and arrival_s is not None:
+        # speed as a decision: each route found (and the straight one) at its least-fuel profile
+        for polyline, price in candidates:
+            profiled = profiled_route(problem, polyline, arrival_s, "optimal")
+            if profiled.cost_usd < best.cost_usd:
+                best, best_price = profiled, price
     if best is straight:
         best = dataclasses.replace(straight, method="optimal")
     return dataclasses.replace(best, time_price_usd_h=best_price)
+
+
+def _corners(points: np.ndarray) -> np.ndarray:
+    """The turning points of a densified polyline (its ends and where the course changes)."""
+    legs = np.diff(points, axis=0)
+    course = np.arctan2(legs[:, 1], legs[:, 0])
+    turns = np.flatnonzero(np.abs(np.angle(np.exp(1j * np.diff(course)))) > 1e-6) + 1
+    return points[np.concatenate([[0], turns, [len(points) - 1]])]
 
 
 def _refine(problem: RoutingProblem, polyline: np.ndarray, best: RouteResult, evaluate,

@@ -15,9 +15,10 @@ speed from the comparison:
   radius within ``ARRIVAL_TOLERANCE_S`` of the system (:mod:`rhnc.voyage.equal_arrival`);
 * the **headline** is the total cost and CO2 of the passage against that baseline, at equal
   arrival time, never per nm sailed;
-* the **available saving**: the optimal weather route (:mod:`rhnc.routing.weather_routing`, over
-  the same met-ocean field and energy model) against the straight route, both arriving
-  when the system arrived; each system's saving is reported as a share of it;
+* the **available saving**: the optimal weather route and speed profile
+  (:mod:`rhnc.routing.weather_routing` with :mod:`rhnc.routing.speed_profile`, over the same
+  met-ocean field and energy model) against the straight route at constant speed, both
+  arriving when the system arrived; each system's saving is reported as a share of it;
 * the **sailed track at equal speed**: the system's track and the straight line costed by
   the routing model at one constant speed through water (the baseline's mean), which
   isolates the route from the speed;
@@ -31,6 +32,7 @@ Tables, figures and the sweep summary are built in :mod:`rhnc.voyage.voyage_comp
 from __future__ import annotations
 
 import copy
+import json
 import logging
 import math
 from collections.abc import Mapping
@@ -48,6 +50,7 @@ from orchestrator.scenario import load_scenario
 from rhnc.voyage.equal_arrival import EqualArrival, match_arrival_time
 from orchestrator.geometry import KNOT, NM
 from rhnc.voyage.voyage_comparison_tables import evaluation_section, sweep_section
+from rhnc.voyage.voyage_geometry import check_on_map, geometry_overrides, refuse_conflicts
 from rhnc.voyage.voyage_spec import (VOYAGE_KEYS, EqualArrivalSettings, OptimalRouteSettings, equal_arrival,
                               optimal_route, point, positive, reject_unknown)
 
@@ -102,6 +105,9 @@ class VoyageComparison:
         #: published figures per run label (the comparison file's ``paper`` tables)
         self.published: dict[str, dict[str, Any]] = {}
         self.labels = tuple(run_scenarios)
+        #: the passage's arrival time after departure [min] (None: each navigation keeps its own)
+        self.arrival_time_min: float | None = None
+        self._maps: dict[str, Any] = {}
 
     # -- construction --------------------------------------------------------------------
     @classmethod
@@ -123,15 +129,20 @@ class VoyageComparison:
         scenarios = {run["label"]: path.parent / run["scenario"] for run in spec["runs"]}
         comparison = cls(path, start * NM, goal * NM, radius, max_hours * 3600.0, equal, optimal, scenarios)
         comparison.published = {run["label"]: dict(run["paper"]) for run in spec["runs"] if "paper" in run}
+        if "arrival_time_min" in table:
+            comparison.arrival_time_min = positive(table, "arrival_time_min", where, 0.0)
         return comparison
 
     # -- the extension's hooks -------------------------------------------------------------
     def run_overrides(self, scenario: Path, overrides: Mapping[str, Any], where: str) -> dict[str, Any]:
         """Overrides that make a run sail until it arrives at this comparison's goal.
 
-        Raises the step cap to ``max_duration_h``, stops on the goal participant's arrival,
-        and has the voyage analysis cut its totals at arrival.  The scenario must have a
-        ``goal`` participant for the same goal (and start from the same point).
+        Gives every participant the comparison's passage (:mod:`rhnc.voyage.voyage_geometry`:
+        navigation, goal, the plant's initial state, a reference route, the arrival time),
+        raises the step cap to ``max_duration_h``, stops on the goal participant's arrival,
+        and has the voyage analysis cut its totals at arrival.  The scenario must have one
+        ``goal`` participant; an override giving a geometry key another value, or a start or
+        goal outside the met-ocean map, is refused.
         """
         where = f"{where}: {scenario.name}"
         loaded = load_scenario(scenario, dict(overrides))
@@ -139,17 +150,17 @@ class VoyageComparison:
         if len(goals) != 1:
             raise ScenarioError(f"{where}: a voyage comparison needs exactly one participant of type \"goal\"")
         goal = goals[0]
-        goal_nm = goal.options.get("goal_nm")
-        if (not isinstance(goal_nm, list) or len(goal_nm) != 2
-                or not np.allclose(np.asarray(goal_nm, dtype=float) * NM, self.goal_m, atol=1.0)):
-            raise ScenarioError(f"{where}: participants.{goal.name}.options.goal_nm {goal_nm} is not the "
-                                f"comparison's voyage.goal_nm {[round(float(v), 6) for v in self.goal_m / NM]}")
+        self._check_on_map(loaded, where)
+        geometry = geometry_overrides(loaded, self.start_m, self.goal_m, self.arrival_time_min, where)
+        refuse_conflicts(geometry, overrides, where)
+        loaded = load_scenario(scenario, {**dict(overrides), **geometry})
         sim = loaded.simulation
         steps = int(math.ceil(self.max_duration_s / sim.dt_s))
         stop = [str(c) for c in sim.stop_when]
         arrival = f"{goal.name}.arrived > 0.5"
         analyses = list(loaded.outputs.analyses)
         result = {
+            **geometry,
             "simulation.stop_when": stop + ([arrival] if arrival not in stop else []),
             f"participants.{goal.name}.options.arrival_radius_nm": self.arrival_radius_nm,
             "outputs.analyses": analyses + ([] if "voyage" in analyses else ["voyage"]),
@@ -167,6 +178,17 @@ class VoyageComparison:
         else:
             result["simulation.stop_s"] = sim.start_s + steps * sim.dt_s
         return result
+
+    def _check_on_map(self, loaded, where: str) -> None:
+        """Refuse a start or goal outside the run's met-ocean map (each map built once)."""
+        if loaded.metocean is None:
+            return
+        from rhnc.weather.metocean_sources import from_scenario_table
+
+        key = json.dumps([str(loaded.directory), loaded.metocean], sort_keys=True, default=str)
+        if key not in self._maps:
+            self._maps[key] = from_scenario_table(loaded.metocean, loaded.directory, f"{loaded.path}: metocean")
+        check_on_map(self._maps[key], self.start_m, self.goal_m, where)
 
     def evaluate(self, reports: Mapping[str, Any], runner: ScenarioRunner, overrides: Mapping[str, Any],
                  out_dir: Path) -> Section:
@@ -216,7 +238,7 @@ class VoyageComparison:
         problem = RoutingProblem(self.start_m, self.goal_m, metocean, energy=EnergyParameters(),
                                  resolution_nm=settings.resolution_nm, avoid=settings.avoid_m)
         straight = straight_route(problem, speed_mps=speed_kn * KNOT)
-        optimal = optimal_route(problem, arrival_s=straight.arrival_s)
+        optimal = optimal_route(problem, arrival_s=straight.arrival_s, speed_profile=True)
         return {"speed_kn": speed_kn, "arrival_min": straight.duration_s / 60.0,
                 "straight_cost_usd": straight.cost_usd, "optimal_cost_usd": optimal.cost_usd,
                 "available_cost_percent": 100.0 * (straight.cost_usd - optimal.cost_usd) / straight.cost_usd,
@@ -307,7 +329,7 @@ class VoyageComparison:
             if self.optimal_route is not None:
                 try:
                     entry["straight"] = straight_route(problem, arrival_s=system.arrival_s)
-                    entry["optimal"] = optimal_route(problem, arrival_s=system.arrival_s)
+                    entry["optimal"] = optimal_route(problem, arrival_s=system.arrival_s, speed_profile=True)
                 except ValueError as exc:   # e.g. no speed arrives then: reported, the comparison goes on
                     log.warning("%s: no optimal route at %s's arrival: %s", self.path, label, exc)
                     entry.pop("straight", None)

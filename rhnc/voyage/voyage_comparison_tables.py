@@ -113,11 +113,33 @@ def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) ->
                      "straight line, both costed at one constant speed through water, the baseline's mean "
                      "(positive: the track is dearer).", "", markdown_table(headline), ""]
     markdown += [f"**FLAG**: {flag}" for flag in flags] + ([""] if flags else [])
+    trials = _trial_rows(baselines)
+    if trials:
+        markdown += ["## Equal-arrival trials", "",
+                     "Every run of each equal-arrival baseline's speed search, failed ones included.", "",
+                     markdown_table(pd.DataFrame(trials)), ""]
+    failed = {f"{row['baseline']} at {row['reference speed [kn]']:.4f} kn": f"{row['status']}: {row['reason']}"
+              for row in trials if row["status"] != "finished"}
     tables = {"voyage_runs": runs}
     if not headline.empty:
         tables["voyage_headline"] = headline
+    if trials:
+        tables["voyage_trials"] = pd.DataFrame(trials)
     summary = {"systems": summary_systems, "speed_spread_percent": spread, "flags": flags}
-    return Section("\n".join(markdown), tables, summary, flags)
+    return Section("\n".join(markdown), tables, summary, flags, failed)
+
+
+def _trial_rows(baselines) -> list[dict[str, Any]]:
+    """One row per run of every equal-arrival search, in the order they were sailed."""
+    rows = []
+    for label, equal in baselines.items():
+        for number, trial in enumerate(equal.trials, start=1):
+            run = trial.run
+            rows.append({"baseline": f"{label} equal-arrival baseline", "trial": number,
+                         "reference speed [kn]": trial.speed_kn,
+                         "arrival [min]": _minutes(trial.arrival_s),
+                         "status": getattr(run, "status", "finished"), "reason": getattr(run, "reason", "") or ""})
+    return rows
 
 
 def sweep_section(key: str, members: list[tuple[Any, Section]], out_dir: Path) -> Section:

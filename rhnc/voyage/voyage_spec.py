@@ -18,7 +18,8 @@ from orchestrator.geometry import NM
 from orchestrator.participant import is_finite_number
 from orchestrator.scenario import load_scenario
 
-VOYAGE_KEYS = ("start_nm", "goal_nm", "arrival_radius_nm", "max_duration_h", "equal_arrival", "optimal_route")
+VOYAGE_KEYS = ("start_nm", "goal_nm", "arrival_time_min", "arrival_radius_nm", "max_duration_h", "equal_arrival",
+               "optimal_route")
 EQUAL_ARRIVAL_KEYS = ("scenario", "speed_key", "systems", "max_trials", "same_control")
 OPTIMAL_ROUTE_KEYS = ("resolution_nm", "avoid")
 

@@ -13,6 +13,9 @@ its formula, its parameters and why they have the values they have: ``docs/weath
 ``moving_storm``   the same vortex crossing the direct route, hourly steps over 24 h
 ``storm_set``      member k of a seeded set of gales drawn over position, size, strength
                    and wind direction (:func:`storm_set_member`)
+``current_jet``    a band of current parallel to a route (:mod:`rhnc.weather.routing_weather_set`)
+``routing_set``    member k of a seeded set of gales, moving gales and current jets about
+                   any route and map (:mod:`rhnc.weather.routing_weather_set`)
 =================  ====================================================================
 
 Keys are checked against the generator's table before it runs: an unknown key or a value
@@ -33,6 +36,7 @@ from orchestrator.participant import is_finite_number
 from orchestrator.geometry import KNOT, NM
 from rhnc.weather.metocean import MetOceanField, fetch_limited_hs
 from rhnc.weather.metocean_grid import check_grid_nodes, map_axis
+from rhnc.weather.routing_weather_set import current_jet, routing_set_member
 from rhnc.weather.weather_spline import bicubic_grid
 
 #: Draws of the storm set, fixed on 2026-11-22 before any routing result (docs/weather.md).
@@ -272,7 +276,7 @@ def holland_wind_speed(r_m, max_wind_ms: float, radius_max_wind_m: float, hollan
 class Generator:
     """One registered generator: its builder, a one-line summary and its keys -> kinds.
 
-    Kinds: ``number`` (int or float), ``integer``, ``point`` ([north, east] numbers),
+    Kinds: ``number`` (int or float), ``integer``, ``boolean``, ``point`` ([north, east] numbers),
     ``lattice`` (2-D list of numbers), ``text``.
     """
 
@@ -303,6 +307,36 @@ GENERATORS: dict[str, Generator] = {
                            {**_MAP_KEYS, "seed": "integer", "member": "integer", "route_start_nm": "point",
                             "route_goal_nm": "point", **_SEA_KEYS}),
 }
+
+
+def routing_set(seed: int = 2611, member: int = 0, route_start_nm=(0.0, 0.0), route_goal_nm=(100.0, 100.0),
+                x_range_nm=(0.0, 100.0), y_range_nm=(0.0, 100.0), resolution_nm: float = 1.0,
+                fetch_km: float = 100.0) -> MetOceanField:
+    """Member ``member`` of the routing set (:mod:`rhnc.weather.routing_weather_set`) over the given map:
+    a gale (:func:`storm_off_route`), a moving gale (:func:`cyclone`) or a current jet, without
+    the uniform current of the other generators."""
+    kind, arguments = routing_set_member(seed, member, route_start_nm, route_goal_nm)
+    described = ", ".join(f"{name} {value}" for name, value in arguments.items()
+                          if name not in ("route_start_nm", "route_goal_nm"))
+    source = f"generated: routing_set seed {seed} member {member}: {kind} ({described})"
+    grid = {"x_range_nm": x_range_nm, "y_range_nm": y_range_nm, "resolution_nm": resolution_nm,
+            "fetch_km": fetch_km, "source": source}
+    if kind == "gale":
+        return storm_off_route(**grid, **arguments, current_kn=0.0)
+    if kind == "moving gale":
+        return cyclone(**grid, **arguments, current_kn=0.0)
+    return current_jet(**grid, **arguments)
+
+
+GENERATORS["current_jet"] = Generator(
+    current_jet, "a Gaussian band of current parallel to the route, under a uniform wind",
+    {**_MAP_KEYS, "route_start_nm": "point", "route_goal_nm": "point", "offset_nm": "number", "width_nm": "number",
+     "peak_kn": "number", "towards_goal": "boolean", "background_wind_ms": "number", "wind_from_deg": "number",
+     "fetch_km": "number"})
+GENERATORS["routing_set"] = Generator(
+    routing_set, "member k of a seeded set of gales, moving gales and current jets about any route",
+    {**_MAP_KEYS, "seed": "integer", "member": "integer", "route_start_nm": "point", "route_goal_nm": "point",
+     "fetch_km": "number"})
 
 
 def list_generators() -> dict[str, str]:
@@ -346,6 +380,10 @@ def checked_option(value: Any, kind: str, where: str) -> Any:
         if not is_finite_number(value):
             raise ScenarioError(f"{where}: expected a number, got {value!r}")
         return float(value)
+    if kind == "boolean":
+        if not isinstance(value, bool):
+            raise ScenarioError(f"{where}: expected true or false, got {value!r}")
+        return value
     if kind == "integer":
         if isinstance(value, bool) or not isinstance(value, int):
             raise ScenarioError(f"{where}: expected an integer, got {value!r}")

@@ -3,6 +3,7 @@ that raised named, no verdicts on a run without steps, only the toolchain's log 
 batch consoles that list every failure and count what ran."""
 
 import json
+import os
 import re
 import subprocess
 import sys

@@ -118,3 +118,67 @@ def test_set_and_sweep_errors(tmp_path, extra, message):
     path.write_text(path.read_text().replace('baseline = "slow"', 'baseline = "slow"\n' + extra))
     with pytest.raises(ScenarioError, match=message):
         load_comparison(path)
+
+
+CRASHING_RUN = """
+[[runs]]
+label = "crashing"
+scenario = "crash.toml"
+"""
+
+
+def test_a_failed_run_is_in_the_table_the_summary_and_stderr_and_exits_3(tmp_path, capsys):
+    import json
+
+    path = write(tmp_path, CRASHING_RUN)
+    crash = SCENARIO.replace("[participants.ship]", '[participants.bug]\ntype = "python"\n'
+                             'class = "sample_participants:Crash"\n[participants.bug.options]\nat_s = 100.0\n'
+                             "[participants.ship]").format(tau=6.0e5)
+    (tmp_path / "crash.toml").write_text(textwrap.dedent(crash))
+    assert main(["compare", str(path), "--results", str(tmp_path / "results"), "--no-progress"]) == 3
+    captured = capsys.readouterr()
+    assert "error: 1 run(s) of the comparison failed: crashing (failed: bug: RuntimeError: boom)" in captured.err
+    assert captured.out.startswith("failed: results in ")
+    folder = next((tmp_path / "results" / "speeds").iterdir())
+    summary = json.loads((folder / "summary.json").read_text())
+    assert summary["status"] == "failed"
+    assert summary["failed_runs"] == {"crashing": "failed: bug: RuntimeError: boom"}
+    assert "## Failed runs (1)" in (folder / "table.md").read_text()
+    assert "| crashing | failed: bug: RuntimeError: boom |" in (folder / "table.md").read_text()
+
+
+def test_an_extensions_failed_runs_join_the_comparisons(tmp_path, monkeypatch):
+    """A run an extension made itself (a baseline's trial) counts as one of the comparison's."""
+    import json
+
+    from orchestrator import compare
+
+    class Extension:
+        def evaluate(self, reports, runner, overrides, out_dir):
+            return compare.Section(markdown="## extension", failed_runs={"a trial": "failed: left the map"})
+
+    monkeypatch.setattr(compare, "load_extensions", lambda spec, path: {"extension": Extension()})
+    monkeypatch.setattr(compare, "_run_overrides", lambda run, extensions, scenario, overrides, where: {})
+    folder = compare.run_comparison(write(tmp_path), tmp_path / "results", progress=False)
+    summary = json.loads((folder / "summary.json").read_text())
+    assert summary["status"] == "failed" and summary["failed_runs"] == {"a trial": "failed: left the map"}
+    assert compare.failed_runs_of(folder) == {"a trial": "failed: left the map"}
+
+
+def test_file_names_in_overrides_are_resolved_against_the_comparison_file(tmp_path):
+    """A NetCDF file named in [set] lies beside the comparison, whatever folder the scenarios are in."""
+    (tmp_path / "storm.nc").write_bytes(b"")
+    (tmp_path / "scenarios").mkdir()
+    path = write(tmp_path / "scenarios")
+    comparison = tmp_path / "compare.toml"
+    text = path.read_text().replace('scenario = "', 'scenario = "scenarios/')
+    comparison.write_text(text + '[set]\n"metocean" = { file = "storm.nc" }\n"participants.helm.options.plan" = "storm.nc"\n'
+                                 '"participants.helm.options.method" = "routing"\n')
+    spec = load_comparison(comparison)
+    assert spec["set"]["metocean"] == {"file": str((tmp_path / "storm.nc").resolve())}
+    assert spec["set"]["participants.helm.options.plan"] == str((tmp_path / "storm.nc").resolve())
+    assert spec["set"]["participants.helm.options.method"] == "routing"   # not a file name: left as it is
+    comparison.write_text(comparison.read_text().replace('file = "storm.nc"', 'file = "gale.nc"'))
+    with pytest.raises(ScenarioError, match=r"compare.toml: set.metocean.file: file not found relative to the "
+                                            r"comparison file: .*gale.nc"):
+        load_comparison(comparison)

@@ -170,8 +170,25 @@ def test_stop_condition_ends_the_run_as_finished(write_scenario, tmp_path):
     text = scenario_text().replace("dt_s = 1.0", 'dt_s = 1.0\nstop_when = "clock.count >= 4"')
     report = run_scenario(write_scenario(text), tmp_path, progress=False)
     assert report.status == "finished"
-    assert report.reason == "stopped at t = 4 s: clock.count >= 4"
+    assert report.reason == "stopped at t = 3 s before the step of echo: clock.count >= 4"
     assert report.summary["simulation"]["steps_done"] == 4
+
+
+def test_a_met_stop_condition_steps_nobody_after_it(write_scenario):
+    # clock first: once its count reaches 4 (at t = 3) echo, declared after it, is not stepped
+    # again (a goal monitor before the ship: the ship is not stepped past its arrival)
+    text = scenario_text(("clock", "echo")).replace("dt_s = 1.0", 'dt_s = 1.0\nstop_when = "clock.count >= 4"')
+    cosim, outcome = run(write_scenario, text)
+    assert outcome.status == "finished"
+    assert outcome.reason == "stopped at t = 3 s before the step of echo: clock.count >= 4"
+    assert [t for t, _ in cosim.participant("echo").seen] == [0.0, 1.0, 2.0]
+
+
+def test_jacobi_a_stop_condition_ends_the_run_before_the_next_round(write_scenario):
+    text = jacobi(scenario_text(("clock", "echo"))).replace("dt_s = 1.0", 'dt_s = 1.0\nstop_when = "clock.count >= 4"')
+    cosim, outcome = run(write_scenario, text)
+    assert outcome.reason == "stopped at t = 4 s: clock.count >= 4"
+    assert [t for t, _ in cosim.participant("echo").seen] == [0.0, 1.0, 2.0, 3.0]
 
 
 def test_stop_condition_on_a_missing_output(write_scenario):

@@ -229,13 +229,78 @@ def test_comparison_file_errors(tmp_path, top, voyage_extra, equal, message):
         load_extensions(load_comparison(path), path)
 
 
-def test_goal_that_differs_from_a_run_is_refused_before_any_run(tmp_path):
+def test_a_route_that_does_not_sail_the_voyage_is_refused_before_any_run(tmp_path):
+    # the detour's polyline ends at (4, 0): it cannot be moved to another goal without rerouting it
     path = write(tmp_path)
-    path.write_text(path.read_text().replace("goal_nm = [4.0, 0.0]", "goal_nm = [5.0, 0.0]"))
-    with pytest.raises(ScenarioError, match=r"detour.toml: participants.goal.options.goal_nm \[4.0, 0.0\] is not "
-                                            r"the comparison's voyage.goal_nm \[5.0, 0.0\]"):
+    path.write_text(path.read_text().replace("goal_nm = [4.0, 0.0]", "goal_nm = [4.5, 0.0]"))
+    with pytest.raises(ScenarioError, match=r"detour.toml: participants.route.options.waypoints_nm runs from "
+                                            r"\[0.0, 0.0\] to \[4.0, 0.0\], not from the \[voyage\] start "
+                                            r"\[0.0, 0.0\] to its goal \[4.5, 0.0\]"):
         run_comparison(path, tmp_path / "results", progress=False)
     assert not (tmp_path / "results" / "fair").exists() or not any((tmp_path / "results" / "fair").iterdir())
+
+
+def test_the_voyage_sets_every_participants_start_and_goal(tmp_path):
+    """[voyage] start and goal reach the goal monitor, the plant's initial state and a straight
+    reference route; the scenario's own values are replaced."""
+    from orchestrator.geometry import NM
+    from orchestrator.scenario import load_scenario
+
+    path = write(tmp_path)
+    path.write_text(path.read_text().replace("start_nm = [0.0, 0.0]\ngoal_nm = [4.0, 0.0]",
+                                             "start_nm = [0.5, -0.5]\ngoal_nm = [3.5, 0.5]"))
+    path.write_text(path.read_text().replace('label = "detour"\nscenario = "detour.toml"',
+                                             'label = "detour"\nscenario = "straight.toml"'))
+    spec = load_comparison(path)
+    voyage = load_extensions(spec, path)["voyage"]
+    overrides = voyage.run_overrides(tmp_path / "straight.toml", {}, "here")
+    loaded = load_scenario(tmp_path / "straight.toml", overrides)
+    options = {p.name: p for p in loaded.participants}
+    assert options["goal"].options["goal_nm"] == [3.5, 0.5]
+    assert options["route"].options["waypoints_nm"] == [[0.5, -0.5], [3.5, 0.5]]
+    heading = np.degrees(np.arctan2(1.0, 3.0))
+    assert options["ship"].initial == pytest.approx({"x_nm": 0.5, "y_nm": -0.5, "psi_deg": heading})
+    assert overrides["outputs.options.voyage.goal_nm"] == [3.5, 0.5]
+    assert np.allclose(voyage.start_m, [0.5 * NM, -0.5 * NM])
+
+
+def test_the_voyage_sets_the_navigation_and_its_arrival_time():
+    from orchestrator.scenario import load_scenario
+    from rhnc.voyage.voyage_geometry import geometry_overrides
+
+    loaded = load_scenario(Path(__file__).parents[2] / "scenarios" / "exp2_routing.toml")
+    nm = 1852.0
+    overrides = geometry_overrides(loaded, np.array([10.0, 90.0]) * nm, np.array([80.0, 5.0]) * nm, 500.0, "here")
+    assert overrides["participants.nav.options.start_nm"] == [10.0, 90.0]
+    assert overrides["participants.nav.options.goal_nm"] == [80.0, 5.0]
+    assert overrides["participants.nav.options.arrival_time_min"] == 500.0
+    assert overrides["participants.goal.options.goal_nm"] == [80.0, 5.0]
+    # psi0 is the scenario's own parameter: set there, in rad; x and y through [initial]
+    assert overrides["participants.ship.parameters.psi0"] == pytest.approx(np.arctan2(-85.0, 70.0))
+    assert overrides["participants.ship.initial.x_nm"] == pytest.approx(10.0)
+    assert overrides["participants.ship.initial.y_nm"] == pytest.approx(90.0)
+
+
+def test_an_override_that_contradicts_the_voyage_is_refused_naming_both(tmp_path, capsys):
+    path = write(tmp_path, top='[set]\n"participants.goal.options.goal_nm" = [3.0, 0.0]')
+    assert main(["compare", str(path), "--results", str(tmp_path / "results")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert ("detour.toml: 'participants.goal.options.goal_nm' = [3.0, 0.0] (set in the comparison) is not the "
+            "[voyage] passage's [4.0, 0.0]") in err
+    assert not (tmp_path / "results" / "fair").exists()
+
+
+@pytest.mark.parametrize("voyage_line, key", [("start_nm = [-2.0, 0.0]", "start_nm"),
+                                              ("goal_nm = [4.0, 3.5]", "goal_nm")])
+def test_a_start_or_goal_off_the_weather_map_is_refused(tmp_path, capsys, voyage_line, key):
+    path = write(tmp_path)
+    old = "start_nm = [0.0, 0.0]" if key == "start_nm" else "goal_nm = [4.0, 0.0]\nmax_duration_h"
+    path.write_text(path.read_text().replace(old, voyage_line if key == "start_nm" else voyage_line + "\nmax_duration_h"))
+    assert main(["compare", str(path), "--results", str(tmp_path / "results")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert f"voyage.{key}" in err and "lies outside the met-ocean map (north -1..5 nm, east -3..3 nm)" in err
 
 
 def test_control_options_naming_files_across_folders_are_refused_before_any_run(tmp_path, capsys, monkeypatch):
@@ -330,3 +395,19 @@ def test_same_control_must_be_true_or_false(tmp_path):
     with pytest.raises(ScenarioError, match=r"compare.toml: voyage.equal_arrival.same_control: expected true or "
                                             r"false, got 'yes'"):
         load_extensions(load_comparison(path), path)
+
+
+def test_a_failed_equal_arrival_trial_is_reported(tmp_path):
+    """A trial that failed (the ship left the weather map) is named in the trials table and
+    handed to the comparison as a failed run, even when the search found its speed."""
+    system = voyage("RHNC", 17.5)
+    equal = matched(system)
+    left = SailedVoyage(**{**voyage("RHNC equal-arrival baseline", 17.0, arrival_s=None, arrived=False).__dict__,
+                           "status": "failed", "reason": "env (MetOcean.fmu): point x is outside the grid"})
+    equal.trials.insert(0, ArrivalTrial(16.0, None, left))
+    section = evaluation_section(COMPARISON_STUB, {"RHNC": system}, {"RHNC": equal}, {}, tmp_path)
+    assert section.failed_runs == {"RHNC equal-arrival baseline at 16.0000 kn":
+                                   "failed: env (MetOcean.fmu): point x is outside the grid"}
+    trials = section.tables["voyage_trials"]
+    assert list(trials["status"]) == ["failed", "finished"]
+    assert "## Equal-arrival trials" in section.markdown and "point x is outside the grid" in section.markdown

@@ -20,7 +20,8 @@ def build(table):
 
 def test_registry_lists_every_generator():
     names = list_generators()
-    assert list(names) == ["paper_default", "storm_off_route", "cyclone", "moving_storm", "storm_set"]
+    assert list(names) == ["paper_default", "storm_off_route", "cyclone", "moving_storm", "storm_set", "current_jet",
+                           "routing_set"]
     assert all(isinstance(summary, str) and summary for summary in names.values())
 
 

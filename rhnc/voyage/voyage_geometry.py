@@ -1,0 +1,147 @@
+"""One voyage geometry for every run of a comparison: ``[voyage]`` start, goal and arrival time.
+
+A voyage comparison names its passage once (``[voyage] start_nm``, ``goal_nm`` and,
+optionally, ``arrival_time_min``); :func:`geometry_overrides` turns it into the overrides
+that give every participant of a run that passage:
+
+* ``navigation``: ``start_nm``, ``goal_nm`` and, for the routing method, ``arrival_time_min``;
+* ``goal``: ``goal_nm``;
+* the plant (the participant whose ``x`` drives the goal monitor): its initial position at
+  the start and its heading along the straight line to the goal, as its own start
+  parameters (``x0``, ``y0``, ``psi0`` in SI units) when the scenario gives them there, else
+  through the canonical ``[participants.<plant>.initial]`` table;
+* ``reference_path``: a straight line (two waypoints, or ``start_nm`` with ``goal_nm`` or
+  ``course_deg``) becomes the line from start to goal; a longer polyline must begin at the
+  start and end at the goal.
+
+An override in the comparison that sets one of these keys to another value is refused with
+one line naming both (:func:`refuse_conflicts`); :func:`check_on_map` refuses a start or goal
+outside the met-ocean map.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from orchestrator.errors import ScenarioError
+from orchestrator.geometry import NM
+
+#: Two positions this close [m] (or headings [rad], or times [min]) are the same.
+SAME = 1e-6
+
+
+def bearing_rad(start_m, goal_m) -> float:
+    """Heading [rad, clockwise from north] of the straight line from ``start_m`` to ``goal_m``."""
+    north, east = np.asarray(goal_m, dtype=float) - np.asarray(start_m, dtype=float)
+    return math.atan2(east, north)
+
+
+def geometry_overrides(loaded, start_m, goal_m, arrival_time_min: float | None, where: str) -> dict[str, Any]:
+    """The overrides that give every participant of the loaded scenario this passage.
+
+    Raises ScenarioError (naming ``where`` and the key) for a reference polyline that does
+    not run from the start to the goal, which cannot be moved without changing its route.
+    """
+    start_nm = [float(v) for v in np.asarray(start_m, dtype=float) / NM]
+    goal_nm = [float(v) for v in np.asarray(goal_m, dtype=float) / NM]
+    heading = bearing_rad(start_m, goal_m)
+    result: dict[str, Any] = {}
+    for spec in loaded.participants:
+        options = f"participants.{spec.name}.options"
+        if spec.type == "navigation":
+            result[f"{options}.start_nm"] = start_nm
+            result[f"{options}.goal_nm"] = goal_nm
+            if arrival_time_min is not None and spec.options.get("method", "routing") == "routing":
+                result[f"{options}.arrival_time_min"] = float(arrival_time_min)
+        elif spec.type == "goal":
+            result[f"{options}.goal_nm"] = goal_nm
+        elif spec.type == "reference_path":
+            result.update(_reference_path(spec, options, start_nm, goal_nm, heading, where))
+    plant = _plant(loaded)
+    if plant is not None:
+        result.update(_plant_start(plant, start_m, heading))
+    return result
+
+
+def refuse_conflicts(geometry: Mapping[str, Any], overrides: Mapping[str, Any], where: str) -> None:
+    """Refuse an override of the comparison that gives a geometry key another value."""
+    for key, value in geometry.items():
+        if key in overrides and not _same(overrides[key], value):
+            raise ScenarioError(f"{where}: '{key}' = {overrides[key]!r} (set in the comparison) is not the "
+                                f"[voyage] passage's {_rounded(value)!r}; leave it out or make [voyage] agree")
+
+
+def check_on_map(field, start_m, goal_m, where: str) -> None:
+    """Refuse a start or goal outside the met-ocean map ``field`` (a ship sent there would
+    meet no weather; a goal on the edge is fine: a run stops as the ship arrives)."""
+    x_min, x_max, y_min, y_max = field.extent
+    for key, point in (("start_nm", start_m), ("goal_nm", goal_m)):
+        if not bool(field.contains(point[0], point[1])):
+            shown = [round(float(v) / NM, 6) for v in point]
+            raise ScenarioError(f"{where}: voyage.{key} {shown} lies outside the met-ocean map (north "
+                                f"{x_min / NM:g}..{x_max / NM:g} nm, east {y_min / NM:g}..{y_max / NM:g} nm)")
+
+
+def _reference_path(spec, options: str, start_nm, goal_nm, heading: float, where: str) -> dict[str, Any]:
+    given = spec.options
+    if "waypoints_nm" in given:
+        points = given["waypoints_nm"]
+        if isinstance(points, list) and len(points) == 2:
+            return {f"{options}.waypoints_nm": [start_nm, goal_nm]}
+        ends_match = (isinstance(points, list) and len(points) > 2
+                      and _same(points[0], start_nm) and _same(points[-1], goal_nm))
+        if not ends_match:
+            first, last = (points[0], points[-1]) if isinstance(points, list) and points else (None, None)
+            raise ScenarioError(f"{where}: {options}.waypoints_nm runs from {first} to {last}, not from the "
+                                f"[voyage] start {start_nm} to its goal {goal_nm}")
+        return {}
+    result = {f"{options}.start_nm": start_nm}
+    if "goal_nm" in given:
+        result[f"{options}.goal_nm"] = goal_nm
+    elif "turn_radius_nm" not in given:
+        result[f"{options}.course_deg"] = math.degrees(heading) % 360.0
+    return result
+
+
+def _plant(loaded):
+    """The FMU whose ``x`` the goal monitor reads (None: no such FMU)."""
+    goals = {p.name for p in loaded.participants if p.type == "goal"}
+    sources = {c.source for c in loaded.connections if c.target in goals and c.target_port == "x"}
+    plants = [p for p in loaded.participants if p.name in sources and p.is_fmu]
+    return plants[0] if len(plants) == 1 else None
+
+
+def _plant_start(plant, start_m, heading: float) -> dict[str, Any]:
+    """The plant's initial x, y and heading: its own start parameters where the scenario sets
+    them there (SI units, the built-in models' ``x0``, ``y0``, ``psi0``), else ``[initial]``."""
+    values = {"x": float(start_m[0]), "y": float(start_m[1]), "psi": heading}
+    initial_keys = {"x": ("x_m", "x_nm", NM), "y": ("y_m", "y_nm", NM), "psi": ("psi_rad", "psi_deg", math.pi / 180)}
+    result = {}
+    for port, value in values.items():
+        mapped = plant.mapping.get(port)
+        parameter = getattr(mapped, "start", None) or f"{port}0"
+        si_key, unit_key, unit = initial_keys[port]
+        if parameter in plant.parameters and mapped is None:
+            result[f"participants.{plant.name}.parameters.{parameter}"] = value
+        elif si_key in plant.initial:
+            result[f"participants.{plant.name}.initial.{si_key}"] = value
+        else:
+            result[f"participants.{plant.name}.initial.{unit_key}"] = value / unit
+    return result
+
+
+def _same(a, b) -> bool:
+    try:
+        return bool(np.allclose(np.asarray(a, dtype=float), np.asarray(b, dtype=float), rtol=0.0, atol=SAME))
+    except (TypeError, ValueError):
+        return a == b
+
+
+def _rounded(value):
+    if isinstance(value, list):
+        return [_rounded(v) for v in value]
+    return round(value, 6) if isinstance(value, float) else value
