@@ -1,7 +1,8 @@
 """Target ships and static obstacles: publishes the ``obstacles`` port (x, y, vx, vy, radius; SI).
 
 Targets sail at constant velocity from a start point, or along waypoints at constant
-speed (stopping at the last one); static obstacles are circles.  Options are in nautical
+speed (stopping at the last one), or manoeuvre on a script, or replay a recorded track
+(:mod:`rhnc.encounters.target_motion`); static obstacles are circles.  Options are in nautical
 miles and knots.  The paper's Eq. 32 head-on target, ``x_T = y_T = 4 - 0.05 t`` nm with
 t counted in 20 s steps, is ``start_nm = [4, 4]``, ``velocity_kn = [-9, -9]``.
 """
@@ -19,7 +20,10 @@ from orchestrator.geometry import KNOT, NM
 from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
 
 
-TARGET_KEYS = ("start_nm", "velocity_kn", "waypoints_nm", "speed_kn", "radius_nm")
+TARGET_KEYS = ("start_nm", "velocity_kn", "waypoints_nm", "speed_kn", "radius_nm", "manoeuvres", "track_file",
+               "mmsi", "origin_deg", "time_offset_s")
+#: Keys of a recorded track (``track_file`` and what goes with it).
+RECORDED_KEYS = ("track_file", "mmsi", "origin_deg", "time_offset_s", "radius_nm")
 STATIC_KEYS = ("center_nm", "radius_nm")
 
 
@@ -69,7 +73,8 @@ class TrafficParticipant(Participant):
     -------
     targets : list of tables
         Each with ``radius_nm`` and either ``start_nm = [x, y]`` + ``velocity_kn = [vx, vy]``
-        or ``waypoints_nm = [[x, y], ...]`` + ``speed_kn``.
+        (optionally ``manoeuvres``), or ``waypoints_nm = [[x, y], ...]`` + ``speed_kn``, or
+        ``track_file`` (+ ``mmsi``, ``origin_deg``, ``time_offset_s``).
     static_obstacles : list of tables
         Each with ``center_nm = [x, y]`` and ``radius_nm``.
 
@@ -80,6 +85,8 @@ class TrafficParticipant(Participant):
         radius [m], at the step's time.
     target<i>_x, target<i>_y : float
         Position of target i (1-based) [m], for plots and analyses.
+    static_obstacles : (k, 5) array
+        The static obstacles alone (charted: a target tracker passes them on as they are).
     """
 
     OPTIONS = ("targets", "static_obstacles")
@@ -95,7 +102,8 @@ class TrafficParticipant(Participant):
         """Build from scenario options (see class docstring); errors name the key."""
         where = context.where
         reject_unknown_options(options, cls.OPTIONS, where)
-        targets = [_target(entry, f"{where}.targets[{i}]") for i, entry in enumerate(_tables(options, "targets", where))]
+        targets = [_target(entry, f"{where}.targets[{i}]", context)
+                   for i, entry in enumerate(_tables(options, "targets", where))]
         static_rows = []
         for i, entry in enumerate(_tables(options, "static_obstacles", where)):
             here = f"{where}.static_obstacles[{i}]"
@@ -114,7 +122,7 @@ class TrafficParticipant(Participant):
         names = ["obstacles"]
         for i in range(1, len(self.targets) + 1):
             names += [f"target{i}_x", f"target{i}_y"]
-        return names
+        return names + ["static_obstacles"]
 
     def obstacles_at(self, time: float) -> np.ndarray:
         """The (n, 5) obstacle array at ``time`` [s]."""
@@ -123,7 +131,7 @@ class TrafficParticipant(Participant):
 
     def _outputs(self, time: float) -> dict[str, Value]:
         obstacles = self.obstacles_at(time)
-        outputs: dict[str, Value] = {"obstacles": obstacles}
+        outputs: dict[str, Value] = {"obstacles": obstacles, "static_obstacles": self.static.copy()}
         for i in range(len(self.targets)):
             outputs[f"target{i + 1}_x"] = float(obstacles[i, 0])
             outputs[f"target{i + 1}_y"] = float(obstacles[i, 1])
@@ -144,12 +152,22 @@ def _tables(options: Mapping[str, Any], key: str, where: str) -> list:
     return entries
 
 
-def _target(entry: Mapping[str, Any], where: str) -> Target:
+def _target(entry: Mapping[str, Any], where: str, context: BuildContext | None = None):
     reject_unknown_options(entry, TARGET_KEYS, where)
     radius = _radius(entry, where)
+    if "track_file" in entry:
+        from rhnc.encounters.target_motion import recorded_target
+
+        reject_unknown_options(entry, RECORDED_KEYS, where)
+        return recorded_target(entry, radius, context.scenario_dir if context else ".", where)
+    for key in RECORDED_KEYS[1:-1]:
+        if key in entry:
+            raise ScenarioError(f"{where}: '{key}' goes with 'track_file'")
     if "waypoints_nm" in entry:
         if "start_nm" in entry or "velocity_kn" in entry:
             raise ScenarioError(f"{where}: give either 'waypoints_nm' + 'speed_kn' or 'start_nm' + 'velocity_kn'")
+        if "manoeuvres" in entry:
+            raise ScenarioError(f"{where}: 'manoeuvres' go with 'start_nm' + 'velocity_kn', not 'waypoints_nm'")
         try:
             points = np.asarray(entry["waypoints_nm"], dtype=float) * NM
         except (TypeError, ValueError):
@@ -169,6 +187,11 @@ def _target(entry: Mapping[str, Any], where: str) -> Target:
         raise ScenarioError(f"{where}: 'speed_kn' goes with 'waypoints_nm'; use 'velocity_kn' = [vx, vy]")
     start = _pair(entry, "start_nm", where) * NM
     velocity = _pair(entry, "velocity_kn", where) * KNOT
+    if "manoeuvres" in entry:
+        from rhnc.encounters.target_motion import scripted_target
+
+        duration = (context.stop_time - context.start_time) if context else 0.0
+        return scripted_target(start, velocity, entry["manoeuvres"], radius, duration, where)
     return Target(start[None, :], velocity, float(np.hypot(*velocity)), radius)
 
 
