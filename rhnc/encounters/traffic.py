@@ -85,6 +85,8 @@ class TrafficParticipant(Participant):
         radius [m], at the step's time.
     target<i>_x, target<i>_y : float
         Position of target i (1-based) [m], for plots and analyses.
+    targets : (n, 5) array
+        The targets alone (what AIS and radar see).
     static_obstacles : (k, 5) array
         The static obstacles alone (charted: a target tracker passes them on as they are).
     """
@@ -122,7 +124,7 @@ class TrafficParticipant(Participant):
         names = ["obstacles"]
         for i in range(1, len(self.targets) + 1):
             names += [f"target{i}_x", f"target{i}_y"]
-        return names + ["static_obstacles"]
+        return names + ["targets", "static_obstacles"]
 
     def obstacles_at(self, time: float) -> np.ndarray:
         """The (n, 5) obstacle array at ``time`` [s]."""
@@ -131,7 +133,8 @@ class TrafficParticipant(Participant):
 
     def _outputs(self, time: float) -> dict[str, Value]:
         obstacles = self.obstacles_at(time)
-        outputs: dict[str, Value] = {"obstacles": obstacles, "static_obstacles": self.static.copy()}
+        outputs: dict[str, Value] = {"obstacles": obstacles, "targets": obstacles[:len(self.targets)].copy(),
+                                     "static_obstacles": self.static.copy()}
         for i in range(len(self.targets)):
             outputs[f"target{i + 1}_x"] = float(obstacles[i, 0])
             outputs[f"target{i + 1}_y"] = float(obstacles[i, 1])
