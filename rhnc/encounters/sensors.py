@@ -13,16 +13,16 @@ AIS (:class:`AisParticipant`)
     falls silent for ``gap_duration_s`` at random instants (``gaps_per_hour``: a receiver
     out of range, a shadowed antenna, a busy channel).  A report arrives ``latency_s`` (+ a
     uniform ``latency_jitter_s``) after transmission and keeps its time stamp.  Output
-    ``reports`` (n, 5): per target row (its identity, as the MMSI is), the latest report
-    received: time of the position [s], x, y [m], SOG [m/s], COG [rad]; time NaN until the
-    first one arrives.
+    ``reports`` (n, 6): per target row (its identity, as the MMSI is), the latest report
+    received: received (1, or 0 until the first one arrives), time of the position [s],
+    x, y [m], SOG [m/s], COG [rad].
 Radar (:class:`RadarParticipant`)
     One scan per step: each target within ``detection_range_nm`` is detected with
     ``detection_probability``; its range and bearing from the own ship carry Gaussian noise.
-    No clutter, no false alarms, no identity.  Output ``detections`` (n, 5): time [s],
-    range [m], bearing [rad, clockwise from north], own x, own y [m] at the scan; rows of
-    missed targets are NaN and the rows are sorted by bearing (a radar does not know which
-    ship is which).
+    No clutter, no false alarms, no identity.  Output ``detections`` (n, 6): detected (1,
+    or 0 for a row without a detection), time [s], range [m], bearing [rad, clockwise from
+    north], own x, own y [m] at the scan; the detections come first, sorted by bearing (a
+    radar does not know which ship is which).
 
 Same seed, same inputs: same series (one ``numpy.random.Generator`` per participant,
 drawn in a fixed order).
@@ -89,7 +89,7 @@ class AisOptions(TomlTable):
 class AisParticipant(Participant):
     """AIS position reports of every target (module docstring).
 
-    Inputs: ``targets`` ((n, 5) true targets).  Output: ``reports`` ((n, 5)).
+    Inputs: ``targets`` ((n, 5) true targets).  Output: ``reports`` ((n, 6)).
     """
 
     OPTIONS = tuple(AisOptions.model_fields)
@@ -118,7 +118,7 @@ class AisParticipant(Participant):
     def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         self._reset()
         if "targets" not in inputs:
-            return {"reports": np.zeros((0, 5))}
+            return {"reports": np.zeros((0, 6))}
         return self._observe(start_time, np.asarray(inputs["targets"], dtype=float).reshape(-1, 5))
 
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
@@ -129,7 +129,7 @@ class AisParticipant(Participant):
     def _observe(self, time: float, targets: np.ndarray) -> dict[str, Value]:
         n = len(targets)
         if self._latest is None or len(self._latest) != n:
-            self._latest = np.full((n, 5), np.nan)
+            self._latest = np.zeros((n, 6))
             # the first transmissions spread over an interval (the ships' slots are not aligned)
             self._next_transmission = time + self._rng.uniform(0.0, 1.0, n) * self._intervals(targets, None)
             self._silent_until = np.full(n, -np.inf)
@@ -139,8 +139,8 @@ class AisParticipant(Participant):
         arrived = [entry for entry in self._in_flight if entry[0] <= time + 1e-9]
         self._in_flight = [entry for entry in self._in_flight if entry[0] > time + 1e-9]
         for _, row, report in sorted(arrived, key=lambda entry: entry[2][0]):
-            if not report[0] <= self._latest[row, 0]:  # a late, older report does not replace a newer one
-                self._latest[row] = report
+            if self._latest[row, 0] == 0.0 or report[0] > self._latest[row, 1]:  # not by an older, late one
+                self._latest[row] = np.r_[1.0, report]
         return {"reports": self._latest.copy()}
 
     def _intervals(self, targets: np.ndarray, previous: np.ndarray | None, dt: float = 1.0) -> np.ndarray:
@@ -195,7 +195,7 @@ class RadarOptions(TomlTable):
 class RadarParticipant(Participant):
     """Radar detections of the targets within range (module docstring).
 
-    Inputs: own ``x``, ``y`` [m], ``targets`` ((n, 5)).  Output: ``detections`` ((n, 5)).
+    Inputs: own ``x``, ``y`` [m], ``targets`` ((n, 5)).  Output: ``detections`` ((n, 6)).
     """
 
     OPTIONS = tuple(RadarOptions.model_fields)
@@ -215,7 +215,7 @@ class RadarParticipant(Participant):
     def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         self._rng = np.random.default_rng(self.options.seed)
         if not all(port in inputs for port in self.input_names):
-            return {"detections": np.zeros((0, 5))}
+            return {"detections": np.zeros((0, 6))}
         return self._scan(start_time, inputs)
 
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
@@ -228,7 +228,7 @@ class RadarParticipant(Participant):
         o = self.options
         own = np.array([float(inputs["x"]), float(inputs["y"])])
         targets = np.asarray(inputs["targets"], dtype=float).reshape(-1, 5)
-        rows = np.full((len(targets), 5), np.nan)
+        rows = np.zeros((len(targets), 6))
         for i, target in enumerate(targets):
             noise = self._rng.standard_normal(2)
             draw = self._rng.uniform()
@@ -236,8 +236,8 @@ class RadarParticipant(Participant):
             distance = float(np.hypot(*offset))
             if distance > o.detection_range_nm * NM or draw >= o.detection_probability:
                 continue
-            rows[i] = [time, max(distance + noise[0] * o.range_sigma_m, 0.0),
+            rows[i] = [1.0, time, max(distance + noise[0] * o.range_sigma_m, 0.0),
                        float(wrap_angle(math.atan2(offset[1], offset[0]) + noise[1] * o.bearing_sigma_deg * DEG)),
                        own[0], own[1]]
-        order = np.argsort(np.where(np.isnan(rows[:, 2]), np.inf, rows[:, 2]), kind="stable")
+        order = np.argsort(np.where(rows[:, 0] > 0, rows[:, 3], np.inf), kind="stable")
         return {"detections": rows[order]}

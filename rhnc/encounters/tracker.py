@@ -166,16 +166,16 @@ class TrackerParticipant(Participant):
     def _process(self, time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         measurements = []  # (time, kind, payload)
         if "ais_reports" in inputs:
-            reports = np.asarray(inputs["ais_reports"], dtype=float).reshape(-1, 5)
+            reports = np.asarray(inputs["ais_reports"], dtype=float).reshape(-1, 6)
             for row, report in enumerate(reports):
-                if np.isfinite(report[0]) and report[0] > self._ais_seen.get(row, -math.inf):
-                    self._ais_seen[row] = float(report[0])
-                    measurements.append((float(report[0]), 0, (row, report)))
+                if report[0] > 0 and report[1] > self._ais_seen.get(row, -math.inf):
+                    self._ais_seen[row] = float(report[1])
+                    measurements.append((float(report[1]), 0, (row, report[1:])))
         scans: dict[float, list[np.ndarray]] = {}
         if "radar_detections" in inputs:
-            for detection in np.asarray(inputs["radar_detections"], dtype=float).reshape(-1, 5):
-                if np.all(np.isfinite(detection)):
-                    scans.setdefault(float(detection[0]), []).append(detection)
+            for detection in np.asarray(inputs["radar_detections"], dtype=float).reshape(-1, 6):
+                if detection[0] > 0:
+                    scans.setdefault(float(detection[1]), []).append(detection[1:])
         measurements += [(t, 1, rows) for t, rows in scans.items()]
         for t, kind, payload in sorted(measurements, key=lambda m: (m[0], m[1])):
             if kind == 0:

@@ -36,9 +36,9 @@ def run_ais(options, truth, duration_s=600.0, step=1.0):
     received, last = [], -math.inf
     for t in np.arange(step, duration_s + step / 2, step):
         report = ais.step(float(t), step, {"targets": truth(float(t))})["reports"][0]
-        if np.isfinite(report[0]) and report[0] != last:
-            received.append((float(t), report.copy()))
-            last = report[0]
+        if report[0] == 1.0 and report[1] != last:
+            received.append((float(t), report[1:].copy()))
+            last = report[1]
     return ais, received
 
 
@@ -116,7 +116,8 @@ def test_radar_detects_within_range_with_range_and_bearing_noise():
     ranges, bearings = [], []
     for k in range(2000):
         rows = radar.step(float(k), 1.0, {"x": 0.0, "y": 0.0, "targets": targets})["detections"]
-        assert np.isnan(rows[-1, 0])  # the one at 7 nm: out of range, never seen
+        assert rows[-1, 0] == 0.0 and np.all(rows[:2, 0] == 1.0)  # the one at 7 nm: out of range, never seen
+        rows = rows[:, 1:]
         np.testing.assert_array_equal(np.argsort(rows[:2, 2]), [0, 1])  # sorted by bearing
         first = rows[np.argmin(np.abs(rows[:2, 2] - math.atan2(4, 3)))]
         ranges.append(first[1])
