@@ -2,7 +2,8 @@
 
 Targets sail at constant velocity from a start point, or along waypoints at constant
 speed (stopping at the last one), or manoeuvre on a script, or replay a recorded track
-(:mod:`rhnc.encounters.target_motion`); static obstacles are circles.  Options are in nautical
+(:mod:`rhnc.encounters.target_motion`), or give way and stand on by the rules of the road
+(:mod:`rhnc.encounters.rule_following`); static obstacles are circles.  Options are in nautical
 miles and knots.  The paper's Eq. 32 head-on target, ``x_T = y_T = 4 - 0.05 t`` nm with
 t counted in 20 s steps, is ``start_nm = [4, 4]``, ``velocity_kn = [-9, -9]``.
 """
@@ -21,7 +22,10 @@ from orchestrator.participant import BuildContext, Participant, Value, is_finite
 
 
 TARGET_KEYS = ("start_nm", "velocity_kn", "waypoints_nm", "speed_kn", "radius_nm", "manoeuvres", "track_file",
-               "mmsi", "origin_deg", "time_offset_s")
+               "mmsi", "origin_deg", "time_offset_s", "behaviour", "alteration_deg", "give_way_tcpa_s",
+               "turn_rate_deg_s")
+#: The own ship's state, the inputs of a traffic with a target that reacts to it.
+OWN_SHIP_INPUTS = ("x", "y", "psi", "u", "v")
 #: Keys of a recorded track (``track_file`` and what goes with it).
 RECORDED_KEYS = ("track_file", "mmsi", "origin_deg", "time_offset_s", "radius_nm")
 STATIC_KEYS = ("center_nm", "radius_nm")
@@ -73,7 +77,7 @@ class TrafficParticipant(Participant):
     -------
     targets : list of tables
         Each with ``radius_nm`` and either ``start_nm = [x, y]`` + ``velocity_kn = [vx, vy]``
-        (optionally ``manoeuvres``), or ``waypoints_nm = [[x, y], ...]`` + ``speed_kn``, or
+        (optionally ``manoeuvres``, or ``behaviour = "rules"``), or ``waypoints_nm = [[x, y], ...]`` + ``speed_kn``, or
         ``track_file`` (+ ``mmsi``, ``origin_deg``, ``time_offset_s``).
     static_obstacles : list of tables
         Each with ``center_nm = [x, y]`` and ``radius_nm``.
@@ -117,7 +121,28 @@ class TrafficParticipant(Participant):
 
     @property
     def input_names(self) -> Sequence[str]:
-        return ()
+        """None, or the own ship's state when a target reacts to it (``behaviour = "rules"``)."""
+        return OWN_SHIP_INPUTS if self._reactive else ()
+
+    @property
+    def _reactive(self) -> list:
+        return [target for target in self.targets if getattr(target, "reactive", False)]
+
+    def _react(self, time: float, inputs: Mapping[str, Value]) -> None:
+        """Reactive targets sail to ``time`` on their last decision, then decide on what they see now."""
+        elapsed = time - self._start_time
+        for target in self._reactive:
+            target.advance(elapsed)
+        missing = [port for port in OWN_SHIP_INPUTS if port not in inputs]
+        if missing:
+            return  # at set-up, before the ship has published its state
+        psi, u, v = (float(inputs[port]) for port in ("psi", "u", "v"))
+        own = np.array([float(inputs["x"]), float(inputs["y"]), u * math.cos(psi) - v * math.sin(psi),
+                        u * math.sin(psi) + v * math.cos(psi), 0.0])
+        rows = np.array([target.state(elapsed) for target in self.targets]).reshape(-1, 5)
+        for i, target in enumerate(self.targets):
+            if getattr(target, "reactive", False):
+                target.decide(np.vstack([own[None, :], np.delete(rows, i, axis=0)]))
 
     @property
     def output_names(self) -> Sequence[str]:
@@ -142,10 +167,21 @@ class TrafficParticipant(Participant):
 
     def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         self._start_time = start_time
+        for target in self._reactive:
+            target.reset()
+        self._react(start_time, inputs)
         return self._outputs(start_time)
 
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
+        if self._reactive:
+            self._react(time, inputs)
         return self._outputs(time)
+
+    def tables(self) -> dict[str, list[dict[str, Any]]]:
+        """``actions``: every decision of a rule-following target to give way or act as stand-on ship."""
+        actions = [{"target": i + 1, **action} for i, target in enumerate(self.targets)
+                   for action in getattr(target, "actions", [])]
+        return {"actions": actions} if actions else {}
 
 
 def _tables(options: Mapping[str, Any], key: str, where: str) -> list:
@@ -169,8 +205,9 @@ def _target(entry: Mapping[str, Any], where: str, context: BuildContext | None =
     if "waypoints_nm" in entry:
         if "start_nm" in entry or "velocity_kn" in entry:
             raise ScenarioError(f"{where}: give either 'waypoints_nm' + 'speed_kn' or 'start_nm' + 'velocity_kn'")
-        if "manoeuvres" in entry:
-            raise ScenarioError(f"{where}: 'manoeuvres' go with 'start_nm' + 'velocity_kn', not 'waypoints_nm'")
+        for key in ("manoeuvres", "behaviour"):
+            if key in entry:
+                raise ScenarioError(f"{where}: '{key}' goes with 'start_nm' + 'velocity_kn', not 'waypoints_nm'")
         try:
             points = np.asarray(entry["waypoints_nm"], dtype=float) * NM
         except (TypeError, ValueError):
@@ -190,6 +227,12 @@ def _target(entry: Mapping[str, Any], where: str, context: BuildContext | None =
         raise ScenarioError(f"{where}: 'speed_kn' goes with 'waypoints_nm'; use 'velocity_kn' = [vx, vy]")
     start = _pair(entry, "start_nm", where) * NM
     velocity = _pair(entry, "velocity_kn", where) * KNOT
+    if "behaviour" in entry or any(key in entry for key in ("alteration_deg", "give_way_tcpa_s", "turn_rate_deg_s")):
+        from rhnc.encounters.rule_following import rule_following_target
+
+        if "manoeuvres" in entry:
+            raise ScenarioError(f"{where}: give either 'manoeuvres' (a script) or 'behaviour' (a reactive target)")
+        return rule_following_target(entry, start, velocity, radius, where)
     if "manoeuvres" in entry:
         from rhnc.encounters.target_motion import scripted_target
 

@@ -136,5 +136,5 @@ def test_nmea_errors_name_the_line(tmp_path):
 def test_manoeuvre_errors_name_the_key(manoeuvres, message):
     with pytest.raises(ScenarioError, match=message):
         traffic([{"start_nm": [0, 0], "velocity_kn": [10, 0], "radius_nm": 0.5, "manoeuvres": manoeuvres}])
-    with pytest.raises(ScenarioError, match=r"'manoeuvres' go with 'start_nm'"):
+    with pytest.raises(ScenarioError, match=r"'manoeuvres' goes with 'start_nm'"):
         traffic([{"waypoints_nm": [[0, 0], [1, 0]], "speed_kn": 5, "radius_nm": 0.5, "manoeuvres": manoeuvres}])
