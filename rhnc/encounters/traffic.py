@@ -81,6 +81,10 @@ class TrafficParticipant(Participant):
         ``track_file`` (+ ``mmsi``, ``origin_deg``, ``time_offset_s``).
     static_obstacles : list of tables
         Each with ``center_nm = [x, y]`` and ``radius_nm``.
+    target_behaviour : str, optional
+        ``"rules"``: every constant-velocity target without its own ``behaviour`` or
+        ``manoeuvres`` follows the rules of the road (so that a batch of traffic situations
+        can make every ship autonomous).
 
     Outputs
     -------
@@ -95,7 +99,7 @@ class TrafficParticipant(Participant):
         The static obstacles alone (charted: a target tracker passes them on as they are).
     """
 
-    OPTIONS = ("targets", "static_obstacles")
+    OPTIONS = ("targets", "static_obstacles", "target_behaviour")
 
     def __init__(self, name: str, targets: Sequence[Target], static: np.ndarray, start_time: float) -> None:
         super().__init__(name)
@@ -108,8 +112,15 @@ class TrafficParticipant(Participant):
         """Build from scenario options (see class docstring); errors name the key."""
         where = context.where
         reject_unknown_options(options, cls.OPTIONS, where)
-        targets = [_target(entry, f"{where}.targets[{i}]", context)
-                   for i, entry in enumerate(_tables(options, "targets", where))]
+        behaviour = options.get("target_behaviour")
+        if behaviour is not None and behaviour != "rules":
+            raise ScenarioError(f"{where}: 'target_behaviour' must be \"rules\" (every target follows the rules of "
+                                f"the road), got {behaviour!r}")
+        entries = _tables(options, "targets", where)
+        if behaviour is not None:
+            entries = [{**entry, "behaviour": behaviour} if "start_nm" in entry and "behaviour" not in entry
+                       and "manoeuvres" not in entry else entry for entry in entries]
+        targets = [_target(entry, f"{where}.targets[{i}]", context) for i, entry in enumerate(entries)]
         static_rows = []
         for i, entry in enumerate(_tables(options, "static_obstacles", where)):
             here = f"{where}.static_obstacles[{i}]"

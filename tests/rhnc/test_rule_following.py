@@ -100,3 +100,51 @@ def test_rule_following_errors_name_the_key(entry, message):
     with pytest.raises(ScenarioError, match=r"'behaviour' goes with 'start_nm'"):
         sail([{"waypoints_nm": [[0, 0], [1, 0]], "speed_kn": 5, "radius_nm": 1.0, "behaviour": "rules"}],
              duration_s=10.0)
+
+
+def test_target_behaviour_makes_every_constant_velocity_target_follow_the_rules():
+    options = {"target_behaviour": "rules", "targets": [
+        {"start_nm": [8.0, 0.0], "velocity_kn": [-18.0, 0.0], "radius_nm": 1.0},
+        {"waypoints_nm": [[0, 5], [1, 5]], "speed_kn": 5, "radius_nm": 1.0},
+        {"start_nm": [0.0, 9.0], "velocity_kn": [0.0, 5.0], "radius_nm": 1.0,
+         "manoeuvres": [{"at_s": 60, "speed_kn": 4}]}]}
+    context = BuildContext("s.toml: participants.traffic", Path("."), 5.0, 0.0, 600.0)
+    traffic = TrafficParticipant.from_options("traffic", options, context)
+    assert [getattr(target, "reactive", False) for target in traffic.targets] == [True, False, False]
+    with pytest.raises(ScenarioError, match=r"participants.traffic: 'target_behaviour' must be \"rules\""):
+        TrafficParticipant.from_options("traffic", {"target_behaviour": "yes", "targets": []}, context)
+
+
+def scripted_rows(start_nm, velocity_kn, change_deg, at_s, times, radius_nm=1.0):
+    from rhnc.encounters.target_motion import Manoeuvre, ScriptedTarget
+
+    ship = ScriptedTarget(np.asarray(start_nm) * NM, np.asarray(velocity_kn) * KNOT,
+                          [Manoeuvre(at_s, math.radians(change_deg), math.radians(0.5), None, 0.02)],
+                          radius_nm * NM, float(times[-1]))
+    return np.array([ship.state(t) for t in times])
+
+
+@pytest.mark.parametrize("target_turn_deg, mutual", [(40.0, 0), (-40.0, 1)])
+def test_traffic_judgement_finds_a_mutual_turn_into_each_other(target_turn_deg, mutual):
+    from rhnc.cosim.traffic_colregs_analysis import judge_traffic
+
+    times = np.arange(0.0, 2400.0, 5.0)
+    own = scripted_rows([0.0, 0.0], [18.0, 0.0], 40.0, 300.0, times)
+    target = scripted_rows([12.0, 0.2], [-18.0, 0.0], target_turn_deg, 300.0, times)  # + : its starboard
+    result = judge_traffic(times, own[:, 0], own[:, 1], target[:, None, :])
+    (entry,) = result["targets"]
+    assert entry["class_against_own_ship"] == "head_on" and entry["own_manoeuvre_side"] == "starboard"
+    assert entry["manoeuvre_side"] == ("starboard" if target_turn_deg > 0 else "port")
+    assert result["mutual_turns_into_each_other"] == mutual
+    assert result["targets_side_correct"] is (mutual == 0)
+
+
+def test_traffic_judgement_of_a_rule_following_target_in_a_crossing():
+    from rhnc.cosim.traffic_colregs_analysis import judge_traffic
+
+    times, own, rows, traffic = sail([{"start_nm": [5.0, -5.0], "velocity_kn": [0.0, 18.0], "radius_nm": 1.0,
+                                       "behaviour": "rules"}])
+    result = judge_traffic(times, own[:, 0], own[:, 1], rows[:, :1, :])
+    (entry,) = result["targets"]
+    assert entry["class_against_own_ship"] == "crossing_give_way" and entry["side_correct"] is True
+    assert entry["separation_kept"] and result["mutual_turns_into_each_other"] == 0
