@@ -127,6 +127,18 @@ def test_radar_detects_within_range_with_range_and_bearing_noise():
     assert np.degrees(np.std(bearings)) == pytest.approx(1.0, rel=0.1)
 
 
+def test_radar_same_seed_same_series():
+    targets = np.array([[3 * NM, 4 * NM, 0, 0, NM], [1 * NM, -2 * NM, 0, 0, NM]])
+    series = []
+    for seed in (5, 5, 6):
+        radar = build(RadarParticipant, {"seed": seed})
+        radar.setup(0.0, {"x": 0.0, "y": 0.0, "targets": targets})
+        series.append(np.array([radar.step(float(k), 1.0, {"x": 0.0, "y": 0.0, "targets": targets})["detections"]
+                                for k in range(1, 50)]))
+    np.testing.assert_array_equal(series[0], series[1])
+    assert not np.array_equal(series[0], series[2])
+
+
 def test_sensor_option_errors_name_the_key():
     with pytest.raises(ScenarioError, match=r"'participants.sensor.options.dropout_probability' must be a probability"):
         build(AisParticipant, {"dropout_probability": 1.5})
