@@ -1,6 +1,7 @@
 """Targets as agents: scripted manoeuvres and recorded tracks (CSV and AIS NMEA) in the traffic participant."""
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -138,3 +139,24 @@ def test_manoeuvre_errors_name_the_key(manoeuvres, message):
         traffic([{"start_nm": [0, 0], "velocity_kn": [10, 0], "radius_nm": 0.5, "manoeuvres": manoeuvres}])
     with pytest.raises(ScenarioError, match=r"'manoeuvres' goes with 'start_nm'"):
         traffic([{"waypoints_nm": [[0, 0], [1, 0]], "speed_kn": 5, "radius_nm": 0.5, "manoeuvres": manoeuvres}])
+
+
+@pytest.mark.parametrize("edit, message", [
+    (("targets = [{ start_nm = [7.5, 0.0], velocity_kn = [-18.0, 0.0], radius_nm = 1.0 }]",
+      "targets = [{ track_file = 'gone.csv', radius_nm = 1.0 }]"), r"targets\[0\]: 'track_file' .*gone.csv not found"),
+    (("[participants.ais.options]\nseed = 1", "[participants.ais.options]\nseed = 1\ndropout_probability = 2"),
+     r"'participants.ais.options.dropout_probability' must be a probability"),
+])
+def test_cli_refuses_bad_traffic_input_in_one_line_with_exit_2_and_writes_nothing(tmp_path, capsys, edit, message):
+    from orchestrator.cli import main
+
+    repo = Path(__file__).resolve().parents[2]
+    text = (repo / "scenarios" / "encounter_nmpc_ais.toml").read_text()
+    assert edit[0] in text
+    scenario = tmp_path / "bad.toml"
+    scenario.write_text(text.replace(edit[0], edit[1]))
+    results = tmp_path / "results"
+    assert main(["run", str(scenario), "--results", str(results), "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"error: {scenario}") and re.search(message, err[0])
+    assert not results.exists() or not any(results.rglob("*"))
