@@ -101,11 +101,13 @@ class TrafficParticipant(Participant):
 
     OPTIONS = ("targets", "static_obstacles", "target_behaviour")
 
-    def __init__(self, name: str, targets: Sequence[Target], static: np.ndarray, start_time: float) -> None:
+    def __init__(self, name: str, targets: Sequence[Target], static: np.ndarray, start_time: float,
+                 where: str | None = None) -> None:
         super().__init__(name)
         self.targets = list(targets)
         self.static = static
         self._start_time = start_time
+        self._where = where or f"participants.{name}"
 
     @classmethod
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "TrafficParticipant":
@@ -128,12 +130,19 @@ class TrafficParticipant(Participant):
             center = _pair(entry, "center_nm", here) * NM
             static_rows.append([center[0], center[1], 0.0, 0.0, _radius(entry, here)])
         static = np.array(static_rows, dtype=float).reshape(-1, 5)
-        return cls(name, targets, static, context.start_time)
+        return cls(name, targets, static, context.start_time, where)
 
     @property
     def input_names(self) -> Sequence[str]:
         """None, or the own ship's state when a target reacts to it (``behaviour = "rules"``)."""
         return OWN_SHIP_INPUTS if self._reactive else ()
+
+    def connected(self, sources: Mapping[str, Participant]) -> None:
+        """Refuse a reactive target that could not see the own ship (its state not connected)."""
+        missing = [port for port in self.input_names if port not in sources]
+        if missing:
+            raise ScenarioError(f"{self._where}: targets with behaviour = \"rules\" react to the own ship; connect "
+                                f"its state to {', '.join(f'{self.name}.{port}' for port in missing)}")
 
     @property
     def _reactive(self) -> list:

@@ -148,3 +148,17 @@ def test_traffic_judgement_of_a_rule_following_target_in_a_crossing():
     (entry,) = result["targets"]
     assert entry["class_against_own_ship"] == "crossing_give_way" and entry["side_correct"] is True
     assert entry["separation_kept"] and result["mutual_turns_into_each_other"] == 0
+
+
+def test_reactive_targets_without_the_own_ship_connected_are_refused_in_one_line(tmp_path, capsys):
+    from orchestrator.cli import main
+
+    repo = Path(__file__).resolve().parents[2]
+    text = (repo / "scenarios" / "encounter_nmpc_autonomous.toml").read_text()
+    scenario = tmp_path / "bad.toml"
+    scenario.write_text(text.replace('  "ship.psi -> traffic.psi",\n', ""))
+    assert main(["run", str(scenario), "--results", str(tmp_path / "results"), "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"error: {scenario}: participants.traffic: targets with behaviour = \"rules\" react to the own "
+                   f"ship; connect its state to traffic.psi"]
+    assert not (tmp_path / "results").exists() or not any((tmp_path / "results").rglob("*"))
