@@ -4,7 +4,9 @@ Reads ``<results>/<batch>/batch.json`` and each run's ``summary.json`` of the ba
 matches runs by their situation file (else their index) and prints one Markdown table:
 per run and batch the minimum clearance beyond R + R_i [nm], the COLREG side and verdict,
 and for batches with a tracker its position/velocity RMS and track breaks, for batches with
-autonomous targets their mutual turns into each other; then a summary line per batch::
+autonomous targets their mutual turns into each other; then a summary line per batch.
+The tracker's figures are recomputed from each run's recorded series (so a change of
+their definition needs no rerun)::
 
     python scripts/traffic_suites_table.py results imazu_nmpc_colregs imazu_nmpc_colregs_ais
 """
@@ -14,6 +16,21 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
+
+
+def tracking_from_timeseries(run_folder: Path) -> dict:
+    """The tracking figures recomputed from a run's recorded series with the current
+    :func:`rhnc.encounters.tracking_errors.tracking_errors` (participants named ``traffic``
+    and ``tracker``, as in the suites' scenarios)."""
+    import pandas as pd
+
+    from orchestrator.analyses import array_output
+    from rhnc.encounters.tracking_errors import tracking_errors
+
+    frame = pd.read_parquet(run_folder / "timeseries.parquet")
+    valid = array_output(frame, "tracker.track_valid")
+    estimates = array_output(frame, "tracker.obstacles")[:, :valid.shape[1], :]
+    return tracking_errors(frame["time_s"].to_numpy(), array_output(frame, "traffic.targets"), estimates, valid)
 
 
 def load(results: Path, batch: str) -> dict[str, dict]:
@@ -26,6 +43,8 @@ def load(results: Path, batch: str) -> dict[str, dict]:
         if summary.is_file():
             key = run.get("parameters", {}).get("situation") or f"run {run['index']}"
             runs[key] = json.loads(summary.read_text())
+            if "tracking" in runs[key].get("analyses", {}):
+                runs[key]["analyses"]["tracking"] = tracking_from_timeseries(summary.parent)
     return runs
 
 
@@ -74,6 +93,19 @@ def main(argv=None) -> int:
         print(f"- {batch}: {len(runs)} runs; separation kept in {sum(c >= 0 for c in clearances)}/{len(clearances)} "
               f"(smallest clearance {min(clearances, default=float('nan')):.3f} nm); COLREG side wrong in "
               f"{sum(side is False for side in sides)}")
+        tracked = [s["analyses"]["tracking"] for s in runs.values() if "tracking" in s.get("analyses", {})]
+        if tracked:
+            rms = [t["position_rms_max_m"] for t in tracked if t["position_rms_max_m"] is not None]
+            speed = [t["velocity_rms_max_mps"] for t in tracked if t["velocity_rms_max_mps"] is not None]
+            print(f"  tracker: position RMS {min(rms):.1f}-{max(rms):.1f} m, velocity RMS {min(speed):.2f}-"
+                  f"{max(speed):.2f} m/s, track breaks {sum(t['track_breaks'] for t in tracked)}, targets never "
+                  f"tracked {sum(t['targets_never_tracked'] for t in tracked)}")
+        autonomous = [s["analyses"]["traffic_colregs"] for s in runs.values()
+                      if "traffic_colregs" in s.get("analyses", {})]
+        if autonomous:
+            print(f"  targets: kept R_i in {sum(a['targets_separation_kept'] for a in autonomous)}/{len(autonomous)}, "
+                  f"side wrong in {sum(a['targets_side_correct'] is False for a in autonomous)}, mutual turns into "
+                  f"each other {sum(a['mutual_turns_into_each_other'] for a in autonomous)}")
     return 0
 
 

@@ -37,6 +37,19 @@ def test_tracking_errors_rms_coverage_and_breaks():
     assert far["targets_never_tracked"] == 1 and far["position_rms_max_m"] is None
 
 
+def test_two_ships_passing_close_keep_their_own_tracks_in_the_figures():
+    t = np.arange(21.0)
+    truth = np.zeros((21, 2, 5))
+    truth[:, 0, 0], truth[:, 1, 0] = 10.0 * t, 200.0 - 10.0 * t  # they pass each other at t = 10
+    truth[:, 0, 2], truth[:, 1, 2] = 10.0, -10.0
+    estimates = truth.copy()
+    estimates[:, :, 0] += np.array([15.0, -15.0])  # each track lags its ship by 15 m
+    result = tracking_errors(t, truth, estimates, np.ones((21, 2)), gate_m=100.0)
+    assert result["track_breaks"] == 0
+    assert result["position_rms_max_m"] == pytest.approx(15.0)
+    assert result["velocity_rms_max_mps"] == pytest.approx(0.0)
+
+
 class _Connection:
     def __init__(self, text):
         source, target = (part.strip() for part in text.split("->"))
