@@ -92,7 +92,9 @@ def main(argv=None) -> int:
         sides = [s["analyses"]["colregs"].get("side_correct") for s in runs.values() if "colregs" in s.get("analyses", {})]
         print(f"- {batch}: {len(runs)} runs; separation kept in {sum(c >= 0 for c in clearances)}/{len(clearances)} "
               f"(smallest clearance {min(clearances, default=float('nan')):.3f} nm); COLREG side wrong in "
-              f"{sum(side is False for side in sides)}")
+              f"{sum(side is False for side in sides)}; verdict fail in "
+              f"{sum(s['analyses'].get('colregs', {}).get('verdict') == 'fail' for s in runs.values())}; runs with a "
+              f"solver fallback {sum((s.get('participants', {}).get('ctrl', {}).get('fallback_count') or 0) > 0 for s in runs.values())}")
         tracked = [s["analyses"]["tracking"] for s in runs.values() if "tracking" in s.get("analyses", {})]
         if tracked:
             rms = [t["position_rms_max_m"] for t in tracked if t["position_rms_max_m"] is not None]
