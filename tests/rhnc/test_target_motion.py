@@ -70,8 +70,11 @@ def nmea_lines(mmsi, points, first_time=1_700_000_000.0, interval_s=10.0):
 
     lines = []
     for k, (lat, lon) in enumerate(points):
-        sentence = encode_dict({"type": 1, "mmsi": mmsi, "lat": lat, "lon": lon, "speed": 12.0, "course": 90.0},
-                               talker_id="AI")[0]
+        message = {"type": 1, "mmsi": mmsi, "lat": lat, "lon": lon, "speed": 12.0, "course": 90.0}
+        try:
+            sentence = encode_dict(message, talker_id="AI")[0]
+        except ValueError:  # pyais before 3 names the talker in full
+            sentence = encode_dict(message, talker_id="AIVDM")[0]
         lines.append(f"{first_time + k * interval_s:.1f} {sentence}")
     return lines
 
