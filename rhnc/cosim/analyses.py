@@ -12,6 +12,7 @@ import numpy as np
 from orchestrator.analyses import array_output, driver_column
 from orchestrator.errors import ScenarioError, ToolchainError
 from orchestrator.geometry import KNOT, NM
+from rhnc.cosim.obstacle_ports import true_obstacles_column
 from rhnc.cosim.plant import own_radius_m, plant_name, steering_column, tau_column
 
 #: The ship whose particulars (ships/<name>.toml) apply when the plant does not say.
@@ -164,7 +165,8 @@ def cut_at_crossing(series: dict[str, np.ndarray], distance: np.ndarray, first_i
 def encounter_analysis(frame, scenario, cosim, out_dir) -> dict:
     """Minimum separation against R + R_i per obstacle, input bounds, return to the track.
 
-    The obstacles are the array output feeding any participant's ``obstacles`` input; the
+    The obstacles are the true ones (:func:`rhnc.cosim.obstacle_ports.true_obstacles_column`:
+    the array feeding an ``obstacles`` input, or the truth behind a tracker feeding it); the
     reference is the array feeding a ``reference`` input, interpolated at each sample's
     time.  Cross-track error is measured from that point across the reference course;
     "back on track" is the first time after the closest approach from which it stays
@@ -177,8 +179,9 @@ def encounter_analysis(frame, scenario, cosim, out_dir) -> dict:
     x, y = frame[f"{plant}.x"].to_numpy(), frame[f"{plant}.y"].to_numpy()
     sources = {c.target_port: f"{c.source}.{c.source_port}" for c in scenario.connections}
     result: dict = {}
-    if "obstacles" in sources:
-        obstacles = array_output(frame, sources["obstacles"])
+    true_obstacles = true_obstacles_column(scenario, cosim)  # a tracker's estimates are not what was passed
+    if true_obstacles is not None:
+        obstacles = array_output(frame, true_obstacles)
         per_obstacle = separations(t, x, y, obstacles, own_radius_m(cosim))
         result["obstacles"] = per_obstacle
         result["min_clearance_nm"] = min(o["min_clearance_nm"] for o in per_obstacle)

@@ -166,7 +166,8 @@ def colregs_analysis(frame, scenario, cosim, out_dir, manoeuvre_threshold_deg: f
                      stand_on_range_factor: float = STAND_ON_ACTION_RANGE_FACTOR) -> dict:
     """The ``colregs`` analysis of a run: :func:`judge_encounters` on its recorded tracks.
 
-    The obstacles are the array output feeding any participant's ``obstacles`` input; the
+    The obstacles are the true ones (the array feeding an ``obstacles`` input, or the truth behind a
+    tracker feeding it: :func:`rhnc.cosim.obstacle_ports.true_obstacles_column`); the
     own radius R is the controller's.  The keyword options are :class:`JudgementSettings`
     (``[outputs.options.colregs]``).
     """
@@ -177,14 +178,16 @@ def colregs_analysis(frame, scenario, cosim, out_dir, manoeuvre_threshold_deg: f
                                  apparent_speed_reduction, early_before_cpa_min, stand_on_wait_min,
                                  risk_cpa_nm, risk_tcpa_min, stand_on_range_factor)
     plant = plant_name(cosim)
-    sources = {c.target_port: f"{c.source}.{c.source_port}" for c in scenario.connections}
-    if "obstacles" not in sources:
+    from rhnc.cosim.obstacle_ports import true_obstacles_column
+
+    true_obstacles = true_obstacles_column(scenario, cosim)  # judged on the true tracks, not a tracker's
+    if true_obstacles is None:
         return {"targets": [], "verdict": NOT_APPLICABLE, "side_correct": None, "targets_failed": 0,
                 "rules_failed": [], "separation_kept": True, "started_inside": [], "started_inside_range_kept": None,
                 "started_inside_opened": None, "borderline": []}
     return judge_encounters(frame["time_s"].to_numpy(), frame[f"{plant}.x"].to_numpy(),
                             frame[f"{plant}.y"].to_numpy(), frame[f"{plant}.psi"].to_numpy(),
-                            array_output(frame, sources["obstacles"]), own_radius_m(cosim), settings)
+                            array_output(frame, true_obstacles), own_radius_m(cosim), settings)
 
 
 def _check_options(options) -> None:

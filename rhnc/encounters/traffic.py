@@ -1,7 +1,9 @@
 """Target ships and static obstacles: publishes the ``obstacles`` port (x, y, vx, vy, radius; SI).
 
 Targets sail at constant velocity from a start point, or along waypoints at constant
-speed (stopping at the last one); static obstacles are circles.  Options are in nautical
+speed (stopping at the last one), or manoeuvre on a script, or replay a recorded track
+(:mod:`rhnc.encounters.target_motion`), or give way and stand on by the rules of the road
+(:mod:`rhnc.encounters.rule_following`); static obstacles are circles.  Options are in nautical
 miles and knots.  The paper's Eq. 32 head-on target, ``x_T = y_T = 4 - 0.05 t`` nm with
 t counted in 20 s steps, is ``start_nm = [4, 4]``, ``velocity_kn = [-9, -9]``.
 """
@@ -19,7 +21,13 @@ from orchestrator.geometry import KNOT, NM
 from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
 
 
-TARGET_KEYS = ("start_nm", "velocity_kn", "waypoints_nm", "speed_kn", "radius_nm")
+TARGET_KEYS = ("start_nm", "velocity_kn", "waypoints_nm", "speed_kn", "radius_nm", "manoeuvres", "track_file",
+               "mmsi", "origin_deg", "time_offset_s", "behaviour", "alteration_deg", "give_way_tcpa_s",
+               "turn_rate_deg_s")
+#: The own ship's state, the inputs of a traffic with a target that reacts to it.
+OWN_SHIP_INPUTS = ("x", "y", "psi", "u", "v")
+#: Keys of a recorded track (``track_file`` and what goes with it).
+RECORDED_KEYS = ("track_file", "mmsi", "origin_deg", "time_offset_s", "radius_nm")
 STATIC_KEYS = ("center_nm", "radius_nm")
 
 
@@ -69,9 +77,14 @@ class TrafficParticipant(Participant):
     -------
     targets : list of tables
         Each with ``radius_nm`` and either ``start_nm = [x, y]`` + ``velocity_kn = [vx, vy]``
-        or ``waypoints_nm = [[x, y], ...]`` + ``speed_kn``.
+        (optionally ``manoeuvres``, or ``behaviour = "rules"``), or ``waypoints_nm = [[x, y], ...]`` + ``speed_kn``, or
+        ``track_file`` (+ ``mmsi``, ``origin_deg``, ``time_offset_s``).
     static_obstacles : list of tables
         Each with ``center_nm = [x, y]`` and ``radius_nm``.
+    target_behaviour : str, optional
+        ``"rules"``: every constant-velocity target without its own ``behaviour`` or
+        ``manoeuvres`` follows the rules of the road (so that a batch of traffic situations
+        can make every ship autonomous).
 
     Outputs
     -------
@@ -80,22 +93,36 @@ class TrafficParticipant(Participant):
         radius [m], at the step's time.
     target<i>_x, target<i>_y : float
         Position of target i (1-based) [m], for plots and analyses.
+    targets : (n, 5) array
+        The targets alone (what AIS and radar see).
+    static_obstacles : (k, 5) array
+        The static obstacles alone (charted: a target tracker passes them on as they are).
     """
 
-    OPTIONS = ("targets", "static_obstacles")
+    OPTIONS = ("targets", "static_obstacles", "target_behaviour")
 
-    def __init__(self, name: str, targets: Sequence[Target], static: np.ndarray, start_time: float) -> None:
+    def __init__(self, name: str, targets: Sequence[Target], static: np.ndarray, start_time: float,
+                 where: str | None = None) -> None:
         super().__init__(name)
         self.targets = list(targets)
         self.static = static
         self._start_time = start_time
+        self._where = where or f"participants.{name}"
 
     @classmethod
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "TrafficParticipant":
         """Build from scenario options (see class docstring); errors name the key."""
         where = context.where
         reject_unknown_options(options, cls.OPTIONS, where)
-        targets = [_target(entry, f"{where}.targets[{i}]") for i, entry in enumerate(_tables(options, "targets", where))]
+        behaviour = options.get("target_behaviour")
+        if behaviour is not None and behaviour != "rules":
+            raise ScenarioError(f"{where}: 'target_behaviour' must be \"rules\" (every target follows the rules of "
+                                f"the road), got {behaviour!r}")
+        entries = _tables(options, "targets", where)
+        if behaviour is not None:
+            entries = [{**entry, "behaviour": behaviour} if "start_nm" in entry and "behaviour" not in entry
+                       and "manoeuvres" not in entry else entry for entry in entries]
+        targets = [_target(entry, f"{where}.targets[{i}]", context) for i, entry in enumerate(entries)]
         static_rows = []
         for i, entry in enumerate(_tables(options, "static_obstacles", where)):
             here = f"{where}.static_obstacles[{i}]"
@@ -103,18 +130,46 @@ class TrafficParticipant(Participant):
             center = _pair(entry, "center_nm", here) * NM
             static_rows.append([center[0], center[1], 0.0, 0.0, _radius(entry, here)])
         static = np.array(static_rows, dtype=float).reshape(-1, 5)
-        return cls(name, targets, static, context.start_time)
+        return cls(name, targets, static, context.start_time, where)
 
     @property
     def input_names(self) -> Sequence[str]:
-        return ()
+        """None, or the own ship's state when a target reacts to it (``behaviour = "rules"``)."""
+        return OWN_SHIP_INPUTS if self._reactive else ()
+
+    def connected(self, sources: Mapping[str, Participant]) -> None:
+        """Refuse a reactive target that could not see the own ship (its state not connected)."""
+        missing = [port for port in self.input_names if port not in sources]
+        if missing:
+            raise ScenarioError(f"{self._where}: targets with behaviour = \"rules\" react to the own ship; connect "
+                                f"its state to {', '.join(f'{self.name}.{port}' for port in missing)}")
+
+    @property
+    def _reactive(self) -> list:
+        return [target for target in self.targets if getattr(target, "reactive", False)]
+
+    def _react(self, time: float, inputs: Mapping[str, Value]) -> None:
+        """Reactive targets sail to ``time`` on their last decision, then decide on what they see now."""
+        elapsed = time - self._start_time
+        for target in self._reactive:
+            target.advance(elapsed)
+        missing = [port for port in OWN_SHIP_INPUTS if port not in inputs]
+        if missing:
+            return  # at set-up, before the ship has published its state
+        psi, u, v = (float(inputs[port]) for port in ("psi", "u", "v"))
+        own = np.array([float(inputs["x"]), float(inputs["y"]), u * math.cos(psi) - v * math.sin(psi),
+                        u * math.sin(psi) + v * math.cos(psi), 0.0])
+        rows = np.array([target.state(elapsed) for target in self.targets]).reshape(-1, 5)
+        for i, target in enumerate(self.targets):
+            if getattr(target, "reactive", False):
+                target.decide(np.vstack([own[None, :], np.delete(rows, i, axis=0)]))
 
     @property
     def output_names(self) -> Sequence[str]:
         names = ["obstacles"]
         for i in range(1, len(self.targets) + 1):
             names += [f"target{i}_x", f"target{i}_y"]
-        return names
+        return names + ["targets", "static_obstacles"]
 
     def obstacles_at(self, time: float) -> np.ndarray:
         """The (n, 5) obstacle array at ``time`` [s]."""
@@ -123,7 +178,8 @@ class TrafficParticipant(Participant):
 
     def _outputs(self, time: float) -> dict[str, Value]:
         obstacles = self.obstacles_at(time)
-        outputs: dict[str, Value] = {"obstacles": obstacles}
+        outputs: dict[str, Value] = {"obstacles": obstacles, "targets": obstacles[:len(self.targets)].copy(),
+                                     "static_obstacles": self.static.copy()}
         for i in range(len(self.targets)):
             outputs[f"target{i + 1}_x"] = float(obstacles[i, 0])
             outputs[f"target{i + 1}_y"] = float(obstacles[i, 1])
@@ -131,10 +187,21 @@ class TrafficParticipant(Participant):
 
     def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         self._start_time = start_time
+        for target in self._reactive:
+            target.reset()
+        self._react(start_time, inputs)
         return self._outputs(start_time)
 
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
+        if self._reactive:
+            self._react(time, inputs)
         return self._outputs(time)
+
+    def tables(self) -> dict[str, list[dict[str, Any]]]:
+        """``actions``: every decision of a rule-following target to give way or act as stand-on ship."""
+        actions = [{"target": i + 1, **action} for i, target in enumerate(self.targets)
+                   for action in getattr(target, "actions", [])]
+        return {"actions": actions} if actions else {}
 
 
 def _tables(options: Mapping[str, Any], key: str, where: str) -> list:
@@ -144,12 +211,23 @@ def _tables(options: Mapping[str, Any], key: str, where: str) -> list:
     return entries
 
 
-def _target(entry: Mapping[str, Any], where: str) -> Target:
+def _target(entry: Mapping[str, Any], where: str, context: BuildContext | None = None):
     reject_unknown_options(entry, TARGET_KEYS, where)
     radius = _radius(entry, where)
+    if "track_file" in entry:
+        from rhnc.encounters.target_motion import recorded_target
+
+        reject_unknown_options(entry, RECORDED_KEYS, where)
+        return recorded_target(entry, radius, context.scenario_dir if context else ".", where)
+    for key in RECORDED_KEYS[1:-1]:
+        if key in entry:
+            raise ScenarioError(f"{where}: '{key}' goes with 'track_file'")
     if "waypoints_nm" in entry:
         if "start_nm" in entry or "velocity_kn" in entry:
             raise ScenarioError(f"{where}: give either 'waypoints_nm' + 'speed_kn' or 'start_nm' + 'velocity_kn'")
+        for key in ("manoeuvres", "behaviour"):
+            if key in entry:
+                raise ScenarioError(f"{where}: '{key}' goes with 'start_nm' + 'velocity_kn', not 'waypoints_nm'")
         try:
             points = np.asarray(entry["waypoints_nm"], dtype=float) * NM
         except (TypeError, ValueError):
@@ -169,6 +247,17 @@ def _target(entry: Mapping[str, Any], where: str) -> Target:
         raise ScenarioError(f"{where}: 'speed_kn' goes with 'waypoints_nm'; use 'velocity_kn' = [vx, vy]")
     start = _pair(entry, "start_nm", where) * NM
     velocity = _pair(entry, "velocity_kn", where) * KNOT
+    if "behaviour" in entry or any(key in entry for key in ("alteration_deg", "give_way_tcpa_s", "turn_rate_deg_s")):
+        from rhnc.encounters.rule_following import rule_following_target
+
+        if "manoeuvres" in entry:
+            raise ScenarioError(f"{where}: give either 'manoeuvres' (a script) or 'behaviour' (a reactive target)")
+        return rule_following_target(entry, start, velocity, radius, where)
+    if "manoeuvres" in entry:
+        from rhnc.encounters.target_motion import scripted_target
+
+        duration = (context.stop_time - context.start_time) if context else 0.0
+        return scripted_target(start, velocity, entry["manoeuvres"], radius, duration, where)
     return Target(start[None, :], velocity, float(np.hypot(*velocity)), radius)
 
 

@@ -44,7 +44,7 @@ def test_static_obstacles_follow_targets_and_waypoint_target_stops_at_the_end():
     np.testing.assert_allclose(half_hour[0], [NM, NM, 0.0, 0.0, 0.5 * NM])
     ninth = traffic.obstacles_at(540.0)  # 1.5 nm: halfway along the second leg, heading east
     np.testing.assert_allclose(ninth[0], [NM, 0.5 * NM, 0.0, 10 * KNOT, 0.5 * NM], atol=1e-9)
-    assert traffic.output_names == ["obstacles", "target1_x", "target1_y"]
+    assert traffic.output_names == ["obstacles", "target1_x", "target1_y", "targets", "static_obstacles"]
 
 
 def test_traffic_errors_name_the_key():
