@@ -110,8 +110,10 @@ def judge_encounters(t, x, y, heading_rad, obstacles: np.ndarray, own_radius_m: 
     sides = [target["side_correct"] for target in targets if target["side_correct"] is not None]
     outside = [target["separation_kept"] for target in targets if not target["started_inside"]]
     inside = [target["range_kept_from_start"] for target in targets if target["started_inside"]]
+    margins = [target["cpa_nm"] - target["required_nm"] for target in targets if not target["started_inside"]]
     return {
         "separation_kept": bool(all(outside)),
+        "separation_margin_nm": min(margins) if margins else None,
         "started_inside": [target["obstacle"] for target in targets if target["started_inside"]],
         "started_inside_range_kept": bool(all(inside)) if inside else None,
         "targets": targets,
@@ -143,7 +145,8 @@ def colregs_analysis(frame, scenario, cosim, out_dir, manoeuvre_threshold_deg: f
     sources = {c.target_port: f"{c.source}.{c.source_port}" for c in scenario.connections}
     if "obstacles" not in sources:
         return {"targets": [], "verdict": NOT_APPLICABLE, "side_correct": None, "targets_failed": 0,
-                "rules_failed": [], "separation_kept": True, "started_inside": [], "started_inside_range_kept": None}
+                "rules_failed": [], "separation_kept": True, "separation_margin_nm": None, "started_inside": [],
+                "started_inside_range_kept": None}
     return judge_encounters(frame["time_s"].to_numpy(), frame[f"{plant}.x"].to_numpy(),
                             frame[f"{plant}.y"].to_numpy(), frame[f"{plant}.psi"].to_numpy(),
                             array_output(frame, sources["obstacles"]), own_radius_m(cosim), settings)
