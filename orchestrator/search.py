@@ -181,6 +181,7 @@ def run_search(path, results_root="results", workers: int | None = None, schedul
         with interrupts.deferred():
             from orchestrator import search_results
 
+            journal = read_journal(root / JOURNAL)  # as a resume reads it
             table = search_results.write_outputs(spec, root, journal)
             found = search_results.findings(spec, table)
             _write_json_atomic(root / "search.json", {**_settings(spec), **found,
