@@ -174,7 +174,7 @@ def _run_page(folder: Path, row, series: list[str]) -> str:
     identifier = row["run_id"]
     run = folder / "runs" / identifier
     summary = _read_json(run / "summary.json")
-    parts = [f"<p><a href='../report.html'>all runs</a></p>", f"<h1>run {_e(identifier)} (rank {row['rank']})</h1>",
+    parts = ["<p><a href='../report.html'>all runs</a></p>", f"<h1>run {_e(identifier)} (rank {row['rank']})</h1>",
              f"<p>status: <b>{_e(summary.get('status', row.get('status')))}</b> {_e(summary.get('reason', ''))}</p>"]
     facts = [(k, v) for k, v in row.items() if k not in ("run_id",) and not k.startswith("param:")]
     params = [(k[len("param:"):], v) for k, v in row.items() if k.startswith("param:")]

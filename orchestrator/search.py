@@ -35,17 +35,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from orchestrator import acceptance, interrupts
+from orchestrator import interrupts
 from orchestrator.batch import LocalPool, _progress_bar, _write_json_atomic, check_against_scenario, results_lock
 from orchestrator.batch_run import (TIMED_OUT, BatchError, RunTask, needs_redo, read_summary,
                                     record_lost_run)
 from orchestrator.batch_spec import RunSpec, draw_overrides, run_id
 from orchestrator.dask_executor import DaskExecutor, check_scheduler
+from orchestrator.search_journal import JOURNAL, append_journal, drop_torn_tail, objective_of, read_journal, run_spec_of
 from orchestrator.search_spec import SearchSpec, load_search
 
 log = logging.getLogger(__name__)
 
-JOURNAL = "trials.jsonl"
 #: Seeds of the per-evaluation samplers: ``seed * SEED_STRIDE + evaluation``.
 SEED_STRIDE = 1_000_003
 
@@ -138,6 +138,7 @@ def run_search(path, results_root="results", workers: int | None = None, schedul
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
         _check_same_search(spec, root)
         journal = read_journal(root / JOURNAL)
+        drop_torn_tail(root / JOURNAL, journal)
         executor = (DaskExecutor(scheduler, tls_files) if scheduler is not None
                     else LocalPool(workers or os.cpu_count() or 1))
         study = optuna.create_study(direction="minimize", sampler=make_sampler(spec.sampler, spec.seed, 0))
@@ -146,7 +147,7 @@ def run_search(path, results_root="results", workers: int | None = None, schedul
         try:
             pending = [entry for entry in journal if not _done(root, entry["run_id"])]
             if pending:
-                evaluated += _evaluate(spec, root, executor, [_run_spec(entry) for entry in pending], bar)
+                evaluated += _evaluate(spec, root, executor, [run_spec_of(entry) for entry in pending], bar)
             for entry in journal:
                 study.add_trial(_frozen_trial(spec, root, entry))
                 if bar is not None:
@@ -164,9 +165,9 @@ def run_search(path, results_root="results", workers: int | None = None, schedul
                     trials.append(trial)
                 append_journal(root / JOURNAL, entries)
                 journal.extend(entries)
-                evaluated += _evaluate(spec, root, executor, [_run_spec(entry) for entry in entries], bar)
+                evaluated += _evaluate(spec, root, executor, [run_spec_of(entry) for entry in entries], bar)
                 for trial, entry in zip(trials, entries):
-                    value = _objective(spec, root, entry["run_id"])
+                    value = objective_of(spec, root, entry["run_id"])
                     if value is None:
                         study.tell(trial, state=optuna.trial.TrialState.FAIL)
                     else:
@@ -194,34 +195,6 @@ def run_search(path, results_root="results", workers: int | None = None, schedul
                         found["best"], wallclock.perf_counter() - started)
 
 
-# -- the journal --------------------------------------------------------------------------------
-def read_journal(path: Path) -> list[dict]:
-    """The journaled evaluations in order; a torn last line (the search killed while writing) is dropped."""
-    entries = []
-    try:
-        lines = path.read_text().splitlines()
-    except FileNotFoundError:
-        return entries
-    for line in lines:
-        try:
-            entry = json.loads(line)
-        except ValueError:
-            break
-        if entry.get("number") != len(entries):
-            break
-        entries.append(entry)
-    return entries
-
-
-def append_journal(path: Path, entries: list[dict]) -> None:
-    """Append one round's entries in one write, flushed to disk before the round runs."""
-    text = "".join(json.dumps(entry, sort_keys=True) + "\n" for entry in entries)
-    with open(path, "a") as handle:
-        handle.write(text)
-        handle.flush()
-        os.fsync(handle.fileno())
-
-
 def _entry(spec: SearchSpec, trial, overrides: dict, parameters: dict, system_attrs: dict) -> dict:
     from optuna.distributions import distribution_to_json
 
@@ -235,7 +208,7 @@ def _frozen_trial(spec: SearchSpec, root: Path, entry: dict):
     import optuna
     from optuna.distributions import json_to_distribution
 
-    value = _objective(spec, root, entry["run_id"])
+    value = objective_of(spec, root, entry["run_id"])
     state = optuna.trial.TrialState.COMPLETE if value is not None else optuna.trial.TrialState.FAIL
     return optuna.trial.create_trial(
         state=state, value=value, params=entry["values"], system_attrs=entry.get("system_attrs") or {},
@@ -251,11 +224,6 @@ def _check_a_point(spec: SearchSpec) -> None:
     overrides = {**spec.batch.fixed, **overrides}
     check_against_scenario(spec.batch, [RunSpec(run_id(spec.batch.scenario_sha256, overrides), 0, overrides,
                                                  parameters)])
-
-
-def _run_spec(entry: dict) -> RunSpec:
-    return RunSpec(entry["run_id"], entry["number"], entry["overrides"],
-                   {"evaluation": entry["number"], **entry["parameters"]})
 
 
 # -- evaluating -----------------------------------------------------------------------------------
@@ -292,20 +260,6 @@ def _evaluate(spec: SearchSpec, root: Path, executor, runs: list[RunSpec], bar) 
     if interrupts.stop_requested():
         raise KeyboardInterrupt
     return len(todo)
-
-
-def _objective(spec: SearchSpec, root: Path, identifier: str) -> float | None:
-    """The evaluation's objective, or None when the run did not finish or has no such number."""
-    summary = read_summary(root / "runs" / identifier)
-    if summary is None or summary.get("status") != "finished":
-        return None
-    try:
-        value = acceptance.lookup(summary, spec.objective)
-    except acceptance.MissingFigure:
-        return None
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or value != value:
-        return None
-    return float(value)
 
 
 # -- settings -------------------------------------------------------------------------------------

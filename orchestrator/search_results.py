@@ -30,15 +30,15 @@ def search_table(spec: SearchSpec, root: Path, journal: list[dict]):
     """One row per journaled evaluation, with its objective and whether it is a failure."""
     import pandas as pd
 
-    from orchestrator.search import _objective, _run_spec
+    from orchestrator.search_journal import objective_of, run_spec_of
 
-    runs = [_run_spec(entry) for entry in journal]
+    runs = [run_spec_of(entry) for entry in journal]
     if not runs:
         return pd.DataFrame(columns=["run_id", "evaluation", "status", "objective", "failure", "passed"])
     table = batch_table(spec.batch, root, runs).rename(columns={"index": "evaluation"})
     table = table.drop(columns=["param:evaluation"], errors="ignore")
     table["evaluation"] = table["evaluation"] + 1  # counted from 1, as a person counts them
-    table["objective"] = [_objective(spec, root, run.run_id) for run in runs]
+    table["objective"] = [objective_of(spec, root, run.run_id) for run in runs]
     table["objective"] = table["objective"].astype(float)
     table["failure"] = [spec.is_failure(None if math.isnan(v) else v, bool(p))
                         for v, p in zip(table["objective"], table["passed"])]
@@ -203,7 +203,7 @@ def write_worst(spec: SearchSpec, table, root: Path) -> list[Path]:
 
 
 def _journal_runs(root: Path) -> list[dict]:
-    from orchestrator.search import JOURNAL, read_journal
+    from orchestrator.search_journal import JOURNAL, read_journal
 
     return read_journal(root / JOURNAL)
 

@@ -13,7 +13,8 @@ import pytest
 
 from orchestrator.batch_spec import load_batch
 from orchestrator.cli import main
-from orchestrator.search import JOURNAL, read_journal, run_search
+from orchestrator.search import run_search
+from orchestrator.search_journal import JOURNAL, read_journal
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -140,6 +141,8 @@ def test_search_is_seeded_and_a_resumed_search_equals_an_uninterrupted_one(searc
     assert _journal_values(folder) == _journal_values(tmp_path / "whole" / "small_search")
     pd.testing.assert_frame_equal(whole.table.drop(columns="wall_time_s"), resumed.table.drop(columns="wall_time_s"))
     shutil.rmtree(folder / "runs" / resumed.table["run_id"].iloc[4])
+    with open(folder / JOURNAL, "a") as journal:  # and a line torn as the next round was written
+        journal.write('{"number": 6, "run_id": "abc')
     again = run_search(path, tmp_path / "part", workers=1, progress=False, report=False)
     assert again.evaluated == 1  # only the run that was lost
     pd.testing.assert_frame_equal(whole.table.drop(columns="wall_time_s"), again.table.drop(columns="wall_time_s"))
