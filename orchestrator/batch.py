@@ -146,6 +146,9 @@ def _run_pending(spec: BatchSpec, runs: list[RunSpec], root: Path, executor, pro
             table = batch_table(spec, root)
             write_table(table, root)
             write_overview(table, spec, root / "overview.png")
+            from orchestrator.report import write_report
+
+            write_report(root)
     return BatchReport(root, table, ran, len(runs) - len(todo), interrupted, wallclock.perf_counter() - started)
 
 
@@ -237,8 +240,8 @@ class LocalPool:
 
 
 # -- the table and the overview -------------------------------------------------------------------
-def batch_table(spec: BatchSpec, root: Path):
-    """One row per run of ``spec``, read from ``root/runs/<id>/summary.json``.
+def batch_table(spec: BatchSpec, root: Path, runs: list[RunSpec] | None = None):
+    """One row per run of ``spec`` (or of ``runs``), read from ``root/runs/<id>/summary.json``.
 
     Columns: ``run_id``, ``index``, ``param:<key>`` per varied parameter, ``status``,
     ``reason``, one column per figure (acceptance metrics and ``report.columns``, by their
@@ -250,7 +253,7 @@ def batch_table(spec: BatchSpec, root: Path):
 
     figures = list(dict.fromkeys([c.metric for c in spec.acceptance] + list(spec.report_columns)))
     rows = []
-    for run in spec.runs():
+    for run in spec.runs() if runs is None else runs:
         summary = read_summary(root / "runs" / run.run_id) or {"status": "not run", "reason": "no results yet"}
         row = {"run_id": run.run_id, "index": run.index}
         row.update({f"param:{k}": v for k, v in run.parameters.items()})
@@ -333,7 +336,7 @@ def write_overview(table, spec: BatchSpec, target: Path) -> Path:
 def _manifest(spec: BatchSpec, runs: list[RunSpec]) -> dict:
     return {"batch": str(spec.path), "name": spec.name, "scenario": str(spec.scenario),
             "scenario_sha256": spec.scenario_sha256, "description": spec.description,
-            "acceptance": [c.describe() for c in spec.acceptance],
+            "acceptance": [c.describe() for c in spec.acceptance], "report_series": list(spec.report_series),
             "runs": [{"run_id": r.run_id, "index": r.index, "overrides": r.overrides, "parameters": r.parameters}
                      for r in runs]}
 

@@ -68,6 +68,7 @@ class MonteCarloSpec:
     runs: int
     own_ship: encounters.ShipMotion | None  # type: ignore[name-defined]  # the domain's type, reached through the plug-in registry
     encounters: tuple[EncounterSpec, ...]
+    encounter_count: tuple[int, int] | None  # None: every entry of ``encounters`` in every run
     obstacles: ObstacleSpec | None
     targets_key: str
     obstacles_key: str
@@ -212,6 +213,7 @@ class MonteCarloTable(TomlTable):
     runs: Annotated[int, PlainValidator(_runs)]
     own_ship: OwnShipTable | None = None
     encounters: Annotated[list, PlainValidator(lambda v: _array_of_tables(v))] = []
+    encounter_count: Annotated[tuple[int, int], PlainValidator(_count)] | None = None
     obstacles: ObstacleTable | None = None
     targets_key: Annotated[str, PlainValidator(_dotted_key)] = DEFAULT_TARGETS_KEY
     obstacles_key: Annotated[str, PlainValidator(_dotted_key)] = DEFAULT_OBSTACLES_KEY
@@ -225,6 +227,11 @@ class MonteCarloTable(TomlTable):
         if (self.encounters or self.obstacles) and self.own_ship is None:
             raise fail_whole("'{prefix}own_ship' (start_nm, course_deg, speed_kn) is needed to place encounters "
                              "and obstacles")
+        if self.encounter_count is not None and not 1 <= self.encounter_count[0] <= self.encounter_count[1] <= len(
+                self.encounters):
+            raise fail_whole(f"'{{prefix}}encounter_count' must be [low, high] with 1 <= low <= high <= "
+                             f"{len(self.encounters)} (the number of [[monte_carlo.encounters]] entries), got "
+                             f"{list(self.encounter_count)}")
         return self
 
 
@@ -266,6 +273,7 @@ def monte_carlo_spec(table: Any, where: str, scenario_data: dict) -> MonteCarloS
                                 "this key to a number or a list of numbers")
         scale[key] = (_keyed(range_of, value, where, f'monte_carlo.scale."{key}"'), base)
     return MonteCarloSpec(seed=model.seed, runs=model.runs, own_ship=own, encounters=tuple(specs),
+                          encounter_count=model.encounter_count,
                           obstacles=obstacles, targets_key=model.targets_key, obstacles_key=model.obstacles_key,
                           uniform=uniform, normal=normal, choice=choice, scale=scale)
 
@@ -301,14 +309,21 @@ def _radius(value: Any) -> float:
 
 
 class ReportTable(TomlTable):
-    """``[report]``: extra columns of the batch table."""
+    """``[report]``: extra columns of the batch table, and the time series the HTML report draws per run."""
 
     columns: Annotated[tuple[str, ...], PlainValidator(lambda v: _columns(v))] = ()
+    series: Annotated[tuple[str, ...], PlainValidator(lambda v: _series(v))] = ()
 
 
 def _columns(value: Any) -> tuple[str, ...]:
     if not isinstance(value, list) or not all(isinstance(c, str) and c for c in value):
         raise fail("must be a list of dotted paths into summary.json")
+    return tuple(value)
+
+
+def _series(value: Any) -> tuple[str, ...]:
+    if not isinstance(value, list) or not all(isinstance(c, str) and c for c in value):
+        raise fail("must be a list of time-series columns (\"<participant>.<port>\", e.g. \"ship.u\")")
     return tuple(value)
 
 
@@ -322,12 +337,13 @@ class BatchFile(TomlTable):
     situations: Any = None
     acceptance: Any = []
     report: Any = None
+    search: Any = None  # read by orchestrator.search_spec
 
     @model_validator(mode="after")
     def _tables(self):
         if self.batch is None:
             raise fail_whole("missing table [batch]")
-        for name in ("batch", "set", "grid", "monte_carlo", "situations", "report"):
+        for name in ("batch", "set", "grid", "monte_carlo", "situations", "report", "search"):
             value = getattr(self, name)
             if value is not None and not isinstance(value, dict):
                 raise fail_whole(f"'{name}' must be a table ([{name}])")

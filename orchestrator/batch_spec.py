@@ -68,6 +68,8 @@ class BatchSpec:
     report_columns: tuple[str, ...]
     description: str = ""
     situations: tuple[SituationRun, ...] = ()
+    report_series: tuple[str, ...] = ()
+    search: dict | None = None  # the raw [search] table (orchestrator.search_spec checks it)
     _runs: list = field(default_factory=list, repr=False, compare=False)
 
     def runs(self) -> list[RunSpec]:
@@ -132,7 +134,8 @@ def load_batch(path) -> BatchSpec:
     return BatchSpec(path=path.resolve(), name=name, scenario=scenario,
                      scenario_sha256=hashlib.sha256(scenario.read_bytes()).hexdigest(), fixed=fixed, grid=grid,
                      monte_carlo=monte_carlo, acceptance=acceptance, report_columns=report.columns,
-                     description=batch.description, situations=situations)
+                     description=batch.description, situations=situations, report_series=report.series,
+                     search=top.search)
 
 
 # -- expansion ------------------------------------------------------------------------------
@@ -160,41 +163,78 @@ def _expand(spec: BatchSpec) -> list[RunSpec]:
 
 def _draw(mc: MonteCarloSpec, index: int) -> tuple[dict, dict]:
     """Overrides and table parameters of draw ``index``: its own stream, so draws never shift."""
-    rng = np.random.default_rng([mc.seed, index])
+    overrides, parameters = draw_overrides(mc, RandomChoices(np.random.default_rng([mc.seed, index])))
+    return overrides, {"draw": index, **parameters}
+
+
+class RandomChoices:
+    """The values of a Monte Carlo draw, from one seeded NumPy stream (uniform, as declared)."""
+
+    def __init__(self, rng: np.random.Generator) -> None:
+        self.rng = rng
+
+    def number(self, name: str, span: Range) -> float:
+        return span.draw(self.rng)
+
+    def index(self, name: str, options: list | tuple) -> int:
+        return int(self.rng.integers(len(options)))
+
+    def integer(self, name: str, low: int, high: int) -> int:
+        return int(self.rng.integers(low, high + 1))
+
+    def normal(self, name: str, mean: float, sd: float) -> float:
+        return float(self.rng.normal(mean, sd))
+
+
+def draw_overrides(mc: MonteCarloSpec, choices) -> tuple[dict, dict]:
+    """Overrides and table parameters of one point of the ``[monte_carlo]`` space.
+
+    ``choices`` picks every value, by the parameter's table name: :class:`RandomChoices`
+    draws them (a batch), an optimiser suggests them (a search, :mod:`orchestrator.search`).
+    """
     overrides: dict[str, Any] = {}
-    parameters: dict[str, Any] = {"draw": index}
+    parameters: dict[str, Any] = {}
     if mc.encounters:
         targets = []
-        for k, enc in enumerate(mc.encounters):
-            kind = enc.types[int(rng.integers(len(enc.types)))]
-            cpa, tcpa = enc.cpa_nm.draw(rng), enc.tcpa_min.draw(rng)
-            speed, offset = enc.speed_kn.draw(rng), enc.course_offset_deg.draw(rng)
-            side = enc.passing_side or encounters.PASSING_SIDES[int(rng.integers(2))]
+        used = mc.encounters
+        if mc.encounter_count is not None:
+            count = choices.integer("encounters.count", *mc.encounter_count)
+            used = mc.encounters[:count]
+            parameters["encounters.count"] = count
+        for k, enc in enumerate(used):
+            kind = enc.types[choices.index(f"enc{k}.type", enc.types)]
+            cpa, tcpa = choices.number(f"enc{k}.cpa_nm", enc.cpa_nm), choices.number(f"enc{k}.tcpa_min", enc.tcpa_min)
+            speed = choices.number(f"enc{k}.speed_kn", enc.speed_kn)
+            offset = choices.number(f"enc{k}.course_offset_deg", enc.course_offset_deg)
+            side = enc.passing_side or encounters.PASSING_SIDES[choices.index(f"enc{k}.passing_side",
+                                                                             encounters.PASSING_SIDES)]
             target = encounters.place_target(mc.own_ship, kind, cpa, tcpa, speed, offset, side)
             targets.append({"start_nm": _rounded(target.start_nm), "velocity_kn": _rounded(target.velocity_kn),
-                            "radius_nm": _round(enc.radius_nm.draw(rng))})
+                            "radius_nm": _round(choices.number(f"enc{k}.radius_nm", enc.radius_nm))})
             parameters.update({f"enc{k}.type": kind, f"enc{k}.cpa_nm": _round(cpa), f"enc{k}.tcpa_min": _round(tcpa),
                                f"enc{k}.speed_kn": _round(speed), f"enc{k}.passing_side": side})
         overrides[mc.targets_key] = targets
     if mc.obstacles is not None:
         obstacles = []
-        count = int(rng.integers(mc.obstacles.count[0], mc.obstacles.count[1] + 1))
+        count = choices.integer("obstacles.count", *mc.obstacles.count)
         heading = np.asarray(mc.own_ship.velocity_kn) / mc.own_ship.speed_kn
         starboard = np.array([-heading[1], heading[0]])
-        for _ in range(count):
-            along, cross = mc.obstacles.along_track_nm.draw(rng), mc.obstacles.cross_track_nm.draw(rng)
+        for j in range(count):
+            along = choices.number(f"obs{j}.along_track_nm", mc.obstacles.along_track_nm)
+            cross = choices.number(f"obs{j}.cross_track_nm", mc.obstacles.cross_track_nm)
             center = np.asarray(mc.own_ship.start_nm) + along * heading + cross * starboard
-            obstacles.append({"center_nm": _rounded(center), "radius_nm": _round(mc.obstacles.radius_nm.draw(rng))})
+            obstacles.append({"center_nm": _rounded(center),
+                              "radius_nm": _round(choices.number(f"obs{j}.radius_nm", mc.obstacles.radius_nm))})
         overrides[mc.obstacles_key] = obstacles
         parameters["obstacles.count"] = count
     for key, span in mc.uniform.items():
-        overrides[key] = parameters[key] = _round(span.draw(rng))
+        overrides[key] = parameters[key] = _round(choices.number(key, span))
     for key, (mean, sd) in mc.normal.items():
-        overrides[key] = parameters[key] = _round(float(rng.normal(mean, sd)))
+        overrides[key] = parameters[key] = _round(choices.normal(key, mean, sd))
     for key, options in mc.choice.items():
-        overrides[key] = parameters[key] = options[int(rng.integers(len(options)))]
+        overrides[key] = parameters[key] = options[choices.index(key, options)]
     for key, (factor_range, base) in mc.scale.items():
-        factor = _round(factor_range.draw(rng))
+        factor = _round(choices.number(f"{key} (scale)", factor_range))
         overrides[key] = _scaled(base, factor)
         parameters[f"{key} (scale)"] = factor
     return overrides, parameters

@@ -78,6 +78,21 @@ def _parser() -> argparse.ArgumentParser:
     batch.add_argument("--results", default="results", help="results folder (default: ./results)")
     batch.add_argument("--retry-failed", action="store_true", help="redo runs recorded as failed")
     batch.add_argument("--no-progress", action="store_true", help="no progress bar")
+    search = sub.add_parser("search", help="search a batch file's [monte_carlo] ranges for the runs that minimise "
+                                           "an objective (optuna; resumable; docs/search.md)")
+    search.add_argument("search", help="search TOML file (a batch file with a [search] table)")
+    search.add_argument("--evaluations", type=int, default=None, help="budget (default: the file's)")
+    search.add_argument("--sampler", default=None, help="tpe, cmaes or random (default: the file's)")
+    search.add_argument("--seed", type=int, default=None, help="the optimiser's seed (default: the file's)")
+    search.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
+    search.add_argument("--scheduler", default=None, metavar="ADDRESS", help="a Dask scheduler, as for batch")
+    search.add_argument("--tls-ca", default=None, metavar="FILE", help="tls:// scheduler: the cluster's CA certificate")
+    search.add_argument("--tls-cert", default=None, metavar="FILE", help="tls:// scheduler: this client's certificate")
+    search.add_argument("--tls-key", default=None, metavar="FILE", help="tls:// scheduler: this client's private key")
+    search.add_argument("--results", default="results", help="results folder (default: ./results)")
+    search.add_argument("--no-progress", action="store_true", help="no progress bar")
+    report = sub.add_parser("report", help="write report.html (a static page) for a batch or search results folder")
+    report.add_argument("folder", help="results/<batch> or results/<search>")
     for name, command in _plugin_commands().items():
         command.add_arguments(sub.add_parser(name, help=command.help))
     return parser
@@ -233,6 +248,34 @@ def _batch(args) -> int:
     return 0 if report.passed == report.total else EXIT_RUN_FAILED
 
 
+def _search(args) -> int:
+    from orchestrator.search import run_search
+
+    if args.workers is not None and args.workers < 1:
+        print("error: --workers must be at least 1", file=sys.stderr)
+        return 2
+    tls = {"ca": args.tls_ca, "cert": args.tls_cert, "key": args.tls_key}
+    report = run_search(args.search, args.results, workers=args.workers, scheduler=args.scheduler,
+                        progress=not args.no_progress, tls=tls if any(tls.values()) else None,
+                        evaluations=args.evaluations, sampler=args.sampler, seed=args.seed)
+    first = (f"first at evaluation {report.first_failure}" if report.first_failure is not None else "none found")
+    best = "none" if report.best is None else f"{report.best:.4g}"
+    print(f"{len(report.table)} evaluations ({report.evaluated} run now); lowest objective {best}; "
+          f"{report.failures} failures, {first}; wall time {report.wall_time_s:.1f} s")
+    print(f"  report: {report.folder / 'report.html'}, worst cases: {report.folder / 'worst'}")
+    if report.interrupted:
+        print("interrupted: rerun the same command to resume the search", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    return 0
+
+
+def _report(args) -> int:
+    from orchestrator.report import write_report
+
+    print(write_report(args.folder))
+    return 0
+
+
 def _compare(args) -> int:
     from orchestrator.compare import failed_runs_of, run_comparison
 
@@ -299,7 +342,7 @@ def _check(args) -> int:
 
 
 _COMMANDS = {"run": _run, "validate": _validate, "build": _build, "batch": _batch,
-             "compare": _compare, "export": _export, "check": _check}
+             "compare": _compare, "export": _export, "check": _check, "search": _search, "report": _report}
 
 
 def _plugin_commands() -> dict:

@@ -125,8 +125,10 @@ def judge_encounters(t, x, y, heading_rad, obstacles: np.ndarray, own_radius_m: 
     outside = [target["separation_kept"] for target in targets if not target["started_inside"]]
     inside = [target["range_kept_from_start"] for target in targets if target["started_inside"]]
     opened = [target["range_opened_in_time"] for target in targets if target["started_inside"]]
+    margins = [target["cpa_nm"] - target["required_nm"] for target in targets if not target["started_inside"]]
     return {
         "separation_kept": bool(all(outside)),
+        "separation_margin_nm": min(margins) if margins else None,
         "started_inside": [target["obstacle"] for target in targets if target["started_inside"]],
         "started_inside_range_kept": bool(all(inside)) if inside else None,
         "started_inside_opened": bool(all(opened)) if opened else None,
@@ -183,8 +185,8 @@ def colregs_analysis(frame, scenario, cosim, out_dir, manoeuvre_threshold_deg: f
     true_obstacles = true_obstacles_column(scenario, cosim)  # judged on the true tracks, not a tracker's
     if true_obstacles is None:
         return {"targets": [], "verdict": NOT_APPLICABLE, "side_correct": None, "targets_failed": 0,
-                "rules_failed": [], "separation_kept": True, "started_inside": [], "started_inside_range_kept": None,
-                "started_inside_opened": None, "borderline": []}
+                "rules_failed": [], "separation_kept": True, "separation_margin_nm": None, "started_inside": [],
+                "started_inside_range_kept": None, "started_inside_opened": None, "borderline": []}
     return judge_encounters(frame["time_s"].to_numpy(), frame[f"{plant}.x"].to_numpy(),
                             frame[f"{plant}.y"].to_numpy(), frame[f"{plant}.psi"].to_numpy(),
                             array_output(frame, true_obstacles), own_radius_m(cosim), settings)

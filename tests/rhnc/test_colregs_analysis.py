@@ -278,6 +278,7 @@ def test_target_starting_inside_the_domain_is_reported_apart_with_its_own_criter
     assert result["range_kept_from_start"]
     assert summary["started_inside"] == [0] and summary["started_inside_range_kept"] is True
     assert summary["separation_kept"]  # the targets that started outside (none) kept it
+    assert summary["separation_margin_nm"] is None  # nor does it count in the margin
     closing = own_track(20)  # a crossing ship 0.8 nm off on the starboard bow: the range closes
     summary = judge_encounters(*closing, target_states(closing[0], (0.6, 0.53), 270.0, 6.0), 0.0,
                                JudgementSettings())
@@ -293,6 +294,20 @@ def test_target_starting_outside_counts_towards_separation():
     summary = judge_encounters(*track, target_states(track[0], (7.0, 0.5), 180.0, 18.0), 0.0, JudgementSettings())
     assert summary["started_inside"] == [] and summary["started_inside_range_kept"] is None
     assert summary["separation_kept"] is False and summary["targets"][0]["range_kept_from_start"] is None
+    # the margin is the CPA less R + R_i: a head-on ship 0.5 nm off the track, no alteration
+    assert summary["separation_margin_nm"] == pytest.approx(0.5 - 1.0, abs=1e-6)
+    assert summary["separation_margin_nm"] == pytest.approx(summary["targets"][0]["cpa_nm"] - 1.0)
+
+
+def test_separation_margin_is_the_smallest_over_the_targets_that_started_outside():
+    track = own_track(20)
+    t = track[0]
+    far = target_states(t, (7.0, 0.8), 180.0, 18.0)  # CPA 0.8 nm
+    near = target_states(t, (7.0, -0.3), 180.0, 18.0)  # CPA 0.3 nm
+    inside = target_states(t, (-0.6, 0.53), 90.0, 10.0)  # starts 0.8 nm off: not counted
+    summary = judge_encounters(*track, np.concatenate([far, near, inside], axis=1), 0.0, JudgementSettings())
+    assert summary["started_inside"] == [2]
+    assert summary["separation_margin_nm"] == pytest.approx(0.3 - 1.0, abs=1e-6)
 
 
 def test_cpa_predicted_as_the_manoeuvre_began_is_reported_beside_the_sailed_one():
