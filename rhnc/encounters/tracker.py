@@ -233,7 +233,7 @@ class TrackerParticipant(Participant):
                 if track.confirmed and d2 <= INITIATION_GATE_FACTOR * o.gate_chi2:
                     near_confirmed.add(j)
         used_tracks, used_detections = set(), set()
-        for _, d2, k, j in sorted(pairs):  # confirmed tracks choose first
+        for _, _distance, k, j in sorted(pairs):  # confirmed tracks choose first
             if k in used_tracks or j in used_detections:
                 continue
             used_tracks.add(k)

@@ -84,12 +84,16 @@ def tracking_errors(t, truth, estimates, valid, gate_m: float = 0.5 * NM) -> dic
             entry["track_breaks"] = int(np.sum(changes))
         targets.append(entry)
     tracked = [entry for entry in targets if entry["position_rms_m"] is not None]
+
+    def largest(key: str) -> float | None:
+        return max((float(entry[key]) for entry in tracked), default=None)
+
     return {
         "targets": targets,
         "targets_never_tracked": sum(1 for entry in targets if entry["position_rms_m"] is None),
-        "position_rms_max_m": max((e["position_rms_m"] for e in tracked), default=None),
-        "position_error_max_m": max((e["position_max_m"] for e in tracked), default=None),
-        "velocity_rms_max_mps": max((e["velocity_rms_mps"] for e in tracked), default=None),
+        "position_rms_max_m": largest("position_rms_m"),
+        "position_error_max_m": largest("position_max_m"),
+        "velocity_rms_max_mps": largest("velocity_rms_mps"),
         "track_breaks": sum(e["track_breaks"] for e in targets),
-        "coverage_min": min((e["coverage"] for e in tracked), default=None),
+        "coverage_min": min((float(entry["coverage"]) for entry in tracked), default=None),
     }

@@ -86,7 +86,7 @@ def profile_times(metocean, energy: EnergyParameters, points: np.ndarray, depart
         hours = np.where(moving, length[:, None] / np.maximum(over_ground, 1e-3), np.inf) / 3600.0
         fuel_cost = np.where(moving, fuel * hours, np.inf)
 
-        def durations(price):
+        def durations(price, fuel_cost=fuel_cost, moving=moving, hours=hours):
             choice = np.argmin(fuel_cost + price * np.where(moving, hours, np.inf), axis=1)
             return hours[np.arange(len(length)), choice] * 3600.0
 

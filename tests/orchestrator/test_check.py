@@ -8,7 +8,6 @@ decision time, so that FMPy-style files of our own run give our own figures.
 
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 import pytest
 

@@ -102,9 +102,13 @@ def fmpy_jacobi_run(config: Path, stop_s: float, out: Path) -> list[str]:
         for initial in element.findall("osp:InitialValues/osp:InitialValue", ns):
             value = initial[0]
             kind = value.tag.split("}")[1]
-            setter = {"Real": lambda r, v: fmu.setReal(r, [float(v)]), "String": lambda r, v: fmu.setString(r, [v]),
-                      "Boolean": lambda r, v: fmu.setBoolean(r, [v == "true"])}[kind]
-            setter([refs[initial.get("variable")]], value.get("value"))
+            reference, text = [refs[initial.get("variable")]], value.get("value")
+            if kind == "Real":
+                fmu.setReal(reference, [float(text)])
+            elif kind == "String":
+                fmu.setString(reference, [text])
+            else:
+                fmu.setBoolean(reference, [text == "true"])
         every = int(round(float(element.get("stepSize")) / base))
         outputs = [v.name for v in description.modelVariables if v.causality == "output"]
         slaves[name] = {"fmu": fmu, "refs": refs, "every": every, "outputs": outputs}

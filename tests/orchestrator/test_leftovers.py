@@ -2,7 +2,6 @@
 by a later run; those of runs still going, in another process, are never touched."""
 
 import os
-import signal
 import subprocess
 import sys
 import tempfile

@@ -22,8 +22,11 @@ def sail(targets, own_course_deg=0.0, own_speed_kn=18.0, duration_s=2400.0, step
                                                            duration_s))
     psi = math.radians(own_course_deg)
     velocity = own_speed_kn * KNOT * np.array([math.cos(psi), math.sin(psi)])
-    own = lambda t: np.asarray(own_start) * NM + velocity * t
-    inputs = lambda t: {"x": own(t)[0], "y": own(t)[1], "psi": psi, "u": own_speed_kn * KNOT, "v": 0.0}
+    def own(t):
+        return np.asarray(own_start) * NM + velocity * t
+
+    def inputs(t):
+        return {"x": own(t)[0], "y": own(t)[1], "psi": psi, "u": own_speed_kn * KNOT, "v": 0.0}
     times = np.arange(0.0, duration_s + step / 2, step)
     rows = [traffic.setup(0.0, inputs(0.0))["obstacles"]]
     rows += [traffic.step(t, step, inputs(t))["obstacles"] for t in times[1:]]

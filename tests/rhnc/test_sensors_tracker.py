@@ -195,7 +195,8 @@ def test_ais_tracker_confirms_after_m_hits_and_estimates_within_the_noise():
 def test_manoeuvring_target_needs_the_process_noise_of_a_turning_ship():
     target = ScriptedTarget([3 * NM, 0.0], [18 * KNOT, 0.0], [Manoeuvre(600.0, math.radians(90), math.radians(0.5),
                                                                        None, 0.02)], NM, 1800.0)
-    truth = lambda t: target.state(t)[None, :]
+    def truth(t):
+        return target.state(t)[None, :]
     peaks = {}
     for q in (0.05, 0.0005):
         times, truths, published, valid, _ = track_run([truth], {"target_radius_nm": 1.0, "process_noise_mps2": q},
