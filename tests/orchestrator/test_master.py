@@ -134,8 +134,8 @@ def test_connection_to_a_missing_port_is_refused(write_scenario):
 
 
 def test_unknown_type_and_class(write_scenario):
-    text = scenario_text().replace('type = "python"\nclass = "sample_participants:Echo"', 'type = "radar"')
-    with pytest.raises(ScenarioError, match=r"participants.echo.type: unknown participant type 'radar'"):
+    text = scenario_text().replace('type = "python"\nclass = "sample_participants:Echo"', 'type = "warp_drive"')
+    with pytest.raises(ScenarioError, match=r"participants.echo.type: unknown participant type 'warp_drive'"):
         CoSimulation(load_scenario(write_scenario(text)))
     text = scenario_text().replace("sample_participants:Echo", "no_such_module:Echo")
     with pytest.raises(ScenarioError, match=r"participants.echo.class: cannot import module 'no_such_module'"):

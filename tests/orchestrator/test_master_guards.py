@@ -197,8 +197,8 @@ def test_refusals_name_the_scenario_file_and_list_the_valid_names(write_scenario
     with pytest.raises(ScenarioError, match=r"no input 'speed' \(inputs: value, heading\)$"):
         CoSimulation(load_scenario(write_scenario(text)))
     text = PROBE.format(every=1, options="").replace('type = "python"\nclass = "sample_participants:Probe"',
-                                                     'type = "radar"')
-    with pytest.raises(ScenarioError, match=r"unknown participant type 'radar' \(valid: [a-z_]+, [a-z_]+, .*, python\)"):
+                                                     'type = "warp_drive"')
+    with pytest.raises(ScenarioError, match=r"unknown participant type 'warp_drive' \(valid: [a-z_]+, [a-z_]+, .*, python\)"):
         CoSimulation(load_scenario(write_scenario(text)))
 
 

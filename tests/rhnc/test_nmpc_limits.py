@@ -262,7 +262,7 @@ def test_the_ships_actuator_rates_reach_the_nmpc():
     from rhnc.control.allocation import coefficients_from_ship, tau_rate_limits
     from rhnc.control.control_options import controller_from_options
 
-    _, settings, _ = controller_from_options({"actuators_ship": "KCS"}, context())
+    _, settings, _, _ = controller_from_options({"actuators_ship": "KCS"}, context())
     expected = tau_rate_limits(coefficients_from_ship("KCS", "x"), settings.max_speed_mps)
     assert settings.tau_rate_max == pytest.approx(expected)
     # the steering gear: dtau_r/ddelta at midships times 2.32 deg/s; the shaft: 0.05 1/s^2 at full revolutions
