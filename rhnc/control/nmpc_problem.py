@@ -31,7 +31,7 @@ from collections.abc import Sequence
 import casadi as ca
 import numpy as np
 
-from rhnc.ship.ship_model import ShipParameters, casadi_derivatives
+from rhnc.ship.ship_model import ShipParameters, casadi_derivatives, rk4_states
 
 #: Parameters per obstacle slot: cx, cy [L], vx, vy [L/s], offset x, y [L], rho [L],
 #: growth [L/s], inflation [-], active [0/1].
@@ -98,17 +98,8 @@ def disturbed_rk4(params: ShipParameters, dt_s: float, substeps: int) -> ca.Func
     state = ca.SX.sym("X", 6)
     tau = ca.SX.sym("tau", 2)
     d = ca.SX.sym("d", DISTURBANCE_SIZE)
-    h = dt_s / substeps
-    x = state
-    columns = []
-    for _ in range(substeps):
-        k1 = f(x, tau, d)
-        k2 = f(x + 0.5 * h * k1, tau, d)
-        k3 = f(x + 0.5 * h * k2, tau, d)
-        k4 = f(x + h * k3, tau, d)
-        x = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-        columns.append(x)
-    return ca.Function("ship_Fd", [state, tau, d], [x, ca.horzcat(*columns)])
+    columns = rk4_states(f, state, dt_s / substeps, substeps, tau, d)
+    return ca.Function("ship_Fd", [state, tau, d], [columns[-1], ca.horzcat(*columns)])
 
 
 def scaled_step(params: ShipParameters, dt_s: float, substeps: int, state_scale: np.ndarray,

@@ -61,7 +61,7 @@ import numpy as np
 from orchestrator.errors import ScenarioError, ToolchainError
 from orchestrator.geometry import KNOT
 from rhnc.ship.prediction_error import position_error_growth
-from rhnc.ship.ship_model import STATE_NAMES, ShipParameters, equations_of_motion, rk4_step
+from rhnc.ship.ship_model import STATE_NAMES, ShipParameters, equations_of_motion, rk4_states, rk4_step
 
 LOG = logging.getLogger(__name__)
 COEFFICIENTS = ("m11", "m22", "m33", "d11", "d22", "d33", "d23", "d32")
@@ -362,14 +362,7 @@ def refine_output_error(records: dict[str, Record], theta: np.ndarray,
         full_state = ca.vertcat(0.0, 0.0, x)
         return equations_of_motion(full_state, tau, scaled, ca.cos, ca.sin, lambda rows: ca.vertcat(*rows))[2:]
 
-    h = SAMPLE_S / 2.0
-    x = state
-    for _ in range(2):
-        k1 = f(x)
-        k2 = f(x + 0.5 * h * k1)
-        k3 = f(x + 0.5 * h * k2)
-        k4 = f(x + h * k3)
-        x = x + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+    x = rk4_states(f, state, SAMPLE_S / 2.0, 2)[-1]
     step = ca.Function("step", [state, tau, variables], [x])
     weights = np.array([1.0 / math.radians(1.0), 10.0, 10.0, 1.0 / math.radians(0.06)])
     residuals = []

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from orchestrator.errors import ToolchainError
-from rhnc.ship.ship_model import ShipParameters, derivatives
+from rhnc.ship.ship_model import ShipParameters, derivatives, rk4_states
 
 #: prediction time over which the position error's growth is measured [s] (15 NMPC intervals of 20 s)
 PREDICTION_HORIZON_S = 300.0
@@ -65,13 +65,7 @@ def position_error_growth(parameters: ShipParameters, records: dict,
         errors = np.empty((steps, len(starts)))
         for j in range(steps):
             tau = record.tau[starts + j].T
-            h = dt / 2.0
-            for _ in range(2):
-                k1 = derivatives(state, tau, parameters)
-                k2 = derivatives(state + 0.5 * h * k1, tau, parameters)
-                k3 = derivatives(state + 0.5 * h * k2, tau, parameters)
-                k4 = derivatives(state + h * k3, tau, parameters)
-                state = state + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+            state = rk4_states(derivatives, state, dt / 2.0, 2, tau, parameters)[-1]
             measured = record.states[starts + j + 1]
             errors[j] = np.hypot(state[0] - measured[:, 0], state[1] - measured[:, 1])
         ratios.append(np.max(errors / times[:, None]))

@@ -259,18 +259,29 @@ def derivatives(state: np.ndarray, tau: np.ndarray, params: ShipParameters) -> n
     return equations_of_motion(state, tau, params, np.cos, np.sin, np.array)
 
 
+def rk4_states(f, x, h: float, substeps: int, *args) -> list:
+    """The classic RK4 scheme, the one integrator of the ship's equations everywhere.
+
+    ``substeps`` steps of ``h`` [s] of ``x' = f(x, *args)`` (the arguments, such as the
+    forces, held); returns the state at the end of every step, the last one the result.
+    Written in plain arithmetic, so the same lines integrate numpy arrays (a state, or one
+    column per state) and CasADi expressions (the NMPC's and the identification's models).
+    """
+    states = []
+    for _ in range(substeps):
+        k1 = f(x, *args)
+        k2 = f(x + 0.5 * h * k1, *args)
+        k3 = f(x + 0.5 * h * k2, *args)
+        k4 = f(x + h * k3, *args)
+        x = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        states.append(x)
+    return states
+
+
 def rk4_step(state: np.ndarray, tau: np.ndarray, dt: float, substeps: int, params: ShipParameters) -> np.ndarray:
     """Advance ``state`` by ``dt`` [s] with ``tau`` held, ``substeps`` classic RK4 steps (numpy)."""
-    h = dt / substeps
     x = np.asarray(state, dtype=float)
-    tau = np.asarray(tau, dtype=float)
-    for _ in range(substeps):
-        k1 = derivatives(x, tau, params)
-        k2 = derivatives(x + 0.5 * h * k1, tau, params)
-        k3 = derivatives(x + 0.5 * h * k2, tau, params)
-        k4 = derivatives(x + h * k3, tau, params)
-        x = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-    return x
+    return rk4_states(derivatives, x, dt / substeps, substeps, np.asarray(tau, dtype=float), params)[-1]
 
 
 # --------------------------------------------------------------------------------------
@@ -298,16 +309,8 @@ def rk4_function(params: ShipParameters, dt: float, substeps: int, with_substeps
     f = casadi_derivatives(params)
     state = ca.SX.sym("X", 6)
     tau = ca.SX.sym("tau", 2)
-    h = dt / substeps
-    x = state
-    columns = []
-    for _ in range(substeps):
-        k1 = f(x, tau)
-        k2 = f(x + 0.5 * h * k1, tau)
-        k3 = f(x + 0.5 * h * k2, tau)
-        k4 = f(x + h * k3, tau)
-        x = x + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-        columns.append(x)
+    columns = rk4_states(f, state, dt / substeps, substeps, tau)
+    x = columns[-1]
     if with_substeps:
         return ca.Function("ship_F", [state, tau], [x, ca.horzcat(*columns)], ["X", "tau"], ["X_next", "Xs"])
     return ca.Function("ship_F", [state, tau], [x], ["X", "tau"], ["X_next"])

@@ -1,5 +1,7 @@
 """Prediction model: parameter sets, RK4 against an independent integrator, CasADi = numpy."""
 
+import math
+
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -91,3 +93,36 @@ def test_parameters_are_frozen(kcs):
     with pytest.raises(AttributeError):
         kcs.m11 = 1.0
     assert isinstance(kcs, ShipParameters)
+
+
+def test_rk4_is_fourth_order_on_numbers_and_on_casadi_expressions():
+    import casadi as ca
+
+    from rhnc.ship.ship_model import rk4_states
+
+    def growth(x, rate):
+        return rate * x
+
+    errors = [abs(rk4_states(growth, 1.0, 1.0 / n, n, 1.0)[-1] - math.e) for n in (4, 8)]
+    assert 14.0 < errors[0] / errors[1] < 18.0  # halving the step divides the error by 2^4
+    symbol = ca.SX.sym("x")
+    ends = ca.Function("ends", [symbol], [ca.vertcat(*rk4_states(growth, symbol, 0.25, 4, 1.0))])
+    np.testing.assert_array_equal(np.array(ends(1.0)).ravel(), rk4_states(growth, 1.0, 0.25, 4, 1.0))
+
+
+def test_the_ship_equations_are_integrated_by_one_rk4_only():
+    # an RK4 stage written out anywhere but rk4_states is a second integrator to keep in step
+    import ast
+    from pathlib import Path
+
+    import rhnc
+
+    found = []
+    for path in sorted(Path(rhnc.__file__).parent.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.FunctionDef):
+                stages = {target.id for statement in ast.walk(node) if isinstance(statement, ast.Assign)
+                          for target in statement.targets if isinstance(target, ast.Name)}
+                if {"k1", "k2", "k3", "k4"} <= stages:
+                    found.append(f"{path.name}:{node.name}")
+    assert found == ["ship_model.py:rk4_states"]
