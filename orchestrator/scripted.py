@@ -24,6 +24,7 @@ from typing import Annotated, Any
 from pydantic import PlainValidator, model_validator
 
 from orchestrator.errors import ScenarioError
+from orchestrator.geometry import wrap_angle
 from orchestrator.participant import BuildContext, Participant, check_options, is_finite_number
 from orchestrator.toml_input import Finite, TomlTable, fail, fail_whole, shown
 
@@ -130,7 +131,7 @@ class ScriptedTau(Participant):
         psi = float(inputs["psi"])
         if self._psi_execute is None:
             self._psi_execute = psi
-        change = math.remainder(psi - self._psi_execute, 2 * math.pi)
+        change = float(wrap_angle(psi - self._psi_execute))
         if self._sign > 0 and change >= angle:
             self._sign = -1.0
         elif self._sign < 0 and change <= -angle:

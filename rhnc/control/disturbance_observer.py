@@ -30,6 +30,7 @@ import math
 import casadi as ca
 import numpy as np
 
+from orchestrator.geometry import wrap_angle
 from rhnc.control.nmpc_problem import DISTURBANCE_SIZE, disturbed_rk4
 from rhnc.ship.ship_model import ShipParameters
 
@@ -101,7 +102,7 @@ class DisturbanceObserver:
                 step, jacobian = self._model(dt)
                 predicted = np.array(step(previous[1], previous[2], self.estimate)).ravel()
                 error = state - predicted
-                error[2] = math.remainder(error[2], 2.0 * math.pi)
+                error[2] = wrap_angle(float(error[2]))
                 J = np.array(jacobian(previous[1], previous[2], self.estimate)) / self.state_scale[:, None]
                 correction = np.linalg.lstsq(J, error / self.state_scale, rcond=1e-9)[0]
                 if np.all(np.isfinite(correction)):
@@ -164,7 +165,7 @@ def trimmed_reference(reference: np.ndarray, disturbance: np.ndarray, dt_s: floa
     surge = np.sqrt(np.maximum(water_speed**2 - sway**2, 0.0))
     heading = np.arctan2(water_e, water_n) - np.arctan2(sway, np.maximum(surge, 1e-9))
     # keep the heading's turns as the reference had them
-    heading = psi + np.remainder(heading - psi + np.pi, 2.0 * np.pi) - np.pi
+    heading = psi + wrap_angle(heading - psi)
     trimmed = reference.copy()
     trimmed[:, 2], trimmed[:, 3], trimmed[:, 4] = heading, surge, sway
     p = params

@@ -79,6 +79,7 @@ import math
 
 import numpy as np
 
+from orchestrator.geometry import wrap_angle
 from rhnc.encounters.colregs import (ACTION_BUFFER_S, ENCOUNTER_CLASSES, STAND_ON_ACTION_RANGE_FACTOR,
                                     STAND_ON_ACTION_TCPA_S, EncounterTracker, cpa_tcpa, latest_alteration_s,
                                     stand_on_latest_s, stand_on_must_act)
@@ -402,8 +403,7 @@ class CollisionDomains:
             return
         side = 1.0
         if name in ("overtaking", "overtaken"):
-            deviation = math.degrees(heading_rad - reference_heading_rad)
-            deviation = (deviation + 180.0) % 360.0 - 180.0
+            deviation = math.degrees(wrap_angle(heading_rad - reference_heading_rad))
             if abs(deviation) > PORT_ALLOWANCE_DEG:
                 side = math.copysign(1.0, deviation)
             elif encounter.relative_bearing_deg > 0.0:

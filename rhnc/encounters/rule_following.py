@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from orchestrator.errors import ScenarioError
-from orchestrator.geometry import DEG, NM
+from orchestrator.geometry import DEG, NM, wrap_angle
 from orchestrator.participant import is_finite_number
 from rhnc.encounters.colregs import EncounterTracker, stand_on_must_act
 
@@ -98,7 +98,7 @@ class RuleFollowingTarget:
         while self.time_s < elapsed_s - 1e-9:
             dt = min(INTEGRATION_STEP_S, elapsed_s - self.time_s)
             before = self.velocity
-            change = math.remainder(self.commanded_course - self.course, 2.0 * math.pi)
+            change = float(wrap_angle(self.commanded_course - self.course))
             self.course += float(np.clip(change, -self.turn_rate_rad_s * dt, self.turn_rate_rad_s * dt))
             self.position = self.position + 0.5 * (before + self.velocity) * dt
             self.time_s += dt

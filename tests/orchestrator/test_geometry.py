@@ -72,3 +72,15 @@ def test_a_plain_number_wraps_to_the_same_bits_as_an_array(half_turn):
     as_array = wrap_angle(angles, half_turn)
     assert as_numbers.tobytes() == as_array.tobytes()
     assert wrap_angle(-half_turn, half_turn) == half_turn
+
+
+def test_no_module_wraps_angles_by_hand():
+    # the half-open wrap (-pi, pi] written again (a remainder or a shifted modulo by a full
+    # turn) can disagree with wrap_angle at the half turn: every such wrap goes through it
+    import re
+
+    by_hand = re.compile(r"remainder\([^)]*2(\.0)? \* (math|np)\.pi\)|\+ (180(\.0)?|(math|np)\.pi)\) % ")
+    found = [f"{path.relative_to(REPO)}:{number}"
+             for folder in CHECKED for path in sorted((REPO / folder).rglob("*.py")) if path.name != "geometry.py"
+             for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1) if by_hand.search(line)]
+    assert found == []
