@@ -11,13 +11,21 @@ cross-track error; Experiment 2: the distance from the navigation's reference at
 sample), tau_r sign changes per 100 solves, fallbacks, the clearance-margin growth, the
 model check; for Experiment 2 also the distance left to the goal.
 
-    python bench/bench_own_ship.py [--exp2-steps 480] [--out docs/own-ship-figures.md]
+    python bench/bench_own_ship.py [--exp2-steps N] [--plants S175 KCSMMG KVLCC2] [--out docs/own-ship-figures.md]
+
+The second test ship, the KVLCC2 tanker (models/KVLCC2), runs its own scenarios at force
+level and through the allocation (scenarios/own_ship/*_kvlcc2_*.toml: its service speed of
+15.5 kn, the runs longer by 18/15.5 to cover the same distance), with the shipped set-up only.
 
 The identified models are written by
     python -m orchestrator identify scenarios/own_ship/exp3a_s175_kcs_model.toml \\
         --tau-u-max-N 8e5 --tau-r-max-Nm 1.65e8 --out scenarios/own_ship/S175_identified.toml
     python -m orchestrator identify scenarios/exp3a_static_mmg.toml --tau-u-max-N 1.8e6 \\
         --tau-r-max-Nm 2.4e8 --set KCSMMG --out scenarios/KCSMMG_identified.toml
+    python -m orchestrator identify scenarios/own_ship/exp3a_kvlcc2_force.toml --tau-u-max-N 2.35e6 \\
+        --tau-r-max-Nm 5.87e8 --speed-kn 15.5 --set KVLCC2 --out scenarios/own_ship/KVLCC2_identified.toml
+    python -m orchestrator identify scenarios/own_ship/exp3a_kvlcc2_alloc.toml --tau-u-max-N 2.35e6 \\
+        --tau-r-max-Nm 5.87e8 --speed-kn 15.5 --set KVLCC2 --out scenarios/own_ship/KVLCC2_alloc_identified.toml
 """
 
 from __future__ import annotations
@@ -27,6 +35,7 @@ import datetime
 import logging
 import os
 import re
+import sys
 import tempfile
 from pathlib import Path
 
@@ -51,7 +60,20 @@ SCENARIOS = {
         "exp3b": REPO / "scenarios" / "exp3b_head_on_mmg.toml",
         "exp2": REPO / "scenarios" / "exp2_rhnc_mmg.toml",
     },
+    "KVLCC2 (force level, mapped)": {
+        "exp3a": OWN / "exp3a_kvlcc2_force.toml",
+        "exp3b": OWN / "exp3b_kvlcc2_force.toml",
+        "exp2": OWN / "exp2_kvlcc2_force.toml",
+    },
+    "KVLCC2 + allocation (actuator level, mapped)": {
+        "exp3a": OWN / "exp3a_kvlcc2_alloc.toml",
+        "exp3b": OWN / "exp3b_kvlcc2_alloc.toml",
+        "exp2": OWN / "exp2_kvlcc2_alloc.toml",
+    },
 }
+#: Plants measured with the shipped set-up only (identified model, observer on): the second
+#: test ship, whose KCS-model and observer-off runs would say nothing new.
+SHIPPED_ONLY = ("KVLCC2",)
 KCS_MODEL = {"participants.ctrl.options.model_file": (REPO / "models" / "KCS" / "parameter_sets.toml").as_posix(),
              "participants.ctrl.options.model_set": "default",
              "participants.ctrl.options.disturbance_observer": False}
@@ -129,7 +151,10 @@ def table(rows: list[tuple[str, str, str, dict]]) -> list[str]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--exp2-steps", type=int, default=480, help="macro steps of Experiment 2 (480: full)")
+    parser.add_argument("--exp2-steps", type=int, default=None,
+                        help="macro steps of Experiment 2 (default: the scenario's, the full voyage)")
+    parser.add_argument("--plants", nargs="*", default=None,
+                        help="only the plants whose label starts with one of these (default: all)")
     parser.add_argument("--out", type=Path, default=None, help="also write the table to this markdown file")
     args = parser.parse_args()
     logging.basicConfig(level=logging.ERROR)
@@ -137,14 +162,19 @@ def main() -> None:
     rows = []
     with tempfile.TemporaryDirectory() as results:
         for plant, experiments in SCENARIOS.items():
+            if args.plants and not plant.startswith(tuple(args.plants)):
+                continue
             for experiment, path in experiments.items():
                 for setup, overrides in SETUPS.items():
+                    if plant.startswith(SHIPPED_ONLY) and setup != "identified + observer":
+                        continue
                     overrides = dict(overrides)
+                    exp2_steps = {"simulation.steps": args.exp2_steps} if args.exp2_steps else {}
                     if experiment == "exp2":
-                        overrides["simulation.steps"] = args.exp2_steps
+                        overrides.update(exp2_steps)
                     if plant.startswith("S175") and setup == "KCS model":
                         path_used, overrides = OWN / f"{experiment}_s175_kcs_model.toml", (
-                            {"simulation.steps": args.exp2_steps} if experiment == "exp2" else {})
+                            exp2_steps if experiment == "exp2" else {})
                     else:
                         path_used = path
                     row = measure(path_used, overrides, results, experiment)
@@ -156,7 +186,7 @@ def main() -> None:
     if args.out is not None:
         stamp = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
         header = [
-            "# Own-ship goals, measured (written by `python bench/bench_own_ship.py --out docs/own-ship-figures.md`)",
+            f"# Own-ship goals, measured (written by `python bench/bench_own_ship.py {' '.join(sys.argv[1:])}`)",
             "",
             f"Generated {stamp}; load average at the start {load[0]:.1f} (2-core machine shared with other work: "
             "the figures are the runs' outcomes, not times). Goals: separation >= R + R_i, within 0.2 nm of the "

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 from scipy.integrate import solve_ivp
 
@@ -132,6 +133,6 @@ def test_bad_parameters_are_refused_at_initialization_naming_them(fmus, open_sla
     ship.fmu.setupExperiment(startTime=0.0)
     ship.fmu.enterInitializationMode()
     ship.set({name: value})
-    with pytest.raises(Exception):
+    with pytest.raises(FMICallException):
         ship.fmu.exitInitializationMode()
     assert message in ship.errors()

@@ -108,7 +108,8 @@ def test_identify_through_the_allocation_refuses_it_with_exit_2_and_nothing_writ
 def test_a_unit_contradicting_the_declared_one_is_refused_naming_both(port, line, unit, tmp_path):
     variable = line.split('"')[1]
     path = _edited(tmp_path, ALLOC, line, f'{port} = {{ variable = "{variable}", unit = "{unit}" }}')
-    with pytest.raises(ScenarioError, match=rf"mapping\.{port}: unit '{re.escape(unit)}' contradicts the unit '\S+' that the FMU declares for variable '{variable}'"):
+    message = rf"mapping\.{port}: unit '{re.escape(unit)}' contradicts the unit '\S+' that the FMU declares for variable '{variable}'"
+    with pytest.raises(ScenarioError, match=message):
         scenario = load_scenario(path)
         spec = scenario.participant("ship")
         FmuParticipant(spec, resolve_fmu(spec.fmu, scenario.directory, "ship"), f"{path}: participants.ship")
