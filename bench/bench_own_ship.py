@@ -32,12 +32,14 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import json
 import logging
 import os
 import re
 import sys
 import tempfile
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
@@ -47,6 +49,7 @@ from orchestrator.geometry import NM
 REPO = Path(__file__).resolve().parents[1]
 OWN = REPO / "scenarios" / "own_ship"
 GOAL_NM = (100.0, 100.0)
+ARRIVAL_RADIUS_NM = 0.5   # the goal participant's arrival_radius_nm in the Experiment 2 scenarios
 
 #: plant -> experiment -> scenario file (the shipped set-up: identified model, observer on)
 SCENARIOS = {
@@ -107,11 +110,19 @@ def measure(path: Path, overrides: dict, results: str, experiment: str) -> dict:
     """One run's figures."""
     from orchestrator.run import run_scenario
 
-    report = run_scenario(path, results, progress=False, overrides=overrides or None)
+    from orchestrator.errors import ToolchainError
+
+    try:
+        report = run_scenario(path, results, progress=False, overrides=overrides or None)
+        summary, folder, error = report.summary, report.folder, ""
+    except ToolchainError as exc:   # a run that failed part-way still has its summary and samples
+        folder = max(Path(results).glob("*/*/summary.json"), key=lambda p: p.stat().st_mtime).parent
+        summary, error = json.loads((folder / "summary.json").read_text()), str(exc).splitlines()[0]
+    report = SimpleNamespace(summary=summary, folder=folder)
     ctrl = report.summary["participants"]["ctrl"]
     row = {"sign": ctrl["tau_r_sign_changes_per_100_solves"], "fallbacks": ctrl["fallback_count"],
            "growth_kn": ctrl.get("clearance_margin_growth_kn", 0.0), "check": ctrl["model_check"]["check"],
-           "status": report.summary["status"]}
+           "status": report.summary["status"], "error": error}
     if experiment == "exp2":
         frame = pd.read_parquet(report.folder / "timeseries.parquet")
         error = reference_error_m(frame)
@@ -129,8 +140,9 @@ def measure(path: Path, overrides: dict, results: str, experiment: str) -> dict:
 
 
 def goals_met(experiment: str, row: dict) -> bool:
-    """Separation >= R + R_i, within 0.2 nm of the track at the end, <= 10 sign changes per 100 solves."""
-    separated = experiment == "exp2" or row["separation_m"] >= 0.0
+    """Separation >= R + R_i, within 0.2 nm of the track at the end, <= 10 sign changes per 100 solves;
+    Experiment 2 arrives (ends within the goal's arrival radius)."""
+    separated = row["left_nm"] <= ARRIVAL_RADIUS_NM if experiment == "exp2" else row["separation_m"] >= 0.0
     return separated and row["track_end_nm"] <= 0.2 and row["sign"] <= 10.0
 
 
@@ -143,6 +155,8 @@ def table(rows: list[tuple[str, str, str, dict]]) -> list[str]:
         extra = ""
         if experiment == "exp2":
             extra = f" ({row['left_nm']:.2f} nm to the goal after {row['minutes']} min)"
+        if row.get("error"):
+            extra += f" (run {row['status']}: {row['error'][:120]})"
         lines.append(f"| {plant} | {experiment} | {setup} | {separation} | {row['track_end_nm']:.3f}{extra} | "
                      f"{row['sign']:.1f} | {'yes' if goals_met(experiment, row) else '**no**'} | {row['fallbacks']} | "
                      f"{row['growth_kn']:.2f} | {row['check']} |")
