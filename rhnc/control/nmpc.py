@@ -296,6 +296,15 @@ class NMPCController:
                                                 s.control_interval_s / s.substeps, self.length_scale, et,
                                                 reference_heading_rad=float(reference[0, 2]),
                                                 horizon_s=N * s.control_interval_s, time_s=time_s)
+        # Rules 8, 16, 17: a readily apparent alteration once the ship gives way or acts
+        floor, ceiling = heading_bounds(report, time_s, float(state[2]), float(state[5]),
+                                        time_s + s.control_interval_s * np.arange(1, N + 1))
+        if floor is not None or ceiling is not None:
+            # the heading asked for within the alteration's bounds: a cost pulling across a bound
+            # checked at the interval ends only is paid by dips between them (a yaw moment
+            # changing sign every interval while the ship rides the bound)
+            ref_scaled[2, 1:] = np.clip(ref_scaled[2, 1:], -np.inf if floor is None else floor,
+                                        np.inf if ceiling is None else ceiling)
         p = self.problem.parameters(ref_scaled, w_d, w_prev, P, disturbance, slots)
         lbx, ubx = self._bounds(state, origin)
         if s.tau_rate_max is not None:   # what the actuators can reach from the last applied input
@@ -308,9 +317,6 @@ class NMPCController:
         if report.no_port_turn:  # Rules 14, 15, 17(c): no alteration to port
             allowance = math.radians(PORT_ALLOWANCE_DEG)
             lbx[heading_index] = np.minimum(ref_scaled[2, 1:] - allowance, state[2])
-        # Rules 8, 16, 17: a readily apparent alteration once the ship gives way or acts
-        floor, ceiling = heading_bounds(report, time_s, float(state[2]), float(state[5]),
-                                        time_s + s.control_interval_s * np.arange(1, N + 1))
         if floor is not None:
             lbx[heading_index] = np.maximum(lbx[heading_index], floor)
         if ceiling is not None:

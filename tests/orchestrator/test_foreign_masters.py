@@ -6,6 +6,10 @@ simulator of a communication point at once) with libcosim's file observer; ``che
 libcosim's CSV files by the criteria that travel with the system (``scenario.toml``).  The
 verdicts must be those of our own master in its default order (Gauss-Seidel).
 
+Every criterion must be met there: separation >= R + R_i, the COLREG rules, at most 10
+yaw-moment sign changes per 100 solves, and Experiment 2's distance made good within 1 %
+of our master's (``value`` in its file).
+
 The second master: a Jacobi loop over the exported FMUs written with plain FMPy
 (``FMU2Slave``), its results written with FMPy's ``write_csv``, one file per FMU.
 """
@@ -23,10 +27,9 @@ from orchestrator.run import run_scenario
 
 REPO = Path(__file__).resolve().parents[2]
 NANO = 1_000_000_000
-SYSTEMS = ("exp3b_head_on", "exp3a_static", "crossing_give_way",
-           pytest.param("exp2_rhnc", marks=pytest.mark.xfail(
-               strict=True, reason="measured: libcosim makes good 137.85 nm against our 139.76 (-1.37 %), "
-                                   "outside the 1 % criterion; the yaw moment no longer chatters (1.25 / 100)")))
+#: Experiment 2 in weather: without the model-error correction of the loop delay's prediction
+#: libcosim made good 137.85 nm against our 139.76 (-1.37 %), outside its 1 % criterion
+SYSTEMS = ("exp3b_head_on", "exp3a_static", "crossing_give_way", "exp2_rhnc")
 
 
 def libcosim_run(config: Path, out: Path) -> list[str]:
@@ -69,6 +72,7 @@ def test_exported_system_in_libcosim_gets_our_masters_verdicts(name, tmp_path):
 
     ours = run_scenario(scenario, tmp_path / "ours", progress=False, overrides={"simulation.exchange": "gauss-seidel"})
     assert theirs == {c["name"]: c["passed"] for c in ours.summary["acceptance"]["criteria"]}, (theirs, ours.reason)
+    assert all(theirs.values()), theirs  # and every criterion met there
 
 
 def fmpy_jacobi_run(config: Path, stop_s: float, out: Path) -> list[str]:

@@ -45,8 +45,10 @@ def test_the_state_is_carried_over_the_delay_with_the_input_sent_a_step_earlier(
     assert time == 20.0
     np.testing.assert_allclose(state, rk4_step(STATE, np.zeros(2), 20.0, 4, kcs), rtol=1e-9)
     delay.sent(0.0, first)                 # acts over [20, 40)
-    time, state = delay.predict(20.0, STATE)
-    np.testing.assert_allclose(state, rk4_step(STATE, first, 20.0, 4, kcs), rtol=1e-9)
+    measured = rk4_step(STATE, np.zeros(2), 20.0, 4, kcs)  # the ship did what the model said: no model error
+    time, state = delay.predict(20.0, measured)
+    np.testing.assert_allclose(delay.model_error, 0.0, atol=1e-9)
+    np.testing.assert_allclose(state, rk4_step(measured, first, 20.0, 4, kcs), rtol=1e-9)
     delay.sent(20.0, second)               # acts over [40, 60)
     # a delay of 1.5 steps: [40, 50) under `first`, [50, 60) under `second`
     longer = LoopDelay(30.0, kcs)
@@ -57,6 +59,30 @@ def test_the_state_is_carried_over_the_delay_with_the_input_sent_a_step_earlier(
     expected = rk4_step(rk4_step(STATE, first, 10.0, 2, kcs), second, 20.0, 4, kcs)
     np.testing.assert_allclose(state, expected, rtol=1e-9)
     assert abs(state[5] - rk4_step(STATE, second, 30.0, 6, kcs)[5]) > 1e-4  # the switch matters
+
+
+def test_the_prediction_is_corrected_by_the_models_error_over_the_last_delay(kcs):
+    """A ship slower and set aside (wind, waves, current the model does not know): the error the
+    model made over the last delay is added to the next prediction, heading wrapped."""
+    delay = LoopDelay(60.0, kcs)
+    delay.hold(0.0, np.zeros(2))
+    tau = np.array([1.0e6, 0.0])
+    delay.sent(0.0, tau)
+    state = np.array([0.0, 0.0, np.pi - 0.01, 9.0, 0.0, 0.0])
+    _, first = delay.predict(0.0, state)
+    np.testing.assert_array_equal(delay.model_error, 0.0)  # nothing predicted for t = 0
+    offset = np.array([-20.0, 15.0, 0.03, -0.3, 0.02, 0.0])  # behind, set to starboard, turned past +-pi
+    measured = first + offset
+    measured[2] -= 2.0 * np.pi  # the plant reports the heading wrapped
+    delay.sent(60.0, tau)
+    time, second = delay.predict(60.0, measured)
+    assert time == 120.0
+    np.testing.assert_allclose(delay.model_error, offset, atol=1e-9)
+    np.testing.assert_allclose(second, rk4_step(measured, tau, 60.0, 12, kcs) + offset, rtol=1e-9, atol=1e-9)
+    delay.reset()
+    delay.hold(0.0, np.zeros(2))
+    _, again = delay.predict(60.0, measured)  # after a reset nothing was predicted for now
+    np.testing.assert_allclose(again, rk4_step(measured, np.zeros(2), 60.0, 12, kcs), rtol=1e-9)
 
 
 def test_a_negative_or_non_finite_delay_is_refused(kcs):

@@ -116,3 +116,33 @@ def energy_at(weather, nav):
     from rhnc.navigation.fields import energy_rate_fields
 
     return energy_rate_fields(weather, nav.goal, nav.speed, nav.energy)[0]
+
+
+@pytest.mark.parametrize("method", ["paper", "routing"])
+def test_a_delayed_reference_is_planned_for_the_instant_it_reaches_the_controller(metocean, method):
+    """Jacobi order: the reference of a step at t reaches the controller at t + delta; it starts
+    there, from the controller's prediction at t + delta (the set-up's arrives at once)."""
+    jacobi = BuildContext("exp.toml: participants.nav", Path("."), DELTA, 0.0, 3600.0, metocean=metocean,
+                          output_delay_s=DELTA)
+    nav = NavigationParticipant.from_options("nav", {"goal_nm": [100, 100], "method": method, "start_nm": [0, 0]},
+                                             jacobi)
+    assert nav.output_delay_s == DELTA
+    assert nav.fmu_parameters()["output_delay_s"]["start"] == DELTA
+    first = nav.setup(0.0, {})["reference"]
+    assert first[0, 0] == 0.0
+    prediction = first.copy()
+    prediction[:, 2] += 500.0  # the controller predicts the ship 500 m east of the plan
+    t = DELTA
+    step = nav.step(t, DELTA, {"x": 0.0, "y": 0.0, "psi": 0.8, "u": 9.0, "prediction": prediction})["reference"]
+    assert step[0, 0] == t + DELTA
+    expected = [np.interp(t + DELTA, prediction[:, 0], prediction[:, j]) for j in (1, 2)]
+    assert step[0, 1:3] == pytest.approx(expected)
+    # no prediction: the measurement carried over the delay at its course and speed
+    alone = nav.step(t, DELTA, {"x": 10.0, "y": 20.0, "psi": 0.0, "u": 9.0})["reference"]
+    assert alone[0, 1:3] == pytest.approx([10.0 + 9.0 * DELTA, 20.0])
+    assert build(metocean).output_delay_s == 0.0  # Gauss-Seidel: the context's delay is 0
+
+
+def test_a_negative_reference_delay_is_refused_naming_the_key(metocean):
+    with pytest.raises(ScenarioError, match=r"participants.nav.options.output_delay_s: must not be negative, got -1"):
+        build(metocean, output_delay_s=-1.0)
