@@ -94,13 +94,21 @@ class Chart:
             return np.full(len(legs), np.inf)
         return shapely.distance(legs, geometry)
 
-    def legs_clear(self, a, b) -> np.ndarray:
-        """Whether each straight leg keeps the declared clearance along its whole length."""
-        a = np.asarray(a, dtype=float)
-        b = np.asarray(b, dtype=float)
+    def legs_clear(self, a, b, distance_a=None, distance_b=None) -> np.ndarray:
+        """Whether each straight leg keeps the declared clearance along its whole length.
+
+        ``distance_a``, ``distance_b``: the ends' distances [m] when already known (the route
+        search's nodes); legs whose ends are farther than the clearance plus half the leg
+        are clear without a look at the polygons."""
+        a = np.asarray(a, dtype=float).reshape(-1, 2)
+        b = np.asarray(b, dtype=float).reshape(-1, 2)
         if not self.areas or len(a) == 0:
             return np.ones(len(a), dtype=bool)
-        ends = np.minimum(self.distances_m(a[:, 0], a[:, 1]), self.distances_m(b[:, 0], b[:, 1]))
+        if distance_a is None:
+            distance_a = self.distances_m(a[:, 0], a[:, 1])
+        if distance_b is None:
+            distance_b = self.distances_m(b[:, 0], b[:, 1])
+        ends = np.minimum(distance_a, distance_b)
         half = 0.5 * np.hypot(*(b - a).T)
         clear = ends >= self.clearance_m + half  # every point of a leg lies within half its length of an end
         doubtful = ~clear & (ends >= self.clearance_m)
