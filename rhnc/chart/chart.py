@@ -99,7 +99,9 @@ class Chart:
 
         ``distance_a``, ``distance_b``: the ends' distances [m] when already known (the route
         search's nodes); legs whose ends are farther than the clearance plus half the leg
-        are clear without a look at the polygons."""
+        are clear without a look at the polygons.  A leg that starts inside the clearance
+        (a ship pushed there) is clear when it comes no closer than its start: the way out.
+        """
         a = np.asarray(a, dtype=float).reshape(-1, 2)
         b = np.asarray(b, dtype=float).reshape(-1, 2)
         if not self.areas or len(a) == 0:
@@ -108,12 +110,13 @@ class Chart:
             distance_a = self.distances_m(a[:, 0], a[:, 1])
         if distance_b is None:
             distance_b = self.distances_m(b[:, 0], b[:, 1])
+        required = np.minimum(self.clearance_m, np.maximum(distance_a, 0.0) * (1.0 - 1e-9))
         ends = np.minimum(distance_a, distance_b)
         half = 0.5 * np.hypot(*(b - a).T)
-        clear = ends >= self.clearance_m + half  # every point of a leg lies within half its length of an end
-        doubtful = ~clear & (ends >= self.clearance_m)
+        clear = ends >= required + half  # every point of a leg lies within half its length of an end
+        doubtful = ~clear & (ends >= required)
         if np.any(doubtful):
-            clear[doubtful] = self.leg_distances_m(a[doubtful], b[doubtful]) >= self.clearance_m
+            clear[doubtful] = self.leg_distances_m(a[doubtful], b[doubtful]) >= required[doubtful]
         return clear
 
     def to_geographic(self, north_m, east_m):

@@ -110,3 +110,13 @@ def test_bad_chart_files_name_the_key(tmp_path, text, match):
     path.write_text(text)
     with pytest.raises(ScenarioError, match=f"bad.chart.toml: {match}"):
         load_chart(path)
+
+
+def test_a_leg_from_inside_the_clearance_may_lead_out_but_not_closer(tmp_path):
+    chart = load_chart(write_chart(tmp_path, [("island", square(51.0, 1.5, 51.02, 1.52))], clearance_nm=2.0))
+    projection = chart.projection
+    inside = np.column_stack(projection.to_local(51.03, 1.51))  # 0.6 nm north of the island
+    away = np.column_stack(projection.to_local(51.08, 1.51))
+    along = np.column_stack(projection.to_local(51.025, 1.6))  # passes 0.3 nm off it
+    assert chart.legs_clear(inside, away)[0]
+    assert not chart.legs_clear(inside, along)[0]
