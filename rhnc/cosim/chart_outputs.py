@@ -103,7 +103,7 @@ def chart_figure(frame, scenario, cosim, out_dir) -> list[str]:
         ax.plot(closest["east_m"] / NM, closest["north_m"] / NM, "x", color="black", ms=9,
                 label=f"closest {result['min_clearance_nm']:.2f} nm ({closest['area']}, "
                       f"{closest['time_s'] / 60:.0f} min)")
-    pad = 5.0
+    pad = 8.0
     ax.set_xlim(east.min() / NM - pad, east.max() / NM + pad)
     ax.set_ylim(north.min() / NM - pad, north.max() / NM + pad)
     ax.set_aspect("equal")
@@ -112,6 +112,7 @@ def chart_figure(frame, scenario, cosim, out_dir) -> list[str]:
     origin = the_chart.projection
     ax.set_title(f"{scenario.simulation.name}: chart (origin {origin.origin_lat_deg:.3f} N "
                  f"{origin.origin_lon_deg:.3f} E; dotted: clearance {the_chart.clearance_m / NM:.1f} nm)", fontsize=9)
-    ax.legend(loc="best", fontsize=8, framealpha=0.8)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=2, fontsize=8, framealpha=0.8)
+    fig.tight_layout()
     fig.savefig(Path(out_dir) / "chart.png", dpi=120)
     return ["chart.png"]

@@ -20,7 +20,7 @@ GLOBAL_ANALYSISFORECAST_PHY_001_024, hourly surface currents ``uo``, ``vo``):
 * dimensions ``time``, ``depth``, ``latitude``, ``longitude``; latitude south to north,
   longitude from -180 to 180 on the 1/12 deg grid, ``depth`` [m, positive down] with the
   first level at 0.494 m;
-* ``time`` in ``hours since 1950-01-01``; ``uo``, ``vo`` [m s-1] float32, NaN on land.
+* ``time`` in ``hours since 1950-01-01``; ``uo``, ``vo`` [m s-1] float32 (deflated), NaN on land.
 """
 
 from __future__ import annotations
@@ -145,7 +145,7 @@ def write_cmems_currents(path, lat_deg, lon_deg, times, uo, vo, depths_m=(CMEMS_
                 values = np.repeat(values[:, None], depths.size, axis=1)
             values = values[:, :, order_lat][:, :, :, order_lon]
             variable = ds.createVariable(name, "f4", ("time", "depth", "latitude", "longitude"),
-                                         fill_value=np.float32(np.nan))
+                                         fill_value=np.float32(np.nan), zlib=True, complevel=4)
             variable.units, variable.standard_name = "m s-1", standard
             variable[:] = values
     return path

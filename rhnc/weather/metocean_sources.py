@@ -135,7 +135,7 @@ def from_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
     for extra in [d for d in ds.dims if d not in ("northing", "easting", "latitude", "longitude", "lat", "lon",
                                                   time_dim)]:
         ds = ds.isel({extra: 0})
-    arrays = {name: _find_variable(ds, name, path) for name in FIELDS}
+    arrays = {name: _find_variable(ds, name, path, quiet=currents_file is not None) for name in FIELDS}
     lead = (time_dim,) if time_dim else ()
     nt = (ds.sizes[time_dim],) if time_dim else ()
     keep = {"times_s": times_s, "start_time": zero}
@@ -265,7 +265,7 @@ def _seconds(times, origin, path, time_dim) -> tuple[np.ndarray, str]:
     return (times - zero).astype("timedelta64[ns]").astype("int64") / 1e9, str(zero)
 
 
-def _find_variable(ds, name, path):
+def _find_variable(ds, name, path, quiet: bool = False):
     for candidate in CF_NAMES[name]:
         if candidate in ds.data_vars:
             return ds[candidate]
@@ -273,7 +273,8 @@ def _find_variable(ds, name, path):
         if var.attrs.get("standard_name") in CF_NAMES[name]:
             return var
     if name.startswith("current"):
-        log.warning("%s: no %s variable (%s); assuming zero current", path, name, "/".join(CF_NAMES[name]))
+        if not quiet:  # a currents file gives it
+            log.warning("%s: no %s variable (%s); assuming zero current", path, name, "/".join(CF_NAMES[name]))
         any_var = next(iter(ds.data_vars.values()))
         return any_var * 0.0
     raise ValueError(f"{path}: no variable for {name} (looked for {', '.join(CF_NAMES[name])})")
