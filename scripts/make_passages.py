@@ -190,7 +190,8 @@ grid_file = "${{metocean.grid}}"
 [metocean]                     # ERA5 single levels and CMEMS currents, as the services deliver them
 file = "weather/{name}_era5.nc"
 currents_file = "weather/{name}_cmems.nc"
-origin_deg = [{origin}]        # the chart's origin: one local plane for weather, chart and ship
+origin_deg = [{origin}]        # the chart's origin and projection: one plane for weather, chart and ship
+projection = "aeqd"
 resolution_nm = 2.0
 
 [outputs]

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from orchestrator.errors import ScenarioError
-from orchestrator.geometry import NM, local_north_east_m
+from orchestrator.geometry import EARTH_RADIUS_M, NM, local_north_east_m
 from rhnc.weather.metocean import MetOceanField
 from rhnc.weather.metocean_grid import FIELDS, axis_node_count, check_grid_nodes
 from rhnc.weather.metocean_netcdf import CF_NAMES, TIME_DIMS
@@ -34,7 +34,9 @@ log = logging.getLogger(__name__)
 
 #: Keys of a ``[metocean] file = ...`` table and their kinds (see rhnc.weather.weather_generators.checked_option).
 _FILE_KEYS = {"origin_deg": "point", "resolution_nm": "number", "time_index": "integer", "start_time": "text",
-              "currents_file": "text"}
+              "currents_file": "text", "projection": "text"}
+#: Projections of a latitude/longitude file onto the local plane (``projection`` key).
+PROJECTIONS = ("equirectangular", "aeqd")
 
 
 def from_scenario_table(table: Mapping[str, Any], scenario_dir: Path, where: str) -> MetOceanField:
@@ -60,6 +62,10 @@ def from_scenario_table(table: Mapping[str, Any], scenario_dir: Path, where: str
         if key not in _FILE_KEYS:
             raise ScenarioError(f"{where}: unknown key '{key}' (valid: {', '.join(sorted(_FILE_KEYS))})")
         table[key] = checked_option(table[key], _FILE_KEYS[key], f"{where}.{key}")
+    if table.get("projection", "equirectangular") not in PROJECTIONS:
+        raise ScenarioError(f"{where}.projection: '{table['projection']}' is not valid (valid: {', '.join(PROJECTIONS)})")
+    if table.get("projection") == "aeqd" and "origin_deg" not in table:
+        raise ScenarioError(f"{where}.projection: 'aeqd' needs origin_deg, the centre of the plane")
     if "currents_file" in table:
         currents = Path(table["currents_file"])
         table["currents_file"] = currents = currents if currents.is_absolute() else scenario_dir / currents
@@ -73,7 +79,7 @@ def from_scenario_table(table: Mapping[str, Any], scenario_dir: Path, where: str
 
 def from_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
                 time_index: int | None = None, start_time: str | None = None,
-                currents_file=None) -> MetOceanField:
+                currents_file=None, projection: str = "equirectangular") -> MetOceanField:
     """Load a NetCDF file with CF names (ERA5/CMEMS style), every time step of it, through xarray.
 
     Parameters
@@ -97,6 +103,15 @@ def from_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
         grid and time axis: interpolated onto the first file's grid (bilinear, held at its
         edges) and times (linear, held before its first and after its last time).  Its
         current replaces the first file's.
+
+    projection : str
+        For a latitude/longitude grid: ``"equirectangular"`` (north and east proportional
+        to latitude and longitude about the origin; the default, good near the origin) or
+        ``"aeqd"``, pyproj's azimuthal equidistant plane about ``origin_deg``, the plane of a
+        passage's chart (:mod:`rhnc.chart.projection`), so that weather, coastline and ship
+        share one plane (over a 170 nm map the two differ by up to 9 nm at its far corner).
+        The grid is then the largest rectangle of the plane inside the data, each node's
+        values interpolated at its own latitude and longitude.
 
     Longitudes may run from 0 to 360 (ERA5) or from -180 to 180: with ``origin_deg`` they are
     shifted by whole turns to within half a turn of the origin before sorting, so a map
@@ -158,7 +173,20 @@ def from_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
     lat, lon = lat[order_lat], lon[order_lon]
     lat0, lon0 = origin_deg if origin_deg is not None else (lat[0], lon[0])
     north, east = local_north_east_m(lat, lon, lat0, lon0)
-    step = resolution_nm * NM if resolution_nm else float(np.min(np.diff(north)))
+    plane = None
+    if projection == "aeqd":
+        from rhnc.chart.projection import LocalProjection
+
+        plane = LocalProjection(lat0, lon0)
+        lat_edge = np.linspace(lat[0], lat[-1], 64)
+        lon_edge = np.linspace(lon[0], lon[-1], 64)
+        south, _ = plane.to_local(np.full(64, lat[0]), lon_edge)
+        north_edge, _ = plane.to_local(np.full(64, lat[-1]), lon_edge)
+        _, west = plane.to_local(lat_edge, np.full(64, lon[0]))
+        _, east_edge = plane.to_local(lat_edge, np.full(64, lon[-1]))
+        north = np.array([south.max(), north_edge.min()])  # the largest plane rectangle inside the data
+        east = np.array([west.max(), east_edge.min()])
+    step = resolution_nm * NM if resolution_nm else float(np.radians(np.min(np.diff(lat))) * EARTH_RADIUS_M)
     # cover the data's whole extent with a spacing no coarser than `step`
     nx = axis_node_count(north[-1] - north[0], step) + 1  # ceil, so one more node at most
     ny = axis_node_count(east[-1] - east[0], step) + 1
@@ -168,23 +196,31 @@ def from_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
     from scipy.interpolate import RegularGridInterpolator
 
     xx, yy = np.meshgrid(x, y, indexing="ij")
+    if plane is not None:
+        node_lat, node_lon = plane.to_geographic(xx, yy)
+        node_lon = (node_lon - lon0 + 180.0) % 360.0 - 180.0 + lon0
+    else:
+        node_lat = lat0 + np.degrees(xx / EARTH_RADIUS_M)
+        node_lon = lon0 + np.degrees(yy / (EARTH_RADIUS_M * np.cos(np.radians(lat0))))
+    node_lat = np.clip(node_lat, lat[0], lat[-1])
+    node_lon = np.clip(node_lon, lon[0], lon[-1])
     fields = {}
     for name, arr in arrays.items():
         grid = _as_grid(arr, lead + (lat_name, lon_name), nt + (lat.size, lon.size))
         grid = grid[..., order_lat, :][..., order_lon]
         slices = grid if time_dim else grid[None]
-        projected = np.stack([RegularGridInterpolator((north, east), s)((xx, yy)) for s in slices])
+        projected = np.stack([RegularGridInterpolator((lat, lon), s)((node_lat, node_lon)) for s in slices])
         fields[name] = projected if time_dim else projected[0]
-    source = f"file: {path} (origin {lat0:.4f}N {lon0:.4f}E)"
+    source = f"file: {path} (origin {lat0:.4f}N {lon0:.4f}E{', azimuthal equidistant' if plane else ''})"
     if currents_file is not None:
-        fields.update(_currents_on_grid(Path(currents_file), (lat0, lon0), x, y, times_s, zero))
+        fields.update(_currents_on_grid(Path(currents_file), (lat0, lon0), node_lat, node_lon, times_s, zero))
         source += f", currents: {currents_file}"
     return MetOceanField(x, y, fields, source=source, **keep)
 
 
-def _currents_on_grid(path: Path, origin_deg, x, y, times_s, zero) -> dict[str, np.ndarray]:
-    """``current_north``/``current_east`` of a CMEMS-layout file on the grid ``x``, ``y`` [m] and the
-    times ``times_s`` [s since ``zero``] (a static field when ``times_s`` is None)."""
+def _currents_on_grid(path: Path, origin_deg, node_lat, node_lon, times_s, zero) -> dict[str, np.ndarray]:
+    """``current_north``/``current_east`` of a CMEMS-layout file at the grid's nodes (their latitude and
+    longitude [deg]) and the times ``times_s`` [s since ``zero``] (a static field when ``times_s`` is None)."""
     import xarray as xr
     from scipy.interpolate import RegularGridInterpolator
 
@@ -202,7 +238,7 @@ def _currents_on_grid(path: Path, origin_deg, x, y, times_s, zero) -> dict[str, 
     lat = ds[lat_name].values.astype(float)
     lon = (ds[lon_name].values.astype(float) - origin_deg[1] + 180.0) % 360.0 - 180.0 + origin_deg[1]
     order_lat, order_lon = np.argsort(lat), np.argsort(lon)
-    north, east = local_north_east_m(lat[order_lat], lon[order_lon], *origin_deg)
+    lat, lon = lat[order_lat], lon[order_lon]
     if time_dim is not None and ds.sizes[time_dim] > 1:
         ds = ds.sortby(time_dim)
         own_s, _ = _seconds(ds[time_dim].values, zero, path, time_dim)
@@ -211,7 +247,7 @@ def _currents_on_grid(path: Path, origin_deg, x, y, times_s, zero) -> dict[str, 
         if time_dim is not None:
             ds = ds.isel({time_dim: 0})
             time_dim = None
-    xx, yy = np.meshgrid(np.clip(x, north[0], north[-1]), np.clip(y, east[0], east[-1]), indexing="ij")
+    at = (np.clip(node_lat, lat[0], lat[-1]), np.clip(node_lon, lon[0], lon[-1]))
     result = {}
     for name in ("current_north", "current_east"):
         found = next((ds[c] for c in CF_NAMES[name] if c in ds.data_vars), None)
@@ -222,7 +258,7 @@ def _currents_on_grid(path: Path, origin_deg, x, y, times_s, zero) -> dict[str, 
         grid = _as_grid(found, lead + (lat_name, lon_name), nt + (lat.size, lon.size))
         grid = grid[..., order_lat, :][..., order_lon]
         slices = grid if time_dim else grid[None]
-        on_grid = np.stack([RegularGridInterpolator((north, east), s)((xx, yy)) for s in slices])
+        on_grid = np.stack([RegularGridInterpolator((lat, lon), s)(at) for s in slices])
         if own_s is None:
             values = on_grid[0]
             result[name] = values if times_s is None else np.broadcast_to(values, (len(times_s),) + values.shape).copy()

@@ -89,3 +89,19 @@ def test_a_currents_file_missing_its_current_names_it(tmp_path):
                             tmp_path, "s.toml: metocean")
     with pytest.raises(ScenarioError, match=r"s.toml: metocean.currents_file: currents file not found: .*none.nc"):
         from_scenario_table({"file": "era5.nc", "currents_file": "none.nc"}, tmp_path, "s.toml: metocean")
+
+
+def test_the_azimuthal_equidistant_plane_puts_weather_where_the_chart_does(tmp_path):
+    from rhnc.chart.projection import LocalProjection
+
+    era5(tmp_path)
+    table = {"file": "era5.nc", "origin_deg": list(ORIGIN), "resolution_nm": 2.0}
+    plane = from_scenario_table({**table, "projection": "aeqd"}, tmp_path, "s.toml: metocean")
+    flat = from_scenario_table(table, tmp_path, "s.toml: metocean")
+    north, east = LocalProjection(*ORIGIN).to_local(50.9, 1.6)  # far from the origin, inside the data
+    expected = 5.0 + 2.0 * 1.6  # u10 at that longitude, at departure
+    assert plane.sample(north, east, t_s=0.0)["wind_east"] == pytest.approx(expected, abs=0.01)
+    assert abs(flat.sample(north, east, t_s=0.0)["wind_east"] - expected) > 0.03  # the other plane is off there
+    with pytest.raises(ScenarioError, match=r"s.toml: metocean.projection: 'utm' is not valid \(valid: "
+                                            r"equirectangular, aeqd\)"):
+        from_scenario_table({**table, "projection": "utm"}, tmp_path, "s.toml: metocean")
