@@ -61,6 +61,8 @@ PASSAGES = {
         speed_kn=15.0, arrival_min=270.0,
         low=dict(centre=(36.5, -6.4), velocity=(-0.02, 0.1), peak_ms=18.0, radius_deg=0.5),  # a levanter's opposite
         current=(0.8, 0.0),  # the Atlantic inflow, against a westbound ship
+        # traffic: an eastbound ship in the strait, nearly head-on (trafficgen's situation format)
+        traffic=[dict(position=(36.0, -5.35), course_deg=80.0, speed_kn=12.0, radius_nm=1.0)],
         no_go=[("separation zone (drawn for this scenario)",
                 [(35.975, -5.75), (35.975, -5.45), (35.965, -5.45), (35.965, -5.75)])]),
 }
@@ -154,6 +156,56 @@ def write_passage(name: str, passage: dict) -> None:
     (OUT / f"{name}_sea_route.toml").write_text(SEA_ROUTE.format(
         **common, route_nm=json.dumps(route_nm), route_deg=", ".join(f"({a:.4f}, {b:.4f})" for a, b in route)))
     (OUT / f"{name}_compare.toml").write_text(COMPARE.format(**common))
+    if passage.get("traffic"):
+        write_traffic(name, passage, projection, start_nm, common)
+
+
+def write_traffic(name: str, passage: dict, projection: LocalProjection, start_nm, common: dict) -> None:
+    """The passage with target ships: a trafficgen-format situation file, placed on the passage
+    through :mod:`rhnc.encounters.traffic_situation` (own ship at the passage's start)."""
+    from rhnc.encounters.traffic_situation import load_traffic_situation, situation_document
+
+    ships = [{"start_nm": [0.0, 0.0], "course_deg": round(math.degrees(common["psi0"]) % 360.0, 3),
+              "speed_kn": passage["speed_kn"]}]
+    for target in passage["traffic"]:
+        north, east = projection.to_local(*target["position"])
+        ships.append({"start_nm": [float(north) / NM - start_nm[0], float(east) / NM - start_nm[1]],
+                      "course_deg": target["course_deg"], "speed_kn": target["speed_kn"]})
+    document = situation_document(ships, f"{name}: traffic", passage["title"], *passage["start"])
+    situation_file = OUT / f"{name}.situation.json"
+    situation_file.write_text(json.dumps(document, indent=1) + "\n")
+    situation = load_traffic_situation(situation_file, origin_nm=tuple(start_nm))
+    targets = [{"start_nm": [round(v, 4) for v in target.start_nm],
+                "velocity_kn": [round(v, 4) for v in target.velocity_kn], "radius_nm": spec["radius_nm"]}
+               for target, spec in zip(situation.targets, passage["traffic"], strict=True)]
+    text = (OUT / f"{name}.toml").read_text()
+    text = text.replace('  "ship.x -> nav.x",', '  "traffic.obstacles -> nav.obstacles", "traffic.obstacles -> ctrl.obstacles",\n  "ship.x -> nav.x",', 1)
+    text = text.replace(f'name = "{name}"', f'name = "{name}_traffic"', 1)
+    text = text.replace("# Run: python -m orchestrator run scenarios/passages/" + name + ".toml",
+                        f"# With traffic from {situation_file.name} (trafficgen's situation format).\n"
+                        f"# Run: python -m orchestrator run scenarios/passages/{name}_traffic.toml", 1)
+    inline = ", ".join("{ " + ", ".join(f"{key} = {json.dumps(value)}" for key, value in target.items()) + " }"
+                       for target in targets)
+    text = text.replace("[participants.nav]\n", "[participants.traffic]\ntype = \"traffic\"\n"
+                        f"[participants.traffic.options]\ntargets = [{inline}]\n\n[participants.nav]\n", 1)
+    text = text.replace('analyses = ["voyage", "clearance"]', 'analyses = ["voyage", "clearance", "encounter", "colregs"]')
+    text += TRAFFIC_ACCEPTANCE
+    (OUT / f"{name}_traffic.toml").write_text(text)
+
+
+TRAFFIC_ACCEPTANCE = '''
+[[acceptance]]
+name = "separation kept"       # every target: distance >= R + R_i at every sample
+metric = "analyses.encounter.min_clearance_nm"
+op = ">="
+value = 0.0
+
+[[acceptance]]
+name = "separation kept between samples"   # along the chords between samples too
+metric = "analyses.encounter.obstacles.0.min_distance_between_samples_nm"
+op = ">="
+ref = "analyses.encounter.obstacles.0.required_nm - 0.000001"
+'''
 
 
 CONNECTIONS = '''connections = [
