@@ -120,3 +120,22 @@ def test_a_leg_from_inside_the_clearance_may_lead_out_but_not_closer(tmp_path):
     along = np.column_stack(projection.to_local(51.025, 1.6))  # passes 0.3 nm off it
     assert chart.legs_clear(inside, away)[0]
     assert not chart.legs_clear(inside, along)[0]
+
+
+@pytest.mark.slow  # imports global-land-mask: 0.9 GB unpacked, about 10 s
+def test_the_shipped_coastline_is_the_land_mask_cell_for_cell():
+    import shapely
+    from global_land_mask import globe
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "scenarios" / "passages" / "gibraltar_strait.land.geojson"
+    document = json.loads(path.read_text())
+    south, west, north, east = document["properties"]["bounds_deg"]
+    land = shapely.union_all([shapely.geometry.shape(f["geometry"]) for f in document["features"]])
+    rng = np.random.default_rng(7)
+    # cell centres, so that a point is never on a cell edge
+    lat = (np.floor(rng.uniform(south, north, 3000) * 120) + 0.5) / 120
+    lon = (np.floor(rng.uniform(west, east, 3000) * 120) + 0.5) / 120
+    inside = shapely.contains_xy(land, lon, lat)
+    np.testing.assert_array_equal(inside, globe.is_land(lat, lon))
+    assert 0.2 < inside.mean() < 0.8  # both land and sea are sampled
