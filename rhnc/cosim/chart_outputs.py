@@ -59,7 +59,7 @@ def _check_clearance_options(options) -> None:
         raise ValueError(f"chart: expected the path of a chart file, got {chart!r}")
 
 
-clearance_analysis.check_options = _check_clearance_options  # type: ignore[attr-defined]
+clearance_analysis.check_options = _check_clearance_options
 
 
 def chart_figure(frame, scenario, cosim, out_dir) -> list[str]:
