@@ -188,6 +188,11 @@ def write_traffic(name: str, passage: dict, projection: LocalProjection, start_n
                        for target in targets)
     text = text.replace("[participants.nav]\n", "[participants.traffic]\ntype = \"traffic\"\n"
                         f"[participants.traffic.options]\ntargets = [{inline}]\n\n[participants.nav]\n", 1)
+    # the COLREG-aware NMPC, with the settings of the traffic suites (batches/trafficgen_nmpc_colregs.toml)
+    text = text.replace("disturbance_observer = true\n", "disturbance_observer = true\n"
+                        "colregs = true                 # domains by encounter class and role\n"
+                        "clearance_margin_nm = 0.05     # a margin for prediction error\n"
+                        "clearance_margin_growth_kn = 0.2\n", 1)
     text = text.replace('analyses = ["voyage", "clearance"]', 'analyses = ["voyage", "clearance", "encounter", "colregs"]')
     text += TRAFFIC_ACCEPTANCE
     (OUT / f"{name}_traffic.toml").write_text(text)
