@@ -98,6 +98,13 @@ def main() -> None:
              "| baseline clearance [nm] | comparison |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     lines += [passage_row(results, name) for name in PASSAGES]
+    flags = []
+    for name in PASSAGES:
+        folder = latest(results / f"passage_{name}")
+        if folder is not None:
+            flags += [f"- {name}: {flag}" for flag in json.loads((folder / "summary.json").read_text()).get("flags", [])]
+    if flags:
+        lines += ["", "Flags of the comparisons:", ""] + flags
     lines += [""] + traffic_lines(results) + [""]
     out = ROOT / "docs" / "passages-results.md"
     out.write_text("\n".join(lines))
