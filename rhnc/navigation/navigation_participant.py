@@ -98,9 +98,9 @@ from rhnc.navigation.trigger import TRIGGERED, EventTrigger
 
 OPTIONS = ("goal_nm", "speed_kn", "horizon_steps", "k1", "k2", "k3", "guidance_eps", "guidance_c_rad",
            "resolution_nm", "energy", "eps_ship_nm", "eps_static_nm", "start_from", "start_nm", "method",
-           "arrival_time_min", "max_speed_kn", "route_switch_margin_pct", "output_delay_s")
+           "arrival_time_min", "max_speed_kn", "route_switch_margin_pct", "output_delay_s", "chart")
 METHODS = ("paper", "routing")
-ROUTING_ONLY = ("arrival_time_min", "max_speed_kn", "route_switch_margin_pct")
+ROUTING_ONLY = ("arrival_time_min", "max_speed_kn", "route_switch_margin_pct", "chart")
 PAPER_ONLY = ("k1", "k2", "k3", "guidance_eps", "guidance_c_rad")
 #: Most planning steps of one horizon (the paper's N_L is 16; Experiment 1 plans 110).
 MAX_HORIZON_STEPS = 1000
@@ -150,11 +150,12 @@ class NavigationParticipant(Participant):
                  static_range_m: float, start_from: str = "prediction",
                  start: tuple[float, float] | None = None, method: str = "paper",
                  arrival_s: float | None = None, max_speed: float = 24.0 * KNOT,
-                 switch_margin: float = DEFAULT_SWITCH_MARGIN, output_delay_s: float = 0.0) -> None:
+                 switch_margin: float = DEFAULT_SWITCH_MARGIN, output_delay_s: float = 0.0, chart=None) -> None:
         super().__init__(name)
         if not (np.isfinite(output_delay_s) and output_delay_s >= 0.0):
             raise ValueError(f"output_delay_s must be a finite number of seconds >= 0, got {output_delay_s!r}")
         self.output_delay_s = float(output_delay_s)
+        self.chart = chart
         self.metocean = metocean
         self.delta = float(delta)
         self.goal = goal
@@ -175,7 +176,7 @@ class NavigationParticipant(Participant):
             self.field = SuperpositionField(self.weather, goal, energy, guidance, weights)
         else:
             self.routing = RoutingMethod(name, metocean, goal, energy, resolution_nm, self.delta, self.horizon_steps,
-                                         self.speed, arrival_s, self.max_speed, switch_margin)
+                                         self.speed, arrival_s, self.max_speed, switch_margin, keep_out=chart)
             self.route_planner = self.routing.planner
         self._reached_goal = False
 
@@ -213,6 +214,19 @@ class NavigationParticipant(Participant):
                                     f"'{'routing' if method == 'paper' else 'paper'}' only (method is '{method}')")
         arrival_s = (_number(options, "arrival_time_min", 0.0, where, positive=True) * 60.0
                      if "arrival_time_min" in options else None)
+        chart = None
+        if "chart" in options:  # land and no-go areas the route keeps its clearance from
+            from rhnc.chart.chart import load_chart
+            from rhnc.routing.routing_problem import check_navigable
+
+            if not isinstance(options["chart"], str) or not options["chart"]:
+                raise ScenarioError(f"{where}.chart: expected the path of a chart file, got {options['chart']!r}")
+            chart = load_chart(context.scenario_dir / options["chart"])
+            for label, point in (("goal_nm", goal), ("start_nm", start)):
+                try:
+                    check_navigable(chart, point, "point") if point is not None else None
+                except ValueError as exc:
+                    raise ScenarioError(f"{where}.{label}: {str(exc).replace('the point ', '', 1)}") from None
         weights = FieldWeights(k1=_number(options, "k1", 1.0, where), k2=_number(options, "k2", 1.0, where),
                                k3=_number(options, "k3", 16.0, where))
         guidance = GuidanceParameters(eps=_number(options, "guidance_eps", 1.0, where, positive=True),
@@ -227,7 +241,8 @@ class NavigationParticipant(Participant):
                        start_from, start, method, arrival_s,
                        _number(options, "max_speed_kn", 24.0, where, positive=True) * KNOT,
                        _switch_margin(options, where),
-                       _number(options, "output_delay_s", float(getattr(context, "output_delay_s", 0.0)), where))
+                       _number(options, "output_delay_s", float(getattr(context, "output_delay_s", 0.0)), where),
+                       chart)
         except ValueError as exc:
             raise ScenarioError(f"{where}: {exc}") from exc
 

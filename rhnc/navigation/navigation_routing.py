@@ -50,11 +50,14 @@ class RoutingMethod:
         Upper bound of the planned speed [m/s].
     switch_margin : float
         Least saving, as a fraction, for which the followed route is left for a new one.
+    keep_out : Chart, optional
+        Land and no-go areas: every route planned keeps their clearance (:mod:`rhnc.chart.chart`).
     """
 
     def __init__(self, name: str, metocean, goal: tuple[float, float], energy: EnergyParameters,
                  resolution_nm: float, delta: float, horizon_steps: int, speed: float,
-                 arrival_s: float | None, max_speed: float, switch_margin: float = DEFAULT_SWITCH_MARGIN) -> None:
+                 arrival_s: float | None, max_speed: float, switch_margin: float = DEFAULT_SWITCH_MARGIN,
+                 keep_out=None) -> None:
         self.name = name
         self.metocean = metocean
         self.goal = goal
@@ -65,7 +68,9 @@ class RoutingMethod:
         self.speed = speed
         self.arrival_s = arrival_s
         self.max_speed = max_speed
-        self.planner = RecedingRoutePlanner(metocean, goal, energy, resolution_nm, switch_margin=switch_margin)
+        self.keep_out = keep_out
+        self.planner = RecedingRoutePlanner(metocean, goal, energy, resolution_nm, switch_margin=switch_margin,
+                                            keep_out=keep_out)
         self._route = None
         self._price_scale = None
         self._planned_speed = speed
@@ -95,7 +100,7 @@ class RoutingMethod:
         turning points moved sideways while that pays) is the passage plan the planner
         starts out following (:meth:`RecedingRoutePlanner.follow`)."""
         problem = RoutingProblem(tuple(point), tuple(self.goal), self.metocean, self.energy,
-                                 resolution_nm=self.resolution_nm, departure_s=time)
+                                 resolution_nm=self.resolution_nm, departure_s=time, keep_out=self.keep_out)
         try:
             best = optimal_route(problem, arrival_s=self.arrival_s)
         except ValueError as exc:

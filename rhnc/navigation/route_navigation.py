@@ -121,12 +121,12 @@ class RecedingRoutePlanner:
 
     def __init__(self, metocean, goal_m: tuple[float, float], energy: EnergyParameters = EnergyParameters(),
                  resolution_nm: float = 1.0, reach: int = 3, switch_margin: float = DEFAULT_SWITCH_MARGIN,
-                 search_pieces: int = DEFAULT_PIECES):
+                 search_pieces: int = DEFAULT_PIECES, keep_out=None):
         self.metocean = metocean
         self.goal = np.asarray(goal_m, dtype=float)
         self.energy = energy
         problem = RoutingProblem(start_m=tuple(self.goal), goal_m=tuple(self.goal), metocean=metocean,
-                                 energy=energy, resolution_nm=resolution_nm, reach=reach)
+                                 energy=energy, resolution_nm=resolution_nm, reach=reach, keep_out=keep_out)
         self.search = RouteSearch(problem)
         self.graph = self.search.graph
         self.resolution_m = resolution_nm * NM

@@ -6,7 +6,9 @@ components have no common divisor: with ``reach = 3`` these are the 32 moves wit
 ``max(|di|, |dj|) <= 3`` (headings 0, 18.4, 26.6, 33.7, 45, ... degrees), so a course
 between two of them is followed by alternating the two at most ``1 / cos(9.2 deg) - 1 =
 1.3 %`` longer than the straight line (reach 1, the 8 king moves, loses up to 8.2 %).
-Nodes inside a circular obstacle and moves whose segment enters one are left out.
+Nodes inside a circular obstacle and moves whose segment enters one are left out; so are
+nodes and moves that come closer than a declared clearance to land or a no-go area
+(``keep_out``, e.g. a :class:`rhnc.chart.chart.Chart`), judged over each move's whole length.
 
 The graph knows nothing of ships: the caller gives one weight per edge (for the energy
 model: the cost of sailing that edge, see :mod:`rhnc.routing.weather_routing`), and
@@ -157,7 +159,7 @@ class GridGraph:
 
 
 def build_grid_graph(x_m: np.ndarray, y_m: np.ndarray, reach: int = 3,
-                     obstacles: Sequence[Sequence[float]] = ()) -> GridGraph:
+                     obstacles: Sequence[Sequence[float]] = (), keep_out=None) -> GridGraph:
     """Nodes at ``x_m`` x ``y_m`` and the moves of :func:`grid_moves` between free nodes.
 
     Parameters
@@ -168,6 +170,10 @@ def build_grid_graph(x_m: np.ndarray, y_m: np.ndarray, reach: int = 3,
         Longest move in grid steps (3: 32 headings).
     obstacles : sequence of (north_m, east_m, radius_m)
         Circles no node or edge may enter.
+    keep_out : object, optional
+        Areas kept clear of (land, no-go) with ``clearance_m``, ``distances_m(north, east)``
+        and ``legs_clear(a, b, distance_a, distance_b)``: no node within the clearance, no
+        move whose segment comes within it anywhere along its length.
     """
     x_m = np.asarray(x_m, dtype=float)
     y_m = np.asarray(y_m, dtype=float)
@@ -183,6 +189,9 @@ def build_grid_graph(x_m: np.ndarray, y_m: np.ndarray, reach: int = 3,
     circles = [tuple(float(v) for v in c) for c in obstacles]
     for cx, cy, radius in circles:
         free &= np.hypot(points[..., 0] - cx, points[..., 1] - cy) >= radius
+    if keep_out is not None:
+        node_distance = keep_out.distances_m(points[..., 0].ravel(), points[..., 1].ravel()).reshape(nx, ny)
+        free &= node_distance >= keep_out.clearance_m
     sources, targets, move_ids = [], [], []
     for k, (di, dj) in enumerate(moves):
         ok = (ii + di >= 0) & (ii + di < nx) & (jj + dj >= 0) & (jj + dj < ny)
@@ -190,6 +199,10 @@ def build_grid_graph(x_m: np.ndarray, y_m: np.ndarray, reach: int = 3,
         si, sj = ii[ok], jj[ok]
         for cx, cy, radius in circles:
             clear = segment_clearance(points[si, sj], points[si + di, sj + dj], (cx, cy)) >= radius
+            si, sj = si[clear], sj[clear]
+        if keep_out is not None and si.size:
+            clear = keep_out.legs_clear(points[si, sj], points[si + di, sj + dj], node_distance[si, sj],
+                                        node_distance[si + di, sj + dj])
             si, sj = si[clear], sj[clear]
         sources.append(si * ny + sj)
         targets.append((si + di) * ny + sj + dj)

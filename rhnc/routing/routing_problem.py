@@ -44,6 +44,9 @@ class RoutingProblem:
         Time of departure [s] (the clock of a time-varying field).
     reach : int
         Longest move of the search grid in grid steps (3: 32 headings).
+    keep_out : object, optional
+        Land and no-go areas with their clearance (a :class:`rhnc.chart.chart.Chart`): no
+        route comes within ``keep_out.clearance_m`` of them along any leg.
     """
 
     start_m: tuple[float, float]
@@ -54,6 +57,7 @@ class RoutingProblem:
     avoid: tuple[tuple[float, float, float], ...] = ()
     departure_s: float = 0.0
     reach: int = 3
+    keep_out: object | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -111,6 +115,18 @@ def check_problem(problem: RoutingProblem, speed_mps, arrival_s) -> None:
         for k, (cx, cy, radius) in enumerate(problem.avoid):
             if np.hypot(point[0] - cx, point[1] - cy) < radius:
                 raise ValueError(f"the {name} lies inside avoided circle {k}")
+        check_navigable(problem.keep_out, point, name)
+
+
+def check_navigable(keep_out, point, name: str) -> None:
+    """Refuse a point on land or within the declared clearance of an area (one line, naming it)."""
+    if keep_out is None:
+        return
+    distance = float(keep_out.distances_m([point[0]], [point[1]])[0])
+    if distance < keep_out.clearance_m:
+        where = "on land or in a no-go area" if distance <= 0.0 else (
+            f"{distance / NM:.2f} nm from land or a no-go area, inside the clearance of {keep_out.clearance_m / NM:.2f} nm")
+        raise ValueError(f"the {name} ({point[0]:.0f}, {point[1]:.0f}) m lies {where}")
 
 
 def costed_route(problem: RoutingProblem, polyline: np.ndarray, speed_mps: float, method: str) -> RouteResult:
@@ -175,7 +191,7 @@ def straight_route(problem: RoutingProblem, *, speed_mps: float | None = None,
     """The shortest obstacle-free route (the straight line without obstacles) at a constant
     speed through water: ``speed_mps``, or the speed that arrives at ``arrival_s``."""
     check_problem(problem, speed_mps, arrival_s)
-    polyline = shortest_route(problem.start_m, problem.goal_m, problem.avoid)
+    polyline = shortest_clear_route(problem)
     if arrival_s is not None:
         speed_mps = speed_for_arrival(problem, polyline, arrival_s)
     return costed_route(problem, polyline, speed_mps, "straight")
@@ -194,3 +210,30 @@ def time_price_usd_h(problem: RoutingProblem, route: RouteResult) -> float:
              for speed in (v * 0.99, v, v * 1.01)]
     derivative = (rates[2] - rates[0]) / (0.02 * v)
     return float(max(np.mean(v * derivative - rates[1]), 0.0))
+
+
+def shortest_clear_route(problem: RoutingProblem) -> np.ndarray:
+    """The shortest route from start to goal that keeps clear of the avoided circles and of
+    ``keep_out``: the straight line (or its way round the circles) where it is clear, else
+    the shortest path on the search grid, shortened wherever a straight leg stays clear."""
+    from rhnc.routing.route_search import build_grid_graph, shortcut_path, shortest_path_tree
+
+    polyline = shortest_route(problem.start_m, problem.goal_m, problem.avoid)
+    keep_out = problem.keep_out
+    if keep_out is None or np.all(keep_out.legs_clear(polyline[:-1], polyline[1:])):
+        return polyline
+    x_min, x_max, y_min, y_max = problem.metocean.extent
+    step = problem.resolution_nm * NM
+    x = np.linspace(x_min, x_max, axis_node_count(x_max - x_min, step, "the route search's resolution_nm"))
+    y = np.linspace(y_min, y_max, axis_node_count(y_max - y_min, step, "the route search's resolution_nm"))
+    graph = build_grid_graph(x, y, problem.reach, problem.avoid, keep_out)
+    tree = shortest_path_tree(graph, graph.move_length_m[graph.move], graph.nearest_free_node(problem.start_m))
+    path = graph.node_points()[tree.path_to(graph.nearest_free_node(problem.goal_m))]
+    path = np.vstack([problem.start_m, path, problem.goal_m])
+
+    def lengths(i, js):
+        length = np.hypot(*(path[js] - path[i]).T)
+        return np.where(keep_out.legs_clear(np.broadcast_to(path[i], (len(js), 2)), path[js]), length, np.inf)
+
+    consecutive = np.hypot(*np.diff(path, axis=0).T)
+    return path[shortcut_path(len(path), lengths, consecutive_costs=consecutive)]

@@ -42,9 +42,8 @@ from rhnc.ship.energy import brake_power, fuel_rate_t_h
 from rhnc.weather.metocean_grid import axis_node_count
 from rhnc.routing.route_search import (IMPASSABLE, GridGraph, build_grid_graph, segment_clearance, shortcut_path,
                                shortest_path_tree, times_along_tree)
-from rhnc.routing.offline_route import shortest_route
 from rhnc.routing.routing_problem import (RouteResult, RoutingProblem, check_problem, costed_route, profiled_route,
-                                          speed_for_arrival, straight_route, time_price_usd_h)
+                                          shortest_clear_route, speed_for_arrival, straight_route, time_price_usd_h)
 from rhnc.routing.track_cost import constant_speed_times, cost_of_track, is_time_varying, sample_weather
 
 log = logging.getLogger(__name__)
@@ -69,7 +68,7 @@ class RouteSearch:
         what = "the route search's resolution_nm"
         x = np.linspace(x_min, x_max, axis_node_count(x_max - x_min, step, what))  # refused beyond the limit
         y = np.linspace(y_min, y_max, axis_node_count(y_max - y_min, step, what))
-        self.graph: GridGraph = build_grid_graph(x, y, problem.reach, problem.avoid)
+        self.graph: GridGraph = build_grid_graph(x, y, problem.reach, problem.avoid, problem.keep_out)
         self.nodes = self.graph.node_points()
         self.source = self.graph.nearest_free_node(problem.start_m)
         self.target = self.graph.nearest_free_node(problem.goal_m)
@@ -179,6 +178,8 @@ class RouteSearch:
         cost[np.bincount(owner[:-1], weights=blocked, minlength=len(ends)) > 0] = np.inf
         for cx, cy, radius in p.avoid:
             cost[segment_clearance(np.broadcast_to(a, ends.shape), ends, (cx, cy)) < radius] = np.inf
+        if p.keep_out is not None:
+            cost[~p.keep_out.legs_clear(np.broadcast_to(a, ends.shape), ends)] = np.inf
         return cost
 
     def leg_costs(self, polyline: np.ndarray, start_s: float, speed_mps: float, time_price_usd_h: float) -> np.ndarray:
@@ -213,6 +214,8 @@ class RouteSearch:
         cost[np.bincount(leg_of, weights=(sub_speed <= 1e-3) & (length > 0), minlength=len(legs)) > 0] = np.inf
         for cx, cy, radius in p.avoid:
             cost[segment_clearance(vertices[:-1], vertices[1:], (cx, cy)) < radius] = np.inf
+        if p.keep_out is not None and len(vertices) > 1:
+            cost[~p.keep_out.legs_clear(vertices[:-1], vertices[1:])] = np.inf
         return cost
 
     def path_cost(self, polyline: np.ndarray, start_s: float, speed_mps: float, time_price_usd_h: float) -> float:
@@ -272,7 +275,7 @@ def optimal_route(problem: RoutingProblem, *, speed_mps: float | None = None,
         base_price = time_price_usd_h(problem, straight)
         prices = [base_price * multiple for multiple in price_multiples]
     best, best_polyline, best_price = straight, None, float("nan")
-    candidates = [(shortest_route(problem.start_m, problem.goal_m, problem.avoid), float("nan"))]
+    candidates = [(shortest_clear_route(problem), float("nan"))]
     for price in prices:
         polyline = search.route(straight.speed_through_water_mps, price, time_passes)
         candidates.append((polyline, price))
@@ -322,6 +325,8 @@ def _refine(problem: RoutingProblem, polyline: np.ndarray, best: RouteResult, ev
                 moved[k] = np.clip(polyline[k] + sign * step * normal, (x_min, y_min), (x_max, y_max))
                 if any(np.min(segment_clearance(moved[:-1], moved[1:], (cx, cy))) < radius
                        for cx, cy, radius in problem.avoid):
+                    continue
+                if problem.keep_out is not None and not np.all(problem.keep_out.legs_clear(moved[:-1], moved[1:])):
                     continue
                 result = evaluate(moved)
                 evaluations += 1

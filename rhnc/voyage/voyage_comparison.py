@@ -202,6 +202,7 @@ class VoyageComparison:
                                                                     reports[label])
         routes = self._route_costs(systems, baselines, overrides) if self._needs_routing() else {}
         section = evaluation_section(self, systems, baselines, routes, out_dir)
+        section.flags.extend(unmet_criteria_flags(reports, baselines))
         if self.optimal_route is not None and self.equal_arrival is not None:
             try:
                 section.summary["nominal"] = self.nominal_available_saving(overrides)
@@ -387,3 +388,17 @@ def _uses_steps(scenario: Path) -> bool:
 
 def _float(value) -> float:
     return float(value) if is_finite_number(value) else math.nan
+
+
+def unmet_criteria_flags(reports: Mapping[str, Any], baselines: Mapping[str, EqualArrival]) -> list[str]:
+    """One flag per system, and per baseline, whose runs missed their scenario's own acceptance
+    criteria (a track that came closer to land than its declared clearance, say): the comparison
+    still tabulates them, but never as if they were fine."""
+    flags = [f"{label}: acceptance not met: {'; '.join(report.failed_criteria)}"
+             for label, report in reports.items() if getattr(report, "failed_criteria", None)]
+    for label, baseline in baselines.items():
+        failed = sorted({criterion for trial in baseline.trials
+                         for criterion in getattr(trial.run, "failed_criteria", None) or []})
+        if failed:
+            flags.append(f"{label} equal-arrival baseline: acceptance not met in some trials: {'; '.join(failed)}")
+    return flags

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from orchestrator.errors import ScenarioError
-from orchestrator.geometry import NM, local_north_east_m
+from orchestrator.geometry import EARTH_RADIUS_M, NM, local_north_east_m
 from rhnc.weather.metocean import MetOceanField
 from rhnc.weather.metocean_grid import FIELDS, axis_node_count, check_grid_nodes
 from rhnc.weather.metocean_netcdf import CF_NAMES, TIME_DIMS
@@ -33,7 +33,10 @@ from rhnc.weather.weather_generators import build_generated, checked_option
 log = logging.getLogger(__name__)
 
 #: Keys of a ``[metocean] file = ...`` table and their kinds (see rhnc.weather.weather_generators.checked_option).
-_FILE_KEYS = {"origin_deg": "point", "resolution_nm": "number", "time_index": "integer", "start_time": "text"}
+_FILE_KEYS = {"origin_deg": "point", "resolution_nm": "number", "time_index": "integer", "start_time": "text",
+              "currents_file": "text", "projection": "text"}
+#: Projections of a latitude/longitude file onto the local plane (``projection`` key).
+PROJECTIONS = ("equirectangular", "aeqd")
 
 
 def from_scenario_table(table: Mapping[str, Any], scenario_dir: Path, where: str) -> MetOceanField:
@@ -59,6 +62,15 @@ def from_scenario_table(table: Mapping[str, Any], scenario_dir: Path, where: str
         if key not in _FILE_KEYS:
             raise ScenarioError(f"{where}: unknown key '{key}' (valid: {', '.join(sorted(_FILE_KEYS))})")
         table[key] = checked_option(table[key], _FILE_KEYS[key], f"{where}.{key}")
+    if table.get("projection", "equirectangular") not in PROJECTIONS:
+        raise ScenarioError(f"{where}.projection: '{table['projection']}' is not valid (valid: {', '.join(PROJECTIONS)})")
+    if table.get("projection") == "aeqd" and "origin_deg" not in table:
+        raise ScenarioError(f"{where}.projection: 'aeqd' needs origin_deg, the centre of the plane")
+    if "currents_file" in table:
+        currents = Path(table["currents_file"])
+        table["currents_file"] = currents = currents if currents.is_absolute() else scenario_dir / currents
+        if not currents.is_file():
+            raise ScenarioError(f"{where}.currents_file: currents file not found: {currents}")
     try:
         return from_netcdf(file, **table)
     except (ValueError, TypeError, KeyError) as exc:
@@ -66,7 +78,8 @@ def from_scenario_table(table: Mapping[str, Any], scenario_dir: Path, where: str
 
 
 def from_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
-                time_index: int | None = None, start_time: str | None = None) -> MetOceanField:
+                time_index: int | None = None, start_time: str | None = None,
+                currents_file=None, projection: str = "equirectangular") -> MetOceanField:
     """Load a NetCDF file with CF names (ERA5/CMEMS style), every time step of it, through xarray.
 
     Parameters
@@ -84,6 +97,27 @@ def from_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
     start_time : str, optional
         ISO 8601 calendar time of the simulation's t = 0 (default: the file's
         ``time_origin`` attribute, else its first time).
+    currents_file : path-like, optional
+        A second file with the current (``uo``, ``vo``, CMEMS layout: a ``depth`` dimension,
+        of which the shallowest level is taken; NaN on land), on its own latitude/longitude
+        grid and time axis: interpolated onto the first file's grid (bilinear, held at its
+        edges) and times (linear, held before its first and after its last time).  Its
+        current replaces the first file's.
+
+    projection : str
+        For a latitude/longitude grid: ``"equirectangular"`` (north and east proportional
+        to latitude and longitude about the origin; the default, good near the origin) or
+        ``"aeqd"``, pyproj's azimuthal equidistant plane about ``origin_deg``, the plane of a
+        passage's chart (:mod:`rhnc.chart.projection`), so that weather, coastline and ship
+        share one plane (over a 170 nm map the two differ by up to 9 nm at its far corner).
+        The grid is then the largest rectangle of the plane inside the data, each node's
+        values interpolated at its own latitude and longitude.
+
+    Longitudes may run from 0 to 360 (ERA5) or from -180 to 180: with ``origin_deg`` they are
+    shifted by whole turns to within half a turn of the origin before sorting, so a map
+    across the Greenwich meridian is read whole from an ERA5 file.  ERA5's mean wave
+    direction ``mwd`` is not read: the ship model takes the waves from the wind's direction
+    (``models/KCS/readme.md``).
 
     Missing variables are an error, except the current, which defaults to zero
     (ERA5 carries no current) with a warning.  NaN (land in ocean products)
@@ -116,7 +150,7 @@ def from_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
     for extra in [d for d in ds.dims if d not in ("northing", "easting", "latitude", "longitude", "lat", "lon",
                                                   time_dim)]:
         ds = ds.isel({extra: 0})
-    arrays = {name: _find_variable(ds, name, path) for name in FIELDS}
+    arrays = {name: _find_variable(ds, name, path, quiet=currents_file is not None) for name in FIELDS}
     lead = (time_dim,) if time_dim else ()
     nt = (ds.sizes[time_dim],) if time_dim else ()
     keep = {"times_s": times_s, "start_time": zero}
@@ -132,12 +166,27 @@ def from_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
         raise ValueError(f"{path}: expected dimensions northing/easting [m] or latitude/longitude")
     lat = ds[lat_name].values.astype(float)
     lon = ds[lon_name].values.astype(float)
+    if origin_deg is not None:
+        lon = (lon - origin_deg[1] + 180.0) % 360.0 - 180.0 + origin_deg[1]
     order_lat = np.argsort(lat)
     order_lon = np.argsort(lon)
     lat, lon = lat[order_lat], lon[order_lon]
     lat0, lon0 = origin_deg if origin_deg is not None else (lat[0], lon[0])
     north, east = local_north_east_m(lat, lon, lat0, lon0)
-    step = resolution_nm * NM if resolution_nm else float(np.min(np.diff(north)))
+    plane = None
+    if projection == "aeqd":
+        from rhnc.chart.projection import LocalProjection
+
+        plane = LocalProjection(lat0, lon0)
+        lat_edge = np.linspace(lat[0], lat[-1], 64)
+        lon_edge = np.linspace(lon[0], lon[-1], 64)
+        south, _ = plane.to_local(np.full(64, lat[0]), lon_edge)
+        north_edge, _ = plane.to_local(np.full(64, lat[-1]), lon_edge)
+        _, west = plane.to_local(lat_edge, np.full(64, lon[0]))
+        _, east_edge = plane.to_local(lat_edge, np.full(64, lon[-1]))
+        north = np.array([south.max(), north_edge.min()])  # the largest plane rectangle inside the data
+        east = np.array([west.max(), east_edge.min()])
+    step = resolution_nm * NM if resolution_nm else float(np.radians(np.min(np.diff(lat))) * EARTH_RADIUS_M)
     # cover the data's whole extent with a spacing no coarser than `step`
     nx = axis_node_count(north[-1] - north[0], step) + 1  # ceil, so one more node at most
     ny = axis_node_count(east[-1] - east[0], step) + 1
@@ -147,14 +196,85 @@ def from_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
     from scipy.interpolate import RegularGridInterpolator
 
     xx, yy = np.meshgrid(x, y, indexing="ij")
+    if plane is not None:
+        node_lat, node_lon = plane.to_geographic(xx, yy)
+        node_lon = (node_lon - lon0 + 180.0) % 360.0 - 180.0 + lon0
+    else:
+        node_lat = lat0 + np.degrees(xx / EARTH_RADIUS_M)
+        node_lon = lon0 + np.degrees(yy / (EARTH_RADIUS_M * np.cos(np.radians(lat0))))
+    node_lat = np.clip(node_lat, lat[0], lat[-1])
+    node_lon = np.clip(node_lon, lon[0], lon[-1])
     fields = {}
     for name, arr in arrays.items():
         grid = _as_grid(arr, lead + (lat_name, lon_name), nt + (lat.size, lon.size))
         grid = grid[..., order_lat, :][..., order_lon]
         slices = grid if time_dim else grid[None]
-        projected = np.stack([RegularGridInterpolator((north, east), s)((xx, yy)) for s in slices])
+        projected = np.stack([RegularGridInterpolator((lat, lon), s)((node_lat, node_lon)) for s in slices])
         fields[name] = projected if time_dim else projected[0]
-    return MetOceanField(x, y, fields, source=f"file: {path} (origin {lat0:.4f}N {lon0:.4f}E)", **keep)
+    source = f"file: {path} (origin {lat0:.4f}N {lon0:.4f}E{', azimuthal equidistant' if plane else ''})"
+    if currents_file is not None:
+        fields.update(_currents_on_grid(Path(currents_file), (lat0, lon0), node_lat, node_lon, times_s, zero))
+        source += f", currents: {currents_file}"
+    return MetOceanField(x, y, fields, source=source, **keep)
+
+
+def _currents_on_grid(path: Path, origin_deg, node_lat, node_lon, times_s, zero) -> dict[str, np.ndarray]:
+    """``current_north``/``current_east`` of a CMEMS-layout file at the grid's nodes (their latitude and
+    longitude [deg]) and the times ``times_s`` [s since ``zero``] (a static field when ``times_s`` is None)."""
+    import xarray as xr
+    from scipy.interpolate import RegularGridInterpolator
+
+    with xr.open_dataset(path) as ds:
+        _check_size(ds, None)
+        ds = ds.load()
+    for depth in ("depth", "deptht", "elevation"):
+        if depth in ds.dims:
+            ds = ds.sortby(depth).isel({depth: 0})
+    lat_name = "latitude" if "latitude" in ds.dims else "lat"
+    lon_name = "longitude" if "longitude" in ds.dims else "lon"
+    if lat_name not in ds.dims or lon_name not in ds.dims:
+        raise ValueError(f"{path}: expected dimensions latitude/longitude for the current")
+    time_dim = next((d for d in TIME_DIMS if d in ds.dims), None)
+    lat = ds[lat_name].values.astype(float)
+    lon = (ds[lon_name].values.astype(float) - origin_deg[1] + 180.0) % 360.0 - 180.0 + origin_deg[1]
+    order_lat, order_lon = np.argsort(lat), np.argsort(lon)
+    lat, lon = lat[order_lat], lon[order_lon]
+    if time_dim is not None and ds.sizes[time_dim] > 1:
+        ds = ds.sortby(time_dim)
+        own_s, _ = _seconds(ds[time_dim].values, zero, path, time_dim)
+    else:
+        own_s = None
+        if time_dim is not None:
+            ds = ds.isel({time_dim: 0})
+            time_dim = None
+    at = (np.clip(node_lat, lat[0], lat[-1]), np.clip(node_lon, lon[0], lon[-1]))
+    result = {}
+    for name in ("current_north", "current_east"):
+        found = next((ds[c] for c in CF_NAMES[name] if c in ds.data_vars), None)
+        if found is None:
+            raise ValueError(f"{path}: no variable for {name} (looked for {', '.join(CF_NAMES[name])})")
+        lead = (time_dim,) if time_dim else ()
+        nt = (ds.sizes[time_dim],) if time_dim else ()
+        grid = _as_grid(found, lead + (lat_name, lon_name), nt + (lat.size, lon.size))
+        grid = grid[..., order_lat, :][..., order_lon]
+        slices = grid if time_dim else grid[None]
+        on_grid = np.stack([RegularGridInterpolator((lat, lon), s)(at) for s in slices])
+        if own_s is None:
+            values = on_grid[0]
+            result[name] = values if times_s is None else np.broadcast_to(values, (len(times_s),) + values.shape).copy()
+        elif times_s is None:
+            raise ValueError(f"{path}: the current varies in time but the weather file is static: give the weather "
+                             "file's times or a static currents file")
+        else:
+            result[name] = np.stack([_at_time(on_grid, own_s, t) for t in times_s])
+    return result
+
+
+def _at_time(slices: np.ndarray, times_s: np.ndarray, t: float) -> np.ndarray:
+    """Linear in time between the two slices around ``t``, held before the first and after the last."""
+    k = int(np.clip(np.searchsorted(times_s, t) - 1, 0, len(times_s) - 2))
+    w = float(np.clip((t - times_s[k]) / (times_s[k + 1] - times_s[k]), 0.0, 1.0))
+    return (1.0 - w) * slices[k] + w * slices[k + 1]
 
 
 def _check_size(ds, time_index) -> None:
@@ -181,7 +301,7 @@ def _seconds(times, origin, path, time_dim) -> tuple[np.ndarray, str]:
     return (times - zero).astype("timedelta64[ns]").astype("int64") / 1e9, str(zero)
 
 
-def _find_variable(ds, name, path):
+def _find_variable(ds, name, path, quiet: bool = False):
     for candidate in CF_NAMES[name]:
         if candidate in ds.data_vars:
             return ds[candidate]
@@ -189,7 +309,8 @@ def _find_variable(ds, name, path):
         if var.attrs.get("standard_name") in CF_NAMES[name]:
             return var
     if name.startswith("current"):
-        log.warning("%s: no %s variable (%s); assuming zero current", path, name, "/".join(CF_NAMES[name]))
+        if not quiet:  # a currents file gives it
+            log.warning("%s: no %s variable (%s); assuming zero current", path, name, "/".join(CF_NAMES[name]))
         any_var = next(iter(ds.data_vars.values()))
         return any_var * 0.0
     raise ValueError(f"{path}: no variable for {name} (looked for {', '.join(CF_NAMES[name])})")

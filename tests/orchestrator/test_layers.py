@@ -130,7 +130,7 @@ def test_the_loop_check_sees_lazy_imports_and_submodules(tmp_path):
 
 #: The wings of the domain, lowest first: a wing imports only the wings before it (and
 #: itself); ``cosim`` registers them all with the engine and may import any of them.
-WINGS = ("ship", "weather", "routing", "voyage", "navigation", "encounters", "control", "cosim")
+WINGS = ("ship", "chart", "weather", "routing", "voyage", "navigation", "encounters", "control", "cosim")
 
 
 def wing_violations(graph: dict[str, set[str]], domain: str = DOMAIN, wings=WINGS) -> list[str]:

@@ -1,0 +1,115 @@
+"""Tabulate the real passages from their latest comparisons into docs/passages-results.md.
+
+    python -m orchestrator compare scenarios/passages/biscay_crossing_compare.toml
+    python -m orchestrator compare scenarios/passages/cyclades_islands_compare.toml
+    python -m orchestrator compare scenarios/passages/gibraltar_strait_compare.toml
+    python -m orchestrator run scenarios/passages/gibraltar_strait_traffic.toml
+    python scripts/passage_results.py [--results results]
+
+Nothing is typed by hand: every figure is read from the comparisons' and runs' summary.json.
+A passage not yet compared is listed as such.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+PASSAGES = ("biscay_crossing", "cyclades_islands", "gibraltar_strait")
+
+
+def latest(folder: Path) -> Path | None:
+    runs = sorted(p for p in folder.glob("*") if p.is_dir() and not p.name.startswith(".")) if folder.is_dir() else []
+    return runs[-1] if runs else None
+
+
+def clearance_of(run_folder: Path) -> dict:
+    summary = json.loads((run_folder / "summary.json").read_text())
+    return summary.get("analyses", {}).get("clearance", {})
+
+
+def fmt(value, digits=2) -> str:
+    return "-" if value is None else f"{value:,.{digits}f}"
+
+
+def passage_row(results: Path, name: str) -> str:
+    folder = latest(results / f"passage_{name}")
+    if folder is None:
+        return f"| {name} | not compared yet | | | | | | | | | |"
+    summary = json.loads((folder / "summary.json").read_text())
+    system = summary["voyage"]["systems"]["RHNC"]
+    rhnc = clearance_of(folder / summary["runs"]["RHNC"])
+    trials = sorted((folder / "runs" / "RHNC_equal-arrival_baseline").glob("*/summary.json"))
+    trial_summaries = [json.loads(t.read_text()) for t in trials]
+    baseline = [t.get("analyses", {}).get("clearance", {}) for t in trial_summaries]
+    rhnc_nm = json.loads((folder / summary["runs"]["RHNC"] / "summary.json").read_text())["analyses"]["voyage"].get(
+        "distance_nm")
+    arrival_s = (system.get("baseline_arrival_min") or 0.0) * 60.0
+    nearest = min(trial_summaries, default=None, key=lambda t: abs(
+        (t["participants"].get("goal", {}).get("arrival_time_s") or float("inf")) - arrival_s))
+    baseline_nm = nearest["analyses"]["voyage"].get("distance_nm") if nearest else None
+    baseline_min = min((b.get("min_clearance_nm", float("inf")) for b in baseline), default=None)
+    baseline_kept = all(b.get("kept", False) for b in baseline) if baseline else None
+    return (f"| {name} | {fmt(system.get('arrival_min'), 1)} | {fmt(system.get('cost_usd'), 0)} | "
+            f"{fmt(system.get('baseline_cost_usd'), 0)} | {fmt(system.get('saving_cost_percent'))} | "
+            f"{fmt(system.get('saving_co2_percent'))} | {fmt(rhnc_nm, 1)} / {fmt(baseline_nm, 1)} | "
+            f"{fmt(system.get('baseline_speed_kn'))} | {fmt(rhnc.get('min_clearance_nm'))} / "
+            f"{fmt(rhnc.get('required_clearance_nm'), 1)} ({'kept' if rhnc.get('kept') else 'NOT kept'}) | "
+            f"{fmt(baseline_min)} ({'kept' if baseline_kept else 'NOT kept'}) | {folder.relative_to(results.parent)} |")
+
+
+def traffic_lines(results: Path) -> list[str]:
+    folder = latest(results / "gibraltar_strait_traffic")
+    if folder is None:
+        return ["The strait with traffic has not been run yet."]
+    summary = json.loads((folder / "summary.json").read_text())
+    encounter = summary.get("analyses", {}).get("encounter", {})
+    clearance = summary.get("analyses", {}).get("clearance", {})
+    criteria = summary.get("acceptance", {}).get("criteria", [])
+    met = sum(c.get("passed", False) for c in criteria)
+    lines = [f"The strait with traffic (`gibraltar_strait_traffic.toml`, {folder.relative_to(results.parent)}): "
+             f"separation margin to the target {fmt(encounter.get('min_clearance_nm'))} nm (R + R_i kept when >= 0), "
+             f"land and no-go clearance {fmt(clearance.get('min_clearance_nm'))} nm of "
+             f"{fmt(clearance.get('required_clearance_nm'), 1)}; acceptance {met}/{len(criteria)} criteria met:"]
+    lines += [f"- {c['name']}: {'met' if c.get('passed') else 'NOT met'} ({c.get('criterion')}, value {c.get('value')})"
+              for c in criteria]
+    return lines
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--results", default=str(ROOT / "results"))
+    results = Path(parser.parse_args().results).resolve()
+    lines = ["# Real passages: results", "",
+             "Written by `scripts/passage_results.py` from the latest comparison of each passage "
+             "(`python -m orchestrator compare scenarios/passages/<name>_compare.toml`); see "
+             "[passages.md](passages.md) for what each passage is and how it is measured.", "",
+             "RHNC (routing navigation on the chart) against the sea-route baseline (Offline-SPNC along "
+             "searoute's route), the baseline's speed matched to RHNC's arrival. Saving: positive when RHNC "
+             "is cheaper. Clearance: least distance of the sailed track to land and no-go areas along its "
+             "chords, against the declared clearance; the baseline's is the least over its speed trials. "
+             "Sailed: the distance along each track (the baseline's trial nearest the matched arrival): the "
+             "sea-route network's detours make the baseline sail farther and so faster, which is most of "
+             "the saving where the two distances differ.", "",
+             "| passage | arrival [min] | RHNC cost [USD] | baseline cost [USD] | saving cost [%] | saving CO2 [%] "
+             "| sailed RHNC / baseline [nm] | baseline speed [kn] | RHNC clearance [nm] / declared "
+             "| baseline clearance [nm] | comparison |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines += [passage_row(results, name) for name in PASSAGES]
+    flags = []
+    for name in PASSAGES:
+        folder = latest(results / f"passage_{name}")
+        if folder is not None:
+            flags += [f"- {name}: {flag}" for flag in json.loads((folder / "summary.json").read_text()).get("flags", [])]
+    if flags:
+        lines += ["", "Flags of the comparisons:", ""] + flags
+    lines += [""] + traffic_lines(results) + [""]
+    out = ROOT / "docs" / "passages-results.md"
+    out.write_text("\n".join(lines))
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()
