@@ -373,6 +373,9 @@ class _Loop:
         self.plans = [(p, p.name, cosim.every[p.name], cosim.step_timeout_s[p.name],
                        tuple((c.target_port, (c.source, c.source_port)) for c in connections if c.target == p.name))
                       for p in cosim.participants]
+        # per participant: its declared outputs, whether it checks their finiteness itself
+        self.publishing = {p.name: (cosim._declared[p.name], getattr(p, "checks_outputs_finite", False))
+                           for p in cosim.participants}
         self.stop_conditions = bool(self.sim.stop_when)
         self.phase, self.participant, self.time_s = "setting up", None, self.sim.start_s  # for messages
 
@@ -466,7 +469,13 @@ class _Loop:
                 cosim._publish(participant, stamp, outputs, None, recorder)
                 self.pending.append((k + every, name, outputs))
             else:
-                cosim._publish(participant, stamp, outputs, bus, recorder)
+                declared, checked = self.publishing[name]
+                if outputs.keys() <= declared and (checked or all(map(_finite, outputs.values()))):
+                    for port, value in outputs.items():  # what _publish does, without its look-ups
+                        bus[(name, port)] = value
+                    recorder.add(name, stamp, outputs)
+                else:
+                    cosim._publish(participant, stamp, outputs, bus, recorder)  # refuses the first bad output
                 if self.stop_conditions:
                     met = cosim._stop_conditions_met(bus, name)
         return met, skipped

@@ -68,6 +68,8 @@ class Recorder:
         # (a row is its values)
         self._held: dict[str, float] = {"time_s": start_s}
         self._scalar_columns: dict[str, dict[str, str]] = {}  # participant -> port -> column
+        # participant -> its ports (as given, in order) -> their columns, for outputs all floats
+        self._float_rows: dict[str, dict[tuple[str, ...], tuple[str, ...]]] = {}
         self._latest = start_s  # latest time any output describes
         self._columns: list[str] = ["time_s"]
         self._rows: list[list[float]] = []  # emitted rows not yet written (all rows without a spool)
@@ -77,9 +79,24 @@ class Recorder:
 
     # -- the master's side -------------------------------------------------------------------
     def add(self, participant: str, time_s: float, outputs) -> None:
-        columns = self._scalar_columns.get(participant)
-        if columns is None:
-            columns = self._scalar_columns[participant] = {}
+        rows = self._float_rows.get(participant)
+        if rows is None:
+            rows = self._float_rows[participant] = {}
+            self._scalar_columns[participant] = {}
+        columns = self._scalar_columns[participant]
+        ports = tuple(outputs)
+        names = rows.get(ports)
+        if names is not None:  # these outputs seen before, all floats: their columns named once
+            values = tuple(outputs.values())
+            if all(type(value) is float for value in values):
+                flat = dict(zip(names, values))
+                stamp = round(float(time_s), TIME_DECIMALS)
+                self._pending.append((stamp, flat))
+                if stamp > self._latest:
+                    self._latest = stamp
+                return
+        elif all(type(value) is float for value in outputs.values()):
+            rows[ports] = tuple(f"{participant}.{port}" for port in ports)
         flat = {}
         for port, value in outputs.items():
             column = columns.get(port)
