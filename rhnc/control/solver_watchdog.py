@@ -140,9 +140,57 @@ def _outcome(solver: ca.Function, result: Mapping, elapsed: float, cpu: float) -
     )
 
 
+class BufferedCall:
+    """Calls of one nlpsol solver through CasADi's argument buffers: numpy arrays in and out.
+
+    A call with keyword arguments converts each of the eight inputs to a CasADi matrix and
+    each of the six outputs back (0.7-0.8 ms of a 2-3 ms solve of the NMPC's NLP, measured
+    on a loaded machine); here the inputs are copied into arrays the solver reads in
+    place and it writes its outputs into arrays, the same numbers to the bit.  An input not
+    given takes the solver's default, as in a keyword call.  ``stats()`` are those of the
+    last buffered call.
+    """
+
+    def __init__(self, solver: ca.Function) -> None:
+        self._inputs = [(solver.name_in(i), solver.default_in(i), np.zeros(solver.numel_in(i)))
+                        for i in range(solver.n_in())]
+        self._outputs = {solver.name_out(i): np.zeros(solver.numel_out(i)) for i in range(solver.n_out())}
+        self._buffer, self._evaluate = solver.buffer()
+        for i, (_, _, array) in enumerate(self._inputs):
+            self._buffer.set_arg(i, memoryview(array))  # type: ignore[call-arg]
+        for i, array in enumerate(self._outputs.values()):
+            self._buffer.set_res(i, memoryview(array))  # type: ignore[call-arg]
+
+    @classmethod
+    def of(cls, solver: ca.Function) -> "BufferedCall":
+        """The buffered calls of ``solver`` (made at its first call, kept with it)."""
+        call = getattr(solver, "_rhnc_buffered_call", None)
+        if call is None:
+            call = cls(solver)
+            solver._rhnc_buffered_call = call
+        return call
+
+    def __call__(self, arguments: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | float]:
+        """Solve; the outputs are the buffers themselves (valid until the next call), ``f`` a float."""
+        for name, default, array in self._inputs:
+            value = arguments.get(name)
+            array[:] = default if value is None else value
+        self._evaluate()
+        result: dict[str, np.ndarray | float] = dict(self._outputs)
+        result["f"] = float(self._outputs["f"][0])
+        return result
+
+    def stats(self) -> dict:
+        return self._buffer.stats()
+
+
 def _timed_call(solver, arguments) -> SolveOutcome:
     start, cpu_start = time.perf_counter(), time.process_time()
-    result = solver(**arguments)
+    if isinstance(solver, ca.Function):
+        solver = BufferedCall.of(solver)
+        result = solver(arguments)
+    else:  # any callable of nlpsol's keywords (the tests' stand-ins)
+        result = solver(**arguments)
     return _outcome(solver, result, time.perf_counter() - start, time.process_time() - cpu_start)
 
 
