@@ -57,11 +57,12 @@ WALL_TIME_STATUS = "wall_time_exceeded"
 POLL_S = 0.02
 
 
-def process_cpu_time_s(pid: int) -> float | None:
-    """User + system processor time [s] of process ``pid`` so far, or None when it cannot be read
-    (the process is gone, or the platform does not tell)."""
+def process_cpu_time_s(pid: int | psutil.Process) -> float | None:
+    """User + system processor time [s] of process ``pid`` (or of a psutil ``Process``, which
+    halves the cost of a reading: its identity is not looked up again) so far, or None when it
+    cannot be read (the process is gone, or the platform does not tell)."""
     try:
-        times = psutil.Process(pid).cpu_times()
+        times = (pid if isinstance(pid, psutil.Process) else psutil.Process(pid)).cpu_times()
     except psutil.Error:
         return None
     return times.user + times.system
@@ -280,6 +281,7 @@ class BoundedSolver:
         self.renew = renew
         self._solvers: dict[str, ca.Function] = dict(solvers)
         self._pid: int | None = None
+        self._process: psutil.Process | int | None = None  # the worker, whose processor time is read
         self._connection = None
         self._finalizer = None
         self.timeouts = 0
@@ -312,11 +314,11 @@ class BoundedSolver:
         start = time.perf_counter()
         self._ensure_worker()
         self._connection.send((name, arguments))
-        cpu_start = process_cpu_time_s(self._pid) if self.cpu_time_s is not None else None
+        cpu_start = process_cpu_time_s(self._process) if self.cpu_time_s is not None else None
         wall_limit = math.inf if self.wall_time_s is None else self.wall_time_s
         while not self._connection.poll(min(POLL_S, wall_limit)):
             elapsed = time.perf_counter() - start
-            cpu = process_cpu_time_s(self._pid) if cpu_start is not None else None
+            cpu = process_cpu_time_s(self._process) if cpu_start is not None else None
             over_cpu = cpu is not None and cpu - cpu_start > self.cpu_time_s
             if elapsed > wall_limit or over_cpu:
                 self.timeouts += 1
@@ -361,6 +363,10 @@ class BoundedSolver:
                 os._exit(0)
         child_end.close()
         self._pid, self._connection = pid, parent_end
+        try:
+            self._process = psutil.Process(pid)
+        except psutil.Error:  # read by its number at every solve then (None when it cannot be)
+            self._process = pid
         self._finalizer = weakref.finalize(self, _kill, pid)
 
     def close(self) -> None:
@@ -370,4 +376,4 @@ class BoundedSolver:
             self._finalizer = None
         if self._connection is not None:
             self._connection.close()
-        self._pid, self._connection = None, None
+        self._pid, self._process, self._connection = None, None, None
