@@ -24,7 +24,8 @@ from orchestrator.leftovers import owned_temp_folder
 from orchestrator.fmi_slave import REAL_TYPES, SUPPORTED_VERSIONS, FmiSlave
 from orchestrator.participant import Participant, Value, is_finite_number
 from orchestrator.plant_ports import PLANT_PORTS
-from orchestrator.port_mapping import bind_ports, initial_start_values
+from orchestrator.geometry import wrap_angle
+from orchestrator.port_mapping import ScalarBinding, bind_ports, initial_start_values
 from orchestrator.scenario import ParticipantSpec
 
 log = logging.getLogger(__name__)
@@ -160,6 +161,14 @@ class FmuParticipant(Participant):
         self._canonical_inputs: dict[str, float] = {}
         self._output_variables = [v for b in self._output_bindings for v in b.variables]
         self._output_refs = [self.variables[v].valueReference for v in self._output_variables]
+        # where every port is one variable (``scale * fmu + offset``), a step converts them in
+        # one loop: (value reference, scale, offset) per input port, (port, scale, offset, wrap)
+        # per output in the order of the value references
+        self._scalar_inputs = ({port: (self._input_refs[b.variables[0]], b.scale, b.offset)
+                                for b in self._input_bindings for port in b.ports}
+                               if all(type(b) is ScalarBinding for b in self._input_bindings) else None)
+        self._scalar_outputs = ([(b.ports[0], b.scale, b.offset, b.wrap) for b in self._output_bindings]
+                                if all(type(b) is ScalarBinding for b in self._output_bindings) else None)
         self._slave = None
         self._unzip_dir = None
         self._unzip_lock = None
@@ -280,6 +289,9 @@ class FmuParticipant(Participant):
     def _set_inputs(self, inputs: Mapping[str, Value]) -> None:
         if not inputs:
             return
+        if self._scalar_inputs is not None:
+            self._set_scalar_inputs(inputs)
+            return
         touched = []
         for port, value in inputs.items():
             number = float(value)
@@ -296,10 +308,29 @@ class FmuParticipant(Participant):
                 values.append(value)
         self._call("SetReal", self._slave.set_reals, refs, values)
 
+    def _set_scalar_inputs(self, inputs: Mapping[str, Value]) -> None:
+        """:meth:`_set_inputs` where every input port is one variable: the same values, one loop."""
+        refs, values = [], []
+        for port, value in inputs.items():
+            number = float(value)
+            if not math.isfinite(number):
+                raise ModelError(f"{self.name}: input '{port}' received a non-finite value ({number})")
+            self._canonical_inputs[port] = number
+            ref, scale, offset = self._scalar_inputs[port]
+            refs.append(ref)
+            values.append((number - offset) / scale)
+        self._call("SetReal", self._slave.set_reals, refs, values)
+
     def _read_outputs(self, time: float) -> dict[str, Value]:
         if not self._output_refs:
             return {}
         values = self._call("GetReal", self._slave.get_reals, self._output_refs)
+        if self._scalar_outputs is not None and math.isfinite(sum(values)):  # (a NaN or inf sums to one)
+            outputs = {}
+            for (port, scale, offset, wrap), value in zip(self._scalar_outputs, values):
+                value = scale * value + offset
+                outputs[port] = float(wrap_angle(value)) if wrap else value
+            return outputs
         by_variable = {}
         for variable, value in zip(self._output_variables, values):
             if not math.isfinite(value):

@@ -217,87 +217,19 @@ class CoSimulation:
         recorder = Recorder(sim.start_s, sim.dt_s, sim.steps, spool=spool)
         results_error = refused = None
         self.recorder, self.steps_done = recorder, 0
-        bus: dict[tuple[str, str], Value] = {}
-        # per participant: (its input port, the bus key that drives it)
-        inbound = {p.name: [(c.target_port, (c.source, c.source_port)) for c in self.scenario.connections
-                            if c.target == p.name] for p in self.participants}
-        status, reason, steps_done = "finished", "", 0
+        status, reason = "finished", ""
         started = wallclock.perf_counter()
         bar = _progress_bar(sim.steps, self.scenario.simulation.name, progress)
-        current = ["setting up", None, sim.start_s]  # phase, participant, time: for messages
-
-        def position() -> str:
-            phase, name, t = current
-            return f"{phase} participant '{name}' at t = {t:g} s" if name else phase
-
-        jacobi = sim.exchange == "jacobi"
-        # Jacobi: outputs of a step from t reach the bus at t + step_size, as an FMI master
-        # that steps all FMUs at once hands them on: (release step, participant, outputs)
-        pending: list[tuple[int, str, dict]] = []
         watch = time_limits.CallWatch(emergency=lambda why: interrupts.write_emergency(why, time_limits.TIMED_OUT))
-        limits = self.step_timeout_s
+        loop = _Loop(self, recorder, watch)
         try:
-            with interrupts.reporting_position(position):
-                for participant in self.participants:  # set up completely: the record starts at t0
-                    current[1] = participant.name
-                    seen = {} if jacobi else bus
-                    inputs = {port: seen[key] for port, key in inbound[participant.name] if key in seen}
-                    with watch.call(participant.name, "set-up", sim.start_s, limits[participant.name]):
-                        outputs = participant.setup(sim.start_s, inputs)
-                    self._publish(participant, sim.start_s, outputs, bus, recorder)
-                current[1] = None
-                self._check_stop_values(bus)  # an array port refused before the first step (bad input)
-                current[0] = "stepping"
-                met: list = []
-                for k in range(sim.steps):
-                    t = sim.start_s + k * sim.dt_s
-                    current[2] = t
-                    if pending:
-                        for _, name, outputs in [item for item in pending if item[0] <= k]:
-                            bus.update({(name, port): value for port, value in outputs.items()})
-                        pending = [item for item in pending if item[0] > k]
-                        met = self._stop_conditions_met(bus)
-                        if met:  # Jacobi: what the last round handed on ends the run before this one
-                            reason = f"stopped at t = {t:g} s: {met[0]}"
-                            break
-                    skipped: list[str] = []
-                    for participant in self.participants:
-                        every = self.every[participant.name]
-                        if k % every:
-                            continue
-                        if met:  # Gauss-Seidel: met earlier in this round, nobody steps past it
-                            skipped.append(participant.name)
-                            continue
-                        current[1] = participant.name
-                        self._check_stop()
-                        step_size = min(every, sim.steps - k) * sim.dt_s
-                        inputs = {port: bus[key] for port, key in inbound[participant.name] if key in bus}
-                        with watch.call(participant.name, "its step", t, limits[participant.name]):
-                            outputs = participant.step(t, step_size, inputs)
-                        stamp = t + step_size if participant.outputs_at_step_end else t
-                        if jacobi:
-                            self._publish(participant, stamp, outputs, None, recorder)
-                            pending.append((k + every, participant.name, outputs))
-                        else:
-                            self._publish(participant, stamp, outputs, bus, recorder)
-                            met = self._stop_conditions_met(bus, participant.name)
-                    steps_done = self.steps_done = k + 1
-                    recorder.advance(t)  # every participant due at t has stepped: the row of t is final
-                    if bar is not None:
-                        bar.update(1)
-                    if on_step is not None:
-                        on_step(k)
-                    met = met or self._stop_conditions_met(bus)
-                    if met:
-                        reason = (f"stopped at t = {t:g} s before the step of {', '.join(skipped)}: {met[0]}"
-                                  if skipped else f"stopped at t = {t + sim.dt_s:g} s: {met[0]}")
-                        break
-                current[1] = None
-                self._check_stop()
+            with interrupts.reporting_position(loop.position):
+                loop.set_up()
+                reason = loop.step_all(bar, on_step)
         except KeyboardInterrupt:
             status, reason = "interrupted", interrupts.reason()
         except StopConditionError as exc:
-            if steps_done == 0:  # found at set-up: bad input, refused as before a run (nothing written)
+            if self.steps_done == 0:  # found at set-up: bad input, refused as before a run (nothing written)
                 refused = exc
             status, reason = "failed", str(exc)
         except ResultsError as exc:  # the disk, not a participant: no run status can be written
@@ -305,12 +237,12 @@ class CoSimulation:
         except time_limits.StepTimeout:
             status, reason = time_limits.TIMED_OUT, watch.expired or "a participant call timed out"
         except ToolchainError as exc:
-            status, reason = "failed", _naming(str(exc), current[1])
+            status, reason = "failed", _naming(str(exc), loop.participant)
         except SystemExit as exc:  # sys.exit() in a participant ends the run, not the process
-            status, reason = "failed", _naming(f"called sys.exit({exc.code!r})", current[1])
+            status, reason = "failed", _naming(f"called sys.exit({exc.code!r})", loop.participant)
         except Exception as exc:  # a participant's own bug must still leave the results
             log.debug("participant raised", exc_info=True)
-            status, reason = "failed", _naming(f"{type(exc).__name__}: {exc}", current[1])
+            status, reason = "failed", _naming(f"{type(exc).__name__}: {exc}", loop.participant)
         finally:
             watch.close()
             interrupts.acknowledge()
@@ -332,7 +264,7 @@ class CoSimulation:
             log.warning("after the run: %s", "; ".join(problems))
             if status == "finished":
                 status, reason = "failed", "; ".join(problems)
-        return RunOutcome(status, reason, steps_done, wallclock.perf_counter() - started, recorder, summaries,
+        return RunOutcome(status, reason, self.steps_done, wallclock.perf_counter() - started, recorder, summaries,
                           tables)
 
     def _terminate_all(self) -> tuple[list[str], str]:
@@ -386,7 +318,13 @@ class CoSimulation:
         declared = self._declared[participant.name]
         checked = getattr(participant, "checks_outputs_finite", False)
         name = participant.name
-        for port, value in outputs.items():
+        if outputs.keys() <= declared and (checked or all(map(_finite, outputs.values()))):
+            if bus is not None:
+                for port, value in outputs.items():
+                    bus[(name, port)] = value
+            recorder.add(name, stamp, outputs)
+            return
+        for port, value in outputs.items():  # the first output refused, in the order given
             if port not in declared:
                 raise ModelError(f"{name}: returned an undeclared output '{port}'")
             if not checked and not _finite(value):
@@ -412,6 +350,135 @@ class CoSimulation:
             shutil.rmtree(self.work_dir, ignore_errors=True)
             if self._work_lock is not None:
                 self._work_lock.release(remove_file=False)
+
+
+class _Loop:
+    """One run's exchange: sets the participants up and steps them, publishing to the bus.
+
+    What it does per call is fixed before the first step (who is due, the bus keys that drive
+    each input port, the time limit, whether there are stop conditions at all), so that a
+    step of the master costs a few dictionary look-ups beyond the participants' own calls.
+    """
+
+    def __init__(self, cosim: CoSimulation, recorder: Recorder, watch: time_limits.CallWatch) -> None:
+        self.cosim, self.recorder, self.watch = cosim, recorder, watch
+        self.sim = cosim.scenario.simulation
+        self.jacobi = self.sim.exchange == "jacobi"
+        self.bus: dict[tuple[str, str], Value] = {}
+        # Jacobi: outputs of a step from t reach the bus at t + step_size, as an FMI master
+        # that steps all FMUs at once hands them on: (release step, participant, outputs)
+        self.pending: list[tuple[int, str, dict]] = []
+        connections = cosim.scenario.connections
+        # per participant: itself, its name, every, time limit, (its input port, the bus key that drives it)
+        self.plans = [(p, p.name, cosim.every[p.name], cosim.step_timeout_s[p.name],
+                       tuple((c.target_port, (c.source, c.source_port)) for c in connections if c.target == p.name))
+                      for p in cosim.participants]
+        # per participant: its declared outputs, whether it checks their finiteness itself
+        self.publishing = {p.name: (cosim._declared[p.name], getattr(p, "checks_outputs_finite", False))
+                           for p in cosim.participants}
+        self.stop_conditions = bool(self.sim.stop_when)
+        self.phase, self.participant, self.time_s = "setting up", None, self.sim.start_s  # for messages
+
+    def position(self) -> str:
+        return (f"{self.phase} participant '{self.participant}' at t = {self.time_s:g} s" if self.participant
+                else self.phase)
+
+    def set_up(self) -> None:
+        """Set every participant up completely: the record starts at t0."""
+        start, bus, watch = self.sim.start_s, self.bus, self.watch
+        for participant, name, _, limit, inbound in self.plans:
+            self.participant = name
+            seen = {} if self.jacobi else bus
+            inputs = {port: seen[key] for port, key in inbound if key in seen}
+            watch.begin(name, "set-up", start, limit)
+            try:
+                outputs = participant.setup(start, inputs)
+            finally:
+                watch.end()
+            watch.check()
+            self.cosim._publish(participant, start, outputs, bus, self.recorder)
+        self.participant = None
+        self.cosim._check_stop_values(bus)  # an array port refused before the first step (bad input)
+        self.phase = "stepping"
+
+    def step_all(self, bar, on_step: Callable[[int], None] | None) -> str:
+        """Step every participant due at each communication point; the reason of an early stop, or ""."""
+        sim, cosim, recorder = self.sim, self.cosim, self.recorder
+        reason, met = "", []
+        for k in range(sim.steps):
+            t = sim.start_s + k * sim.dt_s
+            self.time_s = t
+            if self.pending:
+                met = self._release(k)
+                if met:  # Jacobi: what the last round handed on ends the run before this one
+                    reason = f"stopped at t = {t:g} s: {met[0]}"
+                    break
+            met, skipped = self._round(k, t)
+            cosim.steps_done = k + 1
+            recorder.advance(t)  # every participant due at t has stepped: the row of t is final
+            if bar is not None:
+                bar.update(1)
+            if on_step is not None:
+                on_step(k)
+            if self.stop_conditions:
+                met = met or cosim._stop_conditions_met(self.bus)
+            if met:
+                reason = (f"stopped at t = {t:g} s before the step of {', '.join(skipped)}: {met[0]}"
+                          if skipped else f"stopped at t = {t + sim.dt_s:g} s: {met[0]}")
+                break
+        self.participant = None
+        cosim._check_stop()
+        return reason
+
+    def _release(self, k: int) -> list:
+        """Jacobi: hand on the outputs due at step ``k``; the stop conditions they meet."""
+        for _, name, outputs in [item for item in self.pending if item[0] <= k]:
+            self.bus.update({(name, port): value for port, value in outputs.items()})
+        self.pending = [item for item in self.pending if item[0] > k]
+        return self.cosim._stop_conditions_met(self.bus)
+
+    def _round(self, k: int, t: float) -> tuple[list, list[str]]:
+        """Step the participants due at step ``k`` (time ``t``) in declaration order.
+
+        Returns the stop conditions met (Gauss-Seidel: once one holds, the participants after
+        it are not stepped) and the names of those skipped for it.
+        """
+        sim, cosim, bus, recorder, watch = self.sim, self.cosim, self.bus, self.recorder, self.watch
+        stop_requested = interrupts.stop_requested
+        met: list = []
+        skipped: list[str] = []
+        for participant, name, every, limit, inbound in self.plans:
+            if k % every:
+                continue
+            if met:  # Gauss-Seidel: met earlier in this round, nobody steps past it
+                skipped.append(name)
+                continue
+            self.participant = name
+            if stop_requested():  # even if a library swallowed the signal
+                raise KeyboardInterrupt
+            step_size = min(every, sim.steps - k) * sim.dt_s
+            inputs = {port: bus[key] for port, key in inbound if key in bus}
+            watch.begin(name, "its step", t, limit)
+            try:
+                outputs = participant.step(t, step_size, inputs)
+            finally:
+                watch.end()
+            watch.check()
+            stamp = t + step_size if participant.outputs_at_step_end else t
+            if self.jacobi:
+                cosim._publish(participant, stamp, outputs, None, recorder)
+                self.pending.append((k + every, name, outputs))
+            else:
+                declared, checked = self.publishing[name]
+                if outputs.keys() <= declared and (checked or all(map(_finite, outputs.values()))):
+                    for port, value in outputs.items():  # what _publish does, without its look-ups
+                        bus[(name, port)] = value
+                    recorder.add(name, stamp, outputs)
+                else:
+                    cosim._publish(participant, stamp, outputs, bus, recorder)  # refuses the first bad output
+                if self.stop_conditions:
+                    met = cosim._stop_conditions_met(bus, name)
+        return met, skipped
 
 
 #: A participant built more slowly than this [s] is named with its build time on stderr.

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import errno
 import logging
+import math
 import shutil
 from pathlib import Path
 
@@ -63,7 +64,12 @@ class Recorder:
         self.spool = None if spool is None else Path(spool)
         self.chunk_rows = chunk_rows
         self._pending: list[tuple[float, dict[str, float]]] = []  # outputs not yet in a row, in order
-        self._held: dict[str, float] = {}  # the latest value of every column applied to the rows
+        # the latest value of every column applied to the rows, in the order of ``_columns``
+        # (a row is its values)
+        self._held: dict[str, float] = {"time_s": start_s}
+        self._scalar_columns: dict[str, dict[str, str]] = {}  # participant -> port -> column
+        # participant -> its ports (as given, in order) -> their columns, for outputs all floats
+        self._float_rows: dict[str, dict[tuple[str, ...], tuple[str, ...]]] = {}
         self._latest = start_s  # latest time any output describes
         self._columns: list[str] = ["time_s"]
         self._rows: list[list[float]] = []  # emitted rows not yet written (all rows without a spool)
@@ -73,9 +79,29 @@ class Recorder:
 
     # -- the master's side -------------------------------------------------------------------
     def add(self, participant: str, time_s: float, outputs) -> None:
+        rows = self._float_rows.get(participant)
+        if rows is None:
+            rows = self._float_rows[participant] = {}
+            self._scalar_columns[participant] = {}
+        columns = self._scalar_columns[participant]
+        ports = tuple(outputs)
+        names = rows.get(ports)
+        if names is not None:  # these outputs seen before, all floats: their columns named once
+            values = tuple(outputs.values())
+            if all(type(value) is float for value in values):
+                flat = dict(zip(names, values))
+                stamp = round(float(time_s), TIME_DECIMALS)
+                self._pending.append((stamp, flat))
+                if stamp > self._latest:
+                    self._latest = stamp
+                return
+        elif all(type(value) is float for value in outputs.values()):
+            rows[ports] = tuple(f"{participant}.{port}" for port in ports)
         flat = {}
         for port, value in outputs.items():
-            column = f"{participant}.{port}"
+            column = columns.get(port)
+            if column is None:
+                column = columns[port] = f"{participant}.{port}"
             if type(value) is float:
                 flat[column] = value
             elif isinstance(value, np.ndarray):
@@ -90,7 +116,8 @@ class Recorder:
                 flat[column] = float(value)
         stamp = round(float(time_s), TIME_DECIMALS)
         self._pending.append((stamp, flat))
-        self._latest = max(self._latest, stamp)
+        if stamp > self._latest:
+            self._latest = stamp
 
     def _cell_columns(self, column: str, shape: tuple[int, ...]) -> list[str]:
         """``column[i,j]`` of every cell of an array output of ``shape``, in C order (named once per run)."""
@@ -111,21 +138,21 @@ class Recorder:
 
     def advance(self, until_s: float) -> None:
         """Every participant due up to ``until_s`` has stepped: the rows up to it are final."""
-        count = int(np.floor((until_s - self.start_s) / self.dt_s + 1e-9)) + 1
+        count = math.floor((until_s - self.start_s) / self.dt_s + 1e-9) + 1
+        held = self._held
         while self._emitted < count:
             grid = round(self.start_s + self.dt_s * self._emitted, TIME_DECIMALS)
             keep = []
             for stamp, flat in self._pending:
                 if stamp <= grid:
-                    for column in flat:
-                        if column not in self._held:
-                            self._columns.append(column)
-                    self._held.update(flat)
+                    if not flat.keys() <= held.keys():  # a column's first value: it joins the rows
+                        self._columns.extend(column for column in flat if column not in held)
+                    held.update(flat)
                 else:
                     keep.append((stamp, flat))
             self._pending = keep
-            self._held["time_s"] = grid
-            self._rows.append([self._held.get(column, np.nan) for column in self._columns])
+            held["time_s"] = grid
+            self._rows.append(list(held.values()))
             self._emitted += 1
             if self.spool is not None and len(self._rows) >= self.chunk_rows:
                 self._flush()

@@ -96,8 +96,17 @@ class CallWatch:
     @contextlib.contextmanager
     def call(self, participant: str, phase: str, time_s: float, limit_s: float | None) -> Iterator[None]:
         """Watch one call; raises :class:`StepTimeout` after it if it timed out (even if swallowed)."""
-        if limit_s is None:
+        self.begin(participant, phase, time_s, limit_s)
+        try:
             yield
+        finally:
+            self.end()
+        self.check()
+
+    def begin(self, participant: str, phase: str, time_s: float, limit_s: float | None) -> None:
+        """Start watching a call (no limit: nothing to watch).  What :meth:`call` does in three
+        calls, for the master's loop: ``begin``; ``try: <call> finally: end()``; ``check()``."""
+        if limit_s is None:
             return
         deadline = time.monotonic() + limit_s
         # No lock and no wake-up of the watchdog per call: it polls (every POLL_S at most)
@@ -108,12 +117,15 @@ class CallWatch:
         self._call = (self._generation, deadline, (participant, phase, time_s, limit_s))
         if _deadline_sink is not None:
             _publish_deadline(deadline + self.grace_s, describe(participant, phase, time_s, limit_s))
-        try:
-            yield
-        finally:
-            self._call = None
-            if _deadline_sink is not None:
-                _publish_deadline(0.0, "")
+
+    def end(self) -> None:
+        """The watched call returned (or raised)."""
+        self._call = None
+        if _deadline_sink is not None:
+            _publish_deadline(0.0, "")
+
+    def check(self) -> None:
+        """Raise :class:`StepTimeout` if the last call timed out (even if it swallowed the interrupt)."""
         if self.expired is not None:
             raise StepTimeout(self.expired)
 

@@ -60,6 +60,7 @@ control step itself (:class:`NMPCController`).
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import time
@@ -186,6 +187,7 @@ class NMPCController:
         self.fallback_count = 0
         self.failure_count = 0
         self.timeout_count = 0
+        self._bound_templates: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     # ------------------------------------------------------------------ state handling
 
@@ -204,12 +206,19 @@ class NMPCController:
         """Stop the solver's worker process (also done when the controller is collected)."""
         self.solvers.close()
 
+    @staticmethod
+    def _origin_shift(origin: np.ndarray) -> np.ndarray:
+        """(north, east, 0, 0, 0, 0) [m]: what a state is measured from in the scaled problem."""
+        shift = np.zeros(6)
+        shift[:2] = origin[:2]
+        return shift
+
     def _to_scaled(self, state: np.ndarray, origin: np.ndarray) -> np.ndarray:
-        shifted = np.asarray(state, dtype=float) - np.r_[origin[:2], 0, 0, 0, 0]
+        shifted = np.asarray(state, dtype=float) - self._origin_shift(origin)
         return shifted / self.state_scale
 
     def _from_scaled(self, z: np.ndarray, origin: np.ndarray) -> np.ndarray:
-        return z * self.state_scale + np.r_[origin[:2], 0, 0, 0, 0]
+        return z * self.state_scale + self._origin_shift(origin)
 
     def _rollout(self, state: np.ndarray, inputs: np.ndarray, disturbance: np.ndarray | None = None) -> np.ndarray:
         """States (n+1, 6) [SI] from ``state`` under ``inputs`` (n, 2) [SI] with the prediction model."""
@@ -263,7 +272,21 @@ class NMPCController:
         return solution
 
     def _step(self, time_s, state, reference, obstacles, et, previous_tau) -> NMPCSolution:
-        """:meth:`solve` without its processor-time count."""
+        """:meth:`solve` without its processor-time count: prepare, solve (hard, then relaxed), unpack."""
+        step = self._prepare(time_s, state, reference, obstacles, et, previous_tau)
+        if not np.all(np.isfinite(step.x0)):
+            # a state far outside the model's range: the prediction itself overflows, and the
+            # solver would iterate on NaN (seen: fatrop running for minutes); skip it
+            LOG.warning("NMPC at t = %.1f s: prediction from the measured state is not finite; fallback", time_s)
+            return self._fail(time_s, step.state, step.previous_tau, 0.0, 0, "prediction_not_finite", UNKNOWN,
+                              UNKNOWN, False, step.disturbance, step.report)
+        attempt = self._attempts(time_s, step)
+        if not attempt.success:
+            return self._failed_solve(time_s, step, attempt)
+        return self._solved(time_s, step, attempt)
+
+    def _prepare(self, time_s, state, reference, obstacles, et, previous_tau) -> "_StepProblem":
+        """The step's NLP: parameters (reference, inputs, terminal weight, domains), bounds, warm start."""
         s = self.settings
         N = s.horizon_steps
         state = np.asarray(state, dtype=float)
@@ -271,20 +294,9 @@ class NMPCController:
         if reference.shape != (N + 1, 6):
             raise ValueError(f"reference must have shape ({N + 1}, 6), got {reference.shape}")
         origin = state[:2].copy()
-        # same heading, nearest turn: the warm start must not begin a full circle away
-        reference = reference.copy()
-        reference[:, 2] -= 2.0 * np.pi * np.round((reference[0, 2] - state[2]) / (2.0 * np.pi))
-        reference[:, 3] = np.minimum(reference[:, 3], s.max_speed_mps)
-        disturbance = np.zeros(DISTURBANCE_SIZE)
-        if self.observer is not None:
-            # offset-free: predict with the estimate, and ask for the drift angle and the
-            # force that hold the reference against it
-            disturbance = self.observer.update(time_s, state)
-            reference, tau_d = trimmed_reference(reference, disturbance, s.control_interval_s, self.params)
-            reference[:, 3] = np.minimum(reference[:, 3], s.max_speed_mps)
-        else:
-            tau_d = reference_inputs(reference, s.control_interval_s, self.params)
-        ref_scaled = ((reference - np.r_[origin, 0, 0, 0, 0]) / self.state_scale).T
+        shift = self._origin_shift(origin)
+        reference, tau_d, disturbance = self._trimmed_reference(time_s, state, reference)
+        ref_scaled = ((reference - shift) / self.state_scale).T
         w_d = (tau_d / self.input_scale).T
         if previous_tau is None:
             previous_tau = self.memory.inputs[0] if self.memory.inputs is not None else self.params.equilibrium_tau(state[3])
@@ -307,6 +319,32 @@ class NMPCController:
                                         np.inf if ceiling is None else ceiling)
         p = self.problem.parameters(ref_scaled, w_d, w_prev, P, disturbance, slots)
         lbx, ubx = self._bounds(state, origin)
+        self._rate_and_heading_bounds(lbx, ubx, time_s, state, ref_scaled, w_prev, report)
+        x0 = self._initial_guess(time_s, state, ref_scaled, w_d, origin, slots, disturbance)
+        return _StepProblem(state, origin, previous_tau, disturbance, report, p, lbx, ubx, x0)
+
+    def _trimmed_reference(self, time_s, state, reference) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The reference on the heading nearest the ship and capped in speed, its feed-forward
+        inputs and the disturbance estimate (offset-free: the drift angle and the force that
+        hold the reference against it)."""
+        s = self.settings
+        # same heading, nearest turn: the warm start must not begin a full circle away
+        reference = reference.copy()
+        reference[:, 2] -= 2.0 * np.pi * np.round((reference[0, 2] - state[2]) / (2.0 * np.pi))
+        reference[:, 3] = np.minimum(reference[:, 3], s.max_speed_mps)
+        if self.observer is None:
+            return reference, reference_inputs(reference, s.control_interval_s, self.params), \
+                np.zeros(DISTURBANCE_SIZE)
+        disturbance = self.observer.update(time_s, state)
+        reference, tau_d = trimmed_reference(reference, disturbance, s.control_interval_s, self.params)
+        reference[:, 3] = np.minimum(reference[:, 3], s.max_speed_mps)
+        return reference, tau_d, disturbance
+
+    def _rate_and_heading_bounds(self, lbx, ubx, time_s, state, ref_scaled, w_prev, report) -> None:
+        """Narrow the bounds (in place) to the inputs the actuators can reach and the headings the
+        rules allow."""
+        s = self.settings
+        N = s.horizon_steps
         if s.tau_rate_max is not None:   # what the actuators can reach from the last applied input
             reach = (np.arange(1, N + 1)[:, None] * s.control_interval_s * np.asarray(s.tau_rate_max)
                      / self.input_scale)
@@ -321,86 +359,96 @@ class NMPCController:
             lbx[heading_index] = np.maximum(lbx[heading_index], floor)
         if ceiling is not None:
             ubx[heading_index] = np.minimum(ubx[heading_index], ceiling)
-        x0 = self._initial_guess(time_s, state, ref_scaled, w_d, origin, slots, disturbance)
 
-        if not np.all(np.isfinite(x0)):
-            # a state far outside the model's range: the prediction itself overflows, and the
-            # solver would iterate on NaN (seen: fatrop running for minutes); skip it
-            LOG.warning("NMPC at t = %.1f s: prediction from the measured state is not finite; fallback", time_s)
-            return self._fail(time_s, state, previous_tau, 0.0, 0, "prediction_not_finite", UNKNOWN, UNKNOWN,
-                              False, disturbance, report)
-        # First the hard problem (slacks fixed at zero: the paper's constraints); only when it
-        # fails, the soft one (slacks free): the plan that violates the clearance least.  After
-        # a step that found no plan keeping the clearance, the soft one alone: the hard problem
-        # is then most likely infeasible again, and failing it took up to 200 iterations
-        # (~100 ms); should it be feasible, the exact L1 penalty gives its plan (zero slack).
+    def _attempts(self, time_s: float, step: "_StepProblem") -> "_Attempts":
+        """Solve the hard problem (slacks fixed at zero: the paper's constraints), and only when it
+        fails, the soft one (slacks free): the plan that violates the clearance least.
+
+        After a step that found no plan keeping the clearance, the soft one alone: the hard
+        problem is then most likely infeasible again, and failing it took up to 200 iterations
+        (~100 ms); should it be feasible, the exact L1 penalty gives its plan (zero slack).
+        """
+        s = self.settings
         problem = self.problem
+        lbx, ubx = step.lbx, step.ubx
         duals = self.memory.dual_guess(time_s) if s.warm_start_duals else {}
-        elapsed, cpu, preparation, iterations, timed_out = 0.0, 0.0, 0.0, 0, False
+        tally = _Attempts()
         budget = s.wall_time_limit_s
         attempts = (False, True) if problem.sigma_index.size else (False,)
         # a target inside its clearance and closing: the hard problem asks the range to
         # open at once and is most likely infeasible; the relaxed one alone, as after a
         # relaxed step
-        if (self.memory.clearance_relaxed or report.danger) and problem.sigma_index.size:
+        if (self.memory.clearance_relaxed or step.report.danger) and problem.sigma_index.size:
             attempts = (True,)
         for relaxed in attempts:
             if relaxed and stop_requested():  # Ctrl-C aborted the first attempt: no second one
                 raise KeyboardInterrupt
             ubx[problem.sigma_index] = np.inf if relaxed else 0.0
             if budget is not None:
-                self.solvers.wall_time_s = max(budget - elapsed, 1e-3)
+                self.solvers.wall_time_s = max(budget - tally.elapsed, 1e-3)
             attempt = "hard" if not relaxed else ("relaxed_alone" if len(attempts) == 1 and "relaxed_alone"
                                                   in self.solvers.factories else "relaxed")
-            outcome = self.solvers.solve(attempt, x0=x0, p=p, lbx=lbx, ubx=ubx,
+            outcome = self.solvers.solve(attempt, x0=step.x0, p=step.p, lbx=lbx, ubx=ubx,
                                          lbg=problem.lbg, ubg=problem.ubg, **duals)
-            elapsed += outcome.wall_time_s
-            cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
-            preparation += outcome.preparation_cpu_s
-            iterations += max(outcome.iterations, 0)
+            tally.relaxed, tally.outcome = relaxed, outcome
+            tally.elapsed += outcome.wall_time_s
+            tally.cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
+            tally.preparation += outcome.preparation_cpu_s
+            tally.iterations += max(outcome.iterations, 0)
             # a point the solver stopped at as acceptable, or at the end of its share of the
             # iteration budget, is used only when it keeps every constraint to the solver's
             # tolerance (never an infeasible iterate)
             out_of_budget = (s.iteration_budget is not None and not outcome.timed_out
                              and outcome.iterations >= self.attempt_iterations[attempt])
-            accepted = ((outcome.acceptable or out_of_budget)
-                        and bool(np.all(np.isfinite(outcome.x)) and np.all(np.isfinite(outcome.g)))
-                        and problem.violation(outcome.x, outcome.g, lbx, ubx) <= ACCEPTABLE_VIOLATION)
-            success = (outcome.success or accepted) and bool(np.all(np.isfinite(outcome.x)))
-            if success or outcome.timed_out:
-                timed_out = outcome.timed_out
+            tally.accepted = ((outcome.acceptable or out_of_budget)
+                              and bool(np.all(np.isfinite(outcome.x)) and np.all(np.isfinite(outcome.g)))
+                              and problem.violation(outcome.x, outcome.g, lbx, ubx) <= ACCEPTABLE_VIOLATION)
+            tally.success = (outcome.success or tally.accepted) and bool(np.all(np.isfinite(outcome.x)))
+            if tally.success or outcome.timed_out:
+                tally.timed_out = outcome.timed_out
                 break
+        outcome = tally.outcome
+        tally.status = outcome.status
+        if tally.accepted:
+            tally.status = "Solved_To_Acceptable_Level" if outcome.acceptable else "Iteration_Budget_Feasible_Point"
+        elif s.solver == "fatrop" and not tally.timed_out:  # fatrop reports an integer code
+            tally.status = "Solve_Succeeded" if outcome.success else f"fatrop_return_code_{tally.status}"
+        return tally
+
+    def _failed_solve(self, time_s: float, step: "_StepProblem", attempt: "_Attempts") -> NMPCSolution:
+        """No attempt gave a plan: the fallback, with what the last attempt left."""
+        outcome = attempt.outcome
         x_opt, g_opt = outcome.x, outcome.g
-        status = outcome.status
-        if accepted:
-            status = "Solved_To_Acceptable_Level" if outcome.acceptable else "Iteration_Budget_Feasible_Point"
-        elif s.solver == "fatrop" and not timed_out:  # fatrop reports an integer code
-            status = "Solve_Succeeded" if outcome.success else f"fatrop_return_code_{status}"
-        if not success:
-            finite = bool(np.all(np.isfinite(x_opt)) and np.all(np.isfinite(g_opt)) and np.isfinite(outcome.f))
-            violation = self.problem.violation(x_opt, g_opt, lbx, ubx) if finite else UNKNOWN
-            failed = self._fail(time_s, state, previous_tau, elapsed, iterations, status,
-                                outcome.f if finite else UNKNOWN, violation, timed_out, disturbance, report)
-            failed.solve_cpu_time_s, failed.preparation_cpu_s = cpu, preparation
-            # with an iteration budget, a relaxed attempt that ran out says nothing of the hard
-            # problem's feasibility, and the relaxed problem is the slower one: the next step
-            # tries the hard one first (solving the relaxed one alone after such a step failed
-            # twenty steps in a row, Imazu 14)
-            self.memory.clearance_relaxed = relaxed and s.iteration_budget is None
-            return failed
-        violation = self.problem.violation(x_opt, g_opt, lbx, ubx)
+        finite = bool(np.all(np.isfinite(x_opt)) and np.all(np.isfinite(g_opt)) and np.isfinite(outcome.f))
+        violation = self.problem.violation(x_opt, g_opt, step.lbx, step.ubx) if finite else UNKNOWN
+        failed = self._fail(time_s, step.state, step.previous_tau, attempt.elapsed, attempt.iterations,
+                            attempt.status, outcome.f if finite else UNKNOWN, violation, attempt.timed_out,
+                            step.disturbance, step.report)
+        failed.solve_cpu_time_s, failed.preparation_cpu_s = attempt.cpu, attempt.preparation
+        # with an iteration budget, a relaxed attempt that ran out says nothing of the hard
+        # problem's feasibility, and the relaxed problem is the slower one: the next step
+        # tries the hard one first (solving the relaxed one alone after such a step failed
+        # twenty steps in a row, Imazu 14)
+        self.memory.clearance_relaxed = attempt.relaxed and self.settings.iteration_budget is None
+        return failed
+
+    def _solved(self, time_s: float, step: "_StepProblem", attempt: "_Attempts") -> NMPCSolution:
+        """The plan of a successful attempt: applied, kept for the next warm start."""
+        problem, outcome = self.problem, attempt.outcome
+        x_opt = outcome.x
+        violation = problem.violation(x_opt, outcome.g, step.lbx, step.ubx)
         slack = float(np.max(x_opt[problem.sigma_index], initial=0.0))
         slack = slack if slack > SLACK_TOLERANCE else 0.0
         if slack > 0.0:
             LOG.warning("NMPC at t = %.1f s: collision clearance relaxed (slack %.3g): no plan keeps it",
                         time_s, slack)
-        states = self._from_scaled(x_opt[problem.z_index], origin)
+        states = self._from_scaled(x_opt[problem.z_index], step.origin)
         # the solver meets the bounds |w| <= 1 only to its tolerance: never apply more than tau_max
         inputs = np.clip(x_opt[problem.w_index], -1.0, 1.0) * self.input_scale
-        solution = NMPCSolution(inputs[0].copy(), states, inputs, elapsed, iterations, status, True, False,
-                                outcome.f, violation, slack, False, disturbance, report.class_codes,
-                                report.active)
-        solution.solve_cpu_time_s, solution.preparation_cpu_s = cpu, preparation
+        solution = NMPCSolution(inputs[0].copy(), states, inputs, attempt.elapsed, attempt.iterations,
+                                attempt.status, True, False, outcome.f, violation, slack, False, step.disturbance,
+                                step.report.class_codes, step.report.active)
+        solution.solve_cpu_time_s, solution.preparation_cpu_s = attempt.cpu, attempt.preparation
         self.memory.store(time_s, states, inputs, outcome.lam_x, outcome.lam_g)
         self.memory.clearance_relaxed = slack > 0.0
         if self.observer is not None:
@@ -408,18 +456,24 @@ class NMPCController:
         return solution
 
     def _bounds(self, state: np.ndarray, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds of the decision variables for a solve from ``state``: the fixed ones (inputs,
+        u >= 0, slacks >= 0) copied from templates built once, then the speed bound and the
+        initial state."""
         s = self.settings
         problem = self.problem
-        lbx = np.full(problem.size, -np.inf)
-        ubx = np.full(problem.size, np.inf)
-        lbx[problem.w_index.ravel()] = -1.0
-        ubx[problem.w_index.ravel()] = 1.0
-        lbx[problem.z_index[1:, 3]] = 0.0  # u >= 0: no sailing backwards
+        if self._bound_templates is None:
+            lbx = np.full(problem.size, -np.inf)
+            ubx = np.full(problem.size, np.inf)
+            lbx[problem.w_index.ravel()] = -1.0
+            ubx[problem.w_index.ravel()] = 1.0
+            lbx[problem.z_index[1:, 3]] = 0.0  # u >= 0: no sailing backwards
+            lbx[problem.sigma_index] = 0.0  # collision slacks
+            self._bound_templates = (lbx, ubx, np.arange(1, s.horizon_steps + 1))
+        lbx_template, ubx_template, k = self._bound_templates
+        lbx, ubx = lbx_template.copy(), ubx_template.copy()
         # u <= max speed; a ship measured faster may take its deceleration limit to get there
-        k = np.arange(1, s.horizon_steps + 1)
         u_max = np.maximum(s.max_speed_mps, state[3] - SLOW_DOWN_MPS2 * k * s.control_interval_s)
         ubx[problem.z_index[1:, 3]] = u_max / self.speed_scale
-        lbx[problem.sigma_index] = 0.0  # collision slacks
         z0 = self._to_scaled(state, origin)
         lbx[problem.z_index[0]] = z0
         ubx[problem.z_index[0]] = z0
@@ -432,7 +486,7 @@ class NMPCController:
         shifted = self.memory.shifted(time_s)
         if shifted is not None:
             states, inputs = shifted
-            z = (states - np.r_[origin, 0, 0, 0, 0]) / self.state_scale
+            z = (states - self._origin_shift(origin)) / self.state_scale
             w = inputs / self.input_scale
         else:
             z = ref_scaled.T.copy()
@@ -460,3 +514,34 @@ class NMPCController:
         LOG.info("NMPC solve at t = %.1f s failed (%s); fallback applied", time_s, status)
         return NMPCSolution(inputs[0].copy(), states, inputs, elapsed, iterations, status, False, True, cost,
                             violation, 0.0, timed_out, disturbance, report.class_codes, report.active)
+
+
+@dataclasses.dataclass
+class _StepProblem:
+    """One step's NLP as :meth:`NMPCController._prepare` set it up."""
+
+    state: np.ndarray  # measured [SI]
+    origin: np.ndarray  # north, east [m] the scaled positions are measured from
+    previous_tau: np.ndarray  # input applied over the last interval [SI]
+    disturbance: np.ndarray
+    report: DomainReport
+    p: np.ndarray  # the parameter vector
+    lbx: np.ndarray
+    ubx: np.ndarray
+    x0: np.ndarray  # warm start
+
+
+@dataclasses.dataclass
+class _Attempts:
+    """What the solve attempts of one step came to (:meth:`NMPCController._attempts`)."""
+
+    outcome: object = None  # the last attempt's SolveOutcome
+    relaxed: bool = False  # the last attempt was the relaxed problem
+    success: bool = False
+    accepted: bool = False  # an acceptable (or out-of-budget) point that keeps every constraint
+    timed_out: bool = False
+    status: str = ""
+    elapsed: float = 0.0  # wall time of the solver calls [s]
+    cpu: float = 0.0  # their processor time [s]
+    preparation: float = 0.0  # processor time of fresh solver objects [s]
+    iterations: int = 0

@@ -302,3 +302,36 @@ def test_unmapped_ports_keep_working(tmp_path):
     path.write_text(s175_scenario("u_kn = 18.0", mapping="", fmu='"k.fmu"'))
     ship = build(path)
     assert {"x", "psi", "tau_u", "wind_direction"} <= set(ship.output_names) | set(ship.input_names)
+
+
+VENDOR_B_MAPPING = """[participants.ship.mapping]
+x = { variable = "north_m", start = "north0_m" }
+y = "east_m"
+psi = { variable = "heading_deg", start = "heading0_deg" }
+u = { variable = "surge_speed_kn", start = "surge0_kn" }
+v = "sway_speed_kn"
+r = "yaw_rate_deg_s"
+tau_u = "thrust_kN"
+tau_r = "yaw_moment_kNm"
+"""
+
+
+def test_a_plant_of_one_variable_per_port_steps_as_the_bindings_convert(write_scenario):
+    """Where every port is one scaled variable the participant converts them in one loop: the
+    same doubles as each binding's own conversion, the heading wrapped, through a full turn."""
+    path = write_scenario(s175_scenario("psi_deg = 170.0\nu_kn = 18.0", mapping=VENDOR_B_MAPPING,
+                                        fmu='"KCSVendorB"'))
+    ships = [build(path), build(path)]
+    assert ships[0]._scalar_inputs is not None and ships[0]._scalar_outputs is not None
+    ships[1]._scalar_inputs = ships[1]._scalar_outputs = None  # each binding's own conversion
+    try:
+        outputs = [ship.setup(0.0, {}) for ship in ships]
+        assert outputs[0] == outputs[1]
+        for k in range(40):
+            inputs = {"tau_u": 7.7e5 + 1e3 * k, "tau_r": 3.0e8}
+            outputs = [ship.step(10.0 * k, 10.0, inputs) for ship in ships]
+            assert list(outputs[0].items()) == list(outputs[1].items())
+        assert all(-math.pi < psi <= math.pi for psi in (outputs[0]["psi"],))
+    finally:
+        for ship in ships:
+            ship.terminate()

@@ -188,3 +188,26 @@ def test_a_column_frame_answers_as_the_dataframe_it_stands_for(tmp_path):
     assert lazy.get("ship.z") is None and "ship.x" in lazy.columns
     with pytest.raises(KeyError):
         lazy["ship.z"]
+
+
+def test_outputs_that_change_kind_or_order_between_steps_are_recorded_by_name_as_floats():
+    """The columns of a participant's all-float outputs are named once; an output given as an
+    int, a numpy number or an array at a later step, or the ports in another order, is still
+    recorded under its own name as a float (cells by index)."""
+    steps = [
+        {"a": 1.0, "b": 2.0},
+        {"a": 3, "b": np.float64(4.5)},
+        {"b": 6.0, "a": 5.0},
+        {"a": np.array([7.0, 8.0]), "b": 9.0},
+        {"a": 10.0, "b": 11.0},
+    ]
+    recorder = Recorder(0.0, 1.0, len(steps))
+    for k, outputs in enumerate(steps):
+        recorder.add("p", float(k), outputs)
+        recorder.advance(float(k))
+    frame = recorder.to_frame()
+    assert list(frame.columns) == ["time_s", "p.a", "p.b", "p.a[0]", "p.a[1]"]
+    assert frame["p.a"].tolist() == [1.0, 3.0, 5.0, 5.0, 10.0]  # (the array's step keeps the last scalar)
+    assert frame["p.b"].tolist() == [2.0, 4.5, 6.0, 9.0, 11.0]
+    assert frame["p.a[1]"].iloc[3:].tolist() == [8.0, 8.0]
+    assert all(type(value) is float for row in recorder._rows for value in row)

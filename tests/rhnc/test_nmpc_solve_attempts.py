@@ -263,3 +263,31 @@ def test_with_a_budget_a_step_that_failed_in_the_relaxed_attempt_tries_the_hard_
     finally:
         log.detach()
         budgeted.solvers._solvers.update(real)
+
+
+def test_a_buffered_solver_call_gives_the_keyword_call_to_the_bit_with_the_defaults_of_inputs_not_given():
+    """The NLP solved through CasADi's argument buffers returns what the keyword call returns
+    (every output, the status and the iteration count), an input left out taking the solver's
+    default: here lbx = -inf lets the minimum lie at x = (-1, -2)."""
+    import casadi as ca
+
+    from rhnc.control.solver_watchdog import BufferedCall, _timed_call
+
+    x = ca.SX.sym("x", 2)
+    p = ca.SX.sym("p", 2)
+    nlp = {"x": x, "p": p, "f": ca.sumsqr(x - p) + 0.1 * x[0] ** 4, "g": x[0] + x[1]}
+    solver = ca.nlpsol("s", "ipopt", nlp, {"print_time": False, "ipopt": {"print_level": 0, "sb": "yes"}})
+    arguments = {"x0": np.array([0.5, 0.5]), "p": np.array([-1.0, -2.0]), "ubx": np.array([5.0, 5.0]),
+                 "lbg": np.array([-10.0]), "ubg": np.array([10.0])}
+    keyword = solver(**arguments)
+    stats = solver.stats()
+    call = BufferedCall.of(solver)
+    buffered = call(arguments)
+    for name in ("x", "g", "lam_x", "lam_g"):
+        np.testing.assert_array_equal(buffered[name], np.array(keyword[name]).ravel())
+    assert buffered["f"] == float(keyword["f"])
+    assert buffered["x"][1] < -1.5  # the default lower bound (-inf), not zero
+    assert call.stats()["iter_count"] == stats["iter_count"] and call.stats()["success"]
+    outcome = _timed_call(solver, arguments)
+    assert outcome.success and outcome.iterations == stats["iter_count"]
+    np.testing.assert_array_equal(outcome.x, np.array(keyword["x"]).ravel())
