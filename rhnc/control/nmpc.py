@@ -319,7 +319,7 @@ class NMPCController:
                                         np.inf if ceiling is None else ceiling)
         p = self.problem.parameters(ref_scaled, w_d, w_prev, P, disturbance, slots)
         lbx, ubx = self._bounds(state, origin)
-        self._rate_and_heading_bounds(lbx, ubx, time_s, state, ref_scaled, w_prev, report)
+        self._rate_and_heading_bounds(lbx, ubx, state, ref_scaled, w_prev, report, floor, ceiling)
         x0 = self._initial_guess(time_s, state, ref_scaled, w_d, origin, slots, disturbance)
         return _StepProblem(state, origin, previous_tau, disturbance, report, p, lbx, ubx, x0)
 
@@ -340,7 +340,7 @@ class NMPCController:
         reference[:, 3] = np.minimum(reference[:, 3], s.max_speed_mps)
         return reference, tau_d, disturbance
 
-    def _rate_and_heading_bounds(self, lbx, ubx, time_s, state, ref_scaled, w_prev, report) -> None:
+    def _rate_and_heading_bounds(self, lbx, ubx, state, ref_scaled, w_prev, report, floor, ceiling) -> None:
         """Narrow the bounds (in place) to the inputs the actuators can reach and the headings the
         rules allow."""
         s = self.settings
