@@ -94,6 +94,27 @@ SLOW_DOWN_MPS2 = 0.02
 UNKNOWN = -1.0
 
 
+def renew_every_solve(outcome) -> bool:
+    """A new solver object after every solve (with an iteration budget, see :func:`renew_rule`)."""
+    return True
+
+
+def renew_rule(solver: str, compiled: bool, iteration_budget: int | None):
+    """After which solves a solver gets a new object: None (never), or ``rule(outcome) -> bool``.
+
+    fatrop's objects keep data of their last solve (compiled: a new one costs about 1 ms;
+    interpreted, nlpsol derives the NLP's functions anew, about 0.5 s: never).  Without an
+    iteration budget, after a failed or long solve (:func:`renew_solver_after`); with one,
+    after every solve: an object kept over a run of short solves (<= 6 iterations each) ran
+    990 iterations, 1 s of processor time, on the next step of a drawn run despite its
+    iteration limit of 90, where a new object on the same arguments took 18 (replayed from
+    the recorded solver inputs).
+    """
+    if solver not in FRESH_SOLVER_PLUGINS or not compiled:
+        return None
+    return renew_solver_after if iteration_budget is None else renew_every_solve
+
+
 def reference_inputs(reference: np.ndarray, dt: float, params: ShipParameters) -> np.ndarray:
     """Feed-forward inputs tau_d (N, 2) [SI] for reference states (N+1, 6) spaced ``dt`` [s].
 
@@ -179,7 +200,7 @@ class NMPCController:
                 solvers["relaxed_alone"] = factories["relaxed_alone"]()
         # a new solver object after a difficult solve, where building one is cheap (compiled:
         # about 1 ms; interpreted, nlpsol derives the NLP's functions anew: about 0.5 s)
-        renew = renew_solver_after if s.solver in FRESH_SOLVER_PLUGINS and library.mode == "compiled" else None
+        renew = renew_rule(s.solver, library.mode == "compiled", budget)
         self.solvers = BoundedSolver(solvers, factories, s.wall_time_limit_s, s.cpu_time_limit_s, renew=renew)
         self.domains = CollisionDomains(s.domain_settings(), s.max_obstacles)
         self.observer = (DisturbanceObserver(params, self.state_scale, s.observer_gain)

@@ -8,7 +8,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from rhnc.control.nmpc import NMPCController, NMPCSettings
+from rhnc.control.nmpc import NMPCController, NMPCSettings, renew_rule
 from rhnc.control.nmpc_problem import renew_solver_after
 from rhnc.navigation.reference_participant import line_or_turn_reference
 from rhnc.ship.ship_model import load_parameter_set
@@ -287,3 +287,12 @@ def test_with_a_budget_a_step_after_a_failed_one_is_again_one_relaxed_attempt(bu
     finally:
         log.detach()
         budgeted.solvers._solvers.update(real)
+
+
+def test_with_a_budget_every_solve_gets_a_new_solver_object():
+    """A fatrop object kept over a run of short solves ran past its iteration limit (990 of
+    90 iterations) on the next step; with a budget, no object serves two solves."""
+    short = SimpleNamespace(success=True, iterations=3)
+    assert renew_rule("fatrop", True, 90)(short)
+    assert not renew_rule("fatrop", True, None)(short)   # without a budget (the paper's mode): unchanged
+    assert renew_rule("fatrop", False, 90) is None       # interpreted: a new object costs 0.5 s
