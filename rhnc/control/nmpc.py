@@ -95,6 +95,27 @@ SLOW_DOWN_MPS2 = 0.02
 UNKNOWN = -1.0
 
 
+def renew_every_solve(outcome) -> bool:
+    """A new solver object after every solve (with an iteration budget, see :func:`renew_rule`)."""
+    return True
+
+
+def renew_rule(solver: str, compiled: bool, iteration_budget: int | None):
+    """After which solves a solver gets a new object: None (never), or ``rule(outcome) -> bool``.
+
+    fatrop's objects keep data of their last solve (compiled: a new one costs about 1 ms;
+    interpreted, nlpsol derives the NLP's functions anew, about 0.5 s: never).  Without an
+    iteration budget, after a failed or long solve (:func:`renew_solver_after`); with one,
+    after every solve: an object kept over a run of short solves (<= 6 iterations each) ran
+    990 iterations, 1 s of processor time, on the next step of a drawn run despite its
+    iteration limit of 90, where a new object on the same arguments took 18 (replayed from
+    the recorded solver inputs).
+    """
+    if solver not in FRESH_SOLVER_PLUGINS or not compiled:
+        return None
+    return renew_solver_after if iteration_budget is None else renew_every_solve
+
+
 def reference_inputs(reference: np.ndarray, dt: float, params: ShipParameters) -> np.ndarray:
     """Feed-forward inputs tau_d (N, 2) [SI] for reference states (N+1, 6) spaced ``dt`` [s].
 
@@ -148,12 +169,14 @@ class NMPCController:
         library = self.library = NLPLibrary(self.problem.nlp, s.solver, options, s.codegen,
                                             self.problem.compact_nlp)
         # with an iteration budget, each attempt's solver gets its share as its iteration
-        # limit (the compiled library is the same: only the solver's options differ)
+        # limit (the compiled library is the same: only the solver's options differ); with
+        # slacks a step is one attempt, the relaxed problem, which gets the whole budget
+        # (see _attempt_order), without them the hard problem gets it
         budget = s.iteration_budget
         self.attempt_iterations = {"hard": s.max_iterations, "relaxed": s.max_iterations,
                                    "relaxed_alone": s.max_iterations}
         if budget is not None:
-            self.attempt_iterations = {"hard": budget // 2, "relaxed": budget - budget // 2, "relaxed_alone": budget}
+            self.attempt_iterations = {"hard": budget, "relaxed": budget, "relaxed_alone": budget}
 
         def factory(nlp_name: str, attempt: str):
             if budget is None:
@@ -178,7 +201,7 @@ class NMPCController:
                 solvers["relaxed_alone"] = factories["relaxed_alone"]()
         # a new solver object after a difficult solve, where building one is cheap (compiled:
         # about 1 ms; interpreted, nlpsol derives the NLP's functions anew: about 0.5 s)
-        renew = renew_solver_after if s.solver in FRESH_SOLVER_PLUGINS and library.mode == "compiled" else None
+        renew = renew_rule(s.solver, library.mode == "compiled", budget)
         self.solvers = BoundedSolver(solvers, factories, s.wall_time_limit_s, s.cpu_time_limit_s, renew=renew)
         self.domains = CollisionDomains(s.domain_settings(), s.max_obstacles)
         self.observer = (DisturbanceObserver(params, self.state_scale, s.observer_gain)
@@ -367,6 +390,7 @@ class NMPCController:
         After a step that found no plan keeping the clearance, the soft one alone: the hard
         problem is then most likely infeasible again, and failing it took up to 200 iterations
         (~100 ms); should it be feasible, the exact L1 penalty gives its plan (zero slack).
+        With an iteration budget, the relaxed one alone (the order: :meth:`_attempt_order`).
         """
         s = self.settings
         problem = self.problem
@@ -374,12 +398,7 @@ class NMPCController:
         duals = self.memory.dual_guess(time_s) if s.warm_start_duals else {}
         tally = _Attempts()
         budget = s.wall_time_limit_s
-        attempts = (False, True) if problem.sigma_index.size else (False,)
-        # a target inside its clearance and closing: the hard problem asks the range to
-        # open at once and is most likely infeasible; the relaxed one alone, as after a
-        # relaxed step
-        if (self.memory.clearance_relaxed or step.report.danger) and problem.sigma_index.size:
-            attempts = (True,)
+        attempts = self._attempt_order(step.report.danger)
         for relaxed in attempts:
             if relaxed and stop_requested():  # Ctrl-C aborted the first attempt: no second one
                 raise KeyboardInterrupt
@@ -454,6 +473,25 @@ class NMPCController:
         if self.observer is not None:
             self.observer.applied(solution.tau)
         return solution
+
+    def _attempt_order(self, danger: bool) -> tuple[bool, ...]:
+        """The attempts of a step, in order: False the hard problem, True the relaxed one.
+
+        Without an iteration budget, the hard problem first and the relaxed one when it
+        fails; the relaxed one alone after a step whose plan needed slack, or with a target
+        inside its clearance and closing (the hard problem then asks the range to open at
+        once and is most likely infeasible).  With a budget, the relaxed problem alone,
+        always: its L1 penalty is exact, so its plan is the hard problem's whenever that one
+        is feasible (zero slack), and one attempt with the whole budget never spends half
+        of it on a hard attempt that fails.  Split in two, the budget failed both attempts
+        of steps whose hard problem needed 50-95 iterations (Imazu 14: 45 + 45 iterations,
+        fallback; the hard problem alone solved in 57-65, the relaxed one in 60-70).
+        """
+        if not self.problem.sigma_index.size:
+            return (False,)
+        if self.settings.iteration_budget is not None or self.memory.clearance_relaxed or danger:
+            return (True,)
+        return (False, True)
 
     def _bounds(self, state: np.ndarray, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Bounds of the decision variables for a solve from ``state``: the fixed ones (inputs,

@@ -8,7 +8,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from rhnc.control.nmpc import NMPCController, NMPCSettings
+from rhnc.control.nmpc import NMPCController, NMPCSettings, renew_rule
 from rhnc.control.nmpc_problem import renew_solver_after
 from rhnc.navigation.reference_participant import line_or_turn_reference
 from rhnc.ship.ship_model import load_parameter_set
@@ -207,8 +207,32 @@ def budgeted(kcs):
                                             wall_time_limit_s=None, cpu_time_limit_s=None, iteration_budget=30))
 
 
-def test_the_iteration_budget_is_shared_by_the_attempts(budgeted):
-    assert budgeted.attempt_iterations == {"hard": 15, "relaxed": 15, "relaxed_alone": 30}
+def test_with_a_budget_each_step_is_one_attempt_with_the_whole_budget(budgeted):
+    assert budgeted.attempt_iterations["relaxed_alone"] == 30
+    state, reference_at = straight()
+    budgeted.reset()
+    log = CallLog(budgeted)
+    try:
+        budgeted.solve(0.0, state, reference_at(0.0))
+        assert log.names == ["relaxed_alone"]   # never half the budget on a hard attempt first
+    finally:
+        log.detach()
+
+
+def test_with_a_budget_a_feasible_step_plans_as_the_hard_problem(budgeted, controller):
+    """The relaxed problem's L1 penalty is exact: where the clearance can be kept, its plan
+    keeps it (no slack) and is the hard problem's plan."""
+    state, reference_at = straight()
+    course = state[2]
+    # an obstacle 3 km ahead on the track, radius 1 km: a turn keeps clear of it
+    ahead = np.array([[3000 * math.cos(course), 3000 * math.sin(course), 0.0, 0.0, 1000.0]])
+    budgeted.reset()
+    controller.reset()
+    relaxed = budgeted.solve(0.0, state, reference_at(0.0), ahead, et=True)
+    hard = controller.solve(0.0, state, reference_at(0.0), ahead, et=True)
+    assert relaxed.success and hard.success and hard.collision_slack == 0.0
+    assert relaxed.collision_slack == 0.0
+    assert np.max(np.hypot(*(relaxed.states[:, :2] - hard.states[:, :2]).T)) < 5.0   # metres
 
 
 @pytest.mark.parametrize("offset, used", [(0.0, True), (1e-3, False)])
@@ -247,19 +271,19 @@ def test_a_budget_outside_its_range_is_refused():
         NMPCSettings(iteration_budget=500)
 
 
-def test_with_a_budget_a_step_that_failed_in_the_relaxed_attempt_tries_the_hard_problem_next(budgeted):
+def test_with_a_budget_a_step_after_a_failed_one_is_again_one_relaxed_attempt(budgeted):
     state, reference_at = straight()
     budgeted.reset()
     real = dict(budgeted.solvers._solvers)
-    for name, solver in real.items():  # both attempts run out at an infeasible point
+    for name, solver in real.items():  # the attempt runs out at an infeasible point
         budgeted.solvers._solvers[name] = OutOfIterations(solver, 1e-3, budgeted.attempt_iterations[name])
     log = CallLog(budgeted)
     try:
         assert budgeted.solve(0.0, state, reference_at(0.0)).fallback
-        assert log.names == ["hard", "relaxed"]
+        assert log.names == ["relaxed_alone"]
         log.names.clear()
         budgeted.solve(DT, state, reference_at(DT))
-        assert log.names == ["hard", "relaxed"]  # not the relaxed problem alone
+        assert log.names == ["relaxed_alone"]
     finally:
         log.detach()
         budgeted.solvers._solvers.update(real)
@@ -291,3 +315,12 @@ def test_a_buffered_solver_call_gives_the_keyword_call_to_the_bit_with_the_defau
     outcome = _timed_call(solver, arguments)
     assert outcome.success and outcome.iterations == stats["iter_count"]
     np.testing.assert_array_equal(outcome.x, np.array(keyword["x"]).ravel())
+
+
+def test_with_a_budget_every_solve_gets_a_new_solver_object():
+    """A fatrop object kept over a run of short solves ran past its iteration limit (990 of
+    90 iterations) on the next step; with a budget, no object serves two solves."""
+    short = SimpleNamespace(success=True, iterations=3)
+    assert renew_rule("fatrop", True, 90)(short)
+    assert not renew_rule("fatrop", True, None)(short)   # without a budget (the paper's mode): unchanged
+    assert renew_rule("fatrop", False, 90) is None       # interpreted: a new object costs 0.5 s
