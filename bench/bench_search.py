@@ -8,7 +8,10 @@ it found none), at most ``baseline_budget``.  Prints per seed both counts and th
 (``> N``: none found within N evaluations), the lowest objective each reached, then the
 medians; ``--write FILE`` also writes the table as Markdown (docs/search-results.md).
 Searches already done in ``--results`` are read, not run again (searches resume), so an
-interrupted comparison goes on where it stopped.
+interrupted comparison goes on where it stopped; ``--as-run`` runs nothing and tables what
+the folders hold (a search stopped before its first loss or budget: ``> N, stopped``).
+``--searches FOLDER ...`` adds one line per other search folder (e.g. the search against
+today's controller): evaluations done, failures, the lowest objective.
 
     nice -n 10 python bench/bench_search.py bench/search_vs_random.toml --write docs/search-results.md
 """
@@ -62,11 +65,14 @@ class Count:
     """One sampler's search on one seed."""
 
     first_failure: int | None  # evaluation of the first failure (from 1), None: none within `budget`
-    budget: int
+    budget: int  # evaluations done when none was found
     lowest: float | None
+    stopped: bool = False  # stopped before its first failure or its budget (--as-run)
 
     def shown(self) -> str:
-        return f"> {self.budget}" if self.first_failure is None else str(self.first_failure)
+        if self.first_failure is not None:
+            return str(self.first_failure)
+        return f"> {self.budget}{', stopped' if self.stopped else ''}"
 
 
 def load_comparison(path: Path):
@@ -95,6 +101,37 @@ def count(search: Path, results: Path, sampler: str, seed: int, budget: int, fai
     return Count(report.first_failure, budget, report.best)
 
 
+def read_count(folder: Path, budget: int) -> Count | None:
+    """What a search folder holds (``search.json``, written when a search ends or is stopped), or None."""
+    import json
+
+    try:
+        saved = json.loads((folder / "search.json").read_text())
+    except (OSError, ValueError):
+        return None
+    done = int(saved.get("evaluations_done", 0))
+    first = saved.get("first_failure")
+    return Count(first, done if first is None else budget, saved.get("best"), first is None and done < budget)
+
+
+def search_line(folder: Path) -> str:
+    """One search's outcome: evaluations done, failures (by its threshold), the lowest objective, acceptance."""
+    import json
+
+    import pandas as pd
+
+    saved = json.loads((folder / "search.json").read_text())
+    table = pd.read_csv(folder / "summary.csv")
+    done = table[table["status"] != "not run"]
+    lowest = done["objective"].min()
+    worst = done.loc[done["objective"].idxmin(), "run_id"] if done["objective"].notna().any() else None
+    return (f"`{saved['search'].split('/')[-1]}` ({saved['sampler']}, seed {saved['seed']}): {len(done)} of "
+            f"{saved['evaluations']} evaluations run; {int(done['failure'].sum())} below {saved['fails_below']} "
+            f"(first: {saved.get('first_failure') or 'none'}); lowest {saved['objective'].split('.')[-1]} "
+            f"{lowest:.3f} (run {worst}); {int((~done['passed'].astype(bool)).sum())} not passing its acceptance "
+            f"criteria ({'; '.join(saved['acceptance'])}); {int(done['objective'].isna().sum())} without an objective")
+
+
 def ratio(optimiser: Count, baseline: Count) -> str:
     if optimiser.first_failure is None:
         return "-"
@@ -108,6 +145,8 @@ def main(argv=None) -> int:
     parser.add_argument("--results", default="results/bench_search", help="results folder")
     parser.add_argument("--seeds", type=int, nargs="+", default=None, help="only these of the file's seeds")
     parser.add_argument("--write", default=None, help="also write the table as Markdown to this file")
+    parser.add_argument("--as-run", action="store_true", help="run nothing: table what the results folders hold")
+    parser.add_argument("--searches", nargs="*", default=[], help="other search folders to add a line for")
     args = parser.parse_args(argv)
     from orchestrator.errors import ScenarioError
 
@@ -123,6 +162,9 @@ def main(argv=None) -> int:
         print(f"error: --seeds {unknown}: not among {path}'s seeds {table.seeds}", file=sys.stderr)
         return EXIT_BAD_INPUT
     opt, base = table.optimiser, table.baseline
+    from orchestrator.search_spec import load_search
+
+    name = load_search(search).name  # the folder each search writes under its --results
     header = (f"| seed | {opt}: evaluations to the first loss | {base}: evaluations to the first loss | ratio | "
               f"{opt}: lowest margin [nm] | {base}: lowest margin [nm] |")
     rows = [header, "|---:|---:|---:|---:|---:|---:|"]
@@ -132,12 +174,21 @@ def main(argv=None) -> int:
     counts = []
     try:
         for seed in seeds:
-            found = count(search, Path(args.results) / f"{opt}-seed{seed}", opt, seed, table.optimiser_budget,
-                          table.fails_below_nm, table.workers)
+            folders = [Path(args.results) / f"{sampler}-seed{seed}" for sampler in (opt, base)]
+            if args.as_run:
+                found = read_count(folders[0] / name, table.optimiser_budget)
+                if found is None:
+                    continue
+            else:
+                found = count(search, folders[0], opt, seed, table.optimiser_budget, table.fails_below_nm,
+                              table.workers)
             reach = found.first_failure or table.optimiser_budget
             budget = min(table.baseline_factor * reach, table.baseline_budget)
-            drawn = count(search, Path(args.results) / f"{base}-seed{seed}", base, seed, budget,
-                          table.fails_below_nm, table.workers)
+            if args.as_run:
+                drawn = (read_count(folders[1] / name, budget)
+                         or Count(None, 0, None, stopped=True))
+            else:
+                drawn = count(search, folders[1], base, seed, budget, table.fails_below_nm, table.workers)
             counts.append((seed, found, drawn))
             lows = ["none" if c.lowest is None else f"{c.lowest:.3f}" for c in (found, drawn)]
             row = f"| {seed} | {found.shown()} | {drawn.shown()} | {ratio(found, drawn)} | {lows[0]} | {lows[1]} |"
@@ -152,7 +203,8 @@ def main(argv=None) -> int:
     lines = [f"{opt} found a loss on {len(found_by)} of {len(counts)} seeds"
              + (f" (median {statistics.median(found_by):g} evaluations)" if found_by else ""),
              f"{base} needed at least {table.baseline_factor} times as many on {met} of {len(counts)} seeds"]
-    for line in lines:
+    others = [search_line(Path(folder)) for folder in args.searches]
+    for line in lines + others:
         print(line)
     if args.write:
         command = (f"nice -n 10 python bench/bench_search.py {args.comparison}"
@@ -162,6 +214,8 @@ def main(argv=None) -> int:
                 f"`{args.comparison}` (search file `{Path(table.search).as_posix().removeprefix('../')}`; a loss is a "
                 f"separation margin below {table.fails_below_nm} nm).  `> N`: none within N evaluations.", "",
                 *rows, "", *[f"- {line}" for line in lines], ""]
+        if others:
+            text += ["## Other searches", "", *[f"- {line}" for line in others], ""]
         Path(args.write).write_text("\n".join(text))
     return 0
 

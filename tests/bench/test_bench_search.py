@@ -63,3 +63,27 @@ def test_a_baseline_that_found_nothing_counts_as_its_budget_at_least(bench):
     assert bench.ratio(found, censored) == ">= 5.0" and censored.shown() == "> 50"
     assert bench.ratio(found, hit) == "3.0" and hit.shown() == "30"
     assert bench.ratio(bench.Count(None, 200, -0.1), hit) == "-"
+
+
+def test_as_run_tables_what_the_folders_hold_and_says_which_search_was_stopped(bench, tmp_path, capsys):
+    import json
+
+    path = tmp_path / "comparison.toml"
+    path.write_text(GOOD.replace("{search}", str(REPO / "batches" / "search_rhnc.toml")))
+    results = tmp_path / "results"
+
+    def saved(folder, first, done, best):
+        (results / folder / "search_rhnc_search").mkdir(parents=True)
+        (results / folder / "search_rhnc_search" / "search.json").write_text(
+            json.dumps({"first_failure": first, "evaluations_done": done, "best": best}))
+
+    saved("tpe-seed1", 12, 20, -0.7)      # found at 12: random may take up to 60
+    saved("random-seed1", None, 33, -0.3)  # nothing in 33, stopped before 60
+    saved("tpe-seed2", None, 200, -0.2)    # nothing in its whole budget
+    out = tmp_path / "table.md"
+    assert bench.main([str(path), "--results", str(results), "--as-run", "--write", str(out)]) == 0
+    rows = [line for line in out.read_text().splitlines() if line.startswith("| 1 ") or line.startswith("| 2 ")]
+    assert rows == ["| 1 | 12 | > 33, stopped | >= 2.8 | -0.700 | -0.300 |",
+                    "| 2 | > 200 | > 0, stopped | - | -0.200 | none |"]
+    assert "tpe found a loss on 1 of 2 seeds" in out.read_text()
+    assert "random needed at least 5 times as many on 0 of 2 seeds" in out.read_text()
