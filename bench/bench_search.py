@@ -145,6 +145,8 @@ def main(argv=None) -> int:
     parser.add_argument("--results", default="results/bench_search", help="results folder")
     parser.add_argument("--seeds", type=int, nargs="+", default=None, help="only these of the file's seeds")
     parser.add_argument("--write", default=None, help="also write the table as Markdown to this file")
+    parser.add_argument("--readme", default=None, help="replace the search summary between the markers "
+                        "<!-- search-summary:begin --> and <!-- search-summary:end --> of this file (README.md)")
     parser.add_argument("--as-run", action="store_true", help="run nothing: table what the results folders hold")
     parser.add_argument("--searches", nargs="*", default=[], help="other search folders to add a line for")
     args = parser.parse_args(argv)
@@ -156,6 +158,12 @@ def main(argv=None) -> int:
     except (ScenarioError, OSError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    if args.readme:
+        try:
+            replace_block(Path(args.readme), "search-summary", "", dry=True)
+        except (OSError, ValueError) as exc:
+            print(f"error: --readme {exc}", file=sys.stderr)
+            return EXIT_BAD_INPUT
     seeds = table.seeds if args.seeds is None else args.seeds
     unknown = [s for s in seeds if s not in table.seeds]
     if unknown:
@@ -217,7 +225,26 @@ def main(argv=None) -> int:
         if others:
             text += ["## Other searches", "", *[f"- {line}" for line in others], ""]
         Path(args.write).write_text("\n".join(text))
+    if args.readme:
+        verdict = ("met" if counts and met == len(counts) and len(counts) >= 3 else "**not met**")
+        block = [*rows, "", *[f"- {line}" for line in lines + others], "",
+                 f"**Goal** (the optimiser finds a loss within {table.optimiser_budget} evaluations where random "
+                 f"sampling needs at least {table.baseline_factor} times as many, on every seed of at least three): "
+                 f"{verdict} on the seeds run ({len(counts)} of {len(table.seeds)} declared)."]
+        replace_block(Path(args.readme), "search-summary", "\n".join(block))
     return 0
+
+
+def replace_block(path: Path, marker: str, body: str, dry: bool = False) -> None:
+    """Replace the text between ``<!-- marker:begin -->`` and ``<!-- marker:end -->`` in ``path``."""
+    text = path.read_text()
+    begin, end = f"<!-- {marker}:begin -->", f"<!-- {marker}:end -->"
+    head, found, rest = text.partition(begin)
+    _, found_end, tail = rest.partition(end)
+    if not found or not found_end:
+        raise ValueError(f"{path}: no {begin} ... {end} block to replace")
+    if not dry:
+        path.write_text(f"{head}{begin}\n{body}\n{end}{tail}")
 
 
 if __name__ == "__main__":

@@ -87,3 +87,20 @@ def test_as_run_tables_what_the_folders_hold_and_says_which_search_was_stopped(b
                     "| 2 | > 200 | > 0, stopped | - | -0.200 | none |"]
     assert "tpe found a loss on 1 of 2 seeds" in out.read_text()
     assert "random needed at least 5 times as many on 0 of 2 seeds" in out.read_text()
+
+
+def test_a_readme_without_the_summary_markers_is_refused_before_anything_runs(bench, tmp_path, capsys):
+    path = tmp_path / "comparison.toml"
+    path.write_text(GOOD.replace("{search}", str(REPO / "batches" / "search_rhnc.toml")))
+    readme = tmp_path / "README.md"
+    readme.write_text("# no markers\n")
+    assert bench.main([str(path), "--results", str(tmp_path / "results"), "--readme", str(readme)]) == 2
+    assert "no <!-- search-summary:begin -->" in capsys.readouterr().err
+    assert not (tmp_path / "results").exists() and readme.read_text() == "# no markers\n"
+
+
+def test_the_readme_block_is_replaced_between_its_markers(bench, tmp_path):
+    readme = tmp_path / "README.md"
+    readme.write_text("a\n<!-- search-summary:begin -->\nold\n<!-- search-summary:end -->\nb\n")
+    bench.replace_block(readme, "search-summary", "new")
+    assert readme.read_text() == "a\n<!-- search-summary:begin -->\nnew\n<!-- search-summary:end -->\nb\n"
