@@ -102,7 +102,8 @@ def make_sampler(kind: str, seed: int, evaluation: int):
 
 def run_search(path, results_root="results", workers: int | None = None, scheduler: str | None = None,
                progress: bool = True, tls: dict | None = None, evaluations: int | None = None,
-               sampler: str | None = None, seed: int | None = None, report: bool = True) -> SearchReport:
+               sampler: str | None = None, seed: int | None = None, report: bool = True,
+               fails_below: float | None = None, until_failure: bool = False) -> SearchReport:
     """Run (or resume, or extend) the search of the file ``path``.
 
     Parameters
@@ -113,8 +114,12 @@ def run_search(path, results_root="results", workers: int | None = None, schedul
         Results folder; the search writes ``results_root/<search name>/``.
     workers, scheduler, tls, progress
         As for :func:`orchestrator.batch.run_batch`.
-    evaluations, sampler, seed
-        Replace the file's budget, optimiser and seed.
+    evaluations, sampler, seed, fails_below
+        Replace the file's budget, optimiser, seed and failure threshold.
+    until_failure : bool
+        Stop after the round that holds the first failure (or at once when the journal holds
+        one): to count the evaluations a sampler needs to find a failure, not to spend the
+        rest of the budget.  The search is the same as without it up to that round.
     report : bool
         Write ``report.html`` at the end.
 
@@ -129,7 +134,7 @@ def run_search(path, results_root="results", workers: int | None = None, schedul
 
     started = wallclock.perf_counter()
     tls_files = check_scheduler(scheduler, **(tls or {})) if scheduler is not None or tls else None
-    spec = load_search(path, evaluations, sampler, seed)
+    spec = load_search(path, evaluations, sampler, seed, fails_below)
     _check_a_point(spec)
     root = Path(results_root) / spec.name
     (root / "runs").mkdir(parents=True, exist_ok=True)
@@ -152,7 +157,8 @@ def run_search(path, results_root="results", workers: int | None = None, schedul
                 study.add_trial(_frozen_trial(spec, root, entry))
                 if bar is not None:
                     bar.update(1)
-            while len(journal) < spec.evaluations and not interrupts.stop_requested():
+            found = until_failure and any(_failed(spec, root, entry["run_id"]) for entry in journal)
+            while len(journal) < spec.evaluations and not found and not interrupts.stop_requested():
                 size = min(spec.per_round, spec.evaluations - len(journal))
                 trials, entries = [], []
                 for _ in range(size):
@@ -172,6 +178,7 @@ def run_search(path, results_root="results", workers: int | None = None, schedul
                         study.tell(trial, state=optuna.trial.TrialState.FAIL)
                     else:
                         study.tell(trial, value)
+                    found = found or (until_failure and _failed(spec, root, entry["run_id"]))
         except KeyboardInterrupt:
             interrupted = True
             interrupts.acknowledge()
@@ -227,6 +234,16 @@ def _check_a_point(spec: SearchSpec) -> None:
 
 
 # -- evaluating -----------------------------------------------------------------------------------
+def _failed(spec: SearchSpec, root: Path, identifier: str) -> bool:
+    """The evaluation's run is a failure by the search's threshold, or by its ``[[acceptance]]`` without one."""
+    from orchestrator import acceptance
+
+    summary = read_summary(root / "runs" / identifier)
+    passed = (summary is not None and summary.get("status") == "finished"
+              and all(v.passed for v in acceptance.evaluate(spec.batch.acceptance, summary)))
+    return spec.is_failure(objective_of(spec, root, identifier), passed)
+
+
 def _done(root: Path, identifier: str) -> bool:
     summary = read_summary(root / "runs" / identifier)
     return summary is not None and not needs_redo(summary)

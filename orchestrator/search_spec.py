@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from dataclasses import dataclass
 from typing import Annotated, Any
 
@@ -116,8 +117,12 @@ def search_space(mc: MonteCarloSpec) -> dict[str, Any]:
 
 
 def load_search(path, evaluations: int | None = None, sampler: str | None = None,
-                seed: int | None = None) -> SearchSpec:
-    """Read and check a search file; ``evaluations``, ``sampler`` and ``seed`` replace the file's.
+                seed: int | None = None, fails_below: float | None = None) -> SearchSpec:
+    """Read and check a search file; ``evaluations``, ``sampler``, ``seed`` and ``fails_below`` replace the file's.
+
+    ``fails_below`` changes which runs count as failures, not what the optimiser is told
+    (it minimises the objective either way), so a search may be read again with another
+    threshold.
 
     Raises
     ------
@@ -147,8 +152,10 @@ def load_search(path, evaluations: int | None = None, sampler: str | None = None
         raise ScenarioError(f"--sampler must be one of {', '.join(SAMPLERS)}, got {sampler!r}")
     if seed is not None and seed < 0:
         raise ScenarioError(f"--seed must be >= 0, got {seed}")
+    if fails_below is not None and not math.isfinite(fails_below):
+        raise ScenarioError(f"--fails-below must be a finite number, got {fails_below}")
     return SearchSpec(batch=batch, name=table.name or f"{batch.name}_search", objective=table.objective,
-                      fails_below=table.fails_below,
+                      fails_below=fails_below if fails_below is not None else table.fails_below,
                       evaluations=evaluations if evaluations is not None else table.evaluations,
                       sampler=sampler or table.sampler,
                       seed=seed if seed is not None else table.seed if table.seed is not None

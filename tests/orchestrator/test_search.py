@@ -152,6 +152,30 @@ def test_search_is_seeded_and_a_resumed_search_equals_an_uninterrupted_one(searc
 
 
 @pytest.mark.slow
+def test_until_failure_stops_after_the_round_of_the_first_failure_and_a_threshold_only_relabels(search_file,
+                                                                                               tmp_path):
+    path = search_file()
+    whole = run_search(path, tmp_path / "whole", workers=1, progress=False, report=False)
+    every = _journal_values(tmp_path / "whole" / "small_search")
+    high, low = whole.table["objective"].max() + 1.0, whole.table["objective"].min() - 1.0
+    # every run below the threshold: the first round (3 evaluations) holds the first failure
+    stopped = run_search(path, tmp_path / "high", workers=1, progress=False, report=False, fails_below=high,
+                         until_failure=True)
+    assert len(stopped.table) == 3 and stopped.first_failure == 1 and stopped.failures == 3
+    assert _journal_values(tmp_path / "high" / "small_search") == every[:3]
+    again = run_search(path, tmp_path / "high", workers=1, progress=False, report=False, fails_below=high,
+                       until_failure=True)
+    assert again.evaluated == 0 and len(again.table) == 3  # the journal holds the failure: nothing more is asked
+    # no run below it: the whole budget, and the optimiser asked for the same runs (it minimises either way)
+    none = run_search(path, tmp_path / "low", workers=1, progress=False, report=False, fails_below=low,
+                      until_failure=True)
+    assert len(none.table) == 6 and none.failures == 0 and none.first_failure is None
+    assert _journal_values(tmp_path / "low" / "small_search") == every
+    saved = json.loads((tmp_path / "low" / "small_search" / "search.json").read_text())
+    assert saved["fails_below"] == low
+
+
+@pytest.mark.slow
 def test_tpe_concentrates_on_the_failures_that_random_sampling_finds_by_chance(search_file, tmp_path):
     # one number to search and a cheap run: after its 10 random start-up evaluations TPE
     # samples where the objective was lowest; random sampling keeps spreading evenly
@@ -187,6 +211,14 @@ def test_bad_search_files_are_refused_in_one_line_and_nothing_is_written(search_
     assert main(["search", str(path), "--results", str(tmp_path / "res"), "--no-progress"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and re.search(message, err), err
+    assert not (tmp_path / "res").exists()
+
+
+def test_a_threshold_that_is_not_a_number_is_refused_before_anything_is_written(search_file, tmp_path):
+    from orchestrator.errors import ScenarioError
+
+    with pytest.raises(ScenarioError, match="--fails-below must be a finite number, got nan"):
+        run_search(search_file(), tmp_path / "res", workers=1, progress=False, fails_below=float("nan"))
     assert not (tmp_path / "res").exists()
 
 
