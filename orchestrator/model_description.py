@@ -69,7 +69,7 @@ def to_fmi3(text: str, source_files: Sequence[str], version: str) -> str:
             root.set(key, old.get(key))
     _set_metadata(root, version)
     old_cosim = old.find("CoSimulation")
-    cosim = ET.SubElement(root, "CoSimulation", {"modelIdentifier": old_cosim.get("modelIdentifier")})
+    cosim = ET.SubElement(root, "CoSimulation", {"modelIdentifier": old_cosim.get("modelIdentifier", "")})
     for key, value in _COSIMULATION_FMI3.items():
         fmi2_key = key.replace("FMUState", "FMUstate")
         cosim.set(key, value if value is not None else old_cosim.get(fmi2_key, "false"))
@@ -117,8 +117,9 @@ def _variables_fmi3(old: ET.Element, root: ET.Element) -> list:
             ET.SubElement(variables, "Float64", attributes)
         elif string is not None:
             element = ET.SubElement(variables, "String", attributes)
-            if string.get("start") is not None:
-                ET.SubElement(element, "Start", {"value": string.get("start")})
+            start = string.get("start")
+            if start is not None:
+                ET.SubElement(element, "Start", {"value": start})
         else:
             raise ValueError(f"variable {scalar.get('name')}: only Real and String translate to FMI 3.0")
     return ordered
