@@ -251,4 +251,6 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("rhnc/voyage/equal_arrival.py", r"if any\(abs\(t\.speed_kn - guess\) < 1e-9",
      r"guess\) <= 1e-9",
      "differs only for a guess exactly 1e-9 kn from a tried speed, the threshold's own value"),
+    ("orchestrator/toml_input.py", r'line = text\.count\("\\n", 0, deep\.start\(\)\) \+ 1', r'text\.count\("\\n", None, ',
+     "str.count with start None counts from the start of the text, as with 0"),
 ]

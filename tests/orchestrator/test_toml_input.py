@@ -194,3 +194,8 @@ def test_a_pair_in_nm_may_lie_at_the_bound_and_a_pair_beyond_it_is_quoted():
     assert Table.model_validate({"at_nm": [bound, -bound]}).at_nm == (bound, -bound)
     with pytest.raises(ScenarioError, match=r"got \[1e\+?0?9, 0\.0\]$|got \[1000000000\.0, 0\.0\]$"):
         toml_input.checked(Table, {"at_nm": [1e9, 0.0]}, "f.toml")
+
+
+def test_a_distance_exactly_at_the_bound_is_taken():
+    bound = toml_input.MAX_DISTANCE_NM
+    toml_input.check_distances_nm({"goal_nm": [bound, -bound]}, "f.toml", "")
