@@ -82,7 +82,7 @@ def read_summary(folder: Path) -> dict | None:
 
 
 # -- the work of one run (in a worker) -----------------------------------------------------------
-def execute_run(task: RunTask) -> dict[str, str]:
+def execute_run(task: RunTask) -> dict[str, Any]:
     """Run one run into ``<batch_root>/runs/<run_id>/``; returns its status and reason.
 
     A scenario that cannot start (:class:`ToolchainError`, or a participant raising while
@@ -153,7 +153,7 @@ def write_failure(batch_root: Path, task: RunTask, reason: str, status: str = "f
     return folder.publish()
 
 
-def pool_execute(task: RunTask) -> dict[str, str]:
+def pool_execute(task: RunTask) -> dict[str, Any]:
     # a running run stops on Ctrl-C as a single run does (status interrupted, folder kept)
     with interrupts.handle_signals():
         return execute_run(task)

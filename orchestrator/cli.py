@@ -34,6 +34,15 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
     sub = parser.add_subparsers(dest="command", required=True)
+    _add_scenario_commands(sub)
+    _add_batch_commands(sub)
+    for name, command in _plugin_commands().items():
+        command.add_arguments(sub.add_parser(name, help=command.help))
+    return parser
+
+
+def _add_scenario_commands(sub) -> None:
+    """The commands on one scenario or comparison: run, validate, build, compare, export, check."""
     run = sub.add_parser("run", help="run a scenario and write results/<scenario>/<run-id>/")
     run.add_argument("scenario", help="scenario TOML file")
     run.add_argument("--results", default="results", help="results folder (default: ./results)")
@@ -66,15 +75,14 @@ def _parser() -> argparse.ArgumentParser:
     check.add_argument("--participant", default=None,
                        help="the participant a single FMPy CSV file belongs to (default: the file's name)")
     check.add_argument("--summary", default=None, metavar="FILE", help="also write the summary as JSON")
+
+
+def _add_batch_commands(sub) -> None:
+    """The commands on many runs: batch, search, report."""
     batch = sub.add_parser("batch", help="run a batch of scenario variations into results/<batch>/ (resumable)")
     batch.add_argument("batch", help="batch TOML file")
-    batch.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
-    batch.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                       help="run on a Dask distributed cluster, tcp://host:8786 or tls://host:8786 (instead of the "
-                            "local pool; docs/batch.md)")
-    batch.add_argument("--tls-ca", default=None, metavar="FILE", help="tls:// scheduler: the cluster's CA certificate")
-    batch.add_argument("--tls-cert", default=None, metavar="FILE", help="tls:// scheduler: this client's certificate")
-    batch.add_argument("--tls-key", default=None, metavar="FILE", help="tls:// scheduler: this client's private key")
+    _add_pool_arguments(batch, "run on a Dask distributed cluster, tcp://host:8786 or tls://host:8786 (instead of "
+                               "the local pool; docs/batch.md)")
     batch.add_argument("--results", default="results", help="results folder (default: ./results)")
     batch.add_argument("--retry-failed", action="store_true", help="redo runs recorded as failed")
     batch.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -84,18 +92,20 @@ def _parser() -> argparse.ArgumentParser:
     search.add_argument("--evaluations", type=int, default=None, help="budget (default: the file's)")
     search.add_argument("--sampler", default=None, help="tpe, cmaes or random (default: the file's)")
     search.add_argument("--seed", type=int, default=None, help="the optimiser's seed (default: the file's)")
-    search.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
-    search.add_argument("--scheduler", default=None, metavar="ADDRESS", help="a Dask scheduler, as for batch")
-    search.add_argument("--tls-ca", default=None, metavar="FILE", help="tls:// scheduler: the cluster's CA certificate")
-    search.add_argument("--tls-cert", default=None, metavar="FILE", help="tls:// scheduler: this client's certificate")
-    search.add_argument("--tls-key", default=None, metavar="FILE", help="tls:// scheduler: this client's private key")
+    _add_pool_arguments(search, "a Dask scheduler, as for batch")
     search.add_argument("--results", default="results", help="results folder (default: ./results)")
     search.add_argument("--no-progress", action="store_true", help="no progress bar")
     report = sub.add_parser("report", help="write report.html (a static page) for a batch or search results folder")
     report.add_argument("folder", help="results/<batch> or results/<search>")
-    for name, command in _plugin_commands().items():
-        command.add_arguments(sub.add_parser(name, help=command.help))
-    return parser
+
+
+def _add_pool_arguments(command, scheduler_help: str) -> None:
+    """Where a batch or search runs: local workers or a Dask scheduler, with its TLS files."""
+    command.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
+    command.add_argument("--scheduler", default=None, metavar="ADDRESS", help=scheduler_help)
+    command.add_argument("--tls-ca", default=None, metavar="FILE", help="tls:// scheduler: the cluster's CA certificate")
+    command.add_argument("--tls-cert", default=None, metavar="FILE", help="tls:// scheduler: this client's certificate")
+    command.add_argument("--tls-key", default=None, metavar="FILE", help="tls:// scheduler: this client's private key")
 
 
 def main(argv=None) -> int:

@@ -167,8 +167,6 @@ def build_fmu(name: str, out_dir: Path | None = None, models_dir: Path | None = 
         Unknown model name, unreadable parameter set, or a compilation error (the message
         names the model and the compiler's first error line).
     """
-    from fmpy import platform, platform_tuple, sharedLibraryExtension
-
     from orchestrator import model_description
 
     models_dir = _models_dir(models_dir)
@@ -204,40 +202,56 @@ def build_fmu(name: str, out_dir: Path | None = None, models_dir: Path | None = 
             headers.append(model_header)
         bounds = tmp / BOUNDS_HEADER
         bounds.write_text(bounds_text, encoding="utf-8")
-        library = tmp / f"{name}{sharedLibraryExtension}"
-        command = [
-            _compiler(), "-O2", "-shared", "-fPIC", "-fvisibility=hidden", "-Wall",
-            f"-I{tmp}", f"-I{model_dir}", f"-I{models_dir / COMMON}", f"-I{_fmi_headers()}",
-            *[str(p) for p in sources if p.suffix == ".c"],
-            "-o", str(library), "-lm",
-        ]
-        log.info("building %s: %s", name, " ".join(command))
-        result = subprocess.run(command, capture_output=True, text=True)
-        if result.returncode != 0:
-            raise FmuError(f"building model {name} failed: {_first_error(result.stderr)}")
-        if result.stderr.strip():
-            log.warning("compiler warnings for %s:\n%s", name, result.stderr.strip())
-
-        # a staging file per process: two runs building the same FMU at once never mix files
-        partial = fmu.parent / f".{name}.fmu.{os.getpid()}.partial"
-        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
-            z.writestr("modelDescription.xml", description)
-            binary_folder = platform if fmi_version == "2.0" else platform_tuple
-            z.write(library, f"binaries/{binary_folder}/{library.name}")
-            names = set()
-            for path in [*sources, *headers, bounds]:
-                if path.name in names:
-                    raise FmuError(f"building model {name} failed: two sources named {path.name}")
-                names.add(path.name)
-                z.write(path, f"sources/{path.name}")
-            for file_name, text in extra_sources.items():
-                z.writestr(f"sources/{file_name}", text)
-            for path in _resources(name, models_dir):
-                z.write(path, f"resources/{path.relative_to(model_dir / RESOURCES).as_posix()}")
-            z.comment = (HASH_PREFIX + digest).encode()
-        partial.replace(fmu)
+        library = _compile(name, tmp, model_dir, models_dir, sources)
+        _pack(fmu, name, fmi_version, description, library, [*sources, *headers, bounds], extra_sources,
+              model_dir, models_dir, digest)
     log.info("built %s", fmu)
     return fmu
+
+
+def _compile(name: str, tmp: Path, model_dir: Path, models_dir: Path, sources: list[Path]) -> Path:
+    """Compile the model's C sources (headers in ``tmp``) into a shared library in ``tmp``."""
+    from fmpy import sharedLibraryExtension
+
+    library = tmp / f"{name}{sharedLibraryExtension}"
+    command = [
+        _compiler(), "-O2", "-shared", "-fPIC", "-fvisibility=hidden", "-Wall",
+        f"-I{tmp}", f"-I{model_dir}", f"-I{models_dir / COMMON}", f"-I{_fmi_headers()}",
+        *[str(p) for p in sources if p.suffix == ".c"],
+        "-o", str(library), "-lm",
+    ]
+    log.info("building %s: %s", name, " ".join(command))
+    result = subprocess.run(command, capture_output=True, text=True)
+    if result.returncode != 0:
+        raise FmuError(f"building model {name} failed: {_first_error(result.stderr)}")
+    if result.stderr.strip():
+        log.warning("compiler warnings for %s:\n%s", name, result.stderr.strip())
+    return library
+
+
+def _pack(fmu: Path, name: str, fmi_version: str, description: str, library: Path, files: list[Path],
+          extra_sources: dict[str, str], model_dir: Path, models_dir: Path, digest: str) -> None:
+    """Zip the description, the library, the sources and the resources into ``fmu``, atomically."""
+    from fmpy import platform, platform_tuple
+
+    # a staging file per process: two runs building the same FMU at once never mix files
+    partial = fmu.parent / f".{name}.fmu.{os.getpid()}.partial"
+    with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("modelDescription.xml", description)
+        binary_folder = platform if fmi_version == "2.0" else platform_tuple
+        z.write(library, f"binaries/{binary_folder}/{library.name}")
+        names = set()
+        for path in files:
+            if path.name in names:
+                raise FmuError(f"building model {name} failed: two sources named {path.name}")
+            names.add(path.name)
+            z.write(path, f"sources/{path.name}")
+        for file_name, text in extra_sources.items():
+            z.writestr(f"sources/{file_name}", text)
+        for path in _resources(name, models_dir):
+            z.write(path, f"resources/{path.relative_to(model_dir / RESOURCES).as_posix()}")
+        z.comment = (HASH_PREFIX + digest).encode()
+    partial.replace(fmu)
 
 
 def _stored_hash(fmu: Path) -> str | None:

@@ -69,13 +69,25 @@ def to_fmi3(text: str, source_files: Sequence[str], version: str) -> str:
             root.set(key, old.get(key))
     _set_metadata(root, version)
     old_cosim = old.find("CoSimulation")
-    cosim = ET.SubElement(root, "CoSimulation", {"modelIdentifier": old_cosim.get("modelIdentifier")})
+    cosim = ET.SubElement(root, "CoSimulation", {"modelIdentifier": old_cosim.get("modelIdentifier", "")})
     for key, value in _COSIMULATION_FMI3.items():
         fmi2_key = key.replace("FMUState", "FMUstate")
         cosim.set(key, value if value is not None else old_cosim.get(fmi2_key, "false"))
     units = old.find("UnitDefinitions")
     if units is not None:
         root.append(units)
+    _types_fmi3(old, root)
+    for name in ("LogCategories", "DefaultExperiment"):
+        element = old.find(name)
+        if element is not None:
+            root.append(element)
+    ordered = _variables_fmi3(old, root)
+    _structure_fmi3(old, root, ordered)
+    return _serialise(root)
+
+
+def _types_fmi3(old: ET.Element, root: ET.Element) -> None:
+    """The FMI 2.0 Real types as FMI 3.0 Float64Type definitions."""
     types = old.find("TypeDefinitions")
     if types is not None:
         new_types = ET.SubElement(root, "TypeDefinitions")
@@ -86,10 +98,10 @@ def to_fmi3(text: str, source_files: Sequence[str], version: str) -> str:
             attributes = {"name": simple.get("name")}
             attributes.update({k: v for k, v in real.attrib.items() if k in _REAL_ATTRIBUTES})
             ET.SubElement(new_types, "Float64Type", attributes)
-    for name in ("LogCategories", "DefaultExperiment"):
-        element = old.find(name)
-        if element is not None:
-            root.append(element)
+
+
+def _variables_fmi3(old: ET.Element, root: ET.Element) -> list:
+    """The variables in FMI 3.0 form (time first); returns the value references in FMI 2.0 index order."""
     variables = ET.SubElement(root, "ModelVariables")
     ET.SubElement(variables, "Float64", {"name": "time", "valueReference": str(FMI3_TIME_VR),
                                          "causality": "independent", "variability": "continuous",
@@ -105,10 +117,16 @@ def to_fmi3(text: str, source_files: Sequence[str], version: str) -> str:
             ET.SubElement(variables, "Float64", attributes)
         elif string is not None:
             element = ET.SubElement(variables, "String", attributes)
-            if string.get("start") is not None:
-                ET.SubElement(element, "Start", {"value": string.get("start")})
+            start = string.get("start")
+            if start is not None:
+                ET.SubElement(element, "Start", {"value": start})
         else:
             raise ValueError(f"variable {scalar.get('name')}: only Real and String translate to FMI 3.0")
+    return ordered
+
+
+def _structure_fmi3(old: ET.Element, root: ET.Element, ordered: list) -> None:
+    """Outputs and initial unknowns, FMI 2.0 indices turned into value references."""
     structure = ET.SubElement(root, "ModelStructure")
     old_structure = old.find("ModelStructure")
     for section, tag in (("Outputs", "Output"), ("InitialUnknowns", "InitialUnknown")):
@@ -119,7 +137,6 @@ def to_fmi3(text: str, source_files: Sequence[str], version: str) -> str:
             if dependencies is not None:
                 attributes["dependencies"] = " ".join(ordered[int(i) - 1] for i in dependencies.split())
             ET.SubElement(structure, tag, attributes)
-    return _serialise(root)
 
 
 def build_description_fmi3(model_identifier: str, source_files: Sequence[str]) -> str:

@@ -78,29 +78,7 @@ def export_osp_system(scenario_path, out_dir) -> Path:
             for entries in exported_layout(fmu).values():
                 for entry in entries:
                     shapes[(spec.name, entry["port"])] = entry["shape"]
-        root = ET.Element("OspSystemStructure", {"xmlns": NAMESPACE, "version": "0.1"})
-        ET.SubElement(root, "StartTime").text = repr(scenario.simulation.start_s)
-        ET.SubElement(root, "BaseStepSize").text = repr(scenario.simulation.dt_s)
-        ET.SubElement(root, "Algorithm").text = "fixedStep"
-        simulators = ET.SubElement(root, "Simulators")
-        for spec in scenario.participants:
-            element = ET.SubElement(simulators, "Simulator", {
-                "name": spec.name, "source": f"{spec.name}.fmu",
-                "stepSize": repr(spec.every * scenario.simulation.dt_s)})
-            if spec.name in fmus:
-                _initial_values(element, fmus[spec.name][1], grid, out_dir)
-        connections = ET.SubElement(root, "Connections")
-        for connection in scenario.connections:
-            source = (connection.source, connection.source_port)
-            target = (connection.target, connection.target_port)
-            shape = shapes.get(source, shapes.get(target))
-            if shape is None or (target in shapes and shapes[target] != shape):
-                raise ScenarioError(f"{scenario_path}: connection '{connection}' joins ports of unknown "
-                                    "or different sizes")
-            for suffix in _element_suffixes(shape):
-                pair = ET.SubElement(connections, "VariableConnection")
-                ET.SubElement(pair, "Variable", {"simulator": source[0], "name": source[1] + suffix})
-                ET.SubElement(pair, "Variable", {"simulator": target[0], "name": target[1] + suffix})
+        root = _system_structure(scenario, scenario_path, fmus, shapes, grid, out_dir)
         ET.indent(root)
         if scenario.acceptance:  # the criteria travel with the system: python -m orchestrator check ... --scenario
             shutil.copyfile(scenario_path, out_dir / SCENARIO_COPY)
@@ -109,6 +87,35 @@ def export_osp_system(scenario_path, out_dir) -> Path:
         return config
     finally:
         cosim.close()
+
+
+def _system_structure(scenario, scenario_path: Path, fmus: dict, shapes: dict[tuple[str, str], list[int]], grid: Path,
+                      out_dir: Path) -> ET.Element:
+    """``OspSystemStructure``: the time grid, one simulator per participant, a connection per element."""
+    root = ET.Element("OspSystemStructure", {"xmlns": NAMESPACE, "version": "0.1"})
+    ET.SubElement(root, "StartTime").text = repr(scenario.simulation.start_s)
+    ET.SubElement(root, "BaseStepSize").text = repr(scenario.simulation.dt_s)
+    ET.SubElement(root, "Algorithm").text = "fixedStep"
+    simulators = ET.SubElement(root, "Simulators")
+    for spec in scenario.participants:
+        element = ET.SubElement(simulators, "Simulator", {
+            "name": spec.name, "source": f"{spec.name}.fmu",
+            "stepSize": repr(spec.every * scenario.simulation.dt_s)})
+        if spec.name in fmus:
+            _initial_values(element, fmus[spec.name][1], grid, out_dir)
+    connections = ET.SubElement(root, "Connections")
+    for connection in scenario.connections:
+        source = (connection.source, connection.source_port)
+        target = (connection.target, connection.target_port)
+        shape = shapes.get(source, shapes.get(target))
+        if shape is None or (target in shapes and shapes[target] != shape):
+            raise ScenarioError(f"{scenario_path}: connection '{connection}' joins ports of unknown "
+                                "or different sizes")
+        for suffix in _element_suffixes(shape):
+            pair = ET.SubElement(connections, "VariableConnection")
+            ET.SubElement(pair, "Variable", {"simulator": source[0], "name": source[1] + suffix})
+            ET.SubElement(pair, "Variable", {"simulator": target[0], "name": target[1] + suffix})
+    return root
 
 
 def _copy_with_resources(source: Path, target: Path, extra: dict[str, Path]) -> None:

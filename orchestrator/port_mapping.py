@@ -258,7 +258,7 @@ def bind_ports(spec: ParticipantSpec, variables: Mapping[str, object], model_des
             continue
         if variable.causality not in ("input", "output"):
             continue
-        entry = VariableMapping(variable.name)
+        entry = VariableMapping(variable=variable.name)
         scale, offset = scalar_conversion(variable.name, entry, variable, model_description,
                                           f"{where}: FMU variable '{variable.name}'")
         binding = ScalarBinding(variable.name, variable.name, scale, offset,
@@ -280,7 +280,7 @@ def _vector_binding(name: str, entry: VectorMapping, take, model_description, ke
     names, conversions = [], []
     for role, variable_name, like in parts:
         variable = take(f"{name}.{role}", variable_name, "input")
-        sub = VariableMapping(variable_name, unit=entry.units.get(role))
+        sub = VariableMapping(variable=variable_name, unit=entry.units.get(role))
         conversions.append(scalar_conversion(like, sub, variable, model_description, f"{key}.{role}"))
         names.append(variable_name)
     return VectorBinding(tuple(ports), canonical_form, tuple(names), fmu_form, tuple(conversions))
@@ -317,7 +317,7 @@ def initial_start_values(spec: ParticipantSpec, outputs: list, variables: Mappin
     geodetic = next((b for b in outputs if isinstance(b, GeodeticBinding)), None)
     for port, value in canonical.items():
         entry = spec.mapping.get(port)
-        entry = entry if isinstance(entry, VariableMapping) else VariableMapping(port)
+        entry = entry if isinstance(entry, VariableMapping) else VariableMapping(variable=port)
         name = entry.start or f"{port}0"
         parameter = variables.get(name)
         key = f"{where}.initial: '{port}'"

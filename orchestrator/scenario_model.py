@@ -16,8 +16,8 @@ from typing import Annotated, Any
 from pydantic import PlainValidator, model_validator
 
 from orchestrator.errors import ScenarioError
-from orchestrator.scenario_participants import ScenarioTable, participant_specs
-from orchestrator.scenario_spec import Connection, OutputSpec, SimulationSpec, StopCondition
+from orchestrator.scenario_participants import participant_specs
+from orchestrator.scenario_spec import Connection, OutputSpec, ScenarioTable, SimulationSpec, StopCondition
 from orchestrator.toml_input import (FolderName, Positive, PositiveInt, check_distances_nm, checked,
                                      default_folder_name, fail, fail_whole, is_finite_number, one_of, shown,
                                      shown_text)
@@ -27,7 +27,6 @@ from orchestrator.toml_input import (FolderName, Positive, PositiveInt, check_di
 #: before the point ("jacobi", as masters that step FMUs in parallel do, e.g. libcosim).
 EXCHANGE_ORDERS = ("gauss-seidel", "jacobi")
 STOP_OPERATORS = ("<=", ">=", "<", ">")
-OUTPUT_FORMATS = ("parquet", "csv")
 #: Most macro steps of one run: a run records every step (an hour at 5 ms, 11.5 days at 1 s).
 MAX_STEPS = 1_000_000
 #: Largest start or stop time [s] (about 317 years): keeps time arithmetic far from overflow.
@@ -42,12 +41,6 @@ def _time(value: Any) -> float:
     if abs(value) > MAX_TIME_S:
         raise fail(f"must lie within +-{MAX_TIME_S:g} s, got {shown(value)}")
     return float(value)
-
-
-def _names(value: Any) -> tuple[str, ...]:
-    if not isinstance(value, list) or not all(isinstance(v, str) and v for v in value):
-        raise fail("must be a list of names")
-    return tuple(value)
 
 
 def _stop_conditions(entries: Any) -> tuple[StopCondition, ...]:
@@ -154,35 +147,6 @@ class SimulationTable(ScenarioTable):
                               step_timeout_s=self.step_timeout_s)
 
 
-class OutputsTable(ScenarioTable):
-    """``[outputs]``: file format, analyses, figures and the analyses' options."""
-
-    format: Annotated[str, one_of(OUTPUT_FORMATS)] = "parquet"
-    analyses: Annotated[tuple[str, ...], PlainValidator(_names)] = ()
-    figures: Annotated[tuple[str, ...], PlainValidator(_names)] = ("track",)
-    options: Annotated[dict, PlainValidator(lambda v: _analysis_options(v))] = {}
-
-    @model_validator(mode="after")
-    def _options_for_listed(self):
-        for name in self.options:
-            if name not in self.analyses:
-                raise fail_whole(f"'{{prefix}}options.{shown_text(name)}' is for an analysis not listed in "
-                                 "'{prefix}analyses'")
-        return self
-
-    def spec(self) -> OutputSpec:
-        return OutputSpec(format=self.format, analyses=self.analyses, figures=self.figures, options=self.options)
-
-
-def _analysis_options(value: Any) -> dict:
-    if not isinstance(value, dict):
-        raise fail("must be a table of [outputs.options.<analysis>] tables")
-    for name, values in value.items():
-        if not isinstance(values, dict):
-            raise fail(f"entry '{shown_text(name)}' must be a table")
-    return value
-
-
 # -- the whole file ------------------------------------------------------------------------------
 def build_scenario_parts(data: dict, where: str, default_name: str):
     """Check a parsed scenario; return its simulation, participants, connections, metocean, outputs.
@@ -200,7 +164,7 @@ def build_scenario_parts(data: dict, where: str, default_name: str):
         check_distances_nm(spec.options, where, f"participants.{spec.name}.options")
     check_distances_nm(top.metocean or {}, where, "metocean")
     connections = _connections(top.connections, participants, where)
-    outputs = checked(OutputsTable, top.outputs or {}, where, ("outputs",)).spec()
+    outputs = checked(OutputSpec, top.outputs or {}, where, ("outputs",))
     return simulation, participants, connections, top.metocean, outputs, top.acceptance
 
 

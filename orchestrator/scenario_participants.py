@@ -14,33 +14,23 @@ from typing import Annotated, Any
 from pydantic import Field, PlainValidator, model_validator
 
 from orchestrator.errors import ScenarioError
-from orchestrator.scenario_spec import ParticipantSpec, VariableMapping, VectorMapping
-from orchestrator.toml_input import (Finite, Positive, Text, TomlTable, checked, fail, fail_whole, is_finite_number, one_of,
+from orchestrator.scenario_spec import ParticipantSpec, ScenarioTable, VariableMapping, VectorMapping
+from orchestrator.toml_input import (Positive, Text, checked, fail, fail_whole, is_finite_number, one_of,
                                      shown, shown_text)
 
-GEODETIC_ROLES = ("latitude", "longitude")
 #: Earth models of a geodetic mapping: the WGS84 ellipsoid, or a sphere (``sphere_radius_m``)
 EARTH_MODELS = ("wgs84", "sphere")
 #: IUGG mean earth radius [m], the sphere's radius unless the mapping gives the plant's own
 MEAN_EARTH_RADIUS_M = 6371008.8
-DIRECTION_SENSES = ("towards", "from")
 FMI_VERSIONS = ("2.0", "3.0")
 #: Largest ``every``: a participant steps at least once in this many macro steps (the step limit).
 MAX_EVERY = 1_000_000
-CONNECTIONS_HINT = " ('connections' must come before the first [table] of the file)"
 
 
 def _every(value: Any) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_EVERY:
         raise fail(f"must be a positive integer (at most {MAX_EVERY}), got {shown(value)}")
     return value
-
-
-class ScenarioTable(TomlTable):
-    """A table of a scenario file: a key that belongs at the top gets a hint (a TOML key after a
-    ``[table]`` header lands in that table)."""
-
-    key_hints = {"connections": CONNECTIONS_HINT}
 
 
 def _class_path(value: Any) -> str:
@@ -141,60 +131,6 @@ def _fmu(value: Any) -> str:
     return value
 
 
-def _scale(value: Any) -> float:
-    if not is_finite_number(value):
-        raise fail(f"must be a finite number, got {shown(value)}")
-    if value == 0:
-        raise fail("must not be zero")
-    return float(value)
-
-
-class VariableTable(ScenarioTable):
-    """``mapping.<port> = { variable = ..., ... }``: one FMU variable."""
-
-    variable: Annotated[str, PlainValidator(lambda v: _variable(v))]
-    scale: Annotated[float, PlainValidator(_scale)] | None = None
-    offset: Finite | None = None
-    unit: Text | None = None
-    geodetic: Annotated[str, one_of(GEODETIC_ROLES)] | None = None
-    start: Text | None = None
-
-    def spec(self) -> VariableMapping:
-        return VariableMapping(self.variable, self.scale, self.offset, self.unit, self.geodetic, self.start)
-
-
-def _variable(value: Any) -> str:
-    if not isinstance(value, str) or not value:
-        raise fail("must be an FMU variable name")
-    return value
-
-
-class VectorTable(ScenarioTable):
-    """``mapping.<port> = { speed = ..., direction = ... }`` or ``{ north = ..., east = ... }``."""
-
-    speed: Text | None = None
-    direction: Text | None = None
-    direction_is: Annotated[str, one_of(DIRECTION_SENSES)] = "towards"
-    north: Text | None = None
-    east: Text | None = None
-    units: dict[str, Any] = {}
-
-    @model_validator(mode="after")
-    def _one_form(self):
-        polar = self.speed is not None or self.direction is not None
-        cartesian = self.north is not None or self.east is not None
-        names = ("speed", "direction") if polar else ("north", "east")
-        if polar == cartesian or not all(getattr(self, n) is not None for n in names):
-            raise fail_whole("'{key}' needs variable = \"...\", or a vector: speed and direction, or north and east")
-        if not all(k in names and isinstance(v, str) for k, v in self.units.items()):
-            raise fail_whole(f"'{{prefix}}units' must map {' and '.join(names)} to unit names")
-        return self
-
-    def spec(self) -> VectorMapping:
-        return VectorMapping(speed=self.speed, direction=self.direction, direction_is=self.direction_is,
-                             north=self.north, east=self.east, units=dict(self.units))
-
-
 MAPPING_FORMS = ("must be \"variable\", { variable = \"...\", scale = 1.0, ... } or a vector "
                  "{ speed = ..., direction = ... } / { north = ..., east = ... }")
 
@@ -202,13 +138,13 @@ MAPPING_FORMS = ("must be \"variable\", { variable = \"...\", scale = 1.0, ... }
 def _mapping_entry(target: Any, where: str, at: tuple) -> VariableMapping | VectorMapping:
     """One ``mapping.<port>`` entry: a variable name, a variable table or a vector table."""
     if isinstance(target, str) and target:
-        return VariableMapping(target)
+        return VariableMapping(variable=target)
     if not isinstance(target, dict) or ("variable" not in target
                                         and not set(target) & {"speed", "direction", "north", "east"}):
         raise ScenarioError(f"{where}: '{_dotted(at)}' {MAPPING_FORMS}")
     if "variable" in target:
-        return checked(VariableTable, target, where, at).spec()
-    return checked(VectorTable, target, where, at).spec()
+        return checked(VariableMapping, target, where, at)
+    return checked(VectorMapping, target, where, at)
 
 
 def _dotted(at: tuple) -> str:

@@ -157,8 +157,8 @@ def run_search(path, results_root="results", workers: int | None = None, schedul
                 study.add_trial(_frozen_trial(spec, root, entry))
                 if bar is not None:
                     bar.update(1)
-            found = until_failure and any(_failed(spec, root, entry["run_id"]) for entry in journal)
-            while len(journal) < spec.evaluations and not found and not interrupts.stop_requested():
+            failure_seen = until_failure and any(_failed(spec, root, entry["run_id"]) for entry in journal)
+            while len(journal) < spec.evaluations and not failure_seen and not interrupts.stop_requested():
                 size = min(spec.per_round, spec.evaluations - len(journal))
                 trials, entries = [], []
                 for _ in range(size):
@@ -178,7 +178,7 @@ def run_search(path, results_root="results", workers: int | None = None, schedul
                         study.tell(trial, state=optuna.trial.TrialState.FAIL)
                     else:
                         study.tell(trial, value)
-                    found = found or (until_failure and _failed(spec, root, entry["run_id"]))
+                    failure_seen = failure_seen or (until_failure and _failed(spec, root, entry["run_id"]))
         except KeyboardInterrupt:
             interrupted = True
             interrupts.acknowledge()

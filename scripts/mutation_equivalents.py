@@ -229,4 +229,28 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("rhnc/control/nmpc.py", r'library\.solver\("rhnc_nmpc(_relaxed)?"\)', r'library\.solver\("(XX\w+XX|[A-Z_]+)"\)',
      "only the name of an nlpsol changes: it labels the solver in CasADi's messages and nothing reads it back "
      "(the functions the solver loads from a compiled library are named after the NLP's oracle, not after it)"),
+    ("rhnc/voyage/equal_arrival.py", r"if arrival is not None and arrival < target_s:",
+     r"arrival <= target_s:",
+     "a trial exactly at the target lies within the aim (a distance, never negative), so the search has already "
+     "ended on it before it is sorted into too early or too late"),
+    ("rhnc/voyage/equal_arrival.py", r"(early|late) = trial if \1 is None or trial\.speed_kn [<>] \1\.speed_kn",
+     r"or True else|speed_kn (<=|>=) (early|late)\.speed_kn",
+     "every speed tried after the first too-early (too-late) trial is below (above) it: extrapolated from one "
+     "side, the secant in 1/v (or the one-point guess v T / target, or 1.25 v after a run that did not arrive) "
+     "moves away from that side; once bracketed the guess is kept strictly inside the bracket; a speed already "
+     "tried is never tried again. So the new trial always replaces the bound, and never ties with it"),
+    ("rhnc/voyage/equal_arrival.py", r"inside = late\.speed_kn < guess < early\.speed_kn",
+     r"late\.speed_kn <= guess|guess <= early\.speed_kn",
+     "differs only for a guess equal to a bracket end to the last bit: the secant through the bracketing trials "
+     "meets that end only when the target is the end's own arrival, which would have ended the search (a late "
+     "trial arrives strictly after the target, an early one outside the aim), and either way a repeated speed "
+     "is refused next"),
+    ("rhnc/voyage/equal_arrival.py", r"if early\.speed_kn - late\.speed_kn < 1e-6:",
+     r"late\.speed_kn <= 1e-6:",
+     "differs only for a bracket exactly 1e-6 kn wide, the threshold's own value"),
+    ("rhnc/voyage/equal_arrival.py", r"if any\(abs\(t\.speed_kn - guess\) < 1e-9",
+     r"guess\) <= 1e-9",
+     "differs only for a guess exactly 1e-9 kn from a tried speed, the threshold's own value"),
+    ("orchestrator/toml_input.py", r'line = text\.count\("\\n", 0, deep\.start\(\)\) \+ 1', r'text\.count\("\\n", None, ',
+     "str.count with start None counts from the start of the text, as with 0"),
 ]

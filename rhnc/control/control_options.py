@@ -90,6 +90,22 @@ def controller_from_options(options: Mapping[str, Any], context: BuildContext):
     if not isinstance(overrides, Mapping):
         raise ScenarioError(f"{where}: option 'parameter_overrides' must be a table")
     params = _prediction_model(options, overrides, context)
+    kwargs = _numeric_settings(options, context)
+    kwargs.update(_identified_margin_growth(options, params, where))
+    kwargs.update(_slack_and_weights(options, where))
+    if "actuators_ship" in options:
+        kwargs["tau_rate_max"] = _tau_rate_limits(options, kwargs, context)
+    try:
+        settings = NMPCSettings(**kwargs)
+    except ValueError as error:
+        raise ScenarioError(f"{where}: {error}") from None
+    et_default = _number(options, "et_default", where, 0.0)
+    return params, settings, et_default, _delays(options, context)
+
+
+def _numeric_settings(options: Mapping[str, Any], context: BuildContext) -> dict[str, Any]:
+    """NMPC settings read straight from options: interval, sizes, solver, scales, limits, flags."""
+    where = context.where
     kwargs: dict[str, Any] = {
         "control_interval_s": _number(options, "control_interval_s", where, context.step_size),
         "own_radius_m": _number(options, "own_radius_nm", where, 0.0) * NM,
@@ -127,6 +143,11 @@ def controller_from_options(options: Mapping[str, Any], context: BuildContext):
                                ("observer_gain", "observer_gain", 1.0)):
         if key in options:
             kwargs[target] = _number(options, key, where, None) * scale
+    return kwargs
+
+
+def _identified_margin_growth(options: Mapping[str, Any], params, where: str) -> dict[str, Any]:
+    """The clearance margin's growth an identified model carries, unless the options set one."""
     if "clearance_margin_growth_kn" not in options and "position_error_growth_mps" in params.extras:
         # an identified model carries how fast its predicted position drifts from the
         # plant's: the collision domains are tightened by it (see rhnc/ship/identification.py)
@@ -134,7 +155,13 @@ def controller_from_options(options: Mapping[str, Any], context: BuildContext):
         if not is_finite_number(growth) or growth < 0.0:
             raise ScenarioError(f"{where}: model set '{params.name}': 'position_error_growth_mps' must be a "
                                 f"number >= 0, got {growth!r}")
-        kwargs["clearance_margin_growth_mps"] = float(growth)
+        return {"clearance_margin_growth_mps": float(growth)}
+    return {}
+
+
+def _slack_and_weights(options: Mapping[str, Any], where: str) -> dict[str, Any]:
+    """``collision_slack_weight`` and the ``weights`` table's cost weights."""
+    kwargs: dict[str, Any] = {}
     if "collision_slack_weight" in options:  # false: hard collision constraints
         value = options["collision_slack_weight"]
         kwargs["collision_slack_weight"] = None if value is False else _number(
@@ -151,20 +178,25 @@ def controller_from_options(options: Mapping[str, Any], context: BuildContext):
             ):
                 raise ScenarioError(f"{where}.weights: '{key}' must be a list of {size} finite numbers >= 0")
             kwargs[key] = tuple(float(v) for v in values)
-    if "actuators_ship" in options:
-        # the steering gear's and the shaft's rates bound how fast the planned tau may change
-        from rhnc.control.allocation import coefficients_from_ship, tau_rate_limits
+    return kwargs
 
-        ship = options["actuators_ship"]
-        if not isinstance(ship, str) or not ship:
-            raise ScenarioError(f"{where}: option 'actuators_ship' must be a ship name or a ship file path")
-        speed = kwargs.get("max_speed_mps", NMPCSettings.max_speed_mps)
-        kwargs["tau_rate_max"] = tau_rate_limits(coefficients_from_ship(ship, where, context.scenario_dir), speed)
-    try:
-        settings = NMPCSettings(**kwargs)
-    except ValueError as error:
-        raise ScenarioError(f"{where}: {error}") from None
-    et_default = _number(options, "et_default", where, 0.0)
+
+def _tau_rate_limits(options: Mapping[str, Any], kwargs: Mapping[str, Any], context: BuildContext):
+    """Rate limits of the planned tau from the steering gear and shaft of ``actuators_ship``."""
+    where = context.where
+    # the steering gear's and the shaft's rates bound how fast the planned tau may change
+    from rhnc.control.allocation import coefficients_from_ship, tau_rate_limits
+
+    ship = options["actuators_ship"]
+    if not isinstance(ship, str) or not ship:
+        raise ScenarioError(f"{where}: option 'actuators_ship' must be a ship name or a ship file path")
+    speed = kwargs.get("max_speed_mps", NMPCSettings.max_speed_mps)
+    return tau_rate_limits(coefficients_from_ship(ship, where, context.scenario_dir), speed)
+
+
+def _delays(options: Mapping[str, Any], context: BuildContext) -> tuple[float, ...]:
+    """``loop_delay_s`` and ``obstacle_age_s``: the options, else the master's."""
+    where = context.where
     defaults = {"loop_delay_s": float(getattr(context, "output_delay_s", 0.0)),
                 "obstacle_age_s": float(getattr(context, "input_ages_s", {}).get("obstacles", 0.0))}
     delays = []
@@ -173,8 +205,7 @@ def controller_from_options(options: Mapping[str, Any], context: BuildContext):
         if value < 0.0:
             raise ScenarioError(f"{where}: option '{key}' must be a number of seconds >= 0, got {value!r}")
         delays.append(value)
-    return params, settings, et_default, tuple(delays)
-
+    return tuple(delays)
 
 
 def _prediction_model(options: Mapping[str, Any], overrides: Mapping[str, Any], context: BuildContext):

@@ -464,9 +464,11 @@ class NMPCController:
         states = self._from_scaled(x_opt[problem.z_index], step.origin)
         # the solver meets the bounds |w| <= 1 only to its tolerance: never apply more than tau_max
         inputs = np.clip(x_opt[problem.w_index], -1.0, 1.0) * self.input_scale
-        solution = NMPCSolution(inputs[0].copy(), states, inputs, attempt.elapsed, attempt.iterations,
-                                attempt.status, True, False, outcome.f, violation, slack, False, step.disturbance,
-                                step.report.class_codes, step.report.active)
+        solution = NMPCSolution(tau=inputs[0].copy(), states=states, inputs=inputs, solve_time_s=attempt.elapsed,
+                                iterations=attempt.iterations, status=attempt.status, success=True, fallback=False,
+                                cost=outcome.f, constraint_violation=violation, collision_slack=slack,
+                                timed_out=False, disturbance=step.disturbance,
+                                encounter_classes=step.report.class_codes, domain_active=step.report.active)
         solution.solve_cpu_time_s, solution.preparation_cpu_s = attempt.cpu, attempt.preparation
         self.memory.store(time_s, states, inputs, outcome.lam_x, outcome.lam_g)
         self.memory.clearance_relaxed = slack > 0.0
@@ -550,8 +552,11 @@ class NMPCController:
         if self.observer is not None:
             self.observer.applied(inputs[0])
         LOG.info("NMPC solve at t = %.1f s failed (%s); fallback applied", time_s, status)
-        return NMPCSolution(inputs[0].copy(), states, inputs, elapsed, iterations, status, False, True, cost,
-                            violation, 0.0, timed_out, disturbance, report.class_codes, report.active)
+        return NMPCSolution(tau=inputs[0].copy(), states=states, inputs=inputs, solve_time_s=elapsed,
+                            iterations=iterations, status=status, success=False, fallback=True, cost=cost,
+                            constraint_violation=violation, collision_slack=0.0, timed_out=timed_out,
+                            disturbance=disturbance, encounter_classes=report.class_codes,
+                            domain_active=report.active)
 
 
 @dataclasses.dataclass

@@ -184,9 +184,9 @@ class NMPCSettings:
         )
 
 
-@dataclasses.dataclass
+@dataclasses.dataclass(kw_only=True)
 class NMPCSolution:
-    """Outcome of one control step.
+    """Outcome of one control step (built by keyword: fifteen fields are not read by position).
 
     Attributes
     ----------

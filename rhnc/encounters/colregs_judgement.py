@@ -285,24 +285,9 @@ def _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, targe
         if failures:
             reasons[rule] = "; ".join(failures)
 
-    if result["started_inside"]:  # no controller can keep R + R_i: the range must open at once
-        kept = result["range_opened_in_time"]
-        separation = [] if kept else [f"started {result['initial_range_nm']:.2f} nm off, inside the required "
-                                      f"{result['required_nm']:.2f} nm, and closed to {result['cpa_nm']:.2f} nm "
-                                      f"{result['range_opening_s']:.0f} s after the start (> "
-                                      f"{settings.inside_open_within_s:g} s)"]
-    else:
-        kept = result["separation_kept"]
-        separation = [] if kept else [f"CPA {result['cpa_nm']:.2f} nm < required {result['required_nm']:.2f} nm"]
+    separation = _separation_failures(result, settings)
     manoeuvred = result["manoeuvre_time_s"] is not None
-    early_s = settings.early_before_cpa_min * 60.0
-    early = manoeuvred and result["time_of_cpa_s"] - result["manoeuvre_time_s"] >= early_s
-    predicted = result["predicted_time_of_cpa_s"]
-    then = ("" if predicted is None else
-            f"; {(predicted - result['manoeuvre_time_s']) / 60:.1f} min before the CPA predicted as it began")
-    timing = [] if early else (["no alteration before the CPA"] if not manoeuvred else
-                               [f"alteration {(result['time_of_cpa_s'] - result['manoeuvre_time_s']) / 60:.1f} min "
-                                f"before the CPA (< {settings.early_before_cpa_min:g} min{then})"])
+    timing = _timing_failures(result, settings)
     give_way = encounter_class in GIVE_WAY_CLASSES
     # a stand-on ship's manoeuvre made while it gives way to another target is that
     # encounter's action (judged there, Rule 8 included), not one taken for this target
@@ -327,22 +312,60 @@ def _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, targe
     if encounter_class in STAND_ON_CLASSES:
         failures = []
         if manoeuvred:
-            # judge the decision with the velocity the ship stood on with before it began
-            k_before, cpa, tcpa = _prediction_before_manoeuvre(t, own_xy, course_rad, target, onset_index,
-                                                               result["manoeuvre_time_s"], settings)
-            range_m = float(np.hypot(*(target[k_before, :2] - own_xy[k_before])))
-            giving_way = any(onset <= result["manoeuvre_time_s"] for onset in give_way_onsets_s)
-            offset = target[k_before, :2] - own_xy[k_before]
-            bearing = float(wrap_deg(math.degrees(math.atan2(offset[1], offset[0]) - course_rad[k_before])))
-            latest = stand_on_latest_s(encounter_class, bearing, own_xy[k_before],
-                                       np.gradient(own_xy, t, axis=0)[k_before], target[k_before, :2],
-                                       target[k_before, 2:4], result["required_nm"] * NM)
-            if not giving_way and not stand_on_must_act(cpa, tcpa, range_m, result["required_nm"] * NM,
-                                                        settings.stand_on_wait_min * 60.0,
-                                                        settings.stand_on_range_factor, latest):
-                failures.append(f"altered course with predicted CPA {cpa / NM:.2f} nm in {tcpa / 60:.1f} min at "
-                                f"{range_m / NM:.2f} nm: the give-way vessel's action could still suffice")
+            failures += _stand_on_failures(result, encounter_class, t, own_xy, course_rad, onset_index, target,
+                                           settings, give_way_onsets_s)
             if encounter_class == "crossing_stand_on" and result["manoeuvre_side"] == "port":
                 failures.append("altered to port for a vessel on the port side (Rule 17(c))")
         judge("rule_17", failures + separation)
     return verdicts, reasons
+
+
+def _separation_failures(result, settings) -> list[str]:
+    """Why the separation was not kept (empty when it was): the CPA against the required
+    distance, or for a target started inside it, the range not opening in time."""
+    if result["started_inside"]:  # no controller can keep R + R_i: the range must open at once
+        kept = result["range_opened_in_time"]
+        separation = [] if kept else [f"started {result['initial_range_nm']:.2f} nm off, inside the required "
+                                      f"{result['required_nm']:.2f} nm, and closed to {result['cpa_nm']:.2f} nm "
+                                      f"{result['range_opening_s']:.0f} s after the start (> "
+                                      f"{settings.inside_open_within_s:g} s)"]
+    else:
+        kept = result["separation_kept"]
+        separation = [] if kept else [f"CPA {result['cpa_nm']:.2f} nm < required {result['required_nm']:.2f} nm"]
+    return separation
+
+
+def _timing_failures(result, settings) -> list[str]:
+    """Why the alteration was not early (empty when it was): none made, or too close to the CPA."""
+    manoeuvred = result["manoeuvre_time_s"] is not None
+    early_s = settings.early_before_cpa_min * 60.0
+    early = manoeuvred and result["time_of_cpa_s"] - result["manoeuvre_time_s"] >= early_s
+    predicted = result["predicted_time_of_cpa_s"]
+    then = ("" if predicted is None else
+            f"; {(predicted - result['manoeuvre_time_s']) / 60:.1f} min before the CPA predicted as it began")
+    timing = [] if early else (["no alteration before the CPA"] if not manoeuvred else
+                               [f"alteration {(result['time_of_cpa_s'] - result['manoeuvre_time_s']) / 60:.1f} min "
+                                f"before the CPA (< {settings.early_before_cpa_min:g} min{then})"])
+    return timing
+
+
+def _stand_on_failures(result, encounter_class, t, own_xy, course_rad, onset_index, target, settings,
+                       give_way_onsets_s) -> list[str]:
+    """A stand-on ship's alteration judged with the velocity it stood on with before it began:
+    made while the give-way vessel's action could still suffice (and not while giving way to another)."""
+    # judge the decision with the velocity the ship stood on with before it began
+    k_before, cpa, tcpa = _prediction_before_manoeuvre(t, own_xy, course_rad, target, onset_index,
+                                                       result["manoeuvre_time_s"], settings)
+    range_m = float(np.hypot(*(target[k_before, :2] - own_xy[k_before])))
+    giving_way = any(onset <= result["manoeuvre_time_s"] for onset in give_way_onsets_s)
+    offset = target[k_before, :2] - own_xy[k_before]
+    bearing = float(wrap_deg(math.degrees(math.atan2(offset[1], offset[0]) - course_rad[k_before])))
+    latest = stand_on_latest_s(encounter_class, bearing, own_xy[k_before],
+                               np.gradient(own_xy, t, axis=0)[k_before], target[k_before, :2],
+                               target[k_before, 2:4], result["required_nm"] * NM)
+    if not giving_way and not stand_on_must_act(cpa, tcpa, range_m, result["required_nm"] * NM,
+                                                settings.stand_on_wait_min * 60.0,
+                                                settings.stand_on_range_factor, latest):
+        return [f"altered course with predicted CPA {cpa / NM:.2f} nm in {tcpa / 60:.1f} min at "
+                f"{range_m / NM:.2f} nm: the give-way vessel's action could still suffice"]
+    return []

@@ -41,6 +41,7 @@ from orchestrator.geometry import wrap_angle
 
 from rhnc.ship.energy import EnergyParameters, cost_rate, emission_rate, brake_power, speed_through_water
 from rhnc.weather.metocean_grid import axis_node_count
+from rhnc.weather.metocean import bilinear
 from orchestrator.geometry import NM
 
 WEATHER_NAMES = ("wind_north", "wind_east", "hs", "current_north", "current_east")
@@ -323,5 +324,4 @@ class SuperpositionField:
         i = np.minimum(fx.astype(int), nx - 2)
         j = np.minimum(fy.astype(int), ny - 2)
         tx, ty = fx - i, fy - j
-        return ((1 - tx) * (1 - ty) * field[i, j] + tx * (1 - ty) * field[i + 1, j]
-                + (1 - tx) * ty * field[i, j + 1] + tx * ty * field[i + 1, j + 1])
+        return bilinear(field, i, j, tx, ty)

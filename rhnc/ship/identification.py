@@ -322,13 +322,41 @@ def refine_output_error(records: dict[str, Record], theta: np.ndarray,
     large error there instead of stopping the fit; if the optimiser still fails the start
     is kept.
     """
-    import casadi as ca
     from scipy.optimize import least_squares
 
     start = dict(zip(names, (float(v) for v in theta)))
     full = {name: start.get(name, 0.0) for name in ALL_COEFFICIENTS}
     speed = float(np.median(np.concatenate([records[n].states[:, 3] for n in FIT_MANOEUVRES if n in records])))
     unit = _coefficient_scales(full, speed)
+    z0, lower, upper = _scaled_start_and_bounds(names, start, full, unit)
+    z0 = np.clip(np.array(z0), lower, upper)
+    if np.any(np.array(lower) >= np.array(upper)):
+        return np.asarray(theta, dtype=float), "not refined: a coefficient is zero"
+    evaluate, jacobian = _simulation_error(records, names, full, unit)
+    large = 1e4   # a diverged simulation: a large error, not a NaN that stops the optimiser
+
+    def residual(z):
+        return np.nan_to_num(np.asarray(evaluate(z)).ravel(), nan=large, posinf=large, neginf=-large)
+
+    def jac(z):
+        return np.nan_to_num(np.asarray(jacobian(z)), nan=0.0, posinf=0.0, neginf=0.0)
+
+    try:
+        result = least_squares(residual, z0, jac=jac, bounds=(lower, upper), x_scale=1.0, max_nfev=100)
+    except (ValueError, np.linalg.LinAlgError, RuntimeError) as exc:
+        return np.asarray(theta, dtype=float), f"not refined ({exc})"
+    before = 0.5 * float(np.sum(residual(z0) ** 2))
+    if not (np.isfinite(result.cost) and result.cost <= before):
+        return np.asarray(theta, dtype=float), "not refined: the optimiser found nothing better"
+    LOG.info("output-error refinement: %s after %d evaluations, cost %.4g -> %.4g", result.message,
+             result.nfev, before, result.cost)
+    return result.x * np.array([max(unit[name], 1e-12) for name in names]), \
+        f"refined: cost {before:.4g} -> {result.cost:.4g} in {result.nfev} evaluations"
+
+
+def _scaled_start_and_bounds(names, start: dict, full: dict, unit: dict) -> tuple[list, list, list]:
+    """The start and bounds of the coefficients divided by their typical magnitudes ``unit``
+    (see :func:`refine_output_error`)."""
     z0, lower, upper = [], [], []
     for name in names:
         scale = max(unit[name], 1e-12)
@@ -347,9 +375,14 @@ def refine_output_error(records: dict[str, Record], theta: np.ndarray,
         else:
             lower.append(5.0 * value)
             upper.append(0.2 * value)
-    z0 = np.clip(np.array(z0), lower, upper)
-    if np.any(np.array(lower) >= np.array(upper)):
-        return np.asarray(theta, dtype=float), "not refined: a coefficient is zero"
+    return z0, lower, upper
+
+
+def _simulation_error(records: dict[str, Record], names, full: dict, unit: dict):
+    """CasADi functions of the scaled coefficients: the weighted open-loop simulation errors
+    over the fitting manoeuvres, and their Jacobian."""
+    import casadi as ca
+
     variables = ca.SX.sym("z", len(names))
     symbolic = dict(full)
     for i, name in enumerate(names):
@@ -378,25 +411,7 @@ def refine_output_error(records: dict[str, Record], theta: np.ndarray,
     stacked = ca.vertcat(*residuals)
     evaluate = ca.Function("residual", [variables], [stacked])
     jacobian = ca.Function("jacobian", [variables], [ca.jacobian(stacked, variables)])
-    large = 1e4   # a diverged simulation: a large error, not a NaN that stops the optimiser
-
-    def residual(z):
-        return np.nan_to_num(np.asarray(evaluate(z)).ravel(), nan=large, posinf=large, neginf=-large)
-
-    def jac(z):
-        return np.nan_to_num(np.asarray(jacobian(z)), nan=0.0, posinf=0.0, neginf=0.0)
-
-    try:
-        result = least_squares(residual, z0, jac=jac, bounds=(lower, upper), x_scale=1.0, max_nfev=100)
-    except (ValueError, np.linalg.LinAlgError, RuntimeError) as exc:
-        return np.asarray(theta, dtype=float), f"not refined ({exc})"
-    before = 0.5 * float(np.sum(residual(z0) ** 2))
-    if not (np.isfinite(result.cost) and result.cost <= before):
-        return np.asarray(theta, dtype=float), "not refined: the optimiser found nothing better"
-    LOG.info("output-error refinement: %s after %d evaluations, cost %.4g -> %.4g", result.message,
-             result.nfev, before, result.cost)
-    return result.x * np.array([max(unit[name], 1e-12) for name in names]), \
-        f"refined: cost {before:.4g} -> {result.cost:.4g} in {result.nfev} evaluations"
+    return evaluate, jacobian
 
 
 def simulate(parameters: ShipParameters, record: Record) -> np.ndarray:

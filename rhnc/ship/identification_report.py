@@ -16,7 +16,7 @@ from rhnc.ship.identification import VALIDATION_MANOEUVRE, Fit
 from rhnc.ship.ship_model import DYNAMICS_KEYS, WIDE_MODEL_KEYS
 
 
-def parameter_set_toml(fit: Fit, identity: dict[str, str], source: str) -> str:
+def parameter_set_toml(fit: Fit, identity: dict[str, str | None], source: str) -> str:
     """The fitted set as a parameter-set file (the format of ``models/KCS/parameter_sets.toml``)."""
     p = fit.parameters
     through = f" through its allocation '{identity['through']}'" if identity.get("through") else ""

@@ -170,6 +170,45 @@ def run_identify(scenario_path, results_root="results", plant: str | None = None
     path = resolve_fmu(spec.fmu, scenario.directory, where)
     probe = FmuParticipant(spec, path, where)
     identity = probe.identity
+    build, allocation = _manoeuvre_plants(scenario, spec, path, where)
+    seen = build({}) if allocation is not None else probe
+    missing = [port for port in (*STATE_NAMES, "tau_u", "tau_r") if port not in (*seen.output_names, *seen.input_names)]
+    if missing:
+        raise ScenarioError(f"{where}: identify needs the plant ports {', '.join(missing)} (map them)")
+    probe_report = probe_plant(build, speed_kn * KNOT, tau_u_max, tau_r_max, where)
+    name = set_name or identity["model_name"]
+    kcs = load_parameter_set("default")
+    fit = identify_model(PlantRunner(build, speed_kn * KNOT), tau_u_max, tau_r_max, name, reference=kcs)
+    source = Path(scenario_path).as_posix()
+    toml_text = parameter_set_toml(fit, {**identity, "through": allocation[0].name if allocation else None}, source)
+    folder = RunFolder(Path(results_root), f"identify/{name}", new_run_id(scenario.sha256))
+    try:
+        folder.path("parameter_sets.toml").write_text(toml_text)
+        figures = write_figures(fit, folder.staging)
+        plant_entry = {"participant": spec.name, "fmu": str(path), **identity,
+                       "through": allocation[0].name if allocation is not None else None}
+        report = _fit_report(fit, name, scenario, plant_entry, speed_kn, probe_report,
+                             {"tau_u_max_N": tau_u_max, "tau_r_max_Nm": tau_r_max}, figures)
+        folder.write_json("fit_report.json", report)
+        folder.path("fit_report.md").write_text(_markdown(report))
+        final = folder.publish()
+    except BaseException:
+        folder.discard()
+        raise
+    parameter_file = final / "parameter_sets.toml"
+    if out is not None:
+        out = Path(out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(toml_text)
+        parameter_file = out
+    return IdentifyReport(final, parameter_file, report)
+
+
+def _manoeuvre_plants(scenario, spec, path: Path, where: str):
+    """``build(initial)``: the plant for one manoeuvre (through the scenario's allocation, if
+    any), without the scenario's start values; and that allocation (None without one)."""
+    from orchestrator.fmu_participant import FmuParticipant
+
     # the manoeuvres set their own initial state: drop the scenario's start values
     starts = set()
     for port in START_PORTS:
@@ -186,55 +225,33 @@ def run_identify(scenario_path, results_root="results", plant: str | None = None
             return plant
         return AllocatedPlant(_build_participant(scenario, allocation[0]), plant, allocation[1], allocation[2])
 
-    seen = build({}) if allocation is not None else probe
-    missing = [port for port in (*STATE_NAMES, "tau_u", "tau_r") if port not in (*seen.output_names, *seen.input_names)]
-    if missing:
-        raise ScenarioError(f"{where}: identify needs the plant ports {', '.join(missing)} (map them)")
-    probe_report = probe_plant(build, speed_kn * KNOT, tau_u_max, tau_r_max, where)
-    name = set_name or identity["model_name"]
-    kcs = load_parameter_set("default")
-    fit = identify_model(PlantRunner(build, speed_kn * KNOT), tau_u_max, tau_r_max, name, reference=kcs)
-    source = Path(scenario_path).as_posix()
-    toml_text = parameter_set_toml(fit, {**identity, "through": allocation[0].name if allocation else None}, source)
-    folder = RunFolder(Path(results_root), f"identify/{name}", new_run_id(scenario.sha256))
-    try:
-        folder.path("parameter_sets.toml").write_text(toml_text)
-        figures = write_figures(fit, folder.staging)
-        report = {
-            "scenario": str(scenario.path),
-            "plant": {"participant": spec.name, "fmu": str(path), **identity,
-                      "through": allocation[0].name if allocation is not None else None},
-            "speed_kn": speed_kn,
-            "probe": probe_report,
-            "trim_tau_u_N": fit.trim_tau_u,
-            "set": name,
-            "model_class": fit.model_class,
-            "held_out_cost_per_class": fit.class_errors,
-            "notes": fit.notes,
-            "coefficients": {k: getattr(fit.parameters, k) for k in ALL_COEFFICIENTS
-                             if k in COEFFICIENTS or getattr(fit.parameters, k) != 0.0},
-            "bounds": {"tau_u_max_N": tau_u_max, "tau_r_max_Nm": tau_r_max},
-            "residual_rms": fit.residual_rms,
-            "r_squared": fit.r_squared,
-            "open_loop_errors": fit.validation,
-            "held_out": VALIDATION_MANOEUVRE,
-            "prediction_error": fit.prediction_error,
-            "figures": figures,
-            "versions": versions(),
-        }
-        folder.write_json("fit_report.json", report)
-        folder.path("fit_report.md").write_text(_markdown(report))
-        final = folder.publish()
-    except BaseException:
-        folder.discard()
-        raise
-    parameter_file = final / "parameter_sets.toml"
-    if out is not None:
-        out = Path(out)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(toml_text)
-        parameter_file = out
-    return IdentifyReport(final, parameter_file, report)
+    return build, allocation
+
+
+def _fit_report(fit, set_name: str, scenario, plant_entry: dict, speed_kn: float, probe_report, bounds: dict,
+                figures) -> dict:
+    """``fit_report.json``: what was identified, on which plant, and how well it predicts."""
+    return {
+        "scenario": str(scenario.path),
+        "plant": plant_entry,
+        "speed_kn": speed_kn,
+        "probe": probe_report,
+        "trim_tau_u_N": fit.trim_tau_u,
+        "set": set_name,
+        "model_class": fit.model_class,
+        "held_out_cost_per_class": fit.class_errors,
+        "notes": fit.notes,
+        "coefficients": {k: getattr(fit.parameters, k) for k in ALL_COEFFICIENTS
+                         if k in COEFFICIENTS or getattr(fit.parameters, k) != 0.0},
+        "bounds": bounds,
+        "residual_rms": fit.residual_rms,
+        "r_squared": fit.r_squared,
+        "open_loop_errors": fit.validation,
+        "held_out": VALIDATION_MANOEUVRE,
+        "prediction_error": fit.prediction_error,
+        "figures": figures,
+        "versions": versions(),
+    }
 
 
 def _markdown(report: dict) -> str:

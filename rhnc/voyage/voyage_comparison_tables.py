@@ -43,54 +43,11 @@ MIN_AVAILABLE_SAVING_PERCENT = 0.5
 
 def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) -> Section:
     """Build the tables and flags of one comparison (see the module docstring)."""
-    straight_nm = comparison.straight_distance_nm
-    rows = []
-    for label, system in systems.items():
-        rows.append(_voyage_row(label, "system (sailed)", system))
-        if label in comparison.published:
-            rows.append(_published_row(label, comparison.published[label]))
-        equal = baselines.get(label)
-        if equal is not None and equal.best is not None:
-            best = equal.best.run
-            row = _voyage_row(best.label, "equal-arrival baseline (sailed)", best)
-            row["reference speed [kn]"] = equal.best.speed_kn
-            rows.append(row)
-        for kind in ("straight", "optimal"):
-            if kind in routes.get(label, {}):
-                rows.append(_route_row(f"{kind} route at {label}'s arrival", f"{kind} route (costed)",
-                                       routes[label][kind], straight_nm))
-    runs = pd.DataFrame(rows)
+    runs = _runs_table(comparison, systems, baselines, routes)
 
     headline_rows, summary_systems = [], {}
     for label, system in systems.items():
-        figures: dict[str, Any] = {"arrived": system.arrived, "arrival_min": _minutes(system.arrival_s),
-                                   "mean_speed_through_water_kn": system.mean_speed_through_water_kn,
-                                   "cost_usd": system.cost_usd, "co2_t": system.co2_t}
-        equal = baselines.get(label)
-        if system.usable and equal is not None and equal.usable:
-            cost, co2 = equal.at_target(lambda t: t.run.cost_usd), equal.at_target(lambda t: t.run.co2_t)
-            figures.update({
-                "baseline_speed_kn": equal.at_target(lambda t: t.speed_kn),
-                "baseline_arrival_min": _minutes(equal.at_target(lambda t: t.run.arrival_s)),
-                "baseline_trials": len(equal.trials), "baseline_interpolated": equal.interpolated,
-                "baseline_cost_usd": cost, "baseline_co2_t": co2,
-                "saving_cost_percent": _saving(cost, system.cost_usd),
-                "saving_co2_percent": _saving(co2, system.co2_t),
-            })
-        route = routes.get(label, {})
-        if "optimal" in route:
-            figures["available_cost_percent"] = _saving(route["straight"].cost_usd, route["optimal"].cost_usd)
-            figures["available_co2_percent"] = _saving(route["straight"].co2_t, route["optimal"].co2_t)
-            for quantity in ("cost", "co2"):
-                available = figures[f"available_{quantity}_percent"]
-                saving = figures.get(f"saving_{quantity}_percent")
-                share = None
-                if saving is not None and available is not None and available >= MIN_AVAILABLE_SAVING_PERCENT:
-                    share = 100.0 * saving / available
-                figures[f"share_{quantity}_percent"] = share
-        if "track_at_equal_speed" in route:
-            figures["track_vs_line_at_equal_speed_cost_percent"] = -_saving(
-                route["line_at_equal_speed"]["cost_usd"], route["track_at_equal_speed"]["cost_usd"])
+        figures = _system_figures(system, baselines.get(label), routes.get(label, {}))
         summary_systems[label] = figures
         if system.usable:
             headline_rows.append(_headline_row(label, figures))
@@ -127,6 +84,58 @@ def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) ->
         tables["voyage_trials"] = pd.DataFrame(trials)
     summary = {"systems": summary_systems, "speed_spread_percent": spread, "flags": flags}
     return Section("\n".join(markdown), tables, summary, flags, failed)
+
+
+def _runs_table(comparison, systems, baselines, routes) -> pd.DataFrame:
+    """One row per voyage: each system sailed, its published figures, its baseline sailed, its routes costed."""
+    straight_nm = comparison.straight_distance_nm
+    rows = []
+    for label, system in systems.items():
+        rows.append(_voyage_row(label, "system (sailed)", system))
+        if label in comparison.published:
+            rows.append(_published_row(label, comparison.published[label]))
+        equal = baselines.get(label)
+        if equal is not None and equal.best is not None:
+            best = equal.best.run
+            row = _voyage_row(best.label, "equal-arrival baseline (sailed)", best)
+            row["reference speed [kn]"] = equal.best.speed_kn
+            rows.append(row)
+        for kind in ("straight", "optimal"):
+            if kind in routes.get(label, {}):
+                rows.append(_route_row(f"{kind} route at {label}'s arrival", f"{kind} route (costed)",
+                                       routes[label][kind], straight_nm))
+    return pd.DataFrame(rows)
+
+
+def _system_figures(system, equal, route) -> dict[str, Any]:
+    """The summary's figures of one system: its own, against its equal-arrival baseline and its routes."""
+    figures: dict[str, Any] = {"arrived": system.arrived, "arrival_min": _minutes(system.arrival_s),
+                               "mean_speed_through_water_kn": system.mean_speed_through_water_kn,
+                               "cost_usd": system.cost_usd, "co2_t": system.co2_t}
+    if system.usable and equal is not None and equal.usable:
+        cost, co2 = equal.at_target(lambda t: t.run.cost_usd), equal.at_target(lambda t: t.run.co2_t)
+        figures.update({
+            "baseline_speed_kn": equal.at_target(lambda t: t.speed_kn),
+            "baseline_arrival_min": _minutes(equal.at_target(lambda t: t.run.arrival_s)),
+            "baseline_trials": len(equal.trials), "baseline_interpolated": equal.interpolated,
+            "baseline_cost_usd": cost, "baseline_co2_t": co2,
+            "saving_cost_percent": _saving(cost, system.cost_usd),
+            "saving_co2_percent": _saving(co2, system.co2_t),
+        })
+    if "optimal" in route:
+        figures["available_cost_percent"] = _saving(route["straight"].cost_usd, route["optimal"].cost_usd)
+        figures["available_co2_percent"] = _saving(route["straight"].co2_t, route["optimal"].co2_t)
+        for quantity in ("cost", "co2"):
+            available = figures[f"available_{quantity}_percent"]
+            saving = figures.get(f"saving_{quantity}_percent")
+            share = None
+            if saving is not None and available is not None and available >= MIN_AVAILABLE_SAVING_PERCENT:
+                share = 100.0 * saving / available
+            figures[f"share_{quantity}_percent"] = share
+    if "track_at_equal_speed" in route:
+        figures["track_vs_line_at_equal_speed_cost_percent"] = -_saving(
+            route["line_at_equal_speed"]["cost_usd"], route["track_at_equal_speed"]["cost_usd"])
+    return figures
 
 
 def _trial_rows(baselines) -> list[dict[str, Any]]:

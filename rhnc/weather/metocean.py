@@ -201,23 +201,15 @@ class MetOceanField:
         tx = fx - i
         ty = fy - j
 
-        def bilinear(grid):
-            return ((1 - tx) * (1 - ty) * grid[i, j] + tx * (1 - ty) * grid[i + 1, j]
-                    + (1 - tx) * ty * grid[i, j + 1] + tx * ty * grid[i + 1, j + 1])
-
         out = {}
         if not self.is_time_varying:
             for name, stack in self._fields.items():
-                out[name] = bilinear(stack[0])
+                out[name] = bilinear(stack[0], i, j, tx, ty)
         else:
             k, w = self.time_weights(t_s)
             k, w, i, j, tx, ty = np.broadcast_arrays(k, w, i, j, tx, ty)
             for name, stack in self._fields.items():
-                before = ((1 - tx) * (1 - ty) * stack[k, i, j] + tx * (1 - ty) * stack[k, i + 1, j]
-                          + (1 - tx) * ty * stack[k, i, j + 1] + tx * ty * stack[k, i + 1, j + 1])
-                after = ((1 - tx) * (1 - ty) * stack[k + 1, i, j] + tx * (1 - ty) * stack[k + 1, i + 1, j]
-                         + (1 - tx) * ty * stack[k + 1, i, j + 1] + tx * ty * stack[k + 1, i + 1, j + 1])
-                out[name] = (1 - w) * before + w * after
+                out[name] = between(bilinear(stack, i, j, tx, ty, k), bilinear(stack, i, j, tx, ty, k + 1), w)
         out["wind_speed"] = np.hypot(out["wind_north"], out["wind_east"])
         out["wind_direction"] = wind_from_direction(out["wind_north"], out["wind_east"])
         return out
@@ -228,7 +220,7 @@ class MetOceanField:
             return self
         k, w = self.time_weights(float(t_s))
         k, w = int(k), float(w)
-        fields = {name: (1 - w) * stack[k] + w * stack[k + 1] for name, stack in self._fields.items()}
+        fields = {name: between(stack[k], stack[k + 1], w) for name, stack in self._fields.items()}
         return MetOceanField(self.x, self.y, fields, source=f"{self.source} at t = {float(t_s):g} s")
 
     # -- writers -------------------------------------------------------------------
@@ -265,6 +257,26 @@ class MetOceanField:
         tmp.write_bytes(header + body)
         tmp.replace(path)
         return path
+
+
+def bilinear(grid, i, j, tx, ty, k=None):
+    """Bilinear sample of ``grid`` (nx, ny) in cell (i, j) at fractions (tx, ty) [-].
+
+    ``tx`` runs along x (north) from node i to i + 1, ``ty`` along y (east) from j to j + 1;
+    the index and fraction arrays broadcast (one sample per element).  With ``k``, ``grid``
+    is a stack (nt, nx, ny) sampled in its slices ``k``.  The MetOcean FMU's C code
+    evaluates the same four terms in the same order.
+    """
+    def node(di, dj):
+        return grid[i + di, j + dj] if k is None else grid[k, i + di, j + dj]
+
+    return ((1 - tx) * (1 - ty) * node(0, 0) + tx * (1 - ty) * node(1, 0)
+            + (1 - tx) * ty * node(0, 1) + tx * ty * node(1, 1))
+
+
+def between(before, after, w):
+    """Linear in time: ``before`` at weight 0, ``after`` at weight 1."""
+    return (1 - w) * before + w * after
 
 
 def wind_from_direction(wind_north, wind_east):

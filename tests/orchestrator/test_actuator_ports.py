@@ -107,17 +107,17 @@ def test_actuator_ports_are_canonical():
                                           ("rad/s", 1 / (2 * math.pi))])
 def test_revolution_units_convert_to_revolutions_per_second(unit, factor):
     variable = type("Variable", (), {"name": "shaft", "unit": unit, "declaredType": None})()
-    scale, offset = scalar_conversion("propeller_rps", VariableMapping("shaft"), variable, None, "w")
+    scale, offset = scalar_conversion("propeller_rps", VariableMapping(variable="shaft"), variable, None, "w")
     assert scale == pytest.approx(factor) and offset == 0.0
 
 
 def test_rudder_in_degrees_converts_and_a_speed_is_refused():
     variable = type("Variable", (), {"name": "rudder", "unit": "deg", "declaredType": None})()
-    scale, _ = scalar_conversion("rudder_angle_cmd", VariableMapping("rudder"), variable, None, "w")
+    scale, _ = scalar_conversion("rudder_angle_cmd", VariableMapping(variable="rudder"), variable, None, "w")
     assert scale == pytest.approx(math.pi / 180)
     wrong = type("Variable", (), {"name": "shaft", "unit": "m/s", "declaredType": None})()
     with pytest.raises(ScenarioError, match=r"w: port 'propeller_rps_cmd' is in 1/s but FMU variable 'shaft' is in 'm/s'"):
-        scalar_conversion("propeller_rps_cmd", VariableMapping("shaft"), wrong, None, "w")
+        scalar_conversion("propeller_rps_cmd", VariableMapping(variable="shaft"), wrong, None, "w")
     assert resolve_unit("rpm").factor == pytest.approx(2 * math.pi / 60)  # pint: an angle per time
 
 

@@ -269,3 +269,19 @@ def test_participant_names_are_identifiers_of_at_most_64_characters(load, refuse
 def test_an_empty_participants_table_is_named(refused):
     assert refused(text="[simulation]\nstop_s = 10.0\ndt_s = 2.0\n[participants]\n") == (
         "FILE: [participants] declares no participant")
+
+
+def test_the_tables_that_check_outputs_and_mappings_are_the_loaded_spec(load):
+    """One declaration per table: ``[outputs]`` and every port mapping are kept as the very
+    models that checked them (no mirror copied field by field beside them)."""
+    from orchestrator.scenario_spec import OutputSpec, VariableMapping
+    from orchestrator.toml_input import TomlTable
+
+    scenario, _ = load('[participants.ship.mapping]\nx = "x"\ny = { variable = "y", scale = 2.0 }\n'
+                       '[outputs]\nformat = "csv"\nanalyses = ["voyage"]\n')
+    mapping = scenario.participant("ship").mapping
+    assert mapping["x"] == VariableMapping(variable="x")
+    assert mapping["y"] == VariableMapping(variable="y", scale=2.0)
+    assert scenario.outputs == OutputSpec(format="csv", analyses=["voyage"])
+    for model in (OutputSpec, VariableMapping, VectorMapping):
+        assert issubclass(model, TomlTable), model

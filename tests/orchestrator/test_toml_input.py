@@ -171,3 +171,31 @@ class Scaled(TomlTable):
 
 def test_checked_passes_its_context_to_the_validators():
     assert checked(Scaled, {"value": 2.0}, "file.toml", context={"factor": 3.0}).value == 6.0
+
+
+@pytest.mark.parametrize("separator", ["=", ",", "[", "{"])
+def test_the_item_count_takes_each_separator_and_stops_just_past_the_limit(separator):
+    half = toml_input.MAX_ITEMS // 2
+    toml_input.prescan_toml("=" * half + separator * (toml_input.MAX_ITEMS - half), "f.toml")   # at the limit
+    with pytest.raises(ScenarioError, match=rf"^f\.toml: holds {toml_input.MAX_ITEMS + 1} keys, values and tables"):
+        toml_input.prescan_toml("=" * half + separator * (toml_input.MAX_ITEMS - half + 1), "f.toml")
+
+
+def test_a_distance_at_the_top_level_is_named_by_its_own_key():
+    with pytest.raises(ScenarioError, match=r"^f\.toml: 'goal_nm\[0\]' must lie within"):
+        toml_input.check_distances_nm({"goal_nm": [1e9, 0.0]}, "f.toml", "")
+
+
+def test_a_pair_in_nm_may_lie_at_the_bound_and_a_pair_beyond_it_is_quoted():
+    class Table(toml_input.TomlTable):
+        at_nm: PairNm
+
+    bound = toml_input.MAX_DISTANCE_NM
+    assert Table.model_validate({"at_nm": [bound, -bound]}).at_nm == (bound, -bound)
+    with pytest.raises(ScenarioError, match=r"got \[1e\+?0?9, 0\.0\]$|got \[1000000000\.0, 0\.0\]$"):
+        toml_input.checked(Table, {"at_nm": [1e9, 0.0]}, "f.toml")
+
+
+def test_a_distance_exactly_at_the_bound_is_taken():
+    bound = toml_input.MAX_DISTANCE_NM
+    toml_input.check_distances_nm({"goal_nm": [bound, -bound]}, "f.toml", "")

@@ -129,3 +129,135 @@ def test_a_trial_that_does_not_arrive_is_followed_by_a_quarter_faster_one():
     match_arrival_time(arrival_of, 25_000.0, tolerance_s=60.0, first_speed_kn=12.0, max_trials=3)
     assert tried[:3] == pytest.approx([12.0, 15.0, 18.75])
 
+
+
+# -- the search's rules, one by one, on scripted and affine arrivals ---------------------------
+def scripted(target_s, offsets_s):
+    """An arrival function that answers ``target_s + offset`` from ``offsets_s`` in turn."""
+    answers = iter(offsets_s)
+
+    def arrival_of(speed_kn):
+        return target_s + next(answers), None
+
+    return arrival_of
+
+
+def affine(lag_s=600.0):
+    """Arrival affine in 1/v: a fixed lag plus the distance over the speed."""
+    return lambda speed_kn: (lag_s + DISTANCE_NM / speed_kn * 3600.0, None)
+
+
+def test_a_baseline_without_a_trial_around_the_target_says_so():
+    lonely = EqualArrival(target_s=1000.0, tolerance_s=10.0, trials=[ArrivalTrial(10.0, 5000.0)])
+    with pytest.raises(ValueError, match="^the equal-arrival baseline has no trial at or around the target arrival$"):
+        lonely.at_target(lambda t: 1.0)
+
+
+def test_the_search_stops_at_half_the_tolerance_unless_told_otherwise():
+    # tolerance 10 s: the default aim is 5 s, so 6 s off goes on and 4 s off stops
+    result = match_arrival_time(scripted(20_000.0, [6.0, -4.0, 0.1, 0.0]), 20_000.0, tolerance_s=10.0,
+                                first_speed_kn=12.0)
+    assert len(result.trials) == 2
+    # an explicit aim is the one used: 4 s off is not close enough for an aim of 1 s
+    result = match_arrival_time(scripted(20_000.0, [6.0, -4.0, 0.5, 0.0]), 20_000.0, tolerance_s=10.0,
+                                first_speed_kn=12.0, aim_s=1.0)
+    assert len(result.trials) == 3
+
+
+def test_a_trial_exactly_at_the_aim_ends_the_search():
+    result = match_arrival_time(scripted(20_000.0, [5.0, 1.0]), 20_000.0, tolerance_s=10.0, first_speed_kn=12.0)
+    assert len(result.trials) == 1
+
+
+def jump(target_s, lag_s=600.0):
+    """Affine arrival with a 600 s jump over the target at the speed that would meet it:
+    no speed lands near the target, and the search bisects the jump."""
+    at_kn = DISTANCE_NM * 3600.0 / (target_s - lag_s)
+
+    def arrival_of(speed_kn):
+        base = lag_s + DISTANCE_NM / speed_kn * 3600.0
+        return (base - 300.0 if speed_kn >= at_kn else base + 300.0), None
+
+    return arrival_of, at_kn
+
+
+def test_eight_trials_by_default():
+    arrival_of, _ = jump(30_000.0)
+    result = match_arrival_time(arrival_of, 30_000.0, tolerance_s=10.0, first_speed_kn=12.0)
+    assert len(result.trials) == 8
+
+
+def test_bisection_ends_once_the_bracket_is_narrower_than_a_micro_knot():
+    arrival_of, at_kn = jump(30_000.0)
+    result = match_arrival_time(arrival_of, 30_000.0, tolerance_s=10.0, first_speed_kn=12.0, max_trials=200)
+    assert len(result.trials) < 200
+    early, late = result.bracket
+    assert 0 < early.speed_kn - late.speed_kn < 1e-6
+    assert late.speed_kn < at_kn <= early.speed_kn
+    # the midpoint that would come next lies closer than a micro-knot to both: not tried
+    assert len(result.trials) <= 40
+
+
+def test_no_speed_is_tried_twice():
+    # never arrives: a quarter faster each time up to the top bound, which is tried once
+    tried = []
+
+    def arrival_of(speed_kn):
+        tried.append(speed_kn)
+        return None, None
+
+    match_arrival_time(arrival_of, 20_000.0, tolerance_s=10.0, first_speed_kn=20.0, max_trials=20)
+    assert tried == pytest.approx([20.0, 25.0, 30.0])
+
+
+def test_the_secant_runs_through_the_last_two_arrived_trials():
+    from rhnc.voyage.equal_arrival import _next_speed
+
+    arrival_of = affine()
+    target_s = 30_000.0
+    trials = [ArrivalTrial(v, arrival_of(v)[0]) for v in (25.0, 20.0, 18.0)]
+    exact = DISTANCE_NM * 3600.0 / (target_s - 600.0)
+    assert _next_speed(trials, target_s, trials[-1], None, 2.0, 30.0) == pytest.approx(exact, rel=1e-12)
+
+
+def test_a_shallow_but_rising_secant_is_still_followed():
+    from rhnc.voyage.equal_arrival import _next_speed
+
+    # arrival grows by 0.05 s from 10 kn to 5 kn: slope 0.5 s per 1/kn, positive
+    trials = [ArrivalTrial(10.0, 1000.0), ArrivalTrial(5.0, 1000.05)]
+    assert _next_speed(trials, 1000.1, None, trials[-1], 2.0, 30.0) == pytest.approx(1.0 / 0.3, rel=1e-9)
+
+
+def test_a_falling_secant_without_a_bracket_ends_the_search():
+    from rhnc.voyage.equal_arrival import _next_speed
+
+    trials = [ArrivalTrial(10.0, 1000.0), ArrivalTrial(9.0, 900.0)]   # slower, yet earlier
+    assert _next_speed(trials, 1100.0, None, trials[-1], 2.0, 30.0) is None
+
+
+def test_the_secant_is_kept_inside_the_bracket_when_it_falls_there():
+    from rhnc.voyage.equal_arrival import _next_speed
+
+    arrival_of = affine()
+    target_s = 30_000.0
+    early, late = ArrivalTrial(20.0, arrival_of(20.0)[0]), ArrivalTrial(12.0, arrival_of(12.0)[0])
+    exact = DISTANCE_NM * 3600.0 / (target_s - 600.0)   # 17.25 kn, not the midpoint 16 kn
+    assert _next_speed([early, late], target_s, early, late, 2.0, 30.0) == pytest.approx(exact, rel=1e-12)
+
+
+def test_a_bracket_narrower_than_a_micro_knot_ends_the_search():
+    from rhnc.voyage.equal_arrival import _next_speed
+
+    early, late = ArrivalTrial(10.0 + 5e-7, 900.0), ArrivalTrial(10.0, 1100.0)
+    assert _next_speed([early, late], 1000.0, early, late, 2.0, 30.0) is None
+    wider_early = ArrivalTrial(10.0 + 5e-6, 900.0)
+    assert _next_speed([wider_early, late], 1000.0, wider_early, late, 2.0, 30.0) == pytest.approx(10.0 + 2.5e-6)
+
+
+def test_a_guess_of_zero_ends_the_search_and_a_small_one_is_raised_to_the_bound():
+    from rhnc.voyage.equal_arrival import _next_speed
+
+    at_once = [ArrivalTrial(10.0, 0.0)]        # arrived at departure: the one-point guess is 0 kn
+    assert _next_speed(at_once, 1000.0, at_once[0], None, 2.0, 30.0) is None
+    early = [ArrivalTrial(10.0, 50.0)]         # guess 10 * 50 / 1000 = 0.5 kn, below the 2 kn bound
+    assert _next_speed(early, 1000.0, early[0], None, 2.0, 30.0) == 2.0

@@ -327,3 +327,17 @@ def test_a_passed_target_whose_cpa_falls_inside_the_warning_range_is_rearmed_whi
     assert _passed_target_beyond_the_warning_range(4.5 * NM).states == ["triggered"]
     # a CPA outside the warning range leaves it passed (closing, so not cleared either)
     assert _passed_target_beyond_the_warning_range(1.1 * 4.5 * NM).states == ["passed"]
+
+
+def test_each_transition_is_logged_in_one_line_a_reader_can_follow(caplog):
+    """The log names the time, the obstacle row and kind, its range, the cause, the new state and ET."""
+    import logging
+
+    trigger = EventTrigger(4.5 * NM, 6.0 * NM)
+    ship = np.array([[10 * NM, 0.0, 0.0, 5.0, 0.2 * NM]])
+    static = np.array([[5 * NM, 3 * NM, 0.0, 0.0, 1 * NM]])
+    with caplog.at_level(logging.INFO, logger="rhnc.navigation.trigger"):
+        trigger.update(125.0, (0.0, 0.0), (5.0, 0.0), (40 * NM, 0.0), np.vstack([static, ship]))
+    assert [record.getMessage() for record in caplog.records] == [
+        f"t=125 s: obstacle 0 (static) at {np.hypot(5, 3) * NM:.0f} m: within warning range -> triggered, ET=1",
+    ]
