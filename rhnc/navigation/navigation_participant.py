@@ -117,6 +117,25 @@ def _number(options: Mapping[str, Any], key: str, default: float, where: str, po
     return float(value)
 
 
+def _chart(options: Mapping[str, Any], context: BuildContext, where: str, goal, start):
+    """The option ``chart``: land and no-go areas the route keeps its clearance from (None
+    without it); the goal and the start must lie in navigable water."""
+    if "chart" not in options:
+        return None
+    from rhnc.chart.chart import load_chart
+    from rhnc.routing.routing_problem import check_navigable
+
+    if not isinstance(options["chart"], str) or not options["chart"]:
+        raise ScenarioError(f"{where}.chart: expected the path of a chart file, got {options['chart']!r}")
+    chart = load_chart(context.scenario_dir / options["chart"])
+    for label, point in (("goal_nm", goal), ("start_nm", start)):
+        try:
+            check_navigable(chart, point, "point") if point is not None else None
+        except ValueError as exc:
+            raise ScenarioError(f"{where}.{label}: {str(exc).replace('the point ', '', 1)}") from None
+    return chart
+
+
 def _switch_margin(options: Mapping[str, Any], where: str) -> float:
     """``route_switch_margin_pct`` as a fraction (below 100 %)."""
     margin = _number(options, "route_switch_margin_pct", 100.0 * DEFAULT_SWITCH_MARGIN, where)
@@ -214,19 +233,7 @@ class NavigationParticipant(Participant):
                                     f"'{'routing' if method == 'paper' else 'paper'}' only (method is '{method}')")
         arrival_s = (_number(options, "arrival_time_min", 0.0, where, positive=True) * 60.0
                      if "arrival_time_min" in options else None)
-        chart = None
-        if "chart" in options:  # land and no-go areas the route keeps its clearance from
-            from rhnc.chart.chart import load_chart
-            from rhnc.routing.routing_problem import check_navigable
-
-            if not isinstance(options["chart"], str) or not options["chart"]:
-                raise ScenarioError(f"{where}.chart: expected the path of a chart file, got {options['chart']!r}")
-            chart = load_chart(context.scenario_dir / options["chart"])
-            for label, point in (("goal_nm", goal), ("start_nm", start)):
-                try:
-                    check_navigable(chart, point, "point") if point is not None else None
-                except ValueError as exc:
-                    raise ScenarioError(f"{where}.{label}: {str(exc).replace('the point ', '', 1)}") from None
+        chart = _chart(options, context, where, goal, start)
         weights = FieldWeights(k1=_number(options, "k1", 1.0, where), k2=_number(options, "k2", 1.0, where),
                                k3=_number(options, "k3", 16.0, where))
         guidance = GuidanceParameters(eps=_number(options, "guidance_eps", 1.0, where, positive=True),
