@@ -13,7 +13,14 @@ project's energy model); nothing is typed by hand.  Run the comparisons first:
     python scripts/routing_results.py [--results results] [--out docs/routing-results.md]
 
 It also rewrites the README's routing table and storm-set findings (between the
-``routing-summary`` markers), so the README quotes exactly these runs.
+``routing-summary`` markers), so the README quotes exactly these runs.  The fixed routing
+weather sets go to ``docs/routing-sets.md`` and the README's ``routing-sets`` block, alone
+with ``--sets-only``; run them first:
+
+    python -m orchestrator compare scenarios/weather/routing_set_ne.toml
+    python -m orchestrator compare scenarios/weather/routing_set_sw.toml
+    python -m orchestrator compare scenarios/weather/routing_set_w.toml
+    python scripts/routing_results.py --sets-only
 """
 
 from __future__ import annotations
@@ -42,13 +49,15 @@ SWEEPS = (
     ("weather_storm_set", "the paper's navigation (RHNC)", "scenarios/weather/storm_set.toml"),
     ("weather_storm_set_routing", "the routing navigation method (RHNC routing)",
      "scenarios/weather/storm_set_routing.toml"),
-    ("weather_routing_set_ne", "the routing set heading north-east, 100 x 100 nm (RHNC routing)",
-     "scenarios/weather/routing_set_ne.toml"),
-    ("weather_routing_set_sw", "the routing set heading south-south-west, 140 x 90 nm (RHNC routing)",
-     "scenarios/weather/routing_set_sw.toml"),
-    ("weather_routing_set_w", "the routing set heading west, 80 x 150 nm (RHNC routing)",
-     "scenarios/weather/routing_set_w.toml"),
 )
+#: (comparison name, the set in words, comparison file) of the fixed routing weather sets (docs/routing-sets.md)
+ROUTING_SETS = (
+    ("weather_routing_set_ne", "heading north-east, 100 x 100 nm", "scenarios/weather/routing_set_ne.toml"),
+    ("weather_routing_set_sw", "heading south-south-west, 140 x 90 nm", "scenarios/weather/routing_set_sw.toml"),
+    ("weather_routing_set_w", "heading west, 80 x 150 nm", "scenarios/weather/routing_set_w.toml"),
+)
+#: the system measured on the routing sets
+ROUTING_SET_SYSTEM = "RHNC routing"
 #: the goal over every weather set: median share, least share where >= 0.5 % is available
 SET_GOAL_MEDIAN_PERCENT, SET_GOAL_LEAST_PERCENT = 90.0, 75.0
 HEADLINE = ["system", "arrival [min]", "cost [USD]", "baseline cost [USD]", "saving cost [%]", "saving CO2 [%]",
@@ -210,6 +219,7 @@ def summary_text(rows: list[dict], sweeps: dict, effect: dict) -> list[str]:
 
 
 README_BEGIN, README_END = "<!-- routing-summary:begin -->", "<!-- routing-summary:end -->"
+SETS_BEGIN, SETS_END = "<!-- routing-sets:begin -->", "<!-- routing-sets:end -->"
 #: (label in the comparisons, words in the README)
 README_SYSTEMS = (("RHNC", "RHNC, paper's method"), ("RHNC routing", "RHNC, routing method"))
 #: the goal of the routing navigation over the storm set
@@ -282,13 +292,117 @@ def readme_block(rows: list[dict], sweeps: dict) -> str:
     return "\n".join(lines)
 
 
-def write_readme_block(readme: Path, block: str) -> None:
+def write_readme_block(readme: Path, block: str, begin: str = README_BEGIN, end: str = README_END) -> None:
     text = readme.read_text()
-    if README_BEGIN not in text or README_END not in text:
-        raise SystemExit(f"{readme}: no {README_BEGIN} ... {README_END} markers to write the routing summary between")
-    head, rest = text.split(README_BEGIN, 1)
-    _, tail = rest.split(README_END, 1)
-    readme.write_text(head + README_BEGIN + "\n" + block + "\n" + README_END + tail)
+    if begin not in text or end not in text:
+        raise SystemExit(f"{readme}: no {begin} ... {end} markers to write the routing summary between")
+    head, rest = text.split(begin, 1)
+    _, tail = rest.split(end, 1)
+    readme.write_text(head + begin + "\n" + block + "\n" + end + tail)
+
+
+def routing_set_members(section, name: str, folders: list[Path], label: str = ROUTING_SET_SYSTEM) -> pd.DataFrame:
+    """One row per member of a routing set: its kind of weather, what it offers, the system's
+    saving and share, and every failed run or trial of the member by name."""
+    from rhnc.weather.routing_weather_set import KINDS
+
+    members = section.tables["voyage_sweep"]
+    key = members.columns[0]
+    failed: dict[int, list[str]] = {}
+    for folder in folders:   # oldest first, as the members were gathered
+        for summary in folder.glob("members/*/summary.json"):
+            member = int(summary.parent.name.partition("=")[2])
+            runs = json.loads(summary.read_text()).get("failed_runs") or {}
+            failed[member] = [f"{run}: {reason}" for run, reason in runs.items()]
+    rows = []
+    for _, row in members.iterrows():
+        member = int(row[key])
+        saving = row.get(f"{label} saving cost [%]")
+        rows.append({
+            "member": member, "weather": KINDS[member % len(KINDS)],
+            "available at the nominal speed [%]": row.get("available cost saving at the nominal speed [%]"),
+            "arrived": bool(row.get(f"{label} arrived")),
+            "arrival [min]": row.get(f"{label} arrival [min]"),
+            "available at its arrival [%]": row.get(f"{label} available cost saving [%]"),
+            "saving vs equal-arrival line [%]": saving,
+            "share [%]": row.get(f"{label} share cost [%]"),
+            "more than 0.5 % dearer": (None if saving is None or saving != saving
+                                       else bool(saving < GOAL_WORST_PERCENT)),
+            "failed runs and trials": "; ".join(failed.get(member, [])) or "none",
+        })
+    return pd.DataFrame(rows)
+
+
+def routing_set_verdict(members: pd.DataFrame, planned: int) -> dict:
+    """The goal's figures over one set: median share (members offering >= 0.5 %), least share,
+    worst saving, members dearer than the line by more than 0.5 %, failures."""
+    share = pd.to_numeric(members["share [%]"], errors="coerce").dropna()
+    saving = pd.to_numeric(members["saving vs equal-arrival line [%]"], errors="coerce").dropna()
+    failures = int((members["failed runs and trials"] != "none").sum())
+    verdict = {"members": len(members), "planned": planned, "arrived": int(members["arrived"].sum()),
+               "with_share": int(share.size), "median_share": float(share.median()) if share.size else float("nan"),
+               "least_share": float(share.min()) if share.size else float("nan"),
+               "worst_saving": float(saving.min()) if saving.size else float("nan"),
+               "dearer": int((saving < GOAL_WORST_PERCENT).sum()), "failed_members": failures}
+    verdict["met"] = bool(verdict["members"] == planned and verdict["arrived"] == planned and failures == 0
+                          and verdict["dearer"] == 0 and (not share.size or (
+                              verdict["median_share"] >= SET_GOAL_MEDIAN_PERCENT
+                              and verdict["least_share"] >= SET_GOAL_LEAST_PERCENT)))
+    return verdict
+
+
+def routing_sets_document(results: Path, out: Path, figures: Path) -> tuple[list[str], list[str]]:
+    """docs/routing-sets.md and the README's block: each fixed routing set, member by member,
+    against the goal (median share >= 90 %, each >= 75 % where >= 0.5 % is available, never
+    more than 0.5 % dearer than the equal-arrival line, no failed run or trial)."""
+    lines = ["# The fixed routing weather sets, measured at equal arrival time", "",
+             "Generated by `python scripts/routing_results.py --sets-only` (or without the option, with "
+             "[routing-results.md](routing-results.md)) from the comparisons below. The sets (seed 2611: gales, "
+             "moving gales and current jets about the route, three headings, three map sizes; "
+             "[weather.md](weather.md)) were fixed before any routing result on them was seen. Each member is "
+             "one fair comparison ([compare-format.md](compare-format.md)): the routing navigation (RHNC routing) "
+             "sails the passage, Offline-SPNC's straight line is co-simulated at the speed that arrives with it "
+             "(the equal-arrival line), and the optimal route and speed profile for that arrival time are costed "
+             "by the routing model. Available: the optimum against the straight route at constant speed. Share: "
+             "saving against the equal-arrival line / available, where at least 0.5 % is available.", "",
+             f"Goal, per set: a median share of at least {SET_GOAL_MEDIAN_PERCENT:.0f} %, at least "
+             f"{SET_GOAL_LEAST_PERCENT:.0f} % in every member offering 0.5 % or more, no member more than "
+             f"{-GOAL_WORST_PERCENT:.1f} % dearer than the equal-arrival line, every run and trial finished.", ""]
+    summary = ["| set | members run | arrived | members offering >= 0.5 % | median share | least share | "
+               "worst saving vs line | more than 0.5 % dearer | members with a failed run or trial | goal |",
+               "|---|---|---|---|---|---|---|---|---|---|"]
+    readme = list(summary)
+    body = []
+    for name, words, path in ROUTING_SETS:
+        spec = tomllib.loads((REPO / path).read_text())
+        low, high = spec["sweep"]["range"]
+        planned = int(high) - int(low) + 1
+        found = sweep_members(results, name, REPO / path, figures)
+        body += [f"## {words}", ""]
+        if found is None:
+            body += [f"No results yet: `python -m orchestrator compare {path}`.", ""]
+            row = f"| {words} | 0 of {planned} | - | - | - | - | - | - | - | not measured |"
+            summary.append(row)
+            readme.append(row)
+            continue
+        section, used, done, finished = found
+        folders = sorted((results / name / folder for folder in used), key=lambda p: p.name.lstrip("."))
+        members = routing_set_members(section, name, folders)
+        v = routing_set_verdict(members, planned)
+        (figures / "voyage_sweep.png").replace(figures / f"{out.stem}_{name}_share.png")
+        state = "" if finished else " The comparison had not published its folder (stopped, or still running); the members it had finished are kept."
+        body += [f"`python -m orchestrator compare {path}` ({done} of {planned} members; results "
+                 + ", ".join(f"`{folder}`" for folder in used) + f").{state}", "",
+                 table(members, list(members.columns)), "",
+                 f"![shares](figures/{out.stem}_{name}_share.png)", ""]
+        row = (f"| {words} | {v['members']} of {planned} | {v['arrived']} | {v['with_share']} | "
+               f"{fmt(v['median_share'], 0)} % | {fmt(v['least_share'], 0)} % | {v['worst_saving']:+.2f} % | "
+               f"{v['dearer']} | {v['failed_members']} | "
+               + ("met" if v["met"] else "not met" if v["members"] == planned else "incomplete") + " |")
+        summary.append(row)
+        readme.append(row)
+    lines += ["## Summary", ""] + summary + [""] + body
+    return lines, readme
 
 
 def main() -> None:
@@ -299,10 +413,21 @@ def main() -> None:
                                                                        "('' to leave it)")
     parser.add_argument("--note", default="", help="a caveat printed under the title (e.g. which runs predate a "
                                                    "model change)")
+    parser.add_argument("--sets-only", action="store_true", help="write only docs/routing-sets.md and the README's "
+                                                                      "routing-sets block")
     args = parser.parse_args()
     results, out = Path(args.results), Path(args.out)
     figures = out.parent / "figures"
     figures.mkdir(parents=True, exist_ok=True)
+    sets_out = out.parent / "routing-sets.md"
+    set_lines, set_readme = routing_sets_document(results, sets_out, figures)
+    sets_out.write_text("\n".join(set_lines) + "\n")
+    print(f"wrote {sets_out}")
+    if args.readme:
+        write_readme_block(Path(args.readme), "\n".join(set_readme), SETS_BEGIN, SETS_END)
+        print(f"rewrote the routing-sets summary in {args.readme}")
+    if args.sets_only:
+        return
 
     lines = ["# Routing savings, measured at equal arrival time", "",
              "Generated by `python scripts/routing_results.py` from the comparisons below (format: "
