@@ -333,6 +333,11 @@ def routing_set_members(section, name: str, folders: list[Path], label: str = RO
     return pd.DataFrame(rows)
 
 
+def percent(value, spec: str = ".0f") -> str:
+    """``value`` [%] as text, ``-`` when undefined."""
+    return "-" if value is None or value != value else f"{value:{spec}} %"
+
+
 def routing_set_verdict(members: pd.DataFrame, planned: int) -> dict:
     """The goal's figures over one set: median share (members offering >= 0.5 %), least share,
     worst saving, members dearer than the line by more than 0.5 %, failures."""
@@ -396,7 +401,7 @@ def routing_sets_document(results: Path, out: Path, figures: Path) -> tuple[list
                  table(members, list(members.columns)), "",
                  f"![shares](figures/{out.stem}_{name}_share.png)", ""]
         row = (f"| {words} | {v['members']} of {planned} | {v['arrived']} | {v['with_share']} | "
-               f"{fmt(v['median_share'], 0)} % | {fmt(v['least_share'], 0)} % | {v['worst_saving']:+.2f} % | "
+               f"{percent(v['median_share'])} | {percent(v['least_share'])} | {percent(v['worst_saving'], '+.2f')} | "
                f"{v['dearer']} | {v['failed_members']} | "
                + ("met" if v["met"] else "not met" if v["members"] == planned else "incomplete") + " |")
         summary.append(row)
