@@ -45,3 +45,19 @@ def test_a_set_meets_the_goal_only_with_every_member_run_finished_and_within_the
     late = members([95.0, 80.0, None, 120.0], [1.2, 0.8, 0.1, 2.0], arrived=[True, True, False, True])
     assert not script.routing_set_verdict(late, 4)["met"]
     assert not script.routing_set_verdict(good, planned=5)["met"]
+
+
+def test_a_sailed_track_ends_where_the_ship_crossed_the_arrival_radius(script, tmp_path):
+    import json
+
+    import numpy as np
+
+    frame = pd.DataFrame({"time_s": [0.0, 60.0, 120.0, 180.0], "ship.x": [0.0, 100.0, 200.0, 300.0],
+                          "ship.y": [0.0, 10.0, 20.0, 30.0], "ship.psi": [0.0] * 4})
+    frame.to_parquet(tmp_path / "timeseries.parquet")
+    (tmp_path / "summary.json").write_text(json.dumps({"analyses": {"voyage": {"arrival_time_min": 1.5}}}))
+    points, times = script.sailed_track(tmp_path)
+    np.testing.assert_allclose(times, [0.0, 60.0, 90.0])
+    np.testing.assert_allclose(points, [[0.0, 0.0], [100.0, 10.0], [150.0, 15.0]])
+    (tmp_path / "summary.json").write_text(json.dumps({"analyses": {"voyage": {"arrival_time_min": None}}}))
+    assert script.sailed_track(tmp_path) is None
