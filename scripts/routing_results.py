@@ -532,7 +532,8 @@ def main() -> None:
              "the same arrival time (costed by the routing model; route and speed profile decided together since "
              "the routing sets were added). Saving: against the baseline, positive when the "
              "system is cheaper. Available: optimal route and speed against the straight route at constant speed. "
-             "Share: saving / available.", ""]
+             "Share: saving / available. The fixed routing weather sets (gales, moving gales and current jets, three "
+             "headings and map sizes): [routing-sets.md](routing-sets.md).", ""]
     summary_rows, sections, speed_spreads = [], [], {}
     for name, words, path in WEATHERS:
         folder = latest(results, name)
