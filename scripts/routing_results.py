@@ -13,7 +13,14 @@ project's energy model); nothing is typed by hand.  Run the comparisons first:
     python scripts/routing_results.py [--results results] [--out docs/routing-results.md]
 
 It also rewrites the README's routing table and storm-set findings (between the
-``routing-summary`` markers), so the README quotes exactly these runs.
+``routing-summary`` markers), so the README quotes exactly these runs.  The fixed routing
+weather sets go to ``docs/routing-sets.md`` and the README's ``routing-sets`` block, alone
+with ``--sets-only``; run them first:
+
+    python -m orchestrator compare scenarios/weather/routing_set_ne.toml
+    python -m orchestrator compare scenarios/weather/routing_set_sw.toml
+    python -m orchestrator compare scenarios/weather/routing_set_w.toml
+    python scripts/routing_results.py --sets-only
 """
 
 from __future__ import annotations
@@ -42,13 +49,15 @@ SWEEPS = (
     ("weather_storm_set", "the paper's navigation (RHNC)", "scenarios/weather/storm_set.toml"),
     ("weather_storm_set_routing", "the routing navigation method (RHNC routing)",
      "scenarios/weather/storm_set_routing.toml"),
-    ("weather_routing_set_ne", "the routing set heading north-east, 100 x 100 nm (RHNC routing)",
-     "scenarios/weather/routing_set_ne.toml"),
-    ("weather_routing_set_sw", "the routing set heading south-south-west, 140 x 90 nm (RHNC routing)",
-     "scenarios/weather/routing_set_sw.toml"),
-    ("weather_routing_set_w", "the routing set heading west, 80 x 150 nm (RHNC routing)",
-     "scenarios/weather/routing_set_w.toml"),
 )
+#: (comparison name, the set in words, comparison file) of the fixed routing weather sets (docs/routing-sets.md)
+ROUTING_SETS = (
+    ("weather_routing_set_ne", "heading north-east, 100 x 100 nm", "scenarios/weather/routing_set_ne.toml"),
+    ("weather_routing_set_sw", "heading south-south-west, 140 x 90 nm", "scenarios/weather/routing_set_sw.toml"),
+    ("weather_routing_set_w", "heading west, 80 x 150 nm", "scenarios/weather/routing_set_w.toml"),
+)
+#: the system measured on the routing sets
+ROUTING_SET_SYSTEM = "RHNC routing"
 #: the goal over every weather set: median share, least share where >= 0.5 % is available
 SET_GOAL_MEDIAN_PERCENT, SET_GOAL_LEAST_PERCENT = 90.0, 75.0
 HEADLINE = ["system", "arrival [min]", "cost [USD]", "baseline cost [USD]", "saving cost [%]", "saving CO2 [%]",
@@ -210,6 +219,7 @@ def summary_text(rows: list[dict], sweeps: dict, effect: dict) -> list[str]:
 
 
 README_BEGIN, README_END = "<!-- routing-summary:begin -->", "<!-- routing-summary:end -->"
+SETS_BEGIN, SETS_END = "<!-- routing-sets:begin -->", "<!-- routing-sets:end -->"
 #: (label in the comparisons, words in the README)
 README_SYSTEMS = (("RHNC", "RHNC, paper's method"), ("RHNC routing", "RHNC, routing method"))
 #: the goal of the routing navigation over the storm set
@@ -282,13 +292,210 @@ def readme_block(rows: list[dict], sweeps: dict) -> str:
     return "\n".join(lines)
 
 
-def write_readme_block(readme: Path, block: str) -> None:
+def write_readme_block(readme: Path, block: str, begin: str = README_BEGIN, end: str = README_END) -> None:
     text = readme.read_text()
-    if README_BEGIN not in text or README_END not in text:
-        raise SystemExit(f"{readme}: no {README_BEGIN} ... {README_END} markers to write the routing summary between")
-    head, rest = text.split(README_BEGIN, 1)
-    _, tail = rest.split(README_END, 1)
-    readme.write_text(head + README_BEGIN + "\n" + block + "\n" + README_END + tail)
+    if begin not in text or end not in text:
+        raise SystemExit(f"{readme}: no {begin} ... {end} markers to write the routing summary between")
+    head, rest = text.split(begin, 1)
+    _, tail = rest.split(end, 1)
+    readme.write_text(head + begin + "\n" + block + "\n" + end + tail)
+
+
+def sailed_track(run: Path) -> tuple[np.ndarray, np.ndarray] | None:
+    """(points [m], times [s]) of a finished run up to its arrival, the last point where the
+    ship crossed the arrival radius (interpolated); None if it did not arrive."""
+    summary = json.loads((run / "summary.json").read_text())
+    arrival_min = summary.get("analyses", {}).get("voyage", {}).get("arrival_time_min")
+    if arrival_min is None:
+        return None
+    frame = pd.read_parquet(run / summary.get("timeseries", "timeseries.parquet"))
+    plant = next(c[:-2] for c in frame.columns if c.endswith(".x") and f"{c[:-2]}.psi" in frame.columns)
+    time = frame["time_s"].to_numpy(dtype=float)
+    points = frame[[f"{plant}.x", f"{plant}.y"]].to_numpy(dtype=float)
+    arrival_s = float(arrival_min) * 60.0
+    before = time < arrival_s - 1e-6
+    end = np.array([np.interp(arrival_s, time, points[:, 0]), np.interp(arrival_s, time, points[:, 1])])
+    return np.vstack([points[before], end]), np.concatenate([time[before], [arrival_s]])
+
+
+_RECOST_FIELDS: dict[str, object] = {}
+
+
+def recosted_saving(member: Path, comparison: Path, overrides: dict, label: str = ROUTING_SET_SYSTEM) -> dict:
+    """The system's saving re-costed by the routing model: its track as sailed (positions and
+    times, up to the arrival radius) against the equal-arrival baseline's track as sailed (the
+    trial arriving closest to it), both costed by :func:`rhnc.routing.track_cost.cost_of_track`
+    in the member's field, the same model and field as the available saving; so the share
+    compares like with like (the co-simulated saving uses the plant's own power)."""
+    from orchestrator.compare import load_comparison, load_extensions
+    from orchestrator.geometry import NM
+    from orchestrator.scenario import load_scenario
+    from rhnc.routing.track_cost import cost_of_track
+    from rhnc.ship.energy import EnergyParameters
+    from rhnc.voyage.voyage_geometry import edge_hold_nm
+    from rhnc.weather.metocean_sources import from_scenario_table
+
+    voyage = load_extensions(load_comparison(comparison), comparison)["voyage"]
+    key = json.dumps(overrides, sort_keys=True)
+    if key not in _RECOST_FIELDS:
+        loaded = load_scenario(voyage.equal_arrival.scenario, dict(overrides))
+        field = from_scenario_table(loaded.metocean, loaded.directory, f"{loaded.path}: metocean")
+        hold = edge_hold_nm(field, voyage.goal_m, voyage.arrival_radius_nm)
+        _RECOST_FIELDS[key] = field if hold is None else field.with_edges_held(hold * NM)
+    field = _RECOST_FIELDS[key]
+    runs = member / "runs"
+    system_runs = sorted((runs / label.replace(" ", "_")).glob("*/summary.json"))
+    system = sailed_track(system_runs[-1].parent) if system_runs else None
+    if system is None:
+        return {}
+    trials = [t for t in (sailed_track(s.parent) for s in (runs / f"{label} equal-arrival baseline".replace(" ", "_"))
+                          .glob("*/summary.json")) if t is not None]
+    if not trials:
+        return {}
+    baseline = min(trials, key=lambda t: abs(t[1][-1] - system[1][-1]))
+    energy = EnergyParameters()
+    sailed = cost_of_track(field, energy, *system)["cost_usd"]
+    line = cost_of_track(field, energy, *baseline)["cost_usd"]
+    return {"saving_percent": 100.0 * (line - sailed) / line, "arrival_gap_s": float(system[1][-1] - baseline[1][-1])}
+
+
+def routing_set_members(section, name: str, folders: list[Path], label: str = ROUTING_SET_SYSTEM,
+                        comparison: Path | None = None) -> pd.DataFrame:
+    """One row per member of a routing set: its kind of weather, what it offers, the system's
+    saving and share, and every failed run or trial of the member by name."""
+    from rhnc.weather.routing_weather_set import KINDS
+
+    members = section.tables["voyage_sweep"]
+    key = members.columns[0]
+    failed: dict[int, list[str]] = {}
+    recosted: dict[int, dict] = {}
+    for folder in folders:   # oldest first, as the members were gathered
+        for summary in folder.glob("members/*/summary.json"):
+            member = int(summary.parent.name.partition("=")[2])
+            content = json.loads(summary.read_text())
+            runs = content.get("failed_runs") or {}
+            failed[member] = [f"{run}: {reason}" for run, reason in runs.items()]
+            if comparison is not None:
+                recosted[member] = recosted_saving(summary.parent, comparison, content["overrides"], label)
+    rows = []
+    for _, row in members.iterrows():
+        member = int(row[key])
+        saving = row.get(f"{label} saving cost [%]")
+        rows.append({
+            "member": member, "weather": KINDS[member % len(KINDS)],
+            "available at the nominal speed [%]": row.get("available cost saving at the nominal speed [%]"),
+            "arrived": bool(row.get(f"{label} arrived")),
+            "arrival [min]": row.get(f"{label} arrival [min]"),
+            "available at its arrival [%]": row.get(f"{label} available cost saving [%]"),
+            "saving vs equal-arrival line [%]": saving,
+            "share [%]": row.get(f"{label} share cost [%]"),
+            "saving re-costed [%]": recosted.get(member, {}).get("saving_percent"),
+            "share re-costed [%]": _share(recosted.get(member, {}).get("saving_percent"),
+                                          row.get(f"{label} available cost saving [%]")),
+            "more than 0.5 % dearer": (None if saving is None or saving != saving
+                                       else bool(saving < GOAL_WORST_PERCENT)),
+            "failed runs and trials": "; ".join(failed.get(member, [])) or "none",
+        })
+    return pd.DataFrame(rows)
+
+
+def percent(value, spec: str = ".0f") -> str:
+    """``value`` [%] as text, ``-`` when undefined."""
+    return "-" if value is None or value != value else f"{value:{spec}} %"
+
+
+def _share(saving, available):
+    """saving / available [%] where at least the threshold is available, else None."""
+    from rhnc.voyage.voyage_comparison_tables import MIN_AVAILABLE_SAVING_PERCENT
+
+    if saving is None or available is None or saving != saving or available != available:
+        return None
+    return 100.0 * saving / available if available >= MIN_AVAILABLE_SAVING_PERCENT else None
+
+
+def routing_set_verdict(members: pd.DataFrame, planned: int) -> dict:
+    """The goal's figures over one set: median share (members offering >= 0.5 %), least share,
+    worst saving, members dearer than the line by more than 0.5 %, failures."""
+    share = pd.to_numeric(members["share [%]"], errors="coerce").dropna()
+    saving = pd.to_numeric(members["saving vs equal-arrival line [%]"], errors="coerce").dropna()
+    failures = int((members["failed runs and trials"] != "none").sum())
+    verdict = {"members": len(members), "planned": planned, "arrived": int(members["arrived"].sum()),
+               "with_share": int(share.size), "median_share": float(share.median()) if share.size else float("nan"),
+               "least_share": float(share.min()) if share.size else float("nan"),
+               "worst_saving": float(saving.min()) if saving.size else float("nan"),
+               "dearer": int((saving < GOAL_WORST_PERCENT).sum()), "failed_members": failures}
+    recosted = pd.to_numeric(members.get("share re-costed [%]", pd.Series(dtype=float)), errors="coerce").dropna()
+    verdict["median_share_recosted"] = float(recosted.median()) if recosted.size else float("nan")
+    verdict["least_share_recosted"] = float(recosted.min()) if recosted.size else float("nan")
+    verdict["met"] = bool(verdict["members"] == planned and verdict["arrived"] == planned and failures == 0
+                          and verdict["dearer"] == 0 and (not share.size or (
+                              verdict["median_share"] >= SET_GOAL_MEDIAN_PERCENT
+                              and verdict["least_share"] >= SET_GOAL_LEAST_PERCENT)))
+    return verdict
+
+
+def routing_sets_document(results: Path, out: Path, figures: Path) -> tuple[list[str], list[str]]:
+    """docs/routing-sets.md and the README's block: each fixed routing set, member by member,
+    against the goal (median share >= 90 %, each >= 75 % where >= 0.5 % is available, never
+    more than 0.5 % dearer than the equal-arrival line, no failed run or trial)."""
+    lines = ["# The fixed routing weather sets, measured at equal arrival time", "",
+             "Generated by `python scripts/routing_results.py --sets-only` (or without the option, with "
+             "[routing-results.md](routing-results.md)) from the comparisons below. The sets (seed 2611: gales, "
+             "moving gales and current jets about the route, three headings, three map sizes; "
+             "[weather.md](weather.md)) were fixed before any routing result on them was seen. Each member is "
+             "one fair comparison ([compare-format.md](compare-format.md)): the routing navigation (RHNC routing) "
+             "sails the passage, Offline-SPNC's straight line is co-simulated at the speed that arrives with it "
+             "(the equal-arrival line), and the optimal route and speed profile for that arrival time are costed "
+             "by the routing model. Available: the optimum against the straight route at constant speed. Share: "
+             "saving against the equal-arrival line / available, where at least 0.5 % is available. "
+             "Re-costed: the same saving with both voyages' tracks as sailed (positions and times, up to the "
+             "arrival radius) costed by the routing model in the member's field (`cost_of_track`), the model and "
+             "field of the available saving; the co-simulated saving uses the plant's own power. A share above "
+             "100 % means the sailed voyage beat the equal-arrival line by more than the routing model's optimum "
+             "beats the straight route: there the optimum (a graph search with refinement and a speed profile) falls "
+             "short of the true optimum, and the share overstates what was captured of the true available saving.",
+             "",
+             f"Goal, per set: a median share of at least {SET_GOAL_MEDIAN_PERCENT:.0f} %, at least "
+             f"{SET_GOAL_LEAST_PERCENT:.0f} % in every member offering 0.5 % or more, no member more than "
+             f"{-GOAL_WORST_PERCENT:.1f} % dearer than the equal-arrival line, every run and trial finished.", ""]
+    summary = ["| set | members run | arrived | members offering >= 0.5 % | median share | least share | "
+               "median / least share re-costed | worst saving vs line | more than 0.5 % dearer | "
+               "members with a failed run or trial | goal |",
+               "|---|---|---|---|---|---|---|---|---|---|---|"]
+    readme = list(summary)
+    body = []
+    for name, words, path in ROUTING_SETS:
+        spec = tomllib.loads((REPO / path).read_text())
+        low, high = spec["sweep"]["range"]
+        planned = int(high) - int(low) + 1
+        found = sweep_members(results, name, REPO / path, figures)
+        body += [f"## {words}", ""]
+        if found is None:
+            body += [f"No results yet: `python -m orchestrator compare {path}`.", ""]
+            row = f"| {words} | 0 of {planned} | - | - | - | - | - | - | - | - | not measured |"
+            summary.append(row)
+            readme.append(row)
+            continue
+        section, used, done, finished = found
+        folders = sorted((results / name / folder for folder in used), key=lambda p: p.name.lstrip("."))
+        members = routing_set_members(section, name, folders, comparison=REPO / path)
+        v = routing_set_verdict(members, planned)
+        (figures / "voyage_sweep.png").replace(figures / f"{out.stem}_{name}_share.png")
+        state = "" if finished else " The comparison had not published its folder (stopped, or still running); the members it had finished are kept."
+        body += [f"`python -m orchestrator compare {path}` ({done} of {planned} members; results "
+                 + ", ".join(f"`{folder}`" for folder in used) + f").{state}", "",
+                 table(members, list(members.columns)), "",
+                 f"![shares](figures/{out.stem}_{name}_share.png)", ""]
+        row = (f"| {words} | {v['members']} of {planned} | {v['arrived']} | {v['with_share']} | "
+               f"{percent(v['median_share'])} | {percent(v['least_share'])} | "
+               f"{percent(v['median_share_recosted'])} / {percent(v['least_share_recosted'])} | "
+               f"{percent(v['worst_saving'], '+.2f')} | "
+               f"{v['dearer']} | {v['failed_members']} | "
+               + ("met" if v["met"] else "not met" if v["members"] == planned else "incomplete") + " |")
+        summary.append(row)
+        readme.append(row)
+    lines += ["## Summary", ""] + summary + [""] + body
+    return lines, readme
 
 
 def main() -> None:
@@ -299,10 +506,21 @@ def main() -> None:
                                                                        "('' to leave it)")
     parser.add_argument("--note", default="", help="a caveat printed under the title (e.g. which runs predate a "
                                                    "model change)")
+    parser.add_argument("--sets-only", action="store_true", help="write only docs/routing-sets.md and the README's "
+                                                                      "routing-sets block")
     args = parser.parse_args()
     results, out = Path(args.results), Path(args.out)
     figures = out.parent / "figures"
     figures.mkdir(parents=True, exist_ok=True)
+    sets_out = out.parent / "routing-sets.md"
+    set_lines, set_readme = routing_sets_document(results, sets_out, figures)
+    sets_out.write_text("\n".join(set_lines) + "\n")
+    print(f"wrote {sets_out}")
+    if args.readme:
+        write_readme_block(Path(args.readme), "\n".join(set_readme), SETS_BEGIN, SETS_END)
+        print(f"rewrote the routing-sets summary in {args.readme}")
+    if args.sets_only:
+        return
 
     lines = ["# Routing savings, measured at equal arrival time", "",
              "Generated by `python scripts/routing_results.py` from the comparisons below (format: "
@@ -314,7 +532,8 @@ def main() -> None:
              "the same arrival time (costed by the routing model; route and speed profile decided together since "
              "the routing sets were added). Saving: against the baseline, positive when the "
              "system is cheaper. Available: optimal route and speed against the straight route at constant speed. "
-             "Share: saving / available.", ""]
+             "Share: saving / available. The fixed routing weather sets (gales, moving gales and current jets, three "
+             "headings and map sizes): [routing-sets.md](routing-sets.md).", ""]
     summary_rows, sections, speed_spreads = [], [], {}
     for name, words, path in WEATHERS:
         folder = latest(results, name)

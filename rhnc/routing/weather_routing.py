@@ -48,8 +48,39 @@ from rhnc.routing.track_cost import constant_speed_times, cost_of_track, is_time
 
 log = logging.getLogger(__name__)
 
-__all__ = ["RoutingProblem", "RouteResult", "RouteSearch", "optimal_route", "straight_route", "cost_of_track",
+__all__ = ["RoutingProblem", "RouteResult", "RouteSearch", "cost_rate", "optimal_route", "straight_route", "cost_of_track",
            "time_price_usd_h"]
+
+
+def cost_rate(weather, heading_rad, speed_mps: float, time_price_usd_h: float, energy):
+    """Objective rate [USD/h] and current along the course [m/s] of a ship on ``heading_rad``.
+
+    The one costing of the search, its segments and its legs: the fuel cost rate of the
+    energy model's brake power at ``speed_mps`` through water with the course sailed,
+    plus ``time_price_usd_h`` for each hour.
+
+    Parameters
+    ----------
+    weather : mapping of str to ndarray
+        ``wind_north``, ``wind_east`` [m/s], ``hs`` [m], ``current_north``, ``current_east``
+        [m/s], broadcastable against ``heading_rad``.
+    heading_rad : ndarray
+        Course sailed [rad] (north = 0, east = pi / 2).
+    speed_mps : float
+        Speed through water [m/s].
+    time_price_usd_h : float
+        Price of an hour [USD/h].
+    energy : EnergyParameters
+
+    Returns
+    -------
+    rate, along : ndarray
+        Objective rate [USD/h] and current along the course [m/s] (speed over ground is
+        ``speed_mps + along``).
+    """
+    along = weather["current_north"] * np.cos(heading_rad) + weather["current_east"] * np.sin(heading_rad)
+    power = brake_power(speed_mps, heading_rad, weather["wind_north"], weather["wind_east"], weather["hs"], energy)
+    return fuel_rate_t_h(power, energy) * energy.fuel_price_usd_t + time_price_usd_h, along
 
 
 class RouteSearch:
@@ -102,11 +133,8 @@ class RouteSearch:
             weather = {name: values[nodes] for name, values in self.static_weather.items()}
         else:
             weather = sample_weather(p.metocean, self.nodes[nodes, 0], self.nodes[nodes, 1], node_times_s)
-        heading = self.graph.heading_rad[None, :]
-        along = weather["current_north"][:, None] * np.cos(heading) + weather["current_east"][:, None] * np.sin(heading)
-        power = brake_power(speed_mps, heading, weather["wind_north"][:, None], weather["wind_east"][:, None],
-                            weather["hs"][:, None], p.energy)
-        rate = fuel_rate_t_h(power, p.energy) * p.energy.fuel_price_usd_t + time_price_usd_h
+        per_node = {name: values[:, None] for name, values in weather.items()}
+        rate, along = cost_rate(per_node, self.graph.heading_rad[None, :], speed_mps, time_price_usd_h, p.energy)
         return rate, speed_mps + along
 
     def edge_weights(self, rate: np.ndarray, over_ground: np.ndarray):
@@ -165,10 +193,8 @@ class RouteSearch:
         heading = np.arctan2(legs[:, 1], legs[:, 0])[owner]
         weather = sample_weather(p.metocean, points[:, 0], points[:, 1],
                                  start_s + fraction * length[owner] / speed_mps)
-        along = weather["current_north"] * np.cos(heading) + weather["current_east"] * np.sin(heading)
+        rate, along = cost_rate(weather, heading, speed_mps, time_price_usd_h, p.energy)
         over_ground = speed_mps + along
-        power = brake_power(speed_mps, heading, weather["wind_north"], weather["wind_east"], weather["hs"], p.energy)
-        rate = fuel_rate_t_h(power, p.energy) * p.energy.fuel_price_usd_t + time_price_usd_h
         same = owner[1:] == owner[:-1]
         sub_speed = 0.5 * (over_ground[1:] + over_ground[:-1])
         sub_length = (length / pieces)[owner[:-1]]
@@ -204,9 +230,7 @@ class RouteSearch:
         heading = np.tile(np.arctan2(legs[:, 1], legs[:, 0])[leg_of], 2)
         ends = np.vstack([points[:-1], points[1:]])
         weather = sample_weather(p.metocean, ends[:, 0], ends[:, 1], np.concatenate([passed_s[:-1], passed_s[1:]]))
-        along = weather["current_north"] * np.cos(heading) + weather["current_east"] * np.sin(heading)
-        power = brake_power(speed_mps, heading, weather["wind_north"], weather["wind_east"], weather["hs"], p.energy)
-        rate = fuel_rate_t_h(power, p.energy) * p.energy.fuel_price_usd_t + time_price_usd_h
+        rate, along = cost_rate(weather, heading, speed_mps, time_price_usd_h, p.energy)
         count = length.size
         sub_speed = speed_mps + 0.5 * (along[:count] + along[count:])
         hours = np.where(length > 0, length / np.maximum(sub_speed, 1e-3), 0.0) / 3600.0

@@ -50,7 +50,7 @@ from orchestrator.scenario import load_scenario
 from rhnc.voyage.equal_arrival import EqualArrival, match_arrival_time
 from orchestrator.geometry import KNOT, NM
 from rhnc.voyage.voyage_comparison_tables import evaluation_section, sweep_section
-from rhnc.voyage.voyage_geometry import check_on_map, geometry_overrides, refuse_conflicts
+from rhnc.voyage.voyage_geometry import check_on_map, edge_hold_nm, geometry_overrides, refuse_conflicts
 from rhnc.voyage.voyage_spec import (VOYAGE_KEYS, EqualArrivalSettings, OptimalRouteSettings, equal_arrival,
                               optimal_route, point, positive, reject_unknown)
 
@@ -150,7 +150,7 @@ class VoyageComparison:
         if len(goals) != 1:
             raise ScenarioError(f"{where}: a voyage comparison needs exactly one participant of type \"goal\"")
         goal = goals[0]
-        self._check_on_map(loaded, where)
+        hold = self._check_on_map(loaded, where)
         geometry = geometry_overrides(loaded, self.start_m, self.goal_m, self.arrival_time_min, where)
         refuse_conflicts(geometry, overrides, where)
         loaded = load_scenario(scenario, {**dict(overrides), **geometry})
@@ -167,6 +167,8 @@ class VoyageComparison:
             "outputs.options.voyage.goal_nm": [float(v) for v in self.goal_m / NM],
             "outputs.options.voyage.arrival_radius_nm": self.arrival_radius_nm,
         }
+        if hold is not None and "metocean.hold_edges_nm" not in overrides:
+            result["metocean.hold_edges_nm"] = hold
         equal = self.equal_arrival
         if equal is not None and equal.same_control and any(
                 Path(scenario).resolve() == self.run_scenarios[label].resolve() for label in equal.systems
@@ -179,16 +181,19 @@ class VoyageComparison:
             result["simulation.stop_s"] = sim.start_s + steps * sim.dt_s
         return result
 
-    def _check_on_map(self, loaded, where: str) -> None:
-        """Refuse a start or goal outside the run's met-ocean map (each map built once)."""
+    def _check_on_map(self, loaded, where: str) -> float | None:
+        """Refuse a start or goal outside the run's met-ocean map (each map built once); the
+        band [nm] over which the run must hold the map's edges for the arrival circle
+        (:func:`rhnc.voyage.voyage_geometry.edge_hold_nm`), None if it need not."""
         if loaded.metocean is None:
-            return
+            return None
         from rhnc.weather.metocean_sources import from_scenario_table
 
         key = json.dumps([str(loaded.directory), loaded.metocean], sort_keys=True, default=str)
         if key not in self._maps:
             self._maps[key] = from_scenario_table(loaded.metocean, loaded.directory, f"{loaded.path}: metocean")
         check_on_map(self._maps[key], self.start_m, self.goal_m, where)
+        return edge_hold_nm(self._maps[key], self.goal_m, self.arrival_radius_nm)
 
     def evaluate(self, reports: Mapping[str, Any], runner: ScenarioRunner, overrides: Mapping[str, Any],
                  out_dir: Path) -> Section:
@@ -322,6 +327,10 @@ class VoyageComparison:
         settings = self.optimal_route or OptimalRouteSettings()
         problem = RoutingProblem(self.start_m, self.goal_m, metocean, energy=energy,
                                  resolution_nm=settings.resolution_nm, avoid=settings.avoid_m)
+        # a track may end in the part of the arrival circle off the map: it is costed, as it
+        # was sailed, with the edge's weather held there; the routes stay on the map
+        hold_nm = edge_hold_nm(metocean, self.goal_m, self.arrival_radius_nm)
+        track_field = metocean if hold_nm is None else metocean.with_edges_held(hold_nm * NM)
         costs: dict[str, dict[str, Any]] = {}
         for label, system in systems.items():
             if not system.usable:
@@ -343,8 +352,8 @@ class VoyageComparison:
                 line = densify(np.vstack([self.start_m, self.goal_m]), settings.resolution_nm * NM / 2.0)
                 entry["equal_speed_kn"] = speed / KNOT
                 for name, points in (("track_at_equal_speed", track), ("line_at_equal_speed", line)):
-                    entry[name] = cost_of_track(metocean, energy, points,
-                                                constant_speed_times(metocean, points, speed))
+                    entry[name] = cost_of_track(track_field, energy, points,
+                                                constant_speed_times(track_field, points, speed))
             costs[label] = entry
         return costs
 

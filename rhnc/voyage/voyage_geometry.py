@@ -16,7 +16,10 @@ that give every participant of a run that passage:
 
 An override in the comparison that sets one of these keys to another value is refused with
 one line naming both (:func:`refuse_conflicts`); :func:`check_on_map` refuses a start or goal
-outside the met-ocean map.
+outside the met-ocean map.  A goal on or near the map's edge has part of its arrival circle
+off the map: :func:`edge_hold_nm` gives the band beyond the edges over which the runs then
+hold the edge's weather (``[metocean] hold_edges_nm``), so a ship can sail anywhere in the
+circle instead of failing there.
 """
 
 from __future__ import annotations
@@ -32,6 +35,9 @@ from orchestrator.geometry import NM
 
 #: Two positions this close [m] (or headings [rad], or times [min]) are the same.
 SAME = 1e-6
+#: Beyond the arrival circle, the band [nm] a ship may still cross before its arrival is seen
+#: (a step or two at speed, a minute at 30 kn).
+EDGE_ALLOWANCE_NM = 0.5
 
 
 def bearing_rad(start_m, goal_m) -> float:
@@ -84,6 +90,17 @@ def check_on_map(field, start_m, goal_m, where: str) -> None:
             shown = [round(float(v) / NM, 6) for v in point]
             raise ScenarioError(f"{where}: voyage.{key} {shown} lies outside the met-ocean map (north "
                                 f"{x_min / NM:g}..{x_max / NM:g} nm, east {y_min / NM:g}..{y_max / NM:g} nm)")
+
+
+def edge_hold_nm(field, goal_m, arrival_radius_nm: float) -> float | None:
+    """The band [nm] beyond the map's edges over which a run must hold the edge's weather
+    so that the arrival circle about ``goal_m`` (and :data:`EDGE_ALLOWANCE_NM` beyond it)
+    lies on the map; None when it already does."""
+    x_min, x_max, y_min, y_max = field.extent
+    north, east = (float(v) for v in goal_m)
+    needed = arrival_radius_nm + EDGE_ALLOWANCE_NM
+    nearest_nm = min(north - x_min, x_max - north, east - y_min, y_max - east) / NM
+    return needed if nearest_nm < needed else None
 
 
 def _reference_path(spec, options: str, start_nm, goal_nm, heading: float, where: str) -> dict[str, Any]:

@@ -36,12 +36,14 @@ The environment FMU reads the same grid through ``write_fmu_grid`` (binary forma
 
 from __future__ import annotations
 
+import math
 import struct
 from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
+from orchestrator.geometry import NM
 from rhnc.weather.metocean_grid import FIELDS
 from rhnc.weather.metocean_netcdf import to_dataset, write_netcdf
 
@@ -145,6 +147,27 @@ class MetOceanField:
         y = np.asarray(y, dtype=float)
         return ((x >= x_min - tolerance) & (x <= x_max + tolerance)
                 & (y >= y_min - tolerance) & (y <= y_max + tolerance))
+
+    def with_edges_held(self, margin_m: float) -> "MetOceanField":
+        """This field on a grid grown by at least ``margin_m`` [m] beyond every edge, whole
+        grid steps, the edge's values held there (the field on the original grid unchanged).
+
+        A ship's arrival circle about a goal on the edge lies partly off the map; holding
+        the edge's weather over that band lets it sail there (nearest-edge values, not
+        data).
+        """
+        if not (np.isfinite(margin_m) and margin_m >= 0.0):
+            raise ValueError(f"the margin to hold the edges over must be a non-negative distance, got {margin_m}")
+        nx, ny = int(math.ceil(margin_m / self.dx - 1e-9)), int(math.ceil(margin_m / self.dy - 1e-9))
+        if nx == 0 and ny == 0:
+            return self
+        x = np.concatenate([self.x[0] - self.dx * np.arange(nx, 0, -1), self.x, self.x[-1] + self.dx * np.arange(1, nx + 1)])
+        y = np.concatenate([self.y[0] - self.dy * np.arange(ny, 0, -1), self.y, self.y[-1] + self.dy * np.arange(1, ny + 1)])
+        fields = {name: np.pad(values, ((0, 0), (nx, nx), (ny, ny)), mode="edge") for name, values in self._fields.items()}
+        if not self.is_time_varying:
+            fields = {name: values[0] for name, values in fields.items()}
+        return MetOceanField(x, y, fields, source=f"{self.source} (edge values held {margin_m / NM:g} nm beyond)",
+                             times_s=self.times_s if self.is_time_varying else None, start_time=self.start_time)
 
     # -- interpolation --------------------------------------------------------------
     def time_weights(self, t_s) -> tuple[np.ndarray, np.ndarray]:

@@ -44,9 +44,17 @@ def from_scenario_table(table: Mapping[str, Any], scenario_dir: Path, where: str
 
     ``generator = "<name>"`` with that generator's keys (registry and keys:
     :func:`rhnc.weather.weather_generators.list_generators`), or ``file = "path.nc"`` with the
-    options of :func:`from_netcdf`.  Errors name ``where`` (file and table) and the key.
+    options of :func:`from_netcdf`.  Either may add ``hold_edges_nm``: the map grown by that
+    distance beyond every edge, the edge's values held there
+    (:meth:`rhnc.weather.metocean.MetOceanField.with_edges_held`).  Errors name ``where``
+    (file and table) and the key.
     """
     table = dict(table)
+    if "hold_edges_nm" in table:
+        hold_nm = checked_option(table.pop("hold_edges_nm"), "number", f"{where}.hold_edges_nm")
+        if hold_nm < 0.0:
+            raise ScenarioError(f"{where}.hold_edges_nm: expected a distance of at least 0 nm, got {hold_nm:g}")
+        return from_scenario_table(table, scenario_dir, where).with_edges_held(hold_nm * NM)
     if ("generator" in table) == ("file" in table):
         raise ScenarioError(f"{where}: give exactly one of 'generator' or 'file'")
     if "generator" in table:

@@ -112,3 +112,54 @@ def test_scenario_table_reads_a_file_relative_to_the_scenario(tmp_path):
     paper_default(resolution_nm=10.0).to_netcdf(tmp_path / "w.nc")
     field = from_scenario_table({"file": "w.nc"}, Path(tmp_path), "s.toml: metocean")
     assert field.x.size == 11
+
+
+def test_edges_held_beyond_the_map_in_whole_steps_the_map_itself_unchanged():
+    field = paper_default(x_range_nm=(0.0, 10.0), y_range_nm=(0.0, 8.0), resolution_nm=0.5)
+    held = field.with_edges_held(0.8 * NM)   # two steps of 0.5 nm cover 0.8 nm
+    assert held.extent == pytest.approx((-1.0 * NM, 11.0 * NM, -1.0 * NM, 9.0 * NM))
+    assert held.dx == pytest.approx(field.dx) and held.dy == pytest.approx(field.dy)
+    inside = held.sample(field.x[:, None] + 0 * field.y[None, :], 0 * field.x[:, None] + field.y[None, :])
+    np.testing.assert_array_equal(inside["hs"], field.hs)
+    # beyond a side: that side's values; beyond a corner: the corner's
+    beyond = held.sample(np.array([10.9, 4.0, 10.9]) * NM, np.array([3.0, -0.7, 8.6]) * NM)
+    edge = field.sample(np.array([10.0, 4.0, 10.0]) * NM, np.array([3.0, 0.0, 8.0]) * NM)
+    for name in ("wind_north", "wind_east", "hs", "current_north", "current_east"):
+        np.testing.assert_allclose(beyond[name], edge[name], rtol=1e-12, atol=1e-12)
+    assert field.with_edges_held(0.0) is field
+    with pytest.raises(ValueError, match="non-negative distance, got -1"):
+        field.with_edges_held(-1.0)
+
+
+def test_edges_held_in_time_too():
+    from rhnc.weather.weather_generators import moving_storm
+
+    field = moving_storm(x_range_nm=(0.0, 20.0), y_range_nm=(0.0, 20.0), resolution_nm=1.0)
+    held = field.with_edges_held(1.0 * NM)
+    np.testing.assert_array_equal(held.times_s, field.times_s)
+    for t in (field.times_s[0], 0.5 * (field.times_s[1] + field.times_s[2])):
+        np.testing.assert_allclose(held.sample([21.0 * NM], [7.0 * NM], t)["wind_north"],
+                                   field.sample([20.0 * NM], [7.0 * NM], t)["wind_north"], rtol=1e-12)
+
+
+def test_a_scenario_table_may_hold_the_edges_and_a_bad_band_is_refused(tmp_path):
+    table = {"generator": "paper_default", "x_range_nm": [0.0, 10.0], "y_range_nm": [0.0, 10.0], "resolution_nm": 1.0}
+    held = from_scenario_table({**table, "hold_edges_nm": 1.5}, tmp_path, "s.toml: metocean")
+    assert held.extent == pytest.approx((-2.0 * NM, 12.0 * NM, -2.0 * NM, 12.0 * NM))
+    assert "edge values held 1.5 nm beyond" in held.source
+    with pytest.raises(ScenarioError, match=r"^s.toml: metocean.hold_edges_nm: expected a distance of at least 0 nm, got -1$"):
+        from_scenario_table({**table, "hold_edges_nm": -1.0}, tmp_path, "s.toml: metocean")
+    with pytest.raises(ScenarioError, match=r"^s.toml: metocean.hold_edges_nm: expected a number, got 'far'$"):
+        from_scenario_table({**table, "hold_edges_nm": "far"}, tmp_path, "s.toml: metocean")
+
+
+def test_a_bad_edge_band_exits_2_from_the_cli_naming_the_key(tmp_path, capsys):
+    from orchestrator.cli import main
+
+    scenario = tmp_path / "held.toml"
+    scenario.write_text('[simulation]\ndt_s = 1.0\nsteps = 2\n[metocean]\ngenerator = "paper_default"\n'
+                        'hold_edges_nm = -0.5\n[participants.a]\ntype = "scripted_tau"\n')
+    assert main(["run", str(scenario), "--results", str(tmp_path / "results")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "held.toml" in err[0] and "metocean.hold_edges_nm" in err[0]
+    assert not (tmp_path / "results").exists() or not any((tmp_path / "results").iterdir())

@@ -411,3 +411,77 @@ def test_a_failed_equal_arrival_trial_is_reported(tmp_path):
     trials = section.tables["voyage_trials"]
     assert list(trials["status"]) == ["failed", "finished"]
     assert "## Equal-arrival trials" in section.markdown and "point x is outside the grid" in section.markdown
+
+
+@pytest.mark.parametrize("goal_nm, hold", [((4.0, 0.0), None),      # 1 nm inside: circle and band on the map
+                                           ((4.6, 0.0), 1.0),       # 0.4 nm from the north edge
+                                           ((5.0, 3.0), 1.0)])      # on the corner
+def test_a_goal_near_the_maps_edge_has_the_runs_hold_the_edges_weather(tmp_path, goal_nm, hold):
+    """The arrival circle (and half a mile beyond it) must lie where the ship finds weather:
+    near an edge, every run holds the edge's values that far beyond the map."""
+    from orchestrator.geometry import NM
+    from orchestrator.scenario import load_scenario
+    from rhnc.weather.metocean_sources import from_scenario_table
+
+    path = write(tmp_path)
+    path.write_text(path.read_text().replace("goal_nm = [4.0, 0.0]\nmax", f"goal_nm = {list(goal_nm)}\nmax"))
+    voyage = load_extensions(load_comparison(path), path)["voyage"]
+    overrides = voyage.run_overrides(tmp_path / "straight.toml", {}, "here")
+    assert overrides.get("metocean.hold_edges_nm") == hold
+    loaded = load_scenario(tmp_path / "straight.toml", overrides)
+    field = from_scenario_table(loaded.metocean, tmp_path, "here")
+    angles = np.linspace(0.0, 2.0 * np.pi, 73)
+    circle = np.asarray(goal_nm)[:, None] + 1.0 * np.vstack([np.cos(angles), np.sin(angles)])
+    assert field.contains(circle[0] * NM, circle[1] * NM).all()
+    # a band the comparison gives itself is kept
+    own = voyage.run_overrides(tmp_path / "straight.toml", {"metocean.hold_edges_nm": 2.0}, "here")
+    assert "metocean.hold_edges_nm" not in own
+
+
+def test_the_edge_band_is_what_the_arrival_circle_needs():
+    from orchestrator.geometry import NM
+    from rhnc.voyage.voyage_geometry import EDGE_ALLOWANCE_NM, edge_hold_nm
+    from rhnc.weather.weather_generators import paper_default
+
+    field = paper_default(x_range_nm=(0.0, 10.0), y_range_nm=(0.0, 10.0), resolution_nm=1.0)
+    radius = 0.5
+    needed = radius + EDGE_ALLOWANCE_NM
+    assert edge_hold_nm(field, np.array([10.0, 10.0]) * NM, radius) == needed
+    assert edge_hold_nm(field, np.array([5.0, 0.2]) * NM, radius) == needed
+    assert edge_hold_nm(field, np.array([5.0, 10.0 - needed + 0.01]) * NM, radius) == needed
+    assert edge_hold_nm(field, np.array([5.0, 10.0 - needed - 0.01]) * NM, radius) is None
+    assert edge_hold_nm(field, np.array([5.0, 5.0]) * NM, 2.0) is None
+    assert edge_hold_nm(field, np.array([5.0, 5.0]) * NM, 4.6) == 4.6 + EDGE_ALLOWANCE_NM
+
+
+EDGE_COMPARISON = """
+name = "edge"
+analysis = "voyage"
+metrics = ["cost_usd", "time_min"]
+[voyage]
+start_nm = [0.0, 0.0]
+goal_nm = [4.0, 0.0]
+max_duration_h = 1.0
+[[runs]]
+label = "beyond"
+scenario = "beyond.toml"
+"""
+
+
+@pytest.mark.slow
+def test_a_ship_sails_the_arrival_circles_part_beyond_the_maps_edge(tmp_path):
+    """The goal on the map's north edge; the route leaves the map 0.7 nm from the goal and
+    comes back to it from beyond the edge: the run arrives instead of failing off the map."""
+    from orchestrator.geometry import NM
+
+    scenario = textwrap.dedent(SCENARIO.format(
+        waypoints="[[0.0, 0.0], [3.0, 0.7], [4.4, 0.7], [4.4, 0.0], [4.0, 0.0]]", speed=12.0))
+    (tmp_path / "beyond.toml").write_text(scenario.replace("x_range_nm = [-1.0, 5.0]", "x_range_nm = [-1.0, 4.0]"))
+    (tmp_path / "compare.toml").write_text(EDGE_COMPARISON)
+    folder = run_comparison(tmp_path / "compare.toml", tmp_path / "results", progress=False)
+    summary = json.loads((folder / "summary.json").read_text())
+    assert summary["status"] == "finished", summary["failed_runs"]
+    run = next((folder / "runs").rglob("summary.json"))
+    frame = pd.read_parquet(run.parent / "timeseries.parquet")
+    assert frame["ship.x"].max() > 4.0 * NM + 0.2 * NM   # it sailed beyond the edge
+    assert json.loads(run.read_text())["analyses"]["voyage"]["arrived"]

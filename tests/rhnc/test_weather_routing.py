@@ -8,7 +8,7 @@ from orchestrator.geometry import KNOT, NM
 from rhnc.routing.route_search import segment_clearance
 from rhnc.routing.track_cost import constant_speed_times, cost_of_track
 from rhnc.routing.routing_problem import costed_route
-from rhnc.routing.weather_routing import RouteSearch, RoutingProblem, _refine, optimal_route, straight_route
+from rhnc.routing.weather_routing import RouteSearch, RoutingProblem, _refine, cost_rate, optimal_route, straight_route
 from weather_fixtures import storm_field, switched_field
 
 SPEED = 18 * KNOT
@@ -267,3 +267,29 @@ def test_refining_moves_the_last_turning_point_too():
     assert after.cost_usd < before.cost_usd
     clearance_nm = np.min(np.hypot(*(after.waypoints_m - centre * NM).T)) / NM
     assert clearance_nm > 0.7
+
+
+def test_one_cost_rate_for_the_grid_its_segments_and_its_legs():
+    # the rate is the energy model's fuel cost with the course sailed plus the price of the
+    # hour, and the current counts along the course; the grid's node rates, a segment's cost
+    # and a leg's cost all come from it, so one straight leg costs the same either way
+    field = storm_field(storms=[(8.0, 12.0, 3.0, 15.0)], base_wind_ms=9.0, wind_from_deg=70.0, current_ms=(0.4, -0.3))
+    problem = RoutingProblem((0.0, 0.0), (20 * NM, 20 * NM), field)
+    weather = field.sample(np.array([3.0, 8.0]) * NM, np.array([5.0, 12.0]) * NM)
+    heading = np.radians([30.0, 200.0])
+    rate, along = cost_rate(weather, heading, SPEED, 250.0, problem.energy)
+    power = brake_power(SPEED, heading, weather["wind_north"], weather["wind_east"], weather["hs"], problem.energy)
+    assert rate == pytest.approx(fuel_rate_t_h(power, problem.energy) * problem.energy.fuel_price_usd_t + 250.0, rel=1e-12)
+    assert along == pytest.approx([0.4 * np.cos(heading[0]) - 0.3 * np.sin(heading[0]),
+                                   0.4 * np.cos(heading[1]) - 0.3 * np.sin(heading[1])], rel=1e-12)
+    search = RouteSearch(problem)
+    node = search.graph.nearest_free_node((8 * NM, 12 * NM))
+    node_rate, over_ground = search.node_rates(SPEED, 250.0, np.array([node]), None)
+    at_node = field.sample(search.nodes[[node], 0], search.nodes[[node], 1])
+    expected, expected_along = cost_rate(at_node, search.graph.heading_rad, SPEED, 250.0, problem.energy)
+    np.testing.assert_array_equal(node_rate[0], expected)
+    np.testing.assert_array_equal(over_ground[0], SPEED + expected_along)
+    start, end = np.array([2.0, 3.0]) * NM, np.array([14.0, 17.0]) * NM
+    segment = search.segment_costs(start, end[None, :], 60.0, SPEED, 250.0)
+    leg = search.leg_costs(np.vstack([start, end]), 60.0, SPEED, 250.0)
+    assert segment[0] == pytest.approx(leg[0], rel=1e-12)
