@@ -38,7 +38,7 @@ def fmus2(tmp_path_factory):
 
 
 def test_every_model_is_built_for_fmi3_and_validated():
-    assert set(MODELS) < set(ALL_MODELS) and len(ALL_MODELS) == 5
+    assert set(MODELS) < set(ALL_MODELS) and len(ALL_MODELS) == 6
 
 
 @pytest.mark.parametrize("name", ALL_MODELS)
