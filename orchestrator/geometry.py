@@ -33,6 +33,13 @@ def wrap_deg(angle_deg):
     return wrap_angle(angle_deg, 180.0)
 
 
+def wrap_longitude_deg(lon_deg, reference_lon_deg: float = 0.0) -> np.ndarray:
+    """Longitudes [deg] shifted by whole turns into ``[reference - 180, reference + 180)``
+    (a grid read from 0-360 degrees placed about the scenario's meridian)."""
+    lon = np.asarray(lon_deg, dtype=float)
+    return (lon - reference_lon_deg + 180.0) % 360.0 - 180.0 + reference_lon_deg
+
+
 def local_north_east_m(lat_deg, lon_deg, lat0_deg: float, lon0_deg: float) -> tuple[np.ndarray, np.ndarray]:
     """Equirectangular projection about ``(lat0_deg, lon0_deg)``: north and east [m].
 

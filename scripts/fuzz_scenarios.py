@@ -244,7 +244,10 @@ def generate(count: int, seed: int = 0, bases: list[Path] | None = None, run_eve
                 try:
                     mutations.append(mutation(data, rng))
                 except (KeyError, IndexError, TypeError):
-                    mutations.append(_known_bad(data, rng))
+                    try:
+                        mutations.append(_known_bad(data, rng))
+                    except (KeyError, IndexError, TypeError):  # the first mutation replaced the table
+                        mutations.append("(second mutation did not apply)")
             text = to_toml(data)
         cases.append(Case(index, base, tuple(mutations), text, run))
     return cases

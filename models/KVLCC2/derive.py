@@ -10,7 +10,7 @@ shaft speed and the rudder yaw moment at the stall angle, both at the service sp
 
 import math
 
-KNOT = 1852.0 / 3600.0   # m/s
+from orchestrator.geometry import KNOT  # m/s per knot
 
 RHO = 1025.0
 L, B, D_DRAUGHT, VOLUME, X_G = 320.0, 58.0, 20.8, 312600.0, 11.2   # m, m, m, m^3, m

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rhnc.chart.projection import wrap_longitude_deg
+from orchestrator.geometry import wrap_longitude_deg
 
 #: Cells per degree of the mask (30 arc-seconds).
 CELLS_PER_DEG = 120

@@ -18,11 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-
-def wrap_longitude_deg(lon_deg, reference_lon_deg: float = 0.0) -> np.ndarray:
-    """Longitudes [deg] shifted by whole turns into ``[reference - 180, reference + 180)``."""
-    lon = np.asarray(lon_deg, dtype=float)
-    return (lon - reference_lon_deg + 180.0) % 360.0 - 180.0 + reference_lon_deg
+from orchestrator.geometry import wrap_longitude_deg
 
 
 @dataclass(frozen=True)

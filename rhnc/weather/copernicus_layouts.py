@@ -29,6 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
+from orchestrator.geometry import wrap_longitude_deg
+
 #: The int16 value ERA5 writes for a missing value.
 ERA5_MISSING = -32767
 ERA5_EPOCH = np.datetime64("1900-01-01T00:00:00")
@@ -116,7 +118,7 @@ def write_cmems_currents(path, lat_deg, lon_deg, times, uo, vo, depths_m=(CMEMS_
     import netCDF4
 
     lat = np.asarray(lat_deg, dtype=float)
-    lon = (np.asarray(lon_deg, dtype=float) + 180.0) % 360.0 - 180.0
+    lon = wrap_longitude_deg(lon_deg)
     order_lat, order_lon = np.argsort(lat), np.argsort(lon)
     hours = (np.asarray(times, dtype="datetime64[s]") - CMEMS_EPOCH) / np.timedelta64(1, "h")
     depths = np.asarray(depths_m, dtype=float)

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from orchestrator.errors import ScenarioError
-from orchestrator.geometry import EARTH_RADIUS_M, NM, local_north_east_m
+from orchestrator.geometry import EARTH_RADIUS_M, NM, local_north_east_m, wrap_longitude_deg
 from rhnc.weather.metocean import MetOceanField
 from rhnc.weather.metocean_grid import FIELDS, axis_node_count, check_grid_nodes
 from rhnc.weather.metocean_netcdf import CF_NAMES, TIME_DIMS
@@ -175,7 +175,7 @@ def from_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
     lat = ds[lat_name].values.astype(float)
     lon = ds[lon_name].values.astype(float)
     if origin_deg is not None:
-        lon = (lon - origin_deg[1] + 180.0) % 360.0 - 180.0 + origin_deg[1]
+        lon = wrap_longitude_deg(lon, origin_deg[1])
     order_lat = np.argsort(lat)
     order_lon = np.argsort(lon)
     lat, lon = lat[order_lat], lon[order_lon]
@@ -206,7 +206,7 @@ def from_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
     xx, yy = np.meshgrid(x, y, indexing="ij")
     if plane is not None:
         node_lat, node_lon = plane.to_geographic(xx, yy)
-        node_lon = (node_lon - lon0 + 180.0) % 360.0 - 180.0 + lon0
+        node_lon = wrap_longitude_deg(node_lon, lon0)
     else:
         node_lat = lat0 + np.degrees(xx / EARTH_RADIUS_M)
         node_lon = lon0 + np.degrees(yy / (EARTH_RADIUS_M * np.cos(np.radians(lat0))))
@@ -244,7 +244,7 @@ def _currents_on_grid(path: Path, origin_deg, node_lat, node_lon, times_s, zero)
         raise ValueError(f"{path}: expected dimensions latitude/longitude for the current")
     time_dim = next((d for d in TIME_DIMS if d in ds.dims), None)
     lat = ds[lat_name].values.astype(float)
-    lon = (ds[lon_name].values.astype(float) - origin_deg[1] + 180.0) % 360.0 - 180.0 + origin_deg[1]
+    lon = wrap_longitude_deg(ds[lon_name].values.astype(float), origin_deg[1])
     order_lat, order_lon = np.argsort(lat), np.argsort(lon)
     lat, lon = lat[order_lat], lon[order_lon]
     if time_dim is not None and ds.sizes[time_dim] > 1:

@@ -59,8 +59,8 @@ def test_missing_fmu_file(write_scenario):
 
 
 def test_unknown_builtin_model(write_scenario):
-    with pytest.raises(FmuError, match=r"participants.ship.fmu: no built-in model 'KVLCC2' \(valid: .*KCS"):
-        build(write_scenario, STRAIGHT.replace('fmu = "KCS"', 'fmu = "KVLCC2"'))
+    with pytest.raises(FmuError, match=r"participants.ship.fmu: no built-in model 'NoSuchShip' \(valid: .*KCS"):
+        build(write_scenario, STRAIGHT.replace('fmu = "KCS"', 'fmu = "NoSuchShip"'))
 
 
 def test_a_file_that_is_not_an_fmu(write_scenario, tmp_path):

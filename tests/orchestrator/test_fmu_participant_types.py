@@ -249,8 +249,8 @@ def test_a_reference_with_a_folder_is_a_file_even_without_the_fmu_suffix(tmp_pat
 
 def test_an_unknown_built_in_model_lists_the_valid_ones(tmp_path):
     with pytest.raises(FmuError) as raised:
-        resolve_fmu("KVLCC2", tmp_path, WHERE)
-    assert str(raised.value) == (f"{WHERE}.fmu: no built-in model 'KVLCC2' (valid: "
+        resolve_fmu("NoSuchShip", tmp_path, WHERE)
+    assert str(raised.value) == (f"{WHERE}.fmu: no built-in model 'NoSuchShip' (valid: "
                                  f"{', '.join(fmu_build.model_names())}, or a path to an .fmu file)")
 
 
