@@ -181,12 +181,9 @@ static inline void mmg_rk4_derivatives(const void *p, const void *in, const doub
  * last one ending on the communication point). Returns 0, or -1 on a non-finite state. */
 static inline int mmg_integrate(const MmgParameters *p, double X[MMG_NSTATES], const MmgInputs *in,
                                 double duration) {
-    int i;
     rk4_advance(mmg_rk4_derivatives, p, in, X, MMG_NSTATES, p->h_int, duration);
     X[MMG_PSI] = kcs_wrap_angle(X[MMG_PSI]);
-    for (i = 0; i < MMG_NSTATES; i++)
-        if (!isfinite(X[i])) return -1;
-    return 0;
+    return rk4_finite(X, MMG_NSTATES) ? 0 : -1;
 }
 
 /* Returns the name of the first parameter that makes the model meaningless, or NULL. */

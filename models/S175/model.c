@@ -178,14 +178,11 @@ static void s175_derivatives(const void *d, const void *unused, const double *X,
 
 fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
     ModelData *d = &comp->data;
-    int i;
     rk4_advance(s175_derivatives, d, NULL, d->X, S_NSTATES, d->h_int_s, h);
     d->X[S_PSI] = fmod(d->X[S_PSI], 2.0 * M_PI);
-    for (i = 0; i < S_NSTATES; i++) {
-        if (!isfinite(d->X[i])) {
-            log_error(comp, "fmi2DoStep: the state became non-finite in the step from t = %g s", t);
-            return fmi2Error;
-        }
+    if (!rk4_finite(d->X, S_NSTATES)) {
+        log_error(comp, "fmi2DoStep: the state became non-finite in the step from t = %g s", t);
+        return fmi2Error;
     }
     return fmi2OK;
 }

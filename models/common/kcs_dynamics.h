@@ -127,14 +127,11 @@ static inline void kcs_rk4_derivatives(const void *p, const void *in, const doub
 static inline int kcs_integrate(const KcsParameters *p, double X[KCS_NSTATES],
                                 const KcsInputs *in, double duration) {
     KcsInputs sat = *in;
-    int i;
     sat.tau_u = kcs_clamp(in->tau_u, p->tau_u_max);
     sat.tau_r = kcs_clamp(in->tau_r, p->tau_r_max);
     rk4_advance(kcs_rk4_derivatives, p, &sat, X, KCS_NSTATES, p->h_int, duration);
     X[KCS_PSI] = kcs_wrap_angle(X[KCS_PSI]);
-    for (i = 0; i < KCS_NSTATES; i++)
-        if (!isfinite(X[i])) return -1;
-    return 0;
+    return rk4_finite(X, KCS_NSTATES) ? 0 : -1;
 }
 
 /* Speed (m/s) and course (rad, (-pi, pi]) over ground. */

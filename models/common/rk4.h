@@ -8,6 +8,8 @@
 #ifndef RK4_H
 #define RK4_H
 
+#include <math.h>
+
 /* Largest state a model may integrate here (the MMG plant has 8). */
 #define RK4_MAX_STATES 16
 
@@ -39,6 +41,14 @@ static inline void rk4_advance(rk4_derivatives f, const void *model, const void 
         rk4_step(f, model, inputs, X, n, h);
         remaining -= h;
     }
+}
+
+/* 1 when all n states X are finite (a model checks this after each communication step). */
+static inline int rk4_finite(const double *X, int n) {
+    int i;
+    for (i = 0; i < n; i++)
+        if (!isfinite(X[i])) return 0;
+    return 1;
 }
 
 #endif /* RK4_H */
