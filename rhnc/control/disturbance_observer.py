@@ -32,7 +32,7 @@ import numpy as np
 
 from orchestrator.geometry import wrap_angle
 from rhnc.control.nmpc_problem import DISTURBANCE_SIZE, disturbed_rk4
-from rhnc.ship.ship_model import ShipParameters
+from rhnc.ship.ship_model import ShipParameters, hull_forces
 
 LOG = logging.getLogger(__name__)
 
@@ -172,8 +172,8 @@ def trimmed_reference(reference: np.ndarray, disturbance: np.ndarray, dt_s: floa
     udot = np.diff(surge) / dt_s
     rdot = np.diff(r) / dt_s
     su, sv, sr = surge[:-1], sway[:-1], r[:-1]
-    tau_u = p.m11 * udot + p.d11 * su + p.d11q * np.abs(su) * su - (p.m22 * sv + p.m23 * sr) * sr - w_u
-    tau_r = (p.m33 * rdot + p.d33 * sr + p.d33q * np.abs(sr) * sr - (p.m11 - p.m22) * su * sv + p.m23 * su * sr
-             + p.d32 * sv - w_r)
+    surge_force, _, yaw_moment = hull_forces(p, su, sv, sr)
+    tau_u = p.m11 * udot - surge_force - w_u
+    tau_r = p.m33 * rdot - yaw_moment - w_r
     tau = np.clip(np.column_stack([tau_u, tau_r]), -p.tau_max, p.tau_max)
     return trimmed, tau

@@ -78,7 +78,7 @@ from rhnc.control.nmpc_problem import (ACCEPTABLE_VIOLATION, DISTURBANCE_SIZE, F
 from rhnc.control.nmpc_settings import SOLVERS, NMPCSettings, NMPCSolution
 from rhnc.control.nmpc_terminal import MIN_TERMINAL_SPEED_MPS, TerminalWeight
 from rhnc.control.nmpc_warm_start import PlanMemory, push_guess_clear
-from rhnc.ship.ship_model import ShipParameters
+from rhnc.ship.ship_model import ShipParameters, hull_forces
 from rhnc.control.solver_watchdog import BoundedSolver
 
 LOG = logging.getLogger(__name__)
@@ -120,18 +120,16 @@ def reference_inputs(reference: np.ndarray, dt: float, params: ShipParameters) -
     """Feed-forward inputs tau_d (N, 2) [SI] for reference states (N+1, 6) spaced ``dt`` [s].
 
     Inverse of the surge and yaw equations with v_d = 0 (the paper's Eq. 19 reference):
-    ``tau_u = m11 udot + d11 u``, ``tau_r = m33 rdot + d33 r`` (plus the quadratic damping
-    and the sway-yaw coupling of a wider model), derivatives by forward differences,
-    clipped to the bounds.
+    ``tau_u = m11 udot + d11 u``, ``tau_r = m33 rdot + d33 r`` (plus the other hull forces of
+    a wider model, :func:`rhnc.ship.ship_model.hull_forces`), derivatives by forward
+    differences, clipped to the bounds.
     """
     u = reference[:, 3]
     r = reference[:, 5]
     udot = np.diff(u) / dt
     rdot = np.diff(r) / dt
-    tau_u = params.m11 * udot + params.d11 * u[:-1] + params.d11q * np.abs(u[:-1]) * u[:-1] - params.m23 * r[:-1] ** 2
-    tau_r = (params.m33 * rdot + params.d33 * r[:-1] + params.d33q * np.abs(r[:-1]) * r[:-1]
-             + params.m23 * u[:-1] * r[:-1])
-    tau = np.column_stack([tau_u, tau_r])
+    surge, _, yaw = hull_forces(params, u[:-1], np.zeros_like(u[:-1]), r[:-1])
+    tau = np.column_stack([params.m11 * udot - surge, params.m33 * rdot - yaw])
     return np.clip(tau, -params.tau_max, params.tau_max)
 
 

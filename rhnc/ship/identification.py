@@ -25,11 +25,13 @@ accelerations are known::
     m23 vdot + m33 rdot - (m11 - m22) u v + m23 u r + d32 v + d33 r
                                                       + d33q |r| r    = tau_r
 
-so each model class (:data:`MODEL_CLASSES`: the paper's diagonal linear model; with the
-sway-yaw mass coupling m23; with it and the quadratic damping) is fitted by one
-bounded linear least-squares problem over all samples of the fitting manoeuvres (masses
-and direct damping positive, quadratic damping not negative; the rows of each equation
-divided by its force scale, the columns by their norms).  The
+(each equation less the hull polynomial's terms, ``x_vv v^2``, ..., ``n_rrr r^3``, in the
+widest class), so each model class (:data:`MODEL_CLASSES`: the paper's diagonal linear
+model; with the sway-yaw mass coupling m23; with it and the quadratic damping; with all of
+these and the cubic MMG hull polynomial of full hull forms) is fitted by one bounded linear
+least-squares problem over all samples of the fitting manoeuvres (masses and direct
+damping positive, quadratic damping not negative, the polynomial free; the rows of each
+equation divided by its force scale, the columns by their norms).  The
 accelerations and the states in the rows come from a Savitzky-Golay filter (cubic, 21 s
 window) over the FMU's 1 s outputs; samples within half a window of an input switch are
 left out.  The bounds are the user's (the largest surge force and yaw moment the ship can
@@ -38,7 +40,7 @@ give: they cannot be seen in motions that stay inside them).
 Validation: each fitted class is integrated open loop with the recorded inputs of the
 held-out manoeuvre, from its first sample, and compared with what the plant did; the
 class with the smallest held-out error is kept (a wider class only when it is better by
-more than 2 %), and within a class the refined coefficients or the equation-error ones,
+more than 2 % and by more than a tenth of the weighted error's unit), and within a class the refined coefficients or the equation-error ones,
 whichever predict the held-out manoeuvre better.  A fit that cannot be made (too few samples, no class that stays finite
 on the held-out manoeuvre) is refused with one line saying what to change.
 
@@ -61,23 +63,32 @@ import numpy as np
 from orchestrator.errors import ScenarioError, ToolchainError
 from orchestrator.geometry import KNOT
 from rhnc.ship.prediction_error import position_error_growth
-from rhnc.ship.ship_model import STATE_NAMES, ShipParameters, equations_of_motion, rk4_states, rk4_step
+from rhnc.ship.ship_model import (HULL_POLYNOMIAL, HULL_POLYNOMIAL_KEYS, STATE_NAMES, ShipParameters,
+                                   equations_of_motion, rk4_states, rk4_step)
 
 LOG = logging.getLogger(__name__)
 COEFFICIENTS = ("m11", "m22", "m33", "d11", "d22", "d33", "d23", "d32")
 #: Every coefficient a class may fit, in the order of the regression's columns.
-ALL_COEFFICIENTS = COEFFICIENTS + ("m23", "d11q", "d22q", "d33q")
+QUADRATIC = COEFFICIENTS + ("m23", "d11q", "d22q", "d33q")
+ALL_COEFFICIENTS = QUADRATIC + HULL_POLYNOMIAL_KEYS
 #: Model classes, narrowest first: name -> the coefficients it fits (the others are 0).
 MODEL_CLASSES = {
     "linear": COEFFICIENTS,
     "coupled mass": COEFFICIENTS + ("m23",),
-    "coupled mass, quadratic damping": ALL_COEFFICIENTS,
+    "coupled mass, quadratic damping": QUADRATIC,
+    "coupled mass, cubic damping": ALL_COEFFICIENTS,
 }
+#: With the hull polynomial the linear cross-coupling may change sign in the refinement:
+#: a course-unstable linear part that the cubic terms steady, as in full hull forms.
+SIGN_FREE_WITH_POLYNOMIAL = ("d23", "d32")
 #: Coefficients that must be positive (masses, direct damping) and not negative (quadratic damping).
 POSITIVE = ("m11", "m22", "m33", "d11", "d22", "d33")
 NOT_NEGATIVE = ("d11q", "d22q", "d33q")
-#: A wider class is kept only when its held-out error is smaller by this fraction.
+#: A wider class is kept only when its held-out error is smaller by this fraction, and by at
+#: least this much of the weighted error (a tenth of a degree of heading, of 0.1 m/s, ...):
+#: below that, the difference is the filter's, not the hull's.
 WIDER_CLASS_GAIN = 0.02
+WIDER_CLASS_MARGIN = 0.1
 #: A manoeuvre stops when the ship is slower than this fraction of the service speed.
 SLOWEST_FRACTION = 0.2
 WEATHER_PORTS = ("current_north", "current_east", "wind_speed", "wind_direction", "hs")
@@ -241,9 +252,14 @@ def regression_rows(record: Record, scales: tuple[float, float, float]):
     tau = record.tau[keep]  # the same before and after a kept sample (switches are left out)
     zero = np.zeros_like(u)
     #           m11     m22     m33   d11   d22   d33   d23   d32  m23           d11q      d22q      d33q
-    surge = np.column_stack([du, -v * r, zero, u, zero, zero, zero, zero, -r * r, np.abs(u) * u, zero, zero])
-    sway = np.column_stack([u * r, dv, zero, zero, v, zero, r, zero, dr, zero, np.abs(v) * v, zero])
-    yaw = np.column_stack([-u * v, u * v, dr, zero, zero, r, zero, v, dv + u * r, zero, zero, np.abs(r) * r])
+    surge = [du, -v * r, zero, u, zero, zero, zero, zero, -r * r, np.abs(u) * u, zero, zero]
+    sway = [u * r, dv, zero, zero, v, zero, r, zero, dr, zero, np.abs(v) * v, zero]
+    yaw = [-u * v, u * v, dr, zero, zero, r, zero, v, dv + u * r, zero, zero, np.abs(r) * r]
+    equations = (surge, sway, yaw)
+    for equation, v_power, r_power in HULL_POLYNOMIAL.values():   # right-hand-side forces: minus here
+        for index, rows in enumerate(equations):
+            rows.append(-v ** v_power * r ** r_power if index == equation else zero)
+    surge, sway, yaw = (np.column_stack(rows) for rows in equations)
     a = np.vstack([surge / scales[0], sway / scales[1], yaw / scales[2]])
     b = np.concatenate([tau[:, 0] / scales[0], zero, tau[:, 1] / scales[2]])
     return a, b, len(u)
@@ -295,13 +311,19 @@ def _coefficient_scales(theta: dict[str, float], speed_mps: float) -> dict[str, 
     """Typical magnitude of every coefficient, from the linear ones: the unit of the
     refinement's variables (so all are of order one) and the floor of a zero start."""
     u = max(speed_mps, 0.1)
-    return {
+    sway, rate = 0.1 * u, math.radians(0.5)           # a sway of a tenth of it, half a degree per second
+    units = {
         **{name: abs(theta[name]) for name in COEFFICIENTS},
         "m23": 0.05 * math.sqrt(theta["m22"] * theta["m33"]),
         "d11q": theta["d11"] / u,                     # as much drag at service speed as d11
-        "d22q": theta["d22"] / (0.1 * u),             # at a sway of a tenth of it
-        "d33q": theta["d33"] / math.radians(0.5),     # at half a degree per second
+        "d22q": theta["d22"] / sway,
+        "d33q": theta["d33"] / rate,
     }
+    # a polynomial term as large as the linear damping of its equation at that sway and rate
+    force = (theta["d11"] * u, theta["d22"] * sway, theta["d33"] * rate)
+    for name, (equation, v_power, r_power) in HULL_POLYNOMIAL.items():
+        units[name] = force[equation] / (sway ** v_power * rate ** r_power)
+    return units
 
 
 def refine_output_error(records: dict[str, Record], theta: np.ndarray,
@@ -328,7 +350,10 @@ def refine_output_error(records: dict[str, Record], theta: np.ndarray,
     full = {name: start.get(name, 0.0) for name in ALL_COEFFICIENTS}
     speed = float(np.median(np.concatenate([records[n].states[:, 3] for n in FIT_MANOEUVRES if n in records])))
     unit = _coefficient_scales(full, speed)
-    z0, lower, upper = _scaled_start_and_bounds(names, start, full, unit)
+    sign_free = SIGN_FREE_WITH_POLYNOMIAL if set(HULL_POLYNOMIAL_KEYS) & set(names) else ()
+    for name in sign_free:   # a cross-coupling near zero may still change sign: a floor for its unit
+        unit[name] = max(unit[name], 0.1 * math.sqrt(full["d22"] * full["d33"]))
+    z0, lower, upper = _scaled_start_and_bounds(names, start, full, unit, sign_free)
     z0 = np.clip(np.array(z0), lower, upper)
     if np.any(np.array(lower) >= np.array(upper)):
         return np.asarray(theta, dtype=float), "not refined: a coefficient is zero"
@@ -354,15 +379,21 @@ def refine_output_error(records: dict[str, Record], theta: np.ndarray,
         f"refined: cost {before:.4g} -> {result.cost:.4g} in {result.nfev} evaluations"
 
 
-def _scaled_start_and_bounds(names, start: dict, full: dict, unit: dict) -> tuple[list, list, list]:
+def _scaled_start_and_bounds(names, start: dict, full: dict, unit: dict,
+                             sign_free: tuple[str, ...] = ()) -> tuple[list, list, list]:
     """The start and bounds of the coefficients divided by their typical magnitudes ``unit``
-    (see :func:`refine_output_error`)."""
+    (see :func:`refine_output_error`); the hull polynomial and the names in ``sign_free``
+    within +-5 times the larger of their start and their unit, either sign."""
     z0, lower, upper = [], [], []
     for name in names:
         scale = max(unit[name], 1e-12)
         value = start[name] / scale
         z0.append(value)
-        if name in NOT_NEGATIVE:
+        if name in HULL_POLYNOMIAL or name in sign_free:
+            bound = 5.0 * max(abs(value), 1.0)
+            lower.append(-bound)
+            upper.append(bound)
+        elif name in NOT_NEGATIVE:
             lower.append(0.0)
             upper.append(5.0 * max(start[name], unit[name]) / scale)
         elif name == "m23":
@@ -437,6 +468,16 @@ def held_out_cost(record: Record, predicted: np.ndarray) -> float:
     return value if math.isfinite(value) else math.inf
 
 
+def _model_cost(parameters: ShipParameters, records: dict[str, Record]) -> float:
+    """The held-out cost of a fitted model (:func:`held_out_cost`); inf when it diverges on the
+    held-out manoeuvre or on any fitting one (a polynomial can fit the samples and still
+    run away between them)."""
+    for name, record in records.items():
+        if name != VALIDATION_MANOEUVRE and not np.all(np.isfinite(simulate(parameters, record))):
+            return math.inf
+    return held_out_cost(records[VALIDATION_MANOEUVRE], simulate(parameters, records[VALIDATION_MANOEUVRE]))
+
+
 def validation_errors(record: Record, predicted: np.ndarray) -> dict[str, float]:
     """RMS and largest errors of a simulated record: heading [deg], speed [kn], yaw rate [deg/min], position [m]."""
     measured = record.states
@@ -504,11 +545,11 @@ def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_
         if fitted is None:
             LOG.info("model class %s: no physical fit", class_name)
             continue
-        cost = held_out_cost(held_out, simulate(fitted, held_out))
+        cost = _model_cost(fitted, records)
         if refine and equation_error is not None:
             # the refinement fits the fitting manoeuvres; where the class lacks the plant's
             # structure that can cost on others, and the held-out manoeuvre decides
-            plain = held_out_cost(held_out, simulate(equation_error, held_out))
+            plain = _model_cost(equation_error, records)
             if plain < cost:
                 cost, fitted, note = plain, equation_error, f"equation error kept: held-out {plain:.4g} against " \
                                                             f"{cost:.4g} refined ({note})"
@@ -522,7 +563,8 @@ def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_
                              "yaw moment of full rudder at service speed as --tau-r-max-Nm and check the probe's figures")
     chosen = finite[0]
     for name in finite[1:]:   # narrowest first: a wider class must earn its coefficients
-        if candidates[name][0] < (1.0 - WIDER_CLASS_GAIN) * candidates[chosen][0]:
+        best = candidates[chosen][0]
+        if candidates[name][0] < min((1.0 - WIDER_CLASS_GAIN) * best, best - WIDER_CLASS_MARGIN):
             chosen = name
     _, equation_error, parameters, rms, r2, note = candidates[chosen]
     parameters = dataclasses.replace(parameters, name=set_name)

@@ -25,7 +25,8 @@ def parameter_set_toml(fit: Fit, identity: dict[str, str | None], source: str) -
         "# 3-DOF prediction model fitted by least squares on the plant's manoeuvres, weather off.",
         "# units: m11, m22 kg; m33 kg m^2; d11, d22 kg/s; d23, d32 kg m/s; d33 kg m^2/s;",
         "#        tau_u_max N; tau_r_max N m (the bounds given to identify); when the wider model class",
-        "#        is chosen: m23 kg m (sway-yaw mass coupling); d11q, d22q kg/m; d33q kg m^2 (quadratic damping).",
+        "#        is chosen: m23 kg m (sway-yaw mass coupling); d11q, d22q kg/m; d33q kg m^2 (quadratic damping);",
+        "#        x_vv.. n_rrr: the cubic MMG hull polynomial (units in rhnc/ship/ship_model.py, HULL_POLYNOMIAL).",
         "",
         f"[{p.name}]",
         f"description = \"Identified on {identity['model_name']}{through} from {source}; held-out "

@@ -24,6 +24,18 @@ sway-yaw coupling of the (symmetric) mass matrix, and the quadratic damping ``d1
     m23 vdot + m33 rdot    = (m11 - m22) u v - m23 u r - d32 v - d33 r - d33q |r| r + tau_r
 
 (the Coriolis terms of Fossen's 3-DOF model with that mass matrix).
+
+Full hull forms (tankers, bulk carriers) need the cubic terms of the MMG hull polynomial:
+a set may add the dimensional coefficients of :data:`HULL_POLYNOMIAL` (zero when absent),
+forces on the right-hand side as the MMG standard writes them::
+
+    surge += x_vv v^2 + x_vr v r + x_rr r^2
+    sway  += y_vvv v^3 + y_vvr v^2 r + y_vrr v r^2 + y_rrr r^3
+    yaw   += n_vvv v^3 + n_vvr v^2 r + n_vrr v r^2 + n_rrr r^3
+
+With them the linear part may be course-unstable (as a full hull is) and the cubic terms
+steady it at larger drift and yaw rate.  :func:`hull_forces` writes all these terms once;
+the equations of motion, the NMPC's feed-forward and the disturbance observer use it.
 """
 
 from __future__ import annotations
@@ -44,14 +56,24 @@ from rhnc.ship.model_library import MODELS_DIR
 #: The plant's parameter sets, shared with the KCS FMU.
 PARAMETER_SETS_FILE = MODELS_DIR / "KCS" / "parameter_sets.toml"
 
+#: The MMG-style hull polynomial: coefficient -> (equation 0 surge / 1 sway / 2 yaw, power of
+#: v, power of r); the term ``coefficient * v**a * r**b`` is a force [N] or moment [N m] on
+#: the right-hand side.  Units: x_vv kg/m, x_vr kg/rad, x_rr kg m/rad^2; y_vvv kg s/m^2,
+#: y_vvr kg s/(m rad), y_vrr kg s/rad^2, y_rrr kg m s/rad^3; the n_ coefficients those times m.
+HULL_POLYNOMIAL = {
+    "x_vv": (0, 2, 0), "x_vr": (0, 1, 1), "x_rr": (0, 0, 2),
+    "y_vvv": (1, 3, 0), "y_vvr": (1, 2, 1), "y_vrr": (1, 1, 2), "y_rrr": (1, 0, 3),
+    "n_vvv": (2, 3, 0), "n_vvr": (2, 2, 1), "n_vrr": (2, 1, 2), "n_rrr": (2, 0, 3),
+}
+HULL_POLYNOMIAL_KEYS = tuple(HULL_POLYNOMIAL)
 #: Keys of a parameter set that the prediction model uses.
 DYNAMICS_KEYS = ("m11", "m22", "m33", "d11", "d22", "d33", "d23", "d32", "tau_u_max", "tau_r_max",
-                 "m23", "d11q", "d22q", "d33q")
-#: Keys that may be absent (the paper's Eq. 11 has no cross-damping, no coupled mass and
-#: no quadratic damping).
-OPTIONAL_ZERO_KEYS = ("d23", "d32", "m23", "d11q", "d22q", "d33q")
-#: The optional keys of the wider model class, written into a set only when not zero.
-WIDE_MODEL_KEYS = ("m23", "d11q", "d22q", "d33q")
+                 "m23", "d11q", "d22q", "d33q") + HULL_POLYNOMIAL_KEYS
+#: Keys that may be absent (the paper's Eq. 11 has no cross-damping, no coupled mass, no
+#: quadratic damping and no hull polynomial).
+OPTIONAL_ZERO_KEYS = ("d23", "d32", "m23", "d11q", "d22q", "d33q") + HULL_POLYNOMIAL_KEYS
+#: The optional keys of the wider model classes, written into a set only when not zero.
+WIDE_MODEL_KEYS = ("m23", "d11q", "d22q", "d33q") + HULL_POLYNOMIAL_KEYS
 
 STATE_NAMES = ("x", "y", "psi", "u", "v", "r")
 CONTROL_NAMES = ("tau_u", "tau_r")
@@ -77,6 +99,8 @@ class ShipParameters:
         Sway-yaw coupling of the mass matrix [kg·m] (symmetric: m32 = m23).
     d11q, d22q, d33q : float
         Quadratic damping in surge [N·s²/m²], sway [N·s²/m²], yaw [N·m·s²/rad²].
+    x_vv, x_vr, x_rr, y_vvv, y_vvr, y_vrr, y_rrr, n_vvv, n_vvr, n_vrr, n_rrr : float
+        The hull polynomial's coefficients (:data:`HULL_POLYNOMIAL`, units there).
     name : str
         Name of the parameter set the values came from.
     extras : Mapping[str, Any]
@@ -97,6 +121,17 @@ class ShipParameters:
     d11q: float = 0.0
     d22q: float = 0.0
     d33q: float = 0.0
+    x_vv: float = 0.0
+    x_vr: float = 0.0
+    x_rr: float = 0.0
+    y_vvv: float = 0.0
+    y_vvr: float = 0.0
+    y_vrr: float = 0.0
+    y_rrr: float = 0.0
+    n_vvv: float = 0.0
+    n_vvr: float = 0.0
+    n_vrr: float = 0.0
+    n_rrr: float = 0.0
     name: str = "custom"
     extras: Mapping[str, Any] = dataclasses.field(default_factory=lambda: MappingProxyType({}))
 
@@ -135,8 +170,8 @@ class ShipParameters:
         The sway equation is not balanced for ``r != 0`` (a reference with ``v_d = 0``, as
         the paper's Eq. 19 gives, is not an exact trim in a turn).
         """
-        return np.array([self.d11 * u + self.d11q * abs(u) * u - self.m23 * r * r,
-                         self.d33 * r + self.d33q * abs(r) * r + self.m23 * u * r])
+        surge, _, yaw = hull_forces(self, u, 0.0, r)
+        return -np.array([surge, yaw], dtype=float)
 
     def sway_yaw_accelerations(self, sway_force, yaw_moment):
         """``(vdot, rdot)`` from the sway force [N] and yaw moment [N·m] on the right-hand
@@ -221,13 +256,14 @@ def _present(coefficient) -> bool:
     return not (isinstance(coefficient, (int, float)) and coefficient == 0.0)
 
 
-def equations_of_motion(state, tau, p: ShipParameters, cos, sin, stack):
-    """The 3-DOF equations, written once for every backend: ``cos``, ``sin`` and ``stack``
-    (a list of six expressions -> a vector) come from numpy or CasADi."""
-    psi, u, v, r = state[2], state[3], state[4], state[5]
-    surge = p.m22 * v * r - p.d11 * u + tau[0]
+def hull_forces(p: ShipParameters, u, v, r) -> tuple:
+    """Surge force, sway force [N] and yaw moment [N m] on the right-hand side of the
+    equations without the inputs: Coriolis, damping and the hull polynomial, for numbers,
+    numpy arrays or CasADi expressions of ``u``, ``v`` [m/s] and ``r`` [rad/s].  The
+    accelerations follow from these plus ``tau`` through the mass matrix."""
+    surge = p.m22 * v * r - p.d11 * u
     sway = -p.m11 * u * r - p.d22 * v - p.d23 * r
-    yaw = (p.m11 - p.m22) * u * v - p.d32 * v - p.d33 * r + tau[1]
+    yaw = (p.m11 - p.m22) * u * v - p.d32 * v - p.d33 * r
     if _present(p.m23):
         surge = surge + p.m23 * r * r
         yaw = yaw - p.m23 * u * r
@@ -237,6 +273,24 @@ def equations_of_motion(state, tau, p: ShipParameters, cos, sin, stack):
         sway = sway - p.d22q * abs(v) * v
     if _present(p.d33q):
         yaw = yaw - p.d33q * abs(r) * r
+    forces = [surge, sway, yaw]
+    for key, (equation, v_power, r_power) in HULL_POLYNOMIAL.items():
+        coefficient = getattr(p, key)
+        if _present(coefficient):
+            term = coefficient
+            for factor in (v,) * v_power + (r,) * r_power:   # plain products: cheap in CasADi too
+                term = term * factor
+            forces[equation] = forces[equation] + term
+    return tuple(forces)
+
+
+def equations_of_motion(state, tau, p: ShipParameters, cos, sin, stack):
+    """The 3-DOF equations, written once for every backend: ``cos``, ``sin`` and ``stack``
+    (a list of six expressions -> a vector) come from numpy or CasADi."""
+    psi, u, v, r = state[2], state[3], state[4], state[5]
+    surge, sway, yaw = hull_forces(p, u, v, r)
+    surge = surge + tau[0]
+    yaw = yaw + tau[1]
     if _present(p.m23):
         vdot, rdot = p.sway_yaw_accelerations(sway, yaw)
     else:   # the paper's diagonal mass: the same numbers, fewer operations
