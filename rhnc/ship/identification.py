@@ -514,6 +514,21 @@ def _fit_class(records, tau_u_max, tau_r_max, names, refine):
     return parameters(equation_error, "equation error only"), parameters(theta, "fitted"), rms, r2, note
 
 
+def _refined_from_narrower(records: dict[str, Record], names: tuple[str, ...], candidates: dict):
+    """The class ``names`` refined from the narrower candidate with the smallest held-out cost
+    (its coefficients, the others zero): (parameters or None, note)."""
+    narrower_name = min(candidates, key=lambda name: candidates[name][0])
+    narrower = candidates[narrower_name][2]
+    if not math.isfinite(candidates[narrower_name][0]):
+        return None, "no finite narrower class to start from"
+    start = np.array([getattr(narrower, name) for name in names])
+    theta, note = refine_output_error(records, start, names)
+    parameters = dataclasses.replace(narrower, **dict(zip(names, (float(v) for v in theta))))
+    if parameters.m22 * parameters.m33 <= parameters.m23 ** 2:
+        return None, "not positive definite"
+    return parameters, f"from the {narrower_name} model, {note}"
+
+
 def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_name: str,
                    reference: ShipParameters | None = None, refine: bool = True,
                    classes: tuple[str, ...] = tuple(MODEL_CLASSES)) -> Fit:
@@ -553,6 +568,14 @@ def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_
             if plain < cost:
                 cost, fitted, note = plain, equation_error, f"equation error kept: held-out {plain:.4g} against " \
                                                             f"{cost:.4g} refined ({note})"
+        if refine and set(HULL_POLYNOMIAL_KEYS) & set(names) and candidates:
+            # the polynomial's equation-error fit extrapolates and may run away: refine also from
+            # the best narrower class's model, its polynomial zero, so the class starts where
+            # the narrower one ended and can only improve on it
+            nested, nested_note = _refined_from_narrower(records, names, candidates)
+            nested_cost = _model_cost(nested, records) if nested is not None else math.inf
+            if nested_cost < cost:
+                cost, fitted, note = nested_cost, nested, nested_note
         LOG.info("model class %s: held-out cost %.4g (%s)", class_name, cost, note)
         candidates[class_name] = (cost, equation_error, fitted, rms, r2, note)
     class_errors = {name: (candidates[name][0] if name in candidates else None) for name in classes}

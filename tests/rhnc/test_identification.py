@@ -265,6 +265,27 @@ def test_a_full_hull_gets_the_cubic_class_by_held_out_error():
     assert fit.parameters.n_rrr == pytest.approx(true.n_rrr, rel=0.1)
 
 
+@pytest.mark.slow   # one refinement of 23 coefficients: about a minute of processor time
+def test_the_cubic_class_is_refined_from_the_narrower_model_and_improves_on_it():
+    """Started from a narrower model (the hull without its polynomial), the cubic class's
+    refinement finds the polynomial and predicts the held-out zig-zag far better."""
+    from rhnc.ship.identification import (HULL_POLYNOMIAL_KEYS, MODEL_CLASSES, _model_cost,
+                                          _refined_from_narrower)
+
+    true = _full_hull_kcs()
+    trim = true.equilibrium_tau(9.26)[0]
+    records = {name: record for name, record in _standard_records(true).items() if name != "speed_steps"}
+    records["zigzag_20"] = _record("zigzag_20", true,
+                                   lambda t: (trim, 0.5 * true.tau_r_max * np.sign(np.sin(t / 120))), 600)
+    narrower = _wide(true, **{key: 0.0 for key in HULL_POLYNOMIAL_KEYS})
+    narrower_cost = _model_cost(narrower, records)
+    candidates = {"coupled mass, quadratic damping": (narrower_cost, None, narrower, {}, {}, "")}
+    refined, note = _refined_from_narrower(records, MODEL_CLASSES["coupled mass, cubic damping"], candidates)
+    assert note.startswith("from the coupled mass, quadratic damping model, refined")
+    assert _model_cost(refined, records) < 0.2 * narrower_cost
+    assert refined.n_rrr == pytest.approx(true.n_rrr, rel=0.3)
+
+
 def test_helm_falls_with_the_square_of_the_speed_like_a_rudder():
     from rhnc.ship.identification import helm_moment
 
