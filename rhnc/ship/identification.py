@@ -529,6 +529,39 @@ def _refined_from_narrower(records: dict[str, Record], names: tuple[str, ...], c
     return parameters, f"from the {narrower_name} model, {note}"
 
 
+def _fit_candidates(records: dict[str, Record], tau_u_max: float, tau_r_max: float, classes: tuple[str, ...],
+                    refine: bool) -> dict:
+    """Every class fitted and scored on the held-out manoeuvre: name -> (held-out cost,
+    equation-error parameters, chosen parameters, residual RMS, R², note); a class without a
+    physical fit is left out."""
+    candidates = {}
+    for class_name in classes:
+        names = MODEL_CLASSES[class_name]
+        equation_error, fitted, rms, r2, note = _fit_class(records, tau_u_max, tau_r_max, names, refine)
+        cost = _model_cost(fitted, records) if fitted is not None else math.inf
+        if refine and fitted is not None and equation_error is not None:
+            # the refinement fits the fitting manoeuvres; where the class lacks the plant's
+            # structure that can cost on others, and the held-out manoeuvre decides
+            plain = _model_cost(equation_error, records)
+            if plain < cost:
+                cost, fitted, note = plain, equation_error, f"equation error kept: held-out {plain:.4g} against " \
+                                                            f"{cost:.4g} refined ({note})"
+        if refine and set(HULL_POLYNOMIAL_KEYS) & set(names) and candidates:
+            # the polynomial's equation-error fit extrapolates and may run away: refine also from
+            # the best narrower class's model, its polynomial zero, so the class starts where
+            # the narrower one ended and can only improve on it
+            nested, nested_note = _refined_from_narrower(records, names, candidates)
+            nested_cost = _model_cost(nested, records) if nested is not None else math.inf
+            if nested_cost < cost:
+                cost, fitted, note = nested_cost, nested, nested_note
+        if fitted is None:
+            LOG.info("model class %s: no physical fit", class_name)
+            continue
+        LOG.info("model class %s: held-out cost %.4g (%s)", class_name, cost, note)
+        candidates[class_name] = (cost, equation_error, fitted, rms, r2, note)
+    return candidates
+
+
 def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_name: str,
                    reference: ShipParameters | None = None, refine: bool = True,
                    classes: tuple[str, ...] = tuple(MODEL_CLASSES)) -> Fit:
@@ -553,31 +586,7 @@ def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_
                              "--speed-kn")
     records = {name: record for name, record in records.items() if name not in short}
     held_out = records[VALIDATION_MANOEUVRE]
-    candidates = {}
-    for class_name in classes:
-        names = MODEL_CLASSES[class_name]
-        equation_error, fitted, rms, r2, note = _fit_class(records, tau_u_max, tau_r_max, names, refine)
-        if fitted is None:
-            LOG.info("model class %s: no physical fit", class_name)
-            continue
-        cost = _model_cost(fitted, records)
-        if refine and equation_error is not None:
-            # the refinement fits the fitting manoeuvres; where the class lacks the plant's
-            # structure that can cost on others, and the held-out manoeuvre decides
-            plain = _model_cost(equation_error, records)
-            if plain < cost:
-                cost, fitted, note = plain, equation_error, f"equation error kept: held-out {plain:.4g} against " \
-                                                            f"{cost:.4g} refined ({note})"
-        if refine and set(HULL_POLYNOMIAL_KEYS) & set(names) and candidates:
-            # the polynomial's equation-error fit extrapolates and may run away: refine also from
-            # the best narrower class's model, its polynomial zero, so the class starts where
-            # the narrower one ended and can only improve on it
-            nested, nested_note = _refined_from_narrower(records, names, candidates)
-            nested_cost = _model_cost(nested, records) if nested is not None else math.inf
-            if nested_cost < cost:
-                cost, fitted, note = nested_cost, nested, nested_note
-        LOG.info("model class %s: held-out cost %.4g (%s)", class_name, cost, note)
-        candidates[class_name] = (cost, equation_error, fitted, rms, r2, note)
+    candidates = _fit_candidates(records, tau_u_max, tau_r_max, classes, refine)
     class_errors = {name: (candidates[name][0] if name in candidates else None) for name in classes}
     finite = [name for name in candidates if math.isfinite(candidates[name][0])]
     if not finite:
