@@ -27,6 +27,7 @@ import numpy as np
 from orchestrator.errors import ModelError, ScenarioError
 from orchestrator.geometry import KNOT, NM
 from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
+from rhnc.chart.positions import projected_options
 
 
 
@@ -133,6 +134,12 @@ class ReferencePathParticipant(Participant):
         N, the reference has N + 1 points (default 15, the NMPC's N_c).
     interval_s : float
         Spacing of the points [s] (default: this participant's step size).
+    start_deg, goal_deg, waypoints_deg : [lat, lon] or list of them
+        Instead of ``start_nm``, ``goal_nm``, ``waypoints_nm``: latitude and longitude
+        [deg], projected by the chart of option ``chart``.
+    chart : str
+        A chart file (relative to the scenario) whose projection puts the ``_deg``
+        positions in the plane.
     max_lead_nm : float
         With ``waypoints_nm`` or ``goal_nm``: the virtual ship is never more than this far
         along the path ahead of the ship (inputs ``x``, ``y`` [m]); default: no limit, the
@@ -140,7 +147,8 @@ class ReferencePathParticipant(Participant):
     """
 
     OPTIONS = ("start_nm", "course_deg", "turn_radius_nm", "waypoints_nm", "goal_nm", "avoid", "avoid_margin_nm",
-               "speed_kn", "horizon_steps", "interval_s", "max_lead_nm")
+               "speed_kn", "horizon_steps", "interval_s", "max_lead_nm", "chart", "start_deg", "goal_deg",
+               "waypoints_deg")
 
     def __init__(self, name: str, path, horizon_steps: int, interval_s: float, start_time: float,
                  lead: tuple[np.ndarray, float, float] | None = None) -> None:
@@ -160,6 +168,7 @@ class ReferencePathParticipant(Participant):
         """Build from scenario options (see class docstring); errors name the key."""
         where = context.where
         reject_unknown_options(options, cls.OPTIONS, where)
+        options = projected_options(options, where, context.scenario_dir)
         if "speed_kn" not in options:
             raise ScenarioError(f"{where}: missing option 'speed_kn'")
         speed = _number(options, "speed_kn", where) * KNOT
