@@ -66,6 +66,37 @@ def passage_row(results: Path, name: str) -> str:
             f"{fmt(baseline_min, 3)} ({'kept' if baseline_kept else 'NOT kept'}) | {folder.relative_to(results.parent)} |")
 
 
+def stalled_baseline_lines(results: Path, name: str) -> list[str]:
+    """For a passage whose baseline never arrived: how far each trial got, and in what weather."""
+    import numpy as np
+    import pandas as pd
+
+    folder = latest(results / f"passage_{name}")
+    if folder is None:
+        return []
+    import tomllib
+
+    comparison = tomllib.loads((ROOT / "scenarios" / "passages" / f"{name}_compare.toml").read_text())
+    goal = np.array(comparison["voyage"]["goal_nm"], dtype=float)
+    lines = []
+    for trial in sorted((folder / "runs" / "RHNC_equal-arrival_baseline").glob("*/summary.json")):
+        summary = json.loads(trial.read_text())
+        if summary["participants"].get("goal", {}).get("arrival_time_s") is not None:
+            return []  # a trial arrived: nothing stalled
+        frame = pd.read_parquet(trial.parent / "timeseries.parquet")
+        distance = np.hypot(frame["ship.x"] / 1852.0 - goal[0], frame["ship.y"] / 1852.0 - goal[1])
+        off_bow = np.degrees(np.abs(np.angle(np.exp(1j * (frame["env.wind_direction"] - frame["ship.psi"])))))
+        lines.append(f"- reference {frame['route.reference[0,4]'].iloc[0] / 0.514444:.2f} kn: made good "
+                     f"{distance.iloc[0] - distance.iloc[-1]:.1f} nm of {distance.iloc[0]:.1f} in "
+                     f"{frame['time_s'].iloc[-1] / 3600.0:.1f} h (least {distance.min():.1f} nm from the goal); at the "
+                     f"ship, median Hs {frame['env.hs'].median():.1f} m, wind {frame['env.wind_speed'].median():.1f} m/s "
+                     f"from {np.median(off_bow):.0f} deg off the bow, speed through water "
+                     f"{frame['ship.u'].median() / 0.514444:.1f} kn")
+    if not lines:
+        return []
+    return ["", f"{name}: the sea-route baseline arrived in no trial ({folder.relative_to(results.parent)}):", ""] + lines
+
+
 def traffic_lines(results: Path) -> list[str]:
     folder = latest(results / "gibraltar_strait_traffic")
     if folder is None:
@@ -114,6 +145,8 @@ def main() -> None:
             flags += [f"- {name}: {flag}" for flag in json.loads((folder / "summary.json").read_text()).get("flags", [])]
     if flags:
         lines += ["", "Flags of the comparisons:", ""] + flags
+    for name in PASSAGES:
+        lines += stalled_baseline_lines(results, name)
     lines += [""] + traffic_lines(results) + [""]
     out = ROOT / "docs" / "passages-results.md"
     out.write_text("\n".join(lines))
