@@ -299,12 +299,13 @@ every = 1
 [participants.ctrl.options]
 horizon_steps = 15
 disturbance_observer = true
+chart = "{name}.chart.toml"          # land and no-go areas at the declared clearance, as constraints
 ''' + TAIL)
 
 SEA_ROUTE = ('''# Passage: {title}, Offline-SPNC baseline (scripts/make_passages.py): the NMPC follows
 # searoute's port-to-port route over its offline sea-route network, at one constant speed.
 # Route (lat, lon): {route_deg}
-''' + CONNECTIONS.format(extra='''  "route.reference -> ctrl.reference",
+''' + CONNECTIONS.format(extra='''  "route.reference -> ctrl.reference", "ship.x -> route.x", "ship.y -> route.y",
 ''') + '''
 
 [simulation]
@@ -319,12 +320,14 @@ type = "reference_path"
 waypoints_nm = {route_nm}
 speed_kn = {speed_kn}
 horizon_steps = 15
+max_lead_nm = 0.25             # waits for a ship the weather holds back: inside the arrival radius at the end
 
 [participants.ctrl]
 type = "control"
 [participants.ctrl.options]
 horizon_steps = 15
 disturbance_observer = true
+chart = "{name}.chart.toml"          # land and no-go areas at the declared clearance, as constraints
 ''' + TAIL)
 
 COMPARE = '''# Passage: {title}: RHNC against the sea-route baseline at equal arrival time

@@ -37,7 +37,7 @@ def fmt(value, digits=2) -> str:
 def passage_row(results: Path, name: str) -> str:
     folder = latest(results / f"passage_{name}")
     if folder is None:
-        return f"| {name} | not compared yet | | | | | | | | | |"
+        return f"| {name} | not compared yet | | | | | | | | | | |"
     summary = json.loads((folder / "summary.json").read_text())
     system = summary["voyage"]["systems"]["RHNC"]
     rhnc = clearance_of(folder / summary["runs"]["RHNC"])
@@ -50,14 +50,51 @@ def passage_row(results: Path, name: str) -> str:
     nearest = min(trial_summaries, default=None, key=lambda t: abs(
         (t["participants"].get("goal", {}).get("arrival_time_s") or float("inf")) - arrival_s))
     baseline_nm = nearest["analyses"]["voyage"].get("distance_nm") if nearest else None
+    # what the distance alone would save at equal arrival time: at one constant speed through
+    # calm water brake power grows as the cube of speed, so the energy of d nm in time t as d³/t²
+    distance_alone = (100.0 * (1.0 - (rhnc_nm / baseline_nm) ** 3)
+                      if rhnc_nm and baseline_nm and nearest.get("participants", {}).get("goal", {}).get(
+                          "arrival_time_s") else None)
     baseline_min = min((b.get("min_clearance_nm", float("inf")) for b in baseline), default=None)
     baseline_kept = all(b.get("kept", False) for b in baseline) if baseline else None
     return (f"| {name} | {fmt(system.get('arrival_min'), 1)} | {fmt(system.get('cost_usd'), 0)} | "
             f"{fmt(system.get('baseline_cost_usd'), 0)} | {fmt(system.get('saving_cost_percent'))} | "
             f"{fmt(system.get('saving_co2_percent'))} | {fmt(rhnc_nm, 1)} / {fmt(baseline_nm, 1)} | "
-            f"{fmt(system.get('baseline_speed_kn'))} | {fmt(rhnc.get('min_clearance_nm'))} / "
+            f"{fmt(distance_alone, 1)} | "
+            f"{fmt(system.get('baseline_speed_kn'))} | {fmt(rhnc.get('min_clearance_nm'), 3)} / "
             f"{fmt(rhnc.get('required_clearance_nm'), 1)} ({'kept' if rhnc.get('kept') else 'NOT kept'}) | "
-            f"{fmt(baseline_min)} ({'kept' if baseline_kept else 'NOT kept'}) | {folder.relative_to(results.parent)} |")
+            f"{fmt(baseline_min, 3)} ({'kept' if baseline_kept else 'NOT kept'}) | {folder.relative_to(results.parent)} |")
+
+
+def stalled_baseline_lines(results: Path, name: str) -> list[str]:
+    """For a passage whose baseline never arrived: how far each trial got, and in what weather."""
+    import numpy as np
+    import pandas as pd
+
+    folder = latest(results / f"passage_{name}")
+    if folder is None:
+        return []
+    import tomllib
+
+    comparison = tomllib.loads((ROOT / "scenarios" / "passages" / f"{name}_compare.toml").read_text())
+    goal = np.array(comparison["voyage"]["goal_nm"], dtype=float)
+    lines = []
+    for trial in sorted((folder / "runs" / "RHNC_equal-arrival_baseline").glob("*/summary.json")):
+        summary = json.loads(trial.read_text())
+        if summary["participants"].get("goal", {}).get("arrival_time_s") is not None:
+            return []  # a trial arrived: nothing stalled
+        frame = pd.read_parquet(trial.parent / "timeseries.parquet")
+        distance = np.hypot(frame["ship.x"] / 1852.0 - goal[0], frame["ship.y"] / 1852.0 - goal[1])
+        off_bow = np.degrees(np.abs(np.angle(np.exp(1j * (frame["env.wind_direction"] - frame["ship.psi"])))))
+        lines.append(f"- reference {frame['route.reference[0,4]'].iloc[0] / 0.514444:.2f} kn: made good "
+                     f"{distance.iloc[0] - distance.iloc[-1]:.1f} nm of {distance.iloc[0]:.1f} in "
+                     f"{frame['time_s'].iloc[-1] / 3600.0:.1f} h (least {distance.min():.1f} nm from the goal); at the "
+                     f"ship, median Hs {frame['env.hs'].median():.1f} m, wind {frame['env.wind_speed'].median():.1f} m/s "
+                     f"from {np.median(off_bow):.0f} deg off the bow, speed through water "
+                     f"{frame['ship.u'].median() / 0.514444:.1f} kn")
+    if not lines:
+        return []
+    return ["", f"{name}: the sea-route baseline arrived in no trial ({folder.relative_to(results.parent)}):", ""] + lines
 
 
 def traffic_lines(results: Path) -> list[str]:
@@ -92,11 +129,14 @@ def main() -> None:
              "chords, against the declared clearance; the baseline's is the least over its speed trials. "
              "Sailed: the distance along each track (the baseline's trial nearest the matched arrival): the "
              "sea-route network's detours make the baseline sail farther and so faster, which is most of "
-             "the saving where the two distances differ.", "",
+             "the saving where the two distances differ. Distance alone: the saving the shorter track "
+             "alone would give at equal arrival time, if brake power grew as the cube of speed (calm "
+             "water, one constant speed: energy as distance³ / time²): 1 - (RHNC / baseline)³; a "
+             "saving near it is the sea route's detour, not the weather.", "",
              "| passage | arrival [min] | RHNC cost [USD] | baseline cost [USD] | saving cost [%] | saving CO2 [%] "
-             "| sailed RHNC / baseline [nm] | baseline speed [kn] | RHNC clearance [nm] / declared "
-             "| baseline clearance [nm] | comparison |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| sailed RHNC / baseline [nm] | distance alone [%] | baseline speed [kn] "
+             "| RHNC clearance [nm] / declared | baseline clearance [nm] | comparison |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     lines += [passage_row(results, name) for name in PASSAGES]
     flags = []
     for name in PASSAGES:
@@ -105,6 +145,8 @@ def main() -> None:
             flags += [f"- {name}: {flag}" for flag in json.loads((folder / "summary.json").read_text()).get("flags", [])]
     if flags:
         lines += ["", "Flags of the comparisons:", ""] + flags
+    for name in PASSAGES:
+        lines += stalled_baseline_lines(results, name)
     lines += [""] + traffic_lines(results) + [""]
     out = ROOT / "docs" / "passages-results.md"
     out.write_text("\n".join(lines))

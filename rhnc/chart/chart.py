@@ -124,6 +124,48 @@ class Chart:
         return self.projection.to_geographic(north_m, east_m)
 
 
+class BoundaryIndex:
+    """The edges of a chart's areas in a search tree: the nearest point of any area's edge to
+    many positions at once (what the NMPC asks every control step near its predicted track).
+
+    Parameters
+    ----------
+    chart : Chart
+    """
+
+    def __init__(self, chart: Chart) -> None:
+        import shapely
+
+        self.clearance_m = chart.clearance_m
+        hazard = chart.hazard
+        rings = [] if hazard.is_empty else [shapely.get_coordinates(ring) for polygon in shapely.get_parts(hazard)
+                                            for ring in (polygon.exterior, *polygon.interiors)]
+        self.a = np.concatenate([ring[:-1] for ring in rings]) if rings else np.zeros((0, 2))
+        self.b = np.concatenate([ring[1:] for ring in rings]) if rings else np.zeros((0, 2))
+        self.tree = shapely.STRtree(shapely.linestrings(np.stack([self.a, self.b], axis=1))) if rings else None
+        self.hazard = hazard
+        shapely.prepare(hazard)
+
+    def nearest(self, points_m) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The nearest edge point (n, 2) [m] to each of ``points_m`` (n, 2) (north, east [m]), its
+        distance [m] (inf without areas) and whether the position lies inside an area."""
+        import shapely
+
+        points = np.asarray(points_m, dtype=float).reshape(-1, 2)
+        if self.tree is None:
+            return np.full(points.shape, np.nan), np.full(len(points), np.inf), np.zeros(len(points), dtype=bool)
+        pairs = self.tree.query_nearest(shapely.points(points), all_matches=False)
+        edge = np.empty(len(points), dtype=int)
+        edge[pairs[0]] = pairs[1]
+        a, b = self.a[edge], self.b[edge]
+        along = b - a
+        share = np.clip(np.einsum("ij,ij->i", points - a, along) / np.maximum(np.einsum("ij,ij->i", along, along),
+                                                                             1e-12), 0.0, 1.0)
+        nearest = a + share[:, None] * along
+        inside = shapely.contains_xy(self.hazard, points[:, 0], points[:, 1])
+        return nearest, np.hypot(*(points - nearest).T), inside
+
+
 def load_chart(path) -> Chart:
     """Read a chart file (see the module's header); :class:`ScenarioError` naming file and key."""
     path = Path(path)

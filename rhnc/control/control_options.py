@@ -54,12 +54,16 @@ OPTIONS = (
     "loop_delay_s",
     "obstacle_age_s",
     "actuators_ship",
+    "chart",
+    "coastline_slots",
 )
 WEIGHT_KEYS = ("q", "r", "r_rate")
 #: Largest values of the integer options: bounds on the size of the NLP built from them
 #: (checked before it is built; the shipped scenarios use 15-120 intervals).
 INTEGER_LIMITS = {"horizon_steps": 400, "substeps": 50, "max_iterations": 100_000, "iteration_budget": 100_000,
-                  "max_obstacles": 64}
+                  "max_obstacles": 64, "coastline_slots": 64}
+#: Coastline slots with a chart when the options do not say (rhnc/control/nmpc_coastline.py)
+DEFAULT_COASTLINE_SLOTS = 6
 
 
 
@@ -91,6 +95,10 @@ def controller_from_options(options: Mapping[str, Any], context: BuildContext):
         raise ScenarioError(f"{where}: option 'parameter_overrides' must be a table")
     params = _prediction_model(options, overrides, context)
     kwargs = _numeric_settings(options, context)
+    if "chart" in options:
+        kwargs.setdefault("coastline_slots", DEFAULT_COASTLINE_SLOTS)
+    elif "coastline_slots" in options:
+        raise ScenarioError(f"{where}: option 'coastline_slots' needs option 'chart' (the land to keep clear of)")
     kwargs.update(_identified_margin_growth(options, params, where))
     kwargs.update(_slack_and_weights(options, where))
     if "actuators_ship" in options:
@@ -101,6 +109,21 @@ def controller_from_options(options: Mapping[str, Any], context: BuildContext):
         raise ScenarioError(f"{where}: {error}") from None
     et_default = _number(options, "et_default", where, 0.0)
     return params, settings, et_default, _delays(options, context)
+
+
+def chart_from_options(options: Mapping[str, Any], context: BuildContext):
+    """The option ``chart``: land and no-go areas the NMPC keeps its clearance from (None without it)."""
+    if "chart" not in options:
+        return None
+    from rhnc.chart.chart import load_chart
+
+    if not isinstance(options["chart"], str) or not options["chart"]:
+        raise ScenarioError(f"{context.where}: option 'chart' must be the path of a chart file, "
+                            f"got {options['chart']!r}")
+    try:
+        return load_chart(Path(context.scenario_dir) / options["chart"])
+    except ScenarioError as error:
+        raise ScenarioError(f"{context.where}: option 'chart': {error}") from None
 
 
 def _numeric_settings(options: Mapping[str, Any], context: BuildContext) -> dict[str, Any]:

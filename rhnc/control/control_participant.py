@@ -30,7 +30,7 @@ import numpy as np
 from orchestrator.errors import ModelError
 from orchestrator.geometry import KNOT
 from orchestrator.participant import BuildContext, Participant, Value
-from rhnc.control.control_options import OPTIONS, controller_from_options
+from rhnc.control.control_options import OPTIONS, chart_from_options, controller_from_options
 from rhnc.control.loop_delay import LoopDelay
 from rhnc.control.nmpc import NMPCController
 from rhnc.ship.ship_model import STATE_NAMES
@@ -231,6 +231,13 @@ class ControlParticipant(Participant):
         How old the ``obstacles`` input is when it arrives [s] (default: the master's, one
         step of a Python source in Jacobi order, else 0); the obstacles are carried over
         it and the loop delay at their velocity.
+    chart : str
+        A chart file (relative to the scenario; docs/passages.md): the NMPC keeps its
+        declared clearance from land and no-go areas as constraints, always on, softened
+        by the collision slack where no plan keeps it (:mod:`rhnc.control.nmpc_coastline`).
+    coastline_slots : int
+        Constraints for the chart's nearest edges along the predicted track (default 6,
+        only with ``chart``).
     """
 
     OPTIONS = OPTIONS
@@ -260,7 +267,11 @@ class ControlParticipant(Participant):
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "ControlParticipant":
         """Build from scenario options (see :mod:`rhnc.control.control_options`); errors name the key."""
         params, settings, et_default, delays = controller_from_options(options, context)
-        participant = cls(name, NMPCController(params, settings), et_default, *delays)
+        controller = NMPCController(params, settings)
+        chart = chart_from_options(options, context)
+        if chart is not None:
+            controller.use_chart(chart)
+        participant = cls(name, controller, et_default, *delays)
         if "clearance_margin_growth_kn" in options:
             participant.margin_source = "scenario"
         elif "position_error_growth_mps" in params.extras:

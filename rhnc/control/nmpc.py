@@ -72,6 +72,7 @@ from rhnc.encounters.colregs import ENCOUNTER_CLASSES
 from rhnc.control.disturbance_observer import DisturbanceObserver, trimmed_reference
 from rhnc.control.nmpc_codegen import NLPLibrary
 from rhnc.control.nmpc_alteration import heading_bounds
+from rhnc.control.nmpc_coastline import CoastlineDomains
 from rhnc.control.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport
 from rhnc.control.nmpc_problem import (ACCEPTABLE_VIOLATION, DISTURBANCE_SIZE, FRESH_SOLVER_PLUGINS, OBSTACLE_FIELDS,
                                StepEvaluator, build_problem, renew_solver_after, solver_options)
@@ -154,7 +155,8 @@ class NMPCController:
         #: SI value = scaled value * state_scale (positions relative to the solve's origin).
         self.state_scale = np.array([L, L, 1.0, U, U, U / L])
         self.input_scale = params.tau_max.copy()
-        self.problem = build_problem(params, s.horizon_steps, s.control_interval_s, s.substeps, s.max_obstacles,
+        self.problem = build_problem(params, s.horizon_steps, s.control_interval_s, s.substeps,
+                                     s.max_obstacles + s.coastline_slots,
                                      s.q, s.r, s.r_rate, s.collision_slack_weight, self.state_scale,
                                      self.input_scale)
         self._F_scaled = self.problem.step
@@ -205,10 +207,15 @@ class NMPCController:
         self.observer = (DisturbanceObserver(params, self.state_scale, s.observer_gain)
                          if s.disturbance_observer else None)
         self.memory = PlanMemory(s.horizon_steps, s.control_interval_s, self._rollout)
+        self.coastline: CoastlineDomains | None = None
         self.fallback_count = 0
         self.failure_count = 0
         self.timeout_count = 0
         self._bound_templates: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def use_chart(self, chart) -> None:
+        """Keep the clearance of ``chart`` (:class:`rhnc.chart.chart.Chart`) in the coastline slots."""
+        self.coastline = CoastlineDomains(chart, self.settings.coastline_slots)
 
     # ------------------------------------------------------------------ state handling
 
@@ -329,6 +336,7 @@ class NMPCController:
                                                 s.control_interval_s / s.substeps, self.length_scale, et,
                                                 reference_heading_rad=float(reference[0, 2]),
                                                 horizon_s=N * s.control_interval_s, time_s=time_s)
+        slots = self._with_coastline(slots, time_s, state, origin, reference, closing)
         # Rules 8, 16, 17: a readily apparent alteration once the ship gives way or acts
         floor, ceiling = heading_bounds(report, time_s, float(state[2]), float(state[5]),
                                         time_s + s.control_interval_s * np.arange(1, N + 1))
@@ -343,6 +351,25 @@ class NMPCController:
         self._rate_and_heading_bounds(lbx, ubx, state, ref_scaled, w_prev, report, floor, ceiling)
         x0 = self._initial_guess(time_s, state, ref_scaled, w_d, origin, slots, disturbance)
         return _StepProblem(state, origin, previous_tau, disturbance, report, p, lbx, ubx, x0)
+
+    def _with_coastline(self, slots, time_s, state, origin, reference, closing) -> np.ndarray:
+        """The obstacles' slots followed by the coastline's: the chart's nearest edges to the
+        reference and to the previous plan (always on, whatever the event trigger)."""
+        s = self.settings
+        if not s.coastline_slots:
+            return slots
+        if self.coastline is None:
+            land = np.zeros((OBSTACLE_FIELDS, s.coastline_slots))
+            land[6, :] = 1.0  # harmless radius: no chart, no constraint
+            return np.hstack([slots, land])
+        tracks = [reference[:, :2]]
+        shifted = self.memory.shifted(time_s)
+        if shifted is not None:
+            tracks.append(shifted[0][:, :2])
+        horizon_length = closing * s.horizon_steps * s.control_interval_s
+        land = self.coastline.parameters(np.stack(tracks), state[:2], origin, self.length_scale, closing,
+                                         s.control_interval_s / s.substeps, horizon_length)
+        return np.hstack([slots, land])
 
     def _trimmed_reference(self, time_s, state, reference) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The reference on the heading nearest the ship and capped in speed, its feed-forward

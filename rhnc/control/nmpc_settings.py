@@ -107,6 +107,10 @@ class NMPCSettings:
         the k-th planned input stays within k intervals' worth of change from the last
         applied one, so the first, applied one never asks more than one interval's.
         None: no rate bound (only the R1 weight).
+    coastline_slots : int
+        Constraint slots for the nearest edges of land and no-go areas, after the
+        obstacles' (default 0; :mod:`rhnc.control.nmpc_coastline`, filled once the
+        controller is given a chart).
     """
 
     horizon_steps: int = 15
@@ -139,6 +143,7 @@ class NMPCSettings:
     codegen: bool = True
     warm_start_duals: bool = True
     tau_rate_max: tuple[float, float] | None = None
+    coastline_slots: int = 0
 
     def __post_init__(self) -> None:
         if self.iteration_budget is not None and not 2 <= self.iteration_budget <= self.max_iterations:
@@ -152,6 +157,8 @@ class NMPCSettings:
             raise ValueError(f"control_interval_s must be > 0, got {self.control_interval_s}")
         if self.substeps < 1:
             raise ValueError(f"substeps must be >= 1, got {self.substeps}")
+        if self.coastline_slots < 0:
+            raise ValueError(f"coastline_slots must be >= 0, got {self.coastline_slots}")
         if self.solver not in SOLVERS:
             raise ValueError(f"solver must be one of {', '.join(SOLVERS)}, got '{self.solver}'")
         if len(self.q) != 6 or len(self.r) != 2 or len(self.r_rate) != 2:

@@ -10,6 +10,7 @@ from orchestrator.errors import ModelError
 from orchestrator.geometry import NM
 from orchestrator.participant import BuildContext, Participant, Value, check_options
 from orchestrator.toml_input import PairNm, Positive, TomlTable
+from rhnc.chart.positions import projected_options
 
 
 class GoalOptions(TomlTable):
@@ -17,17 +18,24 @@ class GoalOptions(TomlTable):
 
     goal_nm: PairNm
     arrival_radius_nm: Positive = 0.5
+    chart: str | None = None  # only to project goal_deg
+
+
+#: Options a scenario may give: the model's, and the goal in latitude and longitude.
+GOAL_OPTIONS = (*GoalOptions.model_fields, "goal_deg")
 
 
 class GoalMonitor(Participant):
     """Watches the ship's position against a destination.
 
-    Options: ``goal_nm = [north, east]``, ``arrival_radius_nm`` (default 0.5).
+    Options: ``goal_nm = [north, east]`` (or ``goal_deg = [latitude, longitude]`` with
+    ``chart``, the chart file whose projection puts it in the plane), ``arrival_radius_nm``
+    (default 0.5).
     Inputs: ``x``, ``y`` [m].  Outputs: ``goal_distance_m`` [m] and ``arrived`` (1.0 once
     the ship has come within the arrival radius, and from then on).
     """
 
-    OPTIONS = tuple(GoalOptions.model_fields)
+    OPTIONS = GOAL_OPTIONS
 
     def __init__(self, name: str, goal_m: tuple[float, float], radius_m: float) -> None:
         super().__init__(name)
@@ -37,6 +45,7 @@ class GoalMonitor(Participant):
 
     @classmethod
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "GoalMonitor":
+        options = projected_options(options, context.where, context.scenario_dir, names=("goal",))
         checked = check_options(GoalOptions, options, context.where)
         return cls(name, (checked.goal_nm[0] * NM, checked.goal_nm[1] * NM), checked.arrival_radius_nm * NM)
 

@@ -56,7 +56,9 @@ placeholder published at set-up, not a prediction, and is not taken as the start
 
 Options (``[participants.<name>.options]``)
 -------------------------------------------
-goal_nm : [x, y]            goal, north and east [nm] (required)
+goal_nm : [x, y]            goal, north and east [nm] (required; or goal_deg)
+goal_deg, start_deg : [lat, lon]   instead of goal_nm, start_nm: latitude and longitude
+                            [deg], projected by the chart (option ``chart``)
 speed_kn : float            planning speed v_s [kn] (18)
 horizon_steps : int         N_L (16)
 k1, k2, k3 : float          weights of Eq. 6 (1, 1, 16)
@@ -87,6 +89,7 @@ import numpy as np
 
 from orchestrator.errors import ModelError, ScenarioError
 from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
+from rhnc.chart.positions import projected_options
 from rhnc.ship.energy import EnergyParameters, brake_power, cost_rate, emission_rate
 from rhnc.navigation.fields import FieldWeights, GuidanceParameters, SuperpositionField, bearing, resample_weather
 from orchestrator.geometry import KNOT, NM
@@ -204,7 +207,8 @@ class NavigationParticipant(Participant):
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "NavigationParticipant":
         """Build from ``[participants.<name>.options]``; errors name the key."""
         where = f"{context.where}.options"
-        reject_unknown_options(options, OPTIONS, where)
+        reject_unknown_options(options, (*OPTIONS, "goal_deg", "start_deg"), where)
+        options = projected_options(options, where, context.scenario_dir, names=("start", "goal"))
         if context.metocean is None:
             raise ScenarioError(f"{context.where}: the navigation needs the scenario's [metocean] table")
         if "goal_nm" not in options:

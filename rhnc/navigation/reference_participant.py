@@ -5,6 +5,15 @@ v [m/s], r [rad/s]) on the instants ``t, t + delta, ..., t + N delta`` of the cu
 from a "virtual ship" that left ``start_nm`` at the simulation's start time and sails the
 path at constant speed (the paper's Eq. 19 states: v_d = 0, psi_d the path's course,
 r_d its turn rate).
+
+A virtual ship on a timed schedule runs away from a ship that cannot keep up with it (a
+gale on the bow): the reference then lies miles ahead, and at the destination it stops
+there (u_d = 0) while the ship is still miles short, and the NMPC, whose speed error costs
+more than its position error, stops the ship short of it.  With ``max_lead_nm`` (waypoint
+paths, inputs ``x`` and ``y`` connected) the virtual ship keeps its speed but waits for the
+ship: it is never farther along the path than the ship's own progress (its nearest point on
+the path, never going back) plus the lead.  A lead under the goal's arrival radius brings
+the ship into it whenever the virtual ship arrives.
 """
 
 from __future__ import annotations
@@ -15,9 +24,10 @@ from typing import Any
 
 import numpy as np
 
-from orchestrator.errors import ScenarioError
+from orchestrator.errors import ModelError, ScenarioError
 from orchestrator.geometry import KNOT, NM
 from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
+from rhnc.chart.positions import projected_options
 
 
 
@@ -78,6 +88,22 @@ def waypoint_reference(elapsed_s: np.ndarray, waypoints_m: np.ndarray, speed_mps
     return np.column_stack([position, psi, speed, zeros, zeros])
 
 
+def path_progress_m(position_m: np.ndarray, waypoints_m: np.ndarray, at_least_m: float = 0.0) -> float:
+    """Arc length [m] along the polyline ``waypoints_m`` of its nearest point to ``position_m``,
+    among the legs that end past ``at_least_m`` (progress never goes back), at least ``at_least_m``."""
+    points = np.asarray(waypoints_m, dtype=float)
+    a, legs = points[:-1], np.diff(points, axis=0)
+    lengths = np.hypot(legs[:, 0], legs[:, 1])
+    cumulative = np.concatenate([[0.0], np.cumsum(lengths)])
+    share = np.clip(np.einsum("ij,ij->i", np.asarray(position_m, dtype=float)[:2] - a, legs) / lengths**2, 0.0, 1.0)
+    distance = np.hypot(*(a + share[:, None] * legs - np.asarray(position_m, dtype=float)[:2]).T)
+    ahead = cumulative[1:] > at_least_m
+    if not np.any(ahead):
+        return float(cumulative[-1])
+    leg = int(np.argmin(np.where(ahead, distance, np.inf)))
+    return float(max(at_least_m, cumulative[leg] + share[leg] * lengths[leg]))
+
+
 #: Most points of one reference horizon (the NMPC's horizon is at most 400 intervals).
 MAX_HORIZON_STEPS = 10_000
 
@@ -108,23 +134,41 @@ class ReferencePathParticipant(Participant):
         N, the reference has N + 1 points (default 15, the NMPC's N_c).
     interval_s : float
         Spacing of the points [s] (default: this participant's step size).
+    start_deg, goal_deg, waypoints_deg : [lat, lon] or list of them
+        Instead of ``start_nm``, ``goal_nm``, ``waypoints_nm``: latitude and longitude
+        [deg], projected by the chart of option ``chart``.
+    chart : str
+        A chart file (relative to the scenario) whose projection puts the ``_deg``
+        positions in the plane.
+    max_lead_nm : float
+        With ``waypoints_nm`` or ``goal_nm``: the virtual ship is never more than this far
+        along the path ahead of the ship (inputs ``x``, ``y`` [m]); default: no limit, the
+        timed schedule.
     """
 
     OPTIONS = ("start_nm", "course_deg", "turn_radius_nm", "waypoints_nm", "goal_nm", "avoid", "avoid_margin_nm",
-               "speed_kn", "horizon_steps", "interval_s")
+               "speed_kn", "horizon_steps", "interval_s", "max_lead_nm", "chart", "start_deg", "goal_deg",
+               "waypoints_deg")
 
-    def __init__(self, name: str, path, horizon_steps: int, interval_s: float, start_time: float) -> None:
+    def __init__(self, name: str, path, horizon_steps: int, interval_s: float, start_time: float,
+                 lead: tuple[np.ndarray, float, float] | None = None) -> None:
         super().__init__(name)
         self._path = path
         self.horizon_steps = horizon_steps
         self.interval_s = interval_s
         self._start_time = start_time
+        #: (waypoints [m], speed [m/s], largest lead [m]) of a virtual ship that waits, or None
+        self._lead = lead
+        self._virtual_s = 0.0  # the virtual ship's sailing time along the path [s] (with a lead)
+        self._ship_progress_m = 0.0
+        self._last_time = start_time
 
     @classmethod
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "ReferencePathParticipant":
         """Build from scenario options (see class docstring); errors name the key."""
         where = context.where
         reject_unknown_options(options, cls.OPTIONS, where)
+        options = projected_options(options, where, context.scenario_dir)
         if "speed_kn" not in options:
             raise ScenarioError(f"{where}: missing option 'speed_kn'")
         speed = _number(options, "speed_kn", where) * KNOT
@@ -161,11 +205,20 @@ class ReferencePathParticipant(Participant):
         interval = _number(options, "interval_s", where) if "interval_s" in options else context.step_size
         if interval <= 0.0:
             raise ScenarioError(f"{where}: option 'interval_s' must be > 0")
-        return cls(name, path, horizon, interval, context.start_time)
+        lead = None
+        if "max_lead_nm" in options:
+            if "waypoints_nm" not in options and "goal_nm" not in options:
+                raise ScenarioError(f"{where}: option 'max_lead_nm' needs a path of waypoints ('waypoints_nm' or "
+                                    "'goal_nm')")
+            lead_m = _number(options, "max_lead_nm", where) * NM
+            if lead_m <= 0.0:
+                raise ScenarioError(f"{where}: option 'max_lead_nm' must be > 0")
+            lead = (waypoints, speed, lead_m)
+        return cls(name, path, horizon, interval, context.start_time, lead)
 
     @property
     def input_names(self) -> Sequence[str]:
-        return ()
+        return ("x", "y") if self._lead is not None else ()
 
     @property
     def output_names(self) -> Sequence[str]:
@@ -174,13 +227,31 @@ class ReferencePathParticipant(Participant):
     def reference_at(self, time: float) -> np.ndarray:
         """The (N+1, 7) reference published at ``time`` [s]."""
         times = time + self.interval_s * np.arange(self.horizon_steps + 1)
-        return np.column_stack([times, self._path(times - self._start_time)])
+        elapsed = (self._virtual_s if self._lead is not None else time - self._start_time) + (times - time)
+        return np.column_stack([times, self._path(elapsed)])
+
+    def _wait_for(self, time: float, inputs: Mapping[str, Value]) -> None:
+        """Advance the virtual ship to ``time``, no farther than the lead ahead of the ship."""
+        if self._lead is None:
+            return
+        missing = [name for name in ("x", "y") if name not in inputs]
+        if missing:
+            raise ModelError(f"{self.name}: option 'max_lead_nm' needs the inputs {', '.join(missing)} connected "
+                             f"(the ship's position)")
+        waypoints, speed, lead_m = self._lead
+        self._ship_progress_m = path_progress_m(np.array([float(inputs["x"]), float(inputs["y"])]), waypoints,
+                                                self._ship_progress_m)
+        ahead = self._virtual_s + (time - self._last_time)
+        self._virtual_s = max(self._virtual_s, min(ahead, (self._ship_progress_m + lead_m) / speed))
+        self._last_time = time
 
     def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
-        self._start_time = start_time
+        self._start_time = self._last_time = start_time
+        self._virtual_s = self._ship_progress_m = 0.0
         return {"reference": self.reference_at(start_time)}
 
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
+        self._wait_for(time, inputs)
         return {"reference": self.reference_at(time)}
 
 

@@ -27,7 +27,7 @@ def test_distance_and_arrival_latch():
     ({"goal_nm": [1, float("inf")]}, r"'participants.goal.options.goal_nm' must be \[north, east\] in nm, got \[1, inf\]"),
     ({"goal_nm": [1, 2], "arrival_radius_nm": 0}, r"'participants.goal.options.arrival_radius_nm' must be positive"),
     ({"goal_nm": [1, 2], "radius": 1}, r"unknown key 'participants.goal.options.radius' \(valid: goal_nm, "
-                                       r"arrival_radius_nm\)"),
+                                       r"arrival_radius_nm, chart\)"),
 ])
 def test_option_errors(options, message):
     with pytest.raises(ScenarioError, match=message):

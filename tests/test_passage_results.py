@@ -1,0 +1,50 @@
+"""The passages' results table: a baseline that never arrived is listed with how far it got, never hidden."""
+
+import importlib.util
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "passage_results.py"
+
+
+@pytest.fixture(scope="module")
+def script():
+    spec = importlib.util.spec_from_file_location("passage_results_under_test", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    yield module
+    del sys.modules[spec.name]
+
+
+def trial(folder: Path, arrival_s, north_nm):
+    """A baseline trial sailing north along the goal's meridian (Biscay's goal, [38.196, 123.44] nm)."""
+    folder.mkdir(parents=True)
+    (folder / "summary.json").write_text(json.dumps({"participants": {"goal": {"arrival_time_s": arrival_s}}}))
+    count = len(north_nm)
+    pd.DataFrame({"time_s": 60.0 * np.arange(count), "ship.x": np.asarray(north_nm) * 1852.0,
+                  "ship.y": np.full(count, 123.44 * 1852.0), "ship.psi": np.zeros(count), "ship.u": np.full(count, 3.0),
+                  "env.hs": np.full(count, 10.0), "env.wind_speed": np.full(count, 20.0),
+                  "env.wind_direction": np.full(count, np.radians(30.0)),
+                  "route.reference[0,4]": np.full(count, 15.0 * 0.514444)}).to_parquet(folder / "timeseries.parquet")
+
+
+def test_a_baseline_that_arrived_in_no_trial_is_listed_with_its_progress(script, tmp_path):
+    runs = tmp_path / "passage_biscay_crossing" / "20260101T000000Z-x" / "runs" / "RHNC_equal-arrival_baseline"
+    trial(runs / "a", None, [-20.0, -10.0, -8.0, -9.0])  # 58.2 nm from the goal, ends 47.2 nm away
+    lines = script.stalled_baseline_lines(tmp_path, "biscay_crossing")
+    assert "the sea-route baseline arrived in no trial" in lines[1]
+    assert ("- reference 15.00 kn: made good 11.0 nm of 58.2 in 0.1 h (least 46.2 nm from the goal); at the ship, "
+            "median Hs 10.0 m, wind 20.0 m/s from 30 deg off the bow, speed through water 5.8 kn") in lines
+
+
+def test_no_progress_lines_when_a_trial_arrived(script, tmp_path):
+    runs = tmp_path / "passage_biscay_crossing" / "20260101T000000Z-x" / "runs" / "RHNC_equal-arrival_baseline"
+    trial(runs / "a", None, [-20.0, -10.0])
+    trial(runs / "b", 3600.0, [-20.0, 38.0])
+    assert script.stalled_baseline_lines(tmp_path, "biscay_crossing") == []
