@@ -27,12 +27,13 @@ from typing import Any
 
 import numpy as np
 
-from orchestrator.errors import ModelError
+from orchestrator.errors import ModelError, ScenarioError
 from orchestrator.geometry import KNOT
 from orchestrator.participant import BuildContext, Participant, Value
 from rhnc.control.control_options import OPTIONS, controller_from_options
 from rhnc.control.loop_delay import LoopDelay
 from rhnc.control.nmpc import NMPCController
+from rhnc.control.nmpc_acados import AcadosUnavailable
 from rhnc.ship.ship_model import STATE_NAMES
 
 LOG = logging.getLogger(__name__)
@@ -260,7 +261,11 @@ class ControlParticipant(Participant):
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "ControlParticipant":
         """Build from scenario options (see :mod:`rhnc.control.control_options`); errors name the key."""
         params, settings, et_default, delays = controller_from_options(options, context)
-        participant = cls(name, NMPCController(params, settings), et_default, *delays)
+        try:
+            controller = NMPCController(params, settings)
+        except AcadosUnavailable as error:
+            raise ScenarioError(f"{context.where}: option 'solver': {error}") from None
+        participant = cls(name, controller, et_default, *delays)
         if "clearance_margin_growth_kn" in options:
             participant.margin_source = "scenario"
         elif "position_error_growth_mps" in params.extras:

@@ -19,7 +19,7 @@ from rhnc.control.nmpc_problem import DISTURBANCE_SIZE
 #: the KCS's service speed [m/s]: the default speed bound
 SERVICE_SPEED_MPS = 24.0 * KNOT
 
-SOLVERS = ("ipopt", "fatrop", "sqpmethod")
+SOLVERS = ("ipopt", "fatrop", "sqpmethod", "acados")
 
 
 @dataclasses.dataclass(frozen=True)
