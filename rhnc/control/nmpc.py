@@ -224,7 +224,7 @@ class NMPCController:
         from rhnc.control.nmpc_acados import AcadosLayout, AcadosLibrary, AcadosSolvers  # optional: only when chosen
 
         s = self.settings
-        library = AcadosLibrary(self.params, s, self.state_scale, self.input_scale)
+        library = AcadosLibrary(self.params, s, self.state_scale, self.input_scale, self.problem.nlp)
         layout = AcadosLayout.of(self.problem, s.control_interval_s, s.max_obstacles)
         names = ("hard", "relaxed") if self.problem.sigma_index.size else ("hard",)
         names += ("relaxed_alone",) if self.problem.sigma_index.size and s.iteration_budget is not None else ()

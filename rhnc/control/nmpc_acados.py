@@ -75,7 +75,7 @@ DEFAULT_ACADOS_DIR = Path("~/.local/share/rhnc-cosim/acados")
 #: how to install it (the one line the error gives)
 INSTALL_COMMAND = f"pip install --no-deps --target {DEFAULT_ACADOS_DIR} {ACADOS_WHEEL}"
 #: bump when the way solvers are generated changes, so that old folders are not reused
-RECIPE_VERSION = "2"
+RECIPE_VERSION = "3"
 #: acados's infinity: bounds beyond it are treated as absent
 ACADOS_INFINITY = 1.0e9
 #: SQP status codes (acados's ``ACADOS_*`` return values) as the controller reports them
@@ -132,6 +132,7 @@ class AcadosLayout:
     np: int
     stage_parameters: np.ndarray  # (N+1, np) indices into [p, constants, vec(L')]
     constants: np.ndarray  # t0 of every stage, then 0 and 1 (state_on)
+    n_nlp_parameters: int  # length of the NLP's parameter vector
     w_prev: np.ndarray  # indices of w_prev in the NLP's parameter vector
     P: np.ndarray  # indices of vec(P)
 
@@ -157,7 +158,7 @@ class AcadosLayout:
             rows.append(row)
         stage = np.array(rows)
         return AcadosLayout(N=N, n_sigma=n_sigma, nx=8, nu=2 + n_sigma, np=stage.shape[1], stage_parameters=stage,
-                            constants=constants, w_prev=np.arange(wprev0, wprev0 + 2), P=np.arange(P0, P0 + 36))
+                            constants=constants, n_nlp_parameters=n_p, w_prev=np.arange(wprev0, wprev0 + 2), P=np.arange(P0, P0 + 36))
 
 
 def stage_symbols(M: int):
@@ -250,11 +251,18 @@ def acados_ocp(acados, name: str, params, settings, state_scale: np.ndarray, inp
     return ocp
 
 
-def solver_key(ocp, compiler: str) -> str:
+def constraint_function(nlp: dict) -> ca.Function:
+    """``rhnc_nlp_g(x, p) -> g``: the NLP's constraints at a point of its decision vector (the
+    controller's check of a plan, compiled beside the solver: interpreted it cost 0.1 ms a step)."""
+    return ca.Function("rhnc_nlp_g", [nlp["x"], nlp["p"]], [nlp["g"]])
+
+
+def solver_key(ocp, compiler: str, nlp: dict) -> str:
     """Hash of what the generated solver is made from (module docstring)."""
     model = ocp.model
     functions = [ca.Function("f", [model.x, model.u, model.p], [expr])
                  for expr in (model.disc_dyn_expr, model.cost_y_expr, model.cost_y_expr_e, model.con_h_expr)]
+    functions.append(constraint_function(nlp))
     digest = hashlib.sha256()
     settings = {"options": {key: repr(getattr(ocp.solver_options, key)) for key in (
         "nlp_solver_type", "hessian_approx", "qp_solver", "qp_solver_iter_max", "nlp_solver_max_iter",
@@ -281,8 +289,9 @@ def _quiet_call(function, *args, **kwargs):
     return result
 
 
-def build_solver(acados, ocp, folder: Path, compiler: str) -> None:
-    """Generate the solver's C, compile it and the step helper into ``folder`` (atomically)."""
+def build_solver(acados, ocp, folder: Path, compiler: str, nlp: dict) -> None:
+    """Generate the solver's C, compile it, the step helper and the NLP's constraint function
+    into ``folder`` (atomically)."""
     from acados.acados_template import AcadosOcpSolver
 
     partial = folder.with_name(f".{folder.name}.{os.getpid()}.tmp")
@@ -313,13 +322,15 @@ def build_solver(acados, ocp, folder: Path, compiler: str) -> None:
                         str(STEP_SOURCE), f"-I{acados.INCLUDE_DIR}", f"-I{acados.INCLUDE_DIR}/blasfeo/include",
                         f"-I{acados.INCLUDE_DIR}/hpipm/include", f"-L{lib}", f"-Wl,-rpath,{lib}", "-lacados",
                         "-lhpipm", "-lblasfeo", "-lm"], check=True, capture_output=True, text=True)
+        generator = ca.CodeGenerator("rhnc_nlp_g.c", {"with_header": False})
+        generator.add(constraint_function(nlp))
+        source = generator.generate(str(partial) + os.sep)
+        subprocess.run([compiler, "-O2", "-fPIC", "-shared", "-o", str(partial / "rhnc_nlp_g.so"), source],
+                       check=True, capture_output=True, text=True)
         shutil.rmtree(partial / "c_generated_code", ignore_errors=True)
         os.replace(partial, folder)
     finally:
         shutil.rmtree(partial, ignore_errors=True)
-
-
-_DOUBLES = np.ctypeslib.ndpointer(dtype=np.float64, flags="C_CONTIGUOUS")
 
 
 class AcadosLibrary:
@@ -333,14 +344,14 @@ class AcadosLibrary:
 
     builds = 0
 
-    def __init__(self, params, settings, state_scale, input_scale) -> None:
+    def __init__(self, params, settings, state_scale, input_scale, nlp: dict) -> None:
         acados = load_acados()
         compiler = find_compiler()
         if compiler is None:
             raise AcadosUnavailable("solver = 'acados' needs a C compiler ($CC, cc, gcc or clang); none found")
         self.acados = acados
         probe = acados_ocp(acados, "rhnc_nmpc", params, settings, state_scale, input_scale, settings.max_iterations)
-        key = solver_key(probe, compiler)
+        key = solver_key(probe, compiler, nlp)
         self.name = f"rhnc_nmpc_{key[:10]}"
         self.path = cache_dir() / f"acados_{key[:24]}"
         self.build_time_s: float | None = None
@@ -354,7 +365,7 @@ class AcadosLibrary:
                              "under a minute)", self.path)
                     ocp = acados_ocp(acados, self.name, params, settings, state_scale, input_scale,
                                      settings.max_iterations)
-                    build_solver(acados, ocp, self.path, compiler)
+                    build_solver(acados, ocp, self.path, compiler, nlp)
                     AcadosLibrary.builds += 1
                     self.build_time_s = time.perf_counter() - start
         for dependency in ("libblasfeo.so", "libhpipm.so", "libqpOASES_e.so.3.1"):
@@ -365,9 +376,10 @@ class AcadosLibrary:
         self.acados_options_set.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_char_p, ctypes.c_void_p]
         self.solver_library = ctypes.CDLL(str(self.path / f"libacados_ocp_solver_{self.name}.so"))
         self.step_library = ctypes.CDLL(str(self.path / "rhnc_acados_step.so"))
-        step = self.step_library.rhnc_acados_step
+        self.constraints = ca.external("rhnc_nlp_g", str(self.path / "rhnc_nlp_g.so"))
+        step = self.step = self.step_library.rhnc_acados_step
         step.restype = ctypes.c_int
-        step.argtypes = [ctypes.c_void_p] * 8 + [ctypes.c_int] * 6 + [_DOUBLES] * 10
+        step.argtypes = [ctypes.c_void_p] * 8 + [ctypes.c_int] * 6 + [ctypes.c_void_p] * 10
 
     def function(self, suffix: str, restype=ctypes.c_void_p, argtypes=(ctypes.c_void_p,)):
         function = getattr(self.solver_library, f"{self.name}_acados_{suffix}")
@@ -380,7 +392,11 @@ class AcadosLibrary:
 
 
 class AcadosSolver:
-    """One acados solver object (its own memory: iterate, multipliers) of an :class:`AcadosLibrary`."""
+    """One acados solver object (its own memory: iterate, multipliers) of an :class:`AcadosLibrary`.
+
+    Its arguments live in arrays allocated once (``p``, ``x``, ``u``, bounds), filled in
+    place by the caller; a solve is one call into C with their addresses, bound once.
+    """
 
     def __init__(self, library: AcadosLibrary, layout: AcadosLayout, max_iterations: int) -> None:
         self.library, self.layout = library, layout
@@ -389,23 +405,27 @@ class AcadosSolver:
             raise RuntimeError("acados: creating the solver failed")
         get = {name: library.function(f"get_nlp_{name}")(self.capsule)
                for name in ("config", "dims", "in", "out", "solver", "opts")}
-        self.pointers = [self.capsule,
-                         ctypes.cast(library.function("update_params", ctypes.c_int), ctypes.c_void_p),
-                         ctypes.cast(library.function("solve", ctypes.c_int), ctypes.c_void_p),
-                         get["config"], get["dims"], get["in"], get["out"], get["solver"]]
-        options_set = library.acados_options_set
         limit = ctypes.c_int(max_iterations)
-        options_set(get["config"], get["opts"], b"max_iter", ctypes.byref(limit))
+        library.acados_options_set(get["config"], get["opts"], b"max_iter", ctypes.byref(limit))
         self._free = (library.function("free", ctypes.c_int), library.function("free_capsule", ctypes.c_int))
         L = layout
+        self.p = np.zeros((L.N + 1, L.np))
         self.x = np.zeros((L.N + 1, L.nx))
         self.u = np.zeros((L.N, L.nu))
+        self.lbx0, self.ubx0 = np.zeros(L.nx), np.zeros(L.nx)
+        self.lbx, self.ubx = np.zeros((L.N, 2)), np.zeros((L.N, 2))
+        self.lbu, self.ubu = np.zeros((L.N, L.nu)), np.zeros((L.N, L.nu))
         self.info = np.zeros(8)
+        arrays = (self.x, self.u, self.p, self.lbx0, self.ubx0, self.lbx, self.ubx, self.lbu, self.ubu, self.info)
+        self._arguments = (
+            self.capsule, ctypes.cast(library.function("update_params", ctypes.c_int), ctypes.c_void_p),
+            ctypes.cast(library.function("solve", ctypes.c_int), ctypes.c_void_p), get["config"], get["dims"],
+            get["in"], get["out"], get["solver"], L.N, L.nx, L.nu, L.np, 2, L.nu,
+            *(array.ctypes.data for array in arrays))
 
-    def __call__(self, p_stages, lbx0, ubx0, lbx, ubx, lbu, ubu) -> int:
-        L = self.layout
-        return self.library.step_library.rhnc_acados_step(*self.pointers, L.N, L.nx, L.nu, L.np, 2, L.nu, self.x,
-                                                          self.u, p_stages, lbx0, ubx0, lbx, ubx, lbu, ubu, self.info)
+    def __call__(self) -> int:
+        """Solve from the arrays as they are filled; ``x``, ``u`` and ``info`` then hold the answer."""
+        return self.library.step(*self._arguments)
 
     def close(self) -> None:
         if self.capsule is not None:
@@ -442,13 +462,17 @@ class AcadosSolvers:
         #: processor time of the last solve's call into C [s]: acados's own share of the step
         self.backend_time_s = float("nan")
         self.slack_constant = 0.0 if slack_weight is None else 0.25 * slack_weight * layout.N
-        nlp = problem.nlp
-        self._g = ca.Function("g", [nlp["x"], nlp["p"]], [nlp["g"]])
-        self._g_buffer = _Buffered(self._g)
+        self._g_buffer = _Buffered(library.constraints)
         z, w, sigma = problem.z_index, problem.w_index, problem.sigma_index
         self._z, self._w, self._sigma = z, w, sigma
         self._bounded_states = z[1:, 2:4]
         self._inputs = np.column_stack([w, sigma]) if sigma.size else w
+        # [p, constants, vec(L')]: what the stage parameters are taken from
+        n_p = layout.n_nlp_parameters
+        self._extended = np.concatenate([np.zeros(n_p), layout.constants, np.zeros(36)])
+        self._factor = slice(n_p + layout.constants.size, None)
+        self._last_P: bytes | None = None
+        self._last_factor = np.zeros(36)
 
     def start(self) -> None:
         """Nothing to start: the solves run in this process."""
@@ -469,25 +493,22 @@ class AcadosSolvers:
         layout = self.layout
         solver = self.solver(name)
         w_prev = p[layout.w_prev]
-        P = p[layout.P].reshape(6, 6)
-        try:
-            lower = np.linalg.cholesky(P)
-        except np.linalg.LinAlgError:  # positive semidefinite: a tiny shift keeps the factor real
-            lower = np.linalg.cholesky(P + 1e-12 * np.eye(6))
-        stages = np.concatenate([p, layout.constants, lower.T.ravel(order="F")])[layout.stage_parameters]
+        extended = self._extended
+        extended[:p.size] = p
+        extended[self._factor] = self._terminal_factor(p[layout.P])
+        np.take(extended, layout.stage_parameters, out=solver.p)
         x, u = solver.x, solver.u
         x[:, 0:6] = x0[self._z]
         x[0, 6:8] = w_prev
         x[1:, 6:8] = x0[self._w]
         u[:] = x0[self._inputs]
-        lbx0 = np.concatenate([lbx[self._z[0]], w_prev])
-        ubx0 = np.concatenate([ubx[self._z[0]], w_prev])
-        bounds = np.clip(lbx[self._bounded_states], -ACADOS_INFINITY, ACADOS_INFINITY)
-        upper = np.clip(ubx[self._bounded_states], -ACADOS_INFINITY, ACADOS_INFINITY)
-        lbu = np.clip(lbx[self._inputs], -ACADOS_INFINITY, ACADOS_INFINITY)
-        ubu = np.clip(ubx[self._inputs], -ACADOS_INFINITY, ACADOS_INFINITY)
+        solver.lbx0[:6], solver.lbx0[6:] = lbx[self._z[0]], w_prev
+        solver.ubx0[:6], solver.ubx0[6:] = ubx[self._z[0]], w_prev
+        for bound, values, index in ((solver.lbx, lbx, self._bounded_states), (solver.ubx, ubx, self._bounded_states),
+                                     (solver.lbu, lbx, self._inputs), (solver.ubu, ubx, self._inputs)):
+            np.maximum(np.minimum(values[index], ACADOS_INFINITY, out=bound), -ACADOS_INFINITY, out=bound)
         backend_start = time.process_time()
-        status = solver(stages, lbx0, ubx0, bounds, upper, lbu, ubu)
+        status = solver()
         self.backend_time_s = time.process_time() - backend_start
         solution = np.empty(self.problem.size)
         solution[self._z] = x[:, 0:6]
@@ -498,6 +519,17 @@ class AcadosSolvers:
                             iterations=int(info[1]), status=STATUS.get(status, f"acados_status_{status}"),
                             wall_time_s=time.perf_counter() - start, cpu_time_s=time.process_time() - cpu_start,
                             lam_x=None, lam_g=None)
+
+    def _terminal_factor(self, P_vec: np.ndarray) -> np.ndarray:
+        """vec(L') of the terminal weight ``P = L L'`` (kept while P stays the same)."""
+        if self._last_P is None or P_vec.tobytes() != self._last_P:
+            P = P_vec.reshape(6, 6)
+            try:
+                lower = np.linalg.cholesky(P)
+            except np.linalg.LinAlgError:  # positive semidefinite: a tiny shift keeps the factor real
+                lower = np.linalg.cholesky(P + 1e-12 * np.eye(6))
+            self._last_P, self._last_factor = P_vec.tobytes(), lower.T.ravel(order="F")
+        return self._last_factor
 
 
 class _Buffered:
