@@ -61,8 +61,8 @@ import numpy as np
 
 from orchestrator.errors import ToolchainError
 from rhnc.control.nmpc_codegen import _exclusive, cache_dir, find_compiler
-from rhnc.control.nmpc_problem import (ACCEPTABLE_VIOLATION, DISTURBANCE_SIZE, OBSTACLE_FIELDS, NMPCProblem,
-                                       clearances, scaled_step)
+from rhnc.control.nmpc_problem import (ACCEPTABLE_VIOLATION, DISTURBANCE_SIZE, FATROP_ACCEPTABLE_TOL,
+                                       OBSTACLE_FIELDS, NMPCProblem, clearances, scaled_step)
 from rhnc.control.solver_watchdog import SolveOutcome
 
 LOG = logging.getLogger(__name__)
@@ -93,6 +93,13 @@ REGULARIZATION = "MIRROR"
 #: step-length rule: full steps.  A merit line search (MERIT_BACKTRACKING) failed one step
 #: of the one-target benchmark loop at 200 iterations that full steps solved in 64
 GLOBALIZATION = "FIXED_STEP"
+#: acados's status when the SQP ran out of iterations
+MAXIMUM_ITERATIONS = 2
+#: largest stationarity residual of a point the SQP stopped at after its last iteration for the
+#: controller to consider it (as fatrop's acceptable points, with fatrop's acceptable
+#: tolerance; the controller uses it only when it keeps every constraint,
+#: ``ACCEPTABLE_VIOLATION``).  Seen in Experiment 3a: 200 iterations ending on a feasible plan.
+ACCEPTABLE_STATIONARITY = FATROP_ACCEPTABLE_TOL
 #: QP iterations allowed per SQP iteration (HPIPM)
 QP_ITERATIONS = 50
 #: the C file compiled beside every generated solver
@@ -527,10 +534,11 @@ class AcadosSolvers:
         solution[self._inputs] = u
         g = self._g_buffer(solution, p)
         info = solver.info
+        acceptable = status == MAXIMUM_ITERATIONS and float(info[4]) <= ACCEPTABLE_STATIONARITY
         return SolveOutcome(x=solution, g=g, f=float(info[3]) - self.slack_constant, success=status == 0,
                             iterations=int(info[1]), status=STATUS.get(status, f"acados_status_{status}"),
                             wall_time_s=time.perf_counter() - start, cpu_time_s=time.process_time() - cpu_start,
-                            lam_x=None, lam_g=None)
+                            lam_x=None, lam_g=None, acceptable=acceptable)
 
     def _terminal_factor(self, P_vec: np.ndarray) -> np.ndarray:
         """vec(L') of the terminal weight ``P = L L'`` (kept while P stays the same)."""
