@@ -10,7 +10,8 @@ distance between the ship's positions and those of the first backend's run at th
 times [m].
 
 Run: ``python bench/compare_nmpc_backends.py [--scenarios scenarios/exp3a_static.toml ...]
-[--solvers fatrop acados] [--results DIR]``.  acados needs its wheel
+[--solvers fatrop acados acados+rti] [--results DIR]`` (``acados+rti``: acados's real-time
+iterations, ``real_time_iterations = true``).  acados needs its wheel
 (``rhnc.control.nmpc_acados.INSTALL_COMMAND``).  The machine's load is printed beside the
 figures.
 """
@@ -36,7 +37,10 @@ DEFAULT_SCENARIOS = ("scenarios/exp3a_static.toml", "scenarios/exp3b_head_on.tom
 
 
 def with_solver(text: str, solver: str) -> str:
-    """The scenario's TOML with ``solver = "<solver>"`` in every control participant's options."""
+    """The scenario's TOML with ``solver = "<solver>"`` in every control participant's options
+    (``acados+rti``: acados with ``real_time_iterations = true``)."""
+    backend, _, variant = solver.partition("+")
+    extra = ["real_time_iterations = true"] if variant == "rti" else []
     scenario = tomllib.loads(text)
     lines = text.splitlines()
     for name, participant in scenario.get("participants", {}).items():
@@ -47,9 +51,9 @@ def with_solver(text: str, solver: str) -> str:
             at = lines.index(header)
             lines = [line for i, line in enumerate(lines) if not (i > at and line.strip().startswith("solver ")
                                                                   and i < _next_table(lines, at))]
-            lines.insert(at + 1, f'solver = "{solver}"')
+            lines[at + 1:at + 1] = [f'solver = "{backend}"', *extra]
         else:
-            lines += ["", header, f'solver = "{solver}"']
+            lines += ["", header, f'solver = "{backend}"', *extra]
     return "\n".join(lines) + "\n"
 
 

@@ -168,7 +168,8 @@ class ControlParticipant(Participant):
     own_radius_nm : float
         Own ship's hazard radius R [nm] (default 0).
     solver : str
-        ``fatrop`` (default), ``ipopt`` or ``sqpmethod``.
+        ``fatrop`` (default), ``ipopt``, ``sqpmethod`` or ``acados`` (optional install,
+        :mod:`rhnc.control.nmpc_acados`).
     max_iterations, max_obstacles : int
         Solver iteration limit (200), obstacle slots (4).
     iteration_budget : int

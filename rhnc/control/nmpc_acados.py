@@ -256,7 +256,7 @@ def acados_ocp(acados, name: str, params, settings, state_scale: np.ndarray, inp
     # discrete (its own interval inside), so steps of 1 keep the NLP's cost as it is
     o.tf = float(N)
     o.integrator_type = "DISCRETE"
-    o.nlp_solver_type = "SQP"
+    o.nlp_solver_type = "SQP_RTI" if s.real_time_iterations else "SQP"
     o.globalization = GLOBALIZATION
     o.hessian_approx = HESSIAN
     o.regularize_method = REGULARIZATION

@@ -149,15 +149,29 @@ def test_without_acados_a_run_asking_for_it_stops_with_the_option_and_the_instal
                                                                                        capsys):
     monkeypatch.setenv(nmpc_acados.ACADOS_DIR_ENV, str(tmp_path / "nowhere"))
     monkeypatch.delitem(sys.modules, "acados", raising=False)
+    code, error = _run_with_options(tmp_path, capsys, 'solver = "acados"')
+    assert code == 2
+    assert len(error) == 1 and "option 'solver'" in error[0] and nmpc_acados.INSTALL_COMMAND in error[0]
+    assert str(tmp_path / "nowhere") in error[0] and not (tmp_path / "results").exists()
+
+
+def _run_with_options(tmp_path, capsys, lines: str) -> tuple[int, list[str]]:
+    """Run Experiment 3b with ``lines`` added to the controller's options: exit code, stderr lines."""
     text = (ROOT / "scenarios" / "exp3b_head_on.toml").read_text()
-    assert "[participants.ctrl.options]\n" in text
-    scenario = ROOT / "scenarios" / f".test_acados_missing_{tmp_path.name}.toml"
-    scenario.write_text(text.replace("[participants.ctrl.options]\n", "[participants.ctrl.options]\nsolver = \"acados\"\n"))
+    scenario = ROOT / "scenarios" / f".test_acados_options_{tmp_path.name}.toml"
+    scenario.write_text(text.replace("[participants.ctrl.options]\n", f"[participants.ctrl.options]\n{lines}\n"))
     try:
         code = main(["run", str(scenario), "--results", str(tmp_path / "results"), "--no-progress"])
     finally:
         scenario.unlink()
-    error = capsys.readouterr().err.strip().splitlines()
-    assert code == 2
-    assert len(error) == 1 and "option 'solver'" in error[0] and nmpc_acados.INSTALL_COMMAND in error[0]
-    assert not (tmp_path / "results").exists() or not any((tmp_path / "results").rglob("*.csv"))
+    return code, capsys.readouterr().err.strip().splitlines()
+
+
+def test_real_time_iterations_without_acados_as_the_solver_is_refused_naming_the_option(tmp_path, capsys):
+    with pytest.raises(ValueError, match="real_time_iterations needs solver = 'acados', got solver = 'fatrop'"):
+        NMPCSettings(solver="fatrop", real_time_iterations=True)
+    code, error = _run_with_options(tmp_path, capsys, "real_time_iterations = true")
+    assert code == 2 and len(error) == 1 and "real_time_iterations needs solver = 'acados'" in error[0]
+    assert "ctrl" in error[0] and not (tmp_path / "results").exists()
+    code, error = _run_with_options(tmp_path, capsys, 'solver = "acados"\nreal_time_iterations = "yes"')
+    assert code == 2 and len(error) == 1 and "option 'real_time_iterations' must be true or false" in error[0]
