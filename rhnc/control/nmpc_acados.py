@@ -369,6 +369,7 @@ class AcadosLibrary:
         if compiler is None:
             raise AcadosUnavailable("solver = 'acados' needs a C compiler ($CC, cc, gcc or clang); none found")
         self.acados = acados
+        self.real_time_iterations = settings.real_time_iterations
         probe = acados_ocp(acados, "rhnc_nmpc", params, settings, state_scale, input_scale, settings.max_iterations)
         key = solver_key(probe, compiler, nlp)
         self.name = f"rhnc_nmpc_{key[:10]}"
@@ -424,8 +425,9 @@ class AcadosSolver:
             raise RuntimeError("acados: creating the solver failed")
         get = {name: library.function(f"get_nlp_{name}")(self.capsule)
                for name in ("config", "dims", "in", "out", "solver", "opts")}
-        limit = ctypes.c_int(max_iterations)
-        library.acados_options_set(get["config"], get["opts"], b"max_iter", ctypes.byref(limit))
+        if not library.real_time_iterations:  # one iteration per solve has no limit to set
+            limit = ctypes.c_int(max_iterations)
+            library.acados_options_set(get["config"], get["opts"], b"max_iter", ctypes.byref(limit))
         self._free = (library.function("free", ctypes.c_int), library.function("free_capsule", ctypes.c_int))
         L = layout
         self.p = np.zeros((L.N + 1, L.np))
