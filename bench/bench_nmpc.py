@@ -406,7 +406,8 @@ def main() -> None:
               "time of the backend's own call (acados: the call into C; nlpsol: the solver call; do-mpc: IPOPT's "
               "t_proc_total), ratio: cpu med / own cpu; prep: median processor "
               "time of the fresh fatrop object, built outside the solve; tau0 diff: first input against the first row's")
-        print(f"{'configuration':48s} {'median':>8s} {'p95':>8s} {'max':>8s} {'solver':>8s} {'cpu med':>7s} {'cpu max':>7s} {'own cpu':>7s} {'ratio':>5s} {'prep':>5s} {'iter med/max':>10s} "
+        print(f"{'configuration':48s} {'median':>8s} {'p95':>8s} {'max':>8s} {'solver':>8s} {'cpu med':>7s} "
+              f"{'cpu max':>7s} {'own cpu':>7s} {'ratio':>5s} {'prep':>5s} {'iter med/max':>10s} "
               f"{'fails':>5s} {'min gap nm':>8s} {'tau0 diff':>9s}")
         for name, result in results.items():
             if result["codegen"] not in name:

@@ -191,13 +191,12 @@ def stage_symbols(M: int):
     return p, ref, w_d, dist, obs, t0, state_on, Lt
 
 
-def acados_ocp(acados, name: str, params, settings, state_scale: np.ndarray, input_scale: np.ndarray,
-               max_iterations: int):
-    """The NMPC's OCP as an ``AcadosOcp`` (module docstring), code to be generated as ``name``."""
-    from acados.acados_template import AcadosModel, AcadosOcp
+def acados_model(name: str, params, settings, state_scale: np.ndarray, input_scale: np.ndarray):
+    """The stage model of the OCP: dynamics, least-squares residuals, clearances (module docstring)."""
+    from acados.acados_template import AcadosModel
 
     s = settings
-    N, S, M = s.horizon_steps, s.substeps, s.max_obstacles
+    S, M = s.substeps, s.max_obstacles
     n_sigma = 0 if s.collision_slack_weight is None else 1
     Fs = scaled_step(params, s.control_interval_s, S, state_scale, input_scale)
     x = ca.SX.sym("x", 8)
@@ -225,20 +224,31 @@ def acados_ocp(acados, name: str, params, settings, state_scale: np.ndarray, inp
     model.disc_dyn_expr = ca.vertcat(z_next, w)
     model.cost_y_expr = ca.vertcat(*residuals)
     model.cost_y_expr_e = ca.mtimes(Lt, e_path)
-    h = clearances(z_sub, obs, t0, s.control_interval_s / S, S, M) + relax
-    model.con_h_expr = h
+    model.con_h_expr = clearances(z_sub, obs, t0, s.control_interval_s / S, S, M) + relax
+    return model
 
+
+def acados_ocp(acados, name: str, params, settings, state_scale: np.ndarray, input_scale: np.ndarray,
+               max_iterations: int):
+    """The NMPC's OCP as an ``AcadosOcp`` (module docstring), code to be generated as ``name``."""
+    from acados.acados_template import AcadosOcp
+
+    s = settings
+    N = s.horizon_steps
+    n_sigma = 0 if s.collision_slack_weight is None else 1
+    model = acados_model(name, params, s, state_scale, input_scale)
     ocp = AcadosOcp(acados_path=str(Path(acados.DIR)))
     ocp.model = model
     ocp.dims.N = N
-    ny = len(residuals)
+    ny = model.cost_y_expr.shape[0]
+    nh = model.con_h_expr.shape[0]
     ocp.cost.cost_type = "NONLINEAR_LS"
     ocp.cost.cost_type_e = "NONLINEAR_LS"
     ocp.cost.W = 2.0 * np.eye(ny)  # acados's 0.5 |y|²_W = |y|²: the NLP's cost
     ocp.cost.W_e = 2.0 * np.eye(6)
     ocp.cost.yref = np.zeros(ny)
     ocp.cost.yref_e = np.zeros(6)
-    ocp.parameter_values = np.zeros(p.shape[0])
+    ocp.parameter_values = np.zeros(model.p.shape[0])
     ocp.constraints.x0 = np.zeros(8)
     ocp.constraints.idxbu = np.arange(2 + n_sigma)
     ocp.constraints.lbu = np.zeros(2 + n_sigma)
@@ -249,8 +259,8 @@ def acados_ocp(acados, name: str, params, settings, state_scale: np.ndarray, inp
     ocp.constraints.idxbx_e = np.array([2, 3])
     ocp.constraints.lbx_e = np.zeros(2)
     ocp.constraints.ubx_e = np.zeros(2)
-    ocp.constraints.lh = np.zeros(h.shape[0])
-    ocp.constraints.uh = np.full(h.shape[0], ACADOS_INFINITY)
+    ocp.constraints.lh = np.zeros(nh)
+    ocp.constraints.uh = np.full(nh, ACADOS_INFINITY)
     o = ocp.solver_options
     # acados weighs each stage's least-squares cost by the stage's time step; the model is
     # discrete (its own interval inside), so steps of 1 keep the NLP's cost as it is
