@@ -148,7 +148,7 @@ class AcadosLayout:
     n_sigma: int
     nx: int
     nu: int
-    np: int
+    n_stage_parameters: int  # per stage
     stage_parameters: np.ndarray  # (N+1, np) indices into [p, constants, vec(L')]
     constants: np.ndarray  # t0 of every stage, then 0 and 1 (state_on)
     n_nlp_parameters: int  # length of the NLP's parameter vector
@@ -176,8 +176,9 @@ class AcadosLayout:
             row += list(range(n_p + len(constants), n_p + len(constants) + 36))
             rows.append(row)
         stage = np.array(rows)
-        return AcadosLayout(N=N, n_sigma=n_sigma, nx=8, nu=2 + n_sigma, np=stage.shape[1], stage_parameters=stage,
-                            constants=constants, n_nlp_parameters=n_p, w_prev=np.arange(wprev0, wprev0 + 2), P=np.arange(P0, P0 + 36))
+        return AcadosLayout(N=N, n_sigma=n_sigma, nx=8, nu=2 + n_sigma, n_stage_parameters=stage.shape[1],
+                            stage_parameters=stage, constants=constants, n_nlp_parameters=n_p,
+                            w_prev=np.arange(wprev0, wprev0 + 2), P=np.arange(P0, P0 + 36))
 
 
 def stage_symbols(M: int):
@@ -440,7 +441,7 @@ class AcadosSolver:
             library.acados_options_set(get["config"], get["opts"], b"max_iter", ctypes.byref(limit))
         self._free = (library.function("free", ctypes.c_int), library.function("free_capsule", ctypes.c_int))
         L = layout
-        self.p = np.zeros((L.N + 1, L.np))
+        self.p = np.zeros((L.N + 1, L.n_stage_parameters))
         self.x = np.zeros((L.N + 1, L.nx))
         self.u = np.zeros((L.N, L.nu))
         self.lbx0, self.ubx0 = np.zeros(L.nx), np.zeros(L.nx)
@@ -451,7 +452,7 @@ class AcadosSolver:
         self._arguments = (
             self.capsule, ctypes.cast(library.function("update_params", ctypes.c_int), ctypes.c_void_p),
             ctypes.cast(library.function("solve", ctypes.c_int), ctypes.c_void_p), get["config"], get["dims"],
-            get["in"], get["out"], get["solver"], L.N, L.nx, L.nu, L.np, 2, L.nu,
+            get["in"], get["out"], get["solver"], L.N, L.nx, L.nu, L.n_stage_parameters, 2, L.nu,
             *(array.ctypes.data for array in arrays))
 
     def __call__(self) -> int:
