@@ -51,6 +51,7 @@ OPTIONS = (
     "observer_gain",
     "codegen",
     "warm_start_duals",
+    "real_time_iterations",
     "loop_delay_s",
     "obstacle_age_s",
     "actuators_ship",
@@ -152,7 +153,7 @@ def _numeric_settings(options: Mapping[str, Any], context: BuildContext) -> dict
             kwargs[key] = None if options[key] is False else _number(options, key, where, None)
     if "max_speed_kn" in options:
         kwargs["max_speed_mps"] = _number(options, "max_speed_kn", where, None) * KNOT
-    for key in ("colregs", "disturbance_observer", "codegen", "warm_start_duals"):
+    for key in ("colregs", "disturbance_observer", "codegen", "warm_start_duals", "real_time_iterations"):
         if key in options:
             if not isinstance(options[key], bool):
                 raise ScenarioError(f"{where}: option '{key}' must be true or false, got {options[key]!r}")

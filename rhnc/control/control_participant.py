@@ -27,12 +27,13 @@ from typing import Any
 
 import numpy as np
 
-from orchestrator.errors import ModelError
+from orchestrator.errors import ModelError, ScenarioError
 from orchestrator.geometry import KNOT
 from orchestrator.participant import BuildContext, Participant, Value
 from rhnc.control.control_options import OPTIONS, chart_from_options, controller_from_options
 from rhnc.control.loop_delay import LoopDelay
 from rhnc.control.nmpc import NMPCController
+from rhnc.control.nmpc_acados import AcadosUnavailable
 from rhnc.ship.ship_model import STATE_NAMES
 
 LOG = logging.getLogger(__name__)
@@ -167,7 +168,8 @@ class ControlParticipant(Participant):
     own_radius_nm : float
         Own ship's hazard radius R [nm] (default 0).
     solver : str
-        ``fatrop`` (default), ``ipopt`` or ``sqpmethod``.
+        ``fatrop`` (default), ``ipopt``, ``sqpmethod`` or ``acados`` (optional install,
+        :mod:`rhnc.control.nmpc_acados`).
     max_iterations, max_obstacles : int
         Solver iteration limit (200), obstacle slots (4).
     iteration_budget : int
@@ -267,7 +269,10 @@ class ControlParticipant(Participant):
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "ControlParticipant":
         """Build from scenario options (see :mod:`rhnc.control.control_options`); errors name the key."""
         params, settings, et_default, delays = controller_from_options(options, context)
-        controller = NMPCController(params, settings)
+        try:
+            controller = NMPCController(params, settings)
+        except AcadosUnavailable as error:
+            raise ScenarioError(f"{context.where}: option 'solver': {error}") from None
         chart = chart_from_options(options, context)
         if chart is not None:
             controller.use_chart(chart)

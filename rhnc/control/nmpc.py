@@ -163,20 +163,35 @@ class NMPCController:
         self._next_state = StepEvaluator(self.problem.step)
         self.terminal_weight = TerminalWeight(self.problem.step, params, s.q, s.r, U, self.input_scale,
                                               s.terminal_weight)
+        # with an iteration budget, each attempt's solver gets its share as its iteration
+        # limit; with slacks a step is one attempt, the relaxed problem, which gets the whole
+        # budget (see _attempt_order), without them the hard problem gets it
+        budget = s.iteration_budget
+        limit = s.max_iterations if budget is None else budget
+        self.attempt_iterations = {"hard": limit, "relaxed": limit, "relaxed_alone": limit}
+        if s.solver == "acados":
+            self.library, self.solvers = self._acados_solvers()
+        else:
+            self.library, self.solvers = self._nlpsol_solvers()
+        self.domains = CollisionDomains(s.domain_settings(), s.max_obstacles)
+        self.observer = (DisturbanceObserver(params, self.state_scale, s.observer_gain)
+                         if s.disturbance_observer else None)
+        self.memory = PlanMemory(s.horizon_steps, s.control_interval_s, self._rollout)
+        self.coastline: CoastlineDomains | None = None
+        self.fallback_count = 0
+        self.failure_count = 0
+        self.timeout_count = 0
+        self._bound_templates: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def _nlpsol_solvers(self):
+        """The NLP's functions (compiled once per machine and cached, or interpreted) and the
+        attempts' nlpsol solvers behind the watchdog (:mod:`rhnc.control.solver_watchdog`)."""
+        s = self.settings
         options = solver_options(s.solver, self.problem.equality, s.max_iterations, s.wall_time_limit_s,
                                  s.cpu_time_limit_s, s.warm_start_duals)
         # the NLP's functions compiled once per machine and cached (or interpreted)
-        library = self.library = NLPLibrary(self.problem.nlp, s.solver, options, s.codegen,
-                                            self.problem.compact_nlp)
-        # with an iteration budget, each attempt's solver gets its share as its iteration
-        # limit (the compiled library is the same: only the solver's options differ); with
-        # slacks a step is one attempt, the relaxed problem, which gets the whole budget
-        # (see _attempt_order), without them the hard problem gets it
+        library = NLPLibrary(self.problem.nlp, s.solver, options, s.codegen, self.problem.compact_nlp)
         budget = s.iteration_budget
-        self.attempt_iterations = {"hard": s.max_iterations, "relaxed": s.max_iterations,
-                                   "relaxed_alone": s.max_iterations}
-        if budget is not None:
-            self.attempt_iterations = {"hard": budget, "relaxed": budget, "relaxed_alone": budget}
 
         def factory(nlp_name: str, attempt: str):
             if budget is None:
@@ -202,16 +217,21 @@ class NMPCController:
         # a new solver object after a difficult solve, where building one is cheap (compiled:
         # about 1 ms; interpreted, nlpsol derives the NLP's functions anew: about 0.5 s)
         renew = renew_rule(s.solver, library.mode == "compiled", budget)
-        self.solvers = BoundedSolver(solvers, factories, s.wall_time_limit_s, s.cpu_time_limit_s, renew=renew)
-        self.domains = CollisionDomains(s.domain_settings(), s.max_obstacles)
-        self.observer = (DisturbanceObserver(params, self.state_scale, s.observer_gain)
-                         if s.disturbance_observer else None)
-        self.memory = PlanMemory(s.horizon_steps, s.control_interval_s, self._rollout)
-        self.coastline: CoastlineDomains | None = None
-        self.fallback_count = 0
-        self.failure_count = 0
-        self.timeout_count = 0
-        self._bound_templates: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        return library, BoundedSolver(solvers, factories, s.wall_time_limit_s, s.cpu_time_limit_s, renew=renew)
+
+    def _acados_solvers(self):
+        """The generated acados solver (cached once per machine) and the attempts' solver objects:
+        in this process, bounded by their iteration limits (:mod:`rhnc.control.nmpc_acados`)."""
+        from rhnc.control.nmpc_acados import AcadosLayout, AcadosLibrary, AcadosSolvers  # optional: only when chosen
+
+        s = self.settings
+        library = AcadosLibrary(self.params, s, self.state_scale, self.input_scale, self.problem.nlp)
+        layout = AcadosLayout.of(self.problem, s.control_interval_s, s.max_obstacles + s.coastline_slots)
+        names = ("hard", "relaxed") if self.problem.sigma_index.size else ("hard",)
+        names += ("relaxed_alone",) if self.problem.sigma_index.size and s.iteration_budget is not None else ()
+        return library, AcadosSolvers(library, self.problem, layout,
+                                      {name: self.attempt_iterations[name] for name in names},
+                                      s.collision_slack_weight)
 
     def use_chart(self, chart) -> None:
         """Keep the clearance of ``chart`` (:class:`rhnc.chart.chart.Chart`) in the coastline slots."""

@@ -224,18 +224,26 @@ def stage_function(params: ShipParameters, control_interval_s: float, substeps: 
     if n_sigma:
         cost += slack_weight * (sigma[0] + sigma[0] ** 2)
         relax = sigma[0]
-    g = [z_next - z_end]  # dynamics first, then the path constraints (fatrop's structure)
-    for j in range(S):
+    # dynamics first, then the path constraints (fatrop's structure)
+    g = [z_next - z_end] + [clearance + relax for clearance in clearances(z_sub, obs, t0, h, S, M, as_list=True)]
+    return ca.Function("rhnc_stage", [z, w, sigma, z_next, w_before, ref, w_d, dist, obs, t0, state_on],
+                       [cost, ca.vertcat(*g)])
+
+
+def clearances(z_sub, obs, t0, h: float, substeps: int, max_obstacles: int, as_list: bool = False):
+    """The collision constraints of one interval (>= 0 when kept), substep-major: one per RK4
+    substep end ``z_sub[:, j]`` (at ``t0 + (j + 1) h`` [s]) and obstacle slot (module docstring)."""
+    rows = []
+    for j in range(substeps):
         t_sub = t0 + (j + 1) * h
-        for i in range(M):
+        for i in range(max_obstacles):
             cx, cy, vx, vy, ox, oy, rho, growth, inflation, active = (obs[f, i] for f in range(OBSTACLE_FIELDS))
             dx = z_sub[0, j] - (cx + vx * t_sub + ox)
             dy = z_sub[1, j] - (cy + vy * t_sub + oy)
             radius = rho + growth * t_sub
             clearance = (dx**2 + dy**2) / radius**2 - 1.0 - inflation
-            g.append(active * clearance + (1.0 - active) + relax)
-    return ca.Function("rhnc_stage", [z, w, sigma, z_next, w_before, ref, w_d, dist, obs, t0, state_on],
-                       [cost, ca.vertcat(*g)])
+            rows.append(active * clearance + (1.0 - active))
+    return rows if as_list else ca.vertcat(*rows)
 
 
 def terminal_cost(z_N, ref_N, P):

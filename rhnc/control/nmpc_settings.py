@@ -19,7 +19,7 @@ from rhnc.control.nmpc_problem import DISTURBANCE_SIZE
 #: the KCS's service speed [m/s]: the default speed bound
 SERVICE_SPEED_MPS = 24.0 * KNOT
 
-SOLVERS = ("ipopt", "fatrop", "sqpmethod")
+SOLVERS = ("ipopt", "fatrop", "sqpmethod", "acados")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -35,7 +35,9 @@ class NMPCSettings:
     substeps : int
         RK4 steps per control interval, also the points where collisions are checked.
     solver : str
-        ``"ipopt"``, ``"fatrop"`` or ``"sqpmethod"``.
+        ``"ipopt"``, ``"fatrop"``, ``"sqpmethod"`` (CasADi's ``nlpsol``) or ``"acados"``
+        (:mod:`rhnc.control.nmpc_acados`: an optional install; its SQP bounds itself by its
+        iteration limit and runs in this process, the time limits are not used).
     max_iterations : int
         Iteration limit of the NLP solver (each attempt).
     iteration_budget : int or None
@@ -111,6 +113,11 @@ class NMPCSettings:
         Constraint slots for the nearest edges of land and no-go areas, after the
         obstacles' (default 0; :mod:`rhnc.control.nmpc_coastline`, filled once the
         controller is given a chart).
+    real_time_iterations : bool
+        With ``solver = "acados"``: one SQP iteration per control step (acados's SQP_RTI,
+        the real-time iteration scheme) instead of iterating to convergence; each step goes
+        on from the last plan, so the plan converges over the steps.  Off by default: see
+        ``docs/nmpc-performance.md`` for how its closed loop compares.
     """
 
     horizon_steps: int = 15
@@ -144,6 +151,7 @@ class NMPCSettings:
     warm_start_duals: bool = True
     tau_rate_max: tuple[float, float] | None = None
     coastline_slots: int = 0
+    real_time_iterations: bool = False
 
     def __post_init__(self) -> None:
         if self.iteration_budget is not None and not 2 <= self.iteration_budget <= self.max_iterations:
@@ -177,6 +185,8 @@ class NMPCSettings:
                      "stand_on_action_range_factor", "apparent_alteration_deg", "give_way_action_tcpa_s"):
             if getattr(self, name) < 0.0:
                 raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
+        if self.real_time_iterations and self.solver != "acados":
+            raise ValueError(f"real_time_iterations needs solver = 'acados', got solver = '{self.solver}'")
         if not 0.0 < self.observer_gain <= 1.0:
             raise ValueError(f"observer_gain must be in (0, 1], got {self.observer_gain}")
 
