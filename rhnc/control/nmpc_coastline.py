@@ -95,7 +95,7 @@ class CoastlineDomains:
         signed = np.where(inside, np.inf, distance).reshape(k, n)
         position = np.asarray(position_m, dtype=float)
         chosen: list[np.ndarray] = []
-        for piece, columns in enumerate(np.array_split(np.arange(n), self.slots)):
+        for columns in np.array_split(np.arange(n), self.slots):
             if columns.size == 0:
                 continue
             block = signed[:, columns]

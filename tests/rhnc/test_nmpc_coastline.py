@@ -1,7 +1,6 @@
 """The NMPC keeps a chart's clearance from land as constraints: a reference across a headland."""
 
 import json
-import math
 
 import numpy as np
 import pytest
