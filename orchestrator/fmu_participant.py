@@ -169,6 +169,16 @@ class FmuParticipant(Participant):
                                if all(type(b) is ScalarBinding for b in self._input_bindings) else None)
         self._scalar_outputs = ([(b.ports[0], b.scale, b.offset, b.wrap) for b in self._output_bindings]
                                 if all(type(b) is ScalarBinding for b in self._output_bindings) else None)
+        # the scalar input ports in the order of the values a step sets (each port's index there)
+        self._input_order = {port: index for index, port in enumerate(self._scalar_inputs or ())}
+        self._input_values = [0.0] * len(self._input_order)
+        # outputs that are the FMU's values as they are (scale 1, offset 0, not wrapped)
+        self._plain_outputs = (tuple(port for port, *_ in self._scalar_outputs)
+                               if self._scalar_outputs is not None
+                               and all((scale, offset, wrap) == (1.0, 0.0, False)
+                                       for _, scale, offset, wrap in self._scalar_outputs) else None)
+        # FMPy's calls on arrays made once, bound at set-up
+        self._write_inputs = self._read_reals = self._do_step = None
         self._slave = None
         self._unzip_dir = None
         self._unzip_lock = None
@@ -222,6 +232,7 @@ class FmuParticipant(Participant):
         extract_fmu(self.fmu_path, Path(self._unzip_dir), f"{self.where}.fmu")
         self._slave = FmiSlave(self.model_description, self._unzip_dir, self.name, self._on_message)
         self._slave.instantiate()
+        self._bind_calls()
         self._call("EnterInitializationMode", self._slave.enter_initialization, start_time)
         for name, value in self.parameters.items():
             self._set_variable(name, value)
@@ -231,8 +242,16 @@ class FmuParticipant(Participant):
 
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         self._set_inputs(inputs)
-        self._call("DoStep", self._slave.do_step, time, step_size)
+        self._call("DoStep", self._do_step, time, step_size)
         return self._read_outputs(time + step_size)
+
+    def _bind_calls(self) -> None:
+        """The per-step FMU calls on value-reference and value arrays made once for this instance."""
+        slave = self._slave
+        self._do_step = slave.stepper()
+        self._read_reals = slave.real_reader(self._output_refs) if self._output_refs else None
+        if self._scalar_inputs:
+            self._write_inputs = slave.real_writer([self._scalar_inputs[port][0] for port in self._input_order])
 
     def terminate(self) -> None:
         if self._slave is not None:
@@ -309,7 +328,18 @@ class FmuParticipant(Participant):
         self._call("SetReal", self._slave.set_reals, refs, values)
 
     def _set_scalar_inputs(self, inputs: Mapping[str, Value]) -> None:
-        """:meth:`_set_inputs` where every input port is one variable: the same values, one loop."""
+        """:meth:`_set_inputs` where every input port is one variable: the same values, one loop
+        (every port given: into the arrays made at set-up)."""
+        if len(inputs) == len(self._input_values):
+            values, order, scalar_inputs = self._input_values, self._input_order, self._scalar_inputs
+            for port, value in inputs.items():
+                number = float(value)
+                if not math.isfinite(number):
+                    raise ModelError(f"{self.name}: input '{port}' received a non-finite value ({number})")
+                _, scale, offset = scalar_inputs[port]
+                values[order[port]] = (number - offset) / scale
+            self._call("SetReal", self._write_inputs, values)
+            return
         refs, values = [], []
         for port, value in inputs.items():
             number = float(value)
@@ -324,8 +354,11 @@ class FmuParticipant(Participant):
     def _read_outputs(self, time: float) -> dict[str, Value]:
         if not self._output_refs:
             return {}
-        values = self._call("GetReal", self._slave.get_reals, self._output_refs)
-        if self._scalar_outputs is not None and math.isfinite(sum(values)):  # (a NaN or inf sums to one)
+        values = self._call("GetReal", self._read_reals)
+        if self._plain_outputs is not None and math.isfinite(sum(values)):  # (a NaN or inf sums to one)
+            # 1.0 * value + 0.0 as below: the same floats (-0.0 becomes 0.0 there too)
+            return dict(zip(self._plain_outputs, [value + 0.0 for value in values]))
+        if self._scalar_outputs is not None and math.isfinite(sum(values)):
             outputs = {}
             for (port, scale, offset, wrap), value in zip(self._scalar_outputs, values):
                 value = scale * value + offset
