@@ -13,7 +13,7 @@ import logging
 import math
 import shutil
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 from fmpy.fmi1 import FMICallException
@@ -24,7 +24,7 @@ from orchestrator.leftovers import owned_temp_folder
 from orchestrator.fmi_slave import REAL_TYPES, SUPPORTED_VERSIONS, FmiSlave
 from orchestrator.participant import Participant, Value, is_finite_number
 from orchestrator.plant_ports import PLANT_PORTS
-from orchestrator.geometry import wrap_angle
+from orchestrator.geometry import wrap_float
 from orchestrator.port_mapping import ScalarBinding, bind_ports, initial_start_values
 from orchestrator.scenario import ParticipantSpec
 
@@ -169,16 +169,16 @@ class FmuParticipant(Participant):
                                if all(type(b) is ScalarBinding for b in self._input_bindings) else None)
         self._scalar_outputs = ([(b.ports[0], b.scale, b.offset, b.wrap) for b in self._output_bindings]
                                 if all(type(b) is ScalarBinding for b in self._output_bindings) else None)
-        # the scalar input ports in the order of the values a step sets (each port's index there)
-        self._input_order = {port: index for index, port in enumerate(self._scalar_inputs or ())}
-        self._input_values = [0.0] * len(self._input_order)
-        # outputs that are the FMU's values as they are (scale 1, offset 0, not wrapped)
-        self._plain_outputs = (tuple(port for port, *_ in self._scalar_outputs)
-                               if self._scalar_outputs is not None
-                               and all((scale, offset, wrap) == (1.0, 0.0, False)
-                                       for _, scale, offset, wrap in self._scalar_outputs) else None)
-        # FMPy's calls on arrays made once, bound at set-up
-        self._write_inputs = self._read_reals = self._do_step = None
+        # where every output is one variable: the ports in the order of the values read, and
+        # which of them are scaled (index, scale, offset) and wrapped (index)
+        if self._scalar_outputs is not None:
+            self._output_ports = tuple(port for port, *_ in self._scalar_outputs)
+            self._scaled_outputs = tuple((index, scale, offset) for index, (_, scale, offset, _) in
+                                         enumerate(self._scalar_outputs) if (scale, offset) != (1.0, 0.0))
+            self._wrapped_outputs = tuple(index for index, (*_, wrap) in enumerate(self._scalar_outputs) if wrap)
+        # FMPy's calls on arrays made once, bound at set-up; a writer per set of input ports given
+        self._read_reals = self._do_step = None
+        self._input_writers: dict[tuple[str, ...], Callable[[list[float]], None]] = {}
         self._slave = None
         self._unzip_dir = None
         self._unzip_lock = None
@@ -250,8 +250,7 @@ class FmuParticipant(Participant):
         slave = self._slave
         self._do_step = slave.stepper()
         self._read_reals = slave.real_reader(self._output_refs) if self._output_refs else None
-        if self._scalar_inputs:
-            self._write_inputs = slave.real_writer([self._scalar_inputs[port][0] for port in self._input_order])
+        self._input_writers = {}
 
     def terminate(self) -> None:
         if self._slave is not None:
@@ -328,42 +327,35 @@ class FmuParticipant(Participant):
         self._call("SetReal", self._slave.set_reals, refs, values)
 
     def _set_scalar_inputs(self, inputs: Mapping[str, Value]) -> None:
-        """:meth:`_set_inputs` where every input port is one variable: the same values, one loop
-        (every port given: into the arrays made at set-up)."""
-        if len(inputs) == len(self._input_values):
-            values, order, scalar_inputs = self._input_values, self._input_order, self._scalar_inputs
-            for port, value in inputs.items():
-                number = float(value)
-                if not math.isfinite(number):
-                    raise ModelError(f"{self.name}: input '{port}' received a non-finite value ({number})")
-                _, scale, offset = scalar_inputs[port]
-                values[order[port]] = (number - offset) / scale
-            self._call("SetReal", self._write_inputs, values)
-            return
-        refs, values = [], []
+        """:meth:`_set_inputs` where every input port is one variable: the same values, one loop,
+        one call on the arrays made for these ports (once per set of ports given)."""
+        ports = tuple(inputs)
+        write = self._input_writers.get(ports)
+        if write is None:
+            write = self._input_writers[ports] = self._slave.real_writer(
+                [self._scalar_inputs[port][0] for port in ports])
+        values, scalar_inputs = [], self._scalar_inputs
         for port, value in inputs.items():
             number = float(value)
             if not math.isfinite(number):
                 raise ModelError(f"{self.name}: input '{port}' received a non-finite value ({number})")
-            self._canonical_inputs[port] = number
-            ref, scale, offset = self._scalar_inputs[port]
-            refs.append(ref)
+            _, scale, offset = scalar_inputs[port]
             values.append((number - offset) / scale)
-        self._call("SetReal", self._slave.set_reals, refs, values)
+        self._call("SetReal", write, values)
 
     def _read_outputs(self, time: float) -> dict[str, Value]:
         if not self._output_refs:
             return {}
         values = self._call("GetReal", self._read_reals)
-        if self._plain_outputs is not None and math.isfinite(sum(values)):  # (a NaN or inf sums to one)
-            # 1.0 * value + 0.0 as below: the same floats (-0.0 becomes 0.0 there too)
-            return dict(zip(self._plain_outputs, [value + 0.0 for value in values]))
-        if self._scalar_outputs is not None and math.isfinite(sum(values)):
-            outputs = {}
-            for (port, scale, offset, wrap), value in zip(self._scalar_outputs, values):
-                value = scale * value + offset
-                outputs[port] = float(wrap_angle(value)) if wrap else value
-            return outputs
+        if self._scalar_outputs is not None and math.isfinite(sum(values)):  # (a NaN or inf sums to one)
+            # scale * value + offset, wrapped where the port is an angle: 1.0 * value + 0.0 is
+            # value + 0.0 (-0.0 becomes 0.0)
+            outputs = [value + 0.0 for value in values]
+            for index, scale, offset in self._scaled_outputs:
+                outputs[index] = scale * values[index] + offset
+            for index in self._wrapped_outputs:
+                outputs[index] = wrap_float(outputs[index])
+            return dict(zip(self._output_ports, outputs))
         by_variable = {}
         for variable, value in zip(self._output_variables, values):
             if not math.isfinite(value):

@@ -31,6 +31,17 @@ def test_inputs_given_at_set_up_drive_the_first_step(ship):
     assert turning["r"] > 0.0
 
 
+def test_each_step_sets_the_inputs_it_is_given_in_any_order_and_the_others_hold(ship):
+    refs = [ship.variables[name].valueReference for name in ("tau_u", "tau_r")]
+    ship.setup(0.0, {"tau_u": 7.7e5, "tau_r": 1.0e8})
+    ship.step(0.0, 1.0, {"tau_r": 2.0e8})
+    assert ship._slave.get_reals(refs) == [7.7e5, 2.0e8]
+    ship.step(1.0, 1.0, {"tau_r": 3.0e8, "tau_u": 6.6e5})
+    assert ship._slave.get_reals(refs) == [6.6e5, 3.0e8]
+    ship.step(2.0, 1.0, {"tau_u": 5.5e5, "tau_r": 4.0e8})
+    assert ship._slave.get_reals(refs) == [5.5e5, 4.0e8]
+
+
 def test_outputs_are_read_at_the_end_of_the_step(ship, monkeypatch):
     ship.setup(0.0, {"tau_u": 7.7e5, "tau_r": 0.0})
     monkeypatch.setattr(ship, "_read_reals", lambda: [math.nan] * len(ship._output_refs))  # what the FMU gives
