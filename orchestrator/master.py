@@ -32,7 +32,7 @@ from orchestrator import interrupts, leftovers, plugins, time_limits
 from orchestrator.errors import ModelError, ResultsError, ScenarioError, ToolchainError
 from orchestrator.participant import Participant, Value
 from orchestrator.participant_build import build_participant, build_scenario_table
-from orchestrator.recorder import Recorder
+from orchestrator.recorder import FLOAT, Recorder
 from orchestrator.results import json_default
 from orchestrator.scenario import Scenario
 
@@ -369,9 +369,13 @@ class _Loop:
         # that steps all FMUs at once hands them on: (release step, participant, outputs)
         self.pending: list[tuple[int, str, dict]] = []
         connections = cosim.scenario.connections
-        # per participant: itself, its name, every, time limit, (its input port, the bus key that drives it)
+        self.steps, self.dt_s = self.sim.steps, self.sim.dt_s  # (``steps`` is computed at every call)
+        # per participant: itself, its name, every, time limit, (its input port, the bus key that
+        # drives it), whether its outputs describe the end of its step, whether it checks their
+        # finiteness itself, and its publications (below)
         self.plans = [(p, p.name, cosim.every[p.name], cosim.step_timeout_s[p.name],
-                       tuple((c.target_port, (c.source, c.source_port)) for c in connections if c.target == p.name))
+                       tuple((c.target_port, (c.source, c.source_port)) for c in connections if c.target == p.name),
+                       p.outputs_at_step_end, getattr(p, "checks_outputs_finite", False), {})
                       for p in cosim.participants]
         # per participant: its declared outputs, whether it checks their finiteness itself
         self.publishing = {p.name: (cosim._declared[p.name], getattr(p, "checks_outputs_finite", False))
@@ -386,7 +390,7 @@ class _Loop:
     def set_up(self) -> None:
         """Set every participant up completely: the record starts at t0."""
         start, bus, watch = self.sim.start_s, self.bus, self.watch
-        for participant, name, _, limit, inbound in self.plans:
+        for participant, name, _, limit, inbound, *_ in self.plans:
             self.participant = name
             seen = {} if self.jacobi else bus
             inputs = {port: seen[key] for port, key in inbound if key in seen}
@@ -443,11 +447,12 @@ class _Loop:
         Returns the stop conditions met (Gauss-Seidel: once one holds, the participants after
         it are not stepped) and the names of those skipped for it.
         """
-        sim, cosim, bus, recorder, watch = self.sim, self.cosim, self.bus, self.recorder, self.watch
+        cosim, bus, recorder, watch = self.cosim, self.bus, self.recorder, self.watch
+        steps, dt_s = self.steps, self.dt_s
         stop_requested = interrupts.stop_requested
         met: list = []
         skipped: list[str] = []
-        for participant, name, every, limit, inbound in self.plans:
+        for participant, name, every, limit, inbound, at_step_end, checked, publications in self.plans:
             if k % every:
                 continue
             if met:  # Gauss-Seidel: met earlier in this round, nobody steps past it
@@ -456,29 +461,39 @@ class _Loop:
             self.participant = name
             if stop_requested():  # even if a library swallowed the signal
                 raise KeyboardInterrupt
-            step_size = min(every, sim.steps - k) * sim.dt_s
-            inputs = {port: bus[key] for port, key in inbound if key in bus}
+            step_size = (every if k + every <= steps else steps - k) * dt_s
+            inputs = {port: bus[key] for port, key in inbound if key in bus} if inbound else {}
             watch.begin(name, "its step", t, limit)
             try:
                 outputs = participant.step(t, step_size, inputs)
             finally:
                 watch.end()
             watch.check()
-            stamp = t + step_size if participant.outputs_at_step_end else t
+            stamp = t + step_size if at_step_end else t
             if self.jacobi:
                 cosim._publish(participant, stamp, outputs, None, recorder)
                 self.pending.append((k + every, name, outputs))
-            else:
-                declared, checked = self.publishing[name]
-                if outputs.keys() <= declared and (checked or all(map(_finite, outputs.values()))):
-                    for port, value in outputs.items():  # what _publish does, without its look-ups
-                        bus[(name, port)] = value
-                    recorder.add(name, stamp, outputs)
-                else:
-                    cosim._publish(participant, stamp, outputs, bus, recorder)  # refuses the first bad output
-                if self.stop_conditions:
-                    met = cosim._stop_conditions_met(bus, name)
+                continue
+            # outputs all floats, all declared, all finite: onto the bus and into the record
+            # through keys and columns resolved at their first step (what _publish does)
+            ports, values = tuple(outputs), tuple(outputs.values())
+            publication = publications.get(ports)
+            if publication is None:
+                publication = publications[ports] = self._publication(name, ports)
+            if publication and set(map(type, values)) <= FLOAT and (checked or math.isfinite(sum(values))):
+                bus.update(zip(publication[0], values))
+                recorder.add_floats(stamp, publication[1], values)
+            else:  # (a NaN or inf sums to one) refuses the first bad output, records any other kind
+                cosim._publish(participant, stamp, outputs, bus, recorder)
+            if self.stop_conditions:
+                met = cosim._stop_conditions_met(bus, name)
         return met, skipped
+
+    def _publication(self, name: str, ports: tuple[str, ...]) -> tuple:
+        """The bus keys and record columns of ``name``'s outputs ``ports``; empty if one is not declared."""
+        if not set(ports) <= self.publishing[name][0]:
+            return ()
+        return tuple((name, port) for port in ports), self.recorder.float_columns(name, ports)
 
 
 #: A participant built more slowly than this [s] is named with its build time on stderr.

@@ -211,3 +211,19 @@ def test_outputs_that_change_kind_or_order_between_steps_are_recorded_by_name_as
     assert frame["p.b"].tolist() == [2.0, 4.5, 6.0, 9.0, 11.0]
     assert frame["p.a[1]"].iloc[3:].tolist() == [8.0, 8.0]
     assert all(type(value) is float for row in recorder._rows for value in row)
+
+
+def test_times_meet_the_grid_as_rounded_to_its_decimals_whether_rounded_or_not():
+    """A time that is a whole number of 64ths of a second is not rounded: it must come out as
+    rounding would give it, and any other time rounded."""
+    from orchestrator.recorder import TIME_DECIMALS, on_grid_decimals
+
+    rng = np.random.default_rng(3)
+    times = np.concatenate([np.arange(-50, 5000) / 64.0, rng.integers(0, 2 ** 40, 500) / 64.0, np.arange(300) / 128.0,
+                            np.arange(5000) * 0.1, np.arange(5000) * 0.3 + 1e-7, rng.uniform(-1e6, 1e6, 2000),
+                            [2.0 ** 60, -0.0, 1e-7, 0.0000005, 0.0000015]])
+    for time_s in times.tolist() + [3, np.float64(7.25), np.float64(0.1)]:
+        assert repr(on_grid_decimals(time_s)) == repr(round(float(time_s), TIME_DECIMALS)), time_s
+        recorder = Recorder(0.0, 1.0, 1)
+        recorder.add_floats(time_s, recorder.float_columns("p", ("a",)), (1.0,))
+        assert repr(recorder.last_time()) == repr(max(0.0, round(float(time_s), TIME_DECIMALS))), time_s
