@@ -178,7 +178,8 @@ class FmuParticipant(Participant):
             self._wrapped_outputs = tuple(index for index, (*_, wrap) in enumerate(self._scalar_outputs) if wrap)
         # FMPy's calls on arrays made once, bound at set-up; a writer per set of input ports given
         self._read_reals = self._do_step = None
-        self._input_writers: dict[tuple[str, ...], Callable[[list[float]], None]] = {}
+        # (the call, whether every port is the variable unscaled)
+        self._input_writers: dict[tuple[str, ...], tuple[Callable[[list[float]], None], bool]] = {}
         self._slave = None
         self._unzip_dir = None
         self._unzip_lock = None
@@ -281,12 +282,12 @@ class FmuParticipant(Participant):
         if status >= 1:
             self._messages.append(text)
 
-    def _call(self, function: str, call, *args, **kwargs):
+    def _call(self, function: str, call, *args):
         """Call the FMU; ``function`` is the name without its ``fmi2``/``fmi3`` prefix."""
         if self._messages:
             self._messages.clear()
         try:
-            return call(*args, **kwargs)
+            return call(*args)
         except FMICallException as exc:
             detail = self._messages[-1] if self._messages else str(exc)
             raise ModelError(
@@ -330,10 +331,17 @@ class FmuParticipant(Participant):
         """:meth:`_set_inputs` where every input port is one variable: the same values, one loop,
         one call on the arrays made for these ports (once per set of ports given)."""
         ports = tuple(inputs)
-        write = self._input_writers.get(ports)
-        if write is None:
-            write = self._input_writers[ports] = self._slave.real_writer(
-                [self._scalar_inputs[port][0] for port in ports])
+        writer = self._input_writers.get(ports)
+        if writer is None:
+            writer = self._input_writers[ports] = (
+                self._slave.real_writer([self._scalar_inputs[port][0] for port in ports]),
+                all(self._scalar_inputs[port][1:] == (1.0, 0.0) for port in ports))
+        write, plain = writer
+        if plain:  # (number - 0.0) / 1.0 is the number
+            values = [float(value) for value in inputs.values()]
+            if math.isfinite(sum(values)):  # (a NaN or inf sums to one)
+                self._call("SetReal", write, values)
+                return
         values, scalar_inputs = [], self._scalar_inputs
         for port, value in inputs.items():
             number = float(value)
