@@ -380,6 +380,10 @@ class _Loop:
         # per participant: its declared outputs, whether it checks their finiteness itself
         self.publishing = {p.name: (cosim._declared[p.name], getattr(p, "checks_outputs_finite", False))
                            for p in cosim.participants}
+        # the bus keys that anything reads while stepping (a connection, a stop condition): a
+        # step puts only those on the bus
+        self.read_keys = ({(c.source, c.source_port) for c in connections}
+                          | {(c.participant, c.port) for c in self.sim.stop_when})
         self.stop_conditions = bool(self.sim.stop_when)
         self.phase, self.participant, self.time_s = "setting up", None, self.sim.start_s  # for messages
 
@@ -407,19 +411,20 @@ class _Loop:
 
     def step_all(self, bar, on_step: Callable[[int], None] | None) -> str:
         """Step every participant due at each communication point; the reason of an early stop, or ""."""
-        sim, cosim, recorder = self.sim, self.cosim, self.recorder
+        sim, cosim = self.sim, self.cosim
+        start_s, dt_s, step_round, advance = sim.start_s, sim.dt_s, self._round, self.recorder.advance
         reason, met = "", []
-        for k in range(sim.steps):
-            t = sim.start_s + k * sim.dt_s
+        for k in range(self.steps):
+            t = start_s + k * dt_s
             self.time_s = t
             if self.pending:
                 met = self._release(k)
                 if met:  # Jacobi: what the last round handed on ends the run before this one
                     reason = f"stopped at t = {t:g} s: {met[0]}"
                     break
-            met, skipped = self._round(k, t)
+            met, skipped = step_round(k, t)
             cosim.steps_done = k + 1
-            recorder.advance(t)  # every participant due at t has stepped: the row of t is final
+            advance(t)  # every participant due at t has stepped: the row of t is final
             if bar is not None:
                 bar.update(1)
             if on_step is not None:
@@ -448,7 +453,7 @@ class _Loop:
         it are not stepped) and the names of those skipped for it.
         """
         cosim, bus, recorder, watch = self.cosim, self.bus, self.recorder, self.watch
-        steps, dt_s = self.steps, self.dt_s
+        steps, dt_s, begin, end = self.steps, self.dt_s, watch.begin, watch.end
         stop_requested = interrupts.stop_requested
         met: list = []
         skipped: list[str] = []
@@ -463,12 +468,13 @@ class _Loop:
                 raise KeyboardInterrupt
             step_size = (every if k + every <= steps else steps - k) * dt_s
             inputs = {port: bus[key] for port, key in inbound if key in bus} if inbound else {}
-            watch.begin(name, "its step", t, limit)
+            begin(name, "its step", t, limit)
             try:
                 outputs = participant.step(t, step_size, inputs)
             finally:
-                watch.end()
-            watch.check()
+                end()
+            if watch.expired is not None:  # (what watch.check() looks at)
+                watch.check()
             stamp = t + step_size if at_step_end else t
             if self.jacobi:
                 cosim._publish(participant, stamp, outputs, None, recorder)
@@ -481,8 +487,12 @@ class _Loop:
             if publication is None:
                 publication = publications[ports] = self._publication(name, ports)
             if publication and set(map(type, values)) <= FLOAT and (checked or math.isfinite(sum(values))):
-                bus.update(zip(publication[0], values))
-                recorder.add_floats(stamp, publication[1], values)
+                keys, read, columns = publication
+                if read is None:  # every output is read
+                    bus.update(zip(keys, values))
+                elif read:
+                    bus.update(zip(keys, [values[index] for index in read]))
+                recorder.add_floats(stamp, columns, values)
             else:  # (a NaN or inf sums to one) refuses the first bad output, records any other kind
                 cosim._publish(participant, stamp, outputs, bus, recorder)
             if self.stop_conditions:
@@ -490,10 +500,15 @@ class _Loop:
         return met, skipped
 
     def _publication(self, name: str, ports: tuple[str, ...]) -> tuple:
-        """The bus keys and record columns of ``name``'s outputs ``ports``; empty if one is not declared."""
+        """How ``name``'s outputs ``ports`` are published: the bus keys of those read while stepping,
+        their places among the outputs (None: all of them, in order), the record's columns; empty
+        if one is not declared."""
         if not set(ports) <= self.publishing[name][0]:
             return ()
-        return tuple((name, port) for port in ports), self.recorder.float_columns(name, ports)
+        read = [index for index, port in enumerate(ports) if (name, port) in self.read_keys]
+        keys = tuple((name, ports[index]) for index in read)
+        return (keys, None if len(read) == len(ports) else tuple(read),
+                self.recorder.float_columns(name, ports))
 
 
 #: A participant built more slowly than this [s] is named with its build time on stderr.
