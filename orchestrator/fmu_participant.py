@@ -242,8 +242,17 @@ class FmuParticipant(Participant):
         return self._read_outputs(start_time)
 
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
-        self._set_inputs(inputs)
-        self._call("DoStep", self._do_step, time, step_size)
+        if inputs:
+            if self._scalar_inputs is not None:
+                self._set_scalar_inputs(inputs)
+            else:
+                self._set_inputs(inputs)
+        if self._messages:  # what _call does, without a call more per step
+            self._messages.clear()
+        try:
+            self._do_step(time, step_size)
+        except FMICallException as exc:
+            raise self._refused("DoStep", exc) from exc
         return self._read_outputs(time + step_size)
 
     def _bind_calls(self) -> None:
@@ -289,9 +298,12 @@ class FmuParticipant(Participant):
         try:
             return call(*args)
         except FMICallException as exc:
-            detail = self._messages[-1] if self._messages else str(exc)
-            raise ModelError(
-                f"{self.name} ({self.fmu_path.name}): {self._slave.name(function)} failed: {detail}") from exc
+            raise self._refused(function, exc) from exc
+
+    def _refused(self, function: str, exc: FMICallException) -> ModelError:
+        """The error of a refused call, with the FMU's last message about it."""
+        detail = self._messages[-1] if self._messages else str(exc)
+        return ModelError(f"{self.name} ({self.fmu_path.name}): {self._slave.name(function)} failed: {detail}")
 
     def _set_variable(self, name: str, value) -> None:
         variable = self.variables[name]
@@ -354,7 +366,12 @@ class FmuParticipant(Participant):
     def _read_outputs(self, time: float) -> dict[str, Value]:
         if not self._output_refs:
             return {}
-        values = self._call("GetReal", self._read_reals)
+        if self._messages:
+            self._messages.clear()
+        try:
+            values = self._read_reals()
+        except FMICallException as exc:
+            raise self._refused("GetReal", exc) from exc
         if self._scalar_outputs is not None and math.isfinite(sum(values)):  # (a NaN or inf sums to one)
             # scale * value + offset, wrapped where the port is an angle: 1.0 * value + 0.0 is
             # value + 0.0 (-0.0 becomes 0.0)
