@@ -72,7 +72,8 @@ class Recorder:
         self._held: list[float] = [start_s]
         # participant -> its ports (as given, in order) -> their columns, for outputs all floats
         self._float_rows: dict[str, dict[tuple[str, ...], _Columns]] = {}
-        self._by_names: dict[tuple[str, ...], _Columns] = {}  # the columns of any other outputs
+        # (participant, ports, shape of each or None) -> the columns of outputs with arrays
+        self._mixed: dict[tuple, _Columns] = {}
         self._latest = start_s  # latest time any output describes
         self._rows: list[list[float]] = []  # emitted rows not yet written (all rows without a spool)
         self._emitted = 0  # grid rows emitted so far
@@ -90,26 +91,28 @@ class Recorder:
         stamp = on_grid_decimals(time_s)
         if stamp > self._latest:
             self._latest = stamp
-        flat = {}
+        # arrays and other numbers: the columns named once per set of ports and shapes
+        layout = (participant, tuple(outputs),
+                  tuple(value.shape if isinstance(value, np.ndarray) else None for value in values))
+        columns = self._mixed.get(layout)
+        if columns is None:
+            columns = self._mixed[layout] = self._mixed_columns(participant, outputs)
+        self._pending.append((stamp, columns, _flat_values(values)))
+
+    def _mixed_columns(self, participant: str, outputs) -> "_Columns":
+        """The columns of outputs that are not all floats, in the order :func:`_flat_values` gives
+        their values (an array's cells after it).  Two with the same name (a port named as
+        another's cell) are one column, set in that order: the later value holds, as in a dict."""
+        names = []
         for port, value in outputs.items():
             column = f"{participant}.{port}"
-            if type(value) is float:
-                flat[column] = value
-            elif isinstance(value, np.ndarray):
+            if isinstance(value, np.ndarray):
                 if value.ndim == 0:
-                    flat[column] = float(value)
-                # its cells in C order, as np.ndindex names them, each as float(cell); a real
-                # array's in one pass
-                cells = (value.ravel().tolist() if value.dtype.kind in "fiub"
-                         else (value[index] for index in np.ndindex(value.shape)))
-                flat.update(zip(self._cell_columns(column, value.shape), map(float, cells)))
+                    names.append(column)
+                names.extend(self._cell_columns(column, value.shape))
             else:
-                flat[column] = float(value)
-        names = tuple(flat)
-        columns = self._by_names.get(names)
-        if columns is None:
-            columns = self._by_names[names] = _Columns(names)
-        self._pending.append((stamp, columns, tuple(flat.values())))
+                names.append(column)
+        return _Columns(tuple(names))
 
     def float_columns(self, participant: str, ports: tuple[str, ...]) -> "_Columns":
         """The columns of ``participant``'s outputs ``ports`` (in that order), for :meth:`add_floats`."""
@@ -293,6 +296,30 @@ class Recorder:
 
 #: The set of the types of outputs that are all Python floats.
 FLOAT = frozenset({float})
+
+
+_FLOAT64 = np.dtype(np.float64)
+
+
+def _flat_values(values) -> tuple[float, ...]:
+    """Outputs as floats, an array as its own ``float()`` (0-d) and then ``float(cell)`` of each
+    cell in C order (a real array's in one pass)."""
+    flat: list[float] = []
+    for value in values:
+        if type(value) is float:
+            flat.append(value)
+        elif isinstance(value, np.ndarray):
+            if value.ndim == 0:
+                flat.append(float(value))
+            if value.dtype is _FLOAT64:  # its cells are floats as they come
+                flat.extend(value.ravel().tolist())
+            elif value.dtype.kind in "fiub":
+                flat.extend(map(float, value.ravel().tolist()))
+            else:
+                flat.extend(float(value[index]) for index in np.ndindex(value.shape))
+        else:
+            flat.append(float(value))
+    return tuple(flat)
 
 
 def on_grid_decimals(time_s: float) -> float:
