@@ -74,19 +74,21 @@ def _timed(owner, name: str, phase: str, spent: dict, first: dict, cpu: dict | N
     setattr(owner, name, wrapper)
 
 
-def _steps_timed(cosim, by_participant: dict) -> None:
-    """Time every participant's ``step`` calls of ``cosim`` in processor time, by participant."""
+def _calls_timed(cosim, by_participant: dict) -> None:
+    """Time the calls of every participant of ``cosim`` in processor time, by participant: its
+    ``step`` calls, and its ``setup``, ``terminate``, ``summary`` and ``tables`` together."""
     for participant in cosim.participants:
-        step, name = participant.step, participant.name
+        spent = by_participant.setdefault(participant.name, {"step": 0.0, "set-up, end": 0.0})
+        for method, kind in (("step", "step"), ("setup", "set-up, end"), ("terminate", "set-up, end"),
+                             ("summary", "set-up, end"), ("tables", "set-up, end")):
+            def timed(*args, call=getattr(participant, method), kind=kind, spent=spent, **kwargs):
+                started = time.process_time()
+                try:
+                    return call(*args, **kwargs)
+                finally:
+                    spent[kind] += time.process_time() - started
 
-        def timed_step(time_s, step_size, inputs, step=step, name=name):
-            started = time.process_time()
-            try:
-                return step(time_s, step_size, inputs)
-            finally:
-                by_participant[name] = by_participant.get(name, 0.0) + time.process_time() - started
-
-        participant.step = timed_step
+            setattr(participant, method, timed)
 
 
 def child(results: str) -> None:
@@ -108,7 +110,7 @@ def child(results: str) -> None:
     def built(self, *args, **kwargs):  # the imports end where the building starts
         imports_cpu.append(time.process_time())
         build(self, *args, **kwargs)
-        _steps_timed(self, by_participant)
+        _calls_timed(self, by_participant)
 
     master.CoSimulation.__init__ = built
     _timed(master.CoSimulation, "run", "loop", spent, first, cpu)
@@ -147,8 +149,10 @@ def child(results: str) -> None:
     }
     cpu_phases["other"] = total_cpu - sum(cpu_phases.values())
     cpu_phases["children"] = children.ru_utime + children.ru_stime
-    loop = dict(by_participant)
-    loop["master (the rest of the loop)"] = cpu["loop"] - sum(by_participant.values())
+    loop = {name: spent for name, spent in by_participant.items()}
+    loop["master (the rest of the loop)"] = {
+        "step": cpu["loop"] - sum(spent[kind] for spent in by_participant.values() for kind in spent),
+        "set-up, end": 0.0}
     summary_path = next(Path(results).rglob("summary.json"))
     participants = json.loads(summary_path.read_text())["participants"]
     control = {name: s for name, s in participants.items() if "solve_time_median_s" in s}
@@ -185,9 +189,11 @@ def report(runs: list[dict]) -> None:
     print("      " + " ".join(f"{p:>8}" for p in CPU_PHASES))
     for label, pick in (("min", min), ("median", statistics.median)):
         print(f"{label:<6}" + " ".join(f"{pick(r['cpu'][p] for r in runs):8.3f}" for p in CPU_PHASES))
-    print("the loop by participant, processor time of its step calls (median over the runs)")
+    print("the loop by participant, processor time of its calls (median over the runs)")
+    print(f"  {'':32s} {'steps':>8} {'set-up, terminate, summary':>27}")
     for name in runs[-1]["loop_cpu"]:
-        print(f"  {name:32s} {statistics.median(r['loop_cpu'][name] for r in runs):8.3f}")
+        steps, others = (statistics.median(r["loop_cpu"][name][kind] for r in runs) for kind in ("step", "set-up, end"))
+        print(f"  {name:32s} {steps:8.3f} {others:27.3f}")
     for name, summary in runs[-1]["control"].items():
         print(f"{name}: NMPC {summary.get('codegen')}, median solve {summary['solve_time_median_s'] * 1e3:.1f} ms, "
               f"max {summary['solve_time_max_s'] * 1e3:.1f} ms, {summary['solves']} solves (last run)")

@@ -149,13 +149,20 @@ class CoSimulation:
 
     def _stop_conditions_met(self, bus: dict, participant: str | None = None) -> list:
         """The stop conditions (of ``participant``'s outputs, or any) that hold on the bus; an
-        array where a condition needs one number is refused (:class:`StopConditionError`)."""
-        self._check_stop_values(bus)
-        return _met(self.scenario.simulation.stop_when, bus, participant)
+        array where a condition needs one number is refused (:class:`StopConditionError`).
 
-    def _check_stop_values(self, bus: dict) -> None:
-        """Every ``stop_when`` port seen so far holds one number (not an array)."""
-        for condition in self.scenario.simulation.stop_when:
+        With ``participant`` only its conditions are looked at: the master asks right after it
+        published, and the other conditions' values were checked when theirs were.
+        """
+        conditions = self.scenario.simulation.stop_when
+        if participant is not None:
+            conditions = [c for c in conditions if c.participant == participant]
+        self._check_stop_values(bus, conditions)
+        return _met(conditions, bus)
+
+    def _check_stop_values(self, bus: dict, conditions=None) -> None:
+        """Every ``stop_when`` port (of ``conditions``, or all) seen so far holds one number (not an array)."""
+        for condition in self.scenario.simulation.stop_when if conditions is None else conditions:
             value = bus.get((condition.participant, condition.port))
             if value is not None and np.ndim(value) != 0:
                 raise StopConditionError(
@@ -385,6 +392,7 @@ class _Loop:
         self.read_keys = ({(c.source, c.source_port) for c in connections}
                           | {(c.participant, c.port) for c in self.sim.stop_when})
         self.stop_conditions = bool(self.sim.stop_when)
+        self.stopping = {c.participant for c in self.sim.stop_when}  # the participants a condition names
         self.phase, self.participant, self.time_s = "setting up", None, self.sim.start_s  # for messages
 
     def position(self) -> str:
@@ -495,7 +503,7 @@ class _Loop:
                 recorder.add_floats(stamp, columns, values)
             else:  # (a NaN or inf sums to one) refuses the first bad output, records any other kind
                 cosim._publish(participant, stamp, outputs, bus, recorder)
-            if self.stop_conditions:
+            if name in self.stopping:
                 met = cosim._stop_conditions_met(bus, name)
         return met, skipped
 
