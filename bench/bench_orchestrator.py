@@ -1,9 +1,11 @@
 """Orchestrator overhead per macro step against a raw fmpy doStep loop on the same FMU, and where it goes.
 
 The raw loop does what any master must do per step: set the two inputs, doStep, read the
-plant's outputs.  The orchestrator adds the scripted helm participant, the connection
-lookup, the finiteness checks, the watchdog's bookkeeping, the interrupt check and the
-recorder.  Goal: at most 2x the raw loop.
+plant's outputs, through FMPy's ``setReal``/``doStep``/``getReal``.  The orchestrator adds the
+scripted helm participant, the connection lookup, the finiteness checks, the watchdog's
+bookkeeping, the interrupt check and the recorder.  Goal: at most 2x the raw loop.  The same
+loop on FMPy's low-level calls with arrays made once (how the FMU participant calls it) is
+printed beside it.
 
 Processor time (``time.process_time``), the configurations interleaved round by round
 (the machine may be shared), medians over the rounds.  The breakdown times each part of a
@@ -41,10 +43,12 @@ h_int = 1.0
 """
 
 
-def raw_loop(fmu_path: Path, steps: int) -> float:
-    """Processor time [s] of ``steps`` set-doStep-get rounds straight on FMPy's FMU2Slave."""
+def raw_loop(fmu_path: Path, steps: int, low_level: bool = False) -> float:
+    """Processor time [s] of ``steps`` set-doStep-get rounds straight on FMPy's FMU2Slave: its
+    ``setReal``/``doStep``/``getReal``, or (``low_level``) its ``fmi2SetReal``/``fmi2DoStep``/
+    ``fmi2GetReal`` on value-reference and value arrays made once, as the FMU participant calls them."""
     from fmpy import extract, read_model_description
-    from fmpy.fmi2 import FMU2Slave
+    from fmpy.fmi2 import FMU2Slave, fmi2Real, fmi2ValueReference
 
     md = read_model_description(str(fmu_path))
     refs = {v.name: v.valueReference for v in md.modelVariables}
@@ -59,10 +63,21 @@ def raw_loop(fmu_path: Path, steps: int) -> float:
     inputs = [refs["tau_u"], refs["tau_r"]]
     outputs = [refs[n] for n in ("x", "y", "psi", "u", "v", "r", "sog", "cog")]
     started = time.process_time()
-    for k in range(steps):
-        slave.setReal(inputs, [7.7377e5, 3.3e8 if k >= 60 else 0.0])
-        slave.doStep(currentCommunicationPoint=float(k), communicationStepSize=1.0)
-        slave.getReal(outputs)
+    if low_level:
+        component, set_real, do_step, get_real = slave.component, slave.fmi2SetReal, slave.fmi2DoStep, slave.fmi2GetReal
+        input_refs, input_values = (fmi2ValueReference * 2)(*inputs), (fmi2Real * 2)()
+        output_refs, output_values = (fmi2ValueReference * 8)(*outputs), (fmi2Real * 8)()
+        for k in range(steps):
+            input_values[:] = [7.7377e5, 3.3e8 if k >= 60 else 0.0]
+            set_real(component, input_refs, 2, input_values)
+            do_step(component, float(k), 1.0, 1)
+            get_real(component, output_refs, 8, output_values)
+            output_values[:]
+    else:
+        for k in range(steps):
+            slave.setReal(inputs, [7.7377e5, 3.3e8 if k >= 60 else 0.0])
+            slave.doStep(currentCommunicationPoint=float(k), communicationStepSize=1.0)
+            slave.getReal(outputs)
     elapsed = time.process_time() - started
     slave.terminate()
     slave.freeInstance()
@@ -106,9 +121,13 @@ def orchestrated(steps: int) -> tuple[float, float, float]:
 
 
 def parts(steps: int) -> dict[str, float]:
-    """Processor time [s] of each part of a master step, each timed alone ``steps`` times."""
+    """Processor time [s] of each part of a master step, each timed alone ``steps`` times on the
+    participants and values of the run (the exchange as ``orchestrator.master._Loop._round``
+    does it for Gauss-Seidel, written out here)."""
+    import math
+
     from orchestrator import interrupts, time_limits
-    from orchestrator.recorder import Recorder
+    from orchestrator.recorder import FLOAT, Recorder
 
     folder = Path(tempfile.mkdtemp())
     cosim = _cosim(folder, steps)
@@ -119,39 +138,56 @@ def parts(steps: int) -> dict[str, float]:
     try:
         started = time.process_time()
         for k in range(steps):
+            ship.step(float(k), 1.0, out_helm)
+        ship_step = time.process_time() - started
+        write, _ = ship._input_writers[tuple(out_helm)]
+        do_step, read = ship._do_step, ship._read_reals
+        values = list(out_helm.values())
+        started = time.process_time()
+        for k in range(steps):
+            write(values)
+            do_step(steps + float(k), 1.0)
+            read()
+        times["FMU: FMPy's calls (set, doStep, get)"] = fmpy_calls = time.process_time() - started
+        times["FMU participant around them"] = ship_step - fmpy_calls
+        started = time.process_time()
+        for k in range(steps):
             out_helm = helm.step(float(k), 1.0, {})
-            out_ship = ship.step(float(k), 1.0, out_helm)
-        times["participants' own step calls"] = time.process_time() - started
+        times["helm participant's step"] = time.process_time() - started
 
         bus: dict = {}
         recorder = Recorder(0.0, 1.0, steps)
+        # the helm's outputs are all read (connected), none of the ship's
+        publications = {"helm": {tuple(out_helm): (tuple(("helm", port) for port in out_helm), None,
+                                                   recorder.float_columns("helm", tuple(out_helm)))},
+                        "ship": {tuple(out_ship): ((), (), recorder.float_columns("ship", tuple(out_ship)))}}
         started = time.process_time()
         for k in range(steps):
-            cosim._publish(helm, float(k), out_helm, bus, recorder)
-            cosim._publish(ship, k + 1.0, out_ship, bus, recorder)
-        publish = time.process_time() - started
-        recorder = Recorder(0.0, 1.0, steps)
-        started = time.process_time()
-        for k in range(steps):
-            recorder.add("helm", float(k), out_helm)
-            recorder.add("ship", k + 1.0, out_ship)
-            recorder.advance(float(k))
-        recording = time.process_time() - started
-        recorder = Recorder(0.0, 1.0, steps)
-        started = time.process_time()
-        for k in range(steps):
-            recorder.add("helm", float(k), out_helm)
-            recorder.add("ship", k + 1.0, out_ship)
-            recorder._pending.clear()  # (the rows are timed above)
-        times["exchange: output checks, bus"] = publish - (time.process_time() - started)
-        times["recording: rows (add, advance)"] = recording
+            for name, outputs, checked in (("helm", out_helm, False), ("ship", out_ship, True)):
+                ports, values = tuple(outputs), tuple(outputs.values())
+                publication = publications[name].get(ports)
+                if publication and set(map(type, values)) <= FLOAT and (checked or math.isfinite(sum(values))):
+                    keys, read, _ = publication
+                    if read is None:
+                        bus.update(zip(keys, values))
+                    elif read:
+                        bus.update(zip(keys, [values[index] for index in read]))
+        times["exchange: output checks, bus"] = time.process_time() - started
 
         inbound = (("tau_u", ("helm", "tau_u")), ("tau_r", ("helm", "tau_r")))
         started = time.process_time()
         for _ in range(steps):
-            {port: bus[key] for port, key in ()}
             {port: bus[key] for port, key in inbound if key in bus}
         times["exchange: inputs from the bus"] = time.process_time() - started
+
+        helm_columns, ship_columns = publications["helm"][tuple(out_helm)][2], publications["ship"][tuple(out_ship)][2]
+        helm_values, ship_values = tuple(out_helm.values()), tuple(out_ship.values())
+        started = time.process_time()
+        for k in range(steps):
+            recorder.add_floats(float(k), helm_columns, helm_values)
+            recorder.add_floats(k + 1.0, ship_columns, ship_values)
+            recorder.advance(float(k))
+        times["recording: rows (add, advance)"] = time.process_time() - started
 
         watch = time_limits.CallWatch()
         try:
@@ -186,9 +222,10 @@ def main() -> None:
     from orchestrator.fmu_build import ensure_built
 
     fmu = ensure_built("KCS")
-    raw, loop, once, frame, breakdown = [], [], [], [], []
+    raw, low, loop, once, frame, breakdown = [], [], [], [], [], []
     for _ in range(args.rounds):  # interleaved: a load that comes and goes hits every configuration
         raw.append(raw_loop(fmu, args.steps))
+        low.append(raw_loop(fmu, args.steps, low_level=True))
         stepping, rest, assembly = orchestrated(args.steps)
         loop.append(stepping)
         once.append(rest)
@@ -199,6 +236,8 @@ def main() -> None:
     print(f"steps per run {args.steps}, rounds {args.rounds}, processor time, medians; "
           f"load average {os.getloadavg()[0]:.2f} (cores {os.cpu_count()})")
     print(f"raw fmpy loop                        {med(raw) * per:7.1f} us/step")
+    print(f"raw fmpy loop, low-level calls       {med(low) * per:7.1f} us/step  (arrays made once, as the FMU "
+          "participant calls FMPy)")
     ratios = [o / r for o, r in zip(loop, raw)]
     print(f"orchestrator (its steps)             {med(loop) * per:7.1f} us/step  ratio {med(ratios):4.2f}x "
           f"(rounds {min(ratios):.2f}-{max(ratios):.2f}x; goal <= 2x)")

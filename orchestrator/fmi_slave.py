@@ -107,6 +107,65 @@ class FmiSlave:
             return self._fmu.getReal(list(refs))
         return self._fmu.getFloat64(list(refs))
 
+    def real_reader(self, refs: Sequence[int]) -> Callable[[], list[float]]:
+        """A call that reads the real variables ``refs`` (after :meth:`instantiate`): what
+        :meth:`get_reals` does, through FMPy's own ``fmi2GetReal``/``fmi3GetFloat64`` on arrays
+        made once here instead of at every call."""
+        count = len(refs)
+        fmu, component = self._fmu, self._fmu.component
+        if self.version == "2.0":
+            from fmpy.fmi2 import fmi2Real, fmi2ValueReference
+
+            references, values = (fmi2ValueReference * count)(*refs), (fmi2Real * count)()
+            get_real = fmu.fmi2GetReal
+
+            def read() -> list[float]:
+                get_real(component, references, count, values)
+                return values[:]
+        else:
+            from fmpy.fmi3 import fmi3Float64, fmi3ValueReference
+
+            references, values = (fmi3ValueReference * count)(*refs), (fmi3Float64 * count)()
+            get_float64 = fmu.fmi3GetFloat64
+
+            def read() -> list[float]:
+                get_float64(component, references, count, values, count)
+                return values[:]
+        return read
+
+    def real_writer(self, refs: Sequence[int]) -> Callable[[Sequence[float]], None]:
+        """A call that sets the real variables ``refs`` to as many values, in that order (after
+        :meth:`instantiate`): :meth:`set_reals` on arrays made once."""
+        count = len(refs)
+        fmu, component = self._fmu, self._fmu.component
+        if self.version == "2.0":
+            from fmpy.fmi2 import fmi2Real, fmi2ValueReference
+
+            references, values = (fmi2ValueReference * count)(*refs), (fmi2Real * count)()
+            set_real = fmu.fmi2SetReal
+
+            def write(numbers: Sequence[float]) -> None:
+                values[:] = numbers
+                set_real(component, references, count, values)
+        else:
+            from fmpy.fmi3 import fmi3Float64, fmi3ValueReference
+
+            references, values = (fmi3ValueReference * count)(*refs), (fmi3Float64 * count)()
+            set_float64 = fmu.fmi3SetFloat64
+
+            def write(numbers: Sequence[float]) -> None:
+                values[:] = numbers
+                set_float64(component, references, count, values, count)
+        return write
+
+    def stepper(self) -> Callable[[float, float], None]:
+        """:meth:`do_step` bound once (after :meth:`instantiate`)."""
+        fmu, component = self._fmu, self._fmu.component
+        if self.version == "2.0":
+            do_step = fmu.fmi2DoStep
+            return lambda time, step_size: do_step(component, time, step_size, 1)
+        return self.do_step
+
     def set_integers(self, refs: Sequence[int], values: Sequence[int]) -> None:
         if self.version == "2.0":
             self._fmu.setInteger(list(refs), list(values))

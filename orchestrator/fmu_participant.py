@@ -13,7 +13,7 @@ import logging
 import math
 import shutil
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 from fmpy.fmi1 import FMICallException
@@ -24,7 +24,7 @@ from orchestrator.leftovers import owned_temp_folder
 from orchestrator.fmi_slave import REAL_TYPES, SUPPORTED_VERSIONS, FmiSlave
 from orchestrator.participant import Participant, Value, is_finite_number
 from orchestrator.plant_ports import PLANT_PORTS
-from orchestrator.geometry import wrap_angle
+from orchestrator.geometry import wrap_float
 from orchestrator.port_mapping import ScalarBinding, bind_ports, initial_start_values
 from orchestrator.scenario import ParticipantSpec
 
@@ -169,6 +169,17 @@ class FmuParticipant(Participant):
                                if all(type(b) is ScalarBinding for b in self._input_bindings) else None)
         self._scalar_outputs = ([(b.ports[0], b.scale, b.offset, b.wrap) for b in self._output_bindings]
                                 if all(type(b) is ScalarBinding for b in self._output_bindings) else None)
+        # where every output is one variable: the ports in the order of the values read, and
+        # which of them are scaled (index, scale, offset) and wrapped (index)
+        if self._scalar_outputs is not None:
+            self._output_ports = tuple(port for port, *_ in self._scalar_outputs)
+            self._scaled_outputs = tuple((index, scale, offset) for index, (_, scale, offset, _) in
+                                         enumerate(self._scalar_outputs) if (scale, offset) != (1.0, 0.0))
+            self._wrapped_outputs = tuple(index for index, (*_, wrap) in enumerate(self._scalar_outputs) if wrap)
+        # FMPy's calls on arrays made once, bound at set-up; a writer per set of input ports given
+        self._read_reals = self._do_step = None
+        # (the call, whether every port is the variable unscaled)
+        self._input_writers: dict[tuple[str, ...], tuple[Callable[[list[float]], None], bool]] = {}
         self._slave = None
         self._unzip_dir = None
         self._unzip_lock = None
@@ -222,6 +233,7 @@ class FmuParticipant(Participant):
         extract_fmu(self.fmu_path, Path(self._unzip_dir), f"{self.where}.fmu")
         self._slave = FmiSlave(self.model_description, self._unzip_dir, self.name, self._on_message)
         self._slave.instantiate()
+        self._bind_calls()
         self._call("EnterInitializationMode", self._slave.enter_initialization, start_time)
         for name, value in self.parameters.items():
             self._set_variable(name, value)
@@ -230,9 +242,25 @@ class FmuParticipant(Participant):
         return self._read_outputs(start_time)
 
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
-        self._set_inputs(inputs)
-        self._call("DoStep", self._slave.do_step, time, step_size)
+        if inputs:
+            if self._scalar_inputs is not None:
+                self._set_scalar_inputs(inputs)
+            else:
+                self._set_inputs(inputs)
+        if self._messages:  # what _call does, without a call more per step
+            self._messages.clear()
+        try:
+            self._do_step(time, step_size)
+        except FMICallException as exc:
+            raise self._refused("DoStep", exc) from exc
         return self._read_outputs(time + step_size)
+
+    def _bind_calls(self) -> None:
+        """The per-step FMU calls on value-reference and value arrays made once for this instance."""
+        slave = self._slave
+        self._do_step = slave.stepper()
+        self._read_reals = slave.real_reader(self._output_refs) if self._output_refs else None
+        self._input_writers = {}
 
     def terminate(self) -> None:
         if self._slave is not None:
@@ -263,16 +291,19 @@ class FmuParticipant(Participant):
         if status >= 1:
             self._messages.append(text)
 
-    def _call(self, function: str, call, *args, **kwargs):
+    def _call(self, function: str, call, *args):
         """Call the FMU; ``function`` is the name without its ``fmi2``/``fmi3`` prefix."""
         if self._messages:
             self._messages.clear()
         try:
-            return call(*args, **kwargs)
+            return call(*args)
         except FMICallException as exc:
-            detail = self._messages[-1] if self._messages else str(exc)
-            raise ModelError(
-                f"{self.name} ({self.fmu_path.name}): {self._slave.name(function)} failed: {detail}") from exc
+            raise self._refused(function, exc) from exc
+
+    def _refused(self, function: str, exc: FMICallException) -> ModelError:
+        """The error of a refused call, with the FMU's last message about it."""
+        detail = self._messages[-1] if self._messages else str(exc)
+        return ModelError(f"{self.name} ({self.fmu_path.name}): {self._slave.name(function)} failed: {detail}")
 
     def _set_variable(self, name: str, value) -> None:
         variable = self.variables[name]
@@ -309,28 +340,47 @@ class FmuParticipant(Participant):
         self._call("SetReal", self._slave.set_reals, refs, values)
 
     def _set_scalar_inputs(self, inputs: Mapping[str, Value]) -> None:
-        """:meth:`_set_inputs` where every input port is one variable: the same values, one loop."""
-        refs, values = [], []
+        """:meth:`_set_inputs` where every input port is one variable: the same values, one loop,
+        one call on the arrays made for these ports (once per set of ports given)."""
+        ports = tuple(inputs)
+        writer = self._input_writers.get(ports)
+        if writer is None:
+            writer = self._input_writers[ports] = (
+                self._slave.real_writer([self._scalar_inputs[port][0] for port in ports]),
+                all(self._scalar_inputs[port][1:] == (1.0, 0.0) for port in ports))
+        write, plain = writer
+        if plain:  # (number - 0.0) / 1.0 is the number
+            values = [float(value) for value in inputs.values()]
+            if math.isfinite(sum(values)):  # (a NaN or inf sums to one)
+                self._call("SetReal", write, values)
+                return
+        values, scalar_inputs = [], self._scalar_inputs
         for port, value in inputs.items():
             number = float(value)
             if not math.isfinite(number):
                 raise ModelError(f"{self.name}: input '{port}' received a non-finite value ({number})")
-            self._canonical_inputs[port] = number
-            ref, scale, offset = self._scalar_inputs[port]
-            refs.append(ref)
+            _, scale, offset = scalar_inputs[port]
             values.append((number - offset) / scale)
-        self._call("SetReal", self._slave.set_reals, refs, values)
+        self._call("SetReal", write, values)
 
     def _read_outputs(self, time: float) -> dict[str, Value]:
         if not self._output_refs:
             return {}
-        values = self._call("GetReal", self._slave.get_reals, self._output_refs)
+        if self._messages:
+            self._messages.clear()
+        try:
+            values = self._read_reals()
+        except FMICallException as exc:
+            raise self._refused("GetReal", exc) from exc
         if self._scalar_outputs is not None and math.isfinite(sum(values)):  # (a NaN or inf sums to one)
-            outputs = {}
-            for (port, scale, offset, wrap), value in zip(self._scalar_outputs, values):
-                value = scale * value + offset
-                outputs[port] = float(wrap_angle(value)) if wrap else value
-            return outputs
+            # scale * value + offset, wrapped where the port is an angle: 1.0 * value + 0.0 is
+            # value + 0.0 (-0.0 becomes 0.0)
+            outputs = [value + 0.0 for value in values]
+            for index, scale, offset in self._scaled_outputs:
+                outputs[index] = scale * values[index] + offset
+            for index in self._wrapped_outputs:
+                outputs[index] = wrap_float(outputs[index])
+            return dict(zip(self._output_ports, outputs))
         by_variable = {}
         for variable, value in zip(self._output_variables, values):
             if not math.isfinite(value):

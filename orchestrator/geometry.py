@@ -21,11 +21,16 @@ def wrap_angle(angle, half_turn: float = np.pi):
     """Wrap angles to (-half_turn, half_turn]: radians by default, degrees with
     ``half_turn = 180`` (numpy; arrays element-wise)."""
     if type(angle) is float:  # a plain number, as a port's value every step: no array round trip
-        # Python's float % is numpy's np.mod to the bit (fmod, then the divisor's sign)
-        scalar = (angle + half_turn) % (2.0 * half_turn) - half_turn
-        return np.float64(half_turn if scalar == -half_turn else scalar)
+        return np.float64(wrap_float(angle, half_turn))
     wrapped = np.mod(np.asarray(angle, dtype=float) + half_turn, 2.0 * half_turn) - half_turn
     return np.where(wrapped == -half_turn, half_turn, wrapped)
+
+
+def wrap_float(angle: float, half_turn: float = math.pi) -> float:
+    """:func:`wrap_angle` of one Python float, as a Python float (the same value, no numpy)."""
+    # Python's float % is numpy's np.mod to the bit (fmod, then the divisor's sign)
+    scalar = (angle + half_turn) % (2.0 * half_turn) - half_turn
+    return half_turn if scalar == -half_turn else scalar
 
 
 def wrap_deg(angle_deg):

@@ -32,7 +32,7 @@ from orchestrator import interrupts, leftovers, plugins, time_limits
 from orchestrator.errors import ModelError, ResultsError, ScenarioError, ToolchainError
 from orchestrator.participant import Participant, Value
 from orchestrator.participant_build import build_participant, build_scenario_table
-from orchestrator.recorder import Recorder
+from orchestrator.recorder import FLOAT, Recorder
 from orchestrator.results import json_default
 from orchestrator.scenario import Scenario
 
@@ -149,13 +149,20 @@ class CoSimulation:
 
     def _stop_conditions_met(self, bus: dict, participant: str | None = None) -> list:
         """The stop conditions (of ``participant``'s outputs, or any) that hold on the bus; an
-        array where a condition needs one number is refused (:class:`StopConditionError`)."""
-        self._check_stop_values(bus)
-        return _met(self.scenario.simulation.stop_when, bus, participant)
+        array where a condition needs one number is refused (:class:`StopConditionError`).
 
-    def _check_stop_values(self, bus: dict) -> None:
-        """Every ``stop_when`` port seen so far holds one number (not an array)."""
-        for condition in self.scenario.simulation.stop_when:
+        With ``participant`` only its conditions are looked at: the master asks right after it
+        published, and the other conditions' values were checked when theirs were.
+        """
+        conditions = self.scenario.simulation.stop_when
+        if participant is not None:
+            conditions = [c for c in conditions if c.participant == participant]
+        self._check_stop_values(bus, conditions)
+        return _met(conditions, bus)
+
+    def _check_stop_values(self, bus: dict, conditions=None) -> None:
+        """Every ``stop_when`` port (of ``conditions``, or all) seen so far holds one number (not an array)."""
+        for condition in self.scenario.simulation.stop_when if conditions is None else conditions:
             value = bus.get((condition.participant, condition.port))
             if value is not None and np.ndim(value) != 0:
                 raise StopConditionError(
@@ -369,14 +376,23 @@ class _Loop:
         # that steps all FMUs at once hands them on: (release step, participant, outputs)
         self.pending: list[tuple[int, str, dict]] = []
         connections = cosim.scenario.connections
-        # per participant: itself, its name, every, time limit, (its input port, the bus key that drives it)
+        self.steps, self.dt_s = self.sim.steps, self.sim.dt_s  # (``steps`` is computed at every call)
+        # per participant: itself, its name, every, time limit, (its input port, the bus key that
+        # drives it), whether its outputs describe the end of its step, whether it checks their
+        # finiteness itself, and its publications (below)
         self.plans = [(p, p.name, cosim.every[p.name], cosim.step_timeout_s[p.name],
-                       tuple((c.target_port, (c.source, c.source_port)) for c in connections if c.target == p.name))
+                       tuple((c.target_port, (c.source, c.source_port)) for c in connections if c.target == p.name),
+                       p.outputs_at_step_end, getattr(p, "checks_outputs_finite", False), {})
                       for p in cosim.participants]
         # per participant: its declared outputs, whether it checks their finiteness itself
         self.publishing = {p.name: (cosim._declared[p.name], getattr(p, "checks_outputs_finite", False))
                            for p in cosim.participants}
+        # the bus keys that anything reads while stepping (a connection, a stop condition): a
+        # step puts only those on the bus
+        self.read_keys = ({(c.source, c.source_port) for c in connections}
+                          | {(c.participant, c.port) for c in self.sim.stop_when})
         self.stop_conditions = bool(self.sim.stop_when)
+        self.stopping = {c.participant for c in self.sim.stop_when}  # the participants a condition names
         self.phase, self.participant, self.time_s = "setting up", None, self.sim.start_s  # for messages
 
     def position(self) -> str:
@@ -386,7 +402,7 @@ class _Loop:
     def set_up(self) -> None:
         """Set every participant up completely: the record starts at t0."""
         start, bus, watch = self.sim.start_s, self.bus, self.watch
-        for participant, name, _, limit, inbound in self.plans:
+        for participant, name, _, limit, inbound, *_ in self.plans:
             self.participant = name
             seen = {} if self.jacobi else bus
             inputs = {port: seen[key] for port, key in inbound if key in seen}
@@ -403,19 +419,20 @@ class _Loop:
 
     def step_all(self, bar, on_step: Callable[[int], None] | None) -> str:
         """Step every participant due at each communication point; the reason of an early stop, or ""."""
-        sim, cosim, recorder = self.sim, self.cosim, self.recorder
+        sim, cosim = self.sim, self.cosim
+        start_s, dt_s, step_round, advance = sim.start_s, sim.dt_s, self._round, self.recorder.advance
         reason, met = "", []
-        for k in range(sim.steps):
-            t = sim.start_s + k * sim.dt_s
+        for k in range(self.steps):
+            t = start_s + k * dt_s
             self.time_s = t
             if self.pending:
                 met = self._release(k)
                 if met:  # Jacobi: what the last round handed on ends the run before this one
                     reason = f"stopped at t = {t:g} s: {met[0]}"
                     break
-            met, skipped = self._round(k, t)
+            met, skipped = step_round(k, t)
             cosim.steps_done = k + 1
-            recorder.advance(t)  # every participant due at t has stepped: the row of t is final
+            advance(t)  # every participant due at t has stepped: the row of t is final
             if bar is not None:
                 bar.update(1)
             if on_step is not None:
@@ -443,11 +460,12 @@ class _Loop:
         Returns the stop conditions met (Gauss-Seidel: once one holds, the participants after
         it are not stepped) and the names of those skipped for it.
         """
-        sim, cosim, bus, recorder, watch = self.sim, self.cosim, self.bus, self.recorder, self.watch
+        cosim, bus, recorder, watch = self.cosim, self.bus, self.recorder, self.watch
+        steps, dt_s, begin, end = self.steps, self.dt_s, watch.begin, watch.end
         stop_requested = interrupts.stop_requested
         met: list = []
         skipped: list[str] = []
-        for participant, name, every, limit, inbound in self.plans:
+        for participant, name, every, limit, inbound, at_step_end, checked, publications in self.plans:
             if k % every:
                 continue
             if met:  # Gauss-Seidel: met earlier in this round, nobody steps past it
@@ -456,29 +474,49 @@ class _Loop:
             self.participant = name
             if stop_requested():  # even if a library swallowed the signal
                 raise KeyboardInterrupt
-            step_size = min(every, sim.steps - k) * sim.dt_s
-            inputs = {port: bus[key] for port, key in inbound if key in bus}
-            watch.begin(name, "its step", t, limit)
+            step_size = (every if k + every <= steps else steps - k) * dt_s
+            inputs = {port: bus[key] for port, key in inbound if key in bus} if inbound else {}
+            begin(name, "its step", t, limit)
             try:
                 outputs = participant.step(t, step_size, inputs)
             finally:
-                watch.end()
-            watch.check()
-            stamp = t + step_size if participant.outputs_at_step_end else t
+                end()
+            if watch.expired is not None:  # (what watch.check() looks at)
+                watch.check()
+            stamp = t + step_size if at_step_end else t
             if self.jacobi:
                 cosim._publish(participant, stamp, outputs, None, recorder)
                 self.pending.append((k + every, name, outputs))
-            else:
-                declared, checked = self.publishing[name]
-                if outputs.keys() <= declared and (checked or all(map(_finite, outputs.values()))):
-                    for port, value in outputs.items():  # what _publish does, without its look-ups
-                        bus[(name, port)] = value
-                    recorder.add(name, stamp, outputs)
-                else:
-                    cosim._publish(participant, stamp, outputs, bus, recorder)  # refuses the first bad output
-                if self.stop_conditions:
-                    met = cosim._stop_conditions_met(bus, name)
+                continue
+            # outputs all floats, all declared, all finite: onto the bus and into the record
+            # through keys and columns resolved at their first step (what _publish does)
+            ports, values = tuple(outputs), tuple(outputs.values())
+            publication = publications.get(ports)
+            if publication is None:
+                publication = publications[ports] = self._publication(name, ports)
+            if publication and set(map(type, values)) <= FLOAT and (checked or math.isfinite(sum(values))):
+                keys, read, columns = publication
+                if read is None:  # every output is read
+                    bus.update(zip(keys, values))
+                elif read:
+                    bus.update(zip(keys, [values[index] for index in read]))
+                recorder.add_floats(stamp, columns, values)
+            else:  # (a NaN or inf sums to one) refuses the first bad output, records any other kind
+                cosim._publish(participant, stamp, outputs, bus, recorder)
+            if name in self.stopping:
+                met = cosim._stop_conditions_met(bus, name)
         return met, skipped
+
+    def _publication(self, name: str, ports: tuple[str, ...]) -> tuple:
+        """How ``name``'s outputs ``ports`` are published: the bus keys of those read while stepping,
+        their places among the outputs (None: all of them, in order), the record's columns; empty
+        if one is not declared."""
+        if not set(ports) <= self.publishing[name][0]:
+            return ()
+        read = [index for index, port in enumerate(ports) if (name, port) in self.read_keys]
+        keys = tuple((name, ports[index]) for index in read)
+        return (keys, None if len(read) == len(ports) else tuple(read),
+                self.recorder.float_columns(name, ports))
 
 
 #: A participant built more slowly than this [s] is named with its build time on stderr.

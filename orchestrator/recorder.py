@@ -63,15 +63,18 @@ class Recorder:
         self.steps = steps
         self.spool = None if spool is None else Path(spool)
         self.chunk_rows = chunk_rows
-        self._pending: list[tuple[float, dict[str, float]]] = []  # outputs not yet in a row, in order
-        # the latest value of every column applied to the rows, in the order of ``_columns``
-        # (a row is its values)
-        self._held: dict[str, float] = {"time_s": start_s}
-        self._scalar_columns: dict[str, dict[str, str]] = {}  # participant -> port -> column
-        # participant -> its ports (as given, in order) -> their columns, for outputs all floats
-        self._float_rows: dict[str, dict[tuple[str, ...], tuple[str, ...]]] = {}
-        self._latest = start_s  # latest time any output describes
+        # outputs not yet in a row, in order: (time, their columns, their values as floats)
+        self._pending: list[tuple[float, _Columns, tuple[float, ...]]] = []
         self._columns: list[str] = ["time_s"]
+        self._position: dict[str, int] = {"time_s": 0}  # column -> its place in a row
+        # the latest value of every column applied to the rows, in the order of ``_columns``
+        # (a row is a copy of it)
+        self._held: list[float] = [start_s]
+        # participant -> its ports (as given, in order) -> their columns, for outputs all floats
+        self._float_rows: dict[str, dict[tuple[str, ...], _Columns]] = {}
+        # (participant, ports, shape of each or None) -> the columns of outputs with arrays
+        self._mixed: dict[tuple, _Columns] = {}
+        self._latest = start_s  # latest time any output describes
         self._rows: list[list[float]] = []  # emitted rows not yet written (all rows without a spool)
         self._emitted = 0  # grid rows emitted so far
         self._parts: list[Path] = []  # complete Parquet files of CHUNK_ROWS rows each
@@ -79,45 +82,55 @@ class Recorder:
 
     # -- the master's side -------------------------------------------------------------------
     def add(self, participant: str, time_s: float, outputs) -> None:
+        """``participant``'s outputs describing ``time_s``: they enter the rows from the first
+        grid time at or after it (:meth:`advance`)."""
+        values = tuple(outputs.values())
+        if set(map(type, values)) <= FLOAT:  # all floats: their columns named once per set of ports
+            self.add_floats(time_s, self.float_columns(participant, tuple(outputs)), values)
+            return
+        stamp = on_grid_decimals(time_s)
+        if stamp > self._latest:
+            self._latest = stamp
+        # arrays and other numbers: the columns named once per set of ports and shapes
+        layout = (participant, tuple(outputs),
+                  tuple(value.shape if isinstance(value, np.ndarray) else None for value in values))
+        columns = self._mixed.get(layout)
+        if columns is None:
+            columns = self._mixed[layout] = self._mixed_columns(participant, outputs)
+        self._pending.append((stamp, columns, _flat_values(values)))
+
+    def _mixed_columns(self, participant: str, outputs) -> "_Columns":
+        """The columns of outputs that are not all floats, in the order :func:`_flat_values` gives
+        their values (an array's cells after it).  Two with the same name (a port named as
+        another's cell) are one column, set in that order: the later value holds, as in a dict."""
+        names = []
+        for port, value in outputs.items():
+            column = f"{participant}.{port}"
+            if isinstance(value, np.ndarray):
+                if value.ndim == 0:
+                    names.append(column)
+                names.extend(self._cell_columns(column, value.shape))
+            else:
+                names.append(column)
+        return _Columns(tuple(names))
+
+    def float_columns(self, participant: str, ports: tuple[str, ...]) -> "_Columns":
+        """The columns of ``participant``'s outputs ``ports`` (in that order), for :meth:`add_floats`."""
         rows = self._float_rows.get(participant)
         if rows is None:
             rows = self._float_rows[participant] = {}
-            self._scalar_columns[participant] = {}
-        columns = self._scalar_columns[participant]
-        ports = tuple(outputs)
-        names = rows.get(ports)
-        if names is not None:  # these outputs seen before, all floats: their columns named once
-            values = tuple(outputs.values())
-            if all(type(value) is float for value in values):
-                flat = dict(zip(names, values))
-                stamp = round(float(time_s), TIME_DECIMALS)
-                self._pending.append((stamp, flat))
-                if stamp > self._latest:
-                    self._latest = stamp
-                return
-        elif all(type(value) is float for value in outputs.values()):
-            rows[ports] = tuple(f"{participant}.{port}" for port in ports)
-        flat = {}
-        for port, value in outputs.items():
-            column = columns.get(port)
-            if column is None:
-                column = columns[port] = f"{participant}.{port}"
-            if type(value) is float:
-                flat[column] = value
-            elif isinstance(value, np.ndarray):
-                if value.ndim == 0:
-                    flat[column] = float(value)
-                # its cells in C order, as np.ndindex names them, each as float(cell); a real
-                # array's in one pass
-                cells = (value.ravel().tolist() if value.dtype.kind in "fiub"
-                         else (value[index] for index in np.ndindex(value.shape)))
-                flat.update(zip(self._cell_columns(column, value.shape), map(float, cells)))
-            else:
-                flat[column] = float(value)
-        stamp = round(float(time_s), TIME_DECIMALS)
-        self._pending.append((stamp, flat))
+        columns = rows.get(ports)
+        if columns is None:
+            columns = rows[ports] = _Columns(tuple(f"{participant}.{port}" for port in ports))
+        return columns
+
+    def add_floats(self, time_s: float, columns: "_Columns", values: tuple[float, ...]) -> None:
+        """:meth:`add` of outputs that are all Python floats, their columns named once
+        (:meth:`float_columns`): what the master's step calls."""
+        stamp = time_s if type(time_s) is float and (time_s * 64.0).is_integer() else on_grid_decimals(time_s)
         if stamp > self._latest:
             self._latest = stamp
+        self._pending.append((stamp, columns, values))
 
     def _cell_columns(self, column: str, shape: tuple[int, ...]) -> list[str]:
         """``column[i,j]`` of every cell of an array output of ``shape``, in C order (named once per run)."""
@@ -139,23 +152,46 @@ class Recorder:
     def advance(self, until_s: float) -> None:
         """Every participant due up to ``until_s`` has stepped: the rows up to it are final."""
         count = math.floor((until_s - self.start_s) / self.dt_s + 1e-9) + 1
-        held = self._held
+        held, rows = self._held, self._rows
         while self._emitted < count:
-            grid = round(self.start_s + self.dt_s * self._emitted, TIME_DECIMALS)
-            keep = []
-            for stamp, flat in self._pending:
-                if stamp <= grid:
-                    if not flat.keys() <= held.keys():  # a column's first value: it joins the rows
-                        self._columns.extend(column for column in flat if column not in held)
-                    held.update(flat)
-                else:
-                    keep.append((stamp, flat))
-            self._pending = keep
-            held["time_s"] = grid
-            self._rows.append(list(held.values()))
+            grid = on_grid_decimals(self.start_s + self.dt_s * self._emitted)
+            if self._pending:
+                keep = []
+                for item in self._pending:
+                    if item[0] <= grid:
+                        stamp, columns, values = item
+                        place = columns.place
+                        if place is None:  # their first values: the new columns join the rows
+                            place = self._place(columns)
+                        if type(place) is slice:
+                            held[place] = values
+                        else:
+                            for index, value in zip(place, values):
+                                held[index] = value
+                    else:
+                        keep.append(item)
+                self._pending = keep
+            held[0] = grid
+            rows.append(held.copy())
             self._emitted += 1
-            if self.spool is not None and len(self._rows) >= self.chunk_rows:
+            if self.spool is not None and len(rows) >= self.chunk_rows:
                 self._flush()
+                rows = self._rows
+
+    def _place(self, columns: "_Columns"):
+        """Where ``columns`` are in a row (a slice where they are side by side), the new ones
+        appended in their order."""
+        position, held = self._position, self._held
+        for name in columns.names:
+            if name not in position:
+                position[name] = len(self._columns)
+                self._columns.append(name)
+                held.append(math.nan)
+        indices = [position[name] for name in columns.names]
+        first = indices[0] if indices else 0
+        columns.place = (slice(first, first + len(indices)) if indices == list(range(first, first + len(indices)))
+                         else indices)
+        return columns.place
 
     def finish(self) -> None:
         """Emit the rows up to the latest output and write what is buffered (with a spool)."""
@@ -256,6 +292,54 @@ class Recorder:
         except OSError as exc:
             reason = "the disk is full" if exc.errno in (errno.ENOSPC, errno.EDQUOT) else (exc.strerror or str(exc))
             raise ResultsError(f"{where}: the time series could not be written ({reason})") from exc
+
+
+#: The set of the types of outputs that are all Python floats.
+FLOAT = frozenset({float})
+
+
+_FLOAT64 = np.dtype(np.float64)
+
+
+def _flat_values(values) -> tuple[float, ...]:
+    """Outputs as floats, an array as its own ``float()`` (0-d) and then ``float(cell)`` of each
+    cell in C order (a real array's in one pass)."""
+    flat: list[float] = []
+    for value in values:
+        if type(value) is float:
+            flat.append(value)
+        elif isinstance(value, np.ndarray):
+            if value.ndim == 0:
+                flat.append(float(value))
+            if value.dtype is _FLOAT64:  # its cells are floats as they come
+                flat.extend(value.ravel().tolist())
+            elif value.dtype.kind in "fiub":
+                flat.extend(map(float, value.ravel().tolist()))
+            else:
+                flat.extend(float(value[index]) for index in np.ndindex(value.shape))
+        else:
+            flat.append(float(value))
+    return tuple(flat)
+
+
+def on_grid_decimals(time_s: float) -> float:
+    """``round(time_s, TIME_DECIMALS)``, without rounding a time that is a whole number of
+    64ths of a second (as a grid of whole, half or quarter seconds is): such a time has at most
+    six decimals, so rounding returns it unchanged, and ``round`` to decimals is the slowest
+    part of recording an output."""
+    if type(time_s) is float and (time_s * 64.0).is_integer():
+        return time_s
+    return round(float(time_s), TIME_DECIMALS)
+
+
+class _Columns:
+    """The columns of a set of outputs, in their order, and where they are in a row once known."""
+
+    __slots__ = ("names", "place")
+
+    def __init__(self, names: tuple[str, ...]) -> None:
+        self.names = names
+        self.place: slice | list[int] | None = None
 
 
 class ColumnFrame:

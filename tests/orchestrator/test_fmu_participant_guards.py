@@ -31,15 +31,26 @@ def test_inputs_given_at_set_up_drive_the_first_step(ship):
     assert turning["r"] > 0.0
 
 
+def test_each_step_sets_the_inputs_it_is_given_in_any_order_and_the_others_hold(ship):
+    refs = [ship.variables[name].valueReference for name in ("tau_u", "tau_r")]
+    ship.setup(0.0, {"tau_u": 7.7e5, "tau_r": 1.0e8})
+    ship.step(0.0, 1.0, {"tau_r": 2.0e8})
+    assert ship._slave.get_reals(refs) == [7.7e5, 2.0e8]
+    ship.step(1.0, 1.0, {"tau_r": 3.0e8, "tau_u": 6.6e5})
+    assert ship._slave.get_reals(refs) == [6.6e5, 3.0e8]
+    ship.step(2.0, 1.0, {"tau_u": 5.5e5, "tau_r": 4.0e8})
+    assert ship._slave.get_reals(refs) == [5.5e5, 4.0e8]
+
+
 def test_outputs_are_read_at_the_end_of_the_step(ship, monkeypatch):
     ship.setup(0.0, {"tau_u": 7.7e5, "tau_r": 0.0})
-    monkeypatch.setattr(ship._slave, "get_reals", lambda refs: [math.nan] * len(refs))
+    monkeypatch.setattr(ship, "_read_reals", lambda: [math.nan] * len(ship._output_refs))  # what the FMU gives
     with pytest.raises(ModelError, match=r"^ship \(KCS.fmu\): output '\w+' is nan at t = 10 s$"):
         ship.step(0.0, 10.0, {})
 
 
 def test_a_non_finite_output_at_set_up_names_the_start_time(ship, monkeypatch):
-    monkeypatch.setattr(FmiSlave, "get_reals", lambda self, refs: [math.inf] * len(refs))
+    monkeypatch.setattr(FmiSlave, "real_reader", lambda self, refs: lambda: [math.inf] * len(refs))
     with pytest.raises(ModelError, match=r"^ship \(KCS.fmu\): output '\w+' is inf at t = 0 s$"):
         ship.setup(0.0, {"tau_u": 7.7e5, "tau_r": 0.0})
 
@@ -48,10 +59,12 @@ def refuse(self, *args, **kwargs):
     raise FMICallException(function="any", status=3)
 
 
-@pytest.mark.parametrize("method, function", [("enter_initialization", "fmi2EnterInitializationMode"),
-                                              ("get_reals", "fmi2GetReal")])
-def test_a_refused_call_is_named_by_its_fmi_function(ship, monkeypatch, method, function):
-    monkeypatch.setattr(FmiSlave, method, refuse)
+@pytest.mark.parametrize("method, function, replacement", [
+    ("enter_initialization", "fmi2EnterInitializationMode", refuse),
+    ("real_reader", "fmi2GetReal", lambda self, refs: lambda: refuse(self)),  # the reader it makes refuses
+])
+def test_a_refused_call_is_named_by_its_fmi_function(ship, monkeypatch, method, function, replacement):
+    monkeypatch.setattr(FmiSlave, method, replacement)
     with pytest.raises(ModelError, match=rf"^ship \(KCS.fmu\): {function} failed: "):
         ship.setup(0.0, {"tau_u": 7.7e5, "tau_r": 0.0})
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from orchestrator.geometry import DEG, KNOT, NM, local_north_east_m, wrap_angle
+from orchestrator.geometry import DEG, KNOT, NM, local_north_east_m, wrap_angle, wrap_float
 
 REPO = Path(__file__).resolve().parents[2]
 #: Packages and scripts that must take the units from orchestrator.geometry.
@@ -71,6 +71,9 @@ def test_a_plain_number_wraps_to_the_same_bits_as_an_array(half_turn):
     as_numbers = np.array([wrap_angle(float(angle), half_turn) for angle in angles])
     as_array = wrap_angle(angles, half_turn)
     assert as_numbers.tobytes() == as_array.tobytes()
+    as_floats = [wrap_float(float(angle), half_turn) for angle in angles]  # what a port's value gets
+    assert {type(value) for value in as_floats} == {float}
+    assert np.array(as_floats).tobytes() == as_array.tobytes()
     assert wrap_angle(-half_turn, half_turn) == half_turn
 
 

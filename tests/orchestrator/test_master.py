@@ -92,6 +92,35 @@ def test_multi_rate_steps_and_hold(write_scenario):
     assert list(frame["clock.count"][:5]) == [1.0, 1.0, 1.0, 2.0, 2.0]
 
 
+def test_a_connection_from_some_of_many_outputs_hands_on_the_port_it_names(write_scenario):
+    # the ship gives eight outputs each step and one is connected: what the echo sees is that
+    # one, the value the ship gave at the end of its step (the row of t + 1)
+    text = """
+connections = ["helm.tau_u -> ship.tau_u", "helm.tau_r -> ship.tau_r", "ship.r -> echo.value"]
+[simulation]
+stop_s = 30.0
+dt_s = 1.0
+[participants.helm]
+type = "scripted_tau"
+[participants.helm.options]
+tau_u_N = 7.7e5
+tau_r_steps = [[5.0, 3.3e8]]
+[participants.ship]
+fmu = "KCS"
+[participants.ship.parameters]
+u0 = 9.26
+[participants.echo]
+type = "python"
+class = "sample_participants:Echo"
+"""
+    cosim, outcome = run(write_scenario, text)
+    assert outcome.status == "finished"
+    frame = outcome.recorder.to_frame()
+    seen = [value for _, value in cosim.participant("echo").seen]
+    assert len(seen) == len(frame) == 30 and seen[:-1] == list(frame["ship.r"][1:])  # (the row of 30 s: after the run)
+    assert len(set(seen)) > 20  # the ship turns: the values differ from step to step
+
+
 def test_recorder_flattens_arrays_and_stamps_times(write_scenario):
     _, outcome = run(write_scenario, scenario_text())
     frame = outcome.recorder.to_frame()

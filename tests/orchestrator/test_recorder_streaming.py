@@ -211,3 +211,50 @@ def test_outputs_that_change_kind_or_order_between_steps_are_recorded_by_name_as
     assert frame["p.b"].tolist() == [2.0, 4.5, 6.0, 9.0, 11.0]
     assert frame["p.a[1]"].iloc[3:].tolist() == [8.0, 8.0]
     assert all(type(value) is float for row in recorder._rows for value in row)
+
+
+def test_times_meet_the_grid_as_rounded_to_its_decimals_whether_rounded_or_not():
+    """A time that is a whole number of 64ths of a second is not rounded: it must come out as
+    rounding would give it, and any other time rounded."""
+    from orchestrator.recorder import TIME_DECIMALS, on_grid_decimals
+
+    rng = np.random.default_rng(3)
+    times = np.concatenate([np.arange(-50, 5000) / 64.0, rng.integers(0, 2 ** 40, 500) / 64.0, np.arange(300) / 128.0,
+                            np.arange(5000) * 0.1, np.arange(5000) * 0.3 + 1e-7, rng.uniform(-1e6, 1e6, 2000),
+                            [2.0 ** 60, -0.0, 1e-7, 0.0000005, 0.0000015]])
+    for time_s in times.tolist() + [3, np.float64(7.25), np.float64(0.1)]:
+        assert repr(on_grid_decimals(time_s)) == repr(round(float(time_s), TIME_DECIMALS)), time_s
+        recorder = Recorder(0.0, 1.0, 1)
+        recorder.add_floats(time_s, recorder.float_columns("p", ("a",)), (1.0,))
+        assert repr(recorder.last_time()) == repr(max(0.0, round(float(time_s), TIME_DECIMALS))), time_s
+
+
+def test_a_port_named_as_another_ports_cell_holds_the_later_value_in_one_column():
+    """Outputs whose column names meet (a port ``a[0]`` beside an array ``a``) are recorded as a
+    dict of them keeps them: one column, the value given later."""
+    recorder = Recorder(0.0, 1.0, 2)
+    for k in range(2):
+        recorder.add("p", float(k), {"a": np.array([1.0 + k, 2.0]), "a[0]": 5.0 + k})
+        recorder.advance(float(k))
+    frame = recorder.to_frame()
+    assert list(frame.columns) == ["time_s", "p.a[0]", "p.a[1]"]
+    assert frame["p.a[0]"].tolist() == [5.0, 6.0] and frame["p.a[1]"].tolist() == [2.0, 2.0]
+
+
+def test_outputs_with_arrays_are_recorded_as_given_at_every_step_as_their_shapes_change():
+    """The columns of outputs with arrays are named once per set of ports and shapes: a step
+    that gives other shapes, kinds or values is recorded as its own."""
+    steps = [{"a": np.array([1.0, 2.0]), "b": 3.0},
+             {"a": np.array([4.0, 5.0]), "b": 6},
+             {"a": np.array([[7, 8, 9]], dtype=np.int32), "b": np.float32(0.5)},
+             {"a": np.array([10.0, 11.0]), "b": 12.0}]
+    recorder = Recorder(0.0, 1.0, len(steps))
+    for k, outputs in enumerate(steps):
+        recorder.add("p", float(k), outputs)
+        recorder.advance(float(k))
+    frame = recorder.to_frame()
+    assert list(frame.columns) == ["time_s", "p.a[0]", "p.a[1]", "p.b", "p.a[0,0]", "p.a[0,1]", "p.a[0,2]"]
+    assert frame["p.a[0]"].tolist() == [1.0, 4.0, 4.0, 10.0]
+    assert frame["p.b"].tolist() == [3.0, 6.0, 0.5, 12.0]
+    assert frame["p.a[0,2]"].tolist()[2:] == [9.0, 9.0]
+    assert all(type(value) is float for row in recorder._rows for value in row)
