@@ -81,7 +81,9 @@ def _calls_timed(cosim, by_participant: dict) -> None:
         spent = by_participant.setdefault(participant.name, {"step": 0.0, "set-up, end": 0.0})
         for method, kind in (("step", "step"), ("setup", "set-up, end"), ("terminate", "set-up, end"),
                              ("summary", "set-up, end"), ("tables", "set-up, end")):
-            def timed(*args, call=getattr(participant, method), kind=kind, spent=spent, **kwargs):
+            original = getattr(participant, method)
+
+            def timed(*args, call=original, kind=kind, spent=spent, **kwargs):
                 started = time.process_time()
                 try:
                     return call(*args, **kwargs)

@@ -162,7 +162,7 @@ def parts(steps: int) -> dict[str, float]:
                                                    recorder.float_columns("helm", tuple(out_helm)))},
                         "ship": {tuple(out_ship): ((), (), recorder.float_columns("ship", tuple(out_ship)))}}
         started = time.process_time()
-        for k in range(steps):
+        for _ in range(steps):
             for name, outputs, checked in (("helm", out_helm, False), ("ship", out_ship, True)):
                 ports, values = tuple(outputs), tuple(outputs.values())
                 publication = publications[name].get(ports)
