@@ -424,10 +424,12 @@ class CollisionDomains:
         to starboard, though, when ``port_allowed`` is false (another target's Rule 14, 15
         or 17(c) rules out a turn to port: a port alteration would be dropped, and with it
         the give-way action).  Where the side is free (Rule 13), it is the one that keeps
-        every target of ``traffic`` ((position, velocity, clearance) per target) clearer,
-        the own ship on the altered course (:func:`side_clearance_m`); away from this target
-        only when both sides do equally well: turning away from a ship overtaking from
-        astern took the own ship into a faster one on the other quarter.  It ends, for the rest of the encounter, when the target is
+        away from this target unless that side takes the own ship, on the altered course,
+        into a clearance of ``traffic`` ((position, velocity, clearance) per target) and the
+        other side does not (:func:`side_clearance_m`): turning away from a ship overtaking
+        from astern took the own ship into a faster one on the other quarter.  Only then: a
+        side chosen for the least intrusion alone turned a ship away from a target it gave
+        way to to starboard.  It ends, for the rest of the encounter, when the target is
         past and clear (Rule 13(d)): TCPA <= 0 and the range at least
         ``ALTERATION_CLEAR_FACTOR`` times R + R_i (``separation_m``).  Ending it at TCPA <= 0 alone let a ship alongside an overtaken
         target, 1.3 nm off, turn back towards it, and the solver failed from that warm
@@ -457,7 +459,7 @@ class CollisionDomains:
                     clearance = {turn: side_clearance_m(motion[0], motion[1], reference_heading_rad
                                                         + turn * math.radians(s.alteration_deg), traffic)
                                  for turn in (side, -side)}
-                    if clearance[-side] > clearance[side]:
+                    if clearance[side] < 0.0 <= clearance[-side]:
                         side = -side
             if not port_allowed:
                 side = 1.0
