@@ -240,7 +240,10 @@ def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter
 
 
 def _side_correct(result: dict, encounter_class: str) -> bool | None:
-    """The COLREG side: port to port head-on, astern of a crossing ship we give way to."""
+    """The COLREG side: port to port head-on, astern of a crossing ship we give way to; None
+    for a target that started inside R + R_i (immediate danger: Rule 2(b))."""
+    if result["started_inside"]:
+        return None
     if encounter_class == "head_on":
         return result["passing_side"] == "port"
     if encounter_class == "crossing_give_way":
@@ -313,12 +316,17 @@ def _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, targe
         judge("rule_8", size + timing + separation)
     if encounter_class == "overtaking":
         judge("rule_13", separation)
+    # a target that started inside R + R_i is immediate danger from the start: the sides of
+    # Rules 14, 15 and 17(c) yield to opening the range at once (Rule 2(b), as the controller
+    # lets them), and its own criterion, the range opening, is what is judged
+    immediate = result["started_inside"]
     if encounter_class == "head_on":
-        side = [] if result["passing_side"] == "port" else ["passed starboard to starboard"]
-        turn = ["altered to port"] if result["manoeuvre_side"] == "port" else []
-        judge("rule_14", turn + side)
+        side = [] if result["passing_side"] == "port" or immediate else ["passed starboard to starboard"]
+        turn = ["altered to port"] if result["manoeuvre_side"] == "port" and not immediate else []
+        judge("rule_14", turn + side + (separation if immediate else []))
     if encounter_class == "crossing_give_way":
-        judge("rule_15", (["crossed ahead of the target"] if result["crossed"] == "ahead" else []) + separation)
+        ahead = result["crossed"] == "ahead" and not immediate
+        judge("rule_15", (["crossed ahead of the target"] if ahead else []) + separation)
     if give_way:
         judge("rule_16", timing + separation)
     if encounter_class in STAND_ON_CLASSES:
@@ -326,7 +334,7 @@ def _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, targe
         if manoeuvred:
             failures += _stand_on_failures(result, encounter_class, t, own_xy, course_rad, onset_index, target,
                                            settings, give_way_onsets_s)
-            if encounter_class == "crossing_stand_on" and result["manoeuvre_side"] == "port":
+            if encounter_class == "crossing_stand_on" and result["manoeuvre_side"] == "port" and not immediate:
                 failures.append("altered to port for a vessel on the port side (Rule 17(c))")
         judge("rule_17", failures + separation)
     return verdicts, reasons

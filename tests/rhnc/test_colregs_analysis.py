@@ -418,3 +418,14 @@ def test_an_alteration_is_timed_from_when_the_turn_began():
     result = judge(track, target_states(track[0], (1.5, -0.45), 0.0, 13.0))
     assert result["manoeuvre_time_s"] == pytest.approx(220.0, abs=DT_S)
     assert result["manoeuvre_start_s"] == pytest.approx(120.0, abs=60.0)
+
+
+def test_a_target_starting_inside_is_judged_by_the_range_opening_not_by_a_side():
+    # a head-on ship 0.6 nm off on the starboard bow, closing at 36 kn: immediate danger from
+    # the start (Rule 2(b)); the own ship turns away to port and the range opens at once
+    track = own_track(12, turns=[(0.25, -90.0)], rate_deg_s=2.0)
+    result = judge(track, target_states(track[0], (0.6, 0.05), 180.0, 18.0))
+    assert result["encounter_class"] == "head_on" and result["started_inside"]
+    assert result["manoeuvre_side"] == "port" and result["range_opened_in_time"]
+    assert result["side_correct"] is None
+    assert result["rule_14"] == PASS
