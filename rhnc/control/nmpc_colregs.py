@@ -99,9 +99,6 @@ STARBOARD_CLASSES = ("head_on", "crossing_give_way", "crossing_stand_on")
 PORT_ALLOWANCE_DEG = 2.0
 #: the alteration ends when the target is past (TCPA <= 0) and this many R + R_i away
 ALTERATION_CLEAR_FACTOR = 2.0
-#: the way back to the reference heading after an alteration is clear when no target comes
-#: within its clearance in this time [s] on it (a new encounter further ahead is its own)
-WAY_BACK_S = 600.0
 #: classes in which the own ship gives way (Rules 13-16)
 GIVE_WAY_CLASSES = ("head_on", "crossing_give_way", "overtaking")
 #: collision risk at the control rate: an obstacle closer than this many clearances rho
@@ -436,21 +433,14 @@ class CollisionDomains:
         past and clear (Rule 13(d)): TCPA <= 0 and the range at least
         ``ALTERATION_CLEAR_FACTOR`` times R + R_i (``separation_m``).  Ending it at TCPA <= 0 alone let a ship alongside an overtaken
         target, 1.3 nm off, turn back towards it, and the solver failed from that warm
-        start; holding it until the tracker's 4 nm release made long detours.  Nor does it
-        end while the reference heading would take the own ship into the clearance of one of
-        ``traffic`` within ``WAY_BACK_S`` (:func:`side_clearance_m`): the turn back to the route after a give-way
-        alteration crossed ahead of a ship overtaking from the quarter (0.85 nm).
+        start; holding it until the tracker's 4 nm release made long detours.
         """
         s = self.settings
         if s.alteration_deg <= 0.0 or index in self._altered:
             return
         if index in self._altering:
-            back_clear = (motion is None or not traffic
-                          or side_clearance_m(motion[0], motion[1], reference_heading_rad, traffic,
-                                                           WAY_BACK_S) >= 0.0)
-            if (encounter.tcpa_s <= 0.0 and encounter.range_m >= ALTERATION_CLEAR_FACTOR * separation_m
-                    and back_clear):
-                del self._altering[index]  # past and clear, and the way back is clear
+            if encounter.tcpa_s <= 0.0 and encounter.range_m >= ALTERATION_CLEAR_FACTOR * separation_m:
+                del self._altering[index]  # past and clear
                 self._altered.add(index)
             return
         name = encounter.encounter_class

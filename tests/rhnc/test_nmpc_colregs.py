@@ -533,24 +533,3 @@ def test_a_stand_on_target_is_kept_clear_of_while_the_ship_acts_for_another():
     assert list(first.active) == [1.0, 0.0] and domains._altering
     _, second = domains.parameters(targets, state, np.zeros(2), SPEED, 5.0, 230.0, et=True, time_s=20.0)
     assert list(second.active) == [1.0, 1.0]
-
-
-@pytest.mark.parametrize("overtaker, ends", [(False, True), (True, False)])
-def test_an_alteration_ends_only_when_the_way_back_is_clear(overtaker, ends):
-    # the own ship (northbound on its reference, now 35 deg to starboard of it) is past and
-    # clear of the ship it gave way to; a 27 kn ship from astern, 2 nm off to port, would meet
-    # it within its clearance back on the reference heading: the alteration is held
-    from types import SimpleNamespace
-
-    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
-    domains._altering[0] = (0.0, 0.0, math.radians(35.0), 1.0)
-    past = SimpleNamespace(encounter_class="crossing_give_way", tcpa_s=-60.0, cpa_m=2.5 * NM, range_m=2.5 * NM,
-                           relative_bearing_deg=-120.0)
-    heading = math.radians(35.0)
-    velocity = SPEED * np.array([math.cos(heading), math.sin(heading)])
-    traffic = [(np.array([-1.5 * NM, -2.0 * NM]), np.array([-12.0 * KNOT, 0.0]), RADIUS)]
-    if overtaker:
-        traffic.append((np.array([-2.0 * NM, -0.3 * NM]), np.array([27.0 * KNOT, 0.0]), RADIUS))
-    domains._update_alteration(0, past, 0.0, heading, 600.0, RADIUS, (np.zeros(2), SPEED, traffic[0][0],
-                                                                       traffic[0][1], velocity), traffic=traffic)
-    assert (0 not in domains._altering) == ends
