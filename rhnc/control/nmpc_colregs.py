@@ -420,7 +420,8 @@ class CollisionDomains:
         the CPA forward, an overtaking ship's CPA most, as it closes slowly); a stand-on ship once it acts (Rule 17(b)).  It is
         to starboard, except when overtaking or being overtaken, where either side is
         allowed (Rule 13): then it continues a turn the plan has already begun (more than
-        ``PORT_ALLOWANCE_DEG`` off the reference), else it turns away from the other ship;
+        ``PORT_ALLOWANCE_DEG`` off the reference; when overtaken, only while another alteration
+        is held), else it turns away from the other ship;
         to starboard, though, when ``port_allowed`` is false (another target's Rule 14, 15
         or 17(c) rules out a turn to port: a port alteration would be dropped, and with it
         the give-way action).  Where the side is free (Rule 13), it is the one that keeps
@@ -449,7 +450,11 @@ class CollisionDomains:
         side = 1.0
         if name in ("overtaking", "overtaken"):
             deviation = math.degrees(wrap_angle(heading_rad - reference_heading_rad))
-            if abs(deviation) > PORT_ALLOWANCE_DEG:
+            # a turn the plan has begun is an avoiding one when overtaking (the constraint is on)
+            # or while another alteration is held; a stand-on ship that has kept its course has
+            # begun none: its deviation is the way back to the route, and continuing it turned
+            # a ship towards the overtaker it acted for (0.85 nm)
+            if abs(deviation) > PORT_ALLOWANCE_DEG and (name == "overtaking" or self._altering):
                 side = math.copysign(1.0, deviation)
             else:
                 # away from the other ship (pass it on its port side when it is on our starboard

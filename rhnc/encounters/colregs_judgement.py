@@ -215,13 +215,7 @@ def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter
     if encounter_class.startswith("crossing"):
         ahead = crossed_ahead(own_xy, target, onset_index, cpa_index)
         result["crossed"] = None if ahead is None else ("ahead" if ahead else "astern")
-    manoeuvre_time, side = first_manoeuvre(t, course_rad, onset_index, cpa_time, settings)
-    result["manoeuvre_time_s"], result["manoeuvre_side"] = manoeuvre_time, side
-    if manoeuvre_time is not None:
-        k_before, _, tcpa = _prediction_before_manoeuvre(t, own_xy, course_rad, target, onset_index, manoeuvre_time,
-                                                         settings)
-        result["manoeuvre_start_s"] = float(t[k_before])
-        result["predicted_time_of_cpa_s"] = float(t[k_before] + tcpa) if 0.0 < tcpa < math.inf else None
+    result.update(_first_manoeuvre_fields(t, own_xy, course_rad, target, onset_index, cpa_time, settings))
     before = (t >= t[onset_index]) & (t <= cpa_time)
     unwrapped = np.unwrap(course_rad)
     change = np.degrees(unwrapped[before] - unwrapped[onset_index])
@@ -237,6 +231,19 @@ def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter
     applicable = [v for v in verdicts.values() if v != NOT_APPLICABLE]
     result["verdict"] = NOT_APPLICABLE if not applicable else (PASS if all(v == PASS for v in applicable) else FAIL)
     return result
+
+
+def _first_manoeuvre_fields(t, own_xy, course_rad, target: np.ndarray, onset_index: int, cpa_time: float,
+                            settings: JudgementSettings) -> dict:
+    """The first manoeuvre's time (5 deg shown) and side, when it began, and the CPA predicted then."""
+    manoeuvre_time, side = first_manoeuvre(t, course_rad, onset_index, cpa_time, settings)
+    fields = {"manoeuvre_time_s": manoeuvre_time, "manoeuvre_side": side}
+    if manoeuvre_time is not None:
+        k_before, _, tcpa = _prediction_before_manoeuvre(t, own_xy, course_rad, target, onset_index, manoeuvre_time,
+                                                         settings)
+        fields["manoeuvre_start_s"] = float(t[k_before])
+        fields["predicted_time_of_cpa_s"] = float(t[k_before] + tcpa) if 0.0 < tcpa < math.inf else None
+    return fields
 
 
 def _side_correct(result: dict, encounter_class: str) -> bool | None:

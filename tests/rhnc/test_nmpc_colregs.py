@@ -533,3 +533,17 @@ def test_a_stand_on_target_is_kept_clear_of_while_the_ship_acts_for_another():
     assert list(first.active) == [1.0, 0.0] and domains._altering
     _, second = domains.parameters(targets, state, np.zeros(2), SPEED, 5.0, 230.0, et=True, time_s=20.0)
     assert list(second.active) == [1.0, 1.0]
+
+
+def test_a_stand_on_ship_turning_back_to_its_route_acts_away_from_the_overtaker():
+    # overtaken by a ship on the port quarter 1.9 nm off while turning back to port towards the
+    # route (heading 8 deg to port of the reference): that turn is no avoiding one, the action
+    # for the overtaker goes away from it, to starboard
+    heading = math.radians(-8.0)
+    state = np.array([0.0, 0.0, heading, SPEED, 0.0, 0.0])
+    overtaker = np.array([[-1.5 * NM, -1.15 * NM, 24.0 * KNOT * math.cos(0.3), 24.0 * KNOT * math.sin(0.3), RADIUS]])
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    _, report = domains.parameters(overtaker, state, np.zeros(2), SPEED, 5.0, 230.0, et=True,
+                                   reference_heading_rad=0.0, time_s=0.0)
+    assert ENCOUNTER_CLASSES[int(report.class_codes[0])] == "overtaken" and domains._acting == {0}
+    assert report.alteration_ceiling is None and report.alteration_floor is not None
