@@ -571,6 +571,10 @@ class NMPCController:
         shifted = self.memory.shifted(time_s)
         if shifted is not None:
             states, inputs = shifted
+            # the heading on the measured one's turn: the plant wraps it at +-pi, and a plan
+            # a full turn off that it begins from is 2 pi infeasible (a budgeted solve fell back)
+            states = states.copy()
+            states[:, 2] -= 2.0 * np.pi * np.round((states[0, 2] - state[2]) / (2.0 * np.pi))
             z = (states - self._origin_shift(origin)) / self.state_scale
             w = inputs / self.input_scale
         else:

@@ -240,116 +240,154 @@ class CollisionDomains:
             Time of the solve [s] (when an alteration begins).
         """
         s = self.settings
-        L = length_scale_m
         slots = np.zeros((OBSTACLE_FIELDS, self.max_obstacles))
         slots[6, :] = 1.0  # harmless radius for inactive slots
         rows = np.zeros((0, 5)) if obstacles is None else np.atleast_2d(np.asarray(obstacles, dtype=float))
-        codes = np.full(len(rows), -1.0)
         active_rows = np.zeros(len(rows))
         if len(rows) == 0:
-            return slots, DomainReport(codes, active_rows)
+            return slots, DomainReport(np.zeros(0), active_rows)
         own_course = float(state[2] + math.atan2(state[4], state[3]))
         own_speed = float(math.hypot(state[3], state[4]))
-        classes = [None] * len(rows)
-        if s.colregs:
-            encounters = self.tracker.update(state[:2], own_course, own_speed, rows)
-            for index, encounter in enumerate(encounters):
-                classes[index] = encounter
-                codes[index] = ENCOUNTER_CLASSES.index(encounter.encounter_class)
-            self._acting &= set(self.tracker.locked)
-            self._guarding &= set(self.tracker.locked)
-            self._altered &= set(self.tracker.locked)
-            self._altering = {i: v for i, v in self._altering.items() if i in self.tracker.locked}
+        classes, codes = self._classify(rows, state[:2], own_course, own_speed)
         rhos = s.own_radius_m + rows[:, 4] + s.clearance_margin_m
         own_velocity = own_speed * np.array([math.cos(own_course), math.sin(own_course)])
         risk = s.colregs and self._collision_risk(rows, rhos, state[:2], own_velocity)
         if not (et or risk):
             return slots, DomainReport(codes, active_rows)
-        distance = np.hypot(rows[:, 0] - origin[0], rows[:, 1] - origin[1]) - rows[:, 4]
-        order = np.argsort(distance)
-        if len(order) > self.max_obstacles:
-            LOG.warning("%d obstacles given, NMPC uses the %d nearest", len(order), self.max_obstacles)
-            order = order[: self.max_obstacles]
-        order = [i for i in order if rhos[i] > 0.0]  # a zero domain needs no constraint
-        ranges = np.hypot(rows[:, 0] - state[0], rows[:, 1] - state[1])
-        range_rates = np.array([(row[:2] - state[:2]) @ (row[2:4] - own_velocity) / max(r, 1e-9)
-                                for row, r in zip(rows, ranges)])
-        # inside the clearance and closing: immediate danger, the range must open at once
-        # (Rules 2(b), 17(b): the heading rules below give way to it)
-        inside = {i for i in order if s.colregs and ranges[i] < rhos[i]}
-        danger = any(range_rates[i] < 0.0 for i in inside)
+        order = self._nearest(rows, rhos, origin)
+        ranges, range_rates, inside, danger = self._closing(rows, rhos, state[:2], own_velocity, order)
         heading_now = float(state[2]) if reference_heading_rad is None else float(reference_heading_rad)
         # Rules 14, 15, 17(c): no alteration to port while such a target's CPA is ahead; known
         # before any alteration begins, so that an overtaking ship's turns to starboard then
         no_port_turn = not danger and any(classes[i] is not None and classes[i].encounter_class in STARBOARD_CLASSES
                                           and classes[i].tcpa_s > 0.0 for i in order)
-        locked = self.tracker.locked
-        giving_way = any(locked.get(j) in GIVE_WAY_CLASSES for j in self._altering)
+        # every target, for the side of an alteration the rules leave free (Rule 13)
+        traffic = [(rows[j, :2], rows[j, 2:4], s.own_radius_m + rows[j, 4] + s.clearance_margin_m)
+                   for j in range(len(rows))]
+        altering = bool(self._altering)
         slot = 0
         for i in order:
-            x, y, vx, vy, radius = rows[i]
-            rho = rhos[i]
-            offset = np.zeros(2)
             encounter = classes[i]
             name = encounter.encounter_class if encounter is not None else "static"
-            if name in STAND_ON_CLASSES and i not in self._acting:
-                cpa, tcpa = cpa_tcpa(state[:2], own_velocity, (x, y), (vx, vy))
-                latest = stand_on_latest_s(name, encounter.relative_bearing_deg, state[:2], own_velocity, (x, y),
-                                           (vx, vy), s.own_radius_m + radius)
-                if i in inside or stand_on_must_act(cpa, tcpa, encounter.range_m, s.own_radius_m + radius,
-                                                    s.stand_on_action_tcpa_s, s.stand_on_action_range_factor,
-                                                    latest):
-                    LOG.info("Rule 17: target %d (%s) is not giving way enough (CPA %.0f m, TCPA %.0f s): acting",
-                             i, name, cpa, tcpa)
-                    self._acting.add(i)
-                    self.stand_on_actions += 1
-                elif giving_way or i in self._guarding:
-                    # the own ship has left its course and speed for a target it gives way
-                    # to (the analysis's Rule 17 allows that): keep clear of this one too,
-                    # for the rest of the encounter, or the alteration, and the return to
-                    # the route after it, may carry the ship into it
-                    self._guarding.add(i)
-                else:
-                    continue  # keep course and speed: this target's constraint stays off
+            if name in STAND_ON_CLASSES and not self._stands_clear(i, encounter, rows[i], state[:2], own_velocity,
+                                                                   i in inside, altering):
+                continue  # keep course and speed: this target's constraint stays off
             if s.colregs and encounter is not None:
                 self._update_alteration(i, encounter, heading_now, float(state[2]), time_s,
-                                        s.own_radius_m + radius, (state[:2], own_speed, (x, y), (vx, vy), own_velocity),
-                                        port_allowed=not no_port_turn)
-            growth_mps = s.clearance_margin_growth_mps
-            if i in inside:
-                # no shifted domain: the present range, less what it closes in the response
-                # time, and growing: the range opens at once
-                domain_radius = max(ranges[i] + min(range_rates[i], 0.0) * INSIDE_RESPONSE_S, 0.25 * ranges[i])
-                growth_mps = INSIDE_OPENING_MPS
-            elif name in OFFSETS:
-                speed = math.hypot(vx, vy)
-                ahead = np.array([vx, vy]) / speed
-                starboard = np.array([-ahead[1], ahead[0]])
-                forward, side = OFFSETS[name]
-                offset = rho * (forward * ahead + side * starboard)
-                if np.hypot(*(np.array([x, y]) + offset - state[:2])) < rho + float(np.hypot(*offset)):
-                    offset = np.zeros(2)  # already inside the shifted domain: the plain circle
-            if i not in inside:
-                domain_radius = rho + float(np.hypot(*offset))
-            closing = closing_speed_mps + math.hypot(vx, vy)
+                                        s.own_radius_m + rows[i, 4],
+                                        (state[:2], own_speed, rows[i, :2], rows[i, 2:4], own_velocity),
+                                        port_allowed=not no_port_turn, traffic=traffic)
+            offset, domain_radius, growth_mps = self._domain(rows[i], rhos[i], name, state[:2], ranges[i],
+                                                             range_rates[i], i in inside)
+            closing = closing_speed_mps + math.hypot(rows[i, 2], rows[i, 3])
             if horizon_s is not None:
-                growth = s.clearance_margin_growth_mps * horizon_s
-                centre = np.array([x, y]) + offset
-                if np.hypot(*(centre - state[:2])) - closing * horizon_s > domain_radius + growth:
+                centre = rows[i, :2] + offset
+                if (np.hypot(*(centre - state[:2])) - closing * horizon_s
+                        > domain_radius + s.clearance_margin_growth_mps * horizon_s):
                     continue  # out of reach within the horizon: no constraint needed
             if slot >= self.max_obstacles:
                 continue
+            x, y, vx, vy, _ = rows[i]
+            L = length_scale_m
             inflation = (closing * substep_s / (2.0 * domain_radius)) ** 2
             slots[:, slot] = [(x - origin[0]) / L, (y - origin[1]) / L, vx / L, vy / L, offset[0] / L,
                               offset[1] / L, domain_radius / L, growth_mps / L, inflation, 1.0]
             active_rows[i] = 1.0
             slot += 1
+        floor, ceiling = self._alteration_bounds(danger, no_port_turn)
+        return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling, bool(risk and not et), danger)
+
+    def _closing(self, rows: np.ndarray, rhos: np.ndarray, own_xy, own_velocity, order: list[int]):
+        """Ranges [m] and range rates [m/s] of the rows, the rows inside their clearance
+        (``colregs``), and whether one of those is closing: immediate danger, the range must
+        open at once (Rules 2(b), 17(b): the heading rules give way to it)."""
+        ranges = np.hypot(rows[:, 0] - own_xy[0], rows[:, 1] - own_xy[1])
+        range_rates = np.array([(row[:2] - own_xy) @ (row[2:4] - own_velocity) / max(r, 1e-9)
+                                for row, r in zip(rows, ranges)])
+        inside = {i for i in order if self.settings.colregs and ranges[i] < rhos[i]}
+        return ranges, range_rates, inside, any(range_rates[i] < 0.0 for i in inside)
+
+    def _alteration_bounds(self, danger: bool, no_port_turn: bool):
+        """The alteration to starboard (floor) or, failing one, to port (ceiling) the plan
+        must hold: (time it began, heading then, heading to reach) or None; none in danger."""
         floors = [a[:3] for a in self._altering.values() if a[3] > 0]
         ceilings = [a[:3] for a in self._altering.values() if a[3] < 0]
         floor = max(floors, key=lambda a: a[2]) if floors and not danger else None
         ceiling = (min(ceilings, key=lambda a: a[2]) if ceilings and floor is None and not no_port_turn
                    and not danger else None)
-        return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling, bool(risk and not et), danger)
+        return floor, ceiling
+
+    def _classify(self, rows: np.ndarray, own_xy, own_course: float, own_speed: float):
+        """Encounter per row (None without ``colregs``) and the class codes; forget the
+        decisions of encounters the tracker released."""
+        classes = [None] * len(rows)
+        codes = np.full(len(rows), -1.0)
+        if not self.settings.colregs:
+            return classes, codes
+        for index, encounter in enumerate(self.tracker.update(own_xy, own_course, own_speed, rows)):
+            classes[index] = encounter
+            codes[index] = ENCOUNTER_CLASSES.index(encounter.encounter_class)
+        locked = set(self.tracker.locked)
+        self._acting &= locked
+        self._guarding &= locked
+        self._altered &= locked
+        self._altering = {i: v for i, v in self._altering.items() if i in locked}
+        return classes, codes
+
+    def _nearest(self, rows: np.ndarray, rhos: np.ndarray, origin) -> list[int]:
+        """Rows by distance from ``origin``, at most ``max_obstacles``, without zero domains."""
+        distance = np.hypot(rows[:, 0] - origin[0], rows[:, 1] - origin[1]) - rows[:, 4]
+        order = np.argsort(distance)
+        if len(order) > self.max_obstacles:
+            LOG.warning("%d obstacles given, NMPC uses the %d nearest", len(order), self.max_obstacles)
+            order = order[: self.max_obstacles]
+        return [int(i) for i in order if rhos[i] > 0.0]  # a zero domain needs no constraint
+
+    def _stands_clear(self, i: int, encounter, row: np.ndarray, own_xy, own_velocity, inside: bool,
+                      altering: bool) -> bool:
+        """A stand-on target: whether its constraint is on (Rule 17(b) lets the ship act, or it
+        keeps clear of it while altering for another target); False: keep course and speed."""
+        s = self.settings
+        if i in self._acting:
+            return True
+        x, y, vx, vy, radius = row
+        cpa, tcpa = cpa_tcpa(own_xy, own_velocity, (x, y), (vx, vy))
+        latest = stand_on_latest_s(encounter.encounter_class, encounter.relative_bearing_deg, own_xy, own_velocity,
+                                   (x, y), (vx, vy), s.own_radius_m + radius)
+        if inside or stand_on_must_act(cpa, tcpa, encounter.range_m, s.own_radius_m + radius,
+                                       s.stand_on_action_tcpa_s, s.stand_on_action_range_factor, latest):
+            LOG.info("Rule 17: target %d (%s) is not giving way enough (CPA %.0f m, TCPA %.0f s): acting",
+                     i, encounter.encounter_class, cpa, tcpa)
+            self._acting.add(i)
+            self.stand_on_actions += 1
+            return True
+        if altering or i in self._guarding:
+            # the own ship has left its course and speed for another target (it gives way to
+            # it, or acts as stand-on ship for it: the analysis's Rule 17 allows both): keep
+            # clear of this one too, for the rest of the encounter, or the alteration, and the
+            # return to the route after it, may carry the ship into it (a turn away from a ship
+            # overtaking from astern took it towards a faster one on the other quarter)
+            self._guarding.add(i)
+            return True
+        return False
+
+    def _domain(self, row: np.ndarray, rho: float, name: str, own_xy, range_m: float, range_rate: float,
+                inside: bool) -> tuple[np.ndarray, float, float]:
+        """Centre offset [m], radius [m] and growth [m/s] of one target's domain."""
+        offset = np.zeros(2)
+        if inside:
+            # no shifted domain: the present range, less what it closes in the response
+            # time, and growing: the range opens at once
+            return offset, max(range_m + min(range_rate, 0.0) * INSIDE_RESPONSE_S, 0.25 * range_m), INSIDE_OPENING_MPS
+        x, y, vx, vy, _ = row
+        if name in OFFSETS:
+            ahead = np.array([vx, vy]) / math.hypot(vx, vy)
+            starboard = np.array([-ahead[1], ahead[0]])
+            forward, side = OFFSETS[name]
+            offset = rho * (forward * ahead + side * starboard)
+            if np.hypot(*(np.array([x, y]) + offset - own_xy)) < rho + float(np.hypot(*offset)):
+                offset = np.zeros(2)  # already inside the shifted domain: the plain circle
+        return offset, rho + float(np.hypot(*offset)), self.settings.clearance_margin_growth_mps
 
     def _collision_risk(self, rows: np.ndarray, rhos: np.ndarray, own_xy, own_velocity) -> bool:
         """Collision risk by time as well as range, at every solve (``colregs``).
@@ -372,7 +410,8 @@ class CollisionDomains:
         return False
 
     def _update_alteration(self, index: int, encounter, reference_heading_rad: float, heading_rad: float,
-                           time_s: float, separation_m: float, motion=None, port_allowed: bool = True) -> None:
+                           time_s: float, separation_m: float, motion=None, port_allowed: bool = True,
+                           traffic=()) -> None:
         """Begin, keep or end the readily apparent alteration for one target (Rules 8, 16, 17).
 
         A give-way ship begins it once the target's CPA is at most
@@ -381,10 +420,17 @@ class CollisionDomains:
         the CPA forward, an overtaking ship's CPA most, as it closes slowly); a stand-on ship once it acts (Rule 17(b)).  It is
         to starboard, except when overtaking or being overtaken, where either side is
         allowed (Rule 13): then it continues a turn the plan has already begun (more than
-        ``PORT_ALLOWANCE_DEG`` off the reference), else it turns away from the other ship;
+        ``PORT_ALLOWANCE_DEG`` off the reference; when overtaken, only while another alteration
+        is held), else it turns away from the other ship;
         to starboard, though, when ``port_allowed`` is false (another target's Rule 14, 15
         or 17(c) rules out a turn to port: a port alteration would be dropped, and with it
-        the give-way action).  It ends, for the rest of the encounter, when the target is
+        the give-way action).  Where the side is free (Rule 13), it is the one that keeps
+        away from this target unless that side takes the own ship, on the altered course,
+        into a clearance of ``traffic`` ((position, velocity, clearance) per target) and the
+        other side does not (:func:`side_clearance_m`): turning away from a ship overtaking
+        from astern took the own ship into a faster one on the other quarter.  Only then: a
+        side chosen for the least intrusion alone turned a ship away from a target it gave
+        way to to starboard.  It ends, for the rest of the encounter, when the target is
         past and clear (Rule 13(d)): TCPA <= 0 and the range at least
         ``ALTERATION_CLEAR_FACTOR`` times R + R_i (``separation_m``).  Ending it at TCPA <= 0 alone let a ship alongside an overtaken
         target, 1.3 nm off, turn back towards it, and the solver failed from that warm
@@ -404,10 +450,22 @@ class CollisionDomains:
         side = 1.0
         if name in ("overtaking", "overtaken"):
             deviation = math.degrees(wrap_angle(heading_rad - reference_heading_rad))
-            if abs(deviation) > PORT_ALLOWANCE_DEG:
+            # a turn the plan has begun is an avoiding one when overtaking (the constraint is on)
+            # or while another alteration is held; a stand-on ship that has kept its course has
+            # begun none: its deviation is the way back to the route, and continuing it turned
+            # a ship towards the overtaker it acted for (0.85 nm)
+            if abs(deviation) > PORT_ALLOWANCE_DEG and (name == "overtaking" or self._altering):
                 side = math.copysign(1.0, deviation)
-            elif encounter.relative_bearing_deg > 0.0:
-                side = -1.0  # the other ship is on our starboard side: pass it on its port side
+            else:
+                # away from the other ship (pass it on its port side when it is on our starboard
+                # side), unless the other side keeps the whole traffic clearer
+                side = -1.0 if encounter.relative_bearing_deg > 0.0 else 1.0
+                if motion is not None and traffic:
+                    clearance = {turn: side_clearance_m(motion[0], motion[1], reference_heading_rad
+                                                        + turn * math.radians(s.alteration_deg), traffic)
+                                 for turn in (side, -side)}
+                    if clearance[side] < 0.0 <= clearance[-side]:
+                        side = -side
             if not port_allowed:
                 side = 1.0
         goal = reference_heading_rad + side * math.radians(s.alteration_deg)
@@ -434,3 +492,29 @@ class CollisionDomains:
         self.alterations += 1
         LOG.info("target %d (%s): altering %.0f deg to %s (CPA %.0f m in %.0f s)", index, name, s.alteration_deg,
                  "starboard" if side > 0 else "port", encounter.cpa_m, encounter.tcpa_s)
+
+
+def side_clearance_m(own_xy, own_speed_mps: float, course_rad: float, traffic, horizon_s: float = 1800.0) -> float:
+    """The least clearance [m] the own ship keeps from a set of targets on a new course: the
+    smallest CPA less the target's clearance, the own ship sailing ``course_rad`` at its speed
+    from ``own_xy`` and every target keeping its velocity, over ``horizon_s`` (the risk
+    window); ``inf`` without targets.  Compares the two sides of an alteration the rules
+    leave free (Rule 13).
+
+    Parameters
+    ----------
+    own_xy : (2,) [m]; own_speed_mps [m/s]; course_rad [rad]
+    traffic : iterable of (position (2,) [m], velocity (2,) [m/s], clearance [m])
+    horizon_s : float
+        A CPA further ahead counts at its range at this time [s].
+    """
+    velocity = own_speed_mps * np.array([math.cos(course_rad), math.sin(course_rad)])
+    least = math.inf
+    for position, target_velocity, clearance in traffic:
+        relative = np.asarray(position, dtype=float) - np.asarray(own_xy, dtype=float)
+        closing = np.asarray(target_velocity, dtype=float) - velocity
+        w2 = float(closing @ closing)
+        when = 0.0 if w2 < 1e-12 else min(max(-float(relative @ closing) / w2, 0.0), horizon_s)
+        least = min(least, float(np.hypot(*(relative + closing * when))) - clearance)
+    return least
+

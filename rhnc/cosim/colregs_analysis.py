@@ -112,7 +112,7 @@ def judge_encounters(t, x, y, heading_rad, obstacles: np.ndarray, own_radius_m: 
                                 if j != i and other in GIVE_WAY_CLASSES)
         give_way_onsets += tuple(must_act[j] for j in must_act if j != i)
         judged = judge_target(t, own_xy, course, speed, obstacles[:, i], name, onset, required, settings,
-                              give_way_onsets)
+                              give_way_onsets, must_act.get(i))
         judged["max_drift_angle_deg"] = None
         if heading is not None and onset is not None:
             window = (t >= t[onset]) & (t <= judged["time_of_cpa_s"])
@@ -165,7 +165,8 @@ def colregs_analysis(frame, scenario, cosim, out_dir, manoeuvre_threshold_deg: f
                      manoeuvre_hold_s: float = 120.0, apparent_course_change_deg: float = 30.0,
                      apparent_speed_reduction: float = 0.5, early_before_cpa_min: float = 5.0,
                      stand_on_wait_min: float = 10.0, risk_cpa_nm: float = 2.0, risk_tcpa_min: float = 30.0,
-                     stand_on_range_factor: float = STAND_ON_ACTION_RANGE_FACTOR) -> dict:
+                     stand_on_range_factor: float = STAND_ON_ACTION_RANGE_FACTOR,
+                     at_once_within_s: float = 60.0) -> dict:
     """The ``colregs`` analysis of a run: :func:`judge_encounters` on its recorded tracks.
 
     The obstacles are the true ones (the array feeding an ``obstacles`` input, or the truth behind a
@@ -178,7 +179,8 @@ def colregs_analysis(frame, scenario, cosim, out_dir, manoeuvre_threshold_deg: f
 
     settings = JudgementSettings(manoeuvre_threshold_deg, manoeuvre_hold_s, apparent_course_change_deg,
                                  apparent_speed_reduction, early_before_cpa_min, stand_on_wait_min,
-                                 risk_cpa_nm, risk_tcpa_min, stand_on_range_factor)
+                                 risk_cpa_nm, risk_tcpa_min, stand_on_range_factor,
+                                 at_once_within_s=at_once_within_s)
     plant = plant_name(cosim)
     from rhnc.cosim.obstacle_ports import true_obstacles_column
 

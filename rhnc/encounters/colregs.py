@@ -206,7 +206,8 @@ def _borderline(name: str, alpha: float, beta: float, course_difference: float) 
 
 def latest_alteration_s(own_xy, own_velocity, target_xy, target_velocity, separation_m: float,
                         side: float = 1.0, alteration_deg: float = APPARENT_ALTERATION_DEG,
-                        turn_s: float = APPARENT_ALTERATION_TURN_S, step_s: float = 10.0) -> float:
+                        turn_s: float = APPARENT_ALTERATION_TURN_S, step_s: float = 10.0,
+                        lookback_s: float = 0.0) -> float:
     """How long the own ship can wait before a readily apparent alteration still opens the CPA
     to ``separation_m`` [s] (collision risk by time, not by range).
 
@@ -216,6 +217,13 @@ def latest_alteration_s(own_xy, own_velocity, target_xy, target_velocity, separa
     such wait (a multiple of ``step_s``) after which the CPA is at least the separation:
     ``inf`` when the ships are opening or pass clear anyway, ``-inf`` when even an alteration
     begun now is not enough (a larger one, or a change of speed, is needed: act now).
+
+    With ``lookback_s`` > 0, when no alteration begun now is enough, the same approach is
+    followed back that far (both ships on their present velocities) and the last moment
+    that was still enough is returned as a negative wait (how long ago it ran out); ``-inf``
+    only when no moment within the lookback was.  A time that has run out then stays run
+    out: along a steady approach the last moment is one instant, and the wait counts down
+    through zero to negative values instead of jumping back to ``-inf``.
 
     Parameters
     ----------
@@ -233,7 +241,8 @@ def latest_alteration_s(own_xy, own_velocity, target_xy, target_velocity, separa
     angle = side * math.radians(alteration_deg)
     c, s = math.cos(angle), math.sin(angle)
     altered = np.array([c * own_velocity[0] - s * own_velocity[1], s * own_velocity[0] + c * own_velocity[1]])
-    waits = np.arange(0.0, tcpa + step_s, step_s)
+    back = int(max(lookback_s, 0.0) // step_s)
+    waits = step_s * np.arange(-back, int(math.ceil(tcpa / step_s)) + 1)
     switch = waits + 0.5 * turn_s
     relative = (target_xy - own_xy)[None, :] + np.outer(switch, target_velocity - own_velocity)
     w = target_velocity - altered
@@ -246,18 +255,29 @@ def latest_alteration_s(own_xy, own_velocity, target_xy, target_velocity, separa
     # the range during the wait and the turn matters too: before the switch it is the straight approach
     straight_min = np.where(switch >= tcpa, cpa, np.inf)
     closest = np.minimum(closest, straight_min)
-    short = np.nonzero(closest < separation_m)[0]
+    enough = closest >= separation_m
+    short = np.nonzero(~enough[back:])[0]
     if short.size == 0:
         return float(waits[-1])
-    return -math.inf if short[0] == 0 else float(waits[short[0] - 1])
+    if short[0] > 0:
+        return float(waits[back + short[0] - 1])
+    past = np.nonzero(enough[:back])[0]  # not enough now: when did it last suffice?
+    return float(waits[past[-1]]) if past.size else -math.inf
 
 
 def stand_on_latest_s(encounter_class: str, relative_bearing_deg: float, own_xy, own_velocity, target_xy,
-                      target_velocity, separation_m: float) -> float:
+                      target_velocity, separation_m: float, risk_tcpa_s: float = 30.0 * 60.0) -> float:
     """:func:`latest_alteration_s` for a stand-on ship: to starboard for a crossing ship on
-    our port side (Rule 17(c)), away from the other ship when it overtakes us [s]."""
+    our port side (Rule 17(c)), away from the other ship when it overtakes us [s].
+
+    Looked back to where the CPA was ``risk_tcpa_s`` ahead (the onset of risk at the
+    latest): negative when the last moment for the alteration has passed since, so that
+    :func:`stand_on_must_act` keeps "act" once that time has run out."""
     side = 1.0 if encounter_class == "crossing_stand_on" or relative_bearing_deg < 0.0 else -1.0
-    return latest_alteration_s(own_xy, own_velocity, target_xy, target_velocity, separation_m, side)
+    tcpa = cpa_tcpa(own_xy, own_velocity, target_xy, target_velocity)[1]
+    lookback = max(0.0, risk_tcpa_s - tcpa) if math.isfinite(tcpa) else 0.0
+    return latest_alteration_s(own_xy, own_velocity, target_xy, target_velocity, separation_m, side,
+                               lookback_s=lookback)
 
 
 def stand_on_must_act(cpa_m: float, tcpa_s: float, range_m: float, separation_m: float,
@@ -271,11 +291,13 @@ def stand_on_must_act(cpa_m: float, tcpa_s: float, range_m: float, separation_m:
     either it is at most ``action_tcpa_s`` ahead, or the ships are already within
     ``action_range_factor * separation_m`` (a ship closing slowly, e.g. overtaking from
     astern, whose TCPA stays long while it is close), or a readily apparent alteration
-    would open the CPA to the separation only if begun within ``ACTION_BUFFER_S`` from now
-    (``latest_s``, from :func:`stand_on_latest_s`: a fast ship, whose TCPA is still long
-    while the time to act runs out; when no such alteration would do even now, ``-inf``, the
-    other criteria decide: a ship crossing from port on a course near ours is not helped
-    by a turn to starboard, and acting early would only break Rule 17(a)).  The controller decides with this
+    would open the CPA to the separation only if begun within ``ACTION_BUFFER_S`` from now,
+    or that moment has passed (``latest_s`` <= ``ACTION_BUFFER_S``, negative once passed, from
+    :func:`stand_on_latest_s`: a fast ship, whose TCPA is still long while the time to act
+    runs out; once run out, "act" holds: the decision is monotone along the approach).  When
+    no such alteration would ever have done, ``-inf``, the other criteria decide: a ship
+    crossing from port on a course near ours is not helped by a turn to starboard, and
+    acting early would only break Rule 17(a).  The controller decides with this
     function when to stop standing on, and the ``colregs`` analysis judges with it whether
     a stand-on manoeuvre came too early: one definition for both.
 
@@ -292,8 +314,8 @@ def stand_on_must_act(cpa_m: float, tcpa_s: float, range_m: float, separation_m:
     """
     if not (cpa_m < separation_m and tcpa_s > 0.0):
         return False
-    # -inf: no 35 deg alteration opens the CPA now; acting now is then no better than
-    # acting later with a larger one, so the other criteria decide
+    # -inf: no 35 deg alteration opened the CPA at any moment of this approach; acting now is
+    # then no better than acting later with a larger one, so the other criteria decide
     running_out = -math.inf < latest_s <= ACTION_BUFFER_S
     return tcpa_s <= action_tcpa_s or range_m <= action_range_factor * separation_m or running_out
 

@@ -66,6 +66,9 @@ class JudgementSettings:
     risk_tcpa_min: float = 30.0
     stand_on_range_factor: float = STAND_ON_ACTION_RANGE_FACTOR
     inside_open_within_s: float = 60.0
+    #: "early ... if the circumstances of the case admit": an alteration begun within this
+    #: time [s] of the moment the ship was first called on to act (three control intervals)
+    at_once_within_s: float = 60.0
 
     def __post_init__(self) -> None:
         for field in dataclasses.fields(self):
@@ -147,7 +150,7 @@ def crossed_ahead(own_xy: np.ndarray, target: np.ndarray, start: int, cpa_index:
 
 def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter_class: str,
                  onset_index: int | None, required_m: float, settings: JudgementSettings,
-                 give_way_onsets_s: tuple[float, ...] = ()) -> dict:
+                 give_way_onsets_s: tuple[float, ...] = (), stand_on_action_s: float | None = None) -> dict:
     """Everything the ``colregs`` analysis reports for one target (see :mod:`rhnc.cosim.colregs_analysis`).
 
     Parameters
@@ -168,6 +171,9 @@ def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter
         A stand-on manoeuvre made once one of those had begun answers that obligation, so
         Rule 17's "wait until the give-way vessel's action is not enough" does not apply
         to it (Rule 17(c) still does).
+    stand_on_action_s : float, optional
+        A stand-on target: when Rule 17(b) first let the own ship act for it [s] (the
+        moment it was called on to act; for a give-way ship that is the onset).
     """
     t = np.asarray(t, dtype=float)
     cpa_m, cpa_time, cpa_index = closest_approach(t, own_xy, target[:, :2])
@@ -194,6 +200,10 @@ def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter
         "crossed": None,
         "manoeuvre_time_s": None,
         "manoeuvre_side": None,
+        "manoeuvre_start_s": None,
+        "called_to_act_s": (stand_on_action_s if encounter_class in STAND_ON_CLASSES else
+                            None if onset_index is None else float(t[onset_index])),
+        "early_by": None,
         "predicted_time_of_cpa_s": None,
         "max_course_change_deg": 0.0,
         "max_speed_reduction": 0.0,
@@ -205,11 +215,7 @@ def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter
     if encounter_class.startswith("crossing"):
         ahead = crossed_ahead(own_xy, target, onset_index, cpa_index)
         result["crossed"] = None if ahead is None else ("ahead" if ahead else "astern")
-    manoeuvre_time, side = first_manoeuvre(t, course_rad, onset_index, cpa_time, settings)
-    result["manoeuvre_time_s"], result["manoeuvre_side"] = manoeuvre_time, side
-    if manoeuvre_time is not None:
-        result["predicted_time_of_cpa_s"] = predicted_time_of_cpa(t, own_xy, course_rad, target, onset_index,
-                                                                  manoeuvre_time, settings)
+    result.update(_first_manoeuvre_fields(t, own_xy, course_rad, target, onset_index, cpa_time, settings))
     before = (t >= t[onset_index]) & (t <= cpa_time)
     unwrapped = np.unwrap(course_rad)
     change = np.degrees(unwrapped[before] - unwrapped[onset_index])
@@ -227,8 +233,24 @@ def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter
     return result
 
 
+def _first_manoeuvre_fields(t, own_xy, course_rad, target: np.ndarray, onset_index: int, cpa_time: float,
+                            settings: JudgementSettings) -> dict:
+    """The first manoeuvre's time (5 deg shown) and side, when it began, and the CPA predicted then."""
+    manoeuvre_time, side = first_manoeuvre(t, course_rad, onset_index, cpa_time, settings)
+    fields = {"manoeuvre_time_s": manoeuvre_time, "manoeuvre_side": side}
+    if manoeuvre_time is not None:
+        k_before, _, tcpa = _prediction_before_manoeuvre(t, own_xy, course_rad, target, onset_index, manoeuvre_time,
+                                                         settings)
+        fields["manoeuvre_start_s"] = float(t[k_before])
+        fields["predicted_time_of_cpa_s"] = float(t[k_before] + tcpa) if 0.0 < tcpa < math.inf else None
+    return fields
+
+
 def _side_correct(result: dict, encounter_class: str) -> bool | None:
-    """The COLREG side: port to port head-on, astern of a crossing ship we give way to."""
+    """The COLREG side: port to port head-on, astern of a crossing ship we give way to; None
+    for a target that started inside R + R_i (immediate danger: Rule 2(b))."""
+    if result["started_inside"]:
+        return None
     if encounter_class == "head_on":
         return result["passing_side"] == "port"
     if encounter_class == "crossing_give_way":
@@ -244,9 +266,9 @@ def predicted_time_of_cpa(t, own_xy, course_rad, target: np.ndarray, onset_index
     manoeuvre began (the last steady sample before it) [s]; None when the ships were not
     closing then (or kept their distance).
 
-    Shown beside the verdicts, not judged: Rules 8 and 16 measure "early" against the CPA
-    of the sailed tracks, which the manoeuvre itself moves (an overtaking ship that turns
-    away meets its CPA as it turns).
+    Rules 8 and 16 measure "early" against the later of this CPA and the sailed one
+    (:func:`early_by`): the manoeuvre itself moves the sailed CPA (an overtaking ship that
+    turns away meets its CPA as it turns).
     """
     k_before, _, tcpa = _prediction_before_manoeuvre(t, own_xy, course_rad, target, onset_index, manoeuvre_time_s,
                                                      settings)
@@ -287,7 +309,7 @@ def _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, targe
 
     separation = _separation_failures(result, settings)
     manoeuvred = result["manoeuvre_time_s"] is not None
-    timing = _timing_failures(result, settings)
+    timing, result["early_by"] = _timing_failures(result, settings)
     give_way = encounter_class in GIVE_WAY_CLASSES
     # a stand-on ship's manoeuvre made while it gives way to another target is that
     # encounter's action (judged there, Rule 8 included), not one taken for this target
@@ -301,12 +323,17 @@ def _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, targe
         judge("rule_8", size + timing + separation)
     if encounter_class == "overtaking":
         judge("rule_13", separation)
+    # a target that started inside R + R_i is immediate danger from the start: the sides of
+    # Rules 14, 15 and 17(c) yield to opening the range at once (Rule 2(b), as the controller
+    # lets them), and its own criterion, the range opening, is what is judged
+    immediate = result["started_inside"]
     if encounter_class == "head_on":
-        side = [] if result["passing_side"] == "port" else ["passed starboard to starboard"]
-        turn = ["altered to port"] if result["manoeuvre_side"] == "port" else []
-        judge("rule_14", turn + side)
+        side = [] if result["passing_side"] == "port" or immediate else ["passed starboard to starboard"]
+        turn = ["altered to port"] if result["manoeuvre_side"] == "port" and not immediate else []
+        judge("rule_14", turn + side + (separation if immediate else []))
     if encounter_class == "crossing_give_way":
-        judge("rule_15", (["crossed ahead of the target"] if result["crossed"] == "ahead" else []) + separation)
+        ahead = result["crossed"] == "ahead" and not immediate
+        judge("rule_15", (["crossed ahead of the target"] if ahead else []) + separation)
     if give_way:
         judge("rule_16", timing + separation)
     if encounter_class in STAND_ON_CLASSES:
@@ -314,7 +341,7 @@ def _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, targe
         if manoeuvred:
             failures += _stand_on_failures(result, encounter_class, t, own_xy, course_rad, onset_index, target,
                                            settings, give_way_onsets_s)
-            if encounter_class == "crossing_stand_on" and result["manoeuvre_side"] == "port":
+            if encounter_class == "crossing_stand_on" and result["manoeuvre_side"] == "port" and not immediate:
                 failures.append("altered to port for a vessel on the port side (Rule 17(c))")
         judge("rule_17", failures + separation)
     return verdicts, reasons
@@ -335,18 +362,55 @@ def _separation_failures(result, settings) -> list[str]:
     return separation
 
 
-def _timing_failures(result, settings) -> list[str]:
-    """Why the alteration was not early (empty when it was): none made, or too close to the CPA."""
-    manoeuvred = result["manoeuvre_time_s"] is not None
+def early_by(result, settings) -> str | None:
+    """The reading by which the first alteration was early (Rules 8(a), 16), None if by none.
+
+    The rules ask for action "in ample time" and "early", "if the circumstances of the case
+    admit" (8(a)), "so far as possible" (16).  The alteration is timed from when the turn
+    began (``manoeuvre_start_s``: the last sample of a steady course before it; it shows as
+    ``manoeuvre_threshold_deg`` of course only a minute or more later), and it is early when
+    it began at least ``early_before_cpa_min`` before the closest approach it avoided:
+
+    * ``"sailed CPA"``: the CPA of the sailed tracks;
+    * ``"predicted CPA"``: the CPA predicted at the velocities as it began (the turn moves
+      the sailed CPA forward, an overtaking ship's and an overtaken one's most: turning
+      away from a ship closing slowly from astern meets the CPA as the turn is made);
+    * ``"at once"``: or, where the circumstances admitted nothing earlier, it began within
+      ``at_once_within_s`` of the moment the ship was first called on to act
+      (``called_to_act_s``: the onset of risk for a give-way ship, which may come with the
+      CPA closer than that, e.g. a target at risk from the start; for a stand-on ship the
+      moment Rule 17(b) let it act, before which Rule 17(a) had it keep its course).
+    """
+    start = result.get("manoeuvre_start_s")
+    if start is None:
+        return None
     early_s = settings.early_before_cpa_min * 60.0
-    early = manoeuvred and result["time_of_cpa_s"] - result["manoeuvre_time_s"] >= early_s
+    predicted = result.get("predicted_time_of_cpa_s")
+    called = result.get("called_to_act_s")
+    if result["time_of_cpa_s"] - start >= early_s:
+        return "sailed CPA"
+    if predicted is not None and predicted - start >= early_s:
+        return "predicted CPA"
+    if called is not None and start - called <= settings.at_once_within_s:
+        return "at once"
+    return None
+
+
+def _timing_failures(result, settings) -> tuple[list[str], str | None]:
+    """Why the alteration was not early (empty when it was: :func:`early_by`) and the reading
+    by which it was."""
+    if result["manoeuvre_time_s"] is None:
+        return ["no alteration before the CPA"], None
+    reading = early_by(result, settings)
+    if reading is not None:
+        return [], reading
+    start = result["manoeuvre_start_s"]
     predicted = result["predicted_time_of_cpa_s"]
-    then = ("" if predicted is None else
-            f"; {(predicted - result['manoeuvre_time_s']) / 60:.1f} min before the CPA predicted as it began")
-    timing = [] if early else (["no alteration before the CPA"] if not manoeuvred else
-                               [f"alteration {(result['time_of_cpa_s'] - result['manoeuvre_time_s']) / 60:.1f} min "
-                                f"before the CPA (< {settings.early_before_cpa_min:g} min{then})"])
-    return timing
+    then = "" if predicted is None else f", {(predicted - start) / 60:.1f} min before the CPA predicted then"
+    called = result.get("called_to_act_s")
+    late = "" if called is None else f", {start - called:.0f} s after it was called on to act"
+    return [f"alteration began {(result['time_of_cpa_s'] - start) / 60:.1f} min before the CPA "
+            f"(< {settings.early_before_cpa_min:g} min{then}{late})"], None
 
 
 def _stand_on_failures(result, encounter_class, t, own_xy, course_rad, onset_index, target, settings,

@@ -20,6 +20,14 @@ verdict passed; per rule, the targets it passed out of those it applied to; targ
 was decided within the borderline band of a boundary; runs with a
 solver fallback and the fallbacks in all; the median and largest NMPC solve time [ms, wall
 clock] and the largest solve CPU time [ms].
+
+With ``--failures`` it prints instead one line per failing target (or run), by class:
+``separation`` (started outside, CPA < R + R_i), ``inside`` (started inside, range not opened
+within 60 s), ``side`` (COLREG side wrong), ``rule_8`` ... ``rule_17`` (that verdict failed; the
+reason follows), ``fallback`` (a run with solver fallbacks, with the other classes it failed
+by, ``only`` when none)::
+
+    python -m rhnc.encounters.suite_report --failures results/suites/drawn_rhnc_colregs
 """
 
 from __future__ import annotations
@@ -94,6 +102,49 @@ def summarise(folder) -> dict:
             "solve_cpu_max_ms": 1000.0 * max(cpu_max) if cpu_max else None}
 
 
+def failures(folder) -> list[tuple[str, str, str, str, str]]:
+    """Every failing target of a batch folder, by class (see the module docstring), as
+    (class, batch, run id, target, detail) rows; a run with fallbacks is one row."""
+    folder = Path(folder)
+    situations = {}
+    batch_json = folder / "batch.json"
+    if batch_json.is_file():
+        situations = {run["run_id"]: str(run.get("parameters", {}).get("situation", ""))
+                      for run in json.loads(batch_json.read_text()).get("runs", [])}
+    rows = []
+    for path in sorted((folder / "runs").glob("*/summary.json")):
+        summary = json.loads(path.read_text())
+        run = path.parent.name
+        where = f"{run} {situations.get(run, '')}".strip()
+        colregs = summary.get("analyses", {}).get("colregs", {})
+        failed = set()
+        for target in colregs.get("targets", []):
+            name = f"target {target.get('obstacle')} {target.get('encounter_class')}"
+            reasons = target.get("reasons", {})
+            if target.get("started_inside"):
+                if not target.get("range_opened_in_time", target.get("range_kept_from_start")):
+                    rows.append(("inside", folder.name, where, name, f"range opened after "
+                                 f"{target.get('range_opening_s') or 0:.0f} s, initial {target.get('initial_range_nm', 0):.2f} nm"))
+                    failed.add("inside")
+            elif not target.get("separation_kept"):
+                rows.append(("separation", folder.name, where, name,
+                             f"CPA {target.get('cpa_nm', 0):.3f} nm < {target.get('required_nm', 0):.2f} nm"))
+                failed.add("separation")
+            if target.get("side_correct") is False:
+                rows.append(("side", folder.name, where, name, f"passing {target.get('passing_side')}, "
+                             f"manoeuvre {target.get('manoeuvre_side')}, crossed {target.get('crossed')}"))
+                failed.add("side")
+            for rule in RULES:
+                if target.get(rule) == "fail":
+                    rows.append((rule, folder.name, where, name, reasons.get(rule, "")))
+                    failed.add(rule)
+        fallbacks = summary.get("participants", {}).get("ctrl", {}).get("fallback_count") or 0
+        if fallbacks:
+            rows.append(("fallback", folder.name, where, f"{fallbacks} fallbacks",
+                         ", ".join(sorted(failed)) or "only"))
+    return rows
+
+
 def markdown(rows: list[dict]) -> str:
     """One Markdown table, a row per batch summary (:func:`summarise`)."""
     rule_heads = " | ".join(rule.replace("rule_", "R") for rule in RULES)
@@ -134,11 +185,16 @@ def main(argv=None) -> int:
     parser.add_argument("folders", nargs="+", help="batch result folders (results/<batch>)")
     parser.add_argument("--write", metavar="MARKDOWN", action="append", help="write the table between the "
                         "suite-table markers of this file instead of printing it (repeat for several files)")
+    parser.add_argument("--failures", action="store_true", help="list every failing target by class instead")
     args = parser.parse_args(argv)
     missing = [folder for folder in args.folders if not (Path(folder) / "runs").is_dir()]
     if missing:
         print(f"suite_report: {missing[0]}: no runs/ folder (not a batch result)", file=sys.stderr)  # noqa: T201
         return 2
+    if args.failures:
+        for row in sorted(row for folder in args.folders for row in failures(folder)):
+            print("\t".join(row))  # noqa: T201 - a command's output
+        return 0
     table = markdown([summarise(folder) for folder in args.folders])
     if args.write:
         try:

@@ -179,3 +179,25 @@ def test_a_stand_on_ship_that_no_apparent_alteration_helps_still_stands_on():
     # latest -inf: a 35 deg turn would not open the CPA even now; the TCPA and range decide
     assert not stand_on_must_act(0.1 * NM, 900.0, 3.5 * NM, NM, latest_s=-math.inf)
     assert stand_on_must_act(0.1 * NM, 500.0, 3.5 * NM, NM, latest_s=-math.inf)
+
+
+def test_once_the_time_for_the_alteration_has_run_out_a_stand_on_ship_keeps_acting():
+    # ships on steady courses, sampled every 10 s: once Rule 17 says act, it keeps saying so
+    # until the CPA (a stand-on ship that had stopped acting would turn back into danger)
+    from rhnc.encounters.colregs import stand_on_latest_s
+    own_velocity = np.array([10.0 * KN, 0.0])
+    for speed_kn, course_deg in ((30.0, 60.0), (40.0, 150.0), (20.0, 120.0), (30.0, 30.0)):
+        course = math.radians(course_deg)
+        target_velocity = speed_kn * KN * np.array([math.cos(course), math.sin(course)])
+        meeting = own_velocity * 1200.0
+        target_start = meeting - target_velocity * 1200.0 + np.array([0.0, 0.05 * NM])
+        decisions = []
+        for t in range(0, 1200, 10):
+            own, target = own_velocity * t, target_start + target_velocity * t
+            cpa, tcpa = cpa_tcpa(own, own_velocity, target, target_velocity)
+            encounter = classify(own, 0.0, 10.0 * KN, target, target_velocity)
+            latest = stand_on_latest_s(encounter.encounter_class, encounter.relative_bearing_deg, own, own_velocity,
+                                       target, target_velocity, NM)
+            decisions.append(stand_on_must_act(cpa, tcpa, encounter.range_m, NM, latest_s=latest))
+        first = decisions.index(True)
+        assert all(decisions[first:]), (speed_kn, course_deg)

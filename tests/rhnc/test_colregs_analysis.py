@@ -324,9 +324,34 @@ def test_cpa_predicted_as_the_manoeuvre_began_is_reported_beside_the_sailed_one(
     # velocity there is up to 2.5 deg into the turn, which moves a CPA 16 min off by < 1 min
     assert result["predicted_time_of_cpa_s"] == pytest.approx(expected_s, abs=60.0)
     assert result["time_of_cpa_s"] < began_s + 5 * 60  # the sailed CPA: within 5 min of the turn
-    assert result["rule_16"] == FAIL  # judged on the sailed CPA, as before
-    assert "min before the CPA predicted as it began" in result["reasons"]["rule_16"]
-    assert f"{(result['predicted_time_of_cpa_s'] - result['manoeuvre_time_s']) / 60:.1f}" in result["reasons"]["rule_16"]
+    # the alteration came some 16 min before the CPA it avoided: early (Rule 16), though the
+    # turn itself brought the sailed CPA to within 5 min of it
+    assert result["manoeuvre_start_s"] == pytest.approx(began_s, abs=DT_S)
+    assert result["rule_16"] == PASS and result["early_by"] == "predicted CPA"
+
+
+def test_a_late_alteration_is_late_by_every_reading():
+    # the same overtaking, the turn 14 min later: 2 min before the CPA predicted then, long
+    # after the onset of risk
+    track = own_track(40, turns=[(16.0, 35.0)])
+    result = judge(track, target_states(track[0], (1.5, -0.45), 0.0, 13.0))
+    assert result["encounter_class"] == "overtaking" and result["onset_s"] < 60.0
+    assert result["rule_16"] == FAIL and result["early_by"] is None
+    assert "min before the CPA predicted then" in result["reasons"]["rule_16"]
+    assert "after it was called on to act" in result["reasons"]["rule_16"]
+
+
+@pytest.mark.parametrize("turn_min, early", [(0.25, "at once"), (2.0, None)])
+def test_an_alteration_at_once_is_early_when_the_risk_begins_closer_than_that(turn_min, early):
+    # a head-on ship at risk from the start, its CPA 4.4 min ahead (36 kn closing, 2.6 nm):
+    # "early ... if the circumstances of the case admit" (Rule 8(a)) is then an alteration
+    # begun at once; begun 2 min later it is late
+    track = own_track(12, turns=[(turn_min, 60.0)])
+    result = judge(track, target_states(track[0], (2.6, 0.05), 180.0, 18.0, radius_nm=0.5))
+    assert result["encounter_class"] == "head_on" and result["onset_s"] == 0.0
+    assert result["time_of_cpa_s"] - result["manoeuvre_start_s"] < 5 * 60
+    assert result["early_by"] == early
+    assert (result["rule_16"] == PASS) == (early is not None)
 
 
 def test_no_predicted_cpa_without_a_manoeuvre():
@@ -385,3 +410,22 @@ def test_stand_on_manoeuvre_made_when_another_stand_on_target_required_it_is_all
     assert both[1]["rule_17"] == PASS, both[1]["reasons"]
     alone = judge(track, far)  # the same turn with no other ship to act for
     assert alone["rule_17"] == FAIL
+
+
+def test_an_alteration_is_timed_from_when_the_turn_began():
+    # a slow turn (0.05 deg/s) shows as 5 deg of course only 100 s after it began
+    track = own_track(40, turns=[(2.0, 35.0)], rate_deg_s=0.05)
+    result = judge(track, target_states(track[0], (1.5, -0.45), 0.0, 13.0))
+    assert result["manoeuvre_time_s"] == pytest.approx(220.0, abs=DT_S)
+    assert result["manoeuvre_start_s"] == pytest.approx(120.0, abs=60.0)
+
+
+def test_a_target_starting_inside_is_judged_by_the_range_opening_not_by_a_side():
+    # a head-on ship 0.6 nm off on the starboard bow, closing at 36 kn: immediate danger from
+    # the start (Rule 2(b)); the own ship turns away to port and the range opens at once
+    track = own_track(12, turns=[(0.25, -90.0)], rate_deg_s=2.0)
+    result = judge(track, target_states(track[0], (0.6, 0.05), 180.0, 18.0))
+    assert result["encounter_class"] == "head_on" and result["started_inside"]
+    assert result["manoeuvre_side"] == "port" and result["range_opened_in_time"]
+    assert result["side_correct"] is None
+    assert result["rule_14"] == PASS

@@ -291,3 +291,21 @@ def test_applied_inputs_stay_within_the_actuator_limits_exactly(controller, spee
     assert solution.success
     assert np.all(np.abs(solution.inputs) <= controller.input_scale)
     assert np.any(solution.inputs == bound * controller.input_scale)  # saturated: the bound itself
+
+
+def test_the_warm_start_follows_the_measured_heading_across_the_wrap(controller):
+    # a ship on 180 deg: the plant reports its heading as +pi - 0.01, then (turned a little to
+    # starboard) as -pi + 0.01; the previous plan, on headings near +pi, must be brought onto
+    # the measured heading's turn, or the guess begins 2 pi away from its first step
+    course, speed = math.pi - 0.01, 18 * KNOT
+
+    def reference_at(t):
+        return line_or_turn_reference(t + DT * np.arange(N + 1), (0.0, 0.0), course, speed)
+
+    controller.reset()
+    controller.solve(0.0, np.array([0.0, 0.0, course, speed, 0.0, 0.0]), reference_at(0.0), None, et=False)
+    state = np.array([-speed * DT, 0.0, -math.pi + 0.01, speed, 0.0, 0.0])
+    step = controller._prepare(DT, state, reference_at(DT), None, False, None)
+    headings = step.x0[controller.problem.z_index[:, 2]] * controller.state_scale[2]
+    assert headings[0] == pytest.approx(-math.pi + 0.01)
+    assert np.max(np.abs(np.diff(headings))) < 0.2

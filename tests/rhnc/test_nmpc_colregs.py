@@ -498,3 +498,52 @@ def test_a_target_inside_the_clearance_must_see_the_range_open_and_may_be_left_t
     assert slots[7, 0] * 230.0 > 0.5  # ... and it must open
     assert np.allclose(slots[4:6, 0], 0.0)  # a plain circle about the target
     assert not report.no_port_turn and report.alteration_floor is None  # immediate danger: any way out
+
+
+def _overtaken_by_two():
+    """Own ship northbound at 18 kn, overtaken by a ship 1.9 nm astern, a little to port
+    (Rule 17 lets us act: within two clearances), and by a faster one from the starboard
+    quarter, 2.6 nm off, whose CPA is 0.4 nm some 20 min ahead."""
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    course = math.radians(-14.0)
+    fast = 27.6 * KNOT * np.array([math.cos(course), math.sin(course)])
+    meeting = np.array([SPEED * 1200.0, 0.4 * NM])
+    targets = np.array([[-1.9 * NM, -0.1 * NM, 25.0 * KNOT, 0.0, RADIUS], [*(meeting - fast * 1200.0), *fast, RADIUS]])
+    return state, targets
+
+
+def test_a_free_side_is_chosen_with_the_other_targets_in_view():
+    # Rule 13 leaves the side of the stand-on action free; turning away from the ship astern
+    # (to starboard) would head for the faster one on the starboard quarter: port keeps both clear
+    state, targets = _overtaken_by_two()
+    domains = CollisionDomains(DomainSettings(colregs=True, own_radius_m=0.0), max_obstacles=2)
+    _, report = domains.parameters(targets, state, np.zeros(2), SPEED, 5.0, 230.0, et=True,
+                                   reference_heading_rad=0.0, time_s=0.0)
+    assert [ENCOUNTER_CLASSES[int(code)] for code in report.class_codes] == ["overtaken", "overtaken"]
+    assert report.alteration_floor is None
+    assert report.alteration_ceiling == pytest.approx((0.0, 0.0, -math.radians(DomainSettings().alteration_deg)))
+
+
+def test_a_stand_on_target_is_kept_clear_of_while_the_ship_acts_for_another():
+    # the own ship acts for the ship astern (Rule 17(b)) and no longer keeps its course: the
+    # other overtaking ship, which does not yet call for action itself, gets its constraint too
+    state, targets = _overtaken_by_two()
+    domains = CollisionDomains(DomainSettings(colregs=True, own_radius_m=0.0), max_obstacles=2)
+    _, first = domains.parameters(targets, state, np.zeros(2), SPEED, 5.0, 230.0, et=True, time_s=0.0)
+    assert list(first.active) == [1.0, 0.0] and domains._altering
+    _, second = domains.parameters(targets, state, np.zeros(2), SPEED, 5.0, 230.0, et=True, time_s=20.0)
+    assert list(second.active) == [1.0, 1.0]
+
+
+def test_a_stand_on_ship_turning_back_to_its_route_acts_away_from_the_overtaker():
+    # overtaken by a ship on the port quarter 1.9 nm off while turning back to port towards the
+    # route (heading 8 deg to port of the reference): that turn is no avoiding one, the action
+    # for the overtaker goes away from it, to starboard
+    heading = math.radians(-8.0)
+    state = np.array([0.0, 0.0, heading, SPEED, 0.0, 0.0])
+    overtaker = np.array([[-1.5 * NM, -1.15 * NM, 24.0 * KNOT * math.cos(0.3), 24.0 * KNOT * math.sin(0.3), RADIUS]])
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    _, report = domains.parameters(overtaker, state, np.zeros(2), SPEED, 5.0, 230.0, et=True,
+                                   reference_heading_rad=0.0, time_s=0.0)
+    assert ENCOUNTER_CLASSES[int(report.class_codes[0])] == "overtaken" and domains._acting == {0}
+    assert report.alteration_ceiling is None and report.alteration_floor is not None

@@ -74,3 +74,22 @@ def test_the_table_goes_to_every_file_named_or_to_none(tmp_path, capsys):
     assert "old" in doc.read_text() and "old" in readme.read_text()
     assert main([str(tmp_path / "suite"), "--write", str(doc), "--write", str(readme)]) == 0
     assert doc.read_text() == readme.read_text() and "| suite | 1 | 1/1 | 1/1 |" in readme.read_text()
+
+
+def test_failures_lists_every_failing_target_by_class(tmp_path, capsys):
+    _run(tmp_path, "a", True, True, "pass", 0, 0.05, [{"side_correct": True, "rule_8": "pass",
+                                                       "separation_kept": True}])
+    _run(tmp_path, "b", False, False, "fail", 2, 0.30,
+         [{"obstacle": 0, "encounter_class": "crossing_give_way", "side_correct": False, "rule_15": "fail",
+           "separation_kept": False, "cpa_nm": 0.5, "required_nm": 1.0, "reasons": {"rule_15": "crossed ahead"}},
+          {"obstacle": 1, "encounter_class": "overtaken", "started_inside": True, "range_opened_in_time": False,
+           "range_opening_s": 90.0, "initial_range_nm": 0.8, "separation_kept": False}])
+    _run(tmp_path, "c", True, True, "pass", 3, 0.05, [{"side_correct": True, "separation_kept": True}])
+    assert main(["--failures", str(tmp_path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    classes = [line.split("\t")[0] for line in lines]
+    assert sorted(classes) == ["fallback", "fallback", "inside", "rule_15", "separation", "side"]
+    assert any(line.startswith("rule_15") and line.endswith("crossed ahead") for line in lines)
+    assert any(line.startswith("fallback") and "\tc\t" in line and line.endswith("only") for line in lines)
+    assert any(line.startswith("fallback") and "\tb\t" in line and "inside, rule_15, separation, side" in line
+               for line in lines)
