@@ -2,6 +2,7 @@
 the watch settles only when the bound allows, giving up when a premise breaks."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -133,3 +134,70 @@ def test_option_errors(options, message):
     context = BuildContext("s.toml: participants.watch", None, 20.0, 0.0, 600.0)
     with pytest.raises(ScenarioError, match=message):
         SeparationWatch.from_options("watch", options, context)
+
+
+def test_once_settled_no_later_sample_comes_closer_for_own_ships_that_turn_away_and_come_back():
+    # the property a stop relies on, over random voyages within the speed limit: a ship that
+    # turns away (the range opens) and back (it closes again), and targets at constant velocity
+    rng = np.random.default_rng(7)
+    dt, steps, limit_kn = 20.0, 180, 26.0
+    settled_runs = 0
+    for _ in range(150):
+        watch = _watch(max_kn=limit_kn, stop_s=steps * dt)
+        targets = np.column_stack([rng.uniform(-4, 4, (3, 2)) * NM, rng.uniform(-30, 30, (3, 2)) * KNOT,
+                                   np.full(3, NM)])
+        own, heading = np.zeros(2), rng.uniform(0, 2 * np.pi)
+        ranges, flags = [], []
+        for k in range(steps + 1):
+            t = k * dt
+            rows = targets.copy()
+            rows[:, :2] += targets[:, 2:4] * t
+            inputs = {"x": own[0], "y": own[1], "obstacles": rows}
+            flags.append((watch.setup(t, inputs) if k == 0 else watch.step(t, dt, inputs))["settled"])
+            ranges.append(np.hypot(*(rows[:, :2] - own).T))
+            heading += rng.choice([-1.0, 0.0, 1.0]) * rng.uniform(0, 0.6)  # turns away and back
+            own = own + rng.uniform(0.3, 1.0) * limit_kn * KNOT * dt * np.array([np.cos(heading), np.sin(heading)])
+        ranges = np.array(ranges)
+        for k in np.flatnonzero(flags):
+            assert np.all(ranges[k + 1:].min(axis=0, initial=np.inf) >= ranges[:k + 1].min(axis=0) - 1e-6)
+        settled_runs += bool(np.any(flags))
+    assert settled_runs >= 30  # the property was put to the test, not met by never settling
+
+
+# -- full runs against runs ended by the watch ------------------------------------------------------
+REPO = Path(__file__).resolve().parents[2]
+#: A fixed sample of the search's space: a head-on target at 30 kn timed against the 4-min trigger
+#: (a loss below half the domain in the paper's loop), a slow crossing target from starboard, and three
+#: targets (an overtaken one, a fast crossing one from port, a head-on one).
+SAMPLE = {
+    "fast head-on, a loss": [{"radius_nm": 1.0, "start_nm": [60.96, 50.0], "velocity_kn": [-30.0, 0.0]}],
+    "slow crossing": [{"radius_nm": 1.0, "start_nm": [55.4, 45.0], "velocity_kn": [0.0, 6.0]}],
+    "three targets": [{"radius_nm": 1.0, "start_nm": [51.5, 50.2], "velocity_kn": [8.0, 0.0]},
+                      {"radius_nm": 1.0, "start_nm": [55.0, 59.0], "velocity_kn": [-3.0, -28.0]},
+                      {"radius_nm": 1.0, "start_nm": [62.0, 49.7], "velocity_kn": [-16.0, 0.0]}],
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", list(SAMPLE))
+def test_a_run_ended_by_the_watch_is_judged_as_its_full_run(case, tmp_path):
+    # the search file's own stop: its [set] block, with and without which the same run is made
+    import tomllib
+
+    from orchestrator.run import run_scenario
+
+    watched = tomllib.loads((REPO / "batches" / "search_rhnc_watched.toml").read_text())["set"]
+    targets = {"participants.traffic.options.targets": SAMPLE[case]}
+    scenario = REPO / "scenarios" / "encounter_rhnc.toml"
+    full = run_scenario(scenario, tmp_path, progress=False, run_id="full", overrides=targets, group="runs").summary
+    ended = run_scenario(scenario, tmp_path, progress=False, run_id="ended", overrides={**targets, **watched},
+                         group="runs").summary
+    assert full["status"] == ended["status"] == "finished"
+    assert ended["simulation"]["steps_done"] <= full["simulation"]["steps_done"]
+    judged, again = full["analyses"]["colregs"], ended["analyses"]["colregs"]
+    assert again["separation_margin_nm"] == judged["separation_margin_nm"]
+    assert again["separation_kept"] == judged["separation_kept"]
+    assert [t["cpa_nm"] for t in again["targets"]] == [t["cpa_nm"] for t in judged["targets"]]
+    if case == "fast head-on, a loss":
+        assert judged["separation_margin_nm"] < -0.5  # the loss the comparison counts, kept
+        assert ended["simulation"]["steps_done"] < full["simulation"]["steps_done"] / 2
