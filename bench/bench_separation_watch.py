@@ -5,7 +5,7 @@ Two ways, both over a fixed sample of a search's evaluations:
 * ``--rerun FOLDER --watched SEARCH.toml -n N``: the first N evaluations journaled in the
   search folder FOLDER (full runs), each run again here in this process, once as it was and
   once with the ``[set]`` of the search file SEARCH.toml (the watch and its stop): steps and
-  processor time of each, and whether the two are judged alike (separation margin, each
+  processor time of each (this process and its ended children: the NMPC's solver process), and whether the two are judged alike (separation margin, each
   target's closest approach);
 * ``--pairs FULL WATCHED``: two search folders of the same seed and sampler, one on full
   runs and one on runs ended by the watch; every evaluation both journaled with the same
@@ -26,7 +26,6 @@ import argparse
 import json
 import sys
 import tempfile
-import time
 import tomllib
 from pathlib import Path
 
@@ -55,6 +54,14 @@ def _summary(folder: Path, run_id: str) -> dict | None:
         return None
 
 
+def processor_time_s() -> float:
+    """Processor time of this process and of its ended children (the NMPC's solver process, figures) [s]."""
+    import os
+
+    times = os.times()
+    return times.user + times.system + times.children_user + times.children_system
+
+
 def rerun(folder: Path, watched: Path, count: int) -> list[dict]:
     """Run the first ``count`` evaluations of ``folder`` as they were and with ``watched``'s ``[set]``."""
     from orchestrator.run import run_scenario
@@ -69,10 +76,10 @@ def rerun(folder: Path, watched: Path, count: int) -> list[dict]:
         for entry in _journal(folder)[:count]:
             row = {"evaluation": entry["number"] + 1, "run_id": entry["run_id"]}
             for label, overrides in (("full", entry["overrides"]), ("ended", {**entry["overrides"], **stop})):
-                started = time.process_time()
+                started = processor_time_s()
                 report = run_scenario(scenario, scratch, progress=False, run_id=f"{label}-{entry['run_id']}",
                                       overrides=overrides, group="runs")
-                row[f"{label}_cpu_s"] = time.process_time() - started
+                row[f"{label}_cpu_s"] = processor_time_s() - started
                 row[f"{label}_steps"] = report.summary["simulation"]["steps_done"]
                 row[label] = judged(report.summary)
             rows.append(row)
