@@ -79,7 +79,8 @@ class SeparationWatch(Participant):
     Options: ``max_own_speed_kn`` (the own ship's top speed over ground).
     Inputs: ``x``, ``y`` [m] (the own ship), ``obstacles`` ((n, 5): x, y, vx, vy, radius; SI).
     Outputs: ``settled`` (0 or 1) and ``least_future_margin_m`` (the smallest, over the
-    obstacles, of the bound less the closest approach so far; negative while any can still close).
+    obstacles, of the bound less the closest approach so far; negative while any can still close;
+    finite, as every output must be).  A run without obstacles is never settled.
     """
 
     OPTIONS = tuple(SeparationWatchOptions.model_fields)
@@ -107,9 +108,7 @@ class SeparationWatch(Participant):
 
     def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         self._reset()
-        if all(port in inputs for port in self.input_names):
-            return self._observe(start_time, inputs)
-        return {"settled": 0.0, "least_future_margin_m": -math.inf}
+        return self._observe(start_time, inputs) if all(port in inputs for port in self.input_names) else {}
 
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         missing = [port for port in self.input_names if port not in inputs]
@@ -124,15 +123,15 @@ class SeparationWatch(Participant):
         ranges = np.hypot(obstacles[:, 0] - own[0], obstacles[:, 1] - own[1])
         self.closest_m = ranges if self.closest_m is None or len(self.closest_m) != len(ranges) else np.minimum(
             self.closest_m, ranges)
-        if self.gave_up is not None:
-            return {"settled": 0.0, "least_future_margin_m": -math.inf}
+        if not len(obstacles):  # nothing to watch: never settled (a run without obstacles is not ended)
+            return {"settled": 0.0, "least_future_margin_m": 0.0}
         left = self.stop_time_s - time
-        margins = [least_future_range_m(row[:2] - own, row[2:4], self.max_own_speed_mps, left) - closest
-                   for row, closest in zip(obstacles, self.closest_m)]
-        margin = min(margins) if margins else math.inf
-        if margin >= 0.0 and self.settled_at_s is None:
+        margin = min(least_future_range_m(row[:2] - own, row[2:4], self.max_own_speed_mps, left) - closest
+                     for row, closest in zip(obstacles, self.closest_m))
+        settled = margin >= 0.0 and self.gave_up is None
+        if settled and self.settled_at_s is None:
             self.settled_at_s = time
-        return {"settled": 1.0 if margin >= 0.0 else 0.0, "least_future_margin_m": float(margin)}
+        return {"settled": 1.0 if settled else 0.0, "least_future_margin_m": float(margin)}
 
     def _check_premises(self, time: float, own: np.ndarray, obstacles: np.ndarray) -> None:
         """Give up for the rest of the run when an obstacle changed velocity or the own ship outran its limit."""

@@ -122,7 +122,16 @@ def test_the_watch_gives_up_when_a_premise_of_its_bound_breaks(case, reason):
     else:
         outputs = _sail(watch, 30.0, target, (0.0, 0.0), 60)
     assert watch.summary()["gave_up"] == reason
+    assert all(math.isfinite(value) for out in outputs for value in out.values())  # the master refuses others
     assert all(out["settled"] == 0.0 for out in outputs[int(900 / 20) if case == "manoeuvre" else 1:])
+
+
+def test_without_obstacles_nothing_is_settled_and_every_output_is_finite():
+    watch = _watch()
+    outputs = [watch.setup(0.0, {"x": 0.0, "y": 0.0, "obstacles": np.zeros((0, 5))}),
+               watch.step(20.0, 20.0, {"x": 100.0, "y": 0.0, "obstacles": np.zeros((0, 5))})]
+    assert outputs == [{"settled": 0.0, "least_future_margin_m": 0.0}] * 2
+    assert watch.setup(0.0, {}) == {}  # before the ship has published its state
 
 
 @pytest.mark.parametrize("options, message", [
