@@ -13,6 +13,14 @@ least at ``tau* = (-r.v + U sqrt((|v|^2 |r|^2 - (r.v)^2) / (|v|^2 - U^2))) / |v|
 An obstacle is settled when the least ``g`` over the time left is at least its closest
 approach so far; the run is, when every obstacle is.
 
+The watch does not know when each of its inputs was taken: in the master's Gauss-Seidel
+order the own ship has already stepped to ``t + dt`` when the watch steps at ``t``, while
+the obstacles are those of ``t``.  So it allows the own position it sees to be up to one
+of its steps ``s`` off the obstacles' time, an error of at most ``U s`` in each range: it
+looks ahead over the time left plus ``s``, takes ``U s`` off the bound and adds ``U s`` to
+the closest approach so far (a range it saw may be ``U s`` longer than the one recorded).
+Settled is then ``least g - closest - 2 U s >= 0``.
+
 The bound holds as long as its two premises do, and the watch checks both on what it sees:
 an obstacle whose velocity changes (a manoeuvre) or an own ship faster over ground than
 ``max_own_speed_kn`` between two samples makes the watch give up for the rest of the run
@@ -79,16 +87,18 @@ class SeparationWatch(Participant):
     Options: ``max_own_speed_kn`` (the own ship's top speed over ground).
     Inputs: ``x``, ``y`` [m] (the own ship), ``obstacles`` ((n, 5): x, y, vx, vy, radius; SI).
     Outputs: ``settled`` (0 or 1) and ``least_future_margin_m`` (the smallest, over the
-    obstacles, of the bound less the closest approach so far; negative while any can still close;
+    obstacles, of the bound less the closest approach so far, less ``2 U s`` for inputs up to
+    one step apart in time; negative while any can still close;
     finite, as every output must be).  A run without obstacles is never settled.
     """
 
     OPTIONS = tuple(SeparationWatchOptions.model_fields)
 
-    def __init__(self, name: str, max_own_speed_mps: float, stop_time_s: float) -> None:
+    def __init__(self, name: str, max_own_speed_mps: float, stop_time_s: float, step_s: float) -> None:
         super().__init__(name)
         self.max_own_speed_mps = max_own_speed_mps
         self.stop_time_s = stop_time_s
+        self.step_s = step_s  # how far apart in time the own position and the obstacles seen may be
         self._reset()
 
     def _reset(self) -> None:
@@ -101,7 +111,7 @@ class SeparationWatch(Participant):
     @classmethod
     def from_options(cls, name: str, options: Mapping[str, Any], context: BuildContext) -> "SeparationWatch":
         checked = check_options(SeparationWatchOptions, options, context.where)
-        return cls(name, checked.max_own_speed_kn * KNOT, context.stop_time)
+        return cls(name, checked.max_own_speed_kn * KNOT, context.stop_time, context.step_size)
 
     input_names = property(lambda self: ("x", "y", "obstacles"))
     output_names = property(lambda self: ("settled", "least_future_margin_m"))
@@ -125,9 +135,10 @@ class SeparationWatch(Participant):
             self.closest_m, ranges)
         if not len(obstacles):  # nothing to watch: never settled (a run without obstacles is not ended)
             return {"settled": 0.0, "least_future_margin_m": 0.0}
-        left = self.stop_time_s - time
+        left = self.stop_time_s - time + self.step_s
+        skew_m = self.max_own_speed_mps * self.step_s  # the own position seen may be a step off the obstacles'
         margin = min(least_future_range_m(row[:2] - own, row[2:4], self.max_own_speed_mps, left) - closest
-                     for row, closest in zip(obstacles, self.closest_m))
+                     for row, closest in zip(obstacles, self.closest_m)) - 2.0 * skew_m
         settled = margin >= 0.0 and self.gave_up is None
         if settled and self.settled_at_s is None:
             self.settled_at_s = time

@@ -145,9 +145,12 @@ def test_option_errors(options, message):
         SeparationWatch.from_options("watch", options, context)
 
 
-def test_once_settled_no_later_sample_comes_closer_for_own_ships_that_turn_away_and_come_back():
+@pytest.mark.parametrize("skew", [-1, 0, 1])
+def test_once_settled_no_later_sample_comes_closer_for_own_ships_that_turn_away_and_come_back(skew):
     # the property a stop relies on, over random voyages within the speed limit: a ship that
-    # turns away (the range opens) and back (it closes again), and targets at constant velocity
+    # turns away (the range opens) and back (it closes again), and targets at constant velocity;
+    # the watch sees the own ship a step ahead of the obstacles (as in the master's Gauss-Seidel
+    # order, where the ship has stepped when the watch steps), a step behind, or at their time
     rng = np.random.default_rng(7)
     dt, steps, limit_kn = 20.0, 180, 26.0
     settled_runs = 0
@@ -155,20 +158,23 @@ def test_once_settled_no_later_sample_comes_closer_for_own_ships_that_turn_away_
         watch = _watch(max_kn=limit_kn, stop_s=steps * dt)
         targets = np.column_stack([rng.uniform(-4, 4, (3, 2)) * NM, rng.uniform(-30, 30, (3, 2)) * KNOT,
                                    np.full(3, NM)])
-        own, heading = np.zeros(2), rng.uniform(0, 2 * np.pi)
+        own, heading = [np.zeros(2)], rng.uniform(0, 2 * np.pi)
+        for _ in range(steps + 1):
+            heading += rng.choice([-1.0, 0.0, 1.0]) * rng.uniform(0, 0.6)  # turns away and back
+            own.append(own[-1] + rng.uniform(0.3, 1.0) * limit_kn * KNOT * dt * np.array([np.cos(heading),
+                                                                                          np.sin(heading)]))
         ranges, flags = [], []
         for k in range(steps + 1):
             t = k * dt
             rows = targets.copy()
             rows[:, :2] += targets[:, 2:4] * t
-            inputs = {"x": own[0], "y": own[1], "obstacles": rows}
+            seen = own[min(max(k + skew, 0), steps)]
+            inputs = {"x": seen[0], "y": seen[1], "obstacles": rows}
             flags.append((watch.setup(t, inputs) if k == 0 else watch.step(t, dt, inputs))["settled"])
-            ranges.append(np.hypot(*(rows[:, :2] - own).T))
-            heading += rng.choice([-1.0, 0.0, 1.0]) * rng.uniform(0, 0.6)  # turns away and back
-            own = own + rng.uniform(0.3, 1.0) * limit_kn * KNOT * dt * np.array([np.cos(heading), np.sin(heading)])
+            ranges.append(np.hypot(*(rows[:, :2] - own[k]).T))  # what is recorded: both at t
         ranges = np.array(ranges)
-        for k in np.flatnonzero(flags):
-            assert np.all(ranges[k + 1:].min(axis=0, initial=np.inf) >= ranges[:k + 1].min(axis=0) - 1e-6)
+        for k in np.flatnonzero(flags):  # the run ends after this step: its samples up to k + 1 are recorded
+            assert np.all(ranges[k + 2:].min(axis=0, initial=np.inf) >= ranges[:k + 2].min(axis=0) - 1e-6)
         settled_runs += bool(np.any(flags))
     assert settled_runs >= 30  # the property was put to the test, not met by never settling
 
