@@ -146,7 +146,9 @@ def main(argv=None) -> int:
     parser.add_argument("--seeds", type=int, nargs="+", default=None, help="only these of the file's seeds")
     parser.add_argument("--write", default=None, help="also write the table as Markdown to this file")
     parser.add_argument("--readme", default=None, help="replace the search summary between the markers "
-                        "<!-- search-summary:begin --> and <!-- search-summary:end --> of this file (README.md)")
+                        "<!-- MARKER:begin --> and <!-- MARKER:end --> of this file (README.md)")
+    parser.add_argument("--readme-marker", default="search-summary", help="the markers' name for --readme "
+                        "(default search-summary; one block per declared comparison)")
     parser.add_argument("--as-run", action="store_true", help="run nothing: table what the results folders hold")
     parser.add_argument("--searches", nargs="*", default=[], help="other search folders to add a line for")
     args = parser.parse_args(argv)
@@ -160,7 +162,7 @@ def main(argv=None) -> int:
         return EXIT_BAD_INPUT
     if args.readme:
         try:
-            replace_block(Path(args.readme), "search-summary", "", dry=True)
+            replace_block(Path(args.readme), args.readme_marker, "", dry=True)
         except (OSError, ValueError) as exc:
             print(f"error: --readme {exc}", file=sys.stderr)
             return EXIT_BAD_INPUT
@@ -230,7 +232,7 @@ def main(argv=None) -> int:
                  f"**Goal** (the optimiser finds a loss within {table.optimiser_budget} evaluations where random "
                  f"sampling needs at least {table.baseline_factor} times as many, on every seed of at least three): "
                  f"{verdict} on the seeds run ({len(counts)} of {len(table.seeds)} declared)."]
-        replace_block(Path(args.readme), "search-summary", "\n".join(block))
+        replace_block(Path(args.readme), args.readme_marker, "\n".join(block))
     return 0
 
 

@@ -109,7 +109,8 @@ def run_batch(path, results_root="results", workers: int | None = None, schedule
                 else LocalPool(workers or os.cpu_count() or 1))
     executor.connect()  # a scheduler that cannot be reached or refuses: nothing is written yet
     try:
-        return _run_pending(spec, runs, root, executor, progress, retry_failed, started)
+        with interrupts.handled():  # Ctrl-C/SIGTERM stop it from any caller, not only the command line
+            return _run_pending(spec, runs, root, executor, progress, retry_failed, started)
     finally:
         executor.close()
 

@@ -92,6 +92,11 @@ def _add_batch_commands(sub) -> None:
     search.add_argument("--evaluations", type=int, default=None, help="budget (default: the file's)")
     search.add_argument("--sampler", default=None, help="tpe, cmaes or random (default: the file's)")
     search.add_argument("--seed", type=int, default=None, help="the optimiser's seed (default: the file's)")
+    search.add_argument("--fails-below", type=float, default=None, metavar="X",
+                        help="a run whose objective is below X is a failure (default: the file's fails_below); "
+                             "relabels runs, the optimiser minimises the same")
+    search.add_argument("--until-failure", action="store_true",
+                        help="stop after the round that holds the first failure")
     _add_pool_arguments(search, "a Dask scheduler, as for batch")
     search.add_argument("--results", default="results", help="results folder (default: ./results)")
     search.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -267,7 +272,8 @@ def _search(args) -> int:
     tls = {"ca": args.tls_ca, "cert": args.tls_cert, "key": args.tls_key}
     report = run_search(args.search, args.results, workers=args.workers, scheduler=args.scheduler,
                         progress=not args.no_progress, tls=tls if any(tls.values()) else None,
-                        evaluations=args.evaluations, sampler=args.sampler, seed=args.seed)
+                        evaluations=args.evaluations, sampler=args.sampler, seed=args.seed,
+                        fails_below=args.fails_below, until_failure=args.until_failure)
     first = (f"first at evaluation {report.first_failure}" if report.first_failure is not None else "none found")
     best = "none" if report.best is None else f"{report.best:.4g}"
     print(f"{len(report.table)} evaluations ({report.evaluated} run now); lowest objective {best}; "

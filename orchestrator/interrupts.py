@@ -142,6 +142,19 @@ def handle_signals(grace_s: float = GRACE_S) -> Iterator[None]:
         _state.reset()  # the request belonged to this block: later runs in this process start clean
 
 
+@contextlib.contextmanager
+def handled(grace_s: float = GRACE_S) -> Iterator[None]:
+    """:func:`handle_signals` for a library call (a batch, a search) that its caller may already
+    run under them: the command line's handlers stay as they are, a plain Python caller gets them
+    for the call (without them a SIGTERM would end the process at once, and a SIGINT ignored
+    by a shell's background job would be ignored)."""
+    if _state.installed:
+        yield
+        return
+    with handle_signals(grace_s):
+        yield
+
+
 def _on_signal(number: int, _frame) -> None:
     name = signal.Signals(number).name
     if _state.signal_name is not None:  # a second signal: stop now

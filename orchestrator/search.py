@@ -18,7 +18,7 @@ and run on the batch's executors (local worker processes or a Dask cluster).
 Evaluations are asked in rounds of ``per_round`` (run in parallel); each is asked of a
 sampler seeded from the search's seed and the evaluation's number, so the search depends
 on its seed and on the results before it, never on the number of workers.  A search stopped
-at any point (Ctrl-C, ``kill -9``) resumes by running the same command again: the journal's
+at any point (Ctrl-C or SIGTERM, wherever ``run_search`` is called from, or ``kill -9``) resumes by running the same command again: the journal's
 evaluations without a published run are run first, every journaled evaluation is given
 back to a fresh optimiser, and the search goes on; a larger ``--evaluations`` extends a
 finished search.
@@ -139,7 +139,7 @@ def run_search(path, results_root="results", workers: int | None = None, schedul
     root = Path(results_root) / spec.name
     (root / "runs").mkdir(parents=True, exist_ok=True)
     optuna.logging.set_verbosity(optuna.logging.WARNING)
-    with results_lock(root), warnings.catch_warnings():
+    with interrupts.handled(), results_lock(root), warnings.catch_warnings():  # Ctrl-C/SIGTERM, from any caller
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
         _check_same_search(spec, root)
         journal = read_journal(root / JOURNAL)

@@ -104,3 +104,21 @@ def test_the_readme_block_is_replaced_between_its_markers(bench, tmp_path):
     readme.write_text("a\n<!-- search-summary:begin -->\nold\n<!-- search-summary:end -->\nb\n")
     bench.replace_block(readme, "search-summary", "new")
     assert readme.read_text() == "a\n<!-- search-summary:begin -->\nnew\n<!-- search-summary:end -->\nb\n"
+
+
+def test_each_declared_comparison_fills_its_own_readme_block_and_leaves_the_other(bench, tmp_path):
+    import json
+
+    path = tmp_path / "comparison.toml"
+    path.write_text(GOOD.replace("{search}", str(REPO / "batches" / "search_rhnc.toml")))
+    results = tmp_path / "results"
+    (results / "tpe-seed1" / "search_rhnc_search").mkdir(parents=True)
+    (results / "tpe-seed1" / "search_rhnc_search" / "search.json").write_text(
+        json.dumps({"first_failure": 12, "evaluations_done": 20, "best": -0.7}))
+    readme = tmp_path / "README.md"
+    first = "<!-- search-summary:begin -->\nas measured\n<!-- search-summary:end -->\n"
+    readme.write_text(f"{first}<!-- search-summary-watched:begin -->\nold\n<!-- search-summary-watched:end -->\n")
+    assert bench.main([str(path), "--results", str(results), "--as-run", "--readme", str(readme),
+                       "--readme-marker", "search-summary-watched"]) == 0
+    text = readme.read_text()
+    assert text.startswith(first) and "| 1 | 12 | > 0, stopped |" in text.split(first)[1] and "old" not in text

@@ -376,3 +376,65 @@ def test_batch_report_from_the_command_line_not_passed_first(search_file, tmp_pa
 def test_report_of_a_folder_that_is_not_a_batch_is_refused(tmp_path, capsys):
     assert main(["report", str(tmp_path)]) == 2
     assert "not a batch or search results folder" in capsys.readouterr().err
+
+
+STOPPED_FROM_PYTHON = """\
+import signal, sys
+from orchestrator.search import run_search
+if __name__ == "__main__":  # the workers are spawned: they import this file
+    if sys.argv[3] == "SIGINT":
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # as a shell starts a background job: Ctrl-C is not its own
+    report = run_search(sys.argv[1], sys.argv[2], workers=1, progress=False, report=False)
+    print("interrupted" if report.interrupted else "not interrupted", len(report.table))
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["SIGINT", "SIGTERM"])
+def test_a_signal_stops_a_search_called_from_plain_python_and_it_resumes(search_file, tmp_path, name):
+    # no command line around it (a bench script, python -c): run_search installs the handlers itself
+    import os
+    import signal
+    import time
+
+    path = search_file(SEARCH.replace("evaluations = 6", "evaluations = 60"))
+    script = tmp_path / "stopped.py"
+    script.write_text(STOPPED_FROM_PYTHON)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), str(REPO / "tests" / "orchestrator")])}
+    process = subprocess.Popen([sys.executable, str(script), str(path), str(tmp_path / "res"), name], cwd=REPO, env=env,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    journal = tmp_path / "res" / "small_search" / JOURNAL
+    deadline = time.monotonic() + 120
+    while len(read_journal(journal)) < 4 and process.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.2)  # the second round is journaled: the search is running
+    os.kill(process.pid, getattr(signal, name))
+    try:
+        out, err = process.communicate(timeout=90)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        pytest.fail(f"{name} did not stop the search")
+    assert process.returncode == 0, err
+    assert out.split()[:2] == ["interrupted", str(len(read_journal(journal)))], out
+    asked = len(read_journal(journal))
+    assert 4 <= asked < 60
+    resumed = run_search(path, tmp_path / "res", workers=1, progress=False, report=False, evaluations=asked)
+    assert resumed.evaluated <= 3 and len(resumed.table) == asked and set(resumed.table["status"]) == {"finished"}
+
+
+@pytest.mark.slow
+def test_the_command_line_takes_a_threshold_and_stops_at_the_first_failure(search_file, tmp_path, capsys):
+    path = search_file()
+    args = ["search", str(path), "--results", str(tmp_path / "res"), "--no-progress", "--workers", "1"]
+    assert main([*args, "--fails-below", "1000", "--until-failure"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("3 evaluations (3 run now)") and "3 failures, first at evaluation 1" in out, out
+    saved = json.loads((tmp_path / "res" / "small_search" / "search.json").read_text())
+    assert saved["fails_below"] == 1000.0
+
+
+def test_a_threshold_that_is_not_a_number_is_refused_on_the_command_line(search_file, tmp_path, capsys):
+    args = ["search", str(search_file()), "--results", str(tmp_path / "res"), "--no-progress"]
+    assert main([*args, "--fails-below", "nan"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == "error: --fails-below must be a finite number, got nan"
+    assert not (tmp_path / "res").exists()
