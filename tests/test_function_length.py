@@ -26,7 +26,6 @@ REASON = "Length:"
 NOT_YET_SPLIT = {
     "rhnc/control/nmpc.py::NMPCController.__init__",
     "rhnc/control/nmpc_colregs.py::CollisionDomains.parameters",
-    "rhnc/weather/metocean_sources.py::from_netcdf",
     "orchestrator/search.py::run_search",
 }
 
