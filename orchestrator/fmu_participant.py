@@ -15,6 +15,7 @@ import shutil
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 from fmpy.fmi1 import FMICallException
 
@@ -290,7 +291,7 @@ class FmuParticipant(Participant):
         if not inputs:
             return
         if self._scalar_inputs is not None:
-            self._set_scalar_inputs(inputs)
+            self._set_scalar_inputs(inputs, self._scalar_inputs)
             return
         touched = []
         for port, value in inputs.items():
@@ -308,15 +309,16 @@ class FmuParticipant(Participant):
                 values.append(value)
         self._call("SetReal", self._slave.set_reals, refs, values)
 
-    def _set_scalar_inputs(self, inputs: Mapping[str, Value]) -> None:
-        """:meth:`_set_inputs` where every input port is one variable: the same values, one loop."""
+    def _set_scalar_inputs(self, inputs: Mapping[str, Value], scalar_inputs: dict[str, tuple[Any, float, float]]) -> None:
+        """:meth:`_set_inputs` where every input port is one variable (``scalar_inputs``: port -> (value
+        reference, scale, offset)): the same values, one loop."""
         refs, values = [], []
         for port, value in inputs.items():
             number = float(value)
             if not math.isfinite(number):
                 raise ModelError(f"{self.name}: input '{port}' received a non-finite value ({number})")
             self._canonical_inputs[port] = number
-            ref, scale, offset = self._scalar_inputs[port]
+            ref, scale, offset = scalar_inputs[port]
             refs.append(ref)
             values.append((number - offset) / scale)
         self._call("SetReal", self._slave.set_reals, refs, values)
