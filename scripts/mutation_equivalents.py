@@ -251,6 +251,15 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("rhnc/voyage/equal_arrival.py", r"if any\(abs\(t\.speed_kn - guess\) < 1e-9",
      r"guess\) <= 1e-9",
      "differs only for a guess exactly 1e-9 kn from a tried speed, the threshold's own value"),
+    ("rhnc/routing/weather_routing.py", r"if len\(legs\) else np\.zeros\(0\)", r"else np\.zeros\((None|1)\)",
+     "the branch is taken only for a polyline of one point, which no caller passes (path_cost returns 0 below two "
+     "points, the route navigation calls it with three or more) and which fails further on either way (an "
+     "infinite cost written into the empty integer count)"),
+    ("rhnc/routing/weather_routing.py", r"weights=\(sub_speed <= 1e-3\)", r"weights=\(sub_speed < 1e-3\)",
+     "differs only for a speed over ground of exactly 1e-3 m/s, the threshold's own value"),
+    ("rhnc/routing/weather_routing.py", r"max_evaluations: int = 200\)", r"max_evaluations: int = 201\)",
+     "the budget is checked between sweeps over the turning points, not within one: 200 and 201 differ only when "
+     "a sweep ends with exactly 200 evaluations, the budget's own value"),
     ("orchestrator/toml_input.py", r'line = text\.count\("\\n", 0, deep\.start\(\)\) \+ 1', r'text\.count\("\\n", None, ',
      "str.count with start None counts from the start of the text, as with 0"),
 ]
