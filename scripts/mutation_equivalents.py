@@ -260,6 +260,9 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("rhnc/routing/weather_routing.py", r"max_evaluations: int = 200\)", r"max_evaluations: int = 201\)",
      "the budget is checked between sweeps over the turning points, not within one: 200 and 201 differ only when "
      "a sweep ends with exactly 200 evaluations, the budget's own value"),
+    ("rhnc/routing/weather_routing.py", r"len\(best_polyline\) > 2:", r"len\(best_polyline\) >= 2:",
+     "a search polyline of two points is the straight route itself (start to goal), whose cost it ties: it becomes "
+     "the best only when rounding makes the tie strict, so the two differ only in a last-bit tie"),
     ("orchestrator/toml_input.py", r'line = text\.count\("\\n", 0, deep\.start\(\)\) \+ 1', r'text\.count\("\\n", None, ',
      "str.count with start None counts from the start of the text, as with 0"),
 ]

@@ -8,7 +8,8 @@ from orchestrator.geometry import KNOT, NM
 from rhnc.routing.route_search import segment_clearance
 from rhnc.routing.track_cost import constant_speed_times, cost_of_track
 from rhnc.routing.routing_problem import costed_route
-from rhnc.routing.weather_routing import RouteSearch, RoutingProblem, _refine, cost_rate, optimal_route, straight_route
+from rhnc.routing.weather_routing import (RouteSearch, RoutingProblem, _corners, _refine, cost_rate, optimal_route,
+                                          straight_route)
 from weather_fixtures import storm_field, switched_field
 
 SPEED = 18 * KNOT
@@ -366,3 +367,48 @@ def test_a_path_costs_its_legs_each_from_the_time_it_is_reached():
     assert total == pytest.approx(legs.sum(), rel=1e-12)
     hours = np.hypot(*np.diff(polyline, axis=0).T).sum() / SPEED / 3600.0
     assert total - search.path_cost(polyline, 600.0, SPEED, 0.0) == pytest.approx(300.0 * hours, rel=1e-9)
+
+
+class _KeepOutBox:
+    """A stand-in chart refusing every leg with an end in a box (north, east ranges [m]); it checks that
+    what it is asked about are the consecutive legs of one polyline."""
+
+    def __init__(self, north_m, east_m):
+        self.north_m, self.east_m, self.calls = north_m, east_m, 0
+
+    def legs_clear(self, starts, ends):
+        starts, ends = np.asarray(starts), np.asarray(ends)
+        assert starts.shape == ends.shape and np.array_equal(starts[1:], ends[:-1])
+        self.calls += 1
+
+        def inside(p):
+            return ((self.north_m[0] < p[:, 0]) & (p[:, 0] < self.north_m[1])
+                    & (self.east_m[0] < p[:, 1]) & (p[:, 1] < self.east_m[1]))
+        return ~(inside(starts) | inside(ends))
+
+
+def test_refining_asks_the_chart_about_each_candidate_and_keeps_out_of_what_it_refuses():
+    last_from, goal = np.array([10.0, 15.0]), np.array([20.0, 20.0])
+    field = storm_field(storms=[(*(last_from + 0.75 * (goal - last_from)), 1.0, 20.0)])
+    chart = _KeepOutBox((14.0 * NM, 18.5 * NM), (13.0 * NM, 16.5 * NM))  # where the free refinement turns
+    problem = RoutingProblem((0.0, 0.0), tuple(goal * NM), field, keep_out=chart)
+    polyline = np.array([[0.0, 0.0], last_from, goal]) * NM
+
+    def evaluate(points):
+        return costed_route(problem, points, SPEED, "optimal")
+
+    before = evaluate(polyline)
+    after = _refine(problem, polyline, before, evaluate)
+    assert chart.calls > 0 and after.cost_usd < before.cost_usd
+    corners = _corners(after.waypoints_m)  # (the stand-in judges a leg by its ends)
+    inside = ((14.0 * NM < corners[:, 0]) & (corners[:, 0] < 18.5 * NM)
+              & (13.0 * NM < corners[:, 1]) & (corners[:, 1] < 16.5 * NM))
+    assert not inside.any()
+
+
+def test_an_optimal_route_says_so():
+    field = storm_field(storms=[(10.0, 10.6, 2.5, 20.0)])
+    problem = RoutingProblem((0.0, 0.0), (20 * NM, 20 * NM), field)
+    route = optimal_route(problem, speed_mps=SPEED)
+    assert len(route.waypoints_m) > 2 and route.method == "optimal"
+    assert straight_route(problem, speed_mps=SPEED).method == "straight"
