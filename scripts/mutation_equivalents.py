@@ -263,6 +263,10 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("rhnc/routing/weather_routing.py", r"len\(best_polyline\) > 2:", r"len\(best_polyline\) >= 2:",
      "a search polyline of two points is the straight route itself (start to goal), whose cost it ties: it becomes "
      "the best only when rounding makes the tie strict, so the two differ only in a last-bit tie"),
+    ("rhnc/routing/weather_routing.py", r"np\.bincount\(owner\[:-1\], weights=.*minlength=len\(ends\)\)",
+     r"np\.bincount\(owner\[:-1\], weights=[^)]*\)?,\s*\)",
+     "every end owns at least two of the sampled points (pieces + 1, pieces at least 1), so owner[:-1] still "
+     "holds every end's index and the count has len(ends) entries without the minimum length"),
     ("orchestrator/toml_input.py", r'line = text\.count\("\\n", 0, deep\.start\(\)\) \+ 1', r'text\.count\("\\n", None, ',
      "str.count with start None counts from the start of the text, as with 0"),
 ]
