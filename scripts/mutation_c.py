@@ -27,6 +27,7 @@ import datetime as dt
 import hashlib
 import random
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -132,8 +133,12 @@ def all_mutants(root: Path, sources: tuple[str, ...]) -> list[CMutant]:
 
 
 def _copy_tree(work: Path, repo: Path) -> None:
+    """The committed tree, and the FMUs already built (rebuilt by the tests where their sources differ)."""
     archive = subprocess.run(["git", "archive", "HEAD"], cwd=repo, capture_output=True, check=True).stdout
     subprocess.run(["tar", "-x", "-C", str(work)], input=archive, check=True)
+    if (repo / "fmus").is_dir():
+        shutil.copytree(repo / "fmus", work / "fmus", dirs_exist_ok=True,
+                        ignore=shutil.ignore_patterns("build", "__pycache__", ".*.partial"))
 
 
 def _pytest(work: Path, tests: tuple[str, ...], timeout_s: float | None) -> tuple[int | None, str]:
@@ -158,8 +163,13 @@ def verdict_of(returncode: int | None, output: str) -> str:
 
 
 def run_c_module(key: str, sources: tuple[str, ...], tests: tuple[str, ...], repo: Path, sample: int | None,
-                 seed: int, timeout_multiplier: float, timeout_constant: float, hashes: dict[str, str | None]):
-    """Run a sample of the C mutants of ``sources``; returns the arguments of a ``Verdicts``."""
+                 seed: int, timeout_multiplier: float, timeout_constant: float, hashes: dict[str, str | None],
+                 max_minutes: float | None = None):
+    """Run a sample of the C mutants of ``sources``; returns the arguments of a ``Verdicts``.
+
+    ``max_minutes``: no mutant is started after that long; the mutants tested by then are the
+    sample (drawn in random order, so a sample cut short is still a random one).
+    """
     started = time.perf_counter()
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=repo, capture_output=True, text=True,
                             check=True).stdout.strip()
@@ -176,7 +186,11 @@ def run_c_module(key: str, sources: tuple[str, ...], tests: tuple[str, ...], rep
         limit = (time.perf_counter() - t0 + timeout_constant) * timeout_multiplier
         counts: dict[str, int] = {}
         survivors = []
+        tested = 0
         for number, mutant in enumerate(chosen, start=1):
+            if max_minutes is not None and time.perf_counter() - started > 60.0 * max_minutes:
+                break
+            tested += 1
             path = clean / mutant.source
             original_text = path.read_text(encoding="utf-8")
             lines = original_text.splitlines(keepends=True)
@@ -195,7 +209,7 @@ def run_c_module(key: str, sources: tuple[str, ...], tests: tuple[str, ...], rep
                                   "diff": mutant.diff})
     settings = {"tests": list(tests), "pytest_args": ["-m", "not slow"], "timeout_multiplier": timeout_multiplier,
                 "timeout_constant": timeout_constant, "children": 1, "source_hashes": hashes,
-                "sample": {"size": len(chosen), "of": len(everything), "seed": seed},
+                "sample": {"size": tested, "of": len(everything), "seed": seed},
                 "not_compiled_excluded": counts.pop("not compiled", 0)}
     stamp = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     return dict(module=key, sources=list(sources), counts=counts, survivors=survivors,

@@ -498,6 +498,8 @@ def main(argv=None) -> int:
     parser.add_argument("--sample", type=int, help="test a random sample of this many mutants per module "
                         "(an estimate of the score, for modules too slow to run whole)")
     parser.add_argument("--seed", type=int, default=0, help="of the random sample")
+    parser.add_argument("--max-minutes", type=float, help="C modules: start no mutant after this long (the "
+                        "mutants tested by then are the sample)")
     parser.add_argument("--survivors-only", action="store_true",
                         help="retest only the survivors of the stored run (after new tests); the others keep "
                              "their verdicts")
@@ -517,7 +519,8 @@ def main(argv=None) -> int:
                 module = MODULES[key]
                 v = Verdicts(**run_c_module(key, module.sources, module.tests, REPO, args.sample, args.seed,
                                             args.timeout_multiplier, args.timeout_constant,
-                                            {source: committed_hash(source, "HEAD") for source in module.sources}))
+                                            {source: committed_hash(source, "HEAD") for source in module.sources},
+                                            args.max_minutes))
             else:
                 v = run_module(key, args.children, args.timeout_multiplier, args.timeout_constant, args.sample,
                                args.seed, previous)
