@@ -267,6 +267,10 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      r"np\.bincount\(owner\[:-1\], weights=[^)]*\)?,\s*\)",
      "every end owns at least two of the sampled points (pieces + 1, pieces at least 1), so owner[:-1] still "
      "holds every end's index and the count has len(ends) entries without the minimum length"),
+    ("rhnc/routing/route_search.py", r"direct = np\.asarray\(segment_costs\(i, js\), dtype=float\)",
+     r"direct = np\.asarray\(segment_costs\(i, js\),\s*(dtype=None)?\s*\)",
+     "the costs are only compared (with inf, IMPASSABLE and the float sums along the path) and used to index: "
+     "integer costs compare the same as their floats"),
     ("orchestrator/toml_input.py", r'line = text\.count\("\\n", 0, deep\.start\(\)\) \+ 1', r'text\.count\("\\n", None, ',
      "str.count with start None counts from the start of the text, as with 0"),
 ]
