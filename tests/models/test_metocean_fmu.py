@@ -277,3 +277,29 @@ def test_resources_are_found_in_a_folder_whose_name_the_uri_percent_encodes(fmus
         assert f"{tmp_path / (folder + '-2')}/resources/no_such.grid\" cannot be opened" in missing.errors()
     finally:
         missing.close()
+
+
+@pytest.mark.parametrize("prefix", ["file://", "file://localhost", "file:"])
+def test_every_local_form_of_the_resource_uri_with_lower_case_escapes_is_read(fmus, tmp_path, monkeypatch, prefix):
+    """Another master may write ``file:/p`` or ``file://localhost/p`` and escape in lower case hex."""
+    import pathlib
+
+    from conftest import Slave
+
+    from orchestrator.geometry import NM
+    from rhnc.weather.weather_generators import paper_default
+
+    def lower_case_uri(path):
+        return prefix + "".join(c if c.isalnum() or c in "/._-" else "".join(f"%{b:02x}" for b in c.encode())
+                                for c in str(path))
+
+    monkeypatch.setattr(pathlib.Path, "as_uri", lower_case_uri)
+    slave = Slave(fmus["MetOcean"], tmp_path / "unzip*?:[e] é")  # %2a %3f %3a %5b %5d %20 %c3%a9
+    monkeypatch.undo()
+    try:
+        point = (40.0 * NM, 55.0 * NM)
+        slave.initialize({"grid_file": "default.grid", "x": point[0], "y": point[1]})
+        assert slave.get("hs")[0] == pytest.approx(float(paper_default(resolution_nm=5.0).sample(*point)["hs"]),
+                                                   rel=1e-12)
+    finally:
+        slave.close()
