@@ -246,3 +246,20 @@ def test_paper_table2_set_is_unstable_at_cruise_speed():
 
 def test_default_set_is_course_stable_at_18_knots():
     assert max(sway_yaw_poles(parameters(), 18 * KNOT).real) < 0
+
+
+@pytest.mark.parametrize("byte, what", [(0, "magic"), (4, "size")])
+def test_a_serialized_state_with_a_wrong_magic_or_size_is_refused(fmus, open_slave, byte, what):
+    """The state's first two words (a magic number, the size of the state) tell a state of this FMU's
+    build; either one wrong is refused, whatever the other says."""
+    slave = open_slave(fmus["KCS"])
+    slave.initialize({"u0": 9.0})
+    state = slave.fmu.getFMUstate()
+    serialized = bytearray(slave.fmu.serializeFMUstate(state))
+    restored = slave.fmu.deSerializeFMUstate(bytes(serialized))  # the untouched one is taken
+    slave.fmu.freeFMUstate(restored)
+    serialized[byte] ^= 0x01
+    with pytest.raises(FMICallException):
+        slave.fmu.deSerializeFMUstate(bytes(serialized))
+    assert "fmi2DeSerializeFMUstate: the FMU state does not belong to this FMU" in slave.errors(), what
+    slave.fmu.freeFMUstate(state)
