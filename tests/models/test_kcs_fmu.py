@@ -262,6 +262,9 @@ def test_a_serialized_state_with_a_wrong_magic_or_size_is_refused(fmus, open_sla
     with pytest.raises(FMICallException):
         slave.fmu.deSerializeFMUstate(bytes(serialized))
     assert "fmi2DeSerializeFMUstate: the FMU state does not belong to this FMU" in slave.errors(), what
+    with pytest.raises(FMICallException):  # and one of another length
+        slave.fmu.deSerializeFMUstate(bytes(serialized[:-1]))
+    assert f"fmi2DeSerializeFMUstate: {len(serialized) - 1} bytes given, {len(serialized)} expected" in slave.errors()
     slave.fmu.freeFMUstate(state)
 
 
