@@ -271,6 +271,14 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      r"direct = np\.asarray\(segment_costs\(i, js\),\s*(dtype=None)?\s*\)",
      "the costs are only compared (with inf, IMPASSABLE and the float sums along the path) and used to index: "
      "integer costs compare the same as their floats"),
+    ("rhnc/encounters/colregs.py", r"wrap_deg\(target_course_deg - own_course_deg - 180\.0\)",
+     r"wrap_deg\(target_course_deg - own_course_deg \+ 180\.0\)",
+     "the two arguments differ by 360 deg, which the wrap into (-180, 180] removes; abs() of the result is the "
+     "same (180 at the wrap's own edge either way)"),
+    ("rhnc/encounters/colregs.py", r'if name != "overtaking" and abs\(abs\(beta\)', r'if name != "XXovertakingXX"',
+     "an overtaking class has a closing range (positive TCPA), which a target within 2.5 deg of 112.5 deg from our "
+     "bow cannot give: we then move away from it (cos beta < 0) while it moves away from us (own ship more than "
+     "112.5 deg from its bow), so the overtaken note is never due for an overtaking ship"),
     ("orchestrator/toml_input.py", r'line = text\.count\("\\n", 0, deep\.start\(\)\) \+ 1', r'text\.count\("\\n", None, ',
      "str.count with start None counts from the start of the text, as with 0"),
 ]

@@ -133,8 +133,8 @@ MODULES = {
     "solver_watchdog": Module(("rhnc/control/solver_watchdog.py",),
                               ("tests/rhnc/test_solver_worker_lifetime.py", "tests/rhnc/test_nmpc_solve_attempts.py",
                                "tests/rhnc/test_nmpc_limits.py")),
-    "colregs": Module(("rhnc/encounters/colregs.py",), ("tests/rhnc/test_colregs.py", "tests/rhnc/test_imazu.py",
-                                                        "tests/rhnc/test_nmpc_colregs.py")),
+    "colregs": Module(("rhnc/encounters/colregs.py",), ("tests/rhnc/test_colregs.py", "tests/rhnc/test_colregs_rules.py",
+                                                        "tests/rhnc/test_imazu.py", "tests/rhnc/test_nmpc_colregs.py")),
     # (slow tests included: the killed-worker resume is the batch runner's behaviour)
     "batch_run": Module(("orchestrator/batch_run.py",), ("tests/orchestrator/test_batch_lost_runs.py",
                                                          "tests/orchestrator/test_crash_safe_batch.py",
