@@ -144,7 +144,8 @@ def _expand(spec: BatchSpec) -> list[RunSpec]:
     points = list(itertools.product(*(spec.grid[k] for k in keys))) or [()]
     draws = [_draw(spec.monte_carlo, i) for i in range(spec.monte_carlo.runs)] if spec.monte_carlo else [({}, {})]
     situations = [(s.overrides, s.parameters) for s in spec.situations] or [({}, {})]
-    runs, seen = [], {}
+    runs: list[RunSpec] = []
+    seen: dict[str, int] = {}  # run id -> index of the run that has it
     for point, (situation_overrides, situation_parameters), (draw_overrides, draw_parameters) in itertools.product(
             points, situations, draws):
         overrides = {**spec.fixed, **dict(zip(keys, point)), **situation_overrides, **draw_overrides}

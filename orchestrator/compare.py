@@ -139,7 +139,7 @@ def run_comparison(path, results_root="results", progress: bool = True) -> Path:
             folder.write_json("summary.json", summary)
         else:
             key = spec["sweep"]["key"]
-            per_member = {name: [] for name in extensions}
+            per_member: dict[str, list[tuple[Any, Any]]] = {name: [] for name in extensions}
             statuses, failed_runs = {}, {}
             for value, overrides in zip(members, member_overrides):
                 log.info("comparison %s: %s = %s", spec["name"], key, value)

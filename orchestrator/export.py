@@ -162,8 +162,8 @@ def export_participant(scenario_path, participant: str, out_dir=".") -> Path:
         if outcome.status != "finished":
             raise ScenarioError(f"{scenario_path}: the probe run for the export failed: {outcome.reason}")
         layout = _layout(probe, scenario_path)
-        with tempfile.TemporaryDirectory(prefix=f"export-{participant}-") as tmp:
-            tmp = Path(tmp)
+        with tempfile.TemporaryDirectory(prefix=f"export-{participant}-") as folder:
+            tmp = Path(folder)
             bundle = tmp / BUNDLE
             bundle.mkdir()
             _resources(spec, scenario, cosim, bundle)

@@ -67,6 +67,12 @@ class _Figure:
     reader: int | None = None
     outcome: tuple[str, Any] | None = None  # ("drawn", [files]) or ("error", text)
 
+    def result(self) -> tuple[str, Any]:
+        """The outcome, once the figure is drawn (every figure has one after the wait)."""
+        if self.outcome is None:
+            raise RuntimeError(f"figure '{self.name}' has not been drawn yet")
+        return self.outcome
+
 
 class FigureDrawing:
     """The figures of one run, being drawn; :meth:`collect` once, :meth:`cancel` on the way out."""
@@ -86,12 +92,12 @@ class FigureDrawing:
         for figure in self._figures:
             if figure.pid is not None:
                 figure.outcome = _wait(figure)
-        full = [(figure.name, figure.outcome[1]) for figure in self._figures if figure.outcome[0] == "disk full"]
+        full = [(figure.name, figure.result()[1]) for figure in self._figures if figure.result()[0] == "disk full"]
         if full:  # a run folder without its figures must not look complete: the run's writer discards it
             shutil.rmtree(self.out_dir / FIGURE_SPOOL, ignore_errors=True)
             raise OSError(errno.ENOSPC, f"{full[0][1]} (figure '{full[0][0]}')")
         for figure in self._figures:
-            kind, value = figure.outcome
+            kind, value = figure.result()
             if kind == "drawn":
                 _move_contents(figure.folder, self.out_dir)
                 files += value

@@ -188,8 +188,8 @@ def build_fmu(name: str, out_dir: Path | None = None, models_dir: Path | None = 
         extra_sources["buildDescription.xml"] = model_description.build_description_fmi3(name, c_files)
     digest = source_hash(name, models_dir, fmi_version)
 
-    with tempfile.TemporaryDirectory(prefix=f"fmu_build_{name}_") as tmp:
-        tmp = Path(tmp)
+    with tempfile.TemporaryDirectory(prefix=f"fmu_build_{name}_") as folder:
+        tmp = Path(folder)
         shared = _shared_set()
         header = tmp / f"{shared.lower()}_parameter_defaults.h"
         header.write_text(_defaults_header(parameters, shared.upper(), f"models/{shared}/parameter_sets.toml"),

@@ -15,6 +15,7 @@ import shutil
 import tomllib
 from collections.abc import Callable, Mapping
 from pathlib import Path
+from typing import Any
 
 from fmpy.fmi1 import FMICallException
 
@@ -244,7 +245,7 @@ class FmuParticipant(Participant):
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         if inputs:
             if self._scalar_inputs is not None:
-                self._set_scalar_inputs(inputs)
+                self._set_scalar_inputs(inputs, self._scalar_inputs)
             else:
                 self._set_inputs(inputs)
         if self._messages:  # what _call does, without a call more per step
@@ -321,7 +322,7 @@ class FmuParticipant(Participant):
         if not inputs:
             return
         if self._scalar_inputs is not None:
-            self._set_scalar_inputs(inputs)
+            self._set_scalar_inputs(inputs, self._scalar_inputs)
             return
         touched = []
         for port, value in inputs.items():
@@ -339,22 +340,24 @@ class FmuParticipant(Participant):
                 values.append(value)
         self._call("SetReal", self._slave.set_reals, refs, values)
 
-    def _set_scalar_inputs(self, inputs: Mapping[str, Value]) -> None:
-        """:meth:`_set_inputs` where every input port is one variable: the same values, one loop,
-        one call on the arrays made for these ports (once per set of ports given)."""
+    def _set_scalar_inputs(self, inputs: Mapping[str, Value],
+                           scalar_inputs: dict[str, tuple[Any, float, float]]) -> None:
+        """:meth:`_set_inputs` where every input port is one variable (``scalar_inputs``: port ->
+        (value reference, scale, offset)): the same values, one loop, one call on the arrays made
+        for these ports (once per set of ports given)."""
         ports = tuple(inputs)
         writer = self._input_writers.get(ports)
         if writer is None:
             writer = self._input_writers[ports] = (
-                self._slave.real_writer([self._scalar_inputs[port][0] for port in ports]),
-                all(self._scalar_inputs[port][1:] == (1.0, 0.0) for port in ports))
+                self._slave.real_writer([scalar_inputs[port][0] for port in ports]),
+                all(scalar_inputs[port][1:] == (1.0, 0.0) for port in ports))
         write, plain = writer
         if plain:  # (number - 0.0) / 1.0 is the number
             values = [float(value) for value in inputs.values()]
             if math.isfinite(sum(values)):  # (a NaN or inf sums to one)
                 self._call("SetReal", write, values)
                 return
-        values, scalar_inputs = [], self._scalar_inputs
+        values = []
         for port, value in inputs.items():
             number = float(value)
             if not math.isfinite(number):

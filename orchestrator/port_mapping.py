@@ -210,7 +210,9 @@ def bind_ports(spec: ParticipantSpec, variables: Mapping[str, object], model_des
         A unit mismatch, an angle without unit, one variable feeding two ports, an
         incomplete geodetic or vector mapping.
     """
-    inputs, outputs, used = [], [], {}
+    inputs: list[ScalarBinding | VectorBinding | GeodeticBinding] = []
+    outputs: list[ScalarBinding | VectorBinding | GeodeticBinding] = []
+    used: dict[str, str] = {}  # FMU variable -> the port it feeds
 
     def take(port: str, name: str, causality: str | None):
         key = f"{where}.mapping.{port}"

@@ -92,7 +92,7 @@ class ScriptedTau(Participant):
         self.steps = sorted(steps)
         self.zigzag = zigzag  # (execute_s, tau_r, angle_rad) or None
         self._sign = 1.0
-        self._psi_execute = None
+        self._psi_execute: float | None = None  # heading [rad] when the zigzag began
 
     @classmethod
     def from_options(cls, name: str, options: Mapping, context: BuildContext) -> "ScriptedTau":

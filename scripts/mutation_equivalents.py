@@ -251,6 +251,37 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("rhnc/voyage/equal_arrival.py", r"if any\(abs\(t\.speed_kn - guess\) < 1e-9",
      r"guess\) <= 1e-9",
      "differs only for a guess exactly 1e-9 kn from a tried speed, the threshold's own value"),
+    ("rhnc/routing/weather_routing.py", r"if len\(legs\) else np\.zeros\(0\)", r"else np\.zeros\((None|1)\)",
+     "the branch is taken only for a polyline of one point, which no caller passes (path_cost returns 0 below two "
+     "points, the route navigation calls it with three or more) and which fails further on either way (an "
+     "infinite cost written into the empty integer count)"),
+    ("rhnc/routing/weather_routing.py", r"weights=\(sub_speed <= 1e-3\)", r"weights=\(sub_speed < 1e-3\)",
+     "differs only for a speed over ground of exactly 1e-3 m/s, the threshold's own value"),
+    ("rhnc/routing/weather_routing.py", r"max_evaluations: int = 200\)", r"max_evaluations: int = 201\)",
+     "the budget is checked between sweeps over the turning points, not within one: 200 and 201 differ only when "
+     "a sweep ends with exactly 200 evaluations, the budget's own value"),
+    ("rhnc/routing/weather_routing.py", r"len\(best_polyline\) > 2:", r"len\(best_polyline\) >= 2:",
+     "a search polyline of two points is the straight route itself (start to goal), whose cost it ties: it becomes "
+     "the best only when rounding makes the tie strict, so the two differ only in a last-bit tie"),
+    ("rhnc/routing/weather_routing.py", r"np\.bincount\(owner\[:-1\], weights=.*minlength=len\(ends\)\)",
+     r"np\.bincount\(owner\[:-1\], weights=[^)]*\)?,\s*\)",
+     "every end owns at least two of the sampled points (pieces + 1, pieces at least 1), so owner[:-1] still "
+     "holds every end's index and the count has len(ends) entries without the minimum length"),
+    ("rhnc/routing/route_search.py", r"direct = np\.asarray\(segment_costs\(i, js\), dtype=float\)",
+     r"direct = np\.asarray\(segment_costs\(i, js\),\s*(dtype=None)?\s*\)",
+     "the costs are only compared (with inf, IMPASSABLE and the float sums along the path) and used to index: "
+     "integer costs compare the same as their floats"),
+    ("rhnc/encounters/colregs.py", r"wrap_deg\(target_course_deg - own_course_deg - 180\.0\)",
+     r"wrap_deg\(target_course_deg - own_course_deg \+ 180\.0\)",
+     "the two arguments differ by 360 deg, which the wrap into (-180, 180] removes; abs() of the result is the "
+     "same (180 at the wrap's own edge either way)"),
+    ("rhnc/encounters/colregs.py", r'if name != "overtaking" and abs\(abs\(beta\)', r'if name != "XXovertakingXX"',
+     "an overtaking class has a closing range (positive TCPA), which a target within 2.5 deg of 112.5 deg from our "
+     "bow cannot give: we then move away from it (cos beta < 0) while it moves away from us (own ship more than "
+     "112.5 deg from its bow), so the overtaken note is never due for an overtaking ship"),
+    ("rhnc/navigation/fields.py", r"self\._energy_bar: np\.ndarray \| None = None", r"self\._energy_bar: np\.ndarray \| None = \S+",
+     "update() sets the energy part and the guidance field together, and _built() refuses while either is None: "
+     "before the first update the guidance is None, so the refusal does not depend on the energy part's start value"),
     ("orchestrator/toml_input.py", r'line = text\.count\("\\n", 0, deep\.start\(\)\) \+ 1', r'text\.count\("\\n", None, ',
      "str.count with start None counts from the start of the text, as with 0"),
 ]

@@ -70,6 +70,8 @@ class Module:
     sources: tuple[str, ...]
     tests: tuple[str, ...]
     pytest_args: tuple[str, ...] = ()
+    #: "python" (mutmut) or "c" (scripts/mutation_c.py: one source mutation, rebuilt and tested)
+    language: str = "python"
 
 
 MODULES = {
@@ -131,12 +133,19 @@ MODULES = {
     "solver_watchdog": Module(("rhnc/control/solver_watchdog.py",),
                               ("tests/rhnc/test_solver_worker_lifetime.py", "tests/rhnc/test_nmpc_solve_attempts.py",
                                "tests/rhnc/test_nmpc_limits.py")),
-    "colregs": Module(("rhnc/encounters/colregs.py",), ("tests/rhnc/test_colregs.py", "tests/rhnc/test_imazu.py",
-                                                        "tests/rhnc/test_nmpc_colregs.py")),
+    "colregs": Module(("rhnc/encounters/colregs.py",), ("tests/rhnc/test_colregs.py", "tests/rhnc/test_colregs_rules.py",
+                                                        "tests/rhnc/test_imazu.py", "tests/rhnc/test_nmpc_colregs.py")),
     # (slow tests included: the killed-worker resume is the batch runner's behaviour)
     "batch_run": Module(("orchestrator/batch_run.py",), ("tests/orchestrator/test_batch_lost_runs.py",
                                                          "tests/orchestrator/test_crash_safe_batch.py",
                                                          "tests/orchestrator/test_batch.py"), ("-m", "slow or not slow")),
+    # the shared C layer of the FMUs, against the FMU tests (which rebuild the FMUs from the mutated sources)
+    "fmu_common": Module(("models/common/fmu_core.c", "models/common/fmi2_api.c", "models/common/fmi3_api.c",
+                          "models/common/rk4.h", "models/common/kcs_dynamics.h"),
+                         ("tests/models/test_kcs_fmu.py", "tests/models/test_kcsmmg_fmu.py", "tests/models/test_s175_fmu.py",
+                          "tests/models/test_kvlcc2_fmu.py", "tests/models/test_vendor_b_fmu.py",
+                          "tests/models/test_metocean_fmu.py", "tests/models/test_fmi3.py", "tests/models/test_fmu_build.py",
+                          "tests/orchestrator/test_fmu_participant_guards.py"), language="c"),
 }
 
 
@@ -184,8 +193,8 @@ class Verdicts:
 
     def explained(self) -> list[tuple[dict, str]]:
         """(survivor, why) for every survivor, ``why`` empty when it is not explained."""
-        log_lines = {source: log_message_lines((REPO / source).read_text()) if (REPO / source).is_file() else set()
-                     for source in self.sources}
+        log_lines = {source: log_message_lines((REPO / source).read_text())
+                     if (REPO / source).is_file() and source.endswith(".py") else set() for source in self.sources}
         # an entry carried over from an earlier report has no diff, only its explanation
         return [(s, s["why"] if "why" in s and not s["diff"] else
                  explain(s["source"], s["diff"], log_lines.get(s["source"], set()))) for s in self.survivors]
@@ -489,6 +498,8 @@ def main(argv=None) -> int:
     parser.add_argument("--sample", type=int, help="test a random sample of this many mutants per module "
                         "(an estimate of the score, for modules too slow to run whole)")
     parser.add_argument("--seed", type=int, default=0, help="of the random sample")
+    parser.add_argument("--max-minutes", type=float, help="C modules: start no mutant after this long (the "
+                        "mutants tested by then are the sample)")
     parser.add_argument("--survivors-only", action="store_true",
                         help="retest only the survivors of the stored run (after new tests); the others keep "
                              "their verdicts")
@@ -500,8 +511,19 @@ def main(argv=None) -> int:
             previous = load_verdicts().get(key) if args.survivors_only else None
             if args.survivors_only and previous is None:
                 raise SystemExit(f"no stored run of {key} to retest the survivors of")
-            v = run_module(key, args.children, args.timeout_multiplier, args.timeout_constant, args.sample,
-                           args.seed, previous)
+            if MODULES[key].language == "c":
+                if args.survivors_only:
+                    raise SystemExit(f"{key}: a C module is rerun whole (or sampled), not by its survivors")
+                from mutation_c import run_c_module
+
+                module = MODULES[key]
+                v = Verdicts(**run_c_module(key, module.sources, module.tests, REPO, args.sample, args.seed,
+                                            args.timeout_multiplier, args.timeout_constant,
+                                            {source: committed_hash(source, "HEAD") for source in module.sources},
+                                            args.max_minutes))
+            else:
+                v = run_module(key, args.children, args.timeout_multiplier, args.timeout_constant, args.sample,
+                               args.seed, previous)
             verdicts = load_verdicts()  # reread: another run may have stored its module meanwhile
             verdicts[key] = v
             save_verdicts(verdicts)

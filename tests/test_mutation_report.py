@@ -65,3 +65,51 @@ def test_a_run_stored_without_hashes_is_judged_by_its_commit(report, tmp_path):
     (tmp_path / "pkg" / "c.py").write_text("z = 3\n")
     assert report.stale_sources(moved, tmp_path) == ["pkg/c.py"]
     assert report.stale_sources(verdicts(report), tmp_path) == ["pkg/a.py", "pkg/b.py"]
+
+
+C_SCRIPT = SCRIPT.parent / "mutation_c.py"
+
+
+@pytest.fixture(scope="module")
+def c_mutation():
+    spec = importlib.util.spec_from_file_location("mutation_c_under_test", C_SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    yield module
+    del sys.modules[spec.name]
+
+
+C_SOURCE = """/* a comment: a < b && c */
+#include <math.h>
+static int check(int a, int b) {
+    log_error(comp, "a < b");
+    if (a < b && b != 0) return fmi2Error;  /* x == y */
+    return a * b + 1;
+    set_name(comp, "a == b");
+}
+"""
+
+
+def test_c_mutants_change_one_operator_of_a_code_line_never_a_comment_string_or_log_call(c_mutation):
+    mutants = c_mutation.mutants_of("m.c", C_SOURCE)
+    changed = {(m.line, m.mutated.strip()) for m in mutants}
+    assert changed == {
+        (5, "if (a <= b && b != 0) return fmi2Error;  /* x == y */"),
+        (5, "if (a < b || b != 0) return fmi2Error;  /* x == y */"),
+        (5, "if (a < b && b == 0) return fmi2Error;  /* x == y */"),
+        (5, "if (a < b && b != 0) return fmi2OK;  /* x == y */"),
+        (5, "if (!(a < b && b != 0)) return fmi2Error;  /* x == y */"),
+        (6, "return a / b + 1;"),
+        (6, "return a * b - 1;"),
+    }
+    # names are stable across processes (the report matches a survivor by its name)
+    assert len({m.name for m in mutants}) == len(mutants)
+    assert all(m.name.startswith("m_c:") for m in mutants)
+
+
+def test_a_c_mutant_that_does_not_compile_is_told_from_one_the_tests_kill(c_mutation):
+    assert c_mutation.verdict_of(1, "FmuError: building model KCS failed: kcs.c:3: error: ...") == "not compiled"
+    assert c_mutation.verdict_of(1, "FAILED tests/models/test_kcs_fmu.py::test_x") == "killed"
+    assert c_mutation.verdict_of(0, "") == "survived"
+    assert c_mutation.verdict_of(None, "") == "timeout"

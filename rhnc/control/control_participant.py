@@ -47,7 +47,7 @@ _STATE_INFO = {"x": ("m", "measured position north of the scenario's origin"),
 _TIMED_STATE = ["t [s]", "x north [m]", "y east [m]", "psi heading [rad]", "u surge [m/s]", "v sway [m/s]",
                 "r yaw rate [rad/s]"]
 #: unit, description and the meaning of each column (array ports) of every port
-PORT_INFO = {
+PORT_INFO: dict[str, dict[str, Any]] = {
     **{name: {"unit": unit, "description": text} for name, (unit, text) in _STATE_INFO.items()},
     "reference": {"unit": "", "columns": _TIMED_STATE,
                   "description": "reference trajectory, one row per point: (t [s], x [m], y [m], psi [rad], "

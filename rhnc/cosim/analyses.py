@@ -40,8 +40,8 @@ def turning_circle_analysis(frame, scenario, cosim, out_dir) -> dict:
     plant = plant_name(cosim)
     column, kind = steering_column(frame, scenario, plant)
     execute = _execute_time(frame, column)
-    cols = [frame[f"{plant}.{c}"].to_numpy() for c in ("x", "y", "psi")]
-    figures = turning_circle(frame["time_s"].to_numpy(), *cols, execute_s=execute,
+    x, y, psi = (frame[f"{plant}.{c}"].to_numpy() for c in ("x", "y", "psi"))
+    figures = turning_circle(frame["time_s"].to_numpy(), x, y, psi, execute_s=execute,
                              length_m=_ship_length(cosim, plant))
     figures["execute_s"] = execute
     figures["steered_by"] = kind

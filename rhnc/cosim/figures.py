@@ -115,7 +115,8 @@ def _encounter_extent_nm(frame, plant, margin_nm: float = 1.5):
     own_x, own_y = frame[f"{plant}.x"].to_numpy(), frame[f"{plant}.y"].to_numpy()
     north = [own_x.min(), own_x.max()]
     east = [own_y.min(), own_y.max()]
-    prefix, _ = _obstacle_columns(frame)
+    found = _obstacle_columns(frame)
+    prefix = found[0] if found is not None else ""  # (no obstacle columns: no closest approach either)
     for i, k, _ in closest_approach_rows(frame, plant):
         x, y, radius = (frame[f"{prefix}[{i},{c}]"].to_numpy() for c in (0, 1, 4))
         north = [min(north[0], x[k] - radius[k]), max(north[1], x[k] + radius[k])]

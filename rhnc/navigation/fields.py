@@ -208,12 +208,15 @@ class SuperpositionField:
         # Goal-relative geometry, fixed for the goal: distance and bearing to the goal.
         self._distance = np.hypot(self.goal[0] - x, self.goal[1] - y).astype(np.float32)
         self._bearing_to_goal = np.arctan2(self.goal[1] - y, self.goal[0] - x).astype(np.float32)
-        self._speed = None
-        self._start = None
-        self.ec = self.em = None
-        self._ec_bar = self._em_bar = None
-        self._energy_bar = None
-        self._guidance = None
+        # built by update(): None until then
+        self._speed: float | None = None
+        self._start: tuple[float, float] | None = None
+        self.ec: np.ndarray | None = None
+        self.em: np.ndarray | None = None
+        self._ec_bar: np.ndarray | None = None
+        self._em_bar: np.ndarray | None = None
+        self._energy_bar: np.ndarray | None = None
+        self._guidance: np.ndarray | None = None
         self._g_min = self._g_span = 0.0
 
     # -- rebuilding -------------------------------------------------------------------
@@ -251,9 +254,15 @@ class SuperpositionField:
         self._g_span = span if span > 1e-12 * max(abs(self._g_min), 1.0) else np.inf
 
     @property
-    def speed(self) -> float:
-        """Planning speed over ground [m/s] of the last update."""
+    def speed(self) -> float | None:
+        """Planning speed over ground [m/s] of the last update (None before the first)."""
         return self._speed
+
+    def _built(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(E_bar, G)`` of the last update: the energy part of U and the guidance field [s]."""
+        if self._energy_bar is None or self._guidance is None:
+            raise RuntimeError("the fields are built by update(start, speed) first")
+        return self._energy_bar, self._guidance
 
     @property
     def extent(self) -> tuple[float, float, float, float]:
@@ -266,23 +275,24 @@ class SuperpositionField:
         (Not ``guidance()``: the instance attribute ``guidance``, the field's
         :class:`GuidanceParameters`, would hide a method of that name.)
         """
-        return self._guidance
+        return self._built()[1]
 
     def guidance_normalised(self) -> np.ndarray:
         """G_bar (Eq. 5) of the last update."""
-        return (self._guidance.astype(float) - self._g_min) / self._g_span
+        return (self._built()[1].astype(float) - self._g_min) / self._g_span
 
     def potential(self, avoidance: bool = False) -> np.ndarray:
         """U over the whole map (Eq. 6); G_bar alone when ``avoidance``."""
         g_bar = self.guidance_normalised()
-        return g_bar if avoidance else self._energy_bar + self.weights.k3 * g_bar
+        return g_bar if avoidance else self._built()[0] + self.weights.k3 * g_bar
 
     # -- local evaluation -------------------------------------------------------------
     def _patch(self, rows: slice, cols: slice, avoidance: bool) -> np.ndarray:
-        g_bar = (self._guidance[rows, cols].astype(float) - self._g_min) / self._g_span
+        energy_bar, guidance = self._built()
+        g_bar = (guidance[rows, cols].astype(float) - self._g_min) / self._g_span
         if avoidance:
             return g_bar
-        return self._energy_bar[rows, cols] + self.weights.k3 * g_bar
+        return energy_bar[rows, cols] + self.weights.k3 * g_bar
 
     def _cell(self, x: float, y: float) -> tuple[int, int, float, float]:
         nx, ny = self.shape

@@ -338,9 +338,10 @@ class NavigationParticipant(Participant):
         psi = measured.get("psi")
         if psi is None:
             psi = bearing(float(measured["x"]), float(measured["y"]), *self.goal)
-        psi, u = float(psi), float(measured.get("u", self.speed))
+        heading, u = float(psi), float(measured.get("u", self.speed))
         ahead = u * (time - (time if measured_at is None else measured_at))
-        return float(measured["x"]) + ahead * np.cos(psi), float(measured["y"]) + ahead * np.sin(psi), psi, u
+        return (float(measured["x"]) + ahead * float(np.cos(heading)), float(measured["y"]) + ahead * float(np.sin(heading)),
+                heading, u)
 
     def _local_rates(self, x: float, y: float, psi: float, u: float, time: float) -> tuple[float, float]:
         """EC [USD/h] and EM [kg/h] at the ship, speed through water u, in the weather at ``time``."""
@@ -379,7 +380,7 @@ class NavigationParticipant(Participant):
                  **extra: float) -> dict[str, Value]:
         x, y, psi, u = ship
         ec, em = self._local_rates(x, y, psi, u, time)
-        outputs = {
+        outputs: dict[str, Value] = {
             "reference": reference,
             "et": et,
             "ec_rate": ec,

@@ -72,7 +72,7 @@ class RoutingMethod:
         self.planner = RecedingRoutePlanner(metocean, goal, energy, resolution_nm, switch_margin=switch_margin,
                                             keep_out=keep_out)
         self._route = None
-        self._price_scale = None
+        self._price_scale: float | None = None
         self._planned_speed = speed
 
     def planned_speed(self, time: float, route: np.ndarray) -> float:

@@ -314,7 +314,7 @@ class RecedingRoutePlanner:
         """Reference points along ``route`` (from :meth:`route`) at ``speed_mps`` through water."""
         horizon_m = self.horizon_m(speed_mps, delta_s, horizon_steps)
         along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(route, axis=0).T))])
-        head = int(min(np.searchsorted(along, horizon_m) + 1, len(route)))
+        head = min(int(np.searchsorted(along, horizon_m)) + 1, len(route))
         dense = densify(route[:head], min(self.resolution_m / 2.0, speed_mps * delta_s / 2.0))
         times = constant_speed_times(self.metocean, dense, speed_mps, time_s)
         ramp_s = 0.5 * delta_s * (speed_mps - min(max(start_speed_mps, 0.0), speed_mps)) / speed_mps

@@ -45,11 +45,11 @@ def shortest_route(start: Sequence[float], goal: Sequence[float], circles: Seque
     """
     start = np.asarray(start, dtype=float)
     goal = np.asarray(goal, dtype=float)
-    circles = np.asarray(circles, dtype=float).reshape(-1, 3)
-    if len(circles) == 0:
+    rows = np.asarray(circles, dtype=float).reshape(-1, 3)
+    if len(rows) == 0:
         return np.vstack([start, goal])
-    centres = circles[:, :2]
-    radii = circles[:, 2] + margin
+    centres = rows[:, :2]
+    radii = rows[:, 2] + margin
     for name, point in (("start", start), ("goal", goal)):
         inside = np.hypot(*(centres - point).T) < radii
         if np.any(inside):

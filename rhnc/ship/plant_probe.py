@@ -42,18 +42,18 @@ def _sail(build: Callable, speed_mps: float, tau: tuple[float, float]) -> np.nda
     """States (n, 6) of the plant sailed from the probe heading with ``tau`` held."""
     plant = build({"x_m": 0.0, "y_m": 0.0, "psi_rad": math.radians(PROBE_HEADING_DEG), "u_mps": speed_mps})
     weather = {port: 0.0 for port in WEATHER_PORTS if port in plant.input_names}
-    states = []
+    rows: list[list[float]] = []
     try:
         outputs = plant.setup(0.0, weather)
         steps = int(round(PROBE_DURATION_S / PROBE_SAMPLE_S))
         for k in range(steps + 1):
-            states.append([outputs[port] for port in STATE_NAMES])
+            rows.append([outputs[port] for port in STATE_NAMES])
             if k < steps:
                 outputs = plant.step(k * PROBE_SAMPLE_S, PROBE_SAMPLE_S,
                                      {"tau_u": tau[0], "tau_r": tau[1], **weather})
     finally:
         plant.terminate()
-    states = np.array(states, dtype=float)
+    states = np.array(rows, dtype=float)
     states[:, 2] = np.unwrap(states[:, 2])
     return states
 

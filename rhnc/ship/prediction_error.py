@@ -53,7 +53,8 @@ def position_error_growth(parameters: ShipParameters, records: dict,
     ToolchainError
         No record lasts the horizon.
     """
-    ratios, marks = [], {20.0: [], 60.0: [], float(horizon_s): []}
+    ratios: list[float] = []
+    marks: dict[float, list[float]] = {20.0: [], 60.0: [], float(horizon_s): []}
     for record in records.values():
         dt = float(record.t[1] - record.t[0])
         steps = int(round(horizon_s / dt))

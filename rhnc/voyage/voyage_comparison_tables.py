@@ -175,7 +175,8 @@ def sweep_section(key: str, members: list[tuple[Any, Section]], out_dir: Path) -
         rows.append(row)
     table = pd.DataFrame(rows)
     labels = list(dict.fromkeys(label for _, s in members for label in s.summary.get("systems", {})))
-    stats_rows, summary = [], {}
+    stats_rows: list[dict[str, Any]] = []
+    summary: dict[str, dict[str, Any]] = {}  # system -> figure -> its statistics
     nominal = pd.to_numeric(table["available cost saving at the nominal speed [%]"], errors="coerce").dropna()
     stats_rows.append({"system": "(the weather)", "figure": "available cost saving at the nominal speed [%]",
                        **_distribution(nominal.to_numpy())})

@@ -115,7 +115,7 @@ def optimal_route(table, where: str) -> OptimalRouteSettings:
             raise ScenarioError(f"{here}: expected {{ center_nm = [x, y], radius_nm = r }}")
         reject_unknown(entry, ("center_nm", "radius_nm"), here)
         centre = point(entry, "center_nm", here)
-        radius = entry.get("radius_nm")
+        radius: Any = entry.get("radius_nm")  # a TOML value, checked next
         if not is_finite_number(radius) or radius <= 0:
             raise ScenarioError(f"{here}.radius_nm: expected a positive number, got {radius!r}")
         circles.append((float(centre[0] * NM), float(centre[1] * NM), float(radius * NM)))

@@ -131,33 +131,12 @@ def from_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
     (ERA5 carries no current) with a warning.  NaN (land in ocean products)
     becomes zero.
     """
-    import xarray as xr
-
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"met-ocean file not found: {path}")
     if resolution_nm is not None and not resolution_nm > 0:
         raise ValueError(f"resolution_nm must be positive, got {resolution_nm}")
-    with xr.open_dataset(path) as ds:
-        _check_size(ds, time_index)  # from the header, before the data are read
-        ds = ds.load()
-    time_dim = next((d for d in TIME_DIMS if d in ds.dims), None)
-    times_s, zero = None, None
-    if time_dim is not None and time_index is not None:
-        if isinstance(time_index, bool) or not isinstance(time_index, int) or not (
-                -ds.sizes[time_dim] <= time_index < ds.sizes[time_dim]):
-            raise ValueError(f"time_index {time_index!r} is not one of the file's {ds.sizes[time_dim]} time steps")
-        ds = ds.isel({time_dim: time_index})
-        time_dim = None
-    elif time_dim is not None and ds.sizes[time_dim] == 1:
-        ds = ds.isel({time_dim: 0})
-        time_dim = None
-    elif time_dim is not None:
-        ds = ds.sortby(time_dim)
-        times_s, zero = _seconds(ds[time_dim].values, start_time or ds.attrs.get("time_origin"), path, time_dim)
-    for extra in [d for d in ds.dims if d not in ("northing", "easting", "latitude", "longitude", "lat", "lon",
-                                                  time_dim)]:
-        ds = ds.isel({extra: 0})
+    ds, time_dim, times_s, zero = _read_dataset(path, time_index, start_time)
     arrays = {name: _find_variable(ds, name, path, quiet=currents_file is not None) for name in FIELDS}
     lead = (time_dim,) if time_dim else ()
     nt = (ds.sizes[time_dim],) if time_dim else ()
@@ -180,6 +159,65 @@ def from_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
     order_lon = np.argsort(lon)
     lat, lon = lat[order_lat], lon[order_lon]
     lat0, lon0 = origin_deg if origin_deg is not None else (lat[0], lon[0])
+    north, east, plane = _plane_extent(lat, lon, lat0, lon0, projection)
+    step = resolution_nm * NM if resolution_nm else float(np.radians(np.min(np.diff(lat))) * EARTH_RADIUS_M)
+    x, y, node_lat, node_lon = _grid_nodes(north, east, step, nt, plane, lat, lon, lat0, lon0)
+    from scipy.interpolate import RegularGridInterpolator
+
+    fields = {}
+    for name, arr in arrays.items():
+        grid = _as_grid(arr, lead + (lat_name, lon_name), nt + (lat.size, lon.size))
+        grid = grid[..., order_lat, :][..., order_lon]
+        slices = grid if time_dim else grid[None]
+        projected = np.stack([RegularGridInterpolator((lat, lon), s)((node_lat, node_lon)) for s in slices])
+        fields[name] = projected if time_dim else projected[0]
+    source = f"file: {path} (origin {lat0:.4f}N {lon0:.4f}E{', azimuthal equidistant' if plane else ''})"
+    if currents_file is not None:
+        fields.update(_currents_on_grid(Path(currents_file), (lat0, lon0), node_lat, node_lon, times_s, zero))
+        source += f", currents: {currents_file}"
+    return MetOceanField(x, y, fields, source=source, **keep)
+
+
+def _read_dataset(path: Path, time_index, start_time):
+    """The file's data, loaded: ``(dataset, time dimension or None, times [s] or None, zero time or None)``.
+
+    ``time_index`` (or a time axis of one step) leaves a static field, without the time
+    dimension; otherwise the times are sorted and become seconds since ``start_time`` (else
+    the file's ``time_origin``, else its first time).  Any other dimension beside the grid's
+    and the time's (a depth, a level) is cut to its first index.
+    """
+    import xarray as xr
+
+    with xr.open_dataset(path) as ds:
+        _check_size(ds, time_index)  # from the header, before the data are read
+        ds = ds.load()
+    time_dim = next((d for d in TIME_DIMS if d in ds.dims), None)
+    times_s, zero = None, None
+    if time_dim is not None and time_index is not None:
+        if isinstance(time_index, bool) or not isinstance(time_index, int) or not (
+                -ds.sizes[time_dim] <= time_index < ds.sizes[time_dim]):
+            raise ValueError(f"time_index {time_index!r} is not one of the file's {ds.sizes[time_dim]} time steps")
+        ds = ds.isel({time_dim: time_index})
+        time_dim = None
+    elif time_dim is not None and ds.sizes[time_dim] == 1:
+        ds = ds.isel({time_dim: 0})
+        time_dim = None
+    elif time_dim is not None:
+        ds = ds.sortby(time_dim)
+        times_s, zero = _seconds(ds[time_dim].values, start_time or ds.attrs.get("time_origin"), path, time_dim)
+    for extra in [d for d in ds.dims if d not in ("northing", "easting", "latitude", "longitude", "lat", "lon",
+                                                  time_dim)]:
+        ds = ds.isel({extra: 0})
+    return ds, time_dim, times_s, zero
+
+
+def _plane_extent(lat, lon, lat0, lon0, projection: str):
+    """``(north, east, plane)``: the local plane's extent [m] of the (sorted) latitude/longitude axes.
+
+    Equirectangular (``plane`` None): the axes' own north/east offsets from the origin.  ``"aeqd"``:
+    the largest rectangle of pyproj's azimuthal equidistant plane about the origin that lies inside
+    the data (``north``, ``east``: its two edges each), with the projection to map nodes back.
+    """
     north, east = local_north_east_m(lat, lon, lat0, lon0)
     plane = None
     if projection == "aeqd":
@@ -194,15 +232,18 @@ def from_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
         _, east_edge = plane.to_local(lat_edge, np.full(64, lon[-1]))
         north = np.array([south.max(), north_edge.min()])  # the largest plane rectangle inside the data
         east = np.array([west.max(), east_edge.min()])
-    step = resolution_nm * NM if resolution_nm else float(np.radians(np.min(np.diff(lat))) * EARTH_RADIUS_M)
+    return north, east, plane
+
+
+def _grid_nodes(north, east, step: float, nt: tuple, plane, lat, lon, lat0, lon0):
+    """``(x, y, node_lat, node_lon)``: the local grid's axes [m] over the extent, spaced no coarser than
+    ``step`` [m], and each node's latitude and longitude [deg] (clipped to the data's)."""
     # cover the data's whole extent with a spacing no coarser than `step`
     nx = axis_node_count(north[-1] - north[0], step) + 1  # ceil, so one more node at most
     ny = axis_node_count(east[-1] - east[0], step) + 1
     check_grid_nodes(nx, ny, nt[0] if nt else 1)
     x = np.linspace(north[0], north[-1], int(np.ceil((north[-1] - north[0]) / step - 1e-9)) + 1)
     y = np.linspace(east[0], east[-1], int(np.ceil((east[-1] - east[0]) / step - 1e-9)) + 1)
-    from scipy.interpolate import RegularGridInterpolator
-
     xx, yy = np.meshgrid(x, y, indexing="ij")
     if plane is not None:
         node_lat, node_lon = plane.to_geographic(xx, yy)
@@ -212,18 +253,7 @@ def from_netcdf(path, origin_deg=None, resolution_nm: float | None = None,
         node_lon = lon0 + np.degrees(yy / (EARTH_RADIUS_M * np.cos(np.radians(lat0))))
     node_lat = np.clip(node_lat, lat[0], lat[-1])
     node_lon = np.clip(node_lon, lon[0], lon[-1])
-    fields = {}
-    for name, arr in arrays.items():
-        grid = _as_grid(arr, lead + (lat_name, lon_name), nt + (lat.size, lon.size))
-        grid = grid[..., order_lat, :][..., order_lon]
-        slices = grid if time_dim else grid[None]
-        projected = np.stack([RegularGridInterpolator((lat, lon), s)((node_lat, node_lon)) for s in slices])
-        fields[name] = projected if time_dim else projected[0]
-    source = f"file: {path} (origin {lat0:.4f}N {lon0:.4f}E{', azimuthal equidistant' if plane else ''})"
-    if currents_file is not None:
-        fields.update(_currents_on_grid(Path(currents_file), (lat0, lon0), node_lat, node_lon, times_s, zero))
-        source += f", currents: {currents_file}"
-    return MetOceanField(x, y, fields, source=source, **keep)
+    return x, y, node_lat, node_lon
 
 
 def _currents_on_grid(path: Path, origin_deg, node_lat, node_lon, times_s, zero) -> dict[str, np.ndarray]:

@@ -163,6 +163,24 @@ def test_fmi3_independent_variable_reads_the_time(fmus3, tmp_path):
     slave.freeInstance()
 
 
+def test_the_time_is_not_read_before_initialisation(fmus3, tmp_path):
+    from fmpy import extract
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi3 import FMU3Slave
+
+    from orchestrator.model_description import FMI3_TIME_VR
+
+    description = read_model_description(str(fmus3["KCS"]))
+    messages = []
+    slave = FMU3Slave(guid=description.instantiationToken, unzipDirectory=extract(str(fmus3["KCS"]), str(tmp_path / "u")),
+                      modelIdentifier="KCS", instanceName="ship")
+    slave.instantiate(logMessage=lambda env, status, category, message: messages.append(message.decode()))
+    with pytest.raises(FMICallException):
+        slave.getFloat64([FMI3_TIME_VR])
+    assert messages == ["fmi3GetFloat64: illegal call in state Instantiated"]
+    slave.freeInstance()
+
+
 def test_an_unknown_fmi_version_is_refused_naming_the_key(tmp_path):
     path = tmp_path / "s.toml"
     path.write_text(textwrap.dedent(SCENARIO.format(tag="x", version="1.0")))

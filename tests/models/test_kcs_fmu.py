@@ -246,3 +246,48 @@ def test_paper_table2_set_is_unstable_at_cruise_speed():
 
 def test_default_set_is_course_stable_at_18_knots():
     assert max(sway_yaw_poles(parameters(), 18 * KNOT).real) < 0
+
+
+@pytest.mark.parametrize("byte, what", [(0, "magic"), (4, "size")])
+def test_a_serialized_state_with_a_wrong_magic_or_size_is_refused(fmus, open_slave, byte, what):
+    """The state's first two words (a magic number, the size of the state) tell a state of this FMU's
+    build; either one wrong is refused, whatever the other says."""
+    slave = open_slave(fmus["KCS"])
+    slave.initialize({"u0": 9.0})
+    state = slave.fmu.getFMUstate()
+    serialized = bytearray(slave.fmu.serializeFMUstate(state))
+    restored = slave.fmu.deSerializeFMUstate(bytes(serialized))  # the untouched one is taken
+    slave.fmu.freeFMUstate(restored)
+    serialized[byte] ^= 0x01
+    with pytest.raises(FMICallException):
+        slave.fmu.deSerializeFMUstate(bytes(serialized))
+    assert "fmi2DeSerializeFMUstate: the FMU state does not belong to this FMU" in slave.errors(), what
+    with pytest.raises(FMICallException):  # and one of another length
+        slave.fmu.deSerializeFMUstate(bytes(serialized[:-1]))
+    assert f"fmi2DeSerializeFMUstate: {len(serialized) - 1} bytes given, {len(serialized)} expected" in slave.errors()
+    slave.fmu.freeFMUstate(state)
+
+
+def test_the_last_successful_time_and_the_terminated_flag_are_reported(fmus, open_slave):
+    from fmpy.fmi2 import fmi2LastSuccessfulTime, fmi2Terminated
+
+    slave = open_slave(fmus["KCS"])
+    slave.initialize({"u0": 9.0})
+    slave.fmu.doStep(0.0, 10.0)
+    slave.fmu.doStep(10.0, 5.0)
+    assert slave.fmu.getRealStatus(fmi2LastSuccessfulTime) == 15.0
+    assert slave.fmu.getBooleanStatus(fmi2Terminated) is False
+    with pytest.raises(FMICallException):
+        slave.fmu.getRealStatus(fmi2Terminated)  # not a real status
+    assert "only fmi2LastSuccessfulTime is available" in slave.errors()
+
+
+def test_debug_logging_without_categories_is_accepted_and_an_unknown_one_refused(fmus, open_slave):
+    from fmpy.fmi2 import fmi2True
+
+    slave = open_slave(fmus["KCS"])
+    slave.fmu.fmi2SetDebugLogging(slave.fmu.component, fmi2True, 0, None)  # no categories: a NULL array
+    slave.fmu.setDebugLogging(True, ["logAll"])
+    with pytest.raises(FMICallException):
+        slave.fmu.setDebugLogging(True, ["logEverything"])
+    assert 'unknown log category "logEverything"' in slave.errors()

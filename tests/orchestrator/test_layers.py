@@ -165,3 +165,40 @@ def test_wings_import_one_way():
 def test_the_wing_check_sees_an_import_upwards():
     graph = {"rhnc.ship.ship_model": {"rhnc.control.nmpc"}, "rhnc.control.nmpc": {"rhnc.ship.ship_model"}}
     assert wing_violations(graph) == ["rhnc.ship.ship_model -> rhnc.control.nmpc"]
+
+
+def _wings_diagram():
+    import importlib.util
+    import sys
+
+    script = ENGINE.parent / "scripts" / "wings_diagram.py"
+    spec = importlib.util.spec_from_file_location("wings_diagram_under_test", script)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    try:
+        spec.loader.exec_module(module)
+    finally:
+        del sys.modules[spec.name]
+    return module
+
+
+def test_the_drawing_of_the_wings_is_todays_and_its_arrows_point_down():
+    drawing = _wings_diagram()
+    assert drawing.WINGS == WINGS
+    edges = drawing.wing_edges(ENGINE.parent)
+    rank = {wing: position for position, wing in enumerate(("orchestrator",) + WINGS)}
+    assert edges and all(rank[imported] < rank[importer] for importer, imported in edges)
+    committed = (ENGINE.parent / "docs" / "wings.md").read_text(encoding="utf-8")
+    assert committed == drawing.page(edges), "docs/wings.md is not today's drawing: run python scripts/wings_diagram.py"
+
+
+def test_the_drawing_counts_the_modules_importing_another_wing(tmp_path):
+    drawing = _wings_diagram()
+    for wing, text in (("ship", "import orchestrator.geometry\n"),
+                       ("control", "from rhnc.ship import ship_model\nfrom rhnc.encounters.colregs import x\n"),
+                       ("control", "def f():\n    import rhnc.ship.energy\n")):
+        folder = tmp_path / "rhnc" / wing
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / f"m{len(list(folder.iterdir()))}.py").write_text(text)
+    assert drawing.wing_edges(tmp_path) == {("ship", "orchestrator"): 1, ("control", "ship"): 2,
+                                            ("control", "encounters"): 1}

@@ -238,3 +238,14 @@ def test_points_beyond_the_map_are_evaluated_at_the_nearest_border_point(outside
     u = field.potential()
     assert float(field.sample(u, *outside)) == float(field.sample(u, *nearest))
     assert field.gradient_at(*outside) == field.gradient_at(*nearest)
+
+
+def test_a_field_read_before_its_first_update_says_to_update_it():
+    field = SuperpositionField(resample_weather(metocean([0, 5, 10], [0, 5, 10])), (9 * NM, 9 * NM))
+    assert field.speed is None
+    for read in (field.guidance_s, field.guidance_normalised, field.potential,
+                 lambda: field.gradient_at(NM, NM), lambda: field.gradient_at(NM, NM, avoidance=True)):
+        with pytest.raises(RuntimeError, match=r"built by update\(start, speed\) first"):
+            read()
+    field.update((NM, NM), SPEED)
+    assert field.speed == SPEED and field.potential().shape == field.shape

@@ -70,7 +70,8 @@ def test_watchdog_stops_an_endless_solve_and_recovers():
     assert stopped.stopped_by == "wall"  # sleeping: no processor time, the wall cap stops it
     assert np.all(np.isnan(stopped.x)) and stopped.x.shape == (3,)
     assert bounded.timeouts == 1
-    # a fresh worker serves the next call
+    # a fresh worker serves the next call (under a cap a loaded machine's new worker can start within)
+    bounded.wall_time_s = 30.0
     quick = bounded.solve("quick", x0=np.zeros(3))
     assert quick.success and quick.iterations == 3 and not quick.timed_out
     np.testing.assert_allclose(quick.x, 1.0)

@@ -5,7 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from rhnc.routing.route_search import (build_grid_graph, cost_to_go_tree, grid_moves, segment_clearance, shortcut_path,
+from rhnc.routing.route_search import (IMPASSABLE, build_grid_graph, cost_to_go_tree, grid_moves, segment_clearance,
+                                       shortcut_path, simplify_polyline,
                                shortest_path_tree, times_along_tree)
 
 
@@ -80,3 +81,83 @@ def test_cost_to_go_is_the_cost_of_the_path_from_each_node():
             total += weights[graph.edge_between(np.array([node]), np.array([nxt]))[0]]
             node = nxt
         assert total == pytest.approx(backward.cost[start])
+
+
+def test_simplifying_drops_the_staircase_and_keeps_the_turns():
+    staircase = np.array([[0, 0], [1, 0], [1, 1], [2, 1], [2, 2], [3, 2], [3, 3], [9, 3]])
+    simplified = simplify_polyline(staircase, 0.8)
+    assert simplified.dtype == float  # integer input, float coordinates
+    np.testing.assert_array_equal(simplified, [[0, 0], [3, 3], [9, 3]])
+    # a turn at the second vertex, and one of three vertices, are kept; a straight three are not
+    np.testing.assert_array_equal(simplify_polyline([[0, 0], [0, 5], [6, 5], [12, 5]], 0.5), [[0, 0], [0, 5], [12, 5]])
+    np.testing.assert_array_equal(simplify_polyline([[0, 0], [4, 3], [8, 0]], 0.5), [[0, 0], [4, 3], [8, 0]])
+    np.testing.assert_array_equal(simplify_polyline([[0, 0], [4, 0.1], [8, 0]], 0.5), [[0, 0], [8, 0]])
+    # distance to the segment, not to its line: a vertex beyond either end, or on a loop back to the start
+    np.testing.assert_array_equal(simplify_polyline([[0, 0], [-5, 0], [5, 0]], 1.0), [[0, 0], [-5, 0], [5, 0]])
+    np.testing.assert_array_equal(simplify_polyline([[0, 0], [10, 0], [5, 0]], 1.0), [[0, 0], [10, 0], [5, 0]])
+    np.testing.assert_array_equal(simplify_polyline([[0, 0], [5, 5], [0, 0]], 1.0), [[0, 0], [5, 5], [0, 0]])
+    # two points: as given
+    np.testing.assert_array_equal(simplify_polyline([[0, 0], [5, 5]], 1.0), [[0, 0], [5, 5]])
+
+
+def test_segment_clearance_keeps_the_shape_of_its_batch():
+    a = np.zeros((2, 3, 2))
+    b = np.stack([np.full((3, 2), 10.0), np.tile([10.0, 0.0], (3, 1))])
+    clearance = segment_clearance(a, b, (0.0, 5.0))
+    assert clearance.shape == (2, 3)
+    np.testing.assert_allclose(clearance, [[5 / np.sqrt(2)] * 3, [5.0] * 3])
+
+
+def test_an_edge_lookup_refuses_a_move_into_an_obstacle():
+    axis = np.arange(0.0, 8.0)
+    graph = build_grid_graph(axis, axis, reach=1, obstacles=[(4.0, 4.0, 0.5)])  # node (4, 4) blocked
+    ny = 8
+    edge = graph.edge_between(np.array([3 * ny + 3]), np.array([3 * ny + 4]))
+    assert graph.source[edge[0]] == 3 * ny + 3 and graph.target[edge[0]] == 3 * ny + 4
+    with pytest.raises(ValueError, match="no edge between some of the given nodes"):
+        graph.edge_between(np.array([3 * ny + 3, 3 * ny + 3]), np.array([3 * ny + 4, 4 * ny + 4]))
+
+
+def test_a_two_column_grid_has_its_own_spacing():
+    graph = build_grid_graph(np.array([0.0, 100.0, 200.0]), np.array([0.0, 300.0]), reach=1)
+    east = int(np.flatnonzero((graph.moves == [0, 1]).all(axis=1))[0])
+    north = int(np.flatnonzero((graph.moves == [1, 0]).all(axis=1))[0])
+    assert graph.move_length_m[east] == 300.0 and graph.move_length_m[north] == 100.0
+
+
+class _LandNorthOf:
+    """A stand-in chart: land north of ``north_m``, every leg clear (only the nodes' clearance counts here)."""
+
+    clearance_m = 150.0
+
+    def __init__(self, north_m):
+        self.north_m = north_m
+
+    def distances_m(self, north, east):
+        return np.maximum(self.north_m - np.asarray(north, dtype=float), 0.0)
+
+    def legs_clear(self, a, b, *_):
+        return np.ones(np.shape(a)[:-1], dtype=bool)
+
+
+def test_no_node_lies_within_the_charts_clearance():
+    axis = np.arange(0.0, 1001.0, 100.0)
+    graph = build_grid_graph(axis, axis, reach=1, obstacles=[(100.0, 100.0, 50.0)], keep_out=_LandNorthOf(800.0))
+    points = graph.node_points()
+    np.testing.assert_array_equal(graph.free, (points[:, 0] <= 650.0) & ~((points[:, 0] == 100.0) & (points[:, 1] == 100.0)))
+
+
+def test_shortening_from_the_first_vertex_counts_from_zero_and_never_takes_an_impassable_segment():
+    # three equal legs along a line: the direct segments cost what the legs do, so from 0 the last is taken
+    def straight(i, js):
+        return (js - i).astype(float)
+
+    assert shortcut_path(4, straight) == [0, 3]
+    # a blocked second leg (the path crosses it anyway) and, from the first vertex, direct segments costed
+    # as blocked: the path through the blocked leg is as dear, but a blocked segment is never taken
+    legs = np.array([1.0, IMPASSABLE, 1.0])
+
+    def blocked(i, js):
+        return np.array([legs[i] if j == i + 1 else IMPASSABLE if i == 0 else float(j - i) for j in js])
+
+    assert shortcut_path(4, blocked, consecutive_costs=legs) == [0, 1, 3]

@@ -8,7 +8,8 @@ from orchestrator.geometry import KNOT, NM
 from rhnc.routing.route_search import segment_clearance
 from rhnc.routing.track_cost import constant_speed_times, cost_of_track
 from rhnc.routing.routing_problem import costed_route
-from rhnc.routing.weather_routing import RouteSearch, RoutingProblem, _refine, cost_rate, optimal_route, straight_route
+from rhnc.routing.weather_routing import (RouteSearch, RoutingProblem, _corners, _refine, cost_rate, optimal_route,
+                                          straight_route)
 from weather_fixtures import storm_field, switched_field
 
 SPEED = 18 * KNOT
@@ -293,3 +294,121 @@ def test_one_cost_rate_for_the_grid_its_segments_and_its_legs():
     segment = search.segment_costs(start, end[None, :], 60.0, SPEED, 250.0)
     leg = search.leg_costs(np.vstack([start, end]), 60.0, SPEED, 250.0)
     assert segment[0] == pytest.approx(leg[0], rel=1e-12)
+
+
+def test_refining_never_moves_a_turning_point_into_an_avoided_circle():
+    # the storm of the test above; a circle where the refinement, left alone, puts its turning point
+    last_from, goal = np.array([10.0, 15.0]), np.array([20.0, 20.0])
+    field = storm_field(storms=[(*(last_from + 0.75 * (goal - last_from)), 1.0, 20.0)])
+    island = (16.9 * NM, 15.2 * NM, 0.6 * NM)
+    problem = RoutingProblem((0.0, 0.0), tuple(goal * NM), field, avoid=(island,))
+    polyline = np.array([[0.0, 0.0], last_from, goal]) * NM
+    free = RoutingProblem((0.0, 0.0), tuple(goal * NM), field)
+
+    def refined(routing):
+        def evaluate(points):
+            return costed_route(routing, points, SPEED, "optimal")
+        return _refine(routing, polyline, evaluate(polyline), evaluate)
+
+    unconstrained = refined(free).waypoints_m
+    assert np.min(segment_clearance(unconstrained[:-1], unconstrained[1:], island[:2])) < 0.5 * island[2]
+    after = refined(problem)
+    assert np.min(segment_clearance(after.waypoints_m[:-1], after.waypoints_m[1:], island[:2])) >= island[2]
+    assert after.cost_usd < costed_route(problem, polyline, SPEED, "optimal").cost_usd
+
+
+class _KeepOutEast:
+    """A stand-in chart: a leg is clear unless it ends east of ``east_m``; records what it was asked."""
+
+    clearance_m = 0.0
+
+    def __init__(self, east_m):
+        self.east_m, self.asked = east_m, []
+
+    def distances_m(self, north, east):
+        return np.full(np.shape(north), 1e9)
+
+    def legs_clear(self, starts, ends, *_):
+        self.asked.append((np.array(starts), np.array(ends)))
+        return np.asarray(ends)[..., 1] <= self.east_m
+
+
+def test_leg_costs_close_the_legs_entering_an_avoided_circle_or_refused_by_the_chart():
+    field = storm_field(base_wind_ms=6.0)
+    island = (10 * NM, 14 * NM, 1 * NM)
+    polyline = np.array([[2.0, 2.0], [10.0, 4.0], [10.0, 18.0], [18.0, 18.0]]) * NM  # only the middle leg enters
+    open_costs = RouteSearch(RoutingProblem((0.0, 0.0), (20 * NM, 20 * NM), field)).leg_costs(polyline, 0.0, SPEED, 0.0)
+    assert np.all(np.isfinite(open_costs)) and np.all(open_costs > 0)
+    with_island = RouteSearch(RoutingProblem((0.0, 0.0), (20 * NM, 20 * NM), field, avoid=(island,)))
+    costs = with_island.leg_costs(polyline, 0.0, SPEED, 0.0)
+    assert np.isinf(costs[1]) and costs[[0, 2]] == pytest.approx(open_costs[[0, 2]], rel=1e-12)
+    chart = _KeepOutEast(east_m=10 * NM)  # refuses the legs ending at 18 nm east
+    charted = RouteSearch(RoutingProblem((0.0, 0.0), (20 * NM, 20 * NM), field, keep_out=chart))
+    chart.asked.clear()  # (the search grid asked it too)
+    costs = charted.leg_costs(polyline, 0.0, SPEED, 0.0)
+    assert np.isinf(costs[1:]).all() and costs[0] == pytest.approx(open_costs[0], rel=1e-12)
+    starts, ends = chart.asked[-1]
+    np.testing.assert_array_equal(starts, polyline[:-1])
+    np.testing.assert_array_equal(ends, polyline[1:])
+
+
+def test_a_path_costs_its_legs_each_from_the_time_it_is_reached():
+    calm, storm = storm_field(base_wind_ms=4.0), storm_field(base_wind_ms=4.0, storms=[(10.0, 10.0, 6.0, 20.0)])
+    field = switched_field(calm, storm, switch_s=2900.0, ramp_s=600.0)  # the storm rises as the second leg begins
+    search = RouteSearch(RoutingProblem((0.0, 0.0), (20 * NM, 20 * NM), field))
+    polyline = np.array([[1.0, 1.0], [8.0, 12.0], [19.0, 19.0]]) * NM
+    legs = search.leg_costs(polyline, 600.0, SPEED, 300.0)
+    first_leg_s = np.hypot(*(polyline[1] - polyline[0])) / SPEED
+    later = search.leg_costs(polyline[1:], 600.0 + first_leg_s, SPEED, 300.0)
+    assert legs[1] == pytest.approx(later[0], rel=1e-9)
+    assert legs[1] != pytest.approx(search.leg_costs(polyline[1:], 600.0, SPEED, 300.0)[0], rel=1e-3)
+    # the path's cost is its legs' sum, and an hour's price adds the hours sailed
+    total = search.path_cost(polyline, 600.0, SPEED, 300.0)
+    assert total == pytest.approx(legs.sum(), rel=1e-12)
+    hours = np.hypot(*np.diff(polyline, axis=0).T).sum() / SPEED / 3600.0
+    assert total - search.path_cost(polyline, 600.0, SPEED, 0.0) == pytest.approx(300.0 * hours, rel=1e-9)
+
+
+class _KeepOutBox:
+    """A stand-in chart refusing every leg with an end in a box (north, east ranges [m]); it checks that
+    what it is asked about are the consecutive legs of one polyline."""
+
+    def __init__(self, north_m, east_m):
+        self.north_m, self.east_m, self.calls = north_m, east_m, 0
+
+    def legs_clear(self, starts, ends):
+        starts, ends = np.asarray(starts), np.asarray(ends)
+        assert starts.shape == ends.shape and np.array_equal(starts[1:], ends[:-1])
+        self.calls += 1
+
+        def inside(p):
+            return ((self.north_m[0] < p[:, 0]) & (p[:, 0] < self.north_m[1])
+                    & (self.east_m[0] < p[:, 1]) & (p[:, 1] < self.east_m[1]))
+        return ~(inside(starts) | inside(ends))
+
+
+def test_refining_asks_the_chart_about_each_candidate_and_keeps_out_of_what_it_refuses():
+    last_from, goal = np.array([10.0, 15.0]), np.array([20.0, 20.0])
+    field = storm_field(storms=[(*(last_from + 0.75 * (goal - last_from)), 1.0, 20.0)])
+    chart = _KeepOutBox((14.0 * NM, 18.5 * NM), (13.0 * NM, 16.5 * NM))  # where the free refinement turns
+    problem = RoutingProblem((0.0, 0.0), tuple(goal * NM), field, keep_out=chart)
+    polyline = np.array([[0.0, 0.0], last_from, goal]) * NM
+
+    def evaluate(points):
+        return costed_route(problem, points, SPEED, "optimal")
+
+    before = evaluate(polyline)
+    after = _refine(problem, polyline, before, evaluate)
+    assert chart.calls > 0 and after.cost_usd < before.cost_usd
+    corners = _corners(after.waypoints_m)  # (the stand-in judges a leg by its ends)
+    inside = ((14.0 * NM < corners[:, 0]) & (corners[:, 0] < 18.5 * NM)
+              & (13.0 * NM < corners[:, 1]) & (corners[:, 1] < 16.5 * NM))
+    assert not inside.any()
+
+
+def test_an_optimal_route_says_so():
+    field = storm_field(storms=[(10.0, 10.6, 2.5, 20.0)])
+    problem = RoutingProblem((0.0, 0.0), (20 * NM, 20 * NM), field)
+    route = optimal_route(problem, speed_mps=SPEED)
+    assert len(route.waypoints_m) > 2 and route.method == "optimal"
+    assert straight_route(problem, speed_mps=SPEED).method == "straight"

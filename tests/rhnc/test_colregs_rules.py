@@ -1,0 +1,88 @@
+"""COLREG classification's borderline notes, the latest apparent alteration and the tracker's empty input,
+on constructed geometries (x north, y east)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from rhnc.encounters.colregs import (HEAD_ON_BEARING_DEG, EncounterTracker, classify, latest_alteration_s,
+                                     stand_on_latest_s)
+
+NM = 1852.0
+KN = NM / 3600.0
+
+
+def _at(bearing_deg, range_nm):
+    b = math.radians(bearing_deg)
+    return (range_nm * NM * math.cos(b), range_nm * NM * math.sin(b))
+
+
+def _velocity(course_deg, speed_kn):
+    c = math.radians(course_deg)
+    return (speed_kn * KN * math.cos(c), speed_kn * KN * math.sin(c))
+
+
+@pytest.mark.parametrize("side, expected", [(1.0, "crossing_give_way"), (-1.0, "crossing_stand_on")])
+def test_a_crossing_just_outside_the_head_on_sector_is_noted_as_borderline(side, expected):
+    # on a reciprocal course, a degree beyond the head-on bearing, on either bow
+    bearing = side * (HEAD_ON_BEARING_DEG + 1.0)
+    target = _at(bearing, 4.0)
+    encounter = classify((0.0, 0.0), 0.0, 12 * KN, target, _velocity(180.0 + 0.5 * bearing, 12.0))
+    assert encounter.encounter_class == expected
+    assert encounter.borderline.startswith(f"head-on: bearing {HEAD_ON_BEARING_DEG + 1.0:.1f} deg")
+
+
+def _rotated(vector, degrees):
+    c, s = math.cos(math.radians(degrees)), math.sin(math.radians(degrees))
+    return (c * vector[0] - s * vector[1], s * vector[0] + c * vector[1])
+
+
+@pytest.mark.parametrize("side", [1.0, -1.0])
+def test_the_latest_alteration_does_not_depend_on_which_way_the_scene_faces(side):
+    own, own_velocity = (0.0, 0.0), _velocity(0.0, 12.0)
+    target, target_velocity = _at(40.0, 5.0), _velocity(250.0, 14.0)
+    wait = latest_alteration_s(own, own_velocity, target, target_velocity, 0.8 * NM, side)
+    assert 0.0 < wait < math.inf
+    for turn in (30.0, 135.0, -100.0):
+        assert latest_alteration_s(_rotated(own, turn), _rotated(own_velocity, turn), _rotated(target, turn),
+                                   _rotated(target_velocity, turn), 0.8 * NM, side) == pytest.approx(wait)
+
+
+def test_after_a_turn_square_to_a_stationary_target_the_closest_approach_is_at_the_turn():
+    # heading north at 5 m/s for a buoy 1000 m ahead, a 90 deg turn (made at once): the range at the
+    # turn is the closest, 1000 - 5 t; it is below 300.02 m from t = 140 s on
+    wait = latest_alteration_s((0.0, 0.0), (5.0, 0.0), (1000.0, 0.0), (0.0, 0.0), 300.02, 1.0,
+                               alteration_deg=90.0, turn_s=0.0, step_s=10.0)
+    assert wait == 130.0
+    # only the last wait (at the CPA itself) falls short of 40 m: the one before is the latest
+    assert latest_alteration_s((0.0, 0.0), (5.0, 0.0), (1000.0, 0.0), (0.0, 0.0), 40.0, 1.0,
+                               alteration_deg=90.0, turn_s=0.0, step_s=10.0) == 190.0
+
+
+def test_a_stand_on_ship_alters_to_starboard_for_a_crossing_ship_and_away_from_one_overtaking():
+    own, own_velocity = (0.0, 0.0), _velocity(0.0, 12.0)
+
+    def both_sides(target, target_velocity):
+        return [latest_alteration_s(own, own_velocity, target, target_velocity, 0.8 * NM, side) for side in (1.0, -1.0)]
+
+    crossing = ((2.5 * NM, -3.94 * NM), _velocity(80.0, 16.0))  # from port, to pass 0.17 nm ahead
+    encounter = classify(own, 0.0, 12 * KN, *crossing)
+    assert encounter.encounter_class == "crossing_stand_on"
+    starboard, port = both_sides(*crossing)
+    assert starboard != port
+    assert stand_on_latest_s("crossing_stand_on", encounter.relative_bearing_deg, own, own_velocity, *crossing,
+                             0.8 * NM) == starboard
+    for bearing in (150.0, -150.0):  # overtaken from either quarter: turn away from the overtaking ship
+        overtaking = (_at(bearing, 1.5), _velocity(-0.1 * bearing, 20.0))
+        starboard, port = both_sides(*overtaking)
+        assert starboard != port
+        away = port if bearing > 0 else starboard
+        assert stand_on_latest_s("overtaken", bearing, own, own_velocity, *overtaking, 0.8 * NM) == away
+
+
+def test_the_tracker_without_obstacles_reports_no_encounter():
+    tracker = EncounterTracker()
+    assert tracker.update((0.0, 0.0), 0.0, 6.0, None) == []
+    assert tracker.update((0.0, 0.0), 0.0, 6.0, np.zeros((0, 5))) == []
+    assert tracker.locked == {}
