@@ -38,6 +38,11 @@ SET_METADATA_KEYS = ("description", "plant_fmu", "plant_guid")
 CANONICAL_PLANT_PORTS = {name: port.causality for name, port in PLANT_PORTS.items()}
 
 
+def _unbound(*_args: object) -> list[float]:
+    """Stands for a per-step FMU call before set-up binds it (or for outputs there are none of)."""
+    raise RuntimeError("an FMU participant was stepped before its set-up")
+
+
 def resolve_fmu(reference: str, scenario_dir: Path, where: str, fmi_version: str = "2.0") -> Path:
     """Path of the FMU a scenario names: a built-in model (built on demand for ``fmi_version``) or a file."""
     from orchestrator import fmu_build
@@ -178,7 +183,9 @@ class FmuParticipant(Participant):
                                          enumerate(self._scalar_outputs) if (scale, offset) != (1.0, 0.0))
             self._wrapped_outputs = tuple(index for index, (*_, wrap) in enumerate(self._scalar_outputs) if wrap)
         # FMPy's calls on arrays made once, bound at set-up; a writer per set of input ports given
-        self._read_reals = self._do_step = None
+        #: bound at set-up (:meth:`_bind_calls`): a step's doStep and the outputs' getReal
+        self._do_step: Callable[[float, float], object] = _unbound
+        self._read_reals: Callable[[], list[float]] = _unbound
         # (the call, whether every port is the variable unscaled)
         self._input_writers: dict[tuple[str, ...], tuple[Callable[[list[float]], None], bool]] = {}
         self._slave = None
@@ -260,7 +267,7 @@ class FmuParticipant(Participant):
         """The per-step FMU calls on value-reference and value arrays made once for this instance."""
         slave = self._slave
         self._do_step = slave.stepper()
-        self._read_reals = slave.real_reader(self._output_refs) if self._output_refs else None
+        self._read_reals = slave.real_reader(self._output_refs) if self._output_refs else _unbound
         self._input_writers = {}
 
     def terminate(self) -> None:
@@ -378,12 +385,12 @@ class FmuParticipant(Participant):
         if self._scalar_outputs is not None and math.isfinite(sum(values)):  # (a NaN or inf sums to one)
             # scale * value + offset, wrapped where the port is an angle: 1.0 * value + 0.0 is
             # value + 0.0 (-0.0 becomes 0.0)
-            outputs = [value + 0.0 for value in values]
+            scaled = [value + 0.0 for value in values]
             for index, scale, offset in self._scaled_outputs:
-                outputs[index] = scale * values[index] + offset
+                scaled[index] = scale * values[index] + offset
             for index in self._wrapped_outputs:
-                outputs[index] = wrap_float(outputs[index])
-            return dict(zip(self._output_ports, outputs))
+                scaled[index] = wrap_float(scaled[index])
+            return dict(zip(self._output_ports, scaled))
         by_variable = {}
         for variable, value in zip(self._output_variables, values):
             if not math.isfinite(value):
@@ -391,7 +398,7 @@ class FmuParticipant(Participant):
                     f"{self.name} ({self.fmu_path.name}): output '{variable}' is {value} at t = {time:g} s"
                 )
             by_variable[variable] = value
-        outputs = {}
+        outputs: dict[str, Value] = {}
         for binding in self._output_bindings:
             outputs.update(binding.to_canonical(by_variable))
         return outputs

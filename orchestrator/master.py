@@ -380,7 +380,7 @@ class _Loop:
         # per participant: itself, its name, every, time limit, (its input port, the bus key that
         # drives it), whether its outputs describe the end of its step, whether it checks their
         # finiteness itself, and its publications (below)
-        self.plans = [(p, p.name, cosim.every[p.name], cosim.step_timeout_s[p.name],
+        self.plans: list[tuple[Any, ...]] = [(p, p.name, cosim.every[p.name], cosim.step_timeout_s[p.name],
                        tuple((c.target_port, (c.source, c.source_port)) for c in connections if c.target == p.name),
                        p.outputs_at_step_end, getattr(p, "checks_outputs_finite", False), {})
                       for p in cosim.participants]
