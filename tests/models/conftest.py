@@ -76,6 +76,14 @@ class Slave:
 
 
 @pytest.fixture
+def slave_class():
+    """:class:`Slave` itself, for a test that chooses the folder the FMU is unpacked to (a
+    fixture, because a test module cannot import this conftest by name when the other test
+    folders' conftests are collected too)."""
+    return Slave
+
+
+@pytest.fixture
 def open_slave(tmp_path):
     """Factory: open_slave(fmu_path) -> Slave, freed after the test."""
     opened: list[Slave] = []

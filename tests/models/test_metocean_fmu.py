@@ -254,10 +254,10 @@ def test_a_relative_grid_name_is_taken_in_the_resources_folder(fmus, open_slave)
 
 
 @pytest.mark.parametrize("folder", ["unzip*A:[b] é", "unzip%2a%5c"])
-def test_resources_are_found_in_a_folder_whose_name_the_uri_percent_encodes(fmus, tmp_path, folder):
+def test_resources_are_found_in_a_folder_whose_name_the_uri_percent_encodes(fmus, slave_class, tmp_path, folder):
     """The resource location is a file URI, escaped in upper case hex by FMPy (``*`` as %2A, ``é`` as
     %C3%A9), and a name may hold a '%' itself: the FMU decodes every escape, back to the folder's own name."""
-    from conftest import Slave
+    Slave = slave_class
 
     from orchestrator.geometry import NM
     from rhnc.weather.weather_generators import paper_default
@@ -280,11 +280,12 @@ def test_resources_are_found_in_a_folder_whose_name_the_uri_percent_encodes(fmus
 
 
 @pytest.mark.parametrize("prefix", ["file://", "file://localhost", "file:"])
-def test_every_local_form_of_the_resource_uri_with_lower_case_escapes_is_read(fmus, tmp_path, monkeypatch, prefix):
+def test_every_local_form_of_the_resource_uri_with_lower_case_escapes_is_read(fmus, slave_class, tmp_path, monkeypatch,
+                                                                              prefix):
     """Another master may write ``file:/p`` or ``file://localhost/p`` and escape in lower case hex."""
     import pathlib
 
-    from conftest import Slave
+    Slave = slave_class
 
     from orchestrator.geometry import NM
     from rhnc.weather.weather_generators import paper_default

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from rhnc.encounters.colregs import (HEAD_ON_BEARING_DEG, EncounterTracker, classify, latest_alteration_s,
+from rhnc.encounters.colregs import (HEAD_ON_BEARING_DEG, EncounterTracker, classify, cpa_tcpa, latest_alteration_s,
                                      stand_on_latest_s)
 
 NM = 1852.0
@@ -64,7 +64,11 @@ def test_a_stand_on_ship_alters_to_starboard_for_a_crossing_ship_and_away_from_o
     own, own_velocity = (0.0, 0.0), _velocity(0.0, 12.0)
 
     def both_sides(target, target_velocity):
-        return [latest_alteration_s(own, own_velocity, target, target_velocity, 0.8 * NM, side) for side in (1.0, -1.0)]
+        # looked back as far as the stand-on ship's own judgement looks (to the onset of risk,
+        # 30 min before the CPA), so only the side differs between the two calls
+        lookback = max(0.0, 30.0 * 60.0 - cpa_tcpa(own, own_velocity, target, target_velocity)[1])
+        return [latest_alteration_s(own, own_velocity, target, target_velocity, 0.8 * NM, side, lookback_s=lookback)
+                for side in (1.0, -1.0)]
 
     crossing = ((2.5 * NM, -3.94 * NM), _velocity(80.0, 16.0))  # from port, to pass 0.17 nm ahead
     encounter = classify(own, 0.0, 12 * KN, *crossing)
