@@ -257,20 +257,8 @@ def test_a_relative_grid_name_is_taken_in_the_resources_folder(fmus, open_slave)
 def test_resources_are_found_in_a_folder_whose_name_the_uri_percent_encodes(fmus, slave_class, tmp_path, folder):
     """The resource location is a file URI, escaped in upper case hex by FMPy (``*`` as %2A, ``é`` as
     %C3%A9), and a name may hold a '%' itself: the FMU decodes every escape, back to the folder's own name."""
-    Slave = slave_class
-
-    from orchestrator.geometry import NM
-    from rhnc.weather.weather_generators import paper_default
-
-    slave = Slave(fmus["MetOcean"], tmp_path / folder)
-    try:
-        point = (40.0 * NM, 55.0 * NM)
-        slave.initialize({"grid_file": "default.grid", "x": point[0], "y": point[1]})
-        assert slave.get("hs")[0] == pytest.approx(float(paper_default(resolution_nm=5.0).sample(*point)["hs"]),
-                                                   rel=1e-12)
-    finally:
-        slave.close()
-    missing = Slave(fmus["MetOcean"], tmp_path / f"{folder}-2")
+    _reads_the_default_grid(slave_class(fmus["MetOcean"], tmp_path / folder))
+    missing = slave_class(fmus["MetOcean"], tmp_path / f"{folder}-2")
     try:
         with pytest.raises(FMICallException):
             missing.initialize({"grid_file": "no_such.grid"})
@@ -285,18 +273,22 @@ def test_every_local_form_of_the_resource_uri_with_lower_case_escapes_is_read(fm
     """Another master may write ``file:/p`` or ``file://localhost/p`` and escape in lower case hex."""
     import pathlib
 
-    Slave = slave_class
-
-    from orchestrator.geometry import NM
-    from rhnc.weather.weather_generators import paper_default
-
     def lower_case_uri(path):
         return prefix + "".join(c if c.isalnum() or c in "/._-" else "".join(f"%{b:02x}" for b in c.encode())
                                 for c in str(path))
 
     monkeypatch.setattr(pathlib.Path, "as_uri", lower_case_uri)
-    slave = Slave(fmus["MetOcean"], tmp_path / "unzip*?:[e] é")  # %2a %3f %3a %5b %5d %20 %c3%a9
+    slave = slave_class(fmus["MetOcean"], tmp_path / "unzip*?:[e] é")  # %2a %3f %3a %5b %5d %20 %c3%a9
     monkeypatch.undo()
+    _reads_the_default_grid(slave)
+
+
+def _reads_the_default_grid(slave) -> None:
+    """The FMU, unpacked where its resources' URI needs decoding, reads its shipped grid there:
+    the wave height at a point is the generator's; the slave is closed afterwards."""
+    from orchestrator.geometry import NM
+    from rhnc.weather.weather_generators import paper_default
+
     try:
         point = (40.0 * NM, 55.0 * NM)
         slave.initialize({"grid_file": "default.grid", "x": point[0], "y": point[1]})
