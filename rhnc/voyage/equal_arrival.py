@@ -42,12 +42,22 @@ class EqualArrival:
     target_s: float
     tolerance_s: float
     trials: list[ArrivalTrial] = field(default_factory=list)
+    #: the fastest reference speed the search may try [kn]
+    top_speed_kn: float = math.inf
 
     @property
     def best(self) -> ArrivalTrial | None:
         """The arrived trial nearest the target (None when no trial arrived)."""
         arrived = [t for t in self.trials if t.arrival_s is not None]
         return min(arrived, key=lambda t: abs(t.arrival_s - self.target_s)) if arrived else None
+
+    @property
+    def cannot_arrive(self) -> bool:
+        """True when no trial arrived and one was sailed at the fastest speed allowed: the
+        reference voyage arrives at no speed the search may try (a weather it cannot make
+        way in, say), an outcome of its own rather than a search that ran out of trials."""
+        return (bool(self.trials) and all(t.arrival_s is None for t in self.trials)
+                and max(t.speed_kn for t in self.trials) >= self.top_speed_kn)
 
     @property
     def matched(self) -> bool:
@@ -123,7 +133,7 @@ def match_arrival_time(arrival_of: Callable[[float], tuple[float | None, Any]], 
         Every trial; ``best`` and ``matched`` say how close it came.
     """
     low_kn, high_kn = speed_bounds_kn
-    result = EqualArrival(target_s, tolerance_s)
+    result = EqualArrival(target_s, tolerance_s, top_speed_kn=high_kn)
     early: ArrivalTrial | None = None   # fastest-needed bound: arrived too early (speed too high)
     late: ArrivalTrial | None = None    # arrived too late or not at all (speed too low)
     aim_s = 0.5 * tolerance_s if aim_s is None else aim_s

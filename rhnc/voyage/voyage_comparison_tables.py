@@ -69,6 +69,8 @@ def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) ->
                      f"{MIN_AVAILABLE_SAVING_PERCENT} % available). Track vs line: the sailed track against the "
                      "straight line, both costed at one constant speed through water, the baseline's mean "
                      "(positive: the track is dearer).", "", markdown_table(headline), ""]
+    outcomes = _outcomes(systems, baselines)
+    markdown += [f"**Outcome**: {line}" for line in outcomes] + ([""] if outcomes else [])
     markdown += [f"**FLAG**: {flag}" for flag in flags] + ([""] if flags else [])
     trials = _trial_rows(baselines)
     if trials:
@@ -82,7 +84,7 @@ def evaluation_section(comparison, systems, baselines, routes, out_dir: Path) ->
         tables["voyage_headline"] = headline
     if trials:
         tables["voyage_trials"] = pd.DataFrame(trials)
-    summary = {"systems": summary_systems, "speed_spread_percent": spread, "flags": flags}
+    summary = {"systems": summary_systems, "speed_spread_percent": spread, "flags": flags, "outcomes": outcomes}
     return Section("\n".join(markdown), tables, summary, flags, failed)
 
 
@@ -112,6 +114,8 @@ def _system_figures(system, equal, route) -> dict[str, Any]:
     figures: dict[str, Any] = {"arrived": system.arrived, "arrival_min": _minutes(system.arrival_s),
                                "mean_speed_through_water_kn": system.mean_speed_through_water_kn,
                                "cost_usd": system.cost_usd, "co2_t": system.co2_t}
+    if system.usable and equal is not None:
+        figures["baseline_outcome"] = _baseline_outcome(equal)
     if system.usable and equal is not None and equal.usable:
         cost, co2 = equal.at_target(lambda t: t.run.cost_usd), equal.at_target(lambda t: t.run.co2_t)
         figures.update({
@@ -136,6 +140,30 @@ def _system_figures(system, equal, route) -> dict[str, Any]:
         figures["track_vs_line_at_equal_speed_cost_percent"] = -_saving(
             route["line_at_equal_speed"]["cost_usd"], route["track_at_equal_speed"]["cost_usd"])
     return figures
+
+
+def _baseline_outcome(equal) -> str:
+    """How the equal-arrival search ended: ``matched``, ``interpolated``, ``cannot arrive``
+    (no reference speed up to the fastest allowed arrives) or ``unmatched``."""
+    if equal.matched:
+        return "matched"
+    if equal.interpolated:
+        return "interpolated"
+    return "cannot arrive" if equal.cannot_arrive else "unmatched"
+
+
+def _outcomes(systems, baselines) -> list[str]:
+    """A line for each system whose equal-arrival baseline arrives at no speed: the result
+    of the comparison in that weather (no saving can be given), stated with its trials."""
+    lines = []
+    for label, equal in baselines.items():
+        if label in systems and systems[label].usable and equal.cannot_arrive:
+            speeds = ", ".join(f"{t.speed_kn:.2f}" for t in equal.trials)
+            lines.append(f"{label} arrives at {systems[label].arrival_s / 60.0:.1f} min; its equal-arrival "
+                         f"baseline arrives at no reference speed up to the fastest allowed, "
+                         f"{equal.top_speed_kn:g} kn (trials at {speeds} kn): in this weather the baseline cannot "
+                         "make the passage, so there is no saving at equal arrival time to give")
+    return lines
 
 
 def _trial_rows(baselines) -> list[dict[str, Any]]:
@@ -255,6 +283,7 @@ def _headline_row(label: str, f: dict[str, Any]) -> dict[str, Any]:
         "saving cost [%]": f.get("saving_cost_percent"),
         "CO2 [t]": f["co2_t"], "baseline CO2 [t]": f.get("baseline_co2_t"),
         "saving CO2 [%]": f.get("saving_co2_percent"),
+        "baseline": f.get("baseline_outcome"),
         "baseline speed [kn]": f.get("baseline_speed_kn"), "baseline arrival [min]": f.get("baseline_arrival_min"),
         "available cost [%]": f.get("available_cost_percent"), "available CO2 [%]": f.get("available_co2_percent"),
         "share cost [%]": f.get("share_cost_percent"), "share CO2 [%]": f.get("share_co2_percent"),
@@ -298,7 +327,7 @@ def _flags(systems, baselines, routes, limit_percent: float, start_m=None) -> li
             flags.append(f"the equal-arrival baseline of {label} is read between two runs arriving "
                          f"{equal.target_s - early.arrival_s:.0f} s before and {late.arrival_s - equal.target_s:.0f} s "
                          f"after it (the arrival jumps with the reference speed there)")
-        elif not equal.matched:
+        elif not equal.matched and not equal.cannot_arrive:  # that one is an outcome (_outcomes)
             best = equal.best
             miss = f"{abs(best.arrival_s - equal.target_s):.0f} s off" if best else "no trial arrived"
             flags.append(f"the equal-arrival baseline of {label} missed its arrival time by more than "

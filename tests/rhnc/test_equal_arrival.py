@@ -261,3 +261,18 @@ def test_a_guess_of_zero_ends_the_search_and_a_small_one_is_raised_to_the_bound(
     assert _next_speed(at_once, 1000.0, at_once[0], None, 2.0, 30.0) is None
     early = [ArrivalTrial(10.0, 50.0)]         # guess 10 * 50 / 1000 = 0.5 kn, below the 2 kn bound
     assert _next_speed(early, 1000.0, early[0], None, 2.0, 30.0) == 2.0
+
+
+def test_a_baseline_that_arrives_at_no_speed_up_to_the_fastest_cannot_arrive():
+    # a ship held back by the weather: no run arrives whatever the reference speed
+    result = match_arrival_time(lambda v: (None, "held back"), 25_000.0, tolerance_s=2.0, first_speed_kn=14.85,
+                                max_trials=5, speed_bounds_kn=(2.0, 30.0))
+    assert [round(t.speed_kn, 2) for t in result.trials] == [14.85, 18.56, 23.2, 29.0, 30.0]
+    assert result.cannot_arrive and not result.usable
+    # the same search cut short before the fastest speed: it ran out of trials, nothing more
+    short = match_arrival_time(lambda v: (None, "held back"), 25_000.0, tolerance_s=2.0, first_speed_kn=14.85,
+                               max_trials=4, speed_bounds_kn=(2.0, 30.0))
+    assert not short.cannot_arrive
+    # one trial arrived, even too late: the baseline can arrive
+    late = EqualArrival(25_000.0, 2.0, [ArrivalTrial(30.0, None), ArrivalTrial(29.0, 40_000.0)], top_speed_kn=30.0)
+    assert not late.cannot_arrive

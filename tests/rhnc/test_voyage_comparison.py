@@ -485,3 +485,27 @@ def test_a_ship_sails_the_arrival_circles_part_beyond_the_maps_edge(tmp_path):
     frame = pd.read_parquet(run.parent / "timeseries.parquet")
     assert frame["ship.x"].max() > 4.0 * NM + 0.2 * NM   # it sailed beyond the edge
     assert json.loads(run.read_text())["analyses"]["voyage"]["arrived"]
+
+
+def test_a_baseline_that_cannot_arrive_is_reported_as_the_outcome_without_a_saving(tmp_path):
+    system = voyage("RHNC", 15.0, arrival_s=25_050.0)
+    held_back = EqualArrival(system.arrival_s, 2.0, top_speed_kn=30.0)
+    for speed in (14.85, 23.21, 30.0):
+        held_back.trials.append(ArrivalTrial(speed, None, voyage("RHNC equal-arrival baseline", 6.0, arrived=False)))
+    section = evaluation_section(COMPARISON_STUB, {"RHNC": system}, {"RHNC": held_back}, {}, tmp_path)
+    figures = section.summary["systems"]["RHNC"]
+    assert figures["baseline_outcome"] == "cannot arrive"
+    assert "saving_cost_percent" not in figures and "saving_co2_percent" not in figures
+    headline = section.tables["voyage_headline"].set_index("system")
+    assert headline.loc["RHNC", "baseline"] == "cannot arrive" and headline.loc["RHNC", "saving cost [%]"] is None
+    assert section.summary["outcomes"] == [
+        "RHNC arrives at 417.5 min; its equal-arrival baseline arrives at no reference speed up to the fastest "
+        "allowed, 30 kn (trials at 14.85, 23.21, 30.00 kn): in this weather the baseline cannot make the "
+        "passage, so there is no saving at equal arrival time to give"]
+    assert "**Outcome**: RHNC arrives at 417.5 min" in section.markdown
+    assert not any("missed its arrival time" in flag for flag in section.flags)
+    # a search that stopped short of the fastest speed is a flag, not this outcome
+    held_back.trials.pop()
+    section = evaluation_section(COMPARISON_STUB, {"RHNC": system}, {"RHNC": held_back}, {}, tmp_path)
+    assert section.summary["outcomes"] == [] and section.summary["systems"]["RHNC"]["baseline_outcome"] == "unmatched"
+    assert any("missed its arrival time" in flag and "no trial arrived" in flag for flag in section.flags)
