@@ -12,6 +12,8 @@ and is read here as ``PLANT_PORTS``, ``WRAPPED_OUTPUTS``, ``VECTOR_PORTS`` and `
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
+from pathlib import Path
 from dataclasses import dataclass, field
 
 
@@ -81,12 +83,17 @@ class PortTable:
         direction it comes from, clockwise from north).
     initial_keys : dict
         ``[participants.<plant>.initial]`` keys -> (canonical port, factor to its SI unit).
+    geographic_initial : callable or None
+        ``geographic_initial(table, scenario_dir, where) -> table``: the ``[initial]`` table
+        with the domain's geographic keys (a start in latitude and longitude) turned into
+        :attr:`initial_keys` ones; raises ScenarioError naming the key.
     """
 
     ports: dict[str, PlantPort] = field(default_factory=dict)
     wrapped_outputs: tuple[str, ...] = ()
     vector_ports: dict[str, tuple[str, str, str]] = field(default_factory=dict)
     initial_keys: dict[str, tuple[str, float]] = field(default_factory=dict)
+    geographic_initial: Callable[[dict, Path, str], dict] | None = None
 
 
 @functools.lru_cache(maxsize=None)

@@ -57,7 +57,7 @@ def load_scenario(path, overrides: Mapping[str, Any] | None = None) -> Scenario:
         raw = raw + b"\n# overrides\n" + json.dumps(dict(overrides), sort_keys=True, default=str).encode()
     _refuse_other_file_kinds(data, where)
     simulation, participants, connections, metocean, outputs, acceptance = build_scenario_parts(
-        data, where, path.stem)
+        data, where, path.stem, path.parent)
     from orchestrator.acceptance import parse_acceptance  # batch files share the format
 
     return Scenario(

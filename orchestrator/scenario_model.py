@@ -148,7 +148,7 @@ class SimulationTable(ScenarioTable):
 
 
 # -- the whole file ------------------------------------------------------------------------------
-def build_scenario_parts(data: dict, where: str, default_name: str):
+def build_scenario_parts(data: dict, where: str, default_name: str, directory=None):
     """Check a parsed scenario; return its simulation, participants, connections, metocean, outputs.
 
     Raises
@@ -159,7 +159,7 @@ def build_scenario_parts(data: dict, where: str, default_name: str):
     top = checked(ScenarioFile, data, where)
     table = checked(SimulationTable, top.simulation, where, ("simulation",))
     simulation = table.spec(table.name or default_folder_name(default_name, "simulation.name", where))
-    participants = participant_specs(top.participants, where)
+    participants = participant_specs(top.participants, where, directory)
     for spec in participants:
         check_distances_nm(spec.options, where, f"participants.{spec.name}.options")
     check_distances_nm(top.metocean or {}, where, "metocean")

@@ -9,6 +9,8 @@ Python participants are checked by the participant type that reads them.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from typing import Annotated, Any
 
 from pydantic import Field, PlainValidator, model_validator
@@ -151,7 +153,7 @@ def _dotted(at: tuple) -> str:
     return ".".join(shown_text(part) for part in at)
 
 
-def participant_specs(table: dict, where: str) -> tuple[ParticipantSpec, ...]:
+def participant_specs(table: dict, where: str, directory: Path | None = None) -> tuple[ParticipantSpec, ...]:
     if not table:
         raise ScenarioError(f"{where}: [participants] declares no participant")
     specs = []
@@ -163,7 +165,7 @@ def participant_specs(table: dict, where: str) -> tuple[ParticipantSpec, ...]:
             raise ScenarioError(f"{where}: participant name '{shown_text(name)}' must be an identifier "
                                 f"(at most 64 characters)")
         if "fmu" in body:
-            specs.append(_fmu_participant(name, checked(FmuParticipantTable, body, where, at), where, at))
+            specs.append(_fmu_participant(name, checked(FmuParticipantTable, body, where, at), where, at, directory))
         elif "type" in body:
             model = checked(PythonParticipantTable, body, where, at)
             specs.append(ParticipantSpec(name=name, every=model.every, type=model.type, class_path=model.class_path,
@@ -180,12 +182,18 @@ def _earth(table: GeodeticTable | None) -> tuple[str, float | None]:
     return ("sphere", float(table.sphere_radius_m or MEAN_EARTH_RADIUS_M))
 
 
-def _fmu_participant(name: str, model: FmuParticipantTable, where: str, at: tuple) -> ParticipantSpec:
-    from orchestrator.plant_ports import INITIAL_KEYS
+def _fmu_participant(name: str, model: FmuParticipantTable, where: str, at: tuple,
+                     directory: Path | None = None) -> ParticipantSpec:
+    from orchestrator.plant_ports import INITIAL_KEYS, port_table
 
     mapping = {port: _mapping_entry(target, where, at + ("mapping", port)) for port, target in model.mapping.items()}
     initial = {}
-    for key, value in model.initial.items():
+    table = dict(model.initial)
+    in_plane = port_table().geographic_initial
+    if in_plane is not None:  # the domain's geographic keys (a position in latitude and longitude)
+        table = in_plane(table, Path(where).parent if directory is None else directory,
+                         f"{where}: {_dotted(at + ('initial',))}")
+    for key, value in table.items():
         if key not in INITIAL_KEYS:
             raise ScenarioError(f"{where}: unknown key '{_dotted(at + ('initial', key))}' "
                                 f"(valid: {', '.join(INITIAL_KEYS)})")

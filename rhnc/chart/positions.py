@@ -24,31 +24,35 @@ POSITIONS = {"start": False, "goal": False, "waypoints": True}
 
 
 def projected_options(options: Mapping[str, Any], where: str, scenario_dir,
-                      names: tuple[str, ...] = tuple(POSITIONS)) -> dict[str, Any]:
+                      names: tuple[str, ...] = tuple(POSITIONS), chart: Any = None,
+                      noun: str = "option") -> dict[str, Any]:
     """``options`` with each ``<name>_deg`` of ``names`` (of :data:`POSITIONS`) replaced by ``<name>_nm``.
+
+    ``chart`` is the chart file's name when it is given elsewhere than among ``options``
+    (the traffic's targets take their participant's); ``noun`` is what the messages call a
+    key (``option``; ``key`` in a comparison's ``[voyage]``).
 
     Raises
     ------
     ScenarioError
         Both forms of one position given, a geographic one without ``chart``, or not
-        ``[latitude, longitude]`` in degrees; the message names the option.
+        ``[latitude, longitude]`` in degrees; the message names the key.
     """
     result = dict(options)
     given = [name for name in names if f"{name}_deg" in options]
     for name in names:
         if f"{name}_deg" in options and f"{name}_nm" in options:
-            raise ScenarioError(f"{where}: give either option '{name}_nm' or '{name}_deg', not both")
+            raise ScenarioError(f"{where}: give either {noun} '{name}_nm' or '{name}_deg', not both")
     if not given:
         return result
-    if not isinstance(options.get("chart"), str) or not options["chart"]:
-        raise ScenarioError(f"{where}: option '{given[0]}_deg' needs option 'chart' (the chart file whose "
+    chart = options.get("chart") if chart is None else chart
+    if not isinstance(chart, str) or not chart:
+        raise ScenarioError(f"{where}: {noun} '{given[0]}_deg' needs {noun} 'chart' (the chart file whose "
                             "projection puts latitude and longitude in the plane)")
-    from rhnc.chart.chart import load_chart
-
-    projection = load_chart(Path(scenario_dir) / options["chart"]).projection
+    projection = chart_projection(scenario_dir, chart)
     for name in given:
         key = f"{name}_deg"
-        pairs = _pairs(options[key], where, key, POSITIONS[name])
+        pairs = _pairs(options[key], where, key, POSITIONS[name], noun)
         north, east = projection.to_local(pairs[:, 0], pairs[:, 1])
         plane = np.column_stack([north, east]) / NM
         result[f"{name}_nm"] = plane.tolist() if POSITIONS[name] else plane[0].tolist()
@@ -56,7 +60,20 @@ def projected_options(options: Mapping[str, Any], where: str, scenario_dir,
     return result
 
 
-def _pairs(value: Any, where: str, key: str, many: bool) -> np.ndarray:
+def chart_projection(scenario_dir, chart: str):
+    """The projection of the chart file ``chart`` (relative to ``scenario_dir``)."""
+    from rhnc.chart.chart import load_chart
+
+    return load_chart(Path(scenario_dir) / chart).projection
+
+
+def geographic_pair(value: Any, where: str, key: str, noun: str = "option") -> tuple[float, float]:
+    """``[latitude, longitude]`` [deg] checked; the message names ``key``."""
+    lat, lon = _pairs(value, where, key, False, noun)[0]
+    return float(lat), float(lon)
+
+
+def _pairs(value: Any, where: str, key: str, many: bool, noun: str = "option") -> np.ndarray:
     expected = "a list of [latitude, longitude] pairs" if many else "[latitude, longitude]"
     try:
         pairs = np.asarray(value if many else [value], dtype=float)
@@ -64,5 +81,39 @@ def _pairs(value: Any, where: str, key: str, many: bool) -> np.ndarray:
         pairs = np.zeros((0, 0))
     if (pairs.ndim != 2 or pairs.shape[1:] != (2,) or len(pairs) == 0 or not np.all(np.isfinite(pairs))
             or np.any(np.abs(pairs[:, 0]) > 90.0) or np.any(np.abs(pairs[:, 1]) > 360.0)):
-        raise ScenarioError(f"{where}: option '{key}' must be {expected} in degrees, got {value!r}"[:300])
+        raise ScenarioError(f"{where}: {noun} '{key}' must be {expected} in degrees, got {value!r}"[:300])
     return pairs
+
+
+#: The plane keys of a plant's ``[initial]`` table that ``start_deg`` stands for.
+PLANE_START_KEYS = ("x_m", "x_nm", "y_m", "y_nm")
+
+
+def initial_in_plane(table: Mapping[str, Any], scenario_dir, where: str) -> dict[str, Any]:
+    """A plant's ``[initial]`` table with ``start_deg = [lat, lon]`` projected by its ``chart``
+    into ``x_m`` and ``y_m``, so the start reaches the plant's start parameters through its
+    mapping whatever they are called (:func:`orchestrator.port_mapping.initial_start_values`).
+
+    Raises
+    ------
+    ScenarioError
+        ``start_deg`` beside a plane key, without ``chart``, or not ``[latitude, longitude]``;
+        ``chart`` without ``start_deg``; the message names the key.
+    """
+    if "start_deg" not in table and "chart" not in table:
+        return dict(table)
+    if "start_deg" not in table:
+        raise ScenarioError(f"{where}: key 'chart' places 'start_deg'; give start_deg = [latitude, longitude] "
+                            "or drop 'chart'")
+    for key in PLANE_START_KEYS:
+        if key in table:
+            raise ScenarioError(f"{where}: give either key '{key}' or 'start_deg', not both")
+    chart = table.get("chart")
+    if not isinstance(chart, str) or not chart:
+        raise ScenarioError(f"{where}: key 'start_deg' needs key 'chart' (the chart file whose projection puts "
+                            "latitude and longitude in the plane)")
+    lat, lon = geographic_pair(table["start_deg"], where, "start_deg", "key")
+    north, east = chart_projection(scenario_dir, chart).to_local(lat, lon)
+    result = {key: value for key, value in table.items() if key not in ("start_deg", "chart")}
+    result.update({"x_m": float(north), "y_m": float(east)})
+    return result

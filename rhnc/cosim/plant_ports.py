@@ -12,6 +12,7 @@ from __future__ import annotations
 from orchestrator.geometry import DEG, KNOT, NM
 from orchestrator.plant_ports import (ANGLE, ANGULAR_RATE, FORCE, FREQUENCY, LENGTH, MOMENT, POWER, SPEED, PlantPort,
                                       PortTable)
+from rhnc.chart.positions import initial_in_plane
 
 PORTS: dict[str, PlantPort] = {
     "x": PlantPort("output", LENGTH, "m"),
@@ -69,4 +70,5 @@ INITIAL_KEYS = {
 }
 
 
-SHIP_PORTS = PortTable(PORTS, WRAPPED_OUTPUTS, VECTOR_PORTS, INITIAL_KEYS)
+#: ``[initial]`` may give the start in latitude and longitude (``start_deg``) with a chart
+SHIP_PORTS = PortTable(PORTS, WRAPPED_OUTPUTS, VECTOR_PORTS, INITIAL_KEYS, geographic_initial=initial_in_plane)

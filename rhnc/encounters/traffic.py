@@ -21,7 +21,7 @@ from orchestrator.geometry import KNOT, NM
 from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
 
 
-TARGET_KEYS = ("start_nm", "velocity_kn", "waypoints_nm", "speed_kn", "radius_nm", "manoeuvres", "track_file",
+TARGET_KEYS = ("start_nm", "start_deg", "velocity_kn", "waypoints_nm", "waypoints_deg", "speed_kn", "radius_nm", "manoeuvres", "track_file",
                "mmsi", "origin_deg", "time_offset_s", "behaviour", "alteration_deg", "give_way_tcpa_s",
                "turn_rate_deg_s")
 #: The own ship's state, the inputs of a traffic with a target that reacts to it.
@@ -79,8 +79,19 @@ class TrafficParticipant(Participant):
         Each with ``radius_nm`` and either ``start_nm = [x, y]`` + ``velocity_kn = [vx, vy]``
         (optionally ``manoeuvres``, or ``behaviour = "rules"``), or ``waypoints_nm = [[x, y], ...]`` + ``speed_kn``, or
         ``track_file`` (+ ``mmsi``, ``origin_deg``, ``time_offset_s``).
+        A target's ``start_nm`` or ``waypoints_nm`` may be given in latitude and longitude
+        instead, ``start_deg = [lat, lon]`` or ``waypoints_deg = [[lat, lon], ...]``, projected
+        by ``chart`` (:mod:`rhnc.chart.positions`).
     static_obstacles : list of tables
         Each with ``center_nm = [x, y]`` and ``radius_nm``.
+    chart : str, optional
+        A passage's chart file: its projection places the geographic positions of the targets
+        and of ``situation``.
+    situation : str, optional
+        A traffic-situation file (trafficgen's maritime-schema JSON,
+        :mod:`rhnc.encounters.traffic_situation`) whose target ships are placed on the passage
+        by ``chart``, each where its latitude and longitude lie, after ``targets``; with
+        ``situation_radius_nm``, their hazard radius [nm] (the format has none).
     target_behaviour : str, optional
         ``"rules"``: every constant-velocity target without its own ``behaviour`` or
         ``manoeuvres`` follows the rules of the road (so that a batch of traffic situations
@@ -99,7 +110,7 @@ class TrafficParticipant(Participant):
         The static obstacles alone (charted: a target tracker passes them on as they are).
     """
 
-    OPTIONS = ("targets", "static_obstacles", "target_behaviour")
+    OPTIONS = ("targets", "static_obstacles", "target_behaviour", "chart", "situation", "situation_radius_nm")
 
     def __init__(self, name: str, targets: Sequence[Target], static: np.ndarray, start_time: float,
                  where: str | None = None) -> None:
@@ -118,7 +129,7 @@ class TrafficParticipant(Participant):
         if behaviour is not None and behaviour != "rules":
             raise ScenarioError(f"{where}: 'target_behaviour' must be \"rules\" (every target follows the rules of "
                                 f"the road), got {behaviour!r}")
-        entries = _tables(options, "targets", where)
+        entries = _placed_targets(options, where, context)
         if behaviour is not None:
             entries = [{**entry, "behaviour": behaviour} if "start_nm" in entry and "behaviour" not in entry
                        and "manoeuvres" not in entry else entry for entry in entries]
@@ -209,6 +220,42 @@ def _tables(options: Mapping[str, Any], key: str, where: str) -> list:
     if not isinstance(entries, list) or not all(isinstance(e, Mapping) for e in entries):
         raise ScenarioError(f"{where}: option '{key}' must be a list of tables ([[...{key}]] or [{{...}}])")
     return entries
+
+
+def _placed_targets(options: Mapping[str, Any], where: str, context: BuildContext) -> list:
+    """The targets of ``targets`` and ``situation``, every position in the plane [nm]."""
+    from rhnc.chart.positions import projected_options
+
+    chart = options.get("chart")
+    entries = [projected_options(entry, f"{where}.targets[{i}]", context.scenario_dir, ("start", "waypoints"),
+                                 chart=chart if chart is not None else "")
+               for i, entry in enumerate(_tables(options, "targets", where))]
+    uses_chart = "situation" in options or any(f"{name}_deg" in entry for entry in _tables(options, "targets", where)
+                                               for name in ("start", "waypoints"))
+    if chart is not None and not uses_chart:
+        raise ScenarioError(f"{where}: option 'chart' places geographic positions (targets' start_deg or "
+                            "waypoints_deg, or 'situation'); give one, or drop 'chart'")
+    if "situation_radius_nm" in options and "situation" not in options:
+        raise ScenarioError(f"{where}: option 'situation_radius_nm' goes with option 'situation'")
+    if "situation" not in options:
+        return entries
+    situation = options["situation"]
+    if not isinstance(situation, str) or not situation:
+        raise ScenarioError(f"{where}: option 'situation' must be the name of a traffic-situation file, "
+                            f"got {situation!r}"[:300])
+    if not isinstance(chart, str) or not chart:
+        raise ScenarioError(f"{where}: option 'situation' needs option 'chart' (the chart file whose projection "
+                            "places the situation's latitudes and longitudes on the passage)")
+    radius = options.get("situation_radius_nm")
+    if not is_finite_number(radius) or not radius >= 0:
+        raise ScenarioError(f"{where}: option 'situation' needs 'situation_radius_nm', the targets' hazard radius "
+                            f"[nm] >= 0, got {radius!r}"[:300])
+    from rhnc.chart.positions import chart_projection
+    from rhnc.encounters.traffic_situation import load_traffic_situation, target_entry
+
+    placed = load_traffic_situation(context.scenario_dir / situation,
+                                    projection=chart_projection(context.scenario_dir, chart))
+    return entries + [target_entry(target, float(radius)) for target in placed.targets]
 
 
 def _target(entry: Mapping[str, Any], where: str, context: BuildContext | None = None):

@@ -122,7 +122,7 @@ class _Reader:
         return float(value)
 
 
-def load_traffic_situation(path, origin_nm: tuple[float, float] = (0.0, 0.0)) -> TrafficSituation:
+def load_traffic_situation(path, origin_nm: tuple[float, float] = (0.0, 0.0), projection=None) -> TrafficSituation:
     """Read a maritime-schema traffic-situation file into the local plane.
 
     Parameters
@@ -131,6 +131,10 @@ def load_traffic_situation(path, origin_nm: tuple[float, float] = (0.0, 0.0)) ->
         The JSON file.
     origin_nm : (float, float)
         Where the own ship's start lands in the plane (north, east) [nm].
+    projection : rhnc.chart.projection.LocalProjection, optional
+        A passage's plane (its chart's): every position is put where that projection puts
+        its latitude and longitude, and ``origin_nm`` is not used (a situation placed on a
+        passage, rather than the own ship's start moved to ``origin_nm``).
 
     Raises
     ------
@@ -160,8 +164,12 @@ def load_traffic_situation(path, origin_nm: tuple[float, float] = (0.0, 0.0)) ->
 
     def plane(raw: dict, name: str, extend: bool) -> SituationShip:
         lats, lons = np.array(raw["positions"]).T
-        east, north = transformer.transform(lons, lats)
-        points = np.column_stack([north, east]) / NM + np.asarray(origin_nm, dtype=float)
+        if projection is not None:
+            north, east = projection.to_local(lats, lons)
+            points = np.column_stack([north, east]) / NM
+        else:
+            east, north = transformer.transform(lons, lats)
+            points = np.column_stack([north, east]) / NM + np.asarray(origin_nm, dtype=float)
         if np.any(np.hypot(*np.diff(points, axis=0).T) < 1e-6):
             raise reader.fail(f"{raw['where']}.waypoints", "two consecutive waypoints at the same position")
         course = raw["cog"]
@@ -255,7 +263,7 @@ def scenario_overrides(situation: TrafficSituation, scenario_data: Mapping, radi
                                 f"set 'situations.{role}'")
     own = situation.own_ship
     overrides: dict[str, Any] = {
-        f"participants.{traffic}.options.targets": [_target_entry(target, radius_nm) for target in situation.targets],
+        f"participants.{traffic}.options.targets": [target_entry(target, radius_nm) for target in situation.targets],
         f"participants.{plant}.parameters.x0": round(own.start_nm[0] * NM, 3),
         f"participants.{plant}.parameters.y0": round(own.start_nm[1] * NM, 3),
         f"participants.{plant}.parameters.psi0": round(math.radians(own.course_deg), 9),
@@ -277,7 +285,8 @@ def scenario_overrides(situation: TrafficSituation, scenario_data: Mapping, radi
     return overrides
 
 
-def _target_entry(target: SituationShip, radius_nm: float) -> dict[str, Any]:
+def target_entry(target: SituationShip, radius_nm: float) -> dict[str, Any]:
+    """A traffic participant's ``targets`` entry for a situation's ship, radius ``radius_nm``."""
     if len(target.waypoints_nm) <= 2:  # one leg: constant velocity, never stops
         return {"start_nm": [round(v, 6) for v in target.start_nm],
                 "velocity_kn": [round(v, 6) for v in target.velocity_kn], "radius_nm": radius_nm}

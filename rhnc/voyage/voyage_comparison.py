@@ -52,7 +52,7 @@ from orchestrator.geometry import KNOT, NM
 from rhnc.voyage.voyage_comparison_tables import evaluation_section, sweep_section
 from rhnc.voyage.voyage_geometry import check_on_map, edge_hold_nm, geometry_overrides, refuse_conflicts
 from rhnc.voyage.voyage_spec import (VOYAGE_KEYS, EqualArrivalSettings, OptimalRouteSettings, equal_arrival,
-                              optimal_route, point, positive, reject_unknown)
+                                     optimal_route, plane_positions, point, positive, reject_unknown)
 
 log = logging.getLogger(__name__)
 
@@ -115,6 +115,7 @@ class VoyageComparison:
         """Check ``[voyage]`` of the comparison file ``path``; errors name the key."""
         where = f"{path}: voyage"
         reject_unknown(table, VOYAGE_KEYS, where)
+        table = plane_positions(table, path)
         start = point(table, "start_nm", where)
         goal = point(table, "goal_nm", where)
         radius = positive(table, "arrival_radius_nm", where, 0.5)

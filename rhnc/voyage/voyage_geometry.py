@@ -69,7 +69,7 @@ def geometry_overrides(loaded, start_m, goal_m, arrival_time_min: float | None, 
             result.update(_reference_path(spec, options, start_nm, goal_nm, heading, where))
     plant = _plant(loaded)
     if plant is not None:
-        result.update(_plant_start(plant, start_m, heading))
+        result.update(_plant_start(plant, start_m, heading, _geographic_start(loaded, plant)))
     return result
 
 
@@ -132,12 +132,13 @@ def _plant(loaded):
     return plants[0] if len(plants) == 1 else None
 
 
-def _plant_start(plant, start_m, heading: float) -> dict[str, Any]:
+def _plant_start(plant, start_m, heading: float, geographic: bool = False) -> dict[str, Any]:
     """The plant's initial x, y and heading: its own start parameters where the scenario sets
     them there (SI units, the built-in models' ``x0``, ``y0``, ``psi0``), else ``[initial]``."""
     values = {"x": float(start_m[0]), "y": float(start_m[1]), "psi": heading}
     initial_keys = {"x": ("x_m", "x_nm", NM), "y": ("y_m", "y_nm", NM), "psi": ("psi_rad", "psi_deg", math.pi / 180)}
-    result = {}
+    result: dict[str, Any] = {}
+    initial: dict[str, float] = {}
     for port, value in values.items():
         mapped = plant.mapping.get(port)
         parameter = getattr(mapped, "start", None) or f"{port}0"
@@ -145,10 +146,24 @@ def _plant_start(plant, start_m, heading: float) -> dict[str, Any]:
         if parameter in plant.parameters and mapped is None:
             result[f"participants.{plant.name}.parameters.{parameter}"] = value
         elif si_key in plant.initial:
-            result[f"participants.{plant.name}.initial.{si_key}"] = value
+            initial[si_key] = value
         else:
-            result[f"participants.{plant.name}.initial.{unit_key}"] = value / unit
+            initial[unit_key] = value / unit
+    if geographic:  # the whole table, so that the voyage's start replaces start_deg (and its chart)
+        result[f"participants.{plant.name}.initial"] = {**plant.initial, **initial}
+    else:
+        result.update({f"participants.{plant.name}.initial.{key}": value for key, value in initial.items()})
     return result
+
+
+def _geographic_start(loaded, plant) -> bool:
+    """True when the scenario file gives the plant's start in latitude and longitude (``[initial]``
+    ``start_deg``), which the loaded spec holds already in the plane."""
+    from orchestrator.toml_input import read_toml
+
+    data, _ = read_toml(loaded.path, "scenario")
+    table = data.get("participants", {}).get(plant.name, {}).get("initial", {})
+    return isinstance(table, dict) and "start_deg" in table
 
 
 def _same(a, b) -> bool:

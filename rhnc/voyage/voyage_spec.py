@@ -18,7 +18,7 @@ from orchestrator.geometry import NM
 from orchestrator.participant import is_finite_number
 from orchestrator.scenario import load_scenario
 
-VOYAGE_KEYS = ("start_nm", "goal_nm", "arrival_time_min", "arrival_radius_nm", "max_duration_h", "equal_arrival",
+VOYAGE_KEYS = ("start_nm", "goal_nm", "start_deg", "goal_deg", "chart", "arrival_time_min", "arrival_radius_nm", "max_duration_h", "equal_arrival",
                "optimal_route")
 EQUAL_ARRIVAL_KEYS = ("scenario", "speed_key", "systems", "max_trials", "same_control")
 OPTIMAL_ROUTE_KEYS = ("resolution_nm", "avoid")
@@ -54,8 +54,22 @@ def reject_unknown(table: Mapping[str, Any], allowed, where: str) -> None:
 def point(table: Mapping[str, Any], key: str, where: str) -> np.ndarray:
     value = table.get(key)
     if not isinstance(value, list) or len(value) != 2 or not all(is_finite_number(v) for v in value):
-        raise ScenarioError(f"{where}.{key}: expected [north, east] in nm, got {value!r}")
+        other = f" (or {key[:-3]}_deg = [latitude, longitude] with chart)" if key in ("start_nm", "goal_nm") else ""
+        raise ScenarioError(f"{where}.{key}: expected [north, east] in nm{other}, got {value!r}")
     return np.asarray(value, dtype=float)
+
+
+def plane_positions(table: Mapping[str, Any], path: Path) -> dict[str, Any]:
+    """``[voyage]`` with ``start_deg`` and ``goal_deg`` projected by its ``chart`` into
+    ``start_nm`` and ``goal_nm`` (:mod:`rhnc.chart.positions`); errors name the key."""
+    from rhnc.chart.positions import projected_options
+
+    where = f"{path}: voyage"
+    if "chart" in table and not any(f"{name}_deg" in table for name in ("start", "goal")):
+        raise ScenarioError(f"{where}: key 'chart' places start_deg and goal_deg; give one of them, or drop 'chart'")
+    result = projected_options(table, where, path.parent, ("start", "goal"), noun="key")
+    result.pop("chart", None)
+    return result
 
 
 def positive(table: Mapping[str, Any], key: str, where: str, default: float) -> float:
