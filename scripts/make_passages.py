@@ -1,6 +1,6 @@
-"""Write the three passages of scenarios/passages/: charts, coastline, no-go areas, weather files, scenarios.
+"""Write the passages of scenarios/passages/: charts, coastline, no-go areas, weather files, scenarios.
 
-    python scripts/make_passages.py          # rewrites scenarios/passages/ (needs the 'geo' extra)
+    python scripts/make_passages.py [name ...]   # rewrites scenarios/passages/ (needs the 'geo' extra); all by default
 
 Everything a passage needs is derived here from the few lines of PASSAGES below, which
 were fixed (ports, clearance, weather parameters) before any passage was run:
@@ -164,46 +164,49 @@ def write_passage(name: str, passage: dict) -> None:
     distance = math.hypot(goal_nm[0] - start_nm[0], goal_nm[1] - start_nm[1])
     steps = int(math.ceil(2.0 * passage["arrival_min"] / 60.0) * 60)
     common = {"name": name, "title": passage["title"], "start": passage["start"], "goal": passage["goal"],
+              "start_deg": json.dumps(list(passage["start"])), "goal_deg": json.dumps(list(passage["goal"])),
               "start_nm": start_nm, "goal_nm": goal_nm, "speed_ms": round(passage["speed_kn"] * NM / 3600, 3),
               "speed_kn": passage["speed_kn"], "psi0": round(psi0, 6), "steps": steps,
               "arrival_min": passage["arrival_min"], "distance": distance,
               "origin": f"{origin[0]}, {origin[1]}", "x0": round(start_nm[0] * NM, 1), "y0": round(start_nm[1] * NM, 1), "max_h": round(steps / 60.0, 1)}
     (OUT / f"{name}.toml").write_text(RHNC.format(**common))
     (OUT / f"{name}_sea_route.toml").write_text(SEA_ROUTE.format(
-        **common, route_nm=json.dumps(route_nm), route_deg=", ".join(f"({a:.4f}, {b:.4f})" for a, b in route)))
+        **common, route_nm=json.dumps(route_nm), waypoints_deg=json.dumps([list(p) for p in route])))
     (OUT / f"{name}_compare.toml").write_text(COMPARE.format(**common))
     if passage.get("traffic"):
-        write_traffic(name, passage, projection, start_nm, common)
+        write_traffic(name, passage, common)
 
 
-def write_traffic(name: str, passage: dict, projection: LocalProjection, start_nm, common: dict) -> None:
-    """The passage with target ships: a trafficgen-format situation file, placed on the passage
-    through :mod:`rhnc.encounters.traffic_situation` (own ship at the passage's start)."""
-    from rhnc.encounters.traffic_situation import load_traffic_situation, situation_document
+def situation_ship(position, course_deg: float, speed_kn: float, identifier: int, label: str) -> dict:
+    """One ship of a trafficgen-format situation (maritime-schema 0.2), sailing straight."""
+    return {"initial": {"position": {"lat": position[0], "lon": position[1]}, "sog": speed_kn, "cog": course_deg,
+                        "heading": course_deg}, "static": {"id": identifier, "name": label}}
 
-    ships = [{"start_nm": [0.0, 0.0], "course_deg": round(math.degrees(common["psi0"]) % 360.0, 3),
-              "speed_kn": passage["speed_kn"]}]
-    for target in passage["traffic"]:
-        north, east = projection.to_local(*target["position"])
-        ships.append({"start_nm": [float(north) / NM - start_nm[0], float(east) / NM - start_nm[1]],
-                      "course_deg": target["course_deg"], "speed_kn": target["speed_kn"]})
-    document = situation_document(ships, f"{name}: traffic", passage["title"], *passage["start"])
+
+def write_traffic(name: str, passage: dict, common: dict) -> None:
+    """The passage with target ships: a trafficgen-format situation file holding each ship's
+    latitude and longitude, placed on the passage by the chart (the traffic's ``situation``)."""
+    radii = {target["radius_nm"] for target in passage["traffic"]}
+    if len(radii) != 1:
+        raise ValueError(f"{name}: one hazard radius for the situation's targets, got {sorted(radii)}")
+    own = situation_ship(passage["start"], round(math.degrees(common["psi0"]) % 360.0, 3), passage["speed_kn"], 1,
+                         "own ship")
+    targets = [situation_ship(target["position"], target["course_deg"], target["speed_kn"], k + 2, f"target {k + 1}")
+               for k, target in enumerate(passage["traffic"])]
+    document = {"schemaVersion": "0.2.0", "title": f"{name}: traffic", "description": passage["title"],
+                "ownShip": own, "targetShips": targets}
     situation_file = OUT / f"{name}.situation.json"
     situation_file.write_text(json.dumps(document, indent=1) + "\n")
-    situation = load_traffic_situation(situation_file, origin_nm=tuple(start_nm))
-    targets = [{"start_nm": [round(v, 4) for v in target.start_nm],
-                "velocity_kn": [round(v, 4) for v in target.velocity_kn], "radius_nm": spec["radius_nm"]}
-               for target, spec in zip(situation.targets, passage["traffic"], strict=True)]
     text = (OUT / f"{name}.toml").read_text()
     text = text.replace('  "ship.x -> nav.x",', '  "traffic.obstacles -> nav.obstacles", "traffic.obstacles -> ctrl.obstacles",\n  "ship.x -> nav.x",', 1)
     text = text.replace(f'name = "{name}"', f'name = "{name}_traffic"', 1)
     text = text.replace("# Run: python -m orchestrator run scenarios/passages/" + name + ".toml",
                         f"# With traffic from {situation_file.name} (trafficgen's situation format).\n"
                         f"# Run: python -m orchestrator run scenarios/passages/{name}_traffic.toml", 1)
-    inline = ", ".join("{ " + ", ".join(f"{key} = {json.dumps(value)}" for key, value in target.items()) + " }"
-                       for target in targets)
     text = text.replace("[participants.nav]\n", "[participants.traffic]\ntype = \"traffic\"\n"
-                        f"[participants.traffic.options]\ntargets = [{inline}]\n\n[participants.nav]\n", 1)
+                        f"[participants.traffic.options]\nchart = \"{name}.chart.toml\"\n"
+                        f"situation = \"{situation_file.name}\"      # the targets, placed where their lat/lon lie\n"
+                        f"situation_radius_nm = {radii.pop()}\n\n[participants.nav]\n", 1)
     # the COLREG-aware NMPC, with the settings of the traffic suites (batches/trafficgen_nmpc_colregs.toml)
     text = text.replace("disturbance_observer = true\n", "disturbance_observer = true\n"
                         "colregs = true                 # domains by encounter class and role\n"
@@ -243,17 +246,19 @@ TAIL = '''
 [participants.goal]
 type = "goal"
 [participants.goal.options]
-goal_nm = {goal_nm}
+goal_deg = {goal_deg}
+chart = "{name}.chart.toml"
 arrival_radius_nm = 0.5
 
 [participants.ship]
 fmu = "KCS"
 parameter_set = "default"
 [participants.ship.parameters]
-x0 = {x0}                 # m, the start
-y0 = {y0}
 u0 = {speed_ms}                 # m/s
 psi0 = {psi0}             # rad, towards the goal
+[participants.ship.initial]
+start_deg = {start_deg}     # the start, placed by the chart (into x0, y0 through the plant's mapping)
+chart = "{name}.chart.toml"
 
 [participants.env]
 fmu = "MetOcean"
@@ -281,7 +286,7 @@ value = true
 '''
 
 RHNC = ('''# Passage: {title} (scripts/make_passages.py).
-# From {start} to {goal} (lat, lon): {start_nm} to {goal_nm} nm in the chart's plane,
+# From {start} to {goal} (lat, lon): {start_nm} to {goal_nm} nm (north, east) in the chart's plane,
 # {distance:.1f} nm apart. RHNC: the routing navigation plans on the chart (land and no-go areas
 # at the declared clearance), the NMPC follows; weather from ERA5/CMEMS-layout files.
 # Run: python -m orchestrator run scenarios/passages/{name}.toml
@@ -301,8 +306,8 @@ every = 4
 [participants.nav.options]
 method = "routing"
 chart = "{name}.chart.toml"
-start_nm = {start_nm}
-goal_nm = {goal_nm}
+start_deg = {start_deg}
+goal_deg = {goal_deg}
 arrival_time_min = {arrival_min}
 max_speed_kn = 22.0
 horizon_steps = 16
@@ -320,7 +325,7 @@ chart = "{name}.chart.toml"          # land and no-go areas at the declared clea
 
 SEA_ROUTE = ('''# Passage: {title}, Offline-SPNC baseline (scripts/make_passages.py): the NMPC follows
 # searoute's port-to-port route over its offline sea-route network, at one constant speed.
-# Route (lat, lon): {route_deg}
+# Route in the chart's plane (north, east) [nm]: {route_nm}
 ''' + CONNECTIONS.format(extra='''  "route.reference -> ctrl.reference", "ship.x -> route.x", "ship.y -> route.y",
 ''') + '''
 
@@ -333,7 +338,8 @@ stop_when = "goal.arrived > 0.5"
 [participants.route]
 type = "reference_path"
 [participants.route.options]
-waypoints_nm = {route_nm}
+waypoints_deg = {waypoints_deg}
+chart = "{name}.chart.toml"
 speed_kn = {speed_kn}
 horizon_steps = 15
 max_lead_nm = 0.25             # waits for a ship the weather holds back: inside the arrival radius at the end
@@ -354,8 +360,9 @@ analysis = "voyage"
 metrics = ["cost_usd", "co2_t", "time_min", "distance_nm", "mean_speed_through_water_kn"]
 
 [voyage]
-start_nm = {start_nm}
-goal_nm = {goal_nm}
+start_deg = {start_deg}
+goal_deg = {goal_deg}
+chart = "{name}.chart.toml"
 arrival_time_min = {arrival_min}
 arrival_radius_nm = 0.5
 max_duration_h = {max_h}

@@ -58,15 +58,18 @@ def geometry_overrides(loaded, start_m, goal_m, arrival_time_min: float | None, 
     result: dict[str, Any] = {}
     for spec in loaded.participants:
         options = f"participants.{spec.name}.options"
+        placed: dict[str, Any] = {}
         if spec.type == "navigation":
-            result[f"{options}.start_nm"] = start_nm
-            result[f"{options}.goal_nm"] = goal_nm
+            placed[f"{options}.start_nm"] = start_nm
+            placed[f"{options}.goal_nm"] = goal_nm
             if arrival_time_min is not None and spec.options.get("method", "routing") == "routing":
-                result[f"{options}.arrival_time_min"] = float(arrival_time_min)
+                placed[f"{options}.arrival_time_min"] = float(arrival_time_min)
         elif spec.type == "goal":
-            result[f"{options}.goal_nm"] = goal_nm
+            placed[f"{options}.goal_nm"] = goal_nm
         elif spec.type == "reference_path":
-            result.update(_reference_path(spec, options, start_nm, goal_nm, heading, where))
+            placed.update(_reference_path(_in_plane(spec, loaded.directory, where), options, start_nm, goal_nm,
+                                          heading, where))
+        result.update(_in_given_form(placed, spec, loaded.directory))
     plant = _plant(loaded)
     if plant is not None:
         result.update(_plant_start(plant, start_m, heading, _geographic_start(loaded, plant)))
@@ -103,8 +106,36 @@ def edge_hold_nm(field, goal_m, arrival_radius_nm: float) -> float | None:
     return needed if nearest_nm < needed else None
 
 
-def _reference_path(spec, options: str, start_nm, goal_nm, heading: float, where: str) -> dict[str, Any]:
-    given = spec.options
+def _in_plane(spec, directory, where: str) -> dict[str, Any]:
+    """The participant's options with positions given in latitude and longitude in the plane."""
+    from rhnc.chart.positions import projected_options
+
+    return projected_options(spec.options, f"{where}: participants.{spec.name}.options", directory)
+
+
+def _in_given_form(placed: Mapping[str, Any], spec, directory) -> dict[str, Any]:
+    """``placed`` (keys ``...<name>_nm``) with each position the participant gives in latitude
+    and longitude (``<name>_deg`` among its options) turned back into that form, through the
+    chart its options name, so the run's file is overridden in the form it is written in."""
+    result = {}
+    for key, value in placed.items():
+        prefix, _, last = key.rpartition(".")
+        name = last[:-3] if last.endswith("_nm") else None
+        if name is None or f"{name}_deg" not in spec.options:
+            result[key] = value
+            continue
+        from rhnc.chart.positions import chart_projection
+
+        projection = chart_projection(directory, spec.options["chart"])
+        points = np.asarray(value, dtype=float).reshape(-1, 2) * NM
+        lat, lon = projection.to_geographic(points[:, 0], points[:, 1])
+        pairs = [[float(a), float(b)] for a, b in zip(lat, lon)]
+        result[f"{prefix}.{name}_deg"] = pairs if np.ndim(value) == 2 else pairs[0]
+    return result
+
+
+def _reference_path(given: Mapping[str, Any], options: str, start_nm, goal_nm, heading: float,
+                    where: str) -> dict[str, Any]:
     if "waypoints_nm" in given:
         points = given["waypoints_nm"]
         if isinstance(points, list) and len(points) == 2:

@@ -67,9 +67,9 @@ def test_bad_geographic_positions_are_refused_naming_the_option(options, message
 
 
 @pytest.mark.parametrize("old, new, where", [
-    ("arrival_radius_nm = 0.5\n", f'arrival_radius_nm = 0.5\ngoal_deg = [35.93, -6.15]\nchart = "{CHART}"\n',
-     "participants.goal"),
-    ("arrival_time_min = 270.0\n", "arrival_time_min = 270.0\ngoal_deg = [35.93, -6.15]\n", "participants.nav.options"),
+    ("arrival_radius_nm = 0.5\n", "arrival_radius_nm = 0.5\ngoal_nm = [16.797, 14.618]\n", "participants.goal"),
+    ("arrival_time_min = 270.0\n", "arrival_time_min = 270.0\ngoal_nm = [16.797, 14.618]\n",
+     "participants.nav.options"),
 ])
 def test_a_scenario_giving_a_position_both_ways_stops_with_one_line_naming_the_key(tmp_path, capsys, old, new, where):
     text = (PASSAGES / "gibraltar_strait.toml").read_text()

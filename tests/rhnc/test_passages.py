@@ -59,9 +59,8 @@ def test_the_shipped_strait_route_keeps_clear_of_the_drawn_zone_and_land():
 
 
 def test_a_start_on_land_stops_the_run_naming_the_key(tmp_path, capsys):
-    path = gibraltar_copy(tmp_path, [("start_nm = [", "start_nm = [12.0, 50.0]  # Morocco, near Ceuta\nold_start_nm = [")])
-    text = path.read_text()
-    path.write_text(re.sub(r"\nold_start_nm = \[[^\]]*\]", "", text))
+    path = gibraltar_copy(tmp_path, [("start_deg = [36.08, -4.95]\ngoal_deg",
+                                      "start_nm = [12.0, 50.0]  # Morocco, near Ceuta\ngoal_deg")])
     code = main(["run", str(path), "--results", str(tmp_path / "results"), "--no-progress"])
     err = capsys.readouterr().err
     assert code == 2
