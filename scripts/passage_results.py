@@ -1,6 +1,7 @@
 """Tabulate the real passages from their latest comparisons into docs/passages-results.md.
 
     python -m orchestrator compare scenarios/passages/biscay_crossing_compare.toml
+    python -m orchestrator compare scenarios/passages/ligurian_crossing_compare.toml
     python -m orchestrator compare scenarios/passages/cyclades_islands_compare.toml
     python -m orchestrator compare scenarios/passages/gibraltar_strait_compare.toml
     python -m orchestrator run scenarios/passages/gibraltar_strait_traffic.toml
@@ -17,7 +18,7 @@ import json
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-PASSAGES = ("biscay_crossing", "cyclades_islands", "gibraltar_strait")
+PASSAGES = ("biscay_crossing", "ligurian_crossing", "cyclades_islands", "gibraltar_strait")
 
 
 def latest(folder: Path) -> Path | None:
@@ -37,7 +38,7 @@ def fmt(value, digits=2) -> str:
 def passage_row(results: Path, name: str) -> str:
     folder = latest(results / f"passage_{name}")
     if folder is None:
-        return f"| {name} | not compared yet | | | | | | | | | | |"
+        return f"| {name} | not compared yet | | | | | | | | | | | |"
     summary = json.loads((folder / "summary.json").read_text())
     system = summary["voyage"]["systems"]["RHNC"]
     rhnc = clearance_of(folder / summary["runs"]["RHNC"])
@@ -57,13 +58,24 @@ def passage_row(results: Path, name: str) -> str:
                           "arrival_time_s") else None)
     baseline_min = min((b.get("min_clearance_nm", float("inf")) for b in baseline), default=None)
     baseline_kept = all(b.get("kept", False) for b in baseline) if baseline else None
-    return (f"| {name} | {fmt(system.get('arrival_min'), 1)} | {fmt(system.get('cost_usd'), 0)} | "
+    return (f"| {name} | {fmt(system.get('arrival_min'), 1)} | {baseline_outcome(system)} | "
+            f"{fmt(system.get('cost_usd'), 0)} | "
             f"{fmt(system.get('baseline_cost_usd'), 0)} | {fmt(system.get('saving_cost_percent'))} | "
             f"{fmt(system.get('saving_co2_percent'))} | {fmt(rhnc_nm, 1)} / {fmt(baseline_nm, 1)} | "
             f"{fmt(distance_alone, 1)} | "
             f"{fmt(system.get('baseline_speed_kn'))} | {fmt(rhnc.get('min_clearance_nm'), 3)} / "
             f"{fmt(rhnc.get('required_clearance_nm'), 1)} ({'kept' if rhnc.get('kept') else 'NOT kept'}) | "
             f"{fmt(baseline_min, 3)} ({'kept' if baseline_kept else 'NOT kept'}) | {folder.relative_to(results.parent)} |")
+
+
+def baseline_outcome(system: dict) -> str:
+    """How the equal-arrival search ended (comparisons before ``baseline_outcome`` existed: from
+    whether the baseline was read between two trials)."""
+    if "baseline_outcome" in system:
+        return system["baseline_outcome"]
+    if "baseline_interpolated" in system:
+        return "interpolated" if system["baseline_interpolated"] else "matched"
+    return "-"
 
 
 def stalled_baseline_lines(results: Path, name: str) -> list[str]:
@@ -76,8 +88,11 @@ def stalled_baseline_lines(results: Path, name: str) -> list[str]:
         return []
     import tomllib
 
-    comparison = tomllib.loads((ROOT / "scenarios" / "passages" / f"{name}_compare.toml").read_text())
-    goal = np.array(comparison["voyage"]["goal_nm"], dtype=float)
+    from rhnc.voyage.voyage_spec import plane_positions
+
+    compare = ROOT / "scenarios" / "passages" / f"{name}_compare.toml"
+    voyage = plane_positions(tomllib.loads(compare.read_text())["voyage"], compare)  # goal_deg into goal_nm
+    goal = np.array(voyage["goal_nm"], dtype=float)
     lines = []
     for trial in sorted((folder / "runs" / "RHNC_equal-arrival_baseline").glob("*/summary.json")):
         summary = json.loads(trial.read_text())
@@ -133,16 +148,23 @@ def main() -> None:
              "alone would give at equal arrival time, if brake power grew as the cube of speed (calm "
              "water, one constant speed: energy as distance³ / time²): 1 - (RHNC / baseline)³; a "
              "saving near it is the sea route's detour, not the weather.", "",
-             "| passage | arrival [min] | RHNC cost [USD] | baseline cost [USD] | saving cost [%] | saving CO2 [%] "
+             "Baseline: how the search for the baseline's speed ended: matched (a trial arrives within 2 s "
+             "of RHNC), interpolated (read between two trials around it), cannot arrive (no trial arrives, "
+             "up to the fastest speed the search may try: no saving can be given).", "",
+             "| passage | arrival [min] | baseline | RHNC cost [USD] | baseline cost [USD] | saving cost [%] | saving CO2 [%] "
              "| sailed RHNC / baseline [nm] | distance alone [%] | baseline speed [kn] "
              "| RHNC clearance [nm] / declared | baseline clearance [nm] | comparison |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     lines += [passage_row(results, name) for name in PASSAGES]
-    flags = []
+    flags, outcomes = [], []
     for name in PASSAGES:
         folder = latest(results / f"passage_{name}")
         if folder is not None:
-            flags += [f"- {name}: {flag}" for flag in json.loads((folder / "summary.json").read_text()).get("flags", [])]
+            summary = json.loads((folder / "summary.json").read_text())
+            flags += [f"- {name}: {flag}" for flag in summary.get("flags", [])]
+            outcomes += [f"- {name}: {line}" for line in summary.get("voyage", {}).get("outcomes", [])]
+    if outcomes:
+        lines += ["", "Outcomes of the comparisons:", ""] + outcomes
     if flags:
         lines += ["", "Flags of the comparisons:", ""] + flags
     for name in PASSAGES:

@@ -48,3 +48,11 @@ def test_no_progress_lines_when_a_trial_arrived(script, tmp_path):
     trial(runs / "a", None, [-20.0, -10.0])
     trial(runs / "b", 3600.0, [-20.0, 38.0])
     assert script.stalled_baseline_lines(tmp_path, "biscay_crossing") == []
+
+
+def test_the_table_says_how_each_baseline_search_ended(script):
+    assert script.baseline_outcome({"baseline_outcome": "cannot arrive"}) == "cannot arrive"
+    # comparisons written before the outcome was recorded: from how the baseline was read
+    assert script.baseline_outcome({"baseline_interpolated": True}) == "interpolated"
+    assert script.baseline_outcome({"baseline_interpolated": False}) == "matched"
+    assert script.baseline_outcome({}) == "-"
