@@ -7,7 +7,8 @@
     python -m orchestrator run scenarios/passages/gibraltar_strait_traffic.toml
     python scripts/passage_results.py [--results results]
 
-Nothing is typed by hand: every figure is read from the comparisons' and runs' summary.json.
+Nothing is typed by hand: every figure is read from the comparisons' and runs' summary.json;
+the README's passage lines (between the ``passages-summary`` markers) come from the same runs.
 A passage not yet compared is listed as such.
 """
 
@@ -35,10 +36,11 @@ def fmt(value, digits=2) -> str:
     return "-" if value is None else f"{value:,.{digits}f}"
 
 
-def passage_row(results: Path, name: str) -> str:
+def passage_figures(results: Path, name: str) -> dict | None:
+    """The figures of a passage's latest comparison (None: not compared yet)."""
     folder = latest(results / f"passage_{name}")
     if folder is None:
-        return f"| {name} | not compared yet | | | | | | | | | | | |"
+        return None
     summary = json.loads((folder / "summary.json").read_text())
     system = summary["voyage"]["systems"]["RHNC"]
     rhnc = clearance_of(folder / summary["runs"]["RHNC"])
@@ -56,16 +58,68 @@ def passage_row(results: Path, name: str) -> str:
     distance_alone = (100.0 * (1.0 - (rhnc_nm / baseline_nm) ** 3)
                       if rhnc_nm and baseline_nm and nearest.get("participants", {}).get("goal", {}).get(
                           "arrival_time_s") else None)
-    baseline_min = min((b.get("min_clearance_nm", float("inf")) for b in baseline), default=None)
-    baseline_kept = all(b.get("kept", False) for b in baseline) if baseline else None
+    return {"folder": folder.relative_to(results.parent), "system": system, "rhnc": rhnc, "rhnc_nm": rhnc_nm,
+            "baseline_nm": baseline_nm, "distance_alone": distance_alone,
+            "baseline_min": min((b.get("min_clearance_nm", float("inf")) for b in baseline), default=None),
+            "baseline_kept": all(b.get("kept", False) for b in baseline) if baseline else None}
+
+
+def passage_row(results: Path, name: str) -> str:
+    f = passage_figures(results, name)
+    if f is None:
+        return f"| {name} | not compared yet | | | | | | | | | | | |"
+    system, rhnc = f["system"], f["rhnc"]
     return (f"| {name} | {fmt(system.get('arrival_min'), 1)} | {baseline_outcome(system)} | "
             f"{fmt(system.get('cost_usd'), 0)} | "
             f"{fmt(system.get('baseline_cost_usd'), 0)} | {fmt(system.get('saving_cost_percent'))} | "
-            f"{fmt(system.get('saving_co2_percent'))} | {fmt(rhnc_nm, 1)} / {fmt(baseline_nm, 1)} | "
-            f"{fmt(distance_alone, 1)} | "
+            f"{fmt(system.get('saving_co2_percent'))} | {fmt(f['rhnc_nm'], 1)} / {fmt(f['baseline_nm'], 1)} | "
+            f"{fmt(f['distance_alone'], 1)} | "
             f"{fmt(system.get('baseline_speed_kn'))} | {fmt(rhnc.get('min_clearance_nm'), 3)} / "
             f"{fmt(rhnc.get('required_clearance_nm'), 1)} ({'kept' if rhnc.get('kept') else 'NOT kept'}) | "
-            f"{fmt(baseline_min, 3)} ({'kept' if baseline_kept else 'NOT kept'}) | {folder.relative_to(results.parent)} |")
+            f"{fmt(f['baseline_min'], 3)} ({'kept' if f['baseline_kept'] else 'NOT kept'}) | {f['folder']} |")
+
+
+#: The README's passage lines lie between these markers.
+README_BEGIN, README_END = "<!-- passages-summary:begin -->", "<!-- passages-summary:end -->"
+KINDS = {"biscay_crossing": "open sea, a gale", "ligurian_crossing": "open sea, Beaufort 6",
+         "cyclades_islands": "among islands", "gibraltar_strait": "a strait"}
+
+
+def readme_lines(results: Path) -> list[str]:
+    """One line per passage for the README, from the same comparisons as the table."""
+    lines = []
+    for name in PASSAGES:
+        f = passage_figures(results, name)
+        if f is None:
+            lines.append(f"- `{name}` ({KINDS[name]}): not compared yet.")
+            continue
+        system, rhnc = f["system"], f["rhnc"]
+        kept = "kept" if rhnc.get("kept") else "NOT kept"
+        head = (f"- `{name}` ({KINDS[name]}): RHNC arrives at {fmt(system.get('arrival_min'), 1)} min, "
+                f"{fmt(rhnc.get('min_clearance_nm'), 2)} nm from land and no-go areas ({kept}, "
+                f"{fmt(rhnc.get('required_clearance_nm'), 1)} nm declared); ")
+        outcome = baseline_outcome(system)
+        if outcome == "cannot arrive":
+            lines.append(head + "the sea-route baseline arrives at no speed up to 30 kn in this weather: "
+                                "no saving to give.")
+        elif system.get("saving_cost_percent") is None:
+            lines.append(head + "no equal-arrival baseline was matched: no saving given.")
+        else:
+            lines.append(head + f"against the sea route at equal arrival time it saves "
+                                f"{fmt(system.get('saving_cost_percent'))} % of cost and "
+                                f"{fmt(system.get('saving_co2_percent'))} % of CO2 (the shorter track alone: "
+                                f"{fmt(f['distance_alone'], 1)} %); the baseline's clearance "
+                                f"{fmt(f['baseline_min'], 2)} nm ({'kept' if f['baseline_kept'] else 'NOT kept'}).")
+    return lines
+
+
+def write_readme_block(readme: Path, block: str) -> None:
+    text = readme.read_text()
+    if README_BEGIN not in text or README_END not in text:
+        raise SystemExit(f"{readme}: no {README_BEGIN} ... {README_END} markers to write the passages between")
+    head, rest = text.split(README_BEGIN, 1)
+    _, tail = rest.split(README_END, 1)
+    readme.write_text(head + README_BEGIN + "\n" + block + "\n" + README_END + tail)
 
 
 def baseline_outcome(system: dict) -> str:
@@ -173,6 +227,9 @@ def main() -> None:
     out = ROOT / "docs" / "passages-results.md"
     out.write_text("\n".join(lines))
     print("\n".join(lines))
+    summary = readme_lines(results)
+    write_readme_block(ROOT / "README.md", "\n".join(summary))
+    print("\n".join(summary))
 
 
 if __name__ == "__main__":

@@ -56,3 +56,23 @@ def test_the_table_says_how_each_baseline_search_ended(script):
     assert script.baseline_outcome({"baseline_interpolated": True}) == "interpolated"
     assert script.baseline_outcome({"baseline_interpolated": False}) == "matched"
     assert script.baseline_outcome({}) == "-"
+
+
+def test_the_readme_lines_state_a_baseline_that_cannot_arrive_without_a_saving(script, monkeypatch):
+    clear = {"min_clearance_nm": 55.17, "required_clearance_nm": 2.0, "kept": True}
+    figures = {
+        "biscay_crossing": {"system": {"arrival_min": 417.5, "baseline_outcome": "cannot arrive"}, "rhnc": clear},
+        "gibraltar_strait": {"system": {"arrival_min": 267.7, "baseline_outcome": "matched",
+                                        "saving_cost_percent": 4.23, "saving_co2_percent": 5.28},
+                             "rhnc": {**clear, "min_clearance_nm": 1.017, "required_clearance_nm": 1.0},
+                             "distance_alone": -0.4, "baseline_min": 0.996, "baseline_kept": False},
+    }
+    monkeypatch.setattr(script, "PASSAGES", tuple(figures) + ("cyclades_islands",))
+    monkeypatch.setattr(script, "passage_figures", lambda results, name: figures.get(name))
+    lines = script.readme_lines(Path("results"))
+    assert lines[0] == ("- `biscay_crossing` (open sea, a gale): RHNC arrives at 417.5 min, 55.17 nm from land and "
+                        "no-go areas (kept, 2.0 nm declared); the sea-route baseline arrives at no speed up to 30 kn "
+                        "in this weather: no saving to give.")
+    assert lines[1].endswith("against the sea route at equal arrival time it saves 4.23 % of cost and 5.28 % of CO2 "
+                             "(the shorter track alone: -0.4 %); the baseline's clearance 1.00 nm (NOT kept).")
+    assert lines[2] == "- `cyclades_islands` (among islands): not compared yet."
