@@ -120,9 +120,11 @@ def _number(options: Mapping[str, Any], key: str, default: float, where: str, po
     return float(value)
 
 
-def _chart(options: Mapping[str, Any], context: BuildContext, where: str, goal, start):
+def _chart(options: Mapping[str, Any], context: BuildContext, where: str, goal, start,
+           written: Mapping[str, str] | None = None):
     """The option ``chart``: land and no-go areas the route keeps its clearance from (None
-    without it); the goal and the start must lie in navigable water."""
+    without it); the goal and the start must lie in navigable water (a message names the key
+    as ``written``: ``start_deg`` for a start given in latitude and longitude)."""
     if "chart" not in options:
         return None
     from rhnc.chart.chart import load_chart
@@ -135,7 +137,8 @@ def _chart(options: Mapping[str, Any], context: BuildContext, where: str, goal, 
         try:
             check_navigable(chart, point, "point") if point is not None else None
         except ValueError as exc:
-            raise ScenarioError(f"{where}.{label}: {str(exc).replace('the point ', '', 1)}") from None
+            raise ScenarioError(f"{where}.{(written or {}).get(label, label)}: "
+                                f"{str(exc).replace('the point ', '', 1)}") from None
     return chart
 
 
@@ -208,6 +211,8 @@ class NavigationParticipant(Participant):
         """Build from ``[participants.<name>.options]``; errors name the key."""
         where = f"{context.where}.options"
         reject_unknown_options(options, (*OPTIONS, "goal_deg", "start_deg"), where)
+        # the key a message names: the one the user wrote (start_deg for a start given so)
+        written = {f"{n}_nm": f"{n}_deg" if f"{n}_deg" in options else f"{n}_nm" for n in ("start", "goal")}
         options = projected_options(options, where, context.scenario_dir, names=("start", "goal"))
         if context.metocean is None:
             raise ScenarioError(f"{context.where}: the navigation needs the scenario's [metocean] table")
@@ -215,7 +220,7 @@ class NavigationParticipant(Participant):
             raise ScenarioError(f"{where}: missing option 'goal_nm' ([north, east] in nm)")
         goal = _point_nm(options, "goal_nm", where)
         if not bool(context.metocean.contains(goal[0], goal[1])):
-            raise ScenarioError(f"{where}.goal_nm: the goal lies outside the met-ocean map")
+            raise ScenarioError(f"{where}.{written['goal_nm']}: the goal lies outside the met-ocean map")
         start = _point_nm(options, "start_nm", where) if "start_nm" in options else None
         horizon = options.get("horizon_steps", 16)
         if isinstance(horizon, bool) or not isinstance(horizon, int) or not 1 <= horizon <= MAX_HORIZON_STEPS:
@@ -237,7 +242,7 @@ class NavigationParticipant(Participant):
                                     f"'{'routing' if method == 'paper' else 'paper'}' only (method is '{method}')")
         arrival_s = (_number(options, "arrival_time_min", 0.0, where, positive=True) * 60.0
                      if "arrival_time_min" in options else None)
-        chart = _chart(options, context, where, goal, start)
+        chart = _chart(options, context, where, goal, start, written)
         weights = FieldWeights(k1=_number(options, "k1", 1.0, where), k2=_number(options, "k2", 1.0, where),
                                k3=_number(options, "k3", 16.0, where))
         guidance = GuidanceParameters(eps=_number(options, "guidance_eps", 1.0, where, positive=True),

@@ -68,6 +68,16 @@ def test_a_start_on_land_stops_the_run_naming_the_key(tmp_path, capsys):
     assert not (tmp_path / "results").exists()
 
 
+def test_a_start_on_land_in_latitude_and_longitude_is_refused_naming_that_key(tmp_path, capsys):
+    path = gibraltar_copy(tmp_path, [("start_deg = [36.08, -4.95]\ngoal_deg",
+                                      "start_deg = [35.85, -5.35]  # Morocco, near Ceuta\ngoal_deg")])
+    code = main(["run", str(path), "--results", str(tmp_path / "results"), "--no-progress"])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert re.search(r"participants.nav.options.start_deg: \(\d+, \d+\) m lies on land or in a no-go area", err)
+    assert not (tmp_path / "results").exists()
+
+
 def test_a_no_go_file_that_is_not_polygons_stops_the_run(tmp_path, capsys):
     (tmp_path / "lanes.geojson").write_text(json.dumps(
         {"type": "Feature", "properties": {"name": "lane"},
