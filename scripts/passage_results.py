@@ -52,12 +52,12 @@ def passage_figures(results: Path, name: str) -> dict | None:
     arrival_s = (system.get("baseline_arrival_min") or 0.0) * 60.0
     nearest = min(trial_summaries, default=None, key=lambda t: abs(
         (t["participants"].get("goal", {}).get("arrival_time_s") or float("inf")) - arrival_s))
-    baseline_nm = nearest["analyses"]["voyage"].get("distance_nm") if nearest else None
+    arrived = nearest is not None and nearest["participants"].get("goal", {}).get("arrival_time_s") is not None
+    # a baseline that never arrived sailed no passage to set beside RHNC's
+    baseline_nm = nearest["analyses"]["voyage"].get("distance_nm") if arrived else None
     # what the distance alone would save at equal arrival time: at one constant speed through
     # calm water brake power grows as the cube of speed, so the energy of d nm in time t as d³/t²
-    distance_alone = (100.0 * (1.0 - (rhnc_nm / baseline_nm) ** 3)
-                      if rhnc_nm and baseline_nm and nearest.get("participants", {}).get("goal", {}).get(
-                          "arrival_time_s") else None)
+    distance_alone = 100.0 * (1.0 - (rhnc_nm / baseline_nm) ** 3) if rhnc_nm and baseline_nm else None
     return {"folder": folder.relative_to(results.parent), "system": system, "rhnc": rhnc, "rhnc_nm": rhnc_nm,
             "baseline_nm": baseline_nm, "distance_alone": distance_alone,
             "baseline_min": min((b.get("min_clearance_nm", float("inf")) for b in baseline), default=None),

@@ -76,3 +76,30 @@ def test_the_readme_lines_state_a_baseline_that_cannot_arrive_without_a_saving(s
     assert lines[1].endswith("against the sea route at equal arrival time it saves 4.23 % of cost and 5.28 % of CO2 "
                              "(the shorter track alone: -0.4 %); the baseline's clearance 1.00 nm (NOT kept).")
     assert lines[2] == "- `cyclades_islands` (among islands): not compared yet."
+
+
+def comparison(results: Path, name: str, trial_arrivals) -> None:
+    """A comparison folder as compare writes it: RHNC's run and the baseline's trials."""
+    folder = results / f"passage_{name}" / "20260101T000000Z-x"
+    (folder / "rhnc").mkdir(parents=True)
+    clearance = {"min_clearance_nm": 2.5, "required_clearance_nm": 2.0, "kept": True}
+    (folder / "summary.json").write_text(json.dumps({"voyage": {"systems": {"RHNC": {"arrival_min": 400.0}}},
+                                                     "runs": {"RHNC": "rhnc"}}))
+    (folder / "rhnc" / "summary.json").write_text(json.dumps(
+        {"analyses": {"clearance": clearance, "voyage": {"distance_nm": 98.0}}}))
+    for k, arrival_s in enumerate(trial_arrivals):
+        trial = folder / "runs" / "RHNC_equal-arrival_baseline" / f"t{k}"
+        trial.mkdir(parents=True)
+        trial.joinpath("summary.json").write_text(json.dumps(
+            {"participants": {"goal": {"arrival_time_s": arrival_s}},
+             "analyses": {"clearance": clearance, "voyage": {"distance_nm": 90.0 + k}}}))
+
+
+def test_a_baseline_that_never_arrived_has_no_distance_beside_rhncs(script, tmp_path):
+    comparison(tmp_path, "stalled", [None, None])
+    figures = script.passage_figures(tmp_path, "stalled")
+    assert figures["baseline_nm"] is None and figures["distance_alone"] is None
+    comparison(tmp_path, "arrived", [None, 24_000.0])
+    figures = script.passage_figures(tmp_path, "arrived")
+    assert figures["baseline_nm"] == 91.0
+    assert figures["distance_alone"] == pytest.approx(100.0 * (1.0 - (98.0 / 91.0) ** 3))
