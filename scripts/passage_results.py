@@ -96,7 +96,7 @@ def readme_lines(results: Path) -> list[str]:
         system, rhnc = f["system"], f["rhnc"]
         kept = "kept" if rhnc.get("kept") else "NOT kept"
         head = (f"- `{name}` ({KINDS[name]}): RHNC arrives at {fmt(system.get('arrival_min'), 1)} min, "
-                f"{fmt(rhnc.get('min_clearance_nm'), 2)} nm from land and no-go areas ({kept}, "
+                f"{fmt(rhnc.get('min_clearance_nm'), 3)} nm from land and no-go areas ({kept}, "
                 f"{fmt(rhnc.get('required_clearance_nm'), 1)} nm declared); ")
         outcome = baseline_outcome(system)
         if outcome == "cannot arrive":
@@ -109,7 +109,7 @@ def readme_lines(results: Path) -> list[str]:
                                 f"{fmt(system.get('saving_cost_percent'))} % of cost and "
                                 f"{fmt(system.get('saving_co2_percent'))} % of CO2 (the shorter track alone: "
                                 f"{fmt(f['distance_alone'], 1)} %); the baseline's clearance "
-                                f"{fmt(f['baseline_min'], 2)} nm ({'kept' if f['baseline_kept'] else 'NOT kept'}).")
+                                f"{fmt(f['baseline_min'], 3)} nm ({'kept' if f['baseline_kept'] else 'NOT kept'}).")
     return lines
 
 

@@ -70,11 +70,11 @@ def test_the_readme_lines_state_a_baseline_that_cannot_arrive_without_a_saving(s
     monkeypatch.setattr(script, "PASSAGES", tuple(figures) + ("cyclades_islands",))
     monkeypatch.setattr(script, "passage_figures", lambda results, name: figures.get(name))
     lines = script.readme_lines(Path("results"))
-    assert lines[0] == ("- `biscay_crossing` (open sea, a gale): RHNC arrives at 417.5 min, 55.17 nm from land and "
+    assert lines[0] == ("- `biscay_crossing` (open sea, a gale): RHNC arrives at 417.5 min, 55.170 nm from land and "
                         "no-go areas (kept, 2.0 nm declared); the sea-route baseline arrives at no speed up to 30 kn "
                         "in this weather: no saving to give.")
     assert lines[1].endswith("against the sea route at equal arrival time it saves 4.23 % of cost and 5.28 % of CO2 "
-                             "(the shorter track alone: -0.4 %); the baseline's clearance 1.00 nm (NOT kept).")
+                             "(the shorter track alone: -0.4 %); the baseline's clearance 0.996 nm (NOT kept).")
     assert lines[2] == "- `cyclades_islands` (among islands): not compared yet."
 
 
