@@ -230,8 +230,7 @@ class NMPCController:
         names = ("hard", "relaxed") if self.problem.sigma_index.size else ("hard",)
         names += ("relaxed_alone",) if self.problem.sigma_index.size and s.iteration_budget is not None else ()
         return library, AcadosSolvers(library, self.problem, layout,
-                                      {name: self.attempt_iterations[name] for name in names},
-                                      s.collision_slack_weight)
+                                      {name: self.attempt_iterations[name] for name in names})
 
     def use_chart(self, chart) -> None:
         """Keep the clearance of ``chart`` (:class:`rhnc.chart.chart.Chart`) in the coastline slots."""
