@@ -185,12 +185,9 @@ class NMPCProblem:
 
     def violation(self, x: np.ndarray, g: np.ndarray, lbx: np.ndarray, ubx: np.ndarray) -> float:
         """Largest violation of the bounds of ``x`` and ``g`` (0 when the point is feasible)."""
-        return float(max(
-            np.max(np.maximum(self.lbg - g, 0.0), initial=0.0),
-            np.max(np.maximum(g - self.ubg, 0.0), initial=0.0),
-            np.max(np.maximum(lbx - x, 0.0), initial=0.0),
-            np.max(np.maximum(x - ubx, 0.0), initial=0.0),
-        ))
+        # the largest difference, or 0 (a NaN anywhere stays NaN)
+        return float(np.max([0.0, (self.lbg - g).max(initial=0.0), (g - self.ubg).max(initial=0.0),
+                             (lbx - x).max(initial=0.0), (x - ubx).max(initial=0.0)]))
 
 
 def stage_function(params: ShipParameters, control_interval_s: float, substeps: int, max_obstacles: int,
