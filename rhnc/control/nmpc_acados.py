@@ -83,13 +83,23 @@ ACADOS_INFINITY = 1.0e9
 STATUS = {0: "Solve_Succeeded", 1: "acados_nan_detected", 2: "Maximum_Iterations_Exceeded",
           3: "acados_minimum_step", 4: "acados_qp_failure"}
 #: Hessian of the SQP: the exact Hessian of the Lagrangian, its blocks mirrored to positive
-#: definite ones where they are not.  The Gauss-Newton Hessian (with the cost written as
-#: least squares) leaves out the clearances' curvature times their multipliers; it solved the benchmark's closed loops (one and three
-#: targets) in the same time, but on a relaxed problem started inside a domain (slack about 1)
-#: it ran out of its 200 iterations, full steps or a merit line search alike, where fatrop
-#: and the exact Hessian solved it (168 iterations, the same slack and cost)
+#: definite ones where they are not.  The Gauss-Newton Hessian (tried with the cost written
+#: as least squares) leaves out the clearances' curvature times their multipliers; it solved
+#: the benchmark's closed loops (one and three targets) in the same time, but on a relaxed
+#: problem started inside a domain (slack about 1) it ran out of its 200 iterations, full
+#: steps or a merit line search alike, where fatrop and the exact Hessian solved it (168
+#: iterations, the same slack and cost).  Without the dynamics' second derivatives
+#: (``exact_hess_dyn`` off) the benchmark's one-target loop took 5 iterations at the median
+#: instead of 2, and longer.
 HESSIAN = "EXACT"
 REGULARIZATION = "MIRROR"
+#: the clearances' second derivatives in that Hessian (times their multipliers): left out.
+#: With them every clearance row of every stage needs the RK4 substeps' second derivatives,
+#: inactive slots too; without them, on the benchmark's one-target loop with the
+#: co-simulation's four slots and slacks, the linearisation took 35 % less time and the SQP
+#: fewer iterations (381 against 460 over 90 steps, at most 41 against 64), to inputs within
+#: 1.3e-5 of tau_max of the full Hessian's
+CONSTRAINT_CURVATURE = False
 #: step-length rule: full steps.  A merit line search (MERIT_BACKTRACKING) failed one step
 #: of the one-target benchmark loop at 200 iterations that full steps solved in 64
 GLOBALIZATION = "FIXED_STEP"
@@ -253,6 +263,7 @@ def acados_ocp(acados, name: str, params, settings, state_scale: np.ndarray, inp
     o.globalization = GLOBALIZATION
     o.hessian_approx = HESSIAN
     o.regularize_method = REGULARIZATION
+    o.exact_hess_constr = int(CONSTRAINT_CURVATURE)
     o.qp_solver = "PARTIAL_CONDENSING_HPIPM"
     o.qp_solver_iter_max = QP_ITERATIONS
     o.nlp_solver_max_iter = max_iterations
