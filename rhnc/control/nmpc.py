@@ -117,21 +117,23 @@ def renew_rule(solver: str, compiled: bool, iteration_budget: int | None):
     return renew_solver_after if iteration_budget is None else renew_every_solve
 
 
-def reference_inputs(reference: np.ndarray, dt: float, params: ShipParameters) -> np.ndarray:
+def reference_inputs(reference: np.ndarray, dt: float, params: ShipParameters,
+                     tau_max: np.ndarray | None = None) -> np.ndarray:
     """Feed-forward inputs tau_d (N, 2) [SI] for reference states (N+1, 6) spaced ``dt`` [s].
 
     Inverse of the surge and yaw equations with v_d = 0 (the paper's Eq. 19 reference):
     ``tau_u = m11 udot + d11 u``, ``tau_r = m33 rdot + d33 r`` (plus the other hull forces of
     a wider model, :func:`rhnc.ship.ship_model.hull_forces`), derivatives by forward
-    differences, clipped to the bounds.
+    differences, clipped to the bounds (``tau_max``, default the parameters').
     """
     u = reference[:, 3]
     r = reference[:, 5]
-    udot = np.diff(u) / dt
-    rdot = np.diff(r) / dt
-    surge, _, yaw = hull_forces(params, u[:-1], np.zeros_like(u[:-1]), r[:-1])
-    tau = np.column_stack([params.m11 * udot - surge, params.m33 * rdot - yaw])
-    return np.clip(tau, -params.tau_max, params.tau_max)
+    surge, _, yaw = hull_forces(params, u[:-1], np.zeros(len(u) - 1), r[:-1])
+    tau = np.empty((len(u) - 1, 2))
+    tau[:, 0] = params.m11 * ((u[1:] - u[:-1]) / dt) - surge
+    tau[:, 1] = params.m33 * ((r[1:] - r[:-1]) / dt) - yaw
+    bound = params.tau_max if tau_max is None else tau_max
+    return np.minimum(np.maximum(tau, -bound, out=tau), bound, out=tau)
 
 
 class NMPCController:
@@ -182,6 +184,7 @@ class NMPCController:
         self.failure_count = 0
         self.timeout_count = 0
         self._bound_templates: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._no_disturbance = np.zeros(DISTURBANCE_SIZE)
 
     def _nlpsol_solvers(self):
         """The NLP's functions (compiled once per machine and cached, or interpreted) and the
@@ -230,8 +233,7 @@ class NMPCController:
         names = ("hard", "relaxed") if self.problem.sigma_index.size else ("hard",)
         names += ("relaxed_alone",) if self.problem.sigma_index.size and s.iteration_budget is not None else ()
         return library, AcadosSolvers(library, self.problem, layout,
-                                      {name: self.attempt_iterations[name] for name in names},
-                                      s.collision_slack_weight)
+                                      {name: self.attempt_iterations[name] for name in names})
 
     def use_chart(self, chart) -> None:
         """Keep the clearance of ``chart`` (:class:`rhnc.chart.chart.Chart`) in the coastline slots."""
@@ -270,14 +272,17 @@ class NMPCController:
 
     def _rollout(self, state: np.ndarray, inputs: np.ndarray, disturbance: np.ndarray | None = None) -> np.ndarray:
         """States (n+1, 6) [SI] from ``state`` under ``inputs`` (n, 2) [SI] with the prediction model."""
-        d = np.zeros(DISTURBANCE_SIZE) if disturbance is None else disturbance
-        origin = np.asarray(state[:2], dtype=float)
-        z = self._to_scaled(state, origin)
-        rows = [z]
-        for w in np.asarray(inputs) / self.input_scale:
-            z = self._next_state(z, w, d)
-            rows.append(z)
-        return self._from_scaled(np.array(rows), origin)
+        d = self._no_disturbance if disturbance is None else disturbance
+        state = np.asarray(state, dtype=float)
+        inputs = np.asarray(inputs) / self.input_scale
+        rows = np.empty((len(inputs) + 1, 6))
+        rows[0] = state / self.state_scale
+        rows[0, :2] = 0.0  # positions from the state's own: the solve's origin
+        for k, w in enumerate(inputs):
+            rows[k + 1] = self._next_state(rows[k], w, d)
+        rows *= self.state_scale
+        rows[:, :2] += state[:2]
+        return rows
 
     # ------------------------------------------------------------------ solving
 
@@ -398,10 +403,10 @@ class NMPCController:
         s = self.settings
         # same heading, nearest turn: the warm start must not begin a full circle away
         reference = reference.copy()
-        reference[:, 2] -= 2.0 * np.pi * np.round((reference[0, 2] - state[2]) / (2.0 * np.pi))
+        reference[:, 2] -= 2.0 * np.pi * round((reference[0, 2] - state[2]) / (2.0 * np.pi))
         reference[:, 3] = np.minimum(reference[:, 3], s.max_speed_mps)
         if self.observer is None:
-            return reference, reference_inputs(reference, s.control_interval_s, self.params), \
+            return reference, reference_inputs(reference, s.control_interval_s, self.params, self.input_scale), \
                 np.zeros(DISTURBANCE_SIZE)
         disturbance = self.observer.update(time_s, state)
         reference, tau_d = trimmed_reference(reference, disturbance, s.control_interval_s, self.params)
@@ -508,7 +513,7 @@ class NMPCController:
                         time_s, slack)
         states = self._from_scaled(x_opt[problem.z_index], step.origin)
         # the solver meets the bounds |w| <= 1 only to its tolerance: never apply more than tau_max
-        inputs = np.clip(x_opt[problem.w_index], -1.0, 1.0) * self.input_scale
+        inputs = np.minimum(np.maximum(x_opt[problem.w_index], -1.0), 1.0) * self.input_scale
         solution = NMPCSolution(tau=inputs[0].copy(), states=states, inputs=inputs, solve_time_s=attempt.elapsed,
                                 iterations=attempt.iterations, status=attempt.status, success=True, fallback=False,
                                 cost=outcome.f, constraint_violation=violation, collision_slack=slack,
@@ -574,7 +579,7 @@ class NMPCController:
             # the heading on the measured one's turn: the plant wraps it at +-pi, and a plan
             # a full turn off that it begins from is 2 pi infeasible (a budgeted solve fell back)
             states = states.copy()
-            states[:, 2] -= 2.0 * np.pi * np.round((states[0, 2] - state[2]) / (2.0 * np.pi))
+            states[:, 2] -= 2.0 * np.pi * round((states[0, 2] - state[2]) / (2.0 * np.pi))
             z = (states - self._origin_shift(origin)) / self.state_scale
             w = inputs / self.input_scale
         else:
@@ -583,10 +588,11 @@ class NMPCController:
         z[0] = self._to_scaled(state, origin)
         push_guess_clear(z, slots, ref_scaled, self.settings.control_interval_s)
         guess[problem.z_index.ravel()] = z.ravel()
-        guess[problem.w_index.ravel()] = np.clip(w, -1.0, 1.0).ravel()
+        w = np.minimum(np.maximum(w, -1.0), 1.0)
+        guess[problem.w_index.ravel()] = w.ravel()
         # the first interval from the measured state: a non-finite value here means the
         # model cannot predict from this state at all
-        z1 = self._next_state(z[0], np.clip(w[0], -1.0, 1.0), disturbance)
+        z1 = self._next_state(z[0], w[0], disturbance)
         if not np.all(np.isfinite(z1)):
             guess[:] = np.nan
         return guess

@@ -10,15 +10,14 @@ acados's stage-wise form:
   ``w_before_next = w``;
 * inputs ``[w (2), sigma]``: the scaled forces and, with ``collision_slack_weight``, the
   stage's collision slack (bounded to zero in the hard attempt, free in the relaxed one);
-* the cost as least squares (acados's form, which also offers a Gauss-Newton Hessian; see
-  ``HESSIAN`` for why the exact one is used): the heading error
-  ``2 (1 - cos e) = (2 sin(e/2))²``, the slack's ``w (sigma + sigma²) = w (sigma + 1/2)² -
-  w/4`` (the constant is taken off the reported cost), the terminal ``e' P e = |L' e|²``
-  with ``P = L L'`` (the DARE weight's Cholesky factor, a parameter);
+* the cost as acados's external cost: the stage cost and the terminal cost of
+  :mod:`rhnc.control.nmpc_problem` (:func:`~rhnc.control.nmpc_problem.stage_cost`,
+  :func:`~rhnc.control.nmpc_problem.terminal_cost`), the same expressions, with the terminal
+  weight P a parameter; its exact Hessian (see ``HESSIAN``);
 * the clearances of every RK4 substep and obstacle slot as nonlinear inequalities ``h >= 0``
   (:func:`rhnc.control.nmpc_problem.clearances`, the same expressions);
 * per stage the parameters (reference, feed-forward input, disturbance, obstacle slots,
-  the interval's start, whether its state error counts, the terminal factor).
+  the interval's start, whether its state error counts, the terminal weight).
 
 SQP to convergence (tolerance ``ACCEPTABLE_VIOLATION`` on acados's residuals) with the
 controller's iteration limit: the solver bounds its own time, so it runs in this process without the watchdog's
@@ -62,7 +61,8 @@ import numpy as np
 from orchestrator.errors import ToolchainError
 from rhnc.control.nmpc_codegen import _exclusive, cache_dir, find_compiler
 from rhnc.control.nmpc_problem import (ACCEPTABLE_VIOLATION, DISTURBANCE_SIZE, FATROP_ACCEPTABLE_TOL,
-                                       OBSTACLE_FIELDS, NMPCProblem, clearances, scaled_step)
+                                       OBSTACLE_FIELDS, NMPCProblem, clearances, scaled_step, stage_cost,
+                                       terminal_cost)
 from rhnc.control.solver_watchdog import SolveOutcome
 
 LOG = logging.getLogger(__name__)
@@ -76,20 +76,30 @@ DEFAULT_ACADOS_DIR = Path("~/.local/share/rhnc-cosim/acados")
 #: how to install it (the one line the error gives)
 INSTALL_COMMAND = f"pip install --no-deps --target {DEFAULT_ACADOS_DIR} {ACADOS_WHEEL}"
 #: bump when the way solvers are generated changes, so that old folders are not reused
-RECIPE_VERSION = "3"
+RECIPE_VERSION = "4"
 #: acados's infinity: bounds beyond it are treated as absent
 ACADOS_INFINITY = 1.0e9
 #: SQP status codes (acados's ``ACADOS_*`` return values) as the controller reports them
 STATUS = {0: "Solve_Succeeded", 1: "acados_nan_detected", 2: "Maximum_Iterations_Exceeded",
           3: "acados_minimum_step", 4: "acados_qp_failure"}
 #: Hessian of the SQP: the exact Hessian of the Lagrangian, its blocks mirrored to positive
-#: definite ones where they are not.  The Gauss-Newton Hessian leaves out the clearances'
-#: curvature times their multipliers; it solved the benchmark's closed loops (one and three
-#: targets) in the same time, but on a relaxed problem started inside a domain (slack about 1)
-#: it ran out of its 200 iterations, full steps or a merit line search alike, where fatrop
-#: and the exact Hessian solved it (168 iterations, the same slack and cost)
+#: definite ones where they are not.  The Gauss-Newton Hessian (tried with the cost written
+#: as least squares) leaves out the clearances' curvature times their multipliers; it solved
+#: the benchmark's closed loops (one and three targets) in the same time, but on a relaxed
+#: problem started inside a domain (slack about 1) it ran out of its 200 iterations, full
+#: steps or a merit line search alike, where fatrop and the exact Hessian solved it (168
+#: iterations, the same slack and cost).  Without the dynamics' second derivatives
+#: (``exact_hess_dyn`` off) the benchmark's one-target loop took 5 iterations at the median
+#: instead of 2, and longer.
 HESSIAN = "EXACT"
 REGULARIZATION = "MIRROR"
+#: the clearances' second derivatives in that Hessian (times their multipliers): left out.
+#: With them every clearance row of every stage needs the RK4 substeps' second derivatives,
+#: inactive slots too; without them, on the benchmark's one-target loop with the
+#: co-simulation's four slots and slacks, the linearisation took 35 % less time and the SQP
+#: fewer iterations (381 against 460 over 90 steps, at most 41 against 64), to inputs within
+#: 1.3e-5 of tau_max of the full Hessian's
+CONSTRAINT_CURVATURE = False
 #: step-length rule: full steps.  A merit line search (MERIT_BACKTRACKING) failed one step
 #: of the one-target benchmark loop at 200 iterations that full steps solved in 64
 GLOBALIZATION = "FIXED_STEP"
@@ -102,6 +112,12 @@ MAXIMUM_ITERATIONS = 2
 ACCEPTABLE_STATIONARITY = FATROP_ACCEPTABLE_TOL
 #: QP iterations allowed per SQP iteration (HPIPM)
 QP_ITERATIONS = 50
+#: HPIPM's mode and warm start (1: from the last QP's solution).  On the benchmark's one-target
+#: loop with four slots and slacks, SPEED with the warm start took the QPs from 1.21 to 0.70
+#: ms median (its default, BALANCE, without warm start), the same 381 SQP iterations, inputs
+#: within 1.3e-5 of tau_max (SPEED_ABS failed 26 of its 90 steps)
+QP_MODE = "SPEED"
+QP_WARM_START = 1
 #: the C file compiled beside every generated solver
 STEP_SOURCE = Path(__file__).with_name("nmpc_acados_step.c")
 
@@ -149,11 +165,10 @@ class AcadosLayout:
     nx: int
     nu: int
     n_stage_parameters: int  # per stage
-    stage_parameters: np.ndarray  # (N+1, np) indices into [p, constants, vec(L')]
+    stage_parameters: np.ndarray  # (N+1, np) indices into [p, constants]
     constants: np.ndarray  # t0 of every stage, then 0 and 1 (state_on)
     n_nlp_parameters: int  # length of the NLP's parameter vector
     w_prev: np.ndarray  # indices of w_prev in the NLP's parameter vector
-    P: np.ndarray  # indices of vec(P)
 
     @staticmethod
     def of(problem: NMPCProblem, control_interval_s: float, max_obstacles: int) -> "AcadosLayout":
@@ -173,27 +188,27 @@ class AcadosLayout:
             row += list(range(wd0 + 2 * min(k, N - 1), wd0 + 2 * min(k, N - 1) + 2))
             row += list(range(d0, d0 + DISTURBANCE_SIZE)) + list(range(obs0, obs0 + OBSTACLE_FIELDS * M))
             row += [n_p + k, n_p + N + 1 + (0 if k == 0 else 1)]
-            row += list(range(n_p + len(constants), n_p + len(constants) + 36))
+            row += list(range(P0, P0 + 36))
             rows.append(row)
         stage = np.array(rows)
         return AcadosLayout(N=N, n_sigma=n_sigma, nx=8, nu=2 + n_sigma, n_stage_parameters=stage.shape[1],
                             stage_parameters=stage, constants=constants, n_nlp_parameters=n_p,
-                            w_prev=np.arange(wprev0, wprev0 + 2), P=np.arange(P0, P0 + 36))
+                            w_prev=np.arange(wprev0, wprev0 + 2))
 
 
 def stage_symbols(M: int):
-    """The stage parameter vector's parts: ref, w_d, d, obs (10 x M), t0, state_on, L' (6 x 6)."""
+    """The stage parameter vector's parts: ref, w_d, d, obs (10 x M), t0, state_on, P (6 x 6)."""
     p = ca.SX.sym("p", 6 + 2 + DISTURBANCE_SIZE + OBSTACLE_FIELDS * M + 2 + 36)
     ref, w_d, dist = p[0:6], p[6:8], p[8:8 + DISTURBANCE_SIZE]
     o = 8 + DISTURBANCE_SIZE
     obs = ca.reshape(p[o:o + OBSTACLE_FIELDS * M], OBSTACLE_FIELDS, M)
     t0, state_on = p[o + OBSTACLE_FIELDS * M], p[o + OBSTACLE_FIELDS * M + 1]
-    Lt = ca.reshape(p[o + OBSTACLE_FIELDS * M + 2:], 6, 6)
-    return p, ref, w_d, dist, obs, t0, state_on, Lt
+    P = ca.reshape(p[o + OBSTACLE_FIELDS * M + 2:], 6, 6)  # column-major, as the NLP's vec(P)
+    return p, ref, w_d, dist, obs, t0, state_on, P
 
 
 def acados_model(name: str, params, settings, state_scale: np.ndarray, input_scale: np.ndarray):
-    """The stage model of the OCP: dynamics, least-squares residuals, clearances (module docstring)."""
+    """The stage model of the OCP: dynamics, the NLP's stage and terminal costs, clearances (module docstring)."""
     from acados.acados_template import AcadosModel
 
     s = settings
@@ -202,29 +217,17 @@ def acados_model(name: str, params, settings, state_scale: np.ndarray, input_sca
     Fs = scaled_step(params, s.control_interval_s, S, state_scale, input_scale)
     x = ca.SX.sym("x", 8)
     u = ca.SX.sym("u", 2 + n_sigma)
-    p, ref, w_d, dist, obs, t0, state_on, Lt = stage_symbols(M)
-    z, w_before, w = x[0:6], x[6:8], u[0:2]
+    p, ref, w_d, dist, obs, t0, state_on, P = stage_symbols(M)
+    z, w_before, w, sigma = x[0:6], x[6:8], u[0:2], u[2:2 + n_sigma]
     z_next, z_sub = Fs(z, w, dist)
-    e = z - ref
-    q, r, r1 = (np.sqrt(np.asarray(v, dtype=float)) for v in (s.q, s.r, s.r_rate))
-    residuals = [state_on * q[0] * e[0], state_on * q[1] * e[1], state_on * q[2] * 2.0 * ca.sin(e[2] / 2.0),
-                 state_on * q[3] * e[3], state_on * q[4] * e[4], state_on * q[5] * e[5],
-                 r[0] * (w[0] - w_d[0]), r[1] * (w[1] - w_d[1]), r1[0] * (w[0] - w_before[0]),
-                 r1[1] * (w[1] - w_before[1])]
-    relax = 0.0
-    if n_sigma:
-        residuals.append(np.sqrt(s.collision_slack_weight) * (u[2] + 0.5))
-        relax = u[2]
-    eN = z - ref
-    c, sn = ca.cos(ref[2]), ca.sin(ref[2])
-    e_path = ca.vertcat(c * eN[0] + sn * eN[1], -sn * eN[0] + c * eN[1], ca.atan2(ca.sin(eN[2]), ca.cos(eN[2])),
-                        eN[3], eN[4], eN[5])
     model = AcadosModel()
     model.name = name
     model.x, model.u, model.p = x, u, p
     model.disc_dyn_expr = ca.vertcat(z_next, w)
-    model.cost_y_expr = ca.vertcat(*residuals)
-    model.cost_y_expr_e = ca.mtimes(Lt, e_path)
+    model.cost_expr_ext_cost = stage_cost(z, w, sigma, w_before, ref, w_d, state_on, s.q, s.r, s.r_rate,
+                                          s.collision_slack_weight)
+    model.cost_expr_ext_cost_e = terminal_cost(z, ref, P)
+    relax = sigma[0] if n_sigma else 0.0
     model.con_h_expr = clearances(z_sub, obs, t0, s.control_interval_s / S, S, M) + relax
     return model
 
@@ -241,14 +244,9 @@ def acados_ocp(acados, name: str, params, settings, state_scale: np.ndarray, inp
     ocp = AcadosOcp(acados_path=str(Path(acados.DIR)))
     ocp.model = model
     ocp.dims.N = N
-    ny = model.cost_y_expr.shape[0]
     nh = model.con_h_expr.shape[0]
-    ocp.cost.cost_type = "NONLINEAR_LS"
-    ocp.cost.cost_type_e = "NONLINEAR_LS"
-    ocp.cost.W = 2.0 * np.eye(ny)  # acados's 0.5 |y|²_W = |y|²: the NLP's cost
-    ocp.cost.W_e = 2.0 * np.eye(6)
-    ocp.cost.yref = np.zeros(ny)
-    ocp.cost.yref_e = np.zeros(6)
+    ocp.cost.cost_type = "EXTERNAL"
+    ocp.cost.cost_type_e = "EXTERNAL"
     ocp.parameter_values = np.zeros(model.p.shape[0])
     ocp.constraints.x0 = np.zeros(8)
     ocp.constraints.idxbu = np.arange(2 + n_sigma)
@@ -263,16 +261,19 @@ def acados_ocp(acados, name: str, params, settings, state_scale: np.ndarray, inp
     ocp.constraints.lh = np.zeros(nh)
     ocp.constraints.uh = np.full(nh, ACADOS_INFINITY)
     o = ocp.solver_options
-    # acados weighs each stage's least-squares cost by the stage's time step; the model is
-    # discrete (its own interval inside), so steps of 1 keep the NLP's cost as it is
+    # acados weighs each stage's cost by the stage's time step; the model is discrete (its
+    # own interval inside), so steps of 1 keep the NLP's cost as it is
     o.tf = float(N)
     o.integrator_type = "DISCRETE"
     o.nlp_solver_type = "SQP_RTI" if s.real_time_iterations else "SQP"
     o.globalization = GLOBALIZATION
     o.hessian_approx = HESSIAN
     o.regularize_method = REGULARIZATION
+    o.exact_hess_constr = int(CONSTRAINT_CURVATURE)
     o.qp_solver = "PARTIAL_CONDENSING_HPIPM"
     o.qp_solver_iter_max = QP_ITERATIONS
+    o.hpipm_mode = QP_MODE
+    o.qp_solver_warm_start = QP_WARM_START
     o.nlp_solver_max_iter = max_iterations
     o.nlp_solver_tol_stat = ACCEPTABLE_VIOLATION
     o.nlp_solver_tol_eq = ACCEPTABLE_VIOLATION
@@ -293,7 +294,8 @@ def solver_key(ocp, compiler: str, nlp: dict) -> str:
     """Hash of what the generated solver is made from (module docstring)."""
     model = ocp.model
     functions = [ca.Function("f", [model.x, model.u, model.p], [expr])
-                 for expr in (model.disc_dyn_expr, model.cost_y_expr, model.cost_y_expr_e, model.con_h_expr)]
+                 for expr in (model.disc_dyn_expr, model.cost_expr_ext_cost, model.cost_expr_ext_cost_e,
+                              model.con_h_expr)]
     functions.append(constraint_function(nlp))
     digest = hashlib.sha256()
     settings = {part: {key: repr(value) for key, value in sorted(vars(getattr(ocp, part)).items())}
@@ -445,8 +447,11 @@ class AcadosSolver:
         self.x = np.zeros((L.N + 1, L.nx))
         self.u = np.zeros((L.N, L.nu))
         self.lbx0, self.ubx0 = np.zeros(L.nx), np.zeros(L.nx)
-        self.lbx, self.ubx = np.zeros((L.N, 2)), np.zeros((L.N, 2))
-        self.lbu, self.ubu = np.zeros((L.N, L.nu)), np.zeros((L.N, L.nu))
+        # each side's bounds in one array (the states' of stages 1..N, then the inputs'), so
+        # that one indexing fills it; lbx, lbu (ubx, ubu) are views into it
+        self.lower, self.upper = np.zeros(L.N * (2 + L.nu)), np.zeros(L.N * (2 + L.nu))
+        self.lbx, self.lbu = self.lower[:2 * L.N].reshape(L.N, 2), self.lower[2 * L.N:].reshape(L.N, L.nu)
+        self.ubx, self.ubu = self.upper[:2 * L.N].reshape(L.N, 2), self.upper[2 * L.N:].reshape(L.N, L.nu)
         self.info = np.zeros(8)
         arrays = (self.x, self.u, self.p, self.lbx0, self.ubx0, self.lbx, self.ubx, self.lbu, self.ubu, self.info)
         self._arguments = (
@@ -483,7 +488,7 @@ class AcadosSolvers:
     in_worker = False
 
     def __init__(self, library: AcadosLibrary, problem: NMPCProblem, layout: AcadosLayout,
-                 iterations: dict[str, int], slack_weight: float | None) -> None:
+                 iterations: dict[str, int]) -> None:
         self.library, self.problem, self.layout = library, problem, layout
         self.iterations = dict(iterations)
         self.factories = dict.fromkeys(iterations)
@@ -493,18 +498,14 @@ class AcadosSolvers:
         self.timeouts = 0
         #: processor time of the last solve's call into C [s]: acados's own share of the step
         self.backend_time_s = float("nan")
-        self.slack_constant = 0.0 if slack_weight is None else 0.25 * slack_weight * layout.N
         self._g_buffer = _Buffered(library.constraints)
         z, w, sigma = problem.z_index, problem.w_index, problem.sigma_index
         self._z, self._w, self._sigma = z, w, sigma
-        self._bounded_states = z[1:, 2:4]
+        self._bounded = np.concatenate([z[1:, 2:4].ravel(), (np.column_stack([w, sigma]) if sigma.size
+                                                              else w).ravel()])
         self._inputs = np.column_stack([w, sigma]) if sigma.size else w
-        # [p, constants, vec(L')]: what the stage parameters are taken from
-        n_p = layout.n_nlp_parameters
-        self._extended = np.concatenate([np.zeros(n_p), layout.constants, np.zeros(36)])
-        self._factor = slice(n_p + layout.constants.size, None)
-        self._last_P: bytes | None = None
-        self._last_factor = np.zeros(36)
+        # [p, constants]: what the stage parameters are taken from
+        self._extended = np.concatenate([np.zeros(layout.n_nlp_parameters), layout.constants])
 
     def start(self) -> None:
         """Nothing to start: the solves run in this process."""
@@ -527,7 +528,6 @@ class AcadosSolvers:
         w_prev = p[layout.w_prev]
         extended = self._extended
         extended[:p.size] = p
-        extended[self._factor] = self._terminal_factor(p[layout.P])
         np.take(extended, layout.stage_parameters, out=solver.p)
         x, u = solver.x, solver.u
         x[:, 0:6] = x0[self._z]
@@ -536,9 +536,9 @@ class AcadosSolvers:
         u[:] = x0[self._inputs]
         solver.lbx0[:6], solver.lbx0[6:] = lbx[self._z[0]], w_prev
         solver.ubx0[:6], solver.ubx0[6:] = ubx[self._z[0]], w_prev
-        for bound, values, index in ((solver.lbx, lbx, self._bounded_states), (solver.ubx, ubx, self._bounded_states),
-                                     (solver.lbu, lbx, self._inputs), (solver.ubu, ubx, self._inputs)):
-            np.maximum(np.minimum(values[index], ACADOS_INFINITY, out=bound), -ACADOS_INFINITY, out=bound)
+        for bound, values in ((solver.lower, lbx), (solver.upper, ubx)):
+            np.take(values, self._bounded, out=bound)
+            np.maximum(np.minimum(bound, ACADOS_INFINITY, out=bound), -ACADOS_INFINITY, out=bound)
         backend_start = time.process_time()
         status = solver()
         self.backend_time_s = time.process_time() - backend_start
@@ -548,21 +548,10 @@ class AcadosSolvers:
         g = self._g_buffer(solution, p)
         info = solver.info
         acceptable = status == MAXIMUM_ITERATIONS and float(info[4]) <= ACCEPTABLE_STATIONARITY
-        return SolveOutcome(x=solution, g=g, f=float(info[3]) - self.slack_constant, success=status == 0,
+        return SolveOutcome(x=solution, g=g, f=float(info[3]), success=status == 0,
                             iterations=int(info[1]), status=STATUS.get(status, f"acados_status_{status}"),
                             wall_time_s=time.perf_counter() - start, cpu_time_s=time.process_time() - cpu_start,
                             lam_x=None, lam_g=None, acceptable=acceptable)
-
-    def _terminal_factor(self, P_vec: np.ndarray) -> np.ndarray:
-        """vec(L') of the terminal weight ``P = L L'`` (kept while P stays the same)."""
-        if self._last_P is None or P_vec.tobytes() != self._last_P:
-            P = P_vec.reshape(6, 6)
-            try:
-                lower = np.linalg.cholesky(P)
-            except np.linalg.LinAlgError:  # positive semidefinite: a tiny shift keeps the factor real
-                lower = np.linalg.cholesky(P + 1e-12 * np.eye(6))
-            self._last_P, self._last_factor = P_vec.tobytes(), lower.T.ravel(order="F")
-        return self._last_factor
 
 
 class _Buffered:

@@ -47,6 +47,8 @@ def heading_bounds(report, time_s: float, heading_rad: float, yaw_rate_rps: floa
     step of each plan, and a first step allowed to sag below the measured heading would
     postpone the alteration at every solve and never reach it.  Headings are brought to within half a turn of ``heading_rad``.
     """
+    if report.alteration_floor is None and report.alteration_ceiling is None:
+        return None, None  # no alteration: nothing to compute (most steps)
     times_s = np.asarray(times_s, dtype=float)
     tolerance = math.radians(HEADING_TOLERANCE_DEG)
     ahead_s = np.maximum(times_s - time_s, 0.0)

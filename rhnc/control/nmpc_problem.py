@@ -185,12 +185,9 @@ class NMPCProblem:
 
     def violation(self, x: np.ndarray, g: np.ndarray, lbx: np.ndarray, ubx: np.ndarray) -> float:
         """Largest violation of the bounds of ``x`` and ``g`` (0 when the point is feasible)."""
-        return float(max(
-            np.max(np.maximum(self.lbg - g, 0.0), initial=0.0),
-            np.max(np.maximum(g - self.ubg, 0.0), initial=0.0),
-            np.max(np.maximum(lbx - x, 0.0), initial=0.0),
-            np.max(np.maximum(x - ubx, 0.0), initial=0.0),
-        ))
+        # the largest difference, or 0 (a NaN anywhere stays NaN)
+        return float(np.max([0.0, (self.lbg - g).max(initial=0.0), (g - self.ubg).max(initial=0.0),
+                             (lbx - x).max(initial=0.0), (x - ubx).max(initial=0.0)]))
 
 
 def stage_function(params: ShipParameters, control_interval_s: float, substeps: int, max_obstacles: int,
@@ -209,25 +206,38 @@ def stage_function(params: ShipParameters, control_interval_s: float, substeps: 
     h = control_interval_s / S
     Fs = scaled_step(params, control_interval_s, S, state_scale, input_scale)
     n_sigma = 0 if slack_weight is None else 1
-    Q, R, R1 = ca.DM(list(q)), ca.DM(list(r)), ca.DM(list(r_rate))
     z, w, sigma = ca.SX.sym("z", 6), ca.SX.sym("w", 2), ca.SX.sym("sigma", n_sigma)
     z_next, w_before = ca.SX.sym("z_next", 6), ca.SX.sym("w_before", 2)
     ref, w_d, dist = ca.SX.sym("ref", 6), ca.SX.sym("w_d", 2), ca.SX.sym("d", DISTURBANCE_SIZE)
     obs, t0, state_on = ca.SX.sym("obs", OBSTACLE_FIELDS, M), ca.SX.sym("t0"), ca.SX.sym("state_on")
     z_end, z_sub = Fs(z, w, dist)
+    cost = stage_cost(z, w, sigma, w_before, ref, w_d, state_on, q, r, r_rate, slack_weight)
+    relax = sigma[0] if n_sigma else 0
+    # dynamics first, then the path constraints (fatrop's structure)
+    g = [z_next - z_end] + [clearance + relax for clearance in clearances(z_sub, obs, t0, h, S, M, as_list=True)]
+    return ca.Function("rhnc_stage", [z, w, sigma, z_next, w_before, ref, w_d, dist, obs, t0, state_on],
+                       [cost, ca.vertcat(*g)])
+
+
+def stage_cost(z, w, sigma, w_before, ref, w_d, state_on, q: Sequence[float], r: Sequence[float],
+               r_rate: Sequence[float], slack_weight: float | None):
+    """One interval's cost, written once for every backend (CasADi expressions of the scaled
+    quantities; ``sigma`` is empty without slacks).
+
+    ``state_on (e' Q e)`` with the heading error through ``2 (1 - cos e)`` (= e² near 0, no
+    minimum at pi), ``(w - w_d)' R (w - w_d)``, the input rate ``(w - w_before)' R1 (w -
+    w_before)`` and, with slacks, ``slack_weight (sigma + sigma²)`` (an exact L1 penalty
+    plus a little curvature).
+    """
+    Q, R, R1 = ca.DM(list(q)), ca.DM(list(r)), ca.DM(list(r_rate))
     e = z - ref
     heading = 2.0 * (1.0 - ca.cos(e[2]))  # = e² near 0, no minimum at pi
     cost = state_on * (Q[0] * e[0] ** 2 + Q[1] * e[1] ** 2 + Q[2] * heading
                        + Q[3] * e[3] ** 2 + Q[4] * e[4] ** 2 + Q[5] * e[5] ** 2)
     cost += ca.sum1(R * (w - w_d) ** 2) + ca.sum1(R1 * (w - w_before) ** 2)
-    relax = 0
-    if n_sigma:
+    if slack_weight is not None:
         cost += slack_weight * (sigma[0] + sigma[0] ** 2)
-        relax = sigma[0]
-    # dynamics first, then the path constraints (fatrop's structure)
-    g = [z_next - z_end] + [clearance + relax for clearance in clearances(z_sub, obs, t0, h, S, M, as_list=True)]
-    return ca.Function("rhnc_stage", [z, w, sigma, z_next, w_before, ref, w_d, dist, obs, t0, state_on],
-                       [cost, ca.vertcat(*g)])
+    return cost
 
 
 def clearances(z_sub, obs, t0, h: float, substeps: int, max_obstacles: int, as_list: bool = False):

@@ -151,23 +151,25 @@ def push_guess_clear(z_guess: np.ndarray, slots: np.ndarray, ref_scaled: np.ndar
     give-way ship) always pushes to starboard: that is the alteration Rules 14-16 ask for
     (port to port; astern of a ship crossing from starboard).
     """
-    dt = control_interval_s
+    times = control_interval_s * np.arange(1, len(z_guess))
+    nodes = z_guess[1:]  # a view: the nodes after the measured one, moved in place
     for i in np.flatnonzero(slots[9] > 0.5):
-        cx, cy, vx, vy, ox, oy, rho, growth, inflation, _ = slots[:, i]
+        cx, cy, vx, vy, ox, oy, rho, growth, inflation, _ = slots[:, i].tolist()
         give_way = ox * -vy + oy * vx > 1e-9 * rho * max(abs(vx) + abs(vy), 1e-12)
-        for k in range(1, len(z_guess)):
-            t = k * dt
-            r_push = 1.1 * (rho + growth * t) * math.sqrt(1.0 + inflation)
-            dx = z_guess[k, 0] - (cx + vx * t + ox)
-            dy = z_guess[k, 1] - (cy + vy * t + oy)
-            if dx * dx + dy * dy >= r_push * r_push:
-                continue
-            course = ref_scaled[2, k]
-            along_x, along_y = math.cos(course), math.sin(course)
-            starboard_x, starboard_y = -along_y, along_x
-            along = dx * along_x + dy * along_y
-            lateral = dx * starboard_x + dy * starboard_y
-            side = -1.0 if lateral < -0.1 * rho and not give_way else 1.0
-            new_lateral = side * math.sqrt(max(r_push * r_push - along * along, 0.0))
-            z_guess[k, 0] += (new_lateral - lateral) * starboard_x
-            z_guess[k, 1] += (new_lateral - lateral) * starboard_y
+        # every node at once; a later slot sees the nodes the earlier ones moved
+        r_push = 1.1 * (rho + growth * times) * math.sqrt(1.0 + inflation)
+        dx = nodes[:, 0] - (cx + vx * times + ox)
+        dy = nodes[:, 1] - (cy + vy * times + oy)
+        inside = np.flatnonzero(dx * dx + dy * dy < r_push * r_push)
+        if not inside.size:
+            continue
+        dx, dy, r_push = dx[inside], dy[inside], r_push[inside]
+        course = ref_scaled[2, 1:][inside]
+        along_x, along_y = np.cos(course), np.sin(course)
+        starboard_x, starboard_y = -along_y, along_x
+        along = dx * along_x + dy * along_y
+        lateral = dx * starboard_x + dy * starboard_y
+        side = np.where((lateral < -0.1 * rho) & (not give_way), -1.0, 1.0)
+        new_lateral = side * np.sqrt(np.maximum(r_push * r_push - along * along, 0.0))
+        nodes[inside, 0] += (new_lateral - lateral) * starboard_x
+        nodes[inside, 1] += (new_lateral - lateral) * starboard_y
