@@ -26,6 +26,7 @@ import json
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -44,7 +45,7 @@ class Area:
 
     name: str
     kind: str
-    geometry: object  # shapely (Multi)Polygon, x north, y east [m]
+    geometry: Any  # shapely (Multi)Polygon, x north, y east [m]
 
 
 @dataclass(frozen=True)
