@@ -23,12 +23,16 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 from orchestrator.errors import FmuError, ScenarioError
 from orchestrator.geometry import DEG, wrap_angle
 from orchestrator.plant_ports import ANGULAR_RATE, INITIAL_KEYS, PLANT_PORTS, VECTOR_PORTS, WRAPPED_OUTPUTS
 from orchestrator.scenario import ParticipantSpec, VariableMapping, VectorMapping
 from orchestrator.units import SiUnit, UnitParseError, declared_unit, describe_dimension, resolve_unit
+
+if TYPE_CHECKING:
+    from fmpy.model_description import ScalarVariable
 
 log = logging.getLogger(__name__)
 
@@ -198,7 +202,7 @@ def _degree_conversion(entry: VariableMapping, variable, model_description, wher
     return scale / DEG, offset / DEG
 
 
-def bind_ports(spec: ParticipantSpec, variables: Mapping[str, object], model_description, where: str,
+def bind_ports(spec: ParticipantSpec, variables: Mapping[str, ScalarVariable], model_description, where: str,
                fmu_name: str) -> tuple[list, list]:
     """Input and output bindings of an FMU participant (mapped ports, then unmapped variables).
 
@@ -302,7 +306,7 @@ def _geodetic_binding(spec: ParticipantSpec, geodetic: dict, variables, model_de
                            spec.geodetic_earth)
 
 
-def initial_start_values(spec: ParticipantSpec, outputs: list, variables: Mapping[str, object], model_description,
+def initial_start_values(spec: ParticipantSpec, outputs: list, variables: Mapping[str, ScalarVariable], model_description,
                          where: str) -> dict[str, float]:
     """FMU start values (parameter name -> value) of the ``[initial]`` table.
 
