@@ -18,7 +18,7 @@ from pydantic_core import PydanticCustomError
 
 from orchestrator.errors import ScenarioError
 from orchestrator.plugins import LazyModule
-from orchestrator.toml_input import (REQUIRED, Finite, FolderName, NonNegative, NonNegativeInt, PairNm, Positive, Text,
+from orchestrator.toml_input import (Finite, FolderName, NonNegative, NonNegativeInt, PairNm, Positive, Text,
                                      TomlTable, checked, fail, fail_whole, is_finite_number, shown, shown_text)
 
 encounters = LazyModule("batch", "encounters")  # target placement, registered by the ship domain
@@ -106,7 +106,7 @@ class BatchTable(TomlTable):
     """``[batch]``: the name of the results folder and the base scenario."""
 
     name: FolderName | None = None
-    scenario: Annotated[str, PlainValidator(_scenario_path)] = REQUIRED
+    scenario: Annotated[str, PlainValidator(_scenario_path)] | None = None
     description: Annotated[str, PlainValidator(lambda v: _string(v))] = ""
 
     @model_validator(mode="after")

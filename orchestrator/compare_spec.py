@@ -14,7 +14,7 @@ from typing import Annotated, Any
 from pydantic import PlainValidator, model_validator
 
 from orchestrator.errors import ScenarioError
-from orchestrator.toml_input import REQUIRED, FolderName, TomlTable, checked, fail, fail_whole, read_toml, shown_text
+from orchestrator.toml_input import FolderName, TomlTable, checked, fail, fail_whole, read_toml, shown_text
 
 #: Most members of one ``[sweep]`` (each member is a whole comparison).
 MAX_SWEEP_MEMBERS = 10_000
@@ -38,6 +38,11 @@ def _overrides(value: Any) -> dict[str, Any]:
 
 
 Overrides = Annotated[dict, PlainValidator(_overrides)]
+
+
+#: The default of a key that must be given, where the table's own validator says so in its words
+#: (the key keeps its given type: the validator refuses the table while the key is missing).
+REQUIRED: Any = None
 
 
 class RunTable(TomlTable):

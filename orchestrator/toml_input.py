@@ -223,11 +223,6 @@ def checked(model: type[Model], data: Any, where: str, prefix: tuple = (), conte
 
 
 # -- the base model and field types ------------------------------------------------------------
-#: The default of a key that must be given, where the table's own validator says so in its words
-#: (the key keeps its given type: the validator refuses the table while the key is missing).
-REQUIRED: Any = None
-
-
 class TomlTable(BaseModel):
     """A TOML table: unknown keys forbidden (the message lists the valid ones), strict types.
 
