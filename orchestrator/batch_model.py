@@ -106,7 +106,7 @@ class BatchTable(TomlTable):
     """``[batch]``: the name of the results folder and the base scenario."""
 
     name: FolderName | None = None
-    scenario: Annotated[str, PlainValidator(_scenario_path)] = None
+    scenario: Annotated[str, PlainValidator(_scenario_path)] | None = None
     description: Annotated[str, PlainValidator(lambda v: _string(v))] = ""
 
     @model_validator(mode="after")

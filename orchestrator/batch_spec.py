@@ -218,12 +218,14 @@ def draw_overrides(mc: MonteCarloSpec, choices) -> tuple[dict, dict]:
     if mc.obstacles is not None:
         obstacles = []
         count = choices.integer("obstacles.count", *mc.obstacles.count)
-        heading = np.asarray(mc.own_ship.velocity_kn) / mc.own_ship.speed_kn
+        own_ship = mc.own_ship
+        assert own_ship is not None  # obstacles are placed along the own ship's track (required on reading)
+        heading = np.asarray(own_ship.velocity_kn) / own_ship.speed_kn
         starboard = np.array([-heading[1], heading[0]])
         for j in range(count):
             along = choices.number(f"obs{j}.along_track_nm", mc.obstacles.along_track_nm)
             cross = choices.number(f"obs{j}.cross_track_nm", mc.obstacles.cross_track_nm)
-            center = np.asarray(mc.own_ship.start_nm) + along * heading + cross * starboard
+            center = np.asarray(own_ship.start_nm) + along * heading + cross * starboard
             obstacles.append({"center_nm": _rounded(center),
                               "radius_nm": _round(choices.number(f"obs{j}.radius_nm", mc.obstacles.radius_nm))})
         overrides[mc.obstacles_key] = obstacles

@@ -40,11 +40,16 @@ def _overrides(value: Any) -> dict[str, Any]:
 Overrides = Annotated[dict, PlainValidator(_overrides)]
 
 
+#: The default of a key that must be given, where the table's own validator says so in its words
+#: (the key keeps its given type: the validator refuses the table while the key is missing).
+REQUIRED: Any = None
+
+
 class RunTable(TomlTable):
     """One ``[[runs]]`` table: a labelled scenario with its overrides and the paper's figures."""
 
-    label: Annotated[str, PlainValidator(_string)] = None
-    scenario: Annotated[str, PlainValidator(_string)] = None
+    label: Annotated[str, PlainValidator(_string)] = REQUIRED
+    scenario: Annotated[str, PlainValidator(_string)] = REQUIRED
     set: Overrides = {}
     paper: Annotated[dict, PlainValidator(lambda v: _table(v))] = {}
     figures: Annotated[dict, PlainValidator(lambda v: _table(v))] = {}
@@ -88,9 +93,9 @@ def _sweep_key(value: Any) -> str:
 class SweepTable(TomlTable):
     """``[sweep]``: the whole comparison once per value of one scenario key."""
 
-    key: Annotated[str, PlainValidator(_sweep_key)] = None
-    values: Annotated[list, PlainValidator(_values)] = None
-    range: Annotated[list, PlainValidator(_range)] = None
+    key: Annotated[str, PlainValidator(_sweep_key)] = REQUIRED
+    values: Annotated[list, PlainValidator(_values)] | None = None
+    range: Annotated[list, PlainValidator(_range)] | None = None
 
     @model_validator(mode="after")
     def _one_source(self):
@@ -116,11 +121,11 @@ def _runs(value: Any) -> list:
 class ComparisonFile(TomlTable):
     """The comparison's own top-level keys (extension tables are taken off before)."""
 
-    name: FolderName = None
-    analysis: Annotated[str, PlainValidator(_string)] = None
-    metrics: Annotated[list, PlainValidator(_metrics)] = None
+    name: FolderName = REQUIRED
+    analysis: Annotated[str, PlainValidator(_string)] = REQUIRED
+    metrics: Annotated[list, PlainValidator(_metrics)] = REQUIRED
     baseline: Annotated[str, PlainValidator(_string)] | None = None
-    runs: Annotated[list, PlainValidator(_runs)] = None
+    runs: Annotated[list, PlainValidator(_runs)] = REQUIRED
     set: Overrides = {}
     sweep: Any = None
 

@@ -14,6 +14,7 @@ import os
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 #: Address schemes a batch accepts for ``--scheduler`` (``inproc://``: a cluster inside this process).
 SCHEMES = ("tcp://", "tls://", "inproc://")
@@ -75,7 +76,7 @@ class DaskExecutor:
     def __init__(self, address: str, tls: TlsFiles | None = None) -> None:
         self.address = address
         self.tls = tls
-        self.client = None
+        self.client: Any = None  # distributed.Client once connected
 
     def connect(self) -> None:
         """Connect to the scheduler; ``BatchError`` (one line) when it cannot be reached or refuses."""

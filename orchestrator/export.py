@@ -216,13 +216,15 @@ def _complete_model_structure(source: Path, target: Path, units: dict[str, str] 
     import xml.etree.ElementTree as ET
     import zipfile
 
+    from orchestrator.model_description import child
+
     with zipfile.ZipFile(source) as old, zipfile.ZipFile(target, "w", zipfile.ZIP_DEFLATED) as new:
         for item in old.infolist():
             data = old.read(item.filename)
             if item.filename == "modelDescription.xml":
                 root = ET.fromstring(data)
-                variables = root.find("ModelVariables").findall("ScalarVariable")
-                structure = root.find("ModelStructure")
+                variables = child(root, "ModelVariables").findall("ScalarVariable")
+                structure = child(root, "ModelStructure")
                 initial = structure.find("InitialUnknowns")
                 if initial is None:
                     initial = ET.SubElement(structure, "InitialUnknowns")
@@ -231,7 +233,7 @@ def _complete_model_structure(source: Path, target: Path, units: dict[str, str] 
                         ET.SubElement(initial, "Unknown", {"index": str(index)})
                     unit = (units or {}).get(variable.get("name"))
                     if unit:
-                        variable.find("Real").set("unit", unit)
+                        child(variable, "Real").set("unit", unit)
                 used = sorted({unit for unit in (units or {}).values() if unit})
                 if used:
                     definitions = ET.Element("UnitDefinitions")

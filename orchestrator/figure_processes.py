@@ -158,7 +158,7 @@ def _draw(function, frame, scenario, cosim, folder: Path) -> tuple[str, Any]:
     try:
         return "drawn", list(function(frame, scenario, cosim, folder))
     except Exception as exc:  # a figure that cannot be drawn must not lose the results
-        if is_disk_full(exc):  # not the figure's fault: the results as a whole cannot be written
+        if isinstance(exc, OSError) and is_disk_full(exc):  # not the figure's fault: the results as a whole cannot be written
             return "disk full", exc.strerror or str(exc)
         log.debug("figure raised", exc_info=True)
         return "error", f"{type(exc).__name__}: {exc}"

@@ -10,6 +10,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Sequence
 from ctypes import byref
+from typing import Any
 
 log = logging.getLogger(__name__)
 
@@ -43,7 +44,7 @@ class FmiSlave:
             raise ValueError(f"FMI version {self.version} is not supported (valid: {', '.join(SUPPORTED_VERSIONS)})")
         self.prefix = "fmi2" if self.version == "2.0" else "fmi3"
         self._sink = sink
-        self._keep_alive = None
+        self._keep_alive: Any = None  # the ctypes callbacks the FMU holds, kept from the collector
         identifier = model_description.coSimulation.modelIdentifier
         if self.version == "2.0":
             from fmpy.fmi2 import FMU2Slave

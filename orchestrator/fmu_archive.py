@@ -63,8 +63,8 @@ def check_archive(path: Path, where: str, read: bool = True) -> list[zipfile.Zip
                            "(a zip bomb?)")
         kind = stat.S_IFMT(entry.external_attr >> 16)  # 0 when the archiver recorded no file type
         if kind not in (0, stat.S_IFREG, stat.S_IFDIR):
-            kind = "a symbolic link" if kind == stat.S_IFLNK else "a special file"
-            raise FmuError(f"{where}: {path.name}: entry '{entry.filename}' is {kind}; an FMU may hold only "
+            what = "a symbolic link" if kind == stat.S_IFLNK else "a special file"
+            raise FmuError(f"{where}: {path.name}: entry '{entry.filename}' is {what}; an FMU may hold only "
                            "files and folders (rebuild the FMU without it)")
     if read:
         _read_through(path, entries, where)

@@ -101,7 +101,8 @@ def _header(line: str) -> list[str]:
 
 
 def _owner(path: Path, names) -> str:
-    stem = _LIBCOSIM_FILE.match(path.stem).group("name")
+    match = _LIBCOSIM_FILE.match(path.stem)  # every non-empty stem matches
+    stem = match.group("name") if match is not None else path.stem
     # the longest participant name the stem starts with (a libcosim name has a date after it)
     matches = [name for name in names if stem == name or stem.startswith(name + "_")]
     return max(matches, key=len) if matches else stem

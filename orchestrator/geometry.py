@@ -1,4 +1,5 @@
-"""Units and plane geometry every layer shares: nautical mile, knot, degree, angle wrap, projection.
+"""Units and plane geometry every layer shares: nautical mile, knot, degree, angle wrap, projection,
+the nearest point of a segment.
 
 Scenarios place ships in a local plane: ``x`` north, ``y`` east [m], angles clockwise from
 north [rad].  Options and reports speak nautical miles and knots; these are the only
@@ -55,3 +56,23 @@ def local_north_east_m(lat_deg, lon_deg, lat0_deg: float, lon0_deg: float) -> tu
     north = np.radians(np.asarray(lat_deg, dtype=float) - lat0_deg) * EARTH_RADIUS_M
     east = np.radians(np.asarray(lon_deg, dtype=float) - lon0_deg) * EARTH_RADIUS_M * np.cos(np.radians(lat0_deg))
     return north, east
+
+
+def nearest_on_segments(points, a, b) -> tuple[np.ndarray, np.ndarray]:
+    """The point of each segment a-b nearest to ``points``, and its distance [m].
+
+    ``points``, ``a`` and ``b`` are plane positions (..., 2) [m] broadcast against each other:
+    one point against many segments, many points against one segment, or point by segment.
+    A segment of zero length is its start point.  Returns the nearest points (..., 2) [m] and
+    their distances (...) [m].
+    """
+    points = np.asarray(points, dtype=float)
+    a = np.asarray(a, dtype=float)
+    along = np.asarray(b, dtype=float) - a
+    length2 = np.sum(along * along, axis=-1)
+    projected = np.sum((points - a) * along, axis=-1)
+    share = np.divide(projected, length2, out=np.zeros(np.broadcast_shapes(projected.shape, length2.shape)),
+                      where=length2 > 0)
+    nearest = a + np.clip(share, 0.0, 1.0)[..., None] * along
+    offset = points - nearest
+    return nearest, np.asarray(np.hypot(offset[..., 0], offset[..., 1]))

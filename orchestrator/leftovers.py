@@ -25,6 +25,7 @@ import tempfile
 import time
 from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
 log = logging.getLogger(__name__)
 
@@ -35,6 +36,7 @@ TEMP_PREFIXES = ("rhnc-run-", "rhnc-fmu-")
 #: Age [s] below which a folder without a lock file is never removed.
 UNLOCKED_GRACE_S = 60.0
 
+fcntl: Any
 try:
     import fcntl
 except ImportError:  # not POSIX: no lock files, folders are judged by their process id only

@@ -21,6 +21,8 @@ import datetime as _dt
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 
+from orchestrator.errors import FmuError
+
 #: Value reference of the FMI 3.0 independent variable ``time`` (outside every model's table).
 FMI3_TIME_VR = 1000000
 
@@ -39,6 +41,14 @@ _COSIMULATION_FMI3 = {
     "canReturnEarlyAfterIntermediateUpdate": "false",
     "hasEventMode": "false",
 }
+
+
+def child(element: ET.Element, tag: str) -> ET.Element:
+    """The first ``tag`` element under ``element``; :class:`FmuError` naming it when there is none."""
+    found = element.find(tag)
+    if found is None:
+        raise FmuError(f"modelDescription.xml: <{element.tag}> has no <{tag}>")
+    return found
 
 
 def _generation_date() -> str:
@@ -68,7 +78,7 @@ def to_fmi3(text: str, source_files: Sequence[str], version: str) -> str:
         if old.get(key) is not None:
             root.set(key, old.get(key))
     _set_metadata(root, version)
-    old_cosim = old.find("CoSimulation")
+    old_cosim = child(old, "CoSimulation")
     cosim = ET.SubElement(root, "CoSimulation", {"modelIdentifier": old_cosim.get("modelIdentifier", "")})
     for key, value in _COSIMULATION_FMI3.items():
         fmi2_key = key.replace("FMUState", "FMUstate")
@@ -107,7 +117,7 @@ def _variables_fmi3(old: ET.Element, root: ET.Element) -> list:
                                          "causality": "independent", "variability": "continuous",
                                          "description": "simulation time"})
     ordered = []  # value references in FMI 2.0 index order (1-based indices)
-    for scalar in old.find("ModelVariables").findall("ScalarVariable"):
+    for scalar in child(old, "ModelVariables").findall("ScalarVariable"):
         attributes = {k: v for k, v in scalar.attrib.items() if k in _SCALAR_ATTRIBUTES}
         ordered.append(scalar.get("valueReference"))
         real = scalar.find("Real")
@@ -157,7 +167,7 @@ def bounds_header(text: str) -> str:
     """
     root = ET.fromstring(text)
     rows = []
-    for scalar in root.find("ModelVariables").findall("ScalarVariable"):
+    for scalar in child(root, "ModelVariables").findall("ScalarVariable"):
         real = scalar.find("Real")
         if real is None or (real.get("min") is None and real.get("max") is None):
             continue

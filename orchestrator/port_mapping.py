@@ -23,12 +23,16 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 from orchestrator.errors import FmuError, ScenarioError
 from orchestrator.geometry import DEG, wrap_angle
 from orchestrator.plant_ports import ANGULAR_RATE, INITIAL_KEYS, PLANT_PORTS, VECTOR_PORTS, WRAPPED_OUTPUTS
 from orchestrator.scenario import ParticipantSpec, VariableMapping, VectorMapping
 from orchestrator.units import SiUnit, UnitParseError, declared_unit, describe_dimension, resolve_unit
+
+if TYPE_CHECKING:
+    from fmpy.model_description import ScalarVariable
 
 log = logging.getLogger(__name__)
 
@@ -157,18 +161,18 @@ def scalar_conversion(port: str, entry: VariableMapping, variable, model_descrip
         if si is None and spec.is_angle and entry.scale is None:
             raise _fail(where, f"port '{port}' is an angle ({spec.si_unit}) and FMU variable '{variable.name}' "
                                "declares no unit: give its unit (unit = \"deg\") or a scale")
-    converts = si is not None and spec is not None
+    converts = si if spec is not None else None  # the declared unit, where the port has one to convert to
     if entry.scale is not None:
         scale = entry.scale
-        if converts and not math.isclose(scale, si.factor, rel_tol=1e-6):
+        if converts is not None and not math.isclose(scale, converts.factor, rel_tol=1e-6):
             log.warning("%s: scale %g differs from the factor %g of the declared unit '%s' of '%s'",
-                        where, scale, si.factor, unit_name, variable.name)
+                        where, scale, converts.factor, unit_name, variable.name)
     else:
-        scale = si.factor if converts else 1.0
+        scale = converts.factor if converts is not None else 1.0
     if entry.offset is not None:
         offset = entry.offset
     else:
-        offset = si.offset if converts and entry.scale is None else 0.0
+        offset = converts.offset if converts is not None and entry.scale is None else 0.0
     return scale, offset
 
 
@@ -198,7 +202,7 @@ def _degree_conversion(entry: VariableMapping, variable, model_description, wher
     return scale / DEG, offset / DEG
 
 
-def bind_ports(spec: ParticipantSpec, variables: Mapping[str, object], model_description, where: str,
+def bind_ports(spec: ParticipantSpec, variables: Mapping[str, ScalarVariable], model_description, where: str,
                fmu_name: str) -> tuple[list, list]:
     """Input and output bindings of an FMU participant (mapped ports, then unmapped variables).
 
@@ -250,8 +254,8 @@ def bind_ports(spec: ParticipantSpec, variables: Mapping[str, object], model_des
     if geodetic:
         outputs.append(_geodetic_binding(spec, geodetic, variables, model_description, where))
     bound_ports = set()
-    for binding in inputs + outputs:
-        for port in binding.ports:
+    for bound in inputs + outputs:
+        for port in bound.ports:
             if port in bound_ports:
                 raise ScenarioError(f"{where}.mapping: port '{port}' is mapped twice (directly and in a vector)")
             bound_ports.add(port)
@@ -273,6 +277,7 @@ def _vector_binding(name: str, entry: VectorMapping, take, model_description, ke
     if name not in VECTOR_PORTS:
         raise ScenarioError(f"{key}: '{name}' is not a vector input (valid: {', '.join(VECTOR_PORTS)})")
     canonical_form, *ports = VECTOR_PORTS[name]
+    parts: tuple[tuple[str, str | None, str], ...]
     if entry.speed is not None:
         fmu_form = f"polar_{entry.direction_is}"
         parts = (("speed", entry.speed, "wind_speed"), ("direction", entry.direction, "wind_direction"))
@@ -301,7 +306,7 @@ def _geodetic_binding(spec: ParticipantSpec, geodetic: dict, variables, model_de
                            spec.geodetic_earth)
 
 
-def initial_start_values(spec: ParticipantSpec, outputs: list, variables: Mapping[str, object], model_description,
+def initial_start_values(spec: ParticipantSpec, outputs: list, variables: Mapping[str, ScalarVariable], model_description,
                          where: str) -> dict[str, float]:
     """FMU start values (parameter name -> value) of the ``[initial]`` table.
 
@@ -333,6 +338,7 @@ def initial_start_values(spec: ParticipantSpec, outputs: list, variables: Mappin
         degrees = geodetic.latitude_longitude(canonical.get("x", 0.0), canonical.get("y", 0.0))
         for port, value in zip(("x", "y"), degrees):
             entry = spec.mapping[port]
+            assert isinstance(entry, VariableMapping)  # a geodetic x, y maps to one variable (checked on reading)
             parameter = variables[entry.start or f"{port}0"]
             scale, offset = _degree_conversion(entry, parameter, model_description, f"{where}.initial: '{port}'")
             starts[parameter.name] = (value - offset) / scale

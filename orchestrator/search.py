@@ -148,58 +148,91 @@ def run_search(path, results_root="results", workers: int | None = None, schedul
                     else LocalPool(workers or os.cpu_count() or 1))
         study = optuna.create_study(direction="minimize", sampler=make_sampler(spec.sampler, spec.seed, 0))
         bar = _progress_bar(spec.evaluations, 0, spec.name, progress)
-        evaluated, interrupted = 0, False
-        try:
-            pending = [entry for entry in journal if not _done(root, entry["run_id"])]
-            if pending:
-                evaluated += _evaluate(spec, root, executor, [run_spec_of(entry) for entry in pending], bar)
-            for entry in journal:
-                study.add_trial(_frozen_trial(spec, root, entry))
-                if bar is not None:
-                    bar.update(1)
-            failure_seen = until_failure and any(_failed(spec, root, entry["run_id"]) for entry in journal)
-            while len(journal) < spec.evaluations and not failure_seen and not interrupts.stop_requested():
-                size = min(spec.per_round, spec.evaluations - len(journal))
-                trials, entries = [], []
-                for _ in range(size):
-                    number = len(study.trials)
-                    study.sampler = make_sampler(spec.sampler, spec.seed, number)
-                    trial = study.ask()
-                    overrides, parameters = draw_overrides(spec.batch.monte_carlo, TrialChoices(trial))
-                    overrides = {**spec.batch.fixed, **overrides}
-                    entries.append(_entry(spec, trial, overrides, parameters, study.trials[trial.number].system_attrs))
-                    trials.append(trial)
-                append_journal(root / JOURNAL, entries)
-                journal.extend(entries)
-                evaluated += _evaluate(spec, root, executor, [run_spec_of(entry) for entry in entries], bar)
-                for trial, entry in zip(trials, entries):
-                    value = objective_of(spec, root, entry["run_id"])
-                    if value is None:
-                        study.tell(trial, state=optuna.trial.TrialState.FAIL)
-                    else:
-                        study.tell(trial, value)
-                    failure_seen = failure_seen or (until_failure and _failed(spec, root, entry["run_id"]))
-        except KeyboardInterrupt:
-            interrupted = True
-            interrupts.acknowledge()
-        finally:
-            if bar is not None:
-                bar.close()
+        evaluated, interrupted = _run_evaluations(spec, root, executor, study, journal, bar, until_failure)
         interrupted = interrupted or bool(interrupts.stop_requested())
         with interrupts.deferred():
-            from orchestrator import search_results
-
-            journal = read_journal(root / JOURNAL)  # as a resume reads it
-            table = search_results.write_outputs(spec, root, journal)
-            found = search_results.findings(spec, table)
-            _write_json_atomic(root / "search.json", {**_settings(spec), **found,
-                                                      "evaluations_done": int((table["status"] != "not run").sum())})
-            if report:
-                from orchestrator.report import write_report
-
-                write_report(root)
+            table, found = _write_outputs(spec, root, report)
     return SearchReport(root, table, evaluated, interrupted, found["first_failure"], found["failures"],
                         found["best"], wallclock.perf_counter() - started)
+
+
+def _run_evaluations(spec: SearchSpec, root: Path, executor, study, journal: list[dict], bar,
+                     until_failure: bool) -> tuple[int, bool]:
+    """Run the journal's evaluations left without a published run, give the journal to ``study``, then
+    ask, journal and run new rounds up to the budget (or a failure, with ``until_failure``, or a stop
+    request); returns (evaluations run by this command, interrupted).  The bar is closed at the end."""
+    evaluated, interrupted = 0, False
+    try:
+        pending = [entry for entry in journal if not _done(root, entry["run_id"])]
+        if pending:
+            evaluated += _evaluate(spec, root, executor, [run_spec_of(entry) for entry in pending], bar)
+        for entry in journal:
+            study.add_trial(_frozen_trial(spec, root, entry))
+            if bar is not None:
+                bar.update(1)
+        failure_seen = until_failure and any(_failed(spec, root, entry["run_id"]) for entry in journal)
+        while len(journal) < spec.evaluations and not failure_seen and not interrupts.stop_requested():
+            trials, entries = _ask_round(spec, study, min(spec.per_round, spec.evaluations - len(journal)))
+            append_journal(root / JOURNAL, entries)
+            journal.extend(entries)
+            evaluated += _evaluate(spec, root, executor, [run_spec_of(entry) for entry in entries], bar)
+            failure_seen = _tell_round(spec, root, study, trials, entries, until_failure)
+    except KeyboardInterrupt:
+        interrupted = True
+        interrupts.acknowledge()
+    finally:
+        if bar is not None:
+            bar.close()
+    return evaluated, interrupted
+
+
+def _ask_round(spec: SearchSpec, study, size: int) -> tuple[list, list[dict]]:
+    """Ask ``study`` for ``size`` evaluations, each of a sampler seeded by its number; returns the
+    trials and their journal entries."""
+    trials, entries = [], []
+    for _ in range(size):
+        number = len(study.trials)
+        study.sampler = make_sampler(spec.sampler, spec.seed, number)
+        trial = study.ask()
+        overrides, parameters = draw_overrides(spec.batch.monte_carlo, TrialChoices(trial))
+        overrides = {**spec.batch.fixed, **overrides}
+        entries.append(_entry(spec, trial, overrides, parameters, study.trials[trial.number].system_attrs))
+        trials.append(trial)
+    return trials, entries
+
+
+def _tell_round(spec: SearchSpec, root: Path, study, trials: list, entries: list[dict],
+                until_failure: bool) -> bool:
+    """Tell ``study`` the objective of each evaluation of a round run; returns whether the round
+    holds a failure (looked for only with ``until_failure``)."""
+    import optuna
+
+    failure_seen = False
+    for trial, entry in zip(trials, entries):
+        value = objective_of(spec, root, entry["run_id"])
+        if value is None:
+            study.tell(trial, state=optuna.trial.TrialState.FAIL)
+        else:
+            study.tell(trial, value)
+        failure_seen = failure_seen or (until_failure and _failed(spec, root, entry["run_id"]))
+    return failure_seen
+
+
+def _write_outputs(spec: SearchSpec, root: Path, report: bool) -> tuple[Any, dict]:
+    """Write the search's table, figures, ``search.json`` (and ``report.html`` with ``report``) from
+    the journal as a resume reads it; returns the table and the findings."""
+    from orchestrator import search_results
+
+    journal = read_journal(root / JOURNAL)  # as a resume reads it
+    table = search_results.write_outputs(spec, root, journal)
+    found = search_results.findings(spec, table)
+    _write_json_atomic(root / "search.json", {**_settings(spec), **found,
+                                              "evaluations_done": int((table["status"] != "not run").sum())})
+    if report:
+        from orchestrator.report import write_report
+
+        write_report(root)
+    return table, found
 
 
 def _entry(spec: SearchSpec, trial, overrides: dict, parameters: dict, system_attrs: dict) -> dict:

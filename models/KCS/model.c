@@ -38,26 +38,9 @@ static double *field(ModelData *d, fmi2ValueReference vr) {
     }
 }
 
-void model_set_start_values(ModelInstance *comp) {
-    ModelData *d = &comp->data;
-    int i;
-    kcs_default_parameters(&d->p);
-    d->in = (KcsInputs){0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
-    for (i = 0; i < KCS_NSTATES; i++) d->X0[i] = d->X[i] = 0.0;
-}
+void model_set_start_values(ModelInstance *comp) { kcs_start_values(&comp->data); }
 
-fmi2Status model_exit_initialization(ModelInstance *comp) {
-    ModelData *d = &comp->data;
-    const char *bad = kcs_invalid_parameter(&d->p);
-    int i;
-    if (bad) {
-        log_error(comp, "parameter %s has an invalid value", bad);
-        return fmi2Error;
-    }
-    for (i = 0; i < KCS_NSTATES; i++) d->X[i] = d->X0[i];
-    d->X[KCS_PSI] = kcs_wrap_angle(d->X[KCS_PSI]);
-    return fmi2OK;
-}
+fmi2Status model_exit_initialization(ModelInstance *comp) { return kcs_exit_initialization(comp); }
 
 fmi2Status model_get_real(ModelInstance *comp, fmi2ValueReference vr, fmi2Real *value) {
     ModelData *d = &comp->data;

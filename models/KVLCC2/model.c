@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "fmu_model.h"
-#include "rk4.h"
+#include "plant_step.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -94,11 +94,6 @@ static double *field(ModelData *d, fmi2ValueReference vr) {
 
 static double clip(double value, double low, double high) {
     return value > high ? high : (value < low ? low : value);
-}
-
-static double compass(double angle) { /* [0, 360) degrees */
-    double deg = fmod(angle / DEG, 360.0);
-    return deg < 0.0 ? deg + 360.0 : deg;
 }
 
 /* Rudder normal-force coefficient at the effective angle alpha: the lift slope up to the
@@ -265,12 +260,12 @@ fmi2Status model_get_real(ModelInstance *comp, fmi2ValueReference vr, fmi2Real *
     switch (vr) {
     case vr_Latitude: *value = X[S_LAT] / DEG; return fmi2OK;
     case vr_Longitude: *value = X[S_LON] / DEG; return fmi2OK;
-    case vr_Heading: *value = compass(X[S_PSI]); return fmi2OK;
+    case vr_Heading: *value = plant_compass_deg(X[S_PSI]); return fmi2OK;
     case vr_SurgeSpeed: *value = X[S_U] / KNOT; return fmi2OK;
     case vr_SwaySpeed: *value = X[S_V] / KNOT; return fmi2OK;
     case vr_YawRate: *value = X[S_R] / DEG; return fmi2OK;
     case vr_SpeedOverGround: *value = hypot(vn, ve) / KNOT; return fmi2OK;
-    case vr_CourseOverGround: *value = compass(atan2(ve, vn)); return fmi2OK;
+    case vr_CourseOverGround: *value = plant_compass_deg(atan2(ve, vn)); return fmi2OK;
     case vr_RudderAngle: *value = force_mode(d) ? 0.0 : X[S_DELTA] / DEG; return fmi2OK;
     case vr_ShaftSpeed: *value = force_mode(d) ? 0.0 : X[S_N] * 60.0; return fmi2OK;
     case vr_PropellerThrust:
@@ -297,13 +292,7 @@ static void kvlcc2_derivatives(const void *d, const void *unused, const double *
 
 fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
     ModelData *d = &comp->data;
-    rk4_advance(kvlcc2_derivatives, d, NULL, d->X, S_NSTATES, d->h_int_s, h);
-    d->X[S_PSI] = fmod(d->X[S_PSI], 2.0 * M_PI);
-    if (!rk4_finite(d->X, S_NSTATES)) {
-        log_error(comp, "fmi2DoStep: the state became non-finite in the step from t = %g s", t);
-        return fmi2Error;
-    }
-    return fmi2OK;
+    return plant_rk4_step(comp, kvlcc2_derivatives, d, d->X, S_NSTATES, S_PSI, d->h_int_s, t, h);
 }
 
 void model_free_resources(ModelInstance *comp) { (void)comp; }

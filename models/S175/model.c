@@ -6,7 +6,7 @@
 #include <string.h>
 
 #include "fmu_model.h"
-#include "rk4.h"
+#include "plant_step.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -63,11 +63,6 @@ static double *field(ModelData *d, fmi2ValueReference vr) {
 
 static double clamp(double value, double bound) {
     return value > bound ? bound : (value < -bound ? -bound : value);
-}
-
-static double compass(double angle) { /* [0, 360) degrees */
-    double deg = fmod(angle / DEG, 360.0);
-    return deg < 0.0 ? deg + 360.0 : deg;
 }
 
 /* Earth-frame velocity over ground (m/s): through the water plus the current. */
@@ -150,14 +145,14 @@ fmi2Status model_get_real(ModelInstance *comp, fmi2ValueReference vr, fmi2Real *
     case vr_lon: *value = X[S_LON] / DEG; return fmi2OK;
     case vr_north_km: *value = X[S_NORTH] / 1e3; return fmi2OK;
     case vr_east_km: *value = X[S_EAST] / 1e3; return fmi2OK;
-    case vr_heading: *value = compass(X[S_PSI]); return fmi2OK;
+    case vr_heading: *value = plant_compass_deg(X[S_PSI]); return fmi2OK;
     case vr_stw: *value = X[S_U] / KNOT; return fmi2OK;
     case vr_sway_speed: *value = X[S_V] / KNOT; return fmi2OK;
     case vr_rot: *value = X[S_R] / DEG * 60.0; return fmi2OK;
     case vr_sog:
     case vr_cog:
         over_ground(d, X, &vn, &ve);
-        *value = vr == vr_sog ? hypot(vn, ve) / KNOT : compass(atan2(ve, vn));
+        *value = vr == vr_sog ? hypot(vn, ve) / KNOT : plant_compass_deg(atan2(ve, vn));
         return fmi2OK;
     default:
         *value = *field(d, vr);
@@ -178,13 +173,7 @@ static void s175_derivatives(const void *d, const void *unused, const double *X,
 
 fmi2Status model_do_step(ModelInstance *comp, double t, double h) {
     ModelData *d = &comp->data;
-    rk4_advance(s175_derivatives, d, NULL, d->X, S_NSTATES, d->h_int_s, h);
-    d->X[S_PSI] = fmod(d->X[S_PSI], 2.0 * M_PI);
-    if (!rk4_finite(d->X, S_NSTATES)) {
-        log_error(comp, "fmi2DoStep: the state became non-finite in the step from t = %g s", t);
-        return fmi2Error;
-    }
-    return fmi2OK;
+    return plant_rk4_step(comp, s175_derivatives, d, d->X, S_NSTATES, S_PSI, d->h_int_s, t, h);
 }
 
 void model_free_resources(ModelInstance *comp) { (void)comp; }

@@ -1,5 +1,6 @@
-/* Glue shared by the plant FMUs built on kcs_dynamics.h (KCS, KCSVendorB): the checks on a
- * parameter set through fmi2SetReal and the communication step. The variables are matched by
+/* Glue shared by the plant FMUs built on kcs_dynamics.h (KCS, KCSVendorB): their start values,
+ * the end of initialisation, the checks on a parameter set through fmi2SetReal and the
+ * communication step. Both keep the same ModelData (p, in, X, X0, all SI) in config.h. The variables are matched by
  * their names, which both models share for the KCS parameters (h_int, tau_u_max, ...).
  */
 #ifndef KCS_FMU_H
@@ -9,6 +10,26 @@
 
 #include "fmu_model.h"
 #include "kcs_dynamics.h"
+
+/* Start values (fmi2Instantiate, fmi2Reset): the default parameter set, inputs and state zero. */
+static inline void kcs_start_values(ModelData *d) {
+    kcs_default_parameters(&d->p);
+    d->in = (KcsInputs){0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    for (int i = 0; i < KCS_NSTATES; i++) d->X0[i] = d->X[i] = 0.0;
+}
+
+/* End of initialisation: the parameter set checked, the state set to the initial one. */
+static inline fmi2Status kcs_exit_initialization(ModelInstance *comp) {
+    ModelData *d = &comp->data;
+    const char *bad = kcs_invalid_parameter(&d->p);
+    if (bad) {
+        log_error(comp, "parameter %s has an invalid value", bad);
+        return fmi2Error;
+    }
+    for (int i = 0; i < KCS_NSTATES; i++) d->X[i] = d->X0[i];
+    d->X[KCS_PSI] = kcs_wrap_angle(d->X[KCS_PSI]);
+    return fmi2OK;
+}
 
 /* Store si_value (already in SI) in *field after the checks a plant parameter needs. */
 static inline fmi2Status kcs_set_checked(ModelInstance *comp, fmi2ValueReference vr, double *field,

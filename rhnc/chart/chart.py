@@ -26,11 +26,12 @@ import json
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from orchestrator.errors import ScenarioError
-from orchestrator.geometry import NM
+from orchestrator.geometry import NM, nearest_on_segments
 from rhnc.chart.projection import LocalProjection
 
 CHART_KEYS = ("origin_deg", "clearance_nm", "land", "no_go")
@@ -44,7 +45,7 @@ class Area:
 
     name: str
     kind: str
-    geometry: object  # shapely (Multi)Polygon, x north, y east [m]
+    geometry: Any  # shapely (Multi)Polygon, x north, y east [m]
 
 
 @dataclass(frozen=True)
@@ -157,13 +158,9 @@ class BoundaryIndex:
         pairs = self.tree.query_nearest(shapely.points(points), all_matches=False)
         edge = np.empty(len(points), dtype=int)
         edge[pairs[0]] = pairs[1]
-        a, b = self.a[edge], self.b[edge]
-        along = b - a
-        share = np.clip(np.einsum("ij,ij->i", points - a, along) / np.maximum(np.einsum("ij,ij->i", along, along),
-                                                                             1e-12), 0.0, 1.0)
-        nearest = a + share[:, None] * along
+        nearest, distance = nearest_on_segments(points, self.a[edge], self.b[edge])
         inside = shapely.contains_xy(self.hazard, points[:, 0], points[:, 1])
-        return nearest, np.hypot(*(points - nearest).T), inside
+        return nearest, distance, inside
 
 
 def load_chart(path) -> Chart:

@@ -15,6 +15,7 @@ them into the plane's (north, east) order.  Longitudes may be given from -180 to
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -33,8 +34,8 @@ class LocalProjection:
 
     origin_lat_deg: float
     origin_lon_deg: float
-    _forward: object = field(init=False, repr=False, compare=False)
-    _inverse: object = field(init=False, repr=False, compare=False)
+    _forward: Any = field(init=False, repr=False, compare=False)
+    _inverse: Any = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
         if not (np.isfinite(self.origin_lat_deg) and -80.0 <= self.origin_lat_deg <= 80.0):

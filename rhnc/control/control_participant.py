@@ -449,7 +449,7 @@ class ControlParticipant(Participant):
         """
         plant = sources.get("x")
         identity = getattr(plant, "identity", None)
-        if identity is None:
+        if plant is None or identity is None:
             return
         extras = self.controller.params.extras
         declared = extras.get("plant_fmu", ())

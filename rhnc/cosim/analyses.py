@@ -7,6 +7,8 @@ The plant is the participant whose outputs include the ship state (x, y, psi).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from orchestrator.analyses import array_output, driver_column
@@ -114,7 +116,7 @@ def voyage_analysis(frame, scenario, cosim, out_dir, goal_nm=None, arrival_radiu
     if f"{plant}.delivered_power" in frame.columns:
         series["brake_power"] = (frame[f"{plant}.delivered_power"].to_numpy(dtype=float) / energy.shaft_efficiency
                                  + energy.auxiliary_power_w)
-    arrival = {}
+    arrival: dict[str, Any] = {}
     if goal_nm is not None:
         try:
             goal = np.asarray(goal_nm, dtype=float).reshape(2) * NM

@@ -334,10 +334,10 @@ class NavigationParticipant(Participant):
                 self.counts["prediction_starts"] += 1
                 if table.shape[0] == 1:
                     return float(table[0, 1]), float(table[0, 2]), float(table[0, 3]), float(table[0, 4])
-                psi = np.unwrap(table[:, 3])
+                unwrapped = np.unwrap(table[:, 3])
                 return (float(np.interp(time, table[:, 0], table[:, 1])),
                         float(np.interp(time, table[:, 0], table[:, 2])),
-                        float(np.interp(time, table[:, 0], psi)),
+                        float(np.interp(time, table[:, 0], unwrapped)),
                         float(np.interp(time, table[:, 0], table[:, 4])))
         self.counts["measured_starts"] += 1
         psi = measured.get("psi")

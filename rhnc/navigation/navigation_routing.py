@@ -71,7 +71,7 @@ class RoutingMethod:
         self.keep_out = keep_out
         self.planner = RecedingRoutePlanner(metocean, goal, energy, resolution_nm, switch_margin=switch_margin,
                                             keep_out=keep_out)
-        self._route = None
+        self._route: np.ndarray | None = None
         self._price_scale: float | None = None
         self._planned_speed = speed
 

@@ -261,9 +261,9 @@ def _write_tables(folder, results, settings, delta: float) -> list[dict[str, Any
             "border_steps": res["path"].border_steps,
         })
     with open(folder.path("table.csv"), "w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+        table = csv.DictWriter(handle, fieldnames=list(rows[0]))
+        table.writeheader()
+        table.writerows(rows)
     return rows
 
 

@@ -43,14 +43,14 @@ def shortest_route(start: Sequence[float], goal: Sequence[float], circles: Seque
     ValueError
         If the start or the goal lies inside an obstacle, or no path exists.
     """
-    start = np.asarray(start, dtype=float)
-    goal = np.asarray(goal, dtype=float)
-    rows = np.asarray(circles, dtype=float).reshape(-1, 3)
-    if len(rows) == 0:
-        return np.vstack([start, goal])
-    centres = rows[:, :2]
-    radii = rows[:, 2] + margin
-    for name, point in (("start", start), ("goal", goal)):
+    start_m = np.asarray(start, dtype=float)
+    goal_m = np.asarray(goal, dtype=float)
+    table = np.asarray(circles, dtype=float).reshape(-1, 3)
+    if len(table) == 0:
+        return np.vstack([start_m, goal_m])
+    centres = table[:, :2]
+    radii = table[:, 2] + margin
+    for name, point in (("start", start_m), ("goal", goal_m)):
         inside = np.hypot(*(centres - point).T) < radii
         if np.any(inside):
             raise ValueError(f"the {name} lies inside obstacle {int(np.argmax(inside))} (radius plus margin)")
@@ -58,7 +58,7 @@ def shortest_route(start: Sequence[float], goal: Sequence[float], circles: Seque
     scale = 1.0 / np.cos(np.pi / sides) * (1.0 + 1e-6)
     vertices = [centre + radius * scale * np.column_stack([np.cos(angles), np.sin(angles)])
                 for centre, radius in zip(centres, radii)]
-    nodes = np.vstack([start, goal, *vertices])
+    nodes = np.vstack([start_m, goal_m, *vertices])
     outside = np.all(np.hypot(nodes[:, None, 0] - centres[None, :, 0], nodes[:, None, 1] - centres[None, :, 1])
                      >= radii[None, :] * (1.0 - 1e-9), axis=1)
     rows, cols, weights = [], [], []

@@ -32,6 +32,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from orchestrator.geometry import nearest_on_segments
+
 if TYPE_CHECKING:
     from scipy.sparse import csr_matrix
 
@@ -54,14 +56,7 @@ def grid_moves(reach: int = 3) -> np.ndarray:
 
 def segment_clearance(a: np.ndarray, b: np.ndarray, centre: Sequence[float]) -> np.ndarray:
     """Least distance [m] from ``centre`` to the segments a-b (arrays (..., 2))."""
-    a = np.asarray(a, dtype=float)
-    b = np.asarray(b, dtype=float)
-    c = np.asarray(centre, dtype=float)[:2]
-    ab = b - a
-    length2 = np.sum(ab * ab, axis=-1)
-    t = np.divide(np.sum((c - a) * ab, axis=-1), length2, out=np.zeros(length2.shape), where=length2 > 0)
-    closest = a + np.clip(t, 0.0, 1.0)[..., None] * ab
-    return np.hypot(*(c - closest).reshape(-1, 2).T).reshape(length2.shape)
+    return nearest_on_segments(np.asarray(centre, dtype=float)[:2], a, b)[1]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -300,21 +295,13 @@ def simplify_polyline(points: np.ndarray, tolerance_m: float) -> np.ndarray:
         if last - first < 2:
             continue
         inner = points[first + 1:last]
-        distance = _distance_to_segment(inner, points[first], points[last])
+        distance = nearest_on_segments(inner, points[first], points[last])[1]
         worst = int(np.argmax(distance))
         if distance[worst] > tolerance_m:
             split = first + 1 + worst
             keep[split] = True
             stack.extend([(first, split), (split, last)])
     return points[keep]
-
-
-def _distance_to_segment(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Distance [m] of each of ``points`` (n, 2) from the segment a-b."""
-    ab = b - a
-    length2 = float(ab @ ab)
-    t = np.clip(((points - a) @ ab) / length2, 0.0, 1.0) if length2 > 0 else np.zeros(len(points))
-    return np.hypot(*(points - (a + t[:, None] * ab)).T)
 
 
 SegmentCosts = Callable[[int, np.ndarray], np.ndarray]

@@ -12,6 +12,7 @@ route (:func:`time_price_usd_h`).
 from __future__ import annotations
 
 import dataclasses
+from typing import Protocol
 
 import numpy as np
 
@@ -24,6 +25,20 @@ from rhnc.routing.track_cost import constant_speed_times, cost_of_track, densify
 
 #: Bracket of the speed through water solved for a fixed arrival time [m/s].
 SPEED_BRACKET_MPS = (0.5, 30.0)
+
+
+class KeepOut(Protocol):
+    """What the routing asks of areas to keep clear of (a :class:`rhnc.chart.chart.Chart` answers)."""
+
+    clearance_m: float
+
+    def distances_m(self, north_m, east_m) -> np.ndarray:
+        """Distance [m] of points to the nearest area."""
+        ...
+
+    def legs_clear(self, a, b, distance_a=None, distance_b=None) -> np.ndarray:
+        """Whether each straight leg a-b keeps the clearance along its whole length."""
+        ...
 
 
 @dataclasses.dataclass(frozen=True)
@@ -44,7 +59,7 @@ class RoutingProblem:
         Time of departure [s] (the clock of a time-varying field).
     reach : int
         Longest move of the search grid in grid steps (3: 32 headings).
-    keep_out : object, optional
+    keep_out : KeepOut, optional
         Land and no-go areas with their clearance (a :class:`rhnc.chart.chart.Chart`): no
         route comes within ``keep_out.clearance_m`` of them along any leg.
     """
@@ -57,7 +72,7 @@ class RoutingProblem:
     avoid: tuple[tuple[float, float, float], ...] = ()
     departure_s: float = 0.0
     reach: int = 3
-    keep_out: object | None = None
+    keep_out: KeepOut | None = None
 
 
 @dataclasses.dataclass(frozen=True)

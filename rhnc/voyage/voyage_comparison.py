@@ -220,11 +220,11 @@ class VoyageComparison:
         """The equal-arrival scenario's own reference speed [kn] (its ``speed_key`` value)."""
         from orchestrator.scenario import apply_override, read_toml
 
-        data, _ = read_toml(self.equal_arrival.scenario, "scenario")
+        data, _ = read_toml(self._equal.scenario, "scenario")
         for key, value in copy.deepcopy(dict(overrides)).items():
-            apply_override(data, key, value, str(self.equal_arrival.scenario))
+            apply_override(data, key, value, str(self._equal.scenario))
         node: Any = data
-        for part in self.equal_arrival.speed_key.split("."):
+        for part in self._equal.speed_key.split("."):
             node = node.get(part) if isinstance(node, Mapping) else None
         return float(node) if is_finite_number(node) else None
 
@@ -237,11 +237,11 @@ class VoyageComparison:
         from rhnc.routing.weather_routing import RoutingProblem, optimal_route, straight_route
 
         speed_kn = self.nominal_speed_kn(overrides)
-        loaded = load_scenario(self.equal_arrival.scenario, dict(overrides))
+        loaded = load_scenario(self._equal.scenario, dict(overrides))
         if speed_kn is None or loaded.metocean is None:
             raise ValueError("the equal-arrival scenario has no reference speed or no [metocean] table")
         metocean = from_scenario_table(loaded.metocean, loaded.directory, f"{loaded.path}: metocean")
-        settings = self.optimal_route
+        settings = self._optimal
         problem = RoutingProblem(self.start_m, self.goal_m, metocean, energy=EnergyParameters(),
                                  resolution_nm=settings.resolution_nm, avoid=settings.avoid_m)
         straight = straight_route(problem, speed_mps=speed_kn * KNOT)
@@ -257,12 +257,26 @@ class VoyageComparison:
 
     # -- baselines and route costs ------------------------------------------------------------
     @property
+    def _equal(self) -> EqualArrivalSettings:
+        """``[voyage.equal_arrival]``, for the steps its callers take only when it is given."""
+        if self.equal_arrival is None:
+            raise RuntimeError(f"{self.path}: an equal-arrival step without [voyage.equal_arrival]")
+        return self.equal_arrival
+
+    @property
+    def _optimal(self) -> OptimalRouteSettings:
+        """``[voyage.optimal_route]``, for the steps its callers take only when it is given."""
+        if self.optimal_route is None:
+            raise RuntimeError(f"{self.path}: an optimal-route step without [voyage.optimal_route]")
+        return self.optimal_route
+
+    @property
     def straight_distance_nm(self) -> float:
         return float(np.hypot(*(self.goal_m - self.start_m)) / NM)
 
     def _equal_arrival_baseline(self, system: SailedVoyage, runner: ScenarioRunner,
                                 overrides: Mapping[str, Any], report) -> EqualArrival:
-        settings = self.equal_arrival
+        settings = self._equal
         base = dict(overrides)
         if settings.same_control:
             base.update(self.control_overrides(report, overrides))
@@ -294,14 +308,14 @@ class VoyageComparison:
         scenarios lie in different folders, where those names would point elsewhere.
         """
         where = f"{self.path}: voyage.equal_arrival.same_control"
-        baseline = load_scenario(self.equal_arrival.scenario, dict(baseline_overrides))
+        baseline = load_scenario(self._equal.scenario, dict(baseline_overrides))
         controls = [[p for p in loaded.participants if p.type == "control"] for loaded in (system, baseline)]
         if any(len(found) != 1 for found in controls):
             return {}
         (own,), (theirs,) = controls
-        if system.path.resolve().parent != self.equal_arrival.scenario.resolve().parent and any(
+        if system.path.resolve().parent != self._equal.scenario.resolve().parent and any(
                 isinstance(value, str) for value in own.options.values()):
-            raise ScenarioError(f"{where}: {system.path} and {self.equal_arrival.scenario} lie in different "
+            raise ScenarioError(f"{where}: {system.path} and {self._equal.scenario} lie in different "
                                 "folders and the control options name files; put them side by side or "
                                 "set same_control = false")
         return {f"participants.{theirs.name}.options": copy.deepcopy(dict(own.options))}

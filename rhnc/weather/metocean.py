@@ -241,8 +241,8 @@ class MetOceanField:
         """The static field at time ``t_s`` [s], linear between time steps (for static planners)."""
         if not self.is_time_varying:
             return self
-        k, w = self.time_weights(float(t_s))
-        k, w = int(k), float(w)
+        k_array, w_array = self.time_weights(float(t_s))
+        k, w = int(k_array), float(w_array)
         fields = {name: between(stack[k], stack[k + 1], w) for name, stack in self._fields.items()}
         return MetOceanField(self.x, self.y, fields, source=f"{self.source} at t = {float(t_s):g} s")
 

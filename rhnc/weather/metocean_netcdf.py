@@ -52,7 +52,7 @@ def to_dataset(field):
                                          "long_name": "distance east of the map origin"}),
     }
     attrs = {"Conventions": "CF-1.8", "source": field.source, "title": "RHNC met-ocean field"}
-    dims = ("northing", "easting")
+    dims: tuple[str, ...] = ("northing", "easting")
     if field.is_time_varying:
         origin = np.datetime64(field.start_time or DEFAULT_TIME_ORIGIN, "ns")
         offsets = np.round(field.times_s * 1e9).astype("int64").astype("timedelta64[ns]")
@@ -76,7 +76,7 @@ def write_netcdf(field, path) -> Path:
     import netCDF4
 
     path = Path(path)
-    dims = ("northing", "easting")
+    dims: tuple[str, ...] = ("northing", "easting")
     with netCDF4.Dataset(path, "w", format="NETCDF4") as dataset:
         dataset.setncatts({"Conventions": "CF-1.8", "source": field.source, "title": "RHNC met-ocean field"})
         for name, values, long_name, standard_name in (

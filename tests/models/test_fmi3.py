@@ -186,3 +186,13 @@ def test_an_unknown_fmi_version_is_refused_naming_the_key(tmp_path):
     path.write_text(textwrap.dedent(SCENARIO.format(tag="x", version="1.0")))
     with pytest.raises(ScenarioError, match=r"participants\.ship\.fmi_version' must be one of 2\.0, 3\.0, got '1\.0'"):
         load_scenario(path)
+
+
+def test_a_description_without_its_model_variables_is_refused_naming_the_element():
+    from orchestrator.errors import FmuError
+    from orchestrator.model_description import to_fmi3
+
+    text = '<fmiModelDescription fmiVersion="2.0" modelName="M" guid="{1}"><CoSimulation modelIdentifier="M"/>' \
+           '</fmiModelDescription>'
+    with pytest.raises(FmuError, match=r"^modelDescription.xml: <fmiModelDescription> has no <ModelVariables>$"):
+        to_fmi3(text, [], "1.0")

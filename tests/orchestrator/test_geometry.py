@@ -87,3 +87,34 @@ def test_no_module_wraps_angles_by_hand():
              for folder in CHECKED for path in sorted((REPO / folder).rglob("*.py")) if path.name != "geometry.py"
              for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1) if by_hand.search(line)]
     assert found == []
+
+
+def test_the_nearest_point_of_a_segment_is_its_foot_or_the_nearer_end():
+    from orchestrator.geometry import nearest_on_segments
+
+    a, b = np.array([0.0, 0.0]), np.array([10.0, 0.0])
+    points = np.array([[4.0, 3.0], [-6.0, 8.0], [13.0, -4.0], [10.0, 0.0]])
+    nearest, distance = nearest_on_segments(points, a, b)
+    assert nearest.tolist() == [[4.0, 0.0], [0.0, 0.0], [10.0, 0.0], [10.0, 0.0]]
+    assert distance.tolist() == [3.0, 10.0, 5.0, 0.0]
+    # a segment of zero length is its start point
+    nearest, distance = nearest_on_segments([3.0, 4.0], [[0.0, 0.0]], [[0.0, 0.0]])
+    assert nearest.tolist() == [[0.0, 0.0]] and distance.tolist() == [5.0]
+
+
+def test_the_nearest_point_of_a_segment_agrees_with_a_dense_walk_along_it():
+    from orchestrator.geometry import nearest_on_segments
+
+    rng = np.random.default_rng(3)
+    points, a, b = (rng.normal(0.0, 100.0, (200, 2)) for _ in range(3))
+    nearest, distance = nearest_on_segments(points, a, b)
+    share = np.linspace(0.0, 1.0, 20001)
+    walk = a[:, None, :] + share[None, :, None] * (b - a)[:, None, :]
+    dense = np.min(np.hypot(*(walk - points[:, None, :]).transpose(2, 0, 1)), axis=1)
+    assert np.all(distance <= dense + 1e-9) and np.allclose(distance, dense, atol=0.02)
+    assert np.allclose(np.hypot(*(points - nearest).T), distance)
+    # one point against the segments, and the segments one by one, give the same
+    one = nearest_on_segments(points[0], a, b)[1]
+    assert one.shape == (200,)
+    assert np.allclose(one, [nearest_on_segments(points[0], a[k], b[k])[1] for k in range(200)])
+    assert nearest_on_segments(points[:7], a[0], b[0])[1].shape == (7,)
