@@ -379,10 +379,12 @@ class _Loop:
         self.steps, self.dt_s = self.sim.steps, self.sim.dt_s  # (``steps`` is computed at every call)
         # per participant: itself, its name, every, time limit, (its input port, the bus key that
         # drives it), whether its outputs describe the end of its step, whether it checks their
-        # finiteness itself, and its publications (below)
+        # finiteness itself, whether they are always finite floats (FMUs whose ports are one
+        # variable each: no type to look at), and its publications (below)
         self.plans: list[tuple[Any, ...]] = [(p, p.name, cosim.every[p.name], cosim.step_timeout_s[p.name],
                        tuple((c.target_port, (c.source, c.source_port)) for c in connections if c.target == p.name),
-                       p.outputs_at_step_end, getattr(p, "checks_outputs_finite", False), {})
+                       p.outputs_at_step_end, getattr(p, "checks_outputs_finite", False),
+                       getattr(p, "outputs_are_floats", False) is True, {})
                       for p in cosim.participants]
         # per participant: its declared outputs, whether it checks their finiteness itself
         self.publishing = {p.name: (cosim._declared[p.name], getattr(p, "checks_outputs_finite", False))
@@ -465,7 +467,7 @@ class _Loop:
         stop_requested = interrupts.stop_requested
         met: list = []
         skipped: list[str] = []
-        for participant, name, every, limit, inbound, at_step_end, checked, publications in self.plans:
+        for participant, name, every, limit, inbound, at_step_end, checked, floats, publications in self.plans:
             if k % every:
                 continue
             if met:  # Gauss-Seidel: met earlier in this round, nobody steps past it
@@ -494,7 +496,7 @@ class _Loop:
             publication = publications.get(ports)
             if publication is None:
                 publication = publications[ports] = self._publication(name, ports)
-            if publication and set(map(type, values)) <= FLOAT and (checked or math.isfinite(sum(values))):
+            if publication and (floats or set(map(type, values)) <= FLOAT) and (checked or math.isfinite(sum(values))):
                 keys, read, columns = publication
                 if read is None:  # every output is read
                     bus.update(zip(keys, values))
