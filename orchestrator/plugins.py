@@ -127,12 +127,33 @@ def _source_entries(pyproject: Path, group: str) -> dict[str, str]:
 
 
 @functools.lru_cache(maxsize=None)
+def _installed_entry_points():
+    """Every installed entry point, of every group: read once (each read looks at the metadata
+    of every installed distribution; reading it per group cost a run ten such reads)."""
+    return entry_points()
+
+
+def _clear_caches() -> None:
+    """Forget what was read (a test that installs a distribution on the path)."""
+    _registrations.cache_clear()
+    _installed_entry_points.cache_clear()
+
+
 def registrations(kind: str) -> dict[str, Registration]:
-    """Every entry of the group of ``kind`` (see :data:`GROUPS`), by name.
+    """Every entry of the group of ``kind`` (see :data:`GROUPS`), by name (read once per
+    process; ``registrations.cache_clear()`` forgets it).
 
     Two distributions registering one name is refused (naming both), so that which one
     runs never depends on the order of ``sys.path``.
     """
+    return _registrations(kind)
+
+
+registrations.cache_clear = _clear_caches  # type: ignore[attr-defined]
+
+
+@functools.lru_cache(maxsize=None)
+def _registrations(kind: str) -> dict[str, Registration]:
     group = GROUPS[kind]
     pyproject = _source_pyproject()
     found: dict[str, Registration] = {}
@@ -144,7 +165,7 @@ def registrations(kind: str) -> dict[str, Registration]:
                                 f"{earlier.distribution} ({earlier.target}) and by {distribution} ({target})")
         found[name] = Registration(name, target, distribution)
 
-    for entry in entry_points(group=group):
+    for entry in _installed_entry_points().select(group=group):
         distribution = _distribution_name(entry)
         if pyproject is not None and distribution == DISTRIBUTION:
             continue  # the checkout's own declarations stand in for its installed metadata
