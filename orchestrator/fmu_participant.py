@@ -10,7 +10,9 @@ binds ``tau_u`` to an FMU output is refused.
 from __future__ import annotations
 
 import logging
+import itertools
 import math
+import operator
 import shutil
 import tomllib
 from collections.abc import Callable, Mapping
@@ -30,6 +32,9 @@ from orchestrator.port_mapping import ScalarBinding, bind_ports, initial_start_v
 from orchestrator.scenario import ParticipantSpec
 
 log = logging.getLogger(__name__)
+
+#: 0.0 added to every output read (``value + 0.0``: -0.0 becomes 0.0, as ``1.0 * value + 0.0`` gives)
+_ZEROS = itertools.repeat(0.0)
 
 #: Keys of a parameter set that describe it rather than set an FMU parameter.
 SET_METADATA_KEYS = ("description", "plant_fmu", "plant_guid")
@@ -363,7 +368,7 @@ class FmuParticipant(Participant):
                 all(scalar_inputs[port][1:] == (1.0, 0.0) for port in ports))
         write, plain = writer
         if plain:  # (number - 0.0) / 1.0 is the number
-            values = [float(value) for value in inputs.values()]
+            values = list(map(float, inputs.values()))
             if math.isfinite(sum(values)):  # (a NaN or inf sums to one)
                 if self._messages:  # what _call does, without a call more per step
                     self._messages.clear()
@@ -393,7 +398,7 @@ class FmuParticipant(Participant):
         if self._scalar_outputs is not None and math.isfinite(sum(values)):  # (a NaN or inf sums to one)
             # scale * value + offset, wrapped where the port is an angle: 1.0 * value + 0.0 is
             # value + 0.0 (-0.0 becomes 0.0)
-            scaled = [value + 0.0 for value in values]
+            scaled = list(map(operator.add, values, _ZEROS))
             for index, scale, offset in self._scaled_outputs:
                 scaled[index] = scale * values[index] + offset
             for index in self._wrapped_outputs:
