@@ -10,9 +10,7 @@ binds ``tau_u`` to an FMU output is refused.
 from __future__ import annotations
 
 import logging
-import itertools
 import math
-import operator
 import shutil
 import tomllib
 from collections.abc import Callable, Mapping
@@ -32,9 +30,6 @@ from orchestrator.port_mapping import ScalarBinding, bind_ports, initial_start_v
 from orchestrator.scenario import ParticipantSpec
 
 log = logging.getLogger(__name__)
-
-#: 0.0 added to every output read (``value + 0.0``: -0.0 becomes 0.0, as ``1.0 * value + 0.0`` gives)
-_ZEROS = itertools.repeat(0.0)
 
 #: Keys of a parameter set that describe it rather than set an FMU parameter.
 SET_METADATA_KEYS = ("description", "plant_fmu", "plant_guid")
@@ -180,11 +175,11 @@ class FmuParticipant(Participant):
                                if all(type(b) is ScalarBinding for b in self._input_bindings) else None)
         self._scalar_outputs = ([(b.ports[0], b.scale, b.offset, b.wrap) for b in self._output_bindings]
                                 if all(type(b) is ScalarBinding for b in self._output_bindings) else None)
-        # where every output is one variable: the ports in the order of the values read, and
-        # which of them are scaled (index, scale, offset) and wrapped (index)
         #: every output a step returns is a finite Python float (each port one variable): the
         #: master publishes them without looking at their types
         self.outputs_are_floats = self._scalar_outputs is not None
+        # where every output is one variable: the ports in the order of the values read, and
+        # which of them are scaled (index, scale, offset) and wrapped (index)
         if self._scalar_outputs is not None:
             self._output_ports = tuple(port for port, *_ in self._scalar_outputs)
             self._scaled_outputs = tuple((index, scale, offset) for index, (_, scale, offset, _) in
@@ -368,7 +363,7 @@ class FmuParticipant(Participant):
                 all(scalar_inputs[port][1:] == (1.0, 0.0) for port in ports))
         write, plain = writer
         if plain:  # (number - 0.0) / 1.0 is the number
-            values = list(map(float, inputs.values()))
+            values = [float(value) for value in inputs.values()]
             if math.isfinite(sum(values)):  # (a NaN or inf sums to one)
                 if self._messages:  # what _call does, without a call more per step
                     self._messages.clear()
@@ -398,7 +393,7 @@ class FmuParticipant(Participant):
         if self._scalar_outputs is not None and math.isfinite(sum(values)):  # (a NaN or inf sums to one)
             # scale * value + offset, wrapped where the port is an angle: 1.0 * value + 0.0 is
             # value + 0.0 (-0.0 becomes 0.0)
-            scaled = list(map(operator.add, values, _ZEROS))
+            scaled = [value + 0.0 for value in values]
             for index, scale, offset in self._scaled_outputs:
                 scaled[index] = scale * values[index] + offset
             for index in self._wrapped_outputs:
