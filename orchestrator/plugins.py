@@ -149,7 +149,7 @@ def registrations(kind: str) -> dict[str, Registration]:
     return _registrations(kind)
 
 
-registrations.cache_clear = _clear_caches  # type: ignore[attr-defined]
+registrations.cache_clear = _clear_caches
 
 
 @functools.lru_cache(maxsize=None)
