@@ -69,3 +69,16 @@ def test_a_call_logger_is_given_every_per_step_call(kcs):
     slave.stepper()(0.0, 1.0)
     slave.real_reader([refs["x"]])()
     assert [line.split("(")[0] for line in logged] == ["fmi2SetReal", "fmi2DoStep", "fmi2GetReal"]
+
+
+def test_the_reader_gives_what_fmpy_reads_after_every_step(kcs):
+    slave, refs = kcs
+    outputs = [refs[name] for name in ("x", "y", "psi", "u", "v", "r")]
+    read, step = slave.real_reader(outputs), slave.stepper()
+    slave.real_writer([refs["tau_u"], refs["tau_r"]])([7.7e5, 3.3e8])
+    seen = []
+    for k in range(3):
+        step(float(k), 1.0)
+        seen.append(read())
+        assert seen[-1] == slave.get_reals(outputs)
+    assert seen[0] != seen[1] != seen[2]
