@@ -107,8 +107,10 @@ def source_checkout() -> Path | None:
     return pyproject.parent if pyproject is not None else None
 
 
+@functools.lru_cache(maxsize=None)
 def _source_pyproject() -> Path | None:
-    """This package's checkout's ``pyproject.toml`` when the package is imported from one."""
+    """This package's checkout's ``pyproject.toml`` when the package is imported from one
+    (read once per process)."""
     candidate = Path(__file__).resolve().parent.parent / "pyproject.toml"
     if not candidate.is_file():
         return None
@@ -121,9 +123,14 @@ def _source_pyproject() -> Path | None:
 
 
 def _source_entries(pyproject: Path, group: str) -> dict[str, str]:
+    return dict(_declared_entry_points(pyproject).get(group, {}))
+
+
+@functools.lru_cache(maxsize=None)
+def _declared_entry_points(pyproject: Path) -> dict:
+    """The ``[project.entry-points]`` of ``pyproject`` (read once per process, not per group)."""
     with pyproject.open("rb") as handle:
-        declared = tomllib.load(handle)["project"].get("entry-points", {})
-    return dict(declared.get(group, {}))
+        return tomllib.load(handle)["project"].get("entry-points", {})
 
 
 @functools.lru_cache(maxsize=None)
@@ -137,6 +144,7 @@ def _clear_caches() -> None:
     """Forget what was read (a test that installs a distribution on the path)."""
     _registrations.cache_clear()
     _installed_entry_points.cache_clear()
+    _normalised_name.cache_clear()
 
 
 def registrations(kind: str) -> dict[str, Registration]:
@@ -177,7 +185,14 @@ def _registrations(kind: str) -> dict[str, Registration]:
 
 
 def _distribution_name(entry: EntryPoint) -> str:
-    name = entry.dist.name if entry.dist is not None else None
+    return _normalised_name(entry.dist) if entry.dist is not None else "unknown"
+
+
+@functools.lru_cache(maxsize=None)
+def _normalised_name(distribution) -> str:
+    """A distribution's name, normalised; once per distribution object (its ``name`` parses its
+    whole metadata file, and every entry point of a distribution read at once shares one)."""
+    name = distribution.name
     return name.replace("_", "-").lower() if name else "unknown"
 
 
