@@ -486,3 +486,20 @@ class Collector(Participant):
     def step(self, time, step_size, inputs):
         self.seen.append(dict(inputs))
         return {"ok": 1.0}
+
+
+class Drifter(Participant):
+    """One float output that turns NaN from t = 2 s; says nothing about checking its outputs."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        return cls(name)
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["value"])
+
+    def setup(self, start_time, inputs):
+        return {"value": 0.0}
+
+    def step(self, time, step_size, inputs):
+        return {"value": math.nan if time >= 2.0 else time}

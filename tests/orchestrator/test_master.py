@@ -143,6 +143,22 @@ class = "sample_participants:Late"
     assert [list(inputs) for inputs in seen[1:]] == [["b", "a"], ["b", "a"]]
 
 
+def test_a_participant_that_does_not_say_it_checks_its_outputs_has_them_checked(write_scenario):
+    # all-float outputs take the master's quick path: without ``checks_outputs_finite`` the
+    # master checks them itself there too
+    text = """
+[simulation]
+stop_s = 5.0
+dt_s = 1.0
+[participants.drifter]
+type = "python"
+class = "sample_participants:Drifter"
+"""
+    _, outcome = run(write_scenario, text)
+    assert outcome.status == "failed"
+    assert outcome.reason == "drifter: output 'value' is not finite at t = 2 s"
+
+
 def test_recorder_flattens_arrays_and_stamps_times(write_scenario):
     _, outcome = run(write_scenario, scenario_text())
     frame = outcome.recorder.to_frame()
