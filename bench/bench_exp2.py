@@ -27,7 +27,7 @@ Also printed: whether the NMPC ran compiled (:mod:`rhnc.control.nmpc_codegen`; t
 machine compiles it, 15-20 s), its solve times, and the load average before and
 after each run.
 
-    python bench/bench_exp2.py [--repeat 5] [--compare-interpreted]
+    python bench/bench_exp2.py [--repeat 5] [--compare-interpreted] [--solver acados]
 
 Another checkout's code (an older commit, for a before/after comparison) is measured by
 putting it first on the path: ``PYTHONPATH=<checkout> python bench/bench_exp2.py``.
@@ -54,6 +54,8 @@ PHASES = ("wall", "startup", "imports", "build", "loop", "results", "figures", "
 CPU_PHASES = ("imports", "build", "loop", "results", "figures", "other", "children")
 #: Prefix of the line a child process prints its measurements on.
 MARK = "BENCH_EXP2 "
+#: How ``--solver`` reaches the child process: the NMPC's backend for its runs.
+SOLVER_ENV = "BENCH_EXP2_SOLVER"
 
 
 def _timed(owner, name: str, phase: str, spent: dict, first: dict, cpu: dict | None = None) -> None:
@@ -126,6 +128,14 @@ def child(results: str) -> None:
     else:
         _timed(figure_processes, "start", "figures", spent, first, cpu)
         _timed(figure_processes.FigureDrawing, "collect", "figures", spent, first, cpu)
+    solver = os.environ.get(SOLVER_ENV)
+    if solver:  # the scenario as written, its NMPC on another backend
+        load_scenario = run.load_scenario
+
+        def with_solver(path, overrides=None):
+            return load_scenario(path, {**(overrides or {}), "participants.ctrl.options.solver": solver})
+
+        run.load_scenario = with_solver
     sys.argv = ["orchestrator", "run", str(SCENARIO), "--results", results, "--no-progress"]
     try:
         console_main()  # as python -m orchestrator, ending with SystemExit
@@ -197,7 +207,7 @@ def report(runs: list[dict]) -> None:
         steps, others = (statistics.median(r["loop_cpu"][name][kind] for r in runs) for kind in ("step", "set-up, end"))
         print(f"  {name:32s} {steps:8.3f} {others:27.3f}")
     for name, summary in runs[-1]["control"].items():
-        print(f"{name}: NMPC {summary.get('codegen')}, median solve {summary['solve_time_median_s'] * 1e3:.1f} ms, "
+        print(f"{name}: NMPC {summary.get('solver', '')} {summary.get('codegen')}, median solve {summary['solve_time_median_s'] * 1e3:.1f} ms, "
               f"max {summary['solve_time_max_s'] * 1e3:.1f} ms, {summary['solves']} solves (last run)")
     best = min(r["phases"]["wall"] for r in runs)
     print(f"whole run, best of {len(runs)}: {best:.2f} s (goal <= 2 s on an idle machine: "
@@ -209,6 +219,8 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--compare-interpreted", action="store_true",
                         help="then the same runs with the NMPC's functions interpreted (RHNC_NMPC_CODEGEN=0)")
+    parser.add_argument("--solver", help="the NMPC's backend (option 'solver' of participant ctrl: fatrop, "
+                        "acados, ipopt); the scenario's own by default")
     parser.add_argument("--child", metavar="RESULTS", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
@@ -220,6 +232,9 @@ def main() -> None:
           "times in s")
     for mode in [None, "0"] if args.compare_interpreted else [None]:
         env = dict(os.environ)
+        if args.solver:
+            env[SOLVER_ENV] = args.solver
+            print(f"-- NMPC solver: {args.solver}")
         if mode is not None:
             env[CODEGEN_ENV] = mode
             print(f"-- {CODEGEN_ENV}={mode}")

@@ -127,6 +127,7 @@ def parts(steps: int) -> dict[str, float]:
     import math
 
     from orchestrator import interrupts, time_limits
+    from orchestrator.master import _input_reader
     from orchestrator.recorder import FLOAT, Recorder
 
     folder = Path(tempfile.mkdtemp())
@@ -163,10 +164,12 @@ def parts(steps: int) -> dict[str, float]:
                         "ship": {tuple(out_ship): ((), (), recorder.float_columns("ship", tuple(out_ship)))}}
         started = time.process_time()
         for _ in range(steps):
-            for name, outputs, checked in (("helm", out_helm, False), ("ship", out_ship, True)):
+            for name, outputs, checked, floats in (("helm", out_helm, False, False),
+                                                   ("ship", out_ship, True, ship.outputs_are_floats)):
                 ports, values = tuple(outputs), tuple(outputs.values())
                 publication = publications[name].get(ports)
-                if publication and set(map(type, values)) <= FLOAT and (checked or math.isfinite(sum(values))):
+                if publication and (floats or set(map(type, values)) <= FLOAT) and (
+                        checked or math.isfinite(sum(values))):
                     keys, read, _ = publication
                     if read is None:
                         bus.update(zip(keys, values))
@@ -174,10 +177,10 @@ def parts(steps: int) -> dict[str, float]:
                         bus.update(zip(keys, [values[index] for index in read]))
         times["exchange: output checks, bus"] = time.process_time() - started
 
-        inbound = (("tau_u", ("helm", "tau_u")), ("tau_r", ("helm", "tau_r")))
+        input_ports, read_inputs = _input_reader((("tau_u", ("helm", "tau_u")), ("tau_r", ("helm", "tau_r"))))
         started = time.process_time()
         for _ in range(steps):
-            {port: bus[key] for port, key in inbound if key in bus}
+            dict(zip(input_ports, read_inputs(bus)))
         times["exchange: inputs from the bus"] = time.process_time() - started
 
         helm_columns, ship_columns = publications["helm"][tuple(out_helm)][2], publications["ship"][tuple(out_ship)][2]

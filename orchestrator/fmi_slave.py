@@ -19,6 +19,9 @@ REAL_TYPES = ("Real", "Float64")
 #: FMI versions this module can step.
 SUPPORTED_VERSIONS = ("2.0", "3.0")
 
+#: The highest status of a call that succeeded (fmi2Warning, fmi3Warning): FMPy raises above it.
+_WARNING = 1
+
 #: Message callback: (status, category, message), status 0 OK .. 4 Fatal.
 MessageSink = Callable[[int, str, str], None]
 
@@ -108,9 +111,19 @@ class FmiSlave:
             return self._fmu.getReal(list(refs))
         return self._fmu.getFloat64(list(refs))
 
+    def _native(self, function: str):
+        """FMPy's C function ``function`` (``"fmi2GetReal"``) as FMPy loaded it (its argument
+        and result types declared), called without FMPy's per-call Python layer (``_call``),
+        which looks it up by name, offers it to the call logger and checks its status: the
+        caller checks the status as ``_call`` does (:func:`_refuse`).  None when a call
+        logger is set: then every call goes through FMPy's layer, to be logged."""
+        if self._fmu.fmiCallLogger is not None:
+            return None
+        return getattr(self._fmu.dll, function)
+
     def real_reader(self, refs: Sequence[int]) -> Callable[[], list[float]]:
         """A call that reads the real variables ``refs`` (after :meth:`instantiate`): what
-        :meth:`get_reals` does, through FMPy's own ``fmi2GetReal``/``fmi3GetFloat64`` on arrays
+        :meth:`get_reals` does, through FMPy's ``fmi2GetReal``/``fmi3GetFloat64`` on arrays
         made once here instead of at every call."""
         count = len(refs)
         fmu, component = self._fmu, self._fmu.component
@@ -118,11 +131,24 @@ class FmiSlave:
             from fmpy.fmi2 import fmi2Real, fmi2ValueReference
 
             references, values = (fmi2ValueReference * count)(*refs), (fmi2Real * count)()
-            get_real = fmu.fmi2GetReal
+            native = self._native("fmi2GetReal")
+            if native is None:
+                get_real = fmu.fmi2GetReal
 
-            def read() -> list[float]:
-                get_real(component, references, count, values)
-                return values[:]
+                def read() -> list[float]:
+                    get_real(component, references, count, values)
+                    return values[:]
+            else:
+                import numpy as np
+
+                # the same memory seen by numpy: tolist() gives the floats faster than slicing ctypes
+                seen = np.frombuffer(values, dtype=np.float64)
+
+                def read() -> list[float]:
+                    status = native(component, references, count, values)
+                    if status > _WARNING:
+                        _refuse("fmi2GetReal", status)
+                    return seen.tolist()
         else:
             from fmpy.fmi3 import fmi3Float64, fmi3ValueReference
 
@@ -143,11 +169,19 @@ class FmiSlave:
             from fmpy.fmi2 import fmi2Real, fmi2ValueReference
 
             references, values = (fmi2ValueReference * count)(*refs), (fmi2Real * count)()
-            set_real = fmu.fmi2SetReal
+            native = self._native("fmi2SetReal")
+            if native is None:
+                set_real = fmu.fmi2SetReal
 
-            def write(numbers: Sequence[float]) -> None:
-                values[:] = numbers
-                set_real(component, references, count, values)
+                def write(numbers: Sequence[float]) -> None:
+                    values[:] = numbers
+                    set_real(component, references, count, values)
+            else:
+                def write(numbers: Sequence[float]) -> None:
+                    values[:] = numbers
+                    status = native(component, references, count, values)
+                    if status > _WARNING:
+                        _refuse("fmi2SetReal", status)
         else:
             from fmpy.fmi3 import fmi3Float64, fmi3ValueReference
 
@@ -163,8 +197,16 @@ class FmiSlave:
         """:meth:`do_step` bound once (after :meth:`instantiate`)."""
         fmu, component = self._fmu, self._fmu.component
         if self.version == "2.0":
-            do_step = fmu.fmi2DoStep
-            return lambda time, step_size: do_step(component, time, step_size, 1)
+            native = self._native("fmi2DoStep")
+            if native is None:
+                do_step = fmu.fmi2DoStep
+                return lambda time, step_size: do_step(component, time, step_size, 1)
+
+            def step(time: float, step_size: float) -> None:
+                status = native(component, time, step_size, 1)
+                if status > _WARNING:
+                    _refuse("fmi2DoStep", status)
+            return step
         return self.do_step
 
     def set_integers(self, refs: Sequence[int], values: Sequence[int]) -> None:
@@ -200,3 +242,10 @@ class FmiSlave:
             log.debug("fmpy logger proxy unavailable; FMU messages stay unformatted", exc_info=True)
         self._keep_alive = callbacks  # keep the ctypes objects alive
         return callbacks
+
+
+def _refuse(function: str, status: int):
+    """Raise what FMPy's ``_call`` raises for a call that returned ``status`` (above a warning)."""
+    from fmpy.fmi1 import FMICallException
+
+    raise FMICallException(function=function, status=status)

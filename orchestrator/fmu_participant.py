@@ -175,6 +175,9 @@ class FmuParticipant(Participant):
                                if all(type(b) is ScalarBinding for b in self._input_bindings) else None)
         self._scalar_outputs = ([(b.ports[0], b.scale, b.offset, b.wrap) for b in self._output_bindings]
                                 if all(type(b) is ScalarBinding for b in self._output_bindings) else None)
+        #: every output a step returns is a finite Python float (each port one variable): the
+        #: master publishes them without looking at their types
+        self.outputs_are_floats = self._scalar_outputs is not None
         # where every output is one variable: the ports in the order of the values read, and
         # which of them are scaled (index, scale, offset) and wrapped (index)
         if self._scalar_outputs is not None:
@@ -362,7 +365,12 @@ class FmuParticipant(Participant):
         if plain:  # (number - 0.0) / 1.0 is the number
             values = [float(value) for value in inputs.values()]
             if math.isfinite(sum(values)):  # (a NaN or inf sums to one)
-                self._call("SetReal", write, values)
+                if self._messages:  # what _call does, without a call more per step
+                    self._messages.clear()
+                try:
+                    write(values)
+                except FMICallException as exc:
+                    raise self._refused("SetReal", exc) from exc
                 return
         values = []
         for port, value in inputs.items():

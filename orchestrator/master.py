@@ -20,6 +20,7 @@ import contextlib
 import json
 import logging
 import math
+import operator
 import time as wallclock
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -379,11 +380,17 @@ class _Loop:
         self.steps, self.dt_s = self.sim.steps, self.sim.dt_s  # (``steps`` is computed at every call)
         # per participant: itself, its name, every, time limit, (its input port, the bus key that
         # drives it), whether its outputs describe the end of its step, whether it checks their
-        # finiteness itself, and its publications (below)
+        # finiteness itself, whether they are always finite floats (FMUs whose ports are one
+        # variable each: no type to look at), and its publications (below)
         self.plans: list[tuple[Any, ...]] = [(p, p.name, cosim.every[p.name], cosim.step_timeout_s[p.name],
                        tuple((c.target_port, (c.source, c.source_port)) for c in connections if c.target == p.name),
-                       p.outputs_at_step_end, getattr(p, "checks_outputs_finite", False), {})
+                       p.outputs_at_step_end, getattr(p, "checks_outputs_finite", False),
+                       getattr(p, "outputs_are_floats", False) is True, {})
                       for p in cosim.participants]
+        # ... the reader of its inputs from the bus (its ports, and one C call giving their values
+        # in that order; None for fewer than two), and whether a stop condition names it
+        stopping = {c.participant for c in self.sim.stop_when}
+        self.plans = [(*plan, _input_reader(plan[4]), plan[1] in stopping) for plan in self.plans]
         # per participant: its declared outputs, whether it checks their finiteness itself
         self.publishing = {p.name: (cosim._declared[p.name], getattr(p, "checks_outputs_finite", False))
                            for p in cosim.participants}
@@ -392,7 +399,6 @@ class _Loop:
         self.read_keys = ({(c.source, c.source_port) for c in connections}
                           | {(c.participant, c.port) for c in self.sim.stop_when})
         self.stop_conditions = bool(self.sim.stop_when)
-        self.stopping = {c.participant for c in self.sim.stop_when}  # the participants a condition names
         self.phase, self.participant, self.time_s = "setting up", None, self.sim.start_s  # for messages
 
     def position(self) -> str:
@@ -461,11 +467,12 @@ class _Loop:
         it are not stepped) and the names of those skipped for it.
         """
         cosim, bus, recorder, watch = self.cosim, self.bus, self.recorder, self.watch
-        steps, dt_s, begin, end = self.steps, self.dt_s, watch.begin, watch.end
+        steps, dt_s, begin, end, jacobi = self.steps, self.dt_s, watch.begin, watch.end, self.jacobi
         stop_requested = interrupts.stop_requested
         met: list = []
         skipped: list[str] = []
-        for participant, name, every, limit, inbound, at_step_end, checked, publications in self.plans:
+        for (participant, name, every, limit, inbound, at_step_end, checked, floats, publications,
+             (input_ports, read_inputs), stops) in self.plans:
             if k % every:
                 continue
             if met:  # Gauss-Seidel: met earlier in this round, nobody steps past it
@@ -475,7 +482,13 @@ class _Loop:
             if stop_requested():  # even if a library swallowed the signal
                 raise KeyboardInterrupt
             step_size = (every if k + every <= steps else steps - k) * dt_s
-            inputs = {port: bus[key] for port, key in inbound if key in bus} if inbound else {}
+            if read_inputs is None:
+                inputs = {port: bus[key] for port, key in inbound if key in bus} if inbound else {}
+            else:
+                try:  # every driving output on the bus (as from the first step on): one C call
+                    inputs = dict(zip(input_ports, read_inputs(bus)))
+                except KeyError:  # not yet: the ports whose outputs are there
+                    inputs = {port: bus[key] for port, key in inbound if key in bus}
             begin(name, "its step", t, limit)
             try:
                 outputs = participant.step(t, step_size, inputs)
@@ -484,7 +497,7 @@ class _Loop:
             if watch.expired is not None:  # (what watch.check() looks at)
                 watch.check()
             stamp = t + step_size if at_step_end else t
-            if self.jacobi:
+            if jacobi:
                 cosim._publish(participant, stamp, outputs, None, recorder)
                 self.pending.append((k + every, name, outputs))
                 continue
@@ -494,7 +507,7 @@ class _Loop:
             publication = publications.get(ports)
             if publication is None:
                 publication = publications[ports] = self._publication(name, ports)
-            if publication and set(map(type, values)) <= FLOAT and (checked or math.isfinite(sum(values))):
+            if publication and (floats or set(map(type, values)) <= FLOAT) and (checked or math.isfinite(sum(values))):
                 keys, read, columns = publication
                 if read is None:  # every output is read
                     bus.update(zip(keys, values))
@@ -503,7 +516,7 @@ class _Loop:
                 recorder.add_floats(stamp, columns, values)
             else:  # (a NaN or inf sums to one) refuses the first bad output, records any other kind
                 cosim._publish(participant, stamp, outputs, bus, recorder)
-            if name in self.stopping:
+            if stops:
                 met = cosim._stop_conditions_met(bus, name)
         return met, skipped
 
@@ -549,6 +562,16 @@ def _met(conditions, bus, participant: str | None = None) -> list:
     """The stop conditions (of ``participant``'s outputs, or any) that hold on the bus."""
     return [c for c in conditions if (participant is None or c.participant == participant)
             and (c.participant, c.port) in bus and c.holds(float(bus[(c.participant, c.port)]))]
+
+
+def _input_reader(inbound: tuple) -> tuple:
+    """A participant's input ports and a call giving the values of their bus keys in that order
+    (raising KeyError when one is not on the bus); ``(ports, None)`` for fewer than two ports,
+    where the comprehension costs no more."""
+    ports = tuple(port for port, _ in inbound)
+    if len(inbound) < 2:
+        return ports, None
+    return ports, operator.itemgetter(*(key for _, key in inbound))
 
 
 def _naming(message: str, participant: str | None) -> str:

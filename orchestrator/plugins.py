@@ -107,8 +107,10 @@ def source_checkout() -> Path | None:
     return pyproject.parent if pyproject is not None else None
 
 
+@functools.lru_cache(maxsize=None)
 def _source_pyproject() -> Path | None:
-    """This package's checkout's ``pyproject.toml`` when the package is imported from one."""
+    """This package's checkout's ``pyproject.toml`` when the package is imported from one
+    (read once per process)."""
     candidate = Path(__file__).resolve().parent.parent / "pyproject.toml"
     if not candidate.is_file():
         return None
@@ -121,18 +123,45 @@ def _source_pyproject() -> Path | None:
 
 
 def _source_entries(pyproject: Path, group: str) -> dict[str, str]:
-    with pyproject.open("rb") as handle:
-        declared = tomllib.load(handle)["project"].get("entry-points", {})
-    return dict(declared.get(group, {}))
+    return dict(_declared_entry_points(pyproject).get(group, {}))
 
 
 @functools.lru_cache(maxsize=None)
+def _declared_entry_points(pyproject: Path) -> dict:
+    """The ``[project.entry-points]`` of ``pyproject`` (read once per process, not per group)."""
+    with pyproject.open("rb") as handle:
+        return tomllib.load(handle)["project"].get("entry-points", {})
+
+
+@functools.lru_cache(maxsize=None)
+def _installed_entry_points():
+    """Every installed entry point, of every group: read once (each read looks at the metadata
+    of every installed distribution; reading it per group cost a run ten such reads)."""
+    return entry_points()
+
+
+def _clear_caches() -> None:
+    """Forget what was read (a test that installs a distribution on the path)."""
+    _registrations.cache_clear()
+    _installed_entry_points.cache_clear()
+    _normalised_name.cache_clear()
+
+
 def registrations(kind: str) -> dict[str, Registration]:
-    """Every entry of the group of ``kind`` (see :data:`GROUPS`), by name.
+    """Every entry of the group of ``kind`` (see :data:`GROUPS`), by name (read once per
+    process; ``registrations.cache_clear()`` forgets it).
 
     Two distributions registering one name is refused (naming both), so that which one
     runs never depends on the order of ``sys.path``.
     """
+    return _registrations(kind)
+
+
+registrations.cache_clear = _clear_caches
+
+
+@functools.lru_cache(maxsize=None)
+def _registrations(kind: str) -> dict[str, Registration]:
     group = GROUPS[kind]
     pyproject = _source_pyproject()
     found: dict[str, Registration] = {}
@@ -144,7 +173,7 @@ def registrations(kind: str) -> dict[str, Registration]:
                                 f"{earlier.distribution} ({earlier.target}) and by {distribution} ({target})")
         found[name] = Registration(name, target, distribution)
 
-    for entry in entry_points(group=group):
+    for entry in _installed_entry_points().select(group=group):
         distribution = _distribution_name(entry)
         if pyproject is not None and distribution == DISTRIBUTION:
             continue  # the checkout's own declarations stand in for its installed metadata
@@ -156,7 +185,14 @@ def registrations(kind: str) -> dict[str, Registration]:
 
 
 def _distribution_name(entry: EntryPoint) -> str:
-    name = entry.dist.name if entry.dist is not None else None
+    return _normalised_name(entry.dist) if entry.dist is not None else "unknown"
+
+
+@functools.lru_cache(maxsize=None)
+def _normalised_name(distribution) -> str:
+    """A distribution's name, normalised; once per distribution object (its ``name`` parses its
+    whole metadata file, and every entry point of a distribution read at once shares one)."""
+    name = distribution.name
     return name.replace("_", "-").lower() if name else "unknown"
 
 

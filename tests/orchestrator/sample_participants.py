@@ -447,3 +447,59 @@ class Compiling(Participant):
 
         logging.getLogger("orchestrator.sample_build").info("stepping at %g s", time)
         return {"ok": 1.0}
+
+
+class Late(Participant):
+    """Declares outputs ``a`` and ``b`` but gives ``b`` only from its first step on."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        return cls(name)
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["a", "b"])
+
+    def setup(self, start_time, inputs):
+        return {"a": 0.5}
+
+    def step(self, time, step_size, inputs):
+        return {"a": time + 1.0, "b": -(time + 1.0)}
+
+
+class Collector(Participant):
+    """Records the inputs ``a`` and ``b`` it is given at every step."""
+
+    def __init__(self, name):
+        super().__init__(name)
+        self.seen = []
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        return cls(name)
+
+    input_names = property(lambda self: ["a", "b"])
+    output_names = property(lambda self: ["ok"])
+
+    def setup(self, start_time, inputs):
+        return {"ok": 1.0}
+
+    def step(self, time, step_size, inputs):
+        self.seen.append(dict(inputs))
+        return {"ok": 1.0}
+
+
+class Drifter(Participant):
+    """One float output that turns NaN from t = 2 s; says nothing about checking its outputs."""
+
+    @classmethod
+    def from_options(cls, name, options, context):
+        return cls(name)
+
+    input_names = property(lambda self: [])
+    output_names = property(lambda self: ["value"])
+
+    def setup(self, start_time, inputs):
+        return {"value": 0.0}
+
+    def step(self, time, step_size, inputs):
+        return {"value": math.nan if time >= 2.0 else time}

@@ -108,6 +108,39 @@ def test_mapping_renames_and_scales_ports(write_scenario, tmp_path):
     assert "ship.x" not in frame.columns
 
 
+def test_outputs_said_to_be_floats_are_python_floats_scaled_and_wrapped_too(write_scenario):
+    """The master publishes the outputs of a participant with ``outputs_are_floats`` without
+    looking at their types: every value of every step must be a Python float."""
+    text = STRAIGHT + '[participants.ship.mapping]\nnorth_km = { variable = "x", scale = 0.001 }\n'
+    cosim = build(write_scenario, text)
+    ship = cosim.participant("ship")
+    assert ship.outputs_are_floats is True
+    outputs = [ship.setup(0.0, {"tau_u": 7.7e5, "tau_r": 0.0})]
+    try:
+        for k in range(3):
+            outputs.append(ship.step(10.0 * k, 10.0, {"tau_u": 7.7e5, "tau_r": 1.0e8}))
+    finally:
+        ship.terminate()
+        cosim.close()
+    assert {"north_km", "psi"} <= set(outputs[-1])  # scaled, wrapped
+    assert {type(value) for values in outputs for value in values.values()} == {float}
+
+
+def test_a_negative_zero_read_from_the_fmu_is_output_as_zero(write_scenario):
+    """``scale * value + offset`` with 1 and 0 turns -0.0 into 0.0; the outputs of ports that are
+    the variable unscaled are the same bits."""
+    cosim = build(write_scenario, STRAIGHT)
+    ship = cosim.participant("ship")
+    ship.setup(0.0, {"tau_u": 7.7e5, "tau_r": 0.0})
+    try:
+        ship._read_reals = lambda: [-0.0] * len(ship.output_names)
+        outputs = ship._read_outputs(0.0)
+    finally:
+        ship.terminate()
+        cosim.close()
+    assert [math.copysign(1.0, value) for value in outputs.values()] == [1.0] * len(ship.output_names)
+
+
 def test_an_invalid_parameter_value_is_refused_by_the_fmu(write_scenario, tmp_path):
     text = STRAIGHT.replace("u0 = 9.0", "u0 = 9.0\nm11 = 0.0")
     report = run_scenario(write_scenario(text), tmp_path, progress=False)

@@ -121,6 +121,44 @@ class = "sample_participants:Echo"
     assert len(set(seen)) > 20  # the ship turns: the values differ from step to step
 
 
+def test_an_output_not_yet_given_is_left_out_of_the_inputs_until_it_is(write_scenario):
+    # the collector steps first; 'late' gives 'b' from its first step on: the collector's first
+    # step has 'a' alone (from the set-up), the later ones both, in the order declared
+    text = """
+connections = ["late.b -> collector.b", "late.a -> collector.a"]
+[simulation]
+stop_s = 3.0
+dt_s = 1.0
+[participants.collector]
+type = "python"
+class = "sample_participants:Collector"
+[participants.late]
+type = "python"
+class = "sample_participants:Late"
+"""
+    cosim, outcome = run(write_scenario, text)
+    assert outcome.status == "finished", outcome.reason
+    seen = cosim.participant("collector").seen
+    assert seen == [{"a": 0.5}, {"b": -1.0, "a": 1.0}, {"b": -2.0, "a": 2.0}]
+    assert [list(inputs) for inputs in seen[1:]] == [["b", "a"], ["b", "a"]]
+
+
+def test_a_participant_that_does_not_say_it_checks_its_outputs_has_them_checked(write_scenario):
+    # all-float outputs take the master's quick path: without ``checks_outputs_finite`` the
+    # master checks them itself there too
+    text = """
+[simulation]
+stop_s = 5.0
+dt_s = 1.0
+[participants.drifter]
+type = "python"
+class = "sample_participants:Drifter"
+"""
+    _, outcome = run(write_scenario, text)
+    assert outcome.status == "failed"
+    assert outcome.reason == "drifter: output 'value' is not finite at t = 2 s"
+
+
 def test_recorder_flattens_arrays_and_stamps_times(write_scenario):
     _, outcome = run(write_scenario, scenario_text())
     frame = outcome.recorder.to_frame()
