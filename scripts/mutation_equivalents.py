@@ -284,4 +284,10 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      "before the first update the guidance is None, so the refusal does not depend on the energy part's start value"),
     ("orchestrator/toml_input.py", r'line = text\.count\("\\n", 0, deep\.start\(\)\) \+ 1', r'text\.count\("\\n", None, ',
      "str.count with start None counts from the start of the text, as with 0"),
+    ("rhnc/control/solver_watchdog.py", r"self\._process: psutil\.Process \| int \| None = None", r"self\._process: psutil\.Process \| int \| None = \S+",
+     "the start value is never read: _process is read only by a solve in the worker, after _ensure_worker has set it, "
+     "and close() resets it to None"),
+    ("rhnc/control/solver_watchdog.py", r"if elapsed > wall_limit or over_cpu:", r"if elapsed >= wall_limit or over_cpu:",
+     "differs only when the wall time read is exactly the limit, the threshold's own value (a clock reading, "
+     "not an input a test can set)"),
 ]

@@ -131,8 +131,8 @@ MODULES = {
                                    ("tests/rhnc/test_own_ship_control.py", "tests/rhnc/test_nmpc_limits.py"),
                                    ("-m", "slow or not slow")),
     "solver_watchdog": Module(("rhnc/control/solver_watchdog.py",),
-                              ("tests/rhnc/test_solver_worker_lifetime.py", "tests/rhnc/test_nmpc_solve_attempts.py",
-                               "tests/rhnc/test_nmpc_limits.py")),
+                              ("tests/rhnc/test_solver_watchdog_protocol.py", "tests/rhnc/test_solver_worker_lifetime.py",
+                               "tests/rhnc/test_nmpc_solve_attempts.py", "tests/rhnc/test_nmpc_limits.py")),
     "colregs": Module(("rhnc/encounters/colregs.py",), ("tests/rhnc/test_colregs.py", "tests/rhnc/test_colregs_rules.py",
                                                         "tests/rhnc/test_imazu.py", "tests/rhnc/test_nmpc_colregs.py")),
     # (slow tests included: the killed-worker resume is the batch runner's behaviour)
@@ -164,8 +164,9 @@ def explained_by_rule(source: str, removed: list[str], added: list[str]) -> str:
 
 LOG_CALLS = {"debug", "info", "warning", "error", "exception", "critical", "log"}
 
-#: mutmut's statuses that count as killed (a time-out is a mutant the tests did not let pass)
-KILLED = ("killed", "timeout")
+#: mutmut's statuses that count as killed: a time-out is a mutant the tests did not let pass, and so is
+#: mutmut's "segfault", a test run ended by a signal (SIGSEGV, or SIGKILL past its processor-time limit)
+KILLED = ("killed", "timeout", "segfault")
 #: statuses of mutants no test told apart from the original
 SURVIVED = ("survived", "no tests")
 
@@ -197,7 +198,8 @@ class Verdicts:
                      if (REPO / source).is_file() and source.endswith(".py") else set() for source in self.sources}
         # an entry carried over from an earlier report has no diff, only its explanation
         return [(s, s["why"] if "why" in s and not s["diff"] else
-                 explain(s["source"], s["diff"], log_lines.get(s["source"], set()))) for s in self.survivors]
+                 explain(s["source"], s["diff"], log_lines.get(s["source"], set()))) for s in self.survivors
+                if s["status"] not in KILLED]  # (a run stored before a crash counted as killed lists it)
 
     def score(self) -> float:
         return 100.0 * self.killed / max(self.total, 1)
@@ -457,13 +459,14 @@ def write_report(verdicts: dict[str, Verdicts]) -> None:
     header = ["# Mutation testing report", "",
               "Made by `python scripts/mutation_report.py` (mutmut; each module's files mutated alone and "
               "run against that module's own tests, slow tests excluded; verdicts kept in "
-              "`docs/mutation-verdicts.json`). Score = (killed + timeout) / all mutants. A survivor is listed "
+              "`docs/mutation-verdicts.json`). Score = (killed + timeout or crash) / all mutants, a crash being a "
+              "test run ended by a signal (mutmut's \"segfault\"). A survivor is listed "
               "with its diff until a test kills it or it is explained as equivalent: a log message's wording "
               "automatically, anything else by hand in `scripts/mutation_equivalents.py`. The last column "
               "counts the explained survivors as equivalent (left out of the total). A module marked stale "
               "was run on files that have changed since (their SHA-256 then and now differ): its "
               "verdicts need a new run.", "",
-              "| module | mutants | killed | timeout | survived: equivalent | survived: open | score | "
+              "| module | mutants | killed | timeout or crash | survived: equivalent | survived: open | score | "
               "score without equivalents |", "|---|---|---|---|---|---|---|---|"]
     rows, sections = [], []
     for key in MODULES:
@@ -480,7 +483,7 @@ def write_report(verdicts: dict[str, Verdicts]) -> None:
                     + (" (previous report)" if v.settings.get("legacy") else "")
                     + (" (survivors retested)" if v.settings.get("survivors_retested") else "") + f" | {v.total}"
                     + (f" (sample of {sampled['of']})" if sampled else "")
-                    + f" | {v.counts.get('killed', 0)} | {v.counts.get('timeout', 0)} | "
+                    + f" | {v.counts.get('killed', 0)} | {v.counts.get('timeout', 0) + v.counts.get('segfault', 0)} | "
                     f"{equivalent} | {len(explained) - equivalent} | {v.score():.0f} % | "
                     f"{100.0 * v.killed / max(v.total - equivalent, 1):.0f} % |")
         sections.append(section(v))

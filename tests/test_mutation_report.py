@@ -113,3 +113,15 @@ def test_a_c_mutant_that_does_not_compile_is_told_from_one_the_tests_kill(c_muta
     assert c_mutation.verdict_of(1, "FAILED tests/models/test_kcs_fmu.py::test_x") == "killed"
     assert c_mutation.verdict_of(0, "") == "survived"
     assert c_mutation.verdict_of(None, "") == "timeout"
+
+
+def test_a_mutant_whose_test_run_crashed_counts_as_killed_and_is_not_listed_open(report, tmp_path, monkeypatch):
+    (tmp_path / "pkg").mkdir()
+    (tmp_path / "pkg" / "a.py").write_text("x = 1\n")
+    monkeypatch.setattr(report, "REPO", tmp_path)
+    crashed = {"name": "pkg.a.x_f__mutmut_1", "source": "pkg/a.py", "status": "segfault", "diff": "-x = 1\n+x = 2"}
+    v = report.Verdicts(module="a", sources=["pkg/a.py"], counts={"killed": 3, "segfault": 1}, survivors=[crashed],
+                        seconds=1.0, settings={"tests": []})
+    assert v.killed == 4 and v.score() == 100.0
+    assert v.explained() == []
+    assert "not yet killed" not in report.section(v)
