@@ -1,6 +1,7 @@
 """The mutation report marks a module's verdicts stale when a mutated file changed since its run."""
 
 import importlib.util
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -113,6 +114,17 @@ def test_a_c_mutant_that_does_not_compile_is_told_from_one_the_tests_kill(c_muta
     assert c_mutation.verdict_of(1, "FAILED tests/models/test_kcs_fmu.py::test_x") == "killed"
     assert c_mutation.verdict_of(0, "") == "survived"
     assert c_mutation.verdict_of(None, "") == "timeout"
+    assert c_mutation.verdict_of(-signal.SIGXCPU, "") == "timeout"  # past its processor-time limit
+
+
+def test_a_c_mutants_test_run_is_stopped_by_its_processor_time_not_by_the_clock(c_mutation, tmp_path):
+    (tmp_path / "test_spin.py").write_text("import time\n\ndef test_spin():\n    while True:\n        pass\n\n\n"
+                                           "def test_wait():\n    time.sleep(5.0)\n")
+    status, _ = c_mutation._pytest(tmp_path, ("test_spin.py::test_spin",), 4.0)
+    assert status == -signal.SIGXCPU and c_mutation.verdict_of(status, "") == "timeout"
+    # a run that waits longer than its processor-time limit, using none, is not stopped
+    status, _ = c_mutation._pytest(tmp_path, ("test_spin.py::test_wait",), 4.0)
+    assert status == 0
 
 
 def test_a_mutant_whose_test_run_crashed_counts_as_killed_and_is_not_listed_open(report, tmp_path, monkeypatch):
