@@ -135,10 +135,12 @@ MODULES = {
                                "tests/rhnc/test_nmpc_solve_attempts.py", "tests/rhnc/test_nmpc_limits.py")),
     "colregs": Module(("rhnc/encounters/colregs.py",), ("tests/rhnc/test_colregs.py", "tests/rhnc/test_colregs_rules.py",
                                                         "tests/rhnc/test_imazu.py", "tests/rhnc/test_nmpc_colregs.py")),
-    # (slow tests included: the killed-worker resume is the batch runner's behaviour)
-    "batch_run": Module(("orchestrator/batch_run.py",), ("tests/orchestrator/test_batch_lost_runs.py",
+    # (the killed-worker resume and the records of lost runs, which the slow tests check through real
+    # workers, are checked run by run without a pool in test_batch_run_resume.py: a mutant costs seconds)
+    "batch_run": Module(("orchestrator/batch_run.py",), ("tests/orchestrator/test_batch_run_resume.py",
+                                                         "tests/orchestrator/test_batch_lost_runs.py",
                                                          "tests/orchestrator/test_crash_safe_batch.py",
-                                                         "tests/orchestrator/test_batch.py"), ("-m", "slow or not slow")),
+                                                         "tests/orchestrator/test_batch.py")),
     # the shared C layer of the FMUs, against the FMU tests (which rebuild the FMUs from the mutated sources)
     "fmu_common": Module(("models/common/fmu_core.c", "models/common/fmi2_api.c", "models/common/fmi3_api.c",
                           "models/common/rk4.h", "models/common/kcs_dynamics.h"),
