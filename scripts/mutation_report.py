@@ -493,6 +493,50 @@ def write_report(verdicts: dict[str, Verdicts]) -> None:
     REPORT.write_text("\n".join(header + rows) + f"\n\nRendered {stamp}.\n\n" + "\n".join(sections))
 
 
+README = REPO / "README.md"
+README_BEGIN, README_END = "<!-- mutation-scores:begin -->", "<!-- mutation-scores:end -->"
+
+
+def readme_summary(verdicts: dict[str, Verdicts]) -> str:
+    """The README's lines on the scores, from the stored verdicts (which modules are stale today is the
+    report's to say: it depends on the files as they are, not on the runs)."""
+    scored, not_run = [], []
+    open_total, open_in = 0, []
+    for key in MODULES:
+        if key not in verdicts:
+            if key not in ALTERNATIVE_RUNS:
+                not_run.append(key)
+            continue
+        v = verdicts[key]
+        sampled = v.settings.get("sample")
+        scored.append(f"{key} {v.score():.0f} %" + (f" (a sample of {sampled['size']} of {sampled['of']})" if sampled
+                                                    else f" ({v.total})"))
+        opened = sum(1 for _, why in v.explained() if not why)
+        if opened:
+            open_total += opened
+            open_in.append(f"{opened} in {key}")
+    lines = ["Scores (killed, timed out or crashed over all mutants; the number of mutants in brackets): "
+             + ", ".join(scored) + ".",
+             ("Every survivor is killed or explained as equivalent in the report." if not open_total else
+              f"Survivors neither killed nor explained: {open_total} ({', '.join(open_in)}); every other one is "
+              "explained in the report.")
+             + (f" Not run yet: {', '.join(not_run)}." if not_run else "")
+             + " The report marks a module **stale** when a file it mutated has changed since its run: its score "
+               "is then not today's."]
+    return "\n".join(lines)
+
+
+def write_readme(verdicts: dict[str, Verdicts], readme: Path | None = None) -> None:
+    """Replace the README's block between the mutation-score markers (nothing when it has none)."""
+    readme = README if readme is None else readme
+    text = readme.read_text()
+    if README_BEGIN not in text or README_END not in text:
+        return
+    head, rest = text.split(README_BEGIN, 1)
+    _, tail = rest.split(README_END, 1)
+    readme.write_text(head + README_BEGIN + "\n" + readme_summary(verdicts) + "\n" + README_END + tail)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", nargs="+", choices=list(MODULES))
@@ -533,9 +577,11 @@ def main(argv=None) -> int:
             verdicts[key] = v
             save_verdicts(verdicts)
             write_report(verdicts)
+            write_readme(verdicts)
             print(f"{key}: {v.total} mutants, {v.killed} killed, {len(v.survivors)} survived "
                   f"({v.score():.0f} %), {v.seconds:.0f} s", flush=True)
     write_report(load_verdicts())
+    write_readme(load_verdicts())
     return 0
 
 

@@ -137,3 +137,25 @@ def test_a_mutant_whose_test_run_crashed_counts_as_killed_and_is_not_listed_open
     assert v.killed == 4 and v.score() == 100.0
     assert v.explained() == []
     assert "not yet killed" not in report.section(v)
+
+
+def test_the_readmes_mutation_scores_are_those_of_the_stored_verdicts(report):
+    text = report.README.read_text()
+    block = text.split(report.README_BEGIN, 1)[1].split(report.README_END, 1)[0]
+    assert block.strip() == report.readme_summary(report.load_verdicts()), (
+        "README's mutation scores differ from docs/mutation-verdicts.json: run "
+        "python scripts/mutation_report.py --report-only")
+
+
+def test_the_readme_block_is_replaced_between_its_markers_only(report, tmp_path):
+    readme = tmp_path / "README.md"
+    readme.write_text(f"before\n{report.README_BEGIN}\nold scores\n{report.README_END}\nafter\n")
+    v = verdicts(report)
+    report.write_readme({"trigger": v}, readme)
+    text = readme.read_text()
+    assert text.startswith(f"before\n{report.README_BEGIN}\nScores (") and text.endswith(f"{report.README_END}\nafter\n")
+    assert "trigger 90 % (10)" in text and "old scores" not in text
+    assert "Not run yet: reference," in text
+    readme.write_text("no markers\n")
+    report.write_readme({"trigger": v}, readme)
+    assert readme.read_text() == "no markers\n"
