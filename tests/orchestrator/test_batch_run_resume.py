@@ -247,3 +247,11 @@ def test_a_pool_worker_runs_its_run_under_the_stop_handlers_and_puts_them_back(t
     assert pool_execute(task(tmp_path)) == {"status": "finished", "reason": ""}
     assert seen == [(interrupts._on_signal, interrupts._on_signal)]
     assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
+
+
+def test_a_failure_record_never_replaces_a_run_that_published_how_it_ended(tmp_path):
+    publish(tmp_path, "r1", {"status": "finished"})
+    folder = write_failure(tmp_path, task(tmp_path), "killed by SIGKILL")
+    assert summary_of(tmp_path) == {"status": "finished"}  # the run's own word stands
+    assert (tmp_path / "runs" / "r1" / "timeseries.csv").is_file()
+    assert folder == tmp_path / "runs" / "r1-2" and summary_of(tmp_path, "r1-2")["reason"] == "killed by SIGKILL"
