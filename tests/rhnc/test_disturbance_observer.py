@@ -2,6 +2,7 @@
 slow closed-loop test (``test_nmpc_limits.py``) shows through the NMPC, checked part by part
 in milliseconds."""
 
+import dataclasses
 import logging
 import math
 
@@ -99,6 +100,25 @@ def test_a_gap_longer_than_the_limit_or_a_step_back_in_time_updates_nothing(kcs)
     assert np.any(at_limit.update(t1, x1) != 0.0)
 
 
+def test_by_default_a_gap_of_up_to_ten_minutes_is_bridged(kcs):
+    x0 = np.array([0.0, 0.0, 0.3, 18 * KNOT, 0.0, 0.0])
+    tau = np.array([7.0e5, 1.5e7])
+    x1 = plant_step(kcs, x0, tau, DISTURBANCE, dt=600.0)
+    for gap, updated in ((600.0, True), (600.5, False)):
+        observer = DisturbanceObserver(kcs, scale(kcs))
+        observer.update(0.0, x0)
+        observer.applied(tau)
+        assert bool(np.any(observer.update(gap, x1) != 0.0)) is updated
+
+
+@pytest.mark.parametrize("extras, length", [({"lpp": 100.0}, 100.0), ({}, 230.0)], ids=["own-length", "no-length"])
+def test_the_sway_load_bound_follows_the_yaw_moment_over_the_ships_length(kcs, extras, length):
+    # a yaw moment bound large for the ship's length: the sway load's bound is twice its lever force
+    ship = dataclasses.replace(kcs, tau_r_max=5.0e8, extras=extras)
+    observer = DisturbanceObserver(ship, scale(kcs))
+    assert observer.bound[3] == 2.0 * 5.0e8 / length
+
+
 def test_an_update_without_the_applied_input_only_records_the_sample(kcs):
     (t0, x0, tau0), (t1, x1, tau1), (t2, x2, _) = record(kcs, DISTURBANCE, 3)
     observer = DisturbanceObserver(kcs, scale(kcs))
@@ -190,6 +210,14 @@ def test_without_a_disturbance_the_reference_is_kept_and_the_input_balances_the_
     np.testing.assert_allclose(tau, np.column_stack([-surge, -yaw]))
 
 
+def test_a_reference_given_in_integers_is_trimmed_as_in_floats(kcs):
+    reference = np.tile([0, 0, 1, 9, 0, 0], (4, 1))
+    trimmed, tau = trimmed_reference(reference, DISTURBANCE, DT, kcs)
+    expected, expected_tau = trimmed_reference(reference.astype(float), DISTURBANCE, DT, kcs)
+    np.testing.assert_array_equal(trimmed, expected)
+    np.testing.assert_array_equal(tau, expected_tau)
+
+
 def ground_velocity(states, current=(0.0, 0.0)):
     psi, u, v = states[:, 2], states[:, 3], states[:, 4]
     return np.column_stack([u * np.cos(psi) - v * np.sin(psi) + current[0], u * np.sin(psi) + v * np.cos(psi) + current[1]])
@@ -198,6 +226,7 @@ def ground_velocity(states, current=(0.0, 0.0)):
 @pytest.mark.parametrize("yaw_rate", [0.0, 0.002])
 def test_a_trimmed_reference_keeps_the_ground_velocity_under_the_current_with_the_steady_sway(kcs, yaw_rate):
     reference = straight(kcs, yaw_rate=yaw_rate)
+    reference[:, 4] = 0.3  # a reference with a sway of its own: its ground velocity is what is kept
     trimmed, _ = trimmed_reference(reference, DISTURBANCE, DT, kcs)
     np.testing.assert_allclose(ground_velocity(trimmed, DISTURBANCE[:2]), ground_velocity(reference), atol=1e-9)
     np.testing.assert_allclose(trimmed[:, 4], DISTURBANCE[3] / kcs.d22)  # the sway load's steady sway
@@ -215,10 +244,11 @@ def test_the_feed_forward_input_balances_surge_and_yaw_with_the_loads(kcs):
     np.testing.assert_allclose(kcs.m33 * np.diff(trimmed[:, 5]) / DT, yaw + tau[:, 1] + DISTURBANCE[4], rtol=1e-9)
 
 
-def test_a_sway_load_beyond_half_the_water_speed_is_capped_and_the_input_clipped(kcs):
+@pytest.mark.parametrize("side", [1.0, -1.0])
+def test_a_sway_load_beyond_half_the_water_speed_is_capped_and_the_input_clipped(kcs, side):
     reference = straight(kcs, speed=2 * KNOT)
-    trimmed, tau = trimmed_reference(reference, np.array([0.0, 0.0, -1.0e8, 1.0e9, 1.0e12]), DT, kcs)
-    np.testing.assert_allclose(trimmed[:, 4], 0.5 * 2 * KNOT)
+    trimmed, tau = trimmed_reference(reference, np.array([0.0, 0.0, -1.0e8, side * 1.0e9, 1.0e12]), DT, kcs)
+    np.testing.assert_allclose(trimmed[:, 4], side * 0.5 * 2 * KNOT)
     np.testing.assert_allclose(np.hypot(trimmed[:, 3], trimmed[:, 4]), 2 * KNOT)  # the water speed kept
     np.testing.assert_array_equal(tau, np.tile([kcs.tau_u_max, -kcs.tau_r_max], (5, 1)))  # at the bounds
 
