@@ -8,6 +8,7 @@ import threading
 import time
 
 import numpy as np
+import psutil
 import pytest
 
 from rhnc.control.solver_watchdog import WALL_TIME_STATUS, BoundedSolver, SolveOutcome, SolverError, _outcome, _serve
@@ -213,9 +214,13 @@ def test_without_fork_solves_run_in_this_process_under_no_time_limit(monkeypatch
 
 
 def test_the_processor_time_limit_counts_the_workers_time_not_the_controllers():
-    class Sleeping(Counting):  # the worker waits, using no processor time
-        def __call__(self, **arguments):
-            time.sleep(1.5)
+    class Sleeping(Counting):  # the worker waits, using (almost) no processor time, until the controller's
+        def __call__(self, **arguments):  # process has used more than the limit (however loaded the machine)
+            controller = psutil.Process(os.getppid())
+            start = sum(controller.cpu_times()[:2])
+            deadline = time.monotonic() + 45.0
+            while sum(controller.cpu_times()[:2]) - start < 0.6 and time.monotonic() < deadline:
+                time.sleep(0.05)
             return super().__call__(**arguments)
 
     stop = threading.Event()
@@ -225,7 +230,7 @@ def test_the_processor_time_limit_counts_the_workers_time_not_the_controllers():
         while not stop.is_set():
             x = math.sin(x + 1.0)
 
-    bounded = BoundedSolver({"nlp": Sleeping()}, {}, wall_time_s=60.0, cpu_time_s=0.2)
+    bounded = BoundedSolver({"nlp": Sleeping()}, {}, wall_time_s=60.0, cpu_time_s=0.3)
     spinner = threading.Thread(target=spin)
     try:
         bounded.start()
