@@ -14,6 +14,7 @@ from rhnc.ship.ship_model import derivatives, hull_forces, load_parameter_set, r
 
 KNOT = 1852.0 / 3600.0
 DT = 20.0
+COURSE = math.radians(45.0)
 #: 0.5 m/s current setting 135 deg (across a track at 45 deg), wind and waves on the starboard bow
 DISTURBANCE = np.array([0.5 * math.cos(math.radians(135.0)), 0.5 * math.sin(math.radians(135.0)), -2.0e5, -4.0e5,
                         -2.0e7])
@@ -37,7 +38,7 @@ def plant_step(kcs, state, tau, disturbance, dt=DT):
     return rk4_states(lambda x: derivatives(x, tau, kcs) + extra, np.asarray(state, float), 0.5, int(dt / 0.5))[-1]
 
 
-def record(kcs, disturbance, steps, dt=DT, heading=math.radians(45.0)):
+def record(kcs, disturbance, steps, dt=DT, heading=COURSE):
     """(time, measured state, applied input) of a ship steering a slow zig-zag under the disturbance."""
     state = np.array([0.0, 0.0, heading, 18 * KNOT, 0.0, 0.0])
     rows = []
@@ -194,7 +195,7 @@ def test_the_prediction_integrates_a_long_step_in_substeps_of_at_most_the_limit(
 
 
 # -- the trimmed reference ------------------------------------------------------------------------
-def straight(kcs, course=math.radians(45.0), speed=18 * KNOT, nodes=6, yaw_rate=0.0):
+def straight(kcs, course=COURSE, speed=18 * KNOT, nodes=6, yaw_rate=0.0):
     reference = np.zeros((nodes, 6))
     reference[:, 2] = course + yaw_rate * DT * np.arange(nodes)
     reference[:, 3] = speed
