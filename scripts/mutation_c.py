@@ -190,17 +190,21 @@ def verdict_of(returncode: int | None, output: str) -> str:
 
 def run_c_module(key: str, sources: tuple[str, ...], tests: tuple[str, ...], repo: Path, sample: int | None,
                  seed: int, timeout_multiplier: float, timeout_constant: float, hashes: dict[str, str | None],
-                 max_minutes: float | None = None):
+                 max_minutes: float | None = None, only: set[str] | None = None):
     """Run a sample of the C mutants of ``sources``; returns the arguments of a ``Verdicts``.
 
     ``max_minutes``: no mutant is started after that long; the mutants tested by then are the
-    sample (drawn in random order, so a sample cut short is still a random one).
+    sample (drawn in random order, so a sample cut short is still a random one).  ``only``: test
+    just the mutants of these names (an earlier run's survivors, after new tests).
     """
     started = time.perf_counter()
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=repo, capture_output=True, text=True,
                             check=True).stdout.strip()
     everything = all_mutants(repo, sources)
-    chosen = everything if not sample else random.Random(seed).sample(everything, min(sample, len(everything)))
+    if only is not None:
+        chosen = [m for m in everything if m.name in only]
+    else:
+        chosen = everything if not sample else random.Random(seed).sample(everything, min(sample, len(everything)))
     with tempfile.TemporaryDirectory(prefix=f"mutation-{key}-") as tmp:
         clean = Path(tmp) / "clean"
         clean.mkdir()

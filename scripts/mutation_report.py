@@ -493,6 +493,22 @@ def write_report(verdicts: dict[str, Verdicts]) -> None:
     REPORT.write_text("\n".join(header + rows) + f"\n\nRendered {stamp}.\n\n" + "\n".join(sections))
 
 
+def merged_retest(previous: Verdicts, retest: Verdicts, reached: set[str]) -> Verdicts:
+    """The stored run with the verdicts of its survivors in ``reached`` replaced by those of ``retest``
+    (a run of just them, after new tests); a survivor not reached (its line has changed since, so its
+    name is gone) keeps its verdict, and one that no longer compiles leaves the score."""
+    counts = dict(previous.counts)
+    counts["survived"] = counts.get("survived", 0) - sum(1 for s in previous.survivors if s["name"] in reached)
+    for status, n in retest.counts.items():
+        counts[status] = counts.get(status, 0) + n
+    still = {s["name"] for s in retest.survivors}
+    survivors = [s for s in previous.survivors if s["name"] not in reached or s["name"] in still]
+    settings = {**previous.settings, "survivors_retested": {
+        "commit": retest.commit, "date": retest.date, "count": len(reached), "minutes": round(retest.seconds / 60, 1)}}
+    return Verdicts(previous.module, previous.sources, {k: n for k, n in counts.items() if n}, survivors,
+                    previous.seconds, previous.commit, previous.date, settings)
+
+
 README = REPO / "README.md"
 README_BEGIN, README_END = "<!-- mutation-scores:begin -->", "<!-- mutation-scores:end -->"
 
@@ -561,15 +577,19 @@ def main(argv=None) -> int:
             if args.survivors_only and previous is None:
                 raise SystemExit(f"no stored run of {key} to retest the survivors of")
             if MODULES[key].language == "c":
-                if args.survivors_only:
-                    raise SystemExit(f"{key}: a C module is rerun whole (or sampled), not by its survivors")
                 from mutation_c import run_c_module
 
                 module = MODULES[key]
                 v = Verdicts(**run_c_module(key, module.sources, module.tests, REPO, args.sample, args.seed,
                                             args.timeout_multiplier, args.timeout_constant,
                                             {source: committed_hash(source, "HEAD") for source in module.sources},
-                                            args.max_minutes))
+                                            args.max_minutes,
+                                            {s["name"] for s in previous.survivors} if previous else None))
+                if previous:
+                    from mutation_c import all_mutants
+
+                    names = {m.name for m in all_mutants(REPO, module.sources)}
+                    v = merged_retest(previous, v, {s["name"] for s in previous.survivors} & names)
             else:
                 v = run_module(key, args.children, args.timeout_multiplier, args.timeout_constant, args.sample,
                                args.seed, previous)

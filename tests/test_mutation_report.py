@@ -159,3 +159,19 @@ def test_the_readme_block_is_replaced_between_its_markers_only(report, tmp_path)
     readme.write_text("no markers\n")
     report.write_readme({"trigger": v}, readme)
     assert readme.read_text() == "no markers\n"
+
+
+def test_a_c_modules_survivors_retested_take_their_new_verdicts_and_the_others_keep_theirs(report):
+    def survivor(name):
+        return {"name": name, "source": "m.c", "status": "survived", "diff": "-a\n+b"}
+
+    run = report.Verdicts(module="c", sources=["m.c"], counts={"killed": 7, "survived": 3},
+                          survivors=[survivor("m_c:1:a"), survivor("m_c:2:b"), survivor("m_c:3:c")], seconds=60.0,
+                          commit="abc", date="then", settings={"sample": {"size": 10, "of": 99, "seed": 1}})
+    retest = report.Verdicts(module="c", sources=["m.c"], counts={"killed": 1, "survived": 1},
+                             survivors=[survivor("m_c:2:b")], seconds=30.0, commit="def", date="now", settings={})
+    merged = report.merged_retest(run, retest, {"m_c:1:a", "m_c:2:b"})  # m_c:3:c's line has changed since
+    assert merged.counts == {"killed": 8, "survived": 2} and merged.total == 10
+    assert [s["name"] for s in merged.survivors] == ["m_c:2:b", "m_c:3:c"]
+    assert (merged.commit, merged.settings["sample"]["size"]) == ("abc", 10)  # the run's, not the retest's
+    assert merged.settings["survivors_retested"]["commit"] == "def"
