@@ -25,9 +25,12 @@ from __future__ import annotations
 
 import datetime as dt
 import hashlib
+import math
 import random
 import re
+import resource
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -141,11 +144,34 @@ def _copy_tree(work: Path, repo: Path) -> None:
                         ignore=shutil.ignore_patterns("build", "__pycache__", ".*.partial"))
 
 
-def _pytest(work: Path, tests: tuple[str, ...], timeout_s: float | None) -> tuple[int | None, str]:
-    """Exit status of the tests in ``work`` (None: past ``timeout_s``) and the end of their output."""
+#: a mutant's wall-time cap, as a multiple of its processor-time limit: a backstop for a test run that
+#: waits without computing, far above what sharing the machine's cores with other jobs stretches it to
+WALL_CAP_PER_CPU_S = 30.0
+
+
+def _children_cpu_s() -> float:
+    """Processor time [s] of this process's ended and waited-for children (and theirs), so far."""
+    used = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return used.ru_utime + used.ru_stime
+
+
+def _pytest(work: Path, tests: tuple[str, ...], cpu_limit_s: float | None) -> tuple[int | None, str]:
+    """Exit status of the tests in ``work`` (None: past the wall cap) and the end of their output.
+
+    ``cpu_limit_s`` limits the processor time of each process of the run (the kernel ends one past
+    it with SIGXCPU), so that the verdict does not depend on how busy the machine is; the wall
+    cap (:data:`WALL_CAP_PER_CPU_S` times it) only catches a run that waits without computing.
+    """
     command = [sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", "-m", "not slow", *tests]
+
+    def limit_cpu() -> None:  # in the test run's process, before it starts
+        if cpu_limit_s is not None:
+            seconds = max(1, math.ceil(cpu_limit_s))
+            resource.setrlimit(resource.RLIMIT_CPU, (seconds, seconds + 1))
+
     try:
-        done = subprocess.run(command, cwd=work, capture_output=True, text=True, timeout=timeout_s)
+        done = subprocess.run(command, cwd=work, capture_output=True, text=True, preexec_fn=limit_cpu,
+                              timeout=None if cpu_limit_s is None else WALL_CAP_PER_CPU_S * cpu_limit_s)
     except subprocess.TimeoutExpired:
         return None, ""
     return done.returncode, (done.stdout + done.stderr)[-3000:]
@@ -153,7 +179,7 @@ def _pytest(work: Path, tests: tuple[str, ...], timeout_s: float | None) -> tupl
 
 def verdict_of(returncode: int | None, output: str) -> str:
     """mutmut's words for one mutant's test run (``not compiled`` where the build refused the source)."""
-    if returncode is None:
+    if returncode is None or returncode in (-signal.SIGXCPU, -signal.SIGKILL):
         return "timeout"
     if returncode == 0:
         return "survived"
@@ -164,26 +190,34 @@ def verdict_of(returncode: int | None, output: str) -> str:
 
 def run_c_module(key: str, sources: tuple[str, ...], tests: tuple[str, ...], repo: Path, sample: int | None,
                  seed: int, timeout_multiplier: float, timeout_constant: float, hashes: dict[str, str | None],
-                 max_minutes: float | None = None):
+                 max_minutes: float | None = None, only: set[str] | None = None):
     """Run a sample of the C mutants of ``sources``; returns the arguments of a ``Verdicts``.
 
     ``max_minutes``: no mutant is started after that long; the mutants tested by then are the
-    sample (drawn in random order, so a sample cut short is still a random one).
+    sample (drawn in random order, so a sample cut short is still a random one).  ``only``: test
+    just the mutants of these names (an earlier run's survivors, after new tests).
     """
     started = time.perf_counter()
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=repo, capture_output=True, text=True,
                             check=True).stdout.strip()
     everything = all_mutants(repo, sources)
-    chosen = everything if not sample else random.Random(seed).sample(everything, min(sample, len(everything)))
+    if only is not None:
+        chosen = [m for m in everything if m.name in only]
+    else:
+        chosen = everything if not sample else random.Random(seed).sample(everything, min(sample, len(everything)))
     with tempfile.TemporaryDirectory(prefix=f"mutation-{key}-") as tmp:
         clean = Path(tmp) / "clean"
         clean.mkdir()
         _copy_tree(clean, repo)
-        t0 = time.perf_counter()
-        status, output = _pytest(clean, tests, None)  # also builds every FMU once, from the clean sources
+        status, output = _pytest(clean, tests, None)  # builds every FMU once, from the clean sources
         if status != 0:
             raise RuntimeError(f"the FMU tests fail on the clean copy:\n{output}")
-        limit = (time.perf_counter() - t0 + timeout_constant) * timeout_multiplier
+        cpu_before = _children_cpu_s()  # a clean run with the FMUs built: what a mutant's run costs at most
+        status, output = _pytest(clean, tests, None)
+        if status != 0:
+            raise RuntimeError(f"the FMU tests fail on the clean copy:\n{output}")
+        # the processor time of the whole run (its compilers included) as each process's limit: generous
+        limit = (_children_cpu_s() - cpu_before + timeout_constant) * timeout_multiplier
         counts: dict[str, int] = {}
         survivors = []
         tested = 0
@@ -208,6 +242,7 @@ def run_c_module(key: str, sources: tuple[str, ...], tests: tuple[str, ...], rep
                 survivors.append({"name": mutant.name, "source": mutant.source, "status": verdict,
                                   "diff": mutant.diff})
     settings = {"tests": list(tests), "pytest_args": ["-m", "not slow"], "timeout_multiplier": timeout_multiplier,
+                "cpu_limit_s": round(limit, 1),
                 "timeout_constant": timeout_constant, "children": 1, "source_hashes": hashes,
                 "sample": {"size": tested, "of": len(everything), "seed": seed},
                 "not_compiled_excluded": counts.pop("not compiled", 0)}

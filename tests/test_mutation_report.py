@@ -1,6 +1,7 @@
 """The mutation report marks a module's verdicts stale when a mutated file changed since its run."""
 
 import importlib.util
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -113,3 +114,64 @@ def test_a_c_mutant_that_does_not_compile_is_told_from_one_the_tests_kill(c_muta
     assert c_mutation.verdict_of(1, "FAILED tests/models/test_kcs_fmu.py::test_x") == "killed"
     assert c_mutation.verdict_of(0, "") == "survived"
     assert c_mutation.verdict_of(None, "") == "timeout"
+    assert c_mutation.verdict_of(-signal.SIGXCPU, "") == "timeout"  # past its processor-time limit
+
+
+def test_a_c_mutants_test_run_is_stopped_by_its_processor_time_not_by_the_clock(c_mutation, tmp_path):
+    (tmp_path / "test_spin.py").write_text("import time\n\ndef test_spin():\n    while True:\n        pass\n\n\n"
+                                           "def test_wait():\n    time.sleep(5.0)\n")
+    status, _ = c_mutation._pytest(tmp_path, ("test_spin.py::test_spin",), 4.0)
+    assert status == -signal.SIGXCPU and c_mutation.verdict_of(status, "") == "timeout"
+    # a run that waits longer than its processor-time limit, using none, is not stopped
+    status, _ = c_mutation._pytest(tmp_path, ("test_spin.py::test_wait",), 4.0)
+    assert status == 0
+
+
+def test_a_mutant_whose_test_run_crashed_counts_as_killed_and_is_not_listed_open(report, tmp_path, monkeypatch):
+    (tmp_path / "pkg").mkdir()
+    (tmp_path / "pkg" / "a.py").write_text("x = 1\n")
+    monkeypatch.setattr(report, "REPO", tmp_path)
+    crashed = {"name": "pkg.a.x_f__mutmut_1", "source": "pkg/a.py", "status": "segfault", "diff": "-x = 1\n+x = 2"}
+    v = report.Verdicts(module="a", sources=["pkg/a.py"], counts={"killed": 3, "segfault": 1}, survivors=[crashed],
+                        seconds=1.0, settings={"tests": []})
+    assert v.killed == 4 and v.score() == 100.0
+    assert v.explained() == []
+    assert "not yet killed" not in report.section(v)
+
+
+def test_the_readmes_mutation_scores_are_those_of_the_stored_verdicts(report):
+    text = report.README.read_text()
+    block = text.split(report.README_BEGIN, 1)[1].split(report.README_END, 1)[0]
+    assert block.strip() == report.readme_summary(report.load_verdicts()), (
+        "README's mutation scores differ from docs/mutation-verdicts.json: run "
+        "python scripts/mutation_report.py --report-only")
+
+
+def test_the_readme_block_is_replaced_between_its_markers_only(report, tmp_path):
+    readme = tmp_path / "README.md"
+    readme.write_text(f"before\n{report.README_BEGIN}\nold scores\n{report.README_END}\nafter\n")
+    v = verdicts(report)
+    report.write_readme({"trigger": v}, readme)
+    text = readme.read_text()
+    assert text.startswith(f"before\n{report.README_BEGIN}\nScores (") and text.endswith(f"{report.README_END}\nafter\n")
+    assert "trigger 90 % (10)" in text and "old scores" not in text
+    assert "Not run yet: reference," in text
+    readme.write_text("no markers\n")
+    report.write_readme({"trigger": v}, readme)
+    assert readme.read_text() == "no markers\n"
+
+
+def test_a_c_modules_survivors_retested_take_their_new_verdicts_and_the_others_keep_theirs(report):
+    def survivor(name):
+        return {"name": name, "source": "m.c", "status": "survived", "diff": "-a\n+b"}
+
+    run = report.Verdicts(module="c", sources=["m.c"], counts={"killed": 7, "survived": 3},
+                          survivors=[survivor("m_c:1:a"), survivor("m_c:2:b"), survivor("m_c:3:c")], seconds=60.0,
+                          commit="abc", date="then", settings={"sample": {"size": 10, "of": 99, "seed": 1}})
+    retest = report.Verdicts(module="c", sources=["m.c"], counts={"killed": 1, "survived": 1},
+                             survivors=[survivor("m_c:2:b")], seconds=30.0, commit="def", date="now", settings={})
+    merged = report.merged_retest(run, retest, {"m_c:1:a", "m_c:2:b"})  # m_c:3:c's line has changed since
+    assert merged.counts == {"killed": 8, "survived": 2} and merged.total == 10
+    assert [s["name"] for s in merged.survivors] == ["m_c:2:b", "m_c:3:c"]
+    assert (merged.commit, merged.settings["sample"]["size"]) == ("abc", 10)  # the run's, not the retest's
+    assert merged.settings["survivors_retested"]["commit"] == "def"

@@ -291,3 +291,22 @@ def test_debug_logging_without_categories_is_accepted_and_an_unknown_one_refused
     with pytest.raises(FMICallException):
         slave.fmu.setDebugLogging(True, ["logEverything"])
     assert 'unknown log category "logEverything"' in slave.errors()
+
+
+def test_a_get_or_set_of_an_unknown_value_reference_is_refused_naming_it(fmus, open_slave):
+    slave = open_slave(fmus["KCS"])
+    slave.initialize()
+    with pytest.raises(FMICallException):
+        slave.fmu.getReal([9999])
+    assert "fmi2GetReal: unknown value reference 9999" in slave.errors()
+    with pytest.raises(FMICallException):
+        slave.fmu.setReal([9999], [1.0])
+    assert "fmi2SetReal: unknown value reference 9999" in slave.errors()
+
+
+def test_freeing_a_state_through_a_null_pointer_is_refused_naming_it(fmus, open_slave):
+    slave = open_slave(fmus["KCS"])
+    slave.initialize()
+    with pytest.raises(FMICallException):
+        slave.fmu.fmi2FreeFMUstate(slave.fmu.component, None)
+    assert "fmi2FreeFMUstate: invalid argument FMUstate = NULL" in slave.errors()

@@ -144,6 +144,16 @@ def test_a_long_parser_message_is_cut_to_200_characters(tmp_path):
     assert shown_part.endswith(" (at line 2, column ...")
 
 
+def test_an_integer_too_long_to_convert_is_refused_in_a_message_cut_to_120_characters(tmp_path):
+    path = tmp_path / "file.toml"
+    path.write_text("a = " + "9" * 5000 + "\n")  # Python's own message is 140 characters long
+    with pytest.raises(ScenarioError) as raised:
+        read_toml(path, "scenario")
+    shown_part = str(raised.value).removeprefix(f"{path}: not valid TOML: ")
+    assert len(shown_part) == 120 and shown_part.startswith("Exceeds the limit (4300 digits) for integer string")
+    assert shown_part.endswith("...")
+
+
 def test_pydantics_own_errors_read_as_one_line():
     where = "file.toml"
     assert message_of({"type": "dict_type", "loc": ("a", 0), "msg": "Input should be a dict.", "input": 5},
