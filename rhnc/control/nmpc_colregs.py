@@ -130,9 +130,9 @@ class DomainSettings:
         Risk of collision for the classification (see :func:`rhnc.encounters.colregs.classify`).
     alteration_deg : float
         Rule 8(b), 16: once the own ship gives way (or acts as stand-on ship), its heading
-        is held at least this far off the reference heading it had when it began, to the
-        side the rules ask for, until the target is past and clear (0: no minimum
-        alteration).  35 deg: a readily apparent alteration is commonly read as 30 deg or
+        is held at least this far off the reference heading it had when it began, and off
+        the heading at the target's onset of risk, to the side the rules ask for, until the
+        target is past and clear (0: no minimum alteration).  35 deg: a readily apparent alteration is commonly read as 30 deg or
         more of course over ground, and the bound holds the heading; in a cross wind the
         course over ground differs from it by the drift angle (2-6 deg in the paper's
         weather at 18 kn), and the course the change is seen from is the one at the onset.
@@ -197,6 +197,7 @@ class CollisionDomains:
         self._guarding: set[int] = set()
         self._altering: dict[int, tuple[float, float, float, float]] = {}
         self._altered: set[int] = set()
+        self._onset_heading: dict[int, float] = {}
         self.stand_on_actions = 0
         self.alterations = 0
 
@@ -207,6 +208,7 @@ class CollisionDomains:
         self._guarding = set()
         self._altering = {}
         self._altered = set()
+        self._onset_heading = {}
 
     def parameters(self, obstacles: np.ndarray | None, state: np.ndarray, origin: np.ndarray, closing_speed_mps: float,
                    substep_s: float, length_scale_m: float, et: bool, reference_heading_rad: float | None = None,
@@ -249,6 +251,8 @@ class CollisionDomains:
         own_course = float(state[2] + math.atan2(state[4], state[3]))
         own_speed = float(math.hypot(state[3], state[4]))
         classes, codes = self._classify(rows, state[:2], own_course, own_speed)
+        for i in self.tracker.locked:  # the heading at the onset of risk, once per encounter
+            self._onset_heading.setdefault(i, float(state[2]))
         rhos = s.own_radius_m + rows[:, 4] + s.clearance_margin_m
         own_velocity = own_speed * np.array([math.cos(own_course), math.sin(own_course)])
         risk = s.colregs and self._collision_risk(rows, rhos, state[:2], own_velocity)
@@ -332,6 +336,7 @@ class CollisionDomains:
         self._guarding &= locked
         self._altered &= locked
         self._altering = {i: v for i, v in self._altering.items() if i in locked}
+        self._onset_heading = {i: v for i, v in self._onset_heading.items() if i in locked}
         return classes, codes
 
     def _nearest(self, rows: np.ndarray, rhos: np.ndarray, origin) -> list[int]:
@@ -469,6 +474,15 @@ class CollisionDomains:
             if not port_allowed:
                 side = 1.0
         goal = reference_heading_rad + side * math.radians(s.alteration_deg)
+        onset = self._onset_heading.get(index)
+        if onset is not None:
+            # at least the alteration from the heading the ship had at the onset of risk, the
+            # course the other ship saw: a reference pointing back to the route after an
+            # earlier detour (or a turn under way at the onset) left alterations of 20-28 deg
+            # of course over ground from it, not readily apparent (Rule 8(b))
+            beyond = wrap_angle(onset + side * math.radians(s.alteration_deg) - goal)
+            if side * beyond > 0.0:
+                goal += beyond
         if name in GIVE_WAY_CLASSES:
             tcpa = encounter.tcpa_s
             if motion is not None:  # turning away brings the CPA forward (an overtaker's most)

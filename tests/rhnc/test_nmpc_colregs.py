@@ -275,6 +275,29 @@ def test_give_way_alteration_starts_with_the_encounter_and_ends_when_clear():
     assert passed(2.5, 940.0).alteration_floor is None and domains.alterations == 1  # not begun again
 
 
+def test_alteration_is_readily_apparent_from_the_heading_at_the_onset_of_risk():
+    # the risk begins with the ship heading north; when the alteration begins, the reference
+    # points 20 deg to port (back to the route after a detour): 35 deg from that reference
+    # would leave the ship only 15 deg off the course the other ship saw at the onset
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    start, velocity = target_on_collision_course(270.0, 15.0)
+    behind = np.array([-SPEED * 300.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    _, report = domains.parameters(np.array([[*(start - velocity * 300.0), *velocity, RADIUS]]), behind, behind[:2],
+                                   SPEED, 5.0, 230.0, et=True, reference_heading_rad=0.0, time_s=0.0)
+    assert report.class_codes[0] == ENCOUNTER_CLASSES.index("crossing_give_way") and report.alteration_floor is None
+    moved = np.array([SPEED * 60.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    _, report = domains.parameters(np.array([[*(start + velocity * 60.0), *velocity, RADIUS]]), moved, moved[:2],
+                                   SPEED, 5.0, 230.0, et=True, reference_heading_rad=math.radians(-20.0), time_s=360.0)
+    assert math.degrees(report.alteration_floor[2]) == pytest.approx(DomainSettings().alteration_deg)
+    # a reference already further to starboard than that keeps its own 35 deg
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    domains.parameters(np.array([[*(start - velocity * 300.0), *velocity, RADIUS]]), behind, behind[:2],
+                       SPEED, 5.0, 230.0, et=True, reference_heading_rad=0.0, time_s=0.0)
+    _, report = domains.parameters(np.array([[*(start + velocity * 60.0), *velocity, RADIUS]]), moved, moved[:2],
+                                   SPEED, 5.0, 230.0, et=True, reference_heading_rad=math.radians(10.0), time_s=360.0)
+    assert math.degrees(report.alteration_floor[2]) == pytest.approx(10.0 + DomainSettings().alteration_deg)
+
+
 def test_stand_on_target_is_kept_clear_of_once_the_ship_gives_way_to_another():
     # a crossing ship from starboard (we give way, CPA in 14 min) and one from port (we stand
     # on, CPA in 25 min): once the own ship alters for the first, it no longer keeps its
