@@ -301,6 +301,24 @@ class CollisionDomains:
         floor, ceiling = self._alteration_bounds(danger, no_port_turn)
         return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling, bool(risk and not et), danger)
 
+    def reference_turns(self, reference_heading_rad: float, heading_rad: float) -> float:
+        """Whole turns [rad, a multiple of 2 pi] to take off the reference heading: the one within
+        half a turn of the measured heading, or, while an alteration is held, of the heading it
+        is measured from (its goal less the alteration), brought within half a turn of the
+        measured heading.  A ship turned more than half a turn to starboard of its reference
+        (a stand-on ship's hard turn away, 173 deg off a reference at -9 deg) keeps its
+        reference on the side it turned from: taken nearest the measured heading, it jumped a
+        full turn ahead, and the no-port-turn bound (no lower than the reference less the
+        allowance, or the measured heading) then forbade the turn back, from a warm start that
+        made it (the budgeted solve fell back twice)."""
+        anchor = heading_rad
+        floor, ceiling = self._alteration_bounds(False, False)
+        held = floor if floor is not None else ceiling
+        if held is not None:
+            goal = held[2] - 2.0 * math.pi * round((held[2] - heading_rad) / (2.0 * math.pi))
+            anchor = goal - math.copysign(math.radians(self.settings.alteration_deg), 1.0 if floor is not None else -1.0)
+        return 2.0 * math.pi * round((reference_heading_rad - anchor) / (2.0 * math.pi))
+
     def _closing(self, rows: np.ndarray, rhos: np.ndarray, own_xy, own_velocity, order: list[int]):
         """Ranges [m] and range rates [m/s] of the rows, the rows inside their clearance
         (``colregs``), and whether one of those is closing: immediate danger, the range must

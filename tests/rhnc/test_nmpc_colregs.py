@@ -570,3 +570,25 @@ def test_a_stand_on_ship_turning_back_to_its_route_acts_away_from_the_overtaker(
                                    reference_heading_rad=0.0, time_s=0.0)
     assert ENCOUNTER_CLASSES[int(report.class_codes[0])] == "overtaken" and domains._acting == {0}
     assert report.alteration_ceiling is None and report.alteration_floor is not None
+
+
+def test_a_ship_turned_half_a_turn_off_its_reference_keeps_the_reference_on_the_side_it_turned_from(kcs):
+    # a stand-on ship turning hard to starboard (alteration held: 35 deg off a reference at
+    # 0 deg) has come to 173 deg; the reference is at -8.7 deg, 181.7 deg off.  Taken on the
+    # turn nearest the heading, it jumped to +351.3 deg, and the no-port-turn bound (not
+    # below the reference less 2 deg, or the measured heading) forbade the turn back that
+    # the warm start made: the budgeted solve fell back
+    controller = NMPCController(kcs, NMPCSettings(horizon_steps=10, control_interval_s=20.0, colregs=True))
+    state = np.array([0.0, 0.0, math.radians(173.0), SPEED, 0.0, 0.0])
+    reference = line_or_turn_reference(20.0 * np.arange(11), (0.0, 0.0), math.radians(-8.7), SPEED)
+    free = controller._trimmed_reference(0.0, state, reference)[0]
+    assert math.degrees(free[0, 2]) == pytest.approx(351.3, abs=0.5)  # no alteration held: nearest turn
+    controller.domains._altering = {1: (0.0, 0.0, math.radians(35.0), 1.0)}
+    held = controller._trimmed_reference(0.0, state, reference)[0]
+    assert math.degrees(held[0, 2]) == pytest.approx(-8.7, abs=0.5)
+    # mirrored: an alteration to port held, the ship at -173 deg, the reference at +8.7 deg
+    controller.domains._altering = {1: (0.0, 0.0, math.radians(-35.0), -1.0)}
+    port_state = np.array([0.0, 0.0, math.radians(-173.0), SPEED, 0.0, 0.0])
+    mirrored = controller._trimmed_reference(0.0, port_state, line_or_turn_reference(
+        20.0 * np.arange(11), (0.0, 0.0), math.radians(8.7), SPEED))[0]
+    assert math.degrees(mirrored[0, 2]) == pytest.approx(8.7, abs=0.5)
