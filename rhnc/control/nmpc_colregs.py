@@ -97,6 +97,9 @@ STAND_ON_CLASSES = ("crossing_stand_on", "overtaken")
 STARBOARD_CLASSES = ("head_on", "crossing_give_way", "crossing_stand_on")
 #: how far to port of the reference heading the plan may go while that holds [deg]
 PORT_ALLOWANCE_DEG = 2.0
+#: a ship turning away from its reference by this much has begun a manoeuvre [deg] (the
+#: analysis's threshold of a change of course)
+MANOEUVRE_DEG = 5.0
 #: the alteration ends when the target is past (TCPA <= 0) and this many R + R_i away
 ALTERATION_CLEAR_FACTOR = 2.0
 #: classes in which the own ship gives way (Rules 13-16)
@@ -280,7 +283,7 @@ class CollisionDomains:
                 self._update_alteration(i, encounter, heading_now, float(state[2]), time_s,
                                         s.own_radius_m + rows[i, 4],
                                         (state[:2], own_speed, rows[i, :2], rows[i, 2:4], own_velocity),
-                                        port_allowed=not no_port_turn, traffic=traffic)
+                                        port_allowed=not no_port_turn, traffic=traffic, yaw_rate_rps=float(state[5]))
             offset, domain_radius, growth_mps = self._domain(rows[i], rhos[i], name, state[:2], ranges[i],
                                                              range_rates[i], i in inside)
             closing = closing_speed_mps + math.hypot(rows[i, 2], rows[i, 3])
@@ -434,13 +437,17 @@ class CollisionDomains:
 
     def _update_alteration(self, index: int, encounter, reference_heading_rad: float, heading_rad: float,
                            time_s: float, separation_m: float, motion=None, port_allowed: bool = True,
-                           traffic=()) -> None:
+                           traffic=(), yaw_rate_rps: float = 0.0) -> None:
         """Begin, keep or end the readily apparent alteration for one target (Rules 8, 16, 17).
 
         A give-way ship begins it once the target's CPA is at most
         ``give_way_action_tcpa_s`` ahead, predicted at the present velocities or with the
         own ship already on the altered course (whichever comes first: turning away brings
-        the CPA forward, an overtaking ship's CPA most, as it closes slowly); a stand-on ship once it acts (Rule 17(b)).  It is
+        the CPA forward, an overtaking ship's CPA most, as it closes slowly), or as soon as
+        the ship, holding no other alteration, turns away from its reference by
+        ``MANOEUVRE_DEG`` (the NMPC has begun to give way by itself: held to a readily
+        apparent alteration, not left at the 12-20 deg that opened the CPA just enough, a
+        succession of small alterations Rule 8(b) asks to avoid); a stand-on ship once it acts (Rule 17(b)).  It is
         to starboard, except when overtaking or being overtaken, where either side is
         allowed (Rule 13): then it continues a turn the plan has already begun (more than
         ``PORT_ALLOWANCE_DEG`` off the reference; when overtaken, only while another alteration
@@ -471,8 +478,11 @@ class CollisionDomains:
         if name not in GIVE_WAY_CLASSES and name not in STAND_ON_CLASSES:
             return
         side = 1.0
+        deviation = math.degrees(wrap_angle(heading_rad - reference_heading_rad))
+        # turning away from the reference (not back to it) by more than a manoeuvre
+        manoeuvring = (not self._altering and abs(deviation) >= MANOEUVRE_DEG
+                       and deviation * yaw_rate_rps > 0.0)
         if name in ("overtaking", "overtaken"):
-            deviation = math.degrees(wrap_angle(heading_rad - reference_heading_rad))
             # a turn the plan has begun is an avoiding one when overtaking (the constraint is on)
             # or while another alteration is held; a stand-on ship that has kept its course has
             # begun none: its deviation is the way back to the route, and continuing it turned
@@ -514,7 +524,7 @@ class CollisionDomains:
                 own_xy, _, target_xy, target_velocity, own_velocity = motion
                 latest = latest_alteration_s(own_xy, own_velocity, target_xy, target_velocity,
                                              separation_m + s.clearance_margin_m, side)
-            begin = ((0.0 < tcpa <= s.give_way_action_tcpa_s or latest <= ACTION_BUFFER_S)
+            begin = ((0.0 < tcpa <= s.give_way_action_tcpa_s or latest <= ACTION_BUFFER_S or manoeuvring)
                      and encounter.tcpa_s > 0.0 and encounter.cpa_m < s.risk_cpa_m)
         else:
             begin = index in self._acting and encounter.tcpa_s > 0.0

@@ -298,6 +298,31 @@ def test_alteration_is_readily_apparent_from_the_heading_at_the_onset_of_risk():
     assert math.degrees(report.alteration_floor[2]) == pytest.approx(10.0 + DomainSettings().alteration_deg)
 
 
+def test_a_give_way_ship_turning_away_by_itself_is_held_to_a_readily_apparent_alteration():
+    # a ship crossing from starboard, CPA 25 min ahead (the alteration is not yet due); the
+    # NMPC has begun to turn away from the reference for it (10 deg, still turning): the
+    # alteration begins now and is held to 35 deg, not left at what opened the CPA just enough
+    start, velocity = target_on_collision_course(270.0, 15.0)
+    behind = np.array([-SPEED * 600.0, 0.0, math.radians(10.0), SPEED, 0.0, math.radians(0.3)])
+    obstacles = np.array([[*(start - velocity * 600.0), *velocity, RADIUS]])
+
+    def alteration(state):
+        domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+        _, report = domains.parameters(obstacles, state, state[:2], SPEED, 5.0, 230.0, et=True,
+                                       reference_heading_rad=0.0, time_s=0.0)
+        assert report.class_codes[0] == ENCOUNTER_CLASSES.index("crossing_give_way")
+        return report.alteration_floor
+
+    floor = alteration(behind)
+    assert floor is not None and math.degrees(floor[2]) == pytest.approx(10.0 + DomainSettings().alteration_deg)
+    returning = behind.copy()
+    returning[5] = -returning[5]  # turning back to the reference: no manoeuvre
+    assert alteration(returning) is None
+    small = behind.copy()
+    small[2] = math.radians(3.0)  # within the manoeuvre threshold
+    assert alteration(small) is None
+
+
 def test_stand_on_target_is_kept_clear_of_once_the_ship_gives_way_to_another():
     # a crossing ship from starboard (we give way, CPA in 14 min) and one from port (we stand
     # on, CPA in 25 min): once the own ship alters for the first, it no longer keeps its
