@@ -253,9 +253,7 @@ class CollisionDomains:
             return slots, DomainReport(np.zeros(0), active_rows)
         own_course = float(state[2] + math.atan2(state[4], state[3]))
         own_speed = float(math.hypot(state[3], state[4]))
-        classes, codes = self._classify(rows, state[:2], own_course, own_speed)
-        for i in self.tracker.locked:  # the heading at the onset of risk, once per encounter
-            self._onset_heading.setdefault(i, float(state[2]))
+        classes, codes = self._classify(rows, state[:2], own_course, own_speed, float(state[2]))
         rhos = s.own_radius_m + rows[:, 4] + s.clearance_margin_m
         own_velocity = own_speed * np.array([math.cos(own_course), math.sin(own_course)])
         risk = s.colregs and self._collision_risk(rows, rhos, state[:2], own_velocity)
@@ -342,9 +340,9 @@ class CollisionDomains:
                    and not danger else None)
         return floor, ceiling
 
-    def _classify(self, rows: np.ndarray, own_xy, own_course: float, own_speed: float):
+    def _classify(self, rows: np.ndarray, own_xy, own_course: float, own_speed: float, heading: float = 0.0):
         """Encounter per row (None without ``colregs``) and the class codes; forget the
-        decisions of encounters the tracker released."""
+        decisions of encounters the tracker released; note the ``heading`` at each onset of risk."""
         classes = [None] * len(rows)
         codes = np.full(len(rows), -1.0)
         if not self.settings.colregs:
@@ -358,6 +356,8 @@ class CollisionDomains:
         self._altered &= locked
         self._altering = {i: v for i, v in self._altering.items() if i in locked}
         self._onset_heading = {i: v for i, v in self._onset_heading.items() if i in locked}
+        for i in locked:  # the heading at the onset of risk, once per encounter
+            self._onset_heading.setdefault(i, heading)
         return classes, codes
 
     def _nearest(self, rows: np.ndarray, rhos: np.ndarray, origin) -> list[int]:
@@ -512,19 +512,7 @@ class CollisionDomains:
             if side * beyond > 0.0:
                 goal += beyond
         if name in GIVE_WAY_CLASSES:
-            tcpa = encounter.tcpa_s
-            if motion is not None:  # turning away brings the CPA forward (an overtaker's most)
-                own_xy, own_speed, target_xy, target_velocity, _ = motion
-                altered = own_speed * np.array([math.cos(goal), math.sin(goal)])
-                tcpa_altered = cpa_tcpa(own_xy, altered, target_xy, target_velocity)[1]
-                if tcpa_altered > 0.0:
-                    tcpa = min(tcpa, tcpa_altered)
-            latest = math.inf
-            if motion is not None:  # the last moment the alteration still opens the CPA (plus margin)
-                own_xy, _, target_xy, target_velocity, own_velocity = motion
-                latest = latest_alteration_s(own_xy, own_velocity, target_xy, target_velocity,
-                                             separation_m + s.clearance_margin_m, side)
-            begin = ((0.0 < tcpa <= s.give_way_action_tcpa_s or latest <= ACTION_BUFFER_S or manoeuvring)
+            begin = ((self._give_way_due(encounter, goal, side, separation_m, motion) or manoeuvring)
                      and encounter.tcpa_s > 0.0 and encounter.cpa_m < s.risk_cpa_m)
         else:
             begin = index in self._acting and encounter.tcpa_s > 0.0
@@ -534,6 +522,26 @@ class CollisionDomains:
         self.alterations += 1
         LOG.info("target %d (%s): altering %.0f deg to %s (CPA %.0f m in %.0f s)", index, name, s.alteration_deg,
                  "starboard" if side > 0 else "port", encounter.cpa_m, encounter.tcpa_s)
+
+
+    def _give_way_due(self, encounter, goal: float, side: float, separation_m: float, motion) -> bool:
+        """Whether a give-way alteration to ``goal`` is due: the CPA at most
+        ``give_way_action_tcpa_s`` ahead at the present velocities or on the altered course,
+        or the last moment it still opens the CPA (plus margin) within ``ACTION_BUFFER_S``."""
+        s = self.settings
+        tcpa = encounter.tcpa_s
+        if motion is not None:  # turning away brings the CPA forward (an overtaker's most)
+            own_xy, own_speed, target_xy, target_velocity, _ = motion
+            altered = own_speed * np.array([math.cos(goal), math.sin(goal)])
+            tcpa_altered = cpa_tcpa(own_xy, altered, target_xy, target_velocity)[1]
+            if tcpa_altered > 0.0:
+                tcpa = min(tcpa, tcpa_altered)
+        latest = math.inf
+        if motion is not None:  # the last moment the alteration still opens the CPA (plus margin)
+            own_xy, _, target_xy, target_velocity, own_velocity = motion
+            latest = latest_alteration_s(own_xy, own_velocity, target_xy, target_velocity,
+                                         separation_m + s.clearance_margin_m, side)
+        return 0.0 < tcpa <= s.give_way_action_tcpa_s or latest <= ACTION_BUFFER_S
 
 
 def side_clearance_m(own_xy, own_speed_mps: float, course_rad: float, traffic, horizon_s: float = 1800.0) -> float:
