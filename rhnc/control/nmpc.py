@@ -401,9 +401,10 @@ class NMPCController:
         inputs and the disturbance estimate (offset-free: the drift angle and the force that
         hold the reference against it)."""
         s = self.settings
-        # same heading, nearest turn: the warm start must not begin a full circle away
+        # same heading, nearest turn (of the held alteration's: CollisionDomains.reference_turns):
+        # the warm start must not begin a full circle away
         reference = reference.copy()
-        reference[:, 2] -= 2.0 * np.pi * round((reference[0, 2] - state[2]) / (2.0 * np.pi))
+        reference[:, 2] -= self.domains.reference_turns(float(reference[0, 2]), float(state[2]))
         reference[:, 3] = np.minimum(reference[:, 3], s.max_speed_mps)
         if self.observer is None:
             return reference, reference_inputs(reference, s.control_interval_s, self.params, self.input_scale), \

@@ -97,6 +97,9 @@ STAND_ON_CLASSES = ("crossing_stand_on", "overtaken")
 STARBOARD_CLASSES = ("head_on", "crossing_give_way", "crossing_stand_on")
 #: how far to port of the reference heading the plan may go while that holds [deg]
 PORT_ALLOWANCE_DEG = 2.0
+#: a ship turning away from its reference by this much has begun a manoeuvre [deg] (the
+#: analysis's threshold of a change of course)
+MANOEUVRE_DEG = 5.0
 #: the alteration ends when the target is past (TCPA <= 0) and this many R + R_i away
 ALTERATION_CLEAR_FACTOR = 2.0
 #: classes in which the own ship gives way (Rules 13-16)
@@ -130,9 +133,9 @@ class DomainSettings:
         Risk of collision for the classification (see :func:`rhnc.encounters.colregs.classify`).
     alteration_deg : float
         Rule 8(b), 16: once the own ship gives way (or acts as stand-on ship), its heading
-        is held at least this far off the reference heading it had when it began, to the
-        side the rules ask for, until the target is past and clear (0: no minimum
-        alteration).  35 deg: a readily apparent alteration is commonly read as 30 deg or
+        is held at least this far off the reference heading it had when it began, and off
+        the heading at the target's onset of risk, to the side the rules ask for, until the
+        target is past and clear (0: no minimum alteration).  35 deg: a readily apparent alteration is commonly read as 30 deg or
         more of course over ground, and the bound holds the heading; in a cross wind the
         course over ground differs from it by the drift angle (2-6 deg in the paper's
         weather at 18 kn), and the course the change is seen from is the one at the onset.
@@ -197,6 +200,7 @@ class CollisionDomains:
         self._guarding: set[int] = set()
         self._altering: dict[int, tuple[float, float, float, float]] = {}
         self._altered: set[int] = set()
+        self._onset_heading: dict[int, float] = {}
         self.stand_on_actions = 0
         self.alterations = 0
 
@@ -207,6 +211,7 @@ class CollisionDomains:
         self._guarding = set()
         self._altering = {}
         self._altered = set()
+        self._onset_heading = {}
 
     def parameters(self, obstacles: np.ndarray | None, state: np.ndarray, origin: np.ndarray, closing_speed_mps: float,
                    substep_s: float, length_scale_m: float, et: bool, reference_heading_rad: float | None = None,
@@ -248,7 +253,7 @@ class CollisionDomains:
             return slots, DomainReport(np.zeros(0), active_rows)
         own_course = float(state[2] + math.atan2(state[4], state[3]))
         own_speed = float(math.hypot(state[3], state[4]))
-        classes, codes = self._classify(rows, state[:2], own_course, own_speed)
+        classes, codes = self._classify(rows, state[:2], own_course, own_speed, float(state[2]))
         rhos = s.own_radius_m + rows[:, 4] + s.clearance_margin_m
         own_velocity = own_speed * np.array([math.cos(own_course), math.sin(own_course)])
         risk = s.colregs and self._collision_risk(rows, rhos, state[:2], own_velocity)
@@ -276,7 +281,7 @@ class CollisionDomains:
                 self._update_alteration(i, encounter, heading_now, float(state[2]), time_s,
                                         s.own_radius_m + rows[i, 4],
                                         (state[:2], own_speed, rows[i, :2], rows[i, 2:4], own_velocity),
-                                        port_allowed=not no_port_turn, traffic=traffic)
+                                        port_allowed=not no_port_turn, traffic=traffic, yaw_rate_rps=float(state[5]))
             offset, domain_radius, growth_mps = self._domain(rows[i], rhos[i], name, state[:2], ranges[i],
                                                              range_rates[i], i in inside)
             closing = closing_speed_mps + math.hypot(rows[i, 2], rows[i, 3])
@@ -296,6 +301,24 @@ class CollisionDomains:
             slot += 1
         floor, ceiling = self._alteration_bounds(danger, no_port_turn)
         return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling, bool(risk and not et), danger)
+
+    def reference_turns(self, reference_heading_rad: float, heading_rad: float) -> float:
+        """Whole turns [rad, a multiple of 2 pi] to take off the reference heading: the one within
+        half a turn of the measured heading, or, while an alteration is held, of the heading it
+        is measured from (its goal less the alteration), brought within half a turn of the
+        measured heading.  A ship turned more than half a turn to starboard of its reference
+        (a stand-on ship's hard turn away, 173 deg off a reference at -9 deg) keeps its
+        reference on the side it turned from: taken nearest the measured heading, it jumped a
+        full turn ahead, and the no-port-turn bound (no lower than the reference less the
+        allowance, or the measured heading) then forbade the turn back, from a warm start that
+        made it (the budgeted solve fell back twice)."""
+        anchor = heading_rad
+        floor, ceiling = self._alteration_bounds(False, False)
+        held = floor if floor is not None else ceiling
+        if held is not None:
+            goal = held[2] - 2.0 * math.pi * round((held[2] - heading_rad) / (2.0 * math.pi))
+            anchor = goal - math.copysign(math.radians(self.settings.alteration_deg), 1.0 if floor is not None else -1.0)
+        return 2.0 * math.pi * round((reference_heading_rad - anchor) / (2.0 * math.pi))
 
     def _closing(self, rows: np.ndarray, rhos: np.ndarray, own_xy, own_velocity, order: list[int]):
         """Ranges [m] and range rates [m/s] of the rows, the rows inside their clearance
@@ -317,9 +340,9 @@ class CollisionDomains:
                    and not danger else None)
         return floor, ceiling
 
-    def _classify(self, rows: np.ndarray, own_xy, own_course: float, own_speed: float):
+    def _classify(self, rows: np.ndarray, own_xy, own_course: float, own_speed: float, heading: float = 0.0):
         """Encounter per row (None without ``colregs``) and the class codes; forget the
-        decisions of encounters the tracker released."""
+        decisions of encounters the tracker released; note the ``heading`` at each onset of risk."""
         classes = [None] * len(rows)
         codes = np.full(len(rows), -1.0)
         if not self.settings.colregs:
@@ -332,6 +355,9 @@ class CollisionDomains:
         self._guarding &= locked
         self._altered &= locked
         self._altering = {i: v for i, v in self._altering.items() if i in locked}
+        self._onset_heading = {i: v for i, v in self._onset_heading.items() if i in locked}
+        for i in locked:  # the heading at the onset of risk, once per encounter
+            self._onset_heading.setdefault(i, heading)
         return classes, codes
 
     def _nearest(self, rows: np.ndarray, rhos: np.ndarray, origin) -> list[int]:
@@ -411,13 +437,17 @@ class CollisionDomains:
 
     def _update_alteration(self, index: int, encounter, reference_heading_rad: float, heading_rad: float,
                            time_s: float, separation_m: float, motion=None, port_allowed: bool = True,
-                           traffic=()) -> None:
+                           traffic=(), yaw_rate_rps: float = 0.0) -> None:
         """Begin, keep or end the readily apparent alteration for one target (Rules 8, 16, 17).
 
         A give-way ship begins it once the target's CPA is at most
         ``give_way_action_tcpa_s`` ahead, predicted at the present velocities or with the
         own ship already on the altered course (whichever comes first: turning away brings
-        the CPA forward, an overtaking ship's CPA most, as it closes slowly); a stand-on ship once it acts (Rule 17(b)).  It is
+        the CPA forward, an overtaking ship's CPA most, as it closes slowly), or as soon as
+        the ship, holding no other alteration, turns away from its reference by
+        ``MANOEUVRE_DEG`` (the NMPC has begun to give way by itself: held to a readily
+        apparent alteration, not left at the 12-20 deg that opened the CPA just enough, a
+        succession of small alterations Rule 8(b) asks to avoid); a stand-on ship once it acts (Rule 17(b)).  It is
         to starboard, except when overtaking or being overtaken, where either side is
         allowed (Rule 13): then it continues a turn the plan has already begun (more than
         ``PORT_ALLOWANCE_DEG`` off the reference; when overtaken, only while another alteration
@@ -448,8 +478,11 @@ class CollisionDomains:
         if name not in GIVE_WAY_CLASSES and name not in STAND_ON_CLASSES:
             return
         side = 1.0
+        deviation = math.degrees(wrap_angle(heading_rad - reference_heading_rad))
+        # turning away from the reference (not back to it) by more than a manoeuvre
+        manoeuvring = (not self._altering and abs(deviation) >= MANOEUVRE_DEG
+                       and deviation * yaw_rate_rps > 0.0)
         if name in ("overtaking", "overtaken"):
-            deviation = math.degrees(wrap_angle(heading_rad - reference_heading_rad))
             # a turn the plan has begun is an avoiding one when overtaking (the constraint is on)
             # or while another alteration is held; a stand-on ship that has kept its course has
             # begun none: its deviation is the way back to the route, and continuing it turned
@@ -469,20 +502,17 @@ class CollisionDomains:
             if not port_allowed:
                 side = 1.0
         goal = reference_heading_rad + side * math.radians(s.alteration_deg)
+        onset = self._onset_heading.get(index)
+        if onset is not None:
+            # at least the alteration from the heading the ship had at the onset of risk, the
+            # course the other ship saw: a reference pointing back to the route after an
+            # earlier detour (or a turn under way at the onset) left alterations of 20-28 deg
+            # of course over ground from it, not readily apparent (Rule 8(b))
+            beyond = wrap_angle(onset + side * math.radians(s.alteration_deg) - goal)
+            if side * beyond > 0.0:
+                goal += beyond
         if name in GIVE_WAY_CLASSES:
-            tcpa = encounter.tcpa_s
-            if motion is not None:  # turning away brings the CPA forward (an overtaker's most)
-                own_xy, own_speed, target_xy, target_velocity, _ = motion
-                altered = own_speed * np.array([math.cos(goal), math.sin(goal)])
-                tcpa_altered = cpa_tcpa(own_xy, altered, target_xy, target_velocity)[1]
-                if tcpa_altered > 0.0:
-                    tcpa = min(tcpa, tcpa_altered)
-            latest = math.inf
-            if motion is not None:  # the last moment the alteration still opens the CPA (plus margin)
-                own_xy, _, target_xy, target_velocity, own_velocity = motion
-                latest = latest_alteration_s(own_xy, own_velocity, target_xy, target_velocity,
-                                             separation_m + s.clearance_margin_m, side)
-            begin = ((0.0 < tcpa <= s.give_way_action_tcpa_s or latest <= ACTION_BUFFER_S)
+            begin = ((self._give_way_due(encounter, goal, side, separation_m, motion) or manoeuvring)
                      and encounter.tcpa_s > 0.0 and encounter.cpa_m < s.risk_cpa_m)
         else:
             begin = index in self._acting and encounter.tcpa_s > 0.0
@@ -492,6 +522,26 @@ class CollisionDomains:
         self.alterations += 1
         LOG.info("target %d (%s): altering %.0f deg to %s (CPA %.0f m in %.0f s)", index, name, s.alteration_deg,
                  "starboard" if side > 0 else "port", encounter.cpa_m, encounter.tcpa_s)
+
+
+    def _give_way_due(self, encounter, goal: float, side: float, separation_m: float, motion) -> bool:
+        """Whether a give-way alteration to ``goal`` is due: the CPA at most
+        ``give_way_action_tcpa_s`` ahead at the present velocities or on the altered course,
+        or the last moment it still opens the CPA (plus margin) within ``ACTION_BUFFER_S``."""
+        s = self.settings
+        tcpa = encounter.tcpa_s
+        if motion is not None:  # turning away brings the CPA forward (an overtaker's most)
+            own_xy, own_speed, target_xy, target_velocity, _ = motion
+            altered = own_speed * np.array([math.cos(goal), math.sin(goal)])
+            tcpa_altered = cpa_tcpa(own_xy, altered, target_xy, target_velocity)[1]
+            if tcpa_altered > 0.0:
+                tcpa = min(tcpa, tcpa_altered)
+        latest = math.inf
+        if motion is not None:  # the last moment the alteration still opens the CPA (plus margin)
+            own_xy, _, target_xy, target_velocity, own_velocity = motion
+            latest = latest_alteration_s(own_xy, own_velocity, target_xy, target_velocity,
+                                         separation_m + s.clearance_margin_m, side)
+        return 0.0 < tcpa <= s.give_way_action_tcpa_s or latest <= ACTION_BUFFER_S
 
 
 def side_clearance_m(own_xy, own_speed_mps: float, course_rad: float, traffic, horizon_s: float = 1800.0) -> float:

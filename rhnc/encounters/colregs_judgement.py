@@ -314,19 +314,24 @@ def _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, targe
     # a stand-on ship's manoeuvre made while it gives way to another target is that
     # encounter's action (judged there, Rule 8 included), not one taken for this target
     for_another = manoeuvred and any(onset <= result["manoeuvre_time_s"] for onset in give_way_onsets_s)
+    # a target that started inside R + R_i is immediate danger from the start: the sides of
+    # Rules 14, 15 and 17(c) yield to opening the range at once (Rule 2(b), as the controller
+    # lets them), and its own criterion, the range opening, is what is judged; so for Rules 8
+    # and 16, whose size and timing hold "if the circumstances of the case admit" (8(a), (b))
+    # and "so far as possible" (16): the range must open within inside_open_within_s, less
+    # time than a readily apparent alteration takes (colregs.APPARENT_ALTERATION_TURN_S, 137 s)
+    immediate = result["started_inside"]
+    if immediate:
+        timing = []
     if give_way or (manoeuvred and encounter_class != "static"
                     and not (encounter_class in STAND_ON_CLASSES and for_another)):
         large = (result["max_course_change_deg"] >= settings.apparent_course_change_deg
-                 or result["max_speed_reduction"] >= settings.apparent_speed_reduction)
+                 or result["max_speed_reduction"] >= settings.apparent_speed_reduction or immediate)
         size = [] if large else [f"alteration {result['max_course_change_deg']:.0f} deg, speed "
                                  f"-{100 * result['max_speed_reduction']:.0f} %: not readily apparent"]
         judge("rule_8", size + timing + separation)
     if encounter_class == "overtaking":
         judge("rule_13", separation)
-    # a target that started inside R + R_i is immediate danger from the start: the sides of
-    # Rules 14, 15 and 17(c) yield to opening the range at once (Rule 2(b), as the controller
-    # lets them), and its own criterion, the range opening, is what is judged
-    immediate = result["started_inside"]
     if encounter_class == "head_on":
         side = [] if result["passing_side"] == "port" or immediate else ["passed starboard to starboard"]
         turn = ["altered to port"] if result["manoeuvre_side"] == "port" and not immediate else []

@@ -429,3 +429,18 @@ def test_a_target_starting_inside_is_judged_by_the_range_opening_not_by_a_side()
     assert result["manoeuvre_side"] == "port" and result["range_opened_in_time"]
     assert result["side_correct"] is None
     assert result["rule_14"] == PASS
+
+
+def test_rules_8_and_16_judge_a_target_starting_inside_by_the_range_opening():
+    # a ship crossing from starboard 0.54 nm off at 25 kn: immediate danger from the start; a
+    # 12 deg turn, all a ship can make before the range opens 58 s later, is what the
+    # circumstances admit (Rule 8(a), (b)), not "not readily apparent"
+    track = own_track(12, turns=[(0.1, 12.0)])
+    result = judge(track, target_states(track[0], (0.2, 0.5), 270.0, 25.0))
+    assert result["started_inside"] and result["range_opening_s"] <= 60.0
+    assert result["max_course_change_deg"] < JudgementSettings().apparent_course_change_deg
+    assert (result["rule_8"], result["rule_16"]) == (PASS, PASS), result["reasons"]
+    # the range closing for longer than 60 s still fails both
+    slow = judge(track, target_states(track[0], (0.3, 0.5), 250.0, 20.0))
+    assert slow["started_inside"] and slow["range_opening_s"] > 60.0
+    assert (slow["rule_8"], slow["rule_16"]) == (FAIL, FAIL)

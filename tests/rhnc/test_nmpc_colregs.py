@@ -275,6 +275,54 @@ def test_give_way_alteration_starts_with_the_encounter_and_ends_when_clear():
     assert passed(2.5, 940.0).alteration_floor is None and domains.alterations == 1  # not begun again
 
 
+def test_alteration_is_readily_apparent_from_the_heading_at_the_onset_of_risk():
+    # the risk begins with the ship heading north; when the alteration begins, the reference
+    # points 20 deg to port (back to the route after a detour): 35 deg from that reference
+    # would leave the ship only 15 deg off the course the other ship saw at the onset
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    start, velocity = target_on_collision_course(270.0, 15.0)
+    behind = np.array([-SPEED * 300.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    _, report = domains.parameters(np.array([[*(start - velocity * 300.0), *velocity, RADIUS]]), behind, behind[:2],
+                                   SPEED, 5.0, 230.0, et=True, reference_heading_rad=0.0, time_s=0.0)
+    assert report.class_codes[0] == ENCOUNTER_CLASSES.index("crossing_give_way") and report.alteration_floor is None
+    moved = np.array([SPEED * 60.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    _, report = domains.parameters(np.array([[*(start + velocity * 60.0), *velocity, RADIUS]]), moved, moved[:2],
+                                   SPEED, 5.0, 230.0, et=True, reference_heading_rad=math.radians(-20.0), time_s=360.0)
+    assert math.degrees(report.alteration_floor[2]) == pytest.approx(DomainSettings().alteration_deg)
+    # a reference already further to starboard than that keeps its own 35 deg
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    domains.parameters(np.array([[*(start - velocity * 300.0), *velocity, RADIUS]]), behind, behind[:2],
+                       SPEED, 5.0, 230.0, et=True, reference_heading_rad=0.0, time_s=0.0)
+    _, report = domains.parameters(np.array([[*(start + velocity * 60.0), *velocity, RADIUS]]), moved, moved[:2],
+                                   SPEED, 5.0, 230.0, et=True, reference_heading_rad=math.radians(10.0), time_s=360.0)
+    assert math.degrees(report.alteration_floor[2]) == pytest.approx(10.0 + DomainSettings().alteration_deg)
+
+
+def test_a_give_way_ship_turning_away_by_itself_is_held_to_a_readily_apparent_alteration():
+    # a ship crossing from starboard, CPA 25 min ahead (the alteration is not yet due); the
+    # NMPC has begun to turn away from the reference for it (10 deg, still turning): the
+    # alteration begins now and is held to 35 deg, not left at what opened the CPA just enough
+    start, velocity = target_on_collision_course(270.0, 15.0)
+    behind = np.array([-SPEED * 600.0, 0.0, math.radians(10.0), SPEED, 0.0, math.radians(0.3)])
+    obstacles = np.array([[*(start - velocity * 600.0), *velocity, RADIUS]])
+
+    def alteration(state):
+        domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+        _, report = domains.parameters(obstacles, state, state[:2], SPEED, 5.0, 230.0, et=True,
+                                       reference_heading_rad=0.0, time_s=0.0)
+        assert report.class_codes[0] == ENCOUNTER_CLASSES.index("crossing_give_way")
+        return report.alteration_floor
+
+    floor = alteration(behind)
+    assert floor is not None and math.degrees(floor[2]) == pytest.approx(10.0 + DomainSettings().alteration_deg)
+    returning = behind.copy()
+    returning[5] = -returning[5]  # turning back to the reference: no manoeuvre
+    assert alteration(returning) is None
+    small = behind.copy()
+    small[2] = math.radians(3.0)  # within the manoeuvre threshold
+    assert alteration(small) is None
+
+
 def test_stand_on_target_is_kept_clear_of_once_the_ship_gives_way_to_another():
     # a crossing ship from starboard (we give way, CPA in 14 min) and one from port (we stand
     # on, CPA in 25 min): once the own ship alters for the first, it no longer keeps its
@@ -547,3 +595,25 @@ def test_a_stand_on_ship_turning_back_to_its_route_acts_away_from_the_overtaker(
                                    reference_heading_rad=0.0, time_s=0.0)
     assert ENCOUNTER_CLASSES[int(report.class_codes[0])] == "overtaken" and domains._acting == {0}
     assert report.alteration_ceiling is None and report.alteration_floor is not None
+
+
+def test_a_ship_turned_half_a_turn_off_its_reference_keeps_the_reference_on_the_side_it_turned_from(kcs):
+    # a stand-on ship turning hard to starboard (alteration held: 35 deg off a reference at
+    # 0 deg) has come to 173 deg; the reference is at -8.7 deg, 181.7 deg off.  Taken on the
+    # turn nearest the heading, it jumped to +351.3 deg, and the no-port-turn bound (not
+    # below the reference less 2 deg, or the measured heading) forbade the turn back that
+    # the warm start made: the budgeted solve fell back
+    controller = NMPCController(kcs, NMPCSettings(horizon_steps=10, control_interval_s=20.0, colregs=True))
+    state = np.array([0.0, 0.0, math.radians(173.0), SPEED, 0.0, 0.0])
+    reference = line_or_turn_reference(20.0 * np.arange(11), (0.0, 0.0), math.radians(-8.7), SPEED)
+    free = controller._trimmed_reference(0.0, state, reference)[0]
+    assert math.degrees(free[0, 2]) == pytest.approx(351.3, abs=0.5)  # no alteration held: nearest turn
+    controller.domains._altering = {1: (0.0, 0.0, math.radians(35.0), 1.0)}
+    held = controller._trimmed_reference(0.0, state, reference)[0]
+    assert math.degrees(held[0, 2]) == pytest.approx(-8.7, abs=0.5)
+    # mirrored: an alteration to port held, the ship at -173 deg, the reference at +8.7 deg
+    controller.domains._altering = {1: (0.0, 0.0, math.radians(-35.0), -1.0)}
+    port_state = np.array([0.0, 0.0, math.radians(-173.0), SPEED, 0.0, 0.0])
+    mirrored = controller._trimmed_reference(0.0, port_state, line_or_turn_reference(
+        20.0 * np.arange(11), (0.0, 0.0), math.radians(8.7), SPEED))[0]
+    assert math.degrees(mirrored[0, 2]) == pytest.approx(8.7, abs=0.5)
