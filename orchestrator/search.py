@@ -97,6 +97,10 @@ def make_sampler(kind: str, seed: int, evaluation: int):
         return optuna.samplers.RandomSampler(seed=stream)
     if kind == "cmaes":
         return optuna.samplers.CmaEsSampler(seed=stream)
+    if kind == "tpe-restart":
+        from orchestrator.search_samplers import RestartingTPE
+
+        return RestartingTPE(seed=stream)
     return optuna.samplers.TPESampler(seed=stream, multivariate=True, group=True, constant_liar=True)
 
 
