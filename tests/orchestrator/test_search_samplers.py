@@ -18,6 +18,10 @@ def test_an_epoch_ends_after_stall_evaluations_without_a_new_best():
     # a new epoch's best starts afresh: 9.0 is its best though worse than the last epoch's
     assert epoch_start([1.0, 2.0, 2.0, 9.0, 8.0, 9.0], 2) == 3
     assert epoch_start([1.0, 2.0, 2.0, 9.0, 8.0, 9.0, 9.0], 2) == 7
+    # periodic: every period evaluations, new bests or not
+    assert epoch_start([-float(i) for i in range(7)], 2, period=3) == 6
+    assert epoch_start([-float(i) for i in range(6)], 2, period=3) == 6
+    assert epoch_start([1.0] * 5, 2, period=3) == 3
 
 
 def _study_with(values, xs):
@@ -73,6 +77,12 @@ def test_the_search_knows_the_sampler_and_a_fresh_one_asks_the_same():
     first = _asked([0.0] + [1.0] * 14, [0.5] * 15, lambda s: make_sampler("tpe-restart", 3, s), [16, 17])
     assert _asked([0.0] + [1.0] * 14, [0.5] * 15, lambda s: make_sampler("tpe-restart", 3, s), [16, 17]) == first
     assert isinstance(make_sampler("tpe-restart", 1, 0), RestartingTPE)
+    # periodic: 45 evaluations improving every time, a new epoch at 40 with 5 done: still its start-up
+    periodic = _asked([-float(i) for i in range(45)], [0.3] * 45, lambda s: make_sampler("tpe-periodic", 3, s),
+                      range(100))
+    assert sum(x in (0.0, 1.0) for x in periodic) >= 30
+    assert not any(x in (0.0, 1.0) for x in _asked([-float(i) for i in range(45)], [0.3] * 45,
+                                                      lambda s: make_sampler("tpe-restart", 3, s), range(100)))
 
 
 @pytest.mark.parametrize("edge", [0.0, 0.5])
