@@ -90,7 +90,7 @@ def _add_batch_commands(sub) -> None:
                                            "an objective (optuna; resumable; docs/search.md)")
     search.add_argument("search", help="search TOML file (a batch file with a [search] table)")
     search.add_argument("--evaluations", type=int, default=None, help="budget (default: the file's)")
-    search.add_argument("--sampler", default=None, help="tpe, cmaes or random (default: the file's)")
+    search.add_argument("--sampler", default=None, help="tpe, cmaes, tpe-restart, tpe-periodic or random (default: the file's)")
     search.add_argument("--seed", type=int, default=None, help="the optimiser's seed (default: the file's)")
     search.add_argument("--fails-below", type=float, default=None, metavar="X",
                         help="a run whose objective is below X is a failure (default: the file's fails_below); "

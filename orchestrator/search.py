@@ -97,6 +97,10 @@ def make_sampler(kind: str, seed: int, evaluation: int):
         return optuna.samplers.RandomSampler(seed=stream)
     if kind == "cmaes":
         return optuna.samplers.CmaEsSampler(seed=stream)
+    if kind in ("tpe-restart", "tpe-periodic"):
+        from orchestrator.search_samplers import PERIOD, RestartingTPE
+
+        return RestartingTPE(seed=stream, period=PERIOD if kind == "tpe-periodic" else None)
     return optuna.samplers.TPESampler(seed=stream, multivariate=True, group=True, constant_liar=True)
 
 

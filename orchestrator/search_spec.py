@@ -24,8 +24,9 @@ from orchestrator.errors import ScenarioError
 from orchestrator.toml_input import (Finite, FolderName, NonNegativeInt, PositiveInt, TomlTable, checked, fail,
                                      one_of)
 
-#: Optimisers (optuna samplers): TPE (default), CMA-ES, and uniform random sampling of the same ranges.
-SAMPLERS = ("tpe", "cmaes", "random")
+#: Optimisers (optuna samplers): TPE (default), CMA-ES, TPE restarted when it stalls or
+#: periodically (:mod:`orchestrator.search_samplers`), and uniform random sampling of the same ranges.
+SAMPLERS = ("tpe", "cmaes", "tpe-restart", "tpe-periodic", "random")
 #: Most evaluations one search may ask for.
 MAX_EVALUATIONS = 100_000
 

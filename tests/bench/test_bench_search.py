@@ -53,9 +53,13 @@ def test_seeds_not_declared_are_refused(bench, tmp_path, capsys):
     assert not (tmp_path / "results").exists()
 
 
-def test_the_declared_comparison_is_valid(bench):
+def test_the_declared_comparisons_are_valid(bench):
     table, search = bench.load_comparison(REPO / "bench" / "search_vs_random.toml")
     assert search == REPO / "batches" / "search_rhnc.toml" and table.fails_below_nm < 0
+    for name, optimiser in [("watched", "tpe"), ("restart", "tpe-restart"), ("periodic", "tpe-periodic")]:
+        table, search = bench.load_comparison(REPO / "bench" / f"search_vs_random_{name}.toml")
+        assert search == REPO / "batches" / "search_rhnc_watched.toml" and table.fails_below_nm == -0.5
+        assert table.optimiser == optimiser and table.baseline == "random"
 
 
 def test_a_baseline_that_found_nothing_counts_as_its_budget_at_least(bench):

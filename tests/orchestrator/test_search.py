@@ -130,8 +130,9 @@ def test_search_evaluates_its_budget_and_writes_what_it_found(search_file, tmp_p
 
 
 @pytest.mark.slow
-def test_search_is_seeded_and_a_resumed_search_equals_an_uninterrupted_one(search_file, tmp_path):
-    path = search_file()
+@pytest.mark.parametrize("sampler", ["tpe", "tpe-restart"])
+def test_search_is_seeded_and_a_resumed_search_equals_an_uninterrupted_one(search_file, tmp_path, sampler):
+    path = search_file(SEARCH.replace("worst = 2", f"worst = 2\nsampler = \"{sampler}\""))
     whole = run_search(path, tmp_path / "whole", workers=2, progress=False, report=False)
     folder = tmp_path / "part" / "small_search"
     run_search(path, tmp_path / "part", workers=1, progress=False, evaluations=3, report=False)
