@@ -304,7 +304,9 @@ def fit_coefficients(records: dict[str, Record], tau_u_max: float, tau_r_max: fl
     if set(HULL_POLYNOMIAL_KEYS) & set(names):
         solution = _dissipative_solution(a / norms, b, solution, (lower, upper),
                                          power_rows(names, envelope_directions(*sailed_envelope(records))) / norms)
-    theta = solution / norms
+        theta, _ = _made_dissipative(solution / norms, names, records)   # exact, between the grid's directions too
+    else:
+        theta = solution / norms
     residual = a @ theta - b
     counts = [block[2] for block in blocks]
     # rows are stacked per record as [surge, sway, yaw]; gather each equation's rows
@@ -333,6 +335,13 @@ def sailed_envelope(records: dict[str, Record]) -> tuple[float, float]:
     states = np.vstack([records[name].states for name in FIT_MANOEUVRES if name in records])
     return max(float(np.max(np.abs(states[:, 4]))), 0.01), max(float(np.max(np.abs(states[:, 5]))),
                                                               math.radians(0.01))
+
+
+def _made_dissipative(theta: np.ndarray, names: tuple[str, ...], records: dict[str, Record]) -> tuple[np.ndarray, float]:
+    """``theta`` with its polynomial made dissipative on the sailed envelope
+    (:func:`rhnc.ship.physical_bounds.make_dissipative`) and the power that took [W]."""
+    values, added = make_dissipative(dict(zip(names, (float(value) for value in theta))), *sailed_envelope(records))
+    return np.array([values[name] for name in names]), added
 
 
 def _dissipative_solution(a: np.ndarray, b: np.ndarray, start: np.ndarray, bounds: tuple, power: np.ndarray):
@@ -431,8 +440,7 @@ def refine_output_error(records: dict[str, Record], theta: np.ndarray,
     refined = result.x * np.array([max(unit[name], 1e-12) for name in names])
     note = f"refined: cost {before:.4g} -> {result.cost:.4g} in {result.nfev} evaluations"
     if sign_free:
-        values, added = make_dissipative(dict(zip(names, refined)), *sailed_envelope(records))
-        refined = np.array([values[name] for name in names])
+        refined, added = _made_dissipative(refined, names, records)
         if added > 0.0:
             note += f"; cubic damping strengthened by {added:.3g} W at the sailed amplitudes to stay dissipative"
     return refined, note
