@@ -201,6 +201,9 @@ def test_the_model_class_is_chosen_by_held_out_error(plant_class):
                          true.tau_r_max, "fitted", refine=False)
     assert fit.model_class == plant_class
     assert fit.validation["held_out: zigzag_20"]["heading_rms_deg"] < 0.2
+    # without the ship's particulars the hull-polynomial class is not fitted, and the report says why
+    assert fit.class_errors["coupled mass, cubic damping"] is None
+    assert "needs the ship's particulars (identify --ship)" in fit.notes[-1]
     if plant_class != "linear":
         assert fit.class_errors["linear"] > 5 * fit.class_errors[plant_class]
         assert fit.parameters.m23 == pytest.approx(true.m23, rel=0.05)
