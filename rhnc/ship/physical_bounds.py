@@ -159,7 +159,8 @@ def is_dissipative(values, sway_mps: float, yaw_rate_rad_s: float, tolerance: fl
     c = form / scale
     if c[0] > tolerance or c[4] > tolerance:
         return False
-    stationary = np.polynomial.polynomial.polyroots(np.polynomial.polynomial.polyder(c)) if np.any(c[1:]) else []
+    stationary: np.ndarray = (np.polynomial.polynomial.polyroots(np.polynomial.polynomial.polyder(c))
+                              if np.any(c[1:]) else np.zeros(0))
     real = np.array([root.real for root in np.atleast_1d(stationary) if abs(root.imag) <= 1e-9 * max(1.0, abs(root))])
     return bool(np.all(np.polynomial.polynomial.polyval(real, c) / (1.0 + real ** 4) <= tolerance))
 
