@@ -633,11 +633,15 @@ def _fit_candidates(records: dict[str, Record], tau_u_max: float, tau_r_max: flo
     candidates = {}
     for class_name in classes:
         names = MODEL_CLASSES[class_name]
-        if masses is None and set(HULL_POLYNOMIAL_KEYS) & set(names):
+        polynomial = bool(set(HULL_POLYNOMIAL_KEYS) & set(names))
+        if masses is None and polynomial:
             LOG.info("model class %s: not fitted without the ship's particulars (the mass matrix's bounds)",
                      class_name)
             continue
-        equation_error, fitted, rms, r2, note = _fit_class(records, tau_u_max, tau_r_max, names, refine, masses)
+        # the narrower classes keep their free masses: without the polynomial's structure an
+        # effective mass is part of what they fit (bounded, the KVLCC2's held-out errors grew)
+        equation_error, fitted, rms, r2, note = _fit_class(records, tau_u_max, tau_r_max, names, refine,
+                                                           masses if polynomial else None)
         cost = _model_cost(fitted, records) if fitted is not None else math.inf
         if refine and fitted is not None and equation_error is not None:
             # the refinement fits the fitting manoeuvres; where the class lacks the plant's
