@@ -46,6 +46,9 @@ class IdentifyCommand:
         parser.add_argument("--set", dest="set_name", default=None,
                             help="name of the set (default: the FMU's model name)")
         parser.add_argument("--out", default=None, help="also write the parameter-set file here")
+        parser.add_argument("--ship", default=None,
+                            help="the ship's particulars (a name in ships/ or a ship TOML file): bound the mass "
+                                 "matrix of the model class with the hull polynomial, which is fitted only with them")
         parser.add_argument("--results", default="results", help="results folder (default: ./results)")
 
     @staticmethod
@@ -54,7 +57,7 @@ class IdentifyCommand:
 
         report = run_identify(args.scenario, args.results, plant=args.plant, speed_kn=args.speed_kn,
                               tau_u_max_N=args.tau_u_max_N, tau_r_max_Nm=args.tau_r_max_Nm,
-                              set_name=args.set_name, out=args.out)
+                              set_name=args.set_name, out=args.out, ship=args.ship)
         held = report.report["open_loop_errors"][f"held_out: {report.report['held_out']}"]
         print(f"finished: results in {report.folder}")
         print(f"  parameter set '{report.report['set']}' in {report.parameter_file}")

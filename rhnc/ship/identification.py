@@ -62,6 +62,8 @@ import numpy as np
 
 from orchestrator.errors import ScenarioError, ToolchainError
 from orchestrator.geometry import KNOT
+from rhnc.ship.physical_bounds import (MassBounds, envelope_directions, is_dissipative, make_dissipative,
+                                       power_rows)
 from rhnc.ship.prediction_error import position_error_growth
 from rhnc.ship.ship_model import (HULL_POLYNOMIAL, HULL_POLYNOMIAL_KEYS, STATE_NAMES, ShipParameters,
                                    equations_of_motion, rk4_states, rk4_step)
@@ -92,6 +94,8 @@ NOT_NEGATIVE = ("d11q", "d22q", "d33q")
 #: quadratic-damping fit predicts the held-out zig-zag to 0.01 deg) fell back to the linear
 #: class (0.06 deg) and its coefficients drifted 4 % from the plant's.
 WIDER_CLASS_GAIN = 0.02
+#: Weight of the polynomial's positive power (per the linear damping's) in the refinement.
+POWER_PENALTY = 100.0
 WIDER_CLASS_MARGIN = 0.1
 #: A manoeuvre stops when the ship is slower than this fraction of the service speed.
 SLOWEST_FRACTION = 0.2
@@ -270,12 +274,16 @@ def regression_rows(record: Record, scales: tuple[float, float, float]):
 
 
 def fit_coefficients(records: dict[str, Record], tau_u_max: float, tau_r_max: float,
-                     names: tuple[str, ...] = COEFFICIENTS) -> tuple[np.ndarray, dict, dict]:
+                     names: tuple[str, ...] = COEFFICIENTS,
+                     masses: MassBounds | None = None) -> tuple[np.ndarray, dict, dict]:
     """Bounded least-squares coefficients (in the order of ``names``), residual RMS and R² per equation.
 
     Masses and direct damping are kept positive (at least 1e-6 of the scale of their
     column), quadratic damping not negative; the columns are scaled by their norms, so the
-    problem is well conditioned whatever the ship's size.
+    problem is well conditioned whatever the ship's size.  With ``masses`` the mass matrix
+    stays within their bounds; with the hull polynomial among ``names`` its power stays
+    dissipative on the sailed envelope's directions (:mod:`rhnc.ship.physical_bounds`: linear
+    inequalities, solved as a quadratic programme).
     """
     from scipy.optimize import lsq_linear
 
@@ -287,8 +295,18 @@ def fit_coefficients(records: dict[str, Record], tau_u_max: float, tau_r_max: fl
     norms = np.linalg.norm(a, axis=0)
     norms[norms == 0.0] = 1.0
     lower = np.array([1e-6 if n in POSITIVE else 0.0 if n in NOT_NEGATIVE else -np.inf for n in names])
-    solution = lsq_linear(a / norms, b, bounds=(lower, np.full(len(names), np.inf)), method="bvls").x
-    theta = solution / norms
+    upper = np.full(len(names), np.inf)
+    for name, (low, high) in (masses.bounds.items() if masses is not None else ()):
+        if name in names:
+            lower[names.index(name)], upper[names.index(name)] = low * norms[names.index(name)], \
+                high * norms[names.index(name)]
+    solution = lsq_linear(a / norms, b, bounds=(lower, upper), method="bvls").x
+    if set(HULL_POLYNOMIAL_KEYS) & set(names):
+        solution = _dissipative_solution(a / norms, b, solution, (lower, upper),
+                                         power_rows(names, envelope_directions(*sailed_envelope(records))) / norms)
+        theta, _ = _made_dissipative(solution / norms, names, records)   # exact, between the grid's directions too
+    else:
+        theta = solution / norms
     residual = a @ theta - b
     counts = [block[2] for block in blocks]
     # rows are stacked per record as [surge, sway, yaw]; gather each equation's rows
@@ -311,6 +329,42 @@ def fit_coefficients(records: dict[str, Record], tau_u_max: float, tau_r_max: fl
     return theta, rms, r2
 
 
+def sailed_envelope(records: dict[str, Record]) -> tuple[float, float]:
+    """The largest sway speed [m/s] and yaw rate [rad/s] of the fitting manoeuvres (floors:
+    1 cm/s, 0.01 deg/s): the amplitudes the hull polynomial's power is judged at."""
+    states = np.vstack([records[name].states for name in FIT_MANOEUVRES if name in records])
+    return max(float(np.max(np.abs(states[:, 4]))), 0.01), max(float(np.max(np.abs(states[:, 5]))),
+                                                              math.radians(0.01))
+
+
+def _made_dissipative(theta: np.ndarray, names: tuple[str, ...], records: dict[str, Record]) -> tuple[np.ndarray, float]:
+    """``theta`` with its polynomial made dissipative on the sailed envelope
+    (:func:`rhnc.ship.physical_bounds.make_dissipative`) and the power that took [W]."""
+    values, added = make_dissipative(dict(zip(names, (float(value) for value in theta))), *sailed_envelope(records))
+    return np.array([values[name] for name in names]), added
+
+
+def _dissipative_solution(a: np.ndarray, b: np.ndarray, start: np.ndarray, bounds: tuple, power: np.ndarray):
+    """``min |a z - b|^2`` within ``bounds`` and with ``power @ z <= 0`` (a quadratic programme,
+    scipy's SLSQP on the normal equations), from ``start``; the start itself when it already
+    keeps the power's sign."""
+    from scipy.optimize import minimize
+
+    rows = power / np.maximum(np.linalg.norm(power, axis=1, keepdims=True), 1e-300)
+    if np.all(rows @ start <= 0.0):
+        return start
+    hessian, gradient = a.T @ a, a.T @ b
+    lower, upper = bounds
+    feasible = start.copy()
+    feasible[np.any(rows != 0.0, axis=0)] = 0.0          # the polynomial zero: dissipative
+    feasible = np.clip(feasible, lower, upper)
+    result = minimize(lambda z: 0.5 * z @ hessian @ z - gradient @ z, feasible, jac=lambda z: hessian @ z - gradient,
+                      method="SLSQP", bounds=list(zip(lower, upper)),
+                      constraints=[{"type": "ineq", "fun": lambda z: -rows @ z, "jac": lambda z: -rows}],
+                      options={"maxiter": 1000, "ftol": 1e-14})
+    return result.x if np.all(np.isfinite(result.x)) else feasible
+
+
 def _coefficient_scales(theta: dict[str, float], speed_mps: float) -> dict[str, float]:
     """Typical magnitude of every coefficient, from the linear ones: the unit of the
     refinement's variables (so all are of order one) and the floor of a zero start."""
@@ -331,7 +385,8 @@ def _coefficient_scales(theta: dict[str, float], speed_mps: float) -> dict[str, 
 
 
 def refine_output_error(records: dict[str, Record], theta: np.ndarray,
-                        names: tuple[str, ...] = COEFFICIENTS) -> tuple[np.ndarray, str]:
+                        names: tuple[str, ...] = COEFFICIENTS,
+                        masses: MassBounds | None = None) -> tuple[np.ndarray, str]:
     """Coefficients improving ``theta`` (in the order of ``names``) on the simulation error
     of the fitting manoeuvres, and a note on how it went.
 
@@ -346,7 +401,10 @@ def refine_output_error(records: dict[str, Record], theta: np.ndarray,
     the start (sign kept), quadratic damping in [0, 5 x its typical value], m23 within half
     the geometric mean of m22 and m33.  A model that diverges on a manoeuvre counts as a
     large error there instead of stopping the fit; if the optimiser still fails the start
-    is kept.
+    is kept.  With ``masses`` the mass matrix stays within their bounds instead.  With the
+    hull polynomial its power on the sailed envelope's directions is penalised where
+    positive, and what is left of that afterwards is taken out by the pure cubic damping
+    (:func:`rhnc.ship.physical_bounds.make_dissipative`), so the result is dissipative.
     """
     from scipy.optimize import least_squares
 
@@ -357,7 +415,7 @@ def refine_output_error(records: dict[str, Record], theta: np.ndarray,
     sign_free = SIGN_FREE_WITH_POLYNOMIAL if set(HULL_POLYNOMIAL_KEYS) & set(names) else ()
     for name in sign_free:   # a cross-coupling near zero may still change sign: a floor for its unit
         unit[name] = max(unit[name], 0.1 * math.sqrt(full["d22"] * full["d33"]))
-    z0, lower, upper = _scaled_start_and_bounds(names, start, full, unit, sign_free)
+    z0, lower, upper = _scaled_start_and_bounds(names, start, full, unit, sign_free, masses)
     z0 = np.clip(np.array(z0), lower, upper)
     if np.any(np.array(lower) >= np.array(upper)):
         return np.asarray(theta, dtype=float), "not refined: a coefficient is zero"
@@ -379,21 +437,30 @@ def refine_output_error(records: dict[str, Record], theta: np.ndarray,
         return np.asarray(theta, dtype=float), "not refined: the optimiser found nothing better"
     LOG.info("output-error refinement: %s after %d evaluations, cost %.4g -> %.4g", result.message,
              result.nfev, before, result.cost)
-    return result.x * np.array([max(unit[name], 1e-12) for name in names]), \
-        f"refined: cost {before:.4g} -> {result.cost:.4g} in {result.nfev} evaluations"
+    refined = result.x * np.array([max(unit[name], 1e-12) for name in names])
+    note = f"refined: cost {before:.4g} -> {result.cost:.4g} in {result.nfev} evaluations"
+    if sign_free:
+        refined, added = _made_dissipative(refined, names, records)
+        if added > 0.0:
+            note += f"; cubic damping strengthened by {added:.3g} W at the sailed amplitudes to stay dissipative"
+    return refined, note
 
 
-def _scaled_start_and_bounds(names, start: dict, full: dict, unit: dict,
-                             sign_free: tuple[str, ...] = ()) -> tuple[list, list, list]:
+def _scaled_start_and_bounds(names, start: dict, full: dict, unit: dict, sign_free: tuple[str, ...] = (),
+                             masses: MassBounds | None = None) -> tuple[list, list, list]:
     """The start and bounds of the coefficients divided by their typical magnitudes ``unit``
     (see :func:`refine_output_error`); the hull polynomial and the names in ``sign_free``
-    within +-5 times the larger of their start and their unit, either sign."""
+    within +-5 times the larger of their start and their unit, either sign; the masses
+    within ``masses``' bounds when given."""
     z0, lower, upper = [], [], []
     for name in names:
         scale = max(unit[name], 1e-12)
         value = start[name] / scale
         z0.append(value)
-        if name in HULL_POLYNOMIAL or name in sign_free:
+        if masses is not None and name in masses.bounds:
+            lower.append(masses.bounds[name][0] / scale)
+            upper.append(masses.bounds[name][1] / scale)
+        elif name in HULL_POLYNOMIAL or name in sign_free:
             bound = 5.0 * max(abs(value), 1.0)
             lower.append(-bound)
             upper.append(bound)
@@ -443,6 +510,14 @@ def _simulation_error(records: dict[str, Record], names, full: dict, unit: dict)
         trajectory = step.mapaccum(n)(ca.DM(measured[0]), ca.DM(record.tau[:n].T), ca.repmat(variables, 1, n))
         error = (trajectory - ca.DM(measured[1:].T)) * ca.DM(weights)
         residuals.append(ca.vec(error) / math.sqrt(n))
+    if set(HULL_POLYNOMIAL_KEYS) & set(names):
+        # the polynomial's power where positive on the envelope's directions, per the linear
+        # damping's power there: a penalty that keeps the refinement near the dissipative set
+        sway, rate = sailed_envelope(records)
+        rows = power_rows(tuple(names), envelope_directions(sway, rate))
+        power = ca.mtimes(ca.DM(rows), ca.vertcat(*[symbolic[name] for name in names]))
+        reference = abs(full["d22"]) * sway ** 2 + abs(full["d33"]) * rate ** 2
+        residuals.append(POWER_PENALTY * ca.fmax(power, 0.0) / max(reference, 1e-12))
     stacked = ca.vertcat(*residuals)
     evaluate = ca.Function("residual", [variables], [stacked])
     jacobian = ca.Function("jacobian", [variables], [ca.jacobian(stacked, variables)])
@@ -498,50 +573,75 @@ def validation_errors(record: Record, predicted: np.ndarray) -> dict[str, float]
     }
 
 
-def _fit_class(records, tau_u_max, tau_r_max, names, refine):
-    """One class fitted: (equation-error parameters, final parameters, rms, r2, note) or a reason it failed."""
-    equation_error, rms, r2 = fit_coefficients(records, tau_u_max, tau_r_max, names)
+def physical(coefficients: dict, records: dict[str, Record], masses: MassBounds | None = None) -> bool:
+    """True for coefficients a prediction model may have: finite, a positive definite mass
+    matrix; with the hull polynomial also masses within ``masses``' bounds and a dissipative
+    polynomial on the sailed envelope (:mod:`rhnc.ship.physical_bounds`)."""
+    if not all(math.isfinite(value) for value in coefficients.values()):
+        return False
+    if coefficients["m22"] * coefficients["m33"] <= coefficients.get("m23", 0.0) ** 2:
+        return False
+    if not any(coefficients.get(name, 0.0) != 0.0 for name in HULL_POLYNOMIAL_KEYS):
+        return True
+    return masses is not None and masses.contains(coefficients) and is_dissipative(coefficients,
+                                                                                 *sailed_envelope(records))
+
+
+def _fit_class(records, tau_u_max, tau_r_max, names, refine, masses=None):
+    """One class fitted: (equation-error parameters, final parameters, rms, r2, note); a fit
+    that is not :func:`physical` is None."""
+    equation_error, rms, r2 = fit_coefficients(records, tau_u_max, tau_r_max, names, masses)
     note = "equation error only"
     theta = equation_error
     if refine:
-        theta, note = refine_output_error(records, equation_error, names)
+        theta, note = refine_output_error(records, equation_error, names, masses)
 
     def parameters(values, label):
         coefficients = {name: 0.0 for name in ALL_COEFFICIENTS}
         coefficients.update(zip(names, (float(v) for v in values)))
-        if not all(math.isfinite(v) for v in coefficients.values()):
+        if not physical(coefficients, records, masses):
             return None
-        if coefficients["m22"] * coefficients["m33"] <= coefficients["m23"] ** 2:
-            return None   # the mass matrix must be positive definite
         return ShipParameters(**coefficients, tau_u_max=float(tau_u_max), tau_r_max=float(tau_r_max), name=label)
 
     return parameters(equation_error, "equation error only"), parameters(theta, "fitted"), rms, r2, note
 
 
-def _refined_from_narrower(records: dict[str, Record], names: tuple[str, ...], candidates: dict):
+def _refined_from_narrower(records: dict[str, Record], names: tuple[str, ...], candidates: dict,
+                           masses: MassBounds | None = None):
     """The class ``names`` refined from the narrower candidate with the smallest held-out cost
-    (its coefficients, the others zero): (parameters or None, note)."""
+    (its coefficients, the others zero; its masses brought within ``masses``' bounds):
+    (parameters or None, note)."""
     narrower_name = min(candidates, key=lambda name: candidates[name][0])
     narrower = candidates[narrower_name][2]
     if not math.isfinite(candidates[narrower_name][0]):
         return None, "no finite narrower class to start from"
-    start = np.array([getattr(narrower, name) for name in names])
-    theta, note = refine_output_error(records, start, names)
+    start = {name: getattr(narrower, name) for name in names}
+    for name, (low, high) in (masses.bounds.items() if masses is not None else ()):
+        start[name] = min(max(start[name], low), high)
+    theta, note = refine_output_error(records, np.array([start[name] for name in names]), names, masses)
     parameters = dataclasses.replace(narrower, **dict(zip(names, (float(v) for v in theta))))
-    if parameters.m22 * parameters.m33 <= parameters.m23 ** 2:
-        return None, "not positive definite"
+    if not physical({name: getattr(parameters, name) for name in ALL_COEFFICIENTS}, records, masses):
+        return None, "not physical"
     return parameters, f"from the {narrower_name} model, {note}"
 
 
 def _fit_candidates(records: dict[str, Record], tau_u_max: float, tau_r_max: float, classes: tuple[str, ...],
-                    refine: bool) -> dict:
+                    refine: bool, masses: MassBounds | None = None) -> dict:
     """Every class fitted and scored on the held-out manoeuvre: name -> (held-out cost,
     equation-error parameters, chosen parameters, residual RMS, R², note); a class without a
-    physical fit is left out."""
+    physical fit is left out, and so is the hull polynomial's without ``masses``."""
     candidates = {}
     for class_name in classes:
         names = MODEL_CLASSES[class_name]
-        equation_error, fitted, rms, r2, note = _fit_class(records, tau_u_max, tau_r_max, names, refine)
+        polynomial = bool(set(HULL_POLYNOMIAL_KEYS) & set(names))
+        if masses is None and polynomial:
+            LOG.info("model class %s: not fitted without the ship's particulars (the mass matrix's bounds)",
+                     class_name)
+            continue
+        # the narrower classes keep their free masses: without the polynomial's structure an
+        # effective mass is part of what they fit (bounded, the KVLCC2's held-out errors grew)
+        equation_error, fitted, rms, r2, note = _fit_class(records, tau_u_max, tau_r_max, names, refine,
+                                                           masses if polynomial else None)
         cost = _model_cost(fitted, records) if fitted is not None else math.inf
         if refine and fitted is not None and equation_error is not None:
             # the refinement fits the fitting manoeuvres; where the class lacks the plant's
@@ -554,7 +654,7 @@ def _fit_candidates(records: dict[str, Record], tau_u_max: float, tau_r_max: flo
             # the polynomial's equation-error fit extrapolates and may run away: refine also from
             # the best narrower class's model, its polynomial zero, so the class starts where
             # the narrower one ended and can only improve on it
-            nested, nested_note = _refined_from_narrower(records, names, candidates)
+            nested, nested_note = _refined_from_narrower(records, names, candidates, masses)
             nested_cost = _model_cost(nested, records) if nested is not None else math.inf
             if nested_cost < cost:
                 cost, fitted, note = nested_cost, nested, nested_note
@@ -568,8 +668,11 @@ def _fit_candidates(records: dict[str, Record], tau_u_max: float, tau_r_max: flo
 
 def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_name: str,
                    reference: ShipParameters | None = None, refine: bool = True,
-                   classes: tuple[str, ...] = tuple(MODEL_CLASSES)) -> Fit:
+                   classes: tuple[str, ...] = tuple(MODEL_CLASSES), masses: MassBounds | None = None) -> Fit:
     """Sail the manoeuvres, fit every model class, keep the one best on the held-out manoeuvre.
+
+    ``masses`` (the mass matrix the ship's particulars give, :mod:`rhnc.ship.physical_bounds`)
+    bound the class with the hull polynomial; without them that class is not fitted.
 
     ``reference`` (a model to compare with, e.g. the one the NMPC used before) is
     validated the same way under ``validation["held_out with <name>"]``.
@@ -590,7 +693,7 @@ def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_
                              "--speed-kn")
     records = {name: record for name, record in records.items() if name not in short}
     held_out = records[VALIDATION_MANOEUVRE]
-    candidates = _fit_candidates(records, tau_u_max, tau_r_max, classes, refine)
+    candidates = _fit_candidates(records, tau_u_max, tau_r_max, classes, refine, masses)
     class_errors = {name: (candidates[name][0] if name in candidates else None) for name in classes}
     finite = [name for name in candidates if math.isfinite(candidates[name][0])]
     if not finite:
@@ -620,6 +723,11 @@ def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_
     parameters = dataclasses.replace(parameters, extras={"position_error_growth_mps": error["growth_mps"],
                                                          "model_class": chosen})
     notes = list(runner.notes) + [f"{chosen}: {note}"]
+    if masses is None and any(set(MODEL_CLASSES[name]) & set(HULL_POLYNOMIAL_KEYS) for name in classes):
+        notes.append("the class with the hull polynomial was not fitted: it needs the ship's particulars "
+                     "(identify --ship) to bound the mass matrix")
+    elif masses is not None:
+        notes.append(f"mass matrix of the hull-polynomial class bounded from {masses.source}")
     return Fit(parameters, trim, rms, r2, validation, records, predictions, error, chosen, class_errors, notes)
 
 

@@ -148,8 +148,11 @@ def _own_names(spec, scenario) -> set[str]:
 
 def run_identify(scenario_path, results_root="results", plant: str | None = None, speed_kn: float = 18.0,
                  tau_u_max_N: float | None = None, tau_r_max_Nm: float | None = None,
-                 set_name: str | None = None, out: Path | None = None) -> IdentifyReport:
+                 set_name: str | None = None, out: Path | None = None, ship: str | None = None) -> IdentifyReport:
     """Identify the prediction model on the scenario's plant FMU and write the results.
+
+    ``ship`` (a name in ``ships/`` or a ship TOML file) gives the particulars that bound the
+    mass matrix of the model class with the hull polynomial (:mod:`rhnc.ship.physical_bounds`).
 
     Raises
     ------
@@ -162,6 +165,7 @@ def run_identify(scenario_path, results_root="results", plant: str | None = None
     from orchestrator.fmu_participant import FmuParticipant, resolve_fmu
 
     tau_u_max, tau_r_max = check_bounds(tau_u_max_N, tau_r_max_Nm)
+    masses = _ship_masses(ship)
     if not (speed_kn > 0):
         raise ScenarioError(f"identify: --speed-kn must be positive, got {speed_kn}")
     scenario = load_scenario(scenario_path)
@@ -178,7 +182,8 @@ def run_identify(scenario_path, results_root="results", plant: str | None = None
     probe_report = probe_plant(build, speed_kn * KNOT, tau_u_max, tau_r_max, where)
     name = set_name or identity["model_name"]
     kcs = load_parameter_set("default")
-    fit = identify_model(PlantRunner(build, speed_kn * KNOT), tau_u_max, tau_r_max, name, reference=kcs)
+    fit = identify_model(PlantRunner(build, speed_kn * KNOT), tau_u_max, tau_r_max, name, reference=kcs,
+                         masses=masses)
     source = Path(scenario_path).as_posix()
     toml_text = parameter_set_toml(fit, {**identity, "through": allocation[0].name if allocation else None}, source)
     folder = RunFolder(Path(results_root), f"identify/{name}", new_run_id(scenario.sha256))
@@ -202,6 +207,21 @@ def run_identify(scenario_path, results_root="results", plant: str | None = None
         out.write_text(toml_text)
         parameter_file = out
     return IdentifyReport(final, parameter_file, report)
+
+
+def _ship_masses(ship: str | None):
+    """The mass bounds from the particulars of ``ship`` (a name in ships/ or a TOML file), or None."""
+    from rhnc.ship.physical_bounds import mass_from_particulars
+    from rhnc.ship.ships import load_ship
+
+    if ship is None:
+        return None
+    path = Path(ship)
+    if path.suffix == ".toml":
+        if not path.is_file():
+            raise ScenarioError(f"identify: --ship {ship}: file not found")
+        return mass_from_particulars(load_ship(path.stem, path.resolve().parent))
+    return mass_from_particulars(load_ship(ship))
 
 
 def _manoeuvre_plants(scenario, spec, path: Path, where: str):

@@ -201,6 +201,9 @@ def test_the_model_class_is_chosen_by_held_out_error(plant_class):
                          true.tau_r_max, "fitted", refine=False)
     assert fit.model_class == plant_class
     assert fit.validation["held_out: zigzag_20"]["heading_rms_deg"] < 0.2
+    # without the ship's particulars the hull-polynomial class is not fitted, and the report says why
+    assert fit.class_errors["coupled mass, cubic damping"] is None
+    assert "needs the ship's particulars (identify --ship)" in fit.notes[-1]
     if plant_class != "linear":
         assert fit.class_errors["linear"] > 5 * fit.class_errors[plant_class]
         assert fit.parameters.m23 == pytest.approx(true.m23, rel=0.05)
@@ -215,6 +218,14 @@ def _full_hull_kcs() -> ShipParameters:
                  x_vv=-0.5 * kcs.d11 * 9.26 / v**2, x_rr=0.3 * kcs.d11 * 9.26 / r**2,
                  y_vvv=-2.0 * kcs.d22 / v**2, y_vrr=-kcs.d22 / r**2,
                  n_vvr=-0.5 * kcs.d33 / v**2, n_rrr=-0.3 * kcs.d33 / r**2)
+
+
+def _masses_of(true: ShipParameters, factor: float = 1.0):
+    """Mass bounds about ``factor`` times the masses of a known model, as the particulars give them."""
+    from rhnc.ship.physical_bounds import MassBounds
+
+    return MassBounds.around({name: factor * getattr(true, name) for name in ("m11", "m22", "m33", "m23")},
+                             "the known model")
 
 
 def _standard_records(true: ShipParameters) -> dict:
@@ -237,7 +248,7 @@ def test_the_cubic_class_recovers_a_course_unstable_hull_and_its_polynomial():
     true = _full_hull_kcs()
     assert not true.straight_line_stable(9.26)
     records = _standard_records(true)
-    theta, _, r2 = fit_coefficients(records, true.tau_u_max, true.tau_r_max, ALL_COEFFICIENTS)
+    theta, _, r2 = fit_coefficients(records, true.tau_u_max, true.tau_r_max, ALL_COEFFICIENTS, _masses_of(true))
     fitted = _wide(true, **dict(zip(ALL_COEFFICIENTS, (float(value) for value in theta))))
     for key in ("m11", "m22", "m33", "d11", "d22", "d23", "x_vv", "x_rr"):
         assert getattr(fitted, key) == pytest.approx(getattr(true, key), rel=0.03), key
@@ -257,7 +268,7 @@ def test_a_full_hull_gets_the_cubic_class_by_held_out_error():
 
     true = _full_hull_kcs()
     fit = identify_model(PlantRunner(lambda initial: ModelPlant(true, initial), 9.26), true.tau_u_max,
-                         true.tau_r_max, "fitted", refine=False)
+                         true.tau_r_max, "fitted", refine=False, masses=_masses_of(true))
     assert fit.model_class == "coupled mass, cubic damping"
     assert fit.validation["held_out: zigzag_20"]["heading_rms_deg"] < 0.2
     narrower = [error for name, error in fit.class_errors.items() if name != fit.model_class and error is not None]
@@ -280,7 +291,8 @@ def test_the_cubic_class_is_refined_from_the_narrower_model_and_improves_on_it()
     narrower = _wide(true, **{key: 0.0 for key in HULL_POLYNOMIAL_KEYS})
     narrower_cost = _model_cost(narrower, records)
     candidates = {"coupled mass, quadratic damping": (narrower_cost, None, narrower, {}, {}, "")}
-    refined, note = _refined_from_narrower(records, MODEL_CLASSES["coupled mass, cubic damping"], candidates)
+    refined, note = _refined_from_narrower(records, MODEL_CLASSES["coupled mass, cubic damping"], candidates,
+                                           _masses_of(true))
     assert note.startswith("from the coupled mass, quadratic damping model, refined")
     assert _model_cost(refined, records) < 0.2 * narrower_cost
     assert refined.n_rrr == pytest.approx(true.n_rrr, rel=0.3)
