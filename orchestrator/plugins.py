@@ -157,7 +157,8 @@ def registrations(kind: str) -> dict[str, Registration]:
     return _registrations(kind)
 
 
-registrations.cache_clear = _clear_caches
+# callers (and tests) forget the registrations as they did when this function was the cache
+registrations.cache_clear = _clear_caches  # type: ignore[attr-defined]
 
 
 @functools.lru_cache(maxsize=None)
