@@ -271,6 +271,22 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      r"direct = np\.asarray\(segment_costs\(i, js\),\s*(dtype=None)?\s*\)",
      "the costs are only compared (with inf, IMPASSABLE and the float sums along the path) and used to index: "
      "integer costs compare the same as their floats"),
+    ("rhnc/routing/route_search.py", r"lookup = np\.full\(\(2 \* reach \+ 1, 2 \* reach \+ 1\), -1\)",
+     r"np\.full\(\((3 \* reach \+ 1, 2 \* reach \+ 1|2 \* reach \+ 2, 2 \* reach \+ 1|2 \* reach \+ 1, 3 \* reach \+ 1|"
+     r"2 \* reach \+ 1, 2 \* reach \+ 2)\), -1\)",
+     "a larger look-up table: an edge's offsets lie within +-reach, so it is read at rows and columns 0 to "
+     "2 reach only, and the added ones are never read"),
+    ("rhnc/routing/route_search.py", r"lookup = np\.full\(\(2 \* reach \+ 1, 2 \* reach \+ 1\), -1\)",
+     r"np\.full\(\(2 \* reach \+ 1, 2 \* reach \+ 1\), \+1\)",
+     "the entries left at the fill value are offsets that are no move ((0, 0) and the non-primitive ones), which "
+     "no edge has; edge_between is documented for edges only and its one caller, times_along_tree, passes the "
+     "tree's parent-child pairs, which are edges. (For such an offset the refusal does not work with -1 either: "
+     "edge_index[source, -1] is the last move's edge, so a node paired with itself returns an edge)"),
+    ("rhnc/routing/route_search.py", r'reverse_order = np\.argsort\(target, kind="stable"\)',
+     r"np\.argsort\(target,\s*(kind=None)?\s*\)",
+     "an unstable sort only reorders the edges into one target (each a different source): the reversed CSR matrix "
+     "built from it (reversed_edge_matrix, cost_to_go) holds the same entries, so Dijkstra's costs and "
+     "predecessors are the same"),
     ("rhnc/encounters/colregs.py", r"wrap_deg\(target_course_deg - own_course_deg - 180\.0\)",
      r"wrap_deg\(target_course_deg - own_course_deg \+ 180\.0\)",
      "the two arguments differ by 360 deg, which the wrap into (-180, 180] removes; abs() of the result is the "
