@@ -91,3 +91,8 @@ def test_terminate_frees_the_fmu_and_removes_its_unpacked_files(ship):
     assert freed == [True] and ship._slave is None
     assert not unpacked.exists() and ship._unzip_dir is None
     ship.terminate()  # a second terminate does nothing
+
+
+def test_a_step_before_the_set_up_is_refused_saying_so(ship):
+    with pytest.raises(RuntimeError, match="^an FMU participant was stepped before its set-up$"):
+        ship.step(0.0, 10.0, {})
