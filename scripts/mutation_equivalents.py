@@ -177,6 +177,15 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("orchestrator/master.py", r"at t = \{t:g\} s\" if name else phase", r"if \(name\) or True else phase",
      "the position without a participant is only reached after the last step, where only the stop "
      "watchdog's log line reads it (its wording)"),
+    ("orchestrator/master.py", r"met: list = \[\]", r"met: list = None",
+     "the conditions met are only tested for truth (if met, met or ...) until a stop condition's check replaces "
+     "them, and read by index only when true: None and an empty list are both false"),
+    ("orchestrator/master.py", r"publication = publications\[ports\] = self\._publication\(name, ports\)",
+     r"publication = publications\[ports\] = None",
+     "without a publication every step takes the general path, _publish: it refuses the same undeclared or "
+     "non-finite output, puts the outputs on the bus (the ports nobody reads too, which nothing looks up: "
+     "connections and stop conditions read only read_keys) and records them through Recorder.add, which sends "
+     "all-float outputs to the same add_floats with the same columns"),
     ("orchestrator/fmu_participant.py", r"path = path if path\.is_absolute\(\) else scenario_dir / path",
      r"if \(path\.is_absolute\(\)\) and False",
      "joining an absolute path to a folder gives the absolute path itself (pathlib drops the folder), so "
