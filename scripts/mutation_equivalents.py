@@ -124,11 +124,6 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      "status or file depends on it"),
     ("orchestrator/master.py", r"if not enabled:", r"if enabled:",
      "the console progress bar is display only (see above)"),
-    ("orchestrator/master.py", r"tempfile\.mkdtemp\(prefix=\"rhnc-run-\"\)", r"prefix=(None|\"XXrhnc-run-XX\"|\"RHNC-RUN-\")",
-     "only the name of the master's temporary folder changes; it is made, used and removed the same way"),
-    ("orchestrator/master.py", r"shutil\.rmtree\(self\.work_dir, ignore_errors=True\)", r"ignore_errors=(None|False)|self\.work_dir, \)",
-     "removing the master's own temporary folder does not fail (the master made it and nothing else holds it): "
-     "whether a failure would be ignored is never exercised"),
     ("orchestrator/master.py", r"recorder = Recorder\(sim\.start_s, sim\.dt_s, sim\.steps",
      r"sim\.dt_s, None(\)|, spool=spool\))",
      "the recorder keeps the planned step count as an attribute nothing reads (run.py takes steps_planned "
@@ -142,8 +137,6 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("orchestrator/master.py", r"current\[1\] = None", r'current\[1\] = ""|current\[2\] = None',
      "after the last step only the final stop check runs, and the position is read only by the stop "
      "watchdog's log line; an empty name reads as no name, and the time is not shown without a name"),
-    ("orchestrator/fmu_participant.py", r'tempfile\.mkdtemp\(prefix=f"fmu-\{self\.name\}-"\)', r"prefix=None",
-     "only the name of the folder the FMU is unpacked into changes"),
     ("orchestrator/fmu_participant.py", r"FmiSlave\(self\.model_description, self\._unzip_dir, self\.name",
      r"self\._unzip_dir, None,",
      "the FMU instance's name reaches only the FMU's own log callback, whose messages the participant labels "
