@@ -214,6 +214,14 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("rhnc/control/nmpc_codegen.py", r'" "\.join\(COMPILER_FLAGS\)|digest\.update\(b"\\0"\)', r'"XX XX"\.join|b"XX\\0XX"',
      "another fixed spelling of the same parts of the key (flags joined, parts separated): as unambiguous, so the "
      "same problems share a key and different ones do not; keys are only compared with keys this code makes"),
+    ("rhnc/control/nmpc_codegen.py", r'machine = processor_identity\(\) if set\(NATIVE_FLAGS\) <= set\(flags\) else ""',
+     r'else "(XXXX|XX)"',
+     "another fixed stand-in for the processor of a portable build: still the same for every processor, so "
+     "portable libraries are shared across machines (tested) and native ones are not (the flags part already "
+     "tells the two kinds apart); keys are only compared with keys this code makes"),
+    ("rhnc/control/nmpc_codegen.py", r'line\.split\(":", 1\)\[0\]\.strip\(\)\.lower\(\) in wanted',
+     r'line\.split\(":",\s*\)\[0\]',
+     "the first piece of a split is the text before the first colon whether the split stops there or not"),
     ("rhnc/control/nmpc_codegen.py", r'ca\.nlpsol\("rhnc_codegen", self\.plugin', r'"(XXrhnc_codegenXX|RHNC_CODEGEN)"',
      "the name of an nlpsol made only to generate the code: the generated functions are named after its oracle "
      "('nlp', 'nlp_grad_f', 'nlp_hess_l', ... whatever the solver's name), which is what the loading nlpsol looks up"),
