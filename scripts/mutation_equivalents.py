@@ -124,11 +124,6 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      "status or file depends on it"),
     ("orchestrator/master.py", r"if not enabled:", r"if enabled:",
      "the console progress bar is display only (see above)"),
-    ("orchestrator/master.py", r"tempfile\.mkdtemp\(prefix=\"rhnc-run-\"\)", r"prefix=(None|\"XXrhnc-run-XX\"|\"RHNC-RUN-\")",
-     "only the name of the master's temporary folder changes; it is made, used and removed the same way"),
-    ("orchestrator/master.py", r"shutil\.rmtree\(self\.work_dir, ignore_errors=True\)", r"ignore_errors=(None|False)|self\.work_dir, \)",
-     "removing the master's own temporary folder does not fail (the master made it and nothing else holds it): "
-     "whether a failure would be ignored is never exercised"),
     ("orchestrator/master.py", r"recorder = Recorder\(sim\.start_s, sim\.dt_s, sim\.steps",
      r"sim\.dt_s, None(\)|, spool=spool\))",
      "the recorder keeps the planned step count as an attribute nothing reads (run.py takes steps_planned "
@@ -142,8 +137,6 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("orchestrator/master.py", r"current\[1\] = None", r'current\[1\] = ""|current\[2\] = None',
      "after the last step only the final stop check runs, and the position is read only by the stop "
      "watchdog's log line; an empty name reads as no name, and the time is not shown without a name"),
-    ("orchestrator/fmu_participant.py", r'tempfile\.mkdtemp\(prefix=f"fmu-\{self\.name\}-"\)', r"prefix=None",
-     "only the name of the folder the FMU is unpacked into changes"),
     ("orchestrator/fmu_participant.py", r"FmiSlave\(self\.model_description, self\._unzip_dir, self\.name",
      r"self\._unzip_dir, None,",
      "the FMU instance's name reaches only the FMU's own log callback, whose messages the participant labels "
@@ -177,6 +170,15 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("orchestrator/master.py", r"at t = \{t:g\} s\" if name else phase", r"if \(name\) or True else phase",
      "the position without a participant is only reached after the last step, where only the stop "
      "watchdog's log line reads it (its wording)"),
+    ("orchestrator/master.py", r"met: list = \[\]", r"met: list = None",
+     "the conditions met are only tested for truth (if met, met or ...) until a stop condition's check replaces "
+     "them, and read by index only when true: None and an empty list are both false"),
+    ("orchestrator/master.py", r"publication = publications\[ports\] = self\._publication\(name, ports\)",
+     r"publication = publications\[ports\] = None",
+     "without a publication every step takes the general path, _publish: it refuses the same undeclared or "
+     "non-finite output, puts the outputs on the bus (the ports nobody reads too, which nothing looks up: "
+     "connections and stop conditions read only read_keys) and records them through Recorder.add, which sends "
+     "all-float outputs to the same add_floats with the same columns"),
     ("orchestrator/fmu_participant.py", r"path = path if path\.is_absolute\(\) else scenario_dir / path",
      r"if \(path\.is_absolute\(\)\) and False",
      "joining an absolute path to a folder gives the absolute path itself (pathlib drops the folder), so "
@@ -212,6 +214,14 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("rhnc/control/nmpc_codegen.py", r'" "\.join\(COMPILER_FLAGS\)|digest\.update\(b"\\0"\)', r'"XX XX"\.join|b"XX\\0XX"',
      "another fixed spelling of the same parts of the key (flags joined, parts separated): as unambiguous, so the "
      "same problems share a key and different ones do not; keys are only compared with keys this code makes"),
+    ("rhnc/control/nmpc_codegen.py", r'machine = processor_identity\(\) if set\(NATIVE_FLAGS\) <= set\(flags\) else ""',
+     r'else "(XXXX|XX)"',
+     "another fixed stand-in for the processor of a portable build: still the same for every processor, so "
+     "portable libraries are shared across machines (tested) and native ones are not (the flags part already "
+     "tells the two kinds apart); keys are only compared with keys this code makes"),
+    ("rhnc/control/nmpc_codegen.py", r'line\.split\(":", 1\)\[0\]\.strip\(\)\.lower\(\) in wanted',
+     r'line\.split\(":",\s*\)\[0\]',
+     "the first piece of a split is the text before the first colon whether the split stops there or not"),
     ("rhnc/control/nmpc_codegen.py", r'ca\.nlpsol\("rhnc_codegen", self\.plugin', r'"(XXrhnc_codegenXX|RHNC_CODEGEN)"',
      "the name of an nlpsol made only to generate the code: the generated functions are named after its oracle "
      "('nlp', 'nlp_grad_f', 'nlp_hess_l', ... whatever the solver's name), which is what the loading nlpsol looks up"),
@@ -271,6 +281,22 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      r"direct = np\.asarray\(segment_costs\(i, js\),\s*(dtype=None)?\s*\)",
      "the costs are only compared (with inf, IMPASSABLE and the float sums along the path) and used to index: "
      "integer costs compare the same as their floats"),
+    ("rhnc/routing/route_search.py", r"lookup = np\.full\(\(2 \* reach \+ 1, 2 \* reach \+ 1\), -1\)",
+     r"np\.full\(\((3 \* reach \+ 1, 2 \* reach \+ 1|2 \* reach \+ 2, 2 \* reach \+ 1|2 \* reach \+ 1, 3 \* reach \+ 1|"
+     r"2 \* reach \+ 1, 2 \* reach \+ 2)\), -1\)",
+     "a larger look-up table: an edge's offsets lie within +-reach, so it is read at rows and columns 0 to "
+     "2 reach only, and the added ones are never read"),
+    ("rhnc/routing/route_search.py", r"lookup = np\.full\(\(2 \* reach \+ 1, 2 \* reach \+ 1\), -1\)",
+     r"np\.full\(\(2 \* reach \+ 1, 2 \* reach \+ 1\), \+1\)",
+     "the entries left at the fill value are offsets that are no move ((0, 0) and the non-primitive ones), which "
+     "no edge has; edge_between is documented for edges only and its one caller, times_along_tree, passes the "
+     "tree's parent-child pairs, which are edges. (For such an offset the refusal does not work with -1 either: "
+     "edge_index[source, -1] is the last move's edge, so a node paired with itself returns an edge)"),
+    ("rhnc/routing/route_search.py", r'reverse_order = np\.argsort\(target, kind="stable"\)',
+     r"np\.argsort\(target,\s*(kind=None)?\s*\)",
+     "an unstable sort only reorders the edges into one target (each a different source): the reversed CSR matrix "
+     "built from it (reversed_edge_matrix, cost_to_go) holds the same entries, so Dijkstra's costs and "
+     "predecessors are the same"),
     ("rhnc/encounters/colregs.py", r"wrap_deg\(target_course_deg - own_course_deg - 180\.0\)",
      r"wrap_deg\(target_course_deg - own_course_deg \+ 180\.0\)",
      "the two arguments differ by 360 deg, which the wrap into (-180, 180] removes; abs() of the result is the "

@@ -103,7 +103,7 @@ MODULES = {
                      ("tests/orchestrator/test_master.py", "tests/orchestrator/test_master_guards.py",
                       "tests/orchestrator/test_fmu_participant.py", "tests/orchestrator/test_failure_paths.py",
                       "tests/orchestrator/test_time_limits.py", "tests/orchestrator/test_plugins.py",
-                      "tests/orchestrator/test_recorder_streaming.py")),
+                      "tests/orchestrator/test_recorder_streaming.py", "tests/orchestrator/test_master_stop_ports.py")),
     # the scenario file's reader (TOML reading and limits, pydantic tables, the frozen result): its own
     # tests, the hostile-input ones, and those reading the tables it parses for others
     "scenario": Module(("orchestrator/scenario.py", "orchestrator/scenario_model.py",
@@ -119,7 +119,9 @@ MODULES = {
     "fmu_participant": Module(("orchestrator/fmu_participant.py",), ("tests/orchestrator/test_fmu_participant.py",
                                                                      "tests/orchestrator/test_fmu_participant_guards.py",
                                                                      "tests/orchestrator/test_fmu_participant_types.py",
-                                                                     "tests/orchestrator/test_fmu_participant_values.py")),
+                                                                     "tests/orchestrator/test_fmu_participant_values.py",
+                                                                     # (the per-port bindings: vectors, scaling, wrapping)
+                                                                     "tests/orchestrator/test_port_mapping.py")),
     # core modules first mutated after the wings split (each against the tests that exercise it)
     "weather_routing": Module(("rhnc/routing/weather_routing.py",), ("tests/rhnc/test_weather_routing.py",)),
     "route_search": Module(("rhnc/routing/route_search.py",), ("tests/rhnc/test_route_search.py",

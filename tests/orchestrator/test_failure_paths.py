@@ -180,4 +180,6 @@ def test_ctrl_c_after_the_last_step_keeps_every_step(write_scenario, tmp_path, c
     assert summary["simulation"]["steps_done"] == 10
     assert len((folder / "timeseries.csv").read_text().splitlines()) == 1 + 10
     assert summary["participants"]["clock"] == {"steps": 10}
+    if how == "interrupt_summary":  # the one whose summary the Ctrl-C cut short says so
+        assert summary["participants"]["bad"] == {"error": "not collected: interrupted by the user (Ctrl-C)"}
     assert list(private_tmp.iterdir()) == []

@@ -91,3 +91,23 @@ def test_terminate_frees_the_fmu_and_removes_its_unpacked_files(ship):
     assert freed == [True] and ship._slave is None
     assert not unpacked.exists() and ship._unzip_dir is None
     ship.terminate()  # a second terminate does nothing
+
+
+def test_a_step_before_the_set_up_is_refused_saying_so(ship):
+    with pytest.raises(RuntimeError, match="^an FMU participant was stepped before its set-up$"):
+        ship.step(0.0, 10.0, {})
+
+
+def test_the_fmu_is_unpacked_where_a_later_run_finds_it_if_this_process_dies(ship):
+    """A killed run removes nothing: the next one sweeps the temporary folder for ``rhnc-fmu-<pid>-*``
+    (orchestrator.leftovers), so the unpacked FMU must carry that name and its owner's lock."""
+    import os
+    import tempfile
+
+    from orchestrator import leftovers
+
+    ship.setup(0.0, {"tau_u": 7.7e5, "tau_r": 0.0})
+    unpacked = Path(ship._unzip_dir)
+    assert unpacked.parent == Path(tempfile.gettempdir())
+    assert unpacked.name.startswith(f"rhnc-fmu-{os.getpid()}-")
+    assert (unpacked / leftovers.LOCK_NAME).is_file()

@@ -205,7 +205,19 @@ def test_unknown_type_and_class(write_scenario):
     with pytest.raises(ScenarioError, match=r"participants.echo.type: unknown participant type 'warp_drive'"):
         CoSimulation(load_scenario(write_scenario(text)))
     text = scenario_text().replace("sample_participants:Echo", "no_such_module:Echo")
-    with pytest.raises(ScenarioError, match=r"participants.echo.class: cannot import module 'no_such_module'"):
+    with pytest.raises(ScenarioError, match=r"participants.echo.class: cannot import module 'no_such_module': "
+                                            r"No module named 'no_such_module'$"):
+        CoSimulation(load_scenario(write_scenario(text)))
+
+
+def test_a_class_whose_module_lies_beside_the_scenario_but_off_the_import_path_is_refused_saying_so(
+        write_scenario, tmp_path):
+    (tmp_path / "helm_beside_the_scenario.py").write_text("raise AssertionError('must not be imported')\n")
+    text = scenario_text().replace("sample_participants:Echo", "helm_beside_the_scenario:Helm")
+    with pytest.raises(ScenarioError, match=r"participants.echo.class: cannot import module 'helm_beside_the_scenario': "
+                                            r"No module named 'helm_beside_the_scenario' \(it lies in the scenario's "
+                                            r"folder .*, which is not on the import path: start the command from that "
+                                            r"folder, or install the module\)$"):
         CoSimulation(load_scenario(write_scenario(text)))
 
 

@@ -1,6 +1,7 @@
 """What the master hands its participants and reports: build context, sources, time grid,
 output stamps, the position it reports, failures, summaries and the work folder."""
 
+import logging
 import time as wallclock
 
 import pytest
@@ -254,3 +255,37 @@ def test_a_class_calling_sys_exit_while_being_built_is_refused_naming_it(write_s
         CoSimulation(scenario)
     assert str(refused.value) == (f"{scenario.path}: participants.bad: sample_participants:Misbehaving called "
                                   "sys.exit(4) while being built")
+
+
+def test_a_failing_terminate_is_logged_with_its_traceback_at_debug(run_to_end, caplog):
+    """The reason names the exception; ``-v`` shows where it was raised."""
+    text = PROBE.format(every=1, options="") + (
+        '\n[participants.pump]\ntype = "python"\nclass = "sample_participants:Misbehaving"\n'
+        '[participants.pump.options]\nhow = "terminate"\n')
+    with caplog.at_level(logging.DEBUG, logger="orchestrator.master"):
+        run_to_end(text)
+    logged = [r for r in caplog.records if r.name == "orchestrator.master" and r.getMessage() == "terminate raised"]
+    assert len(logged) == 1 and logged[0].levelno == logging.DEBUG
+    assert logged[0].exc_info is not None and isinstance(logged[0].exc_info[1], OSError)
+
+
+def test_from_options_raising_is_logged_with_its_traceback_at_debug(write_scenario, caplog):
+    text = PROBE.format(every=1, options="") + (
+        '\n[participants.bad]\ntype = "python"\nclass = "sample_participants:Misbehaving"\n'
+        '[participants.bad.options]\nhow = "options"\n')
+    with caplog.at_level(logging.DEBUG, logger="orchestrator.participant_build"):
+        with pytest.raises(ScenarioError, match="could not be built from its options: ValueError: gain must be positive"):
+            CoSimulation(load_scenario(write_scenario(text)))
+    logged = [r for r in caplog.records if r.getMessage() == "from_options raised"]
+    assert len(logged) == 1 and logged[0].levelno == logging.DEBUG
+    assert logged[0].exc_info is not None and str(logged[0].exc_info[1]) == "gain must be positive"
+
+
+def test_closing_again_after_the_work_folder_is_gone_does_not_raise(write_scenario):
+    """remove_files (a watchdog ending the process) closes the master, and the run's own clean-up
+    closes it again."""
+    cosim = CoSimulation(load_scenario(write_scenario(PROBE.format(every=1, options=""))))
+    cosim.remove_files()
+    assert not cosim.work_dir.exists()
+    cosim.close()
+    assert not cosim.work_dir.exists()

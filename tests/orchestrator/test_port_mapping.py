@@ -11,7 +11,7 @@ import pytest
 
 from orchestrator import fmu_build
 from orchestrator.cli import main
-from orchestrator.errors import ScenarioError
+from orchestrator.errors import ModelError, ScenarioError
 from orchestrator.fmu_participant import FmuParticipant, resolve_fmu
 from orchestrator.port_mapping import VectorBinding
 from orchestrator.run import run_scenario
@@ -335,3 +335,15 @@ def test_a_plant_of_one_variable_per_port_steps_as_the_bindings_convert(write_sc
     finally:
         for ship in ships:
             ship.terminate()
+
+
+def test_a_non_finite_input_to_a_mapped_plant_is_refused_naming_the_port(write_scenario):
+    """The general input path (ports that are no single variable, here the polar current):
+    the refusal names the participant, the port and the value."""
+    ship = build(write_scenario(s175_scenario("psi_deg = 0.0\nu_kn = 10.0")))
+    try:
+        ship.setup(0.0, {})
+        with pytest.raises(ModelError, match=r"^ship: input 'current_east' received a non-finite value \(inf\)$"):
+            ship.step(0.0, 1.0, {"current_north": 0.0, "current_east": math.inf, "tau_u": 0.0})
+    finally:
+        ship.terminate()

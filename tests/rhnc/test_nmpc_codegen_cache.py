@@ -159,6 +159,27 @@ def test_the_processor_identity_names_model_and_features():
     assert identity and identity == nmpc_codegen.processor_identity()
 
 
+@pytest.mark.parametrize("cpuinfo, identity", [
+    # x86: the first processor's model and flags, not its number, vendor or speed, nor the second's
+    ("processor\t: 0\nvendor_id\t: GenuineIntel\nmodel name\t: Intel(R) Xeon(R) CPU @ 2.20GHz\ncpu MHz\t\t: 2200.1\n"
+     "flags\t\t: fpu sse2 avx2\n\nprocessor\t: 1\nmodel name\t: Other\nflags\t\t: fpu\n",
+     "Intel(R) Xeon(R) CPU @ 2.20GHz|fpu sse2 avx2"),
+    # ARM names its flags "Features"; a value may hold a colon
+    ("processor\t: 0\nBogoMIPS\t: 50.00\nFeatures\t: fp asimd sve\nCPU model\t: Neoverse: V1\n",
+     "fp asimd sve|Neoverse: V1"),
+    ("hart\t\t: 0\nisa\t\t: rv64imafdc_zicsr\nmmu\t\t: sv39\n", "rv64imafdc_zicsr"),
+])
+def test_the_processor_identity_reads_the_first_processors_model_and_feature_lines(monkeypatch, cpuinfo, identity):
+    import io
+
+    def fake_open(path, *args, **kwargs):
+        assert path == "/proc/cpuinfo"
+        return io.StringIO(cpuinfo)
+
+    monkeypatch.setattr(nmpc_codegen, "open", fake_open, raising=False)
+    assert nmpc_codegen.processor_identity() == identity
+
+
 # -- building, loading, falling back -------------------------------------------------------------------
 def test_a_library_is_built_once_named_by_solver_and_key_and_solves_as_interpreted(cache):
     builds = NLPLibrary.builds

@@ -161,3 +161,64 @@ def test_shortening_from_the_first_vertex_counts_from_zero_and_never_takes_an_im
         return np.array([legs[i] if j == i + 1 else IMPASSABLE if i == 0 else float(j - i) for j in js])
 
     assert shortcut_path(4, blocked, consecutive_costs=legs) == [0, 1, 3]
+
+
+def test_a_reach_below_one_is_refused():
+    with pytest.raises(ValueError, match="^reach must be at least 1$"):
+        grid_moves(0)
+
+
+def test_a_two_row_grid_has_its_own_spacing():
+    graph = build_grid_graph(np.array([0.0, 100.0]), np.array([0.0, 300.0, 600.0]), reach=1)
+    east = int(np.flatnonzero((graph.moves == [0, 1]).all(axis=1))[0])
+    north = int(np.flatnonzero((graph.moves == [1, 0]).all(axis=1))[0])
+    assert graph.move_length_m[east] == 300.0 and graph.move_length_m[north] == 100.0
+    assert graph.heading_rad[north] == 0.0 and graph.heading_rad[east] == pytest.approx(np.pi / 2)
+
+
+def test_a_node_inside_any_of_several_obstacles_is_not_free():
+    axis = np.arange(0.0, 11.0)
+    graph = build_grid_graph(axis, axis, reach=1, obstacles=[(2.0, 2.0, 1.5), (8.0, 8.0, 1.5)])
+    points = graph.node_points()
+    inside = ((np.hypot(points[:, 0] - 2, points[:, 1] - 2) < 1.5)
+              | (np.hypot(points[:, 0] - 8, points[:, 1] - 8) < 1.5))
+    np.testing.assert_array_equal(graph.free, ~inside)
+
+
+class _LandEastOf:
+    """A stand-in chart: land east of ``east_m``, every leg clear (only the nodes' clearance counts)."""
+
+    clearance_m = 200.0
+
+    def __init__(self, east_m):
+        self.east_m = east_m
+
+    def distances_m(self, north, east):
+        return np.maximum(self.east_m - np.asarray(east, dtype=float), 0.0)
+
+    def legs_clear(self, a, b, *_):
+        return np.ones(np.shape(a)[:-1], dtype=bool)
+
+
+def test_the_charts_clearance_is_measured_from_each_node_and_a_node_at_exactly_it_is_free():
+    axis = np.arange(0.0, 1001.0, 100.0)
+    graph = build_grid_graph(axis, axis, reach=1, keep_out=_LandEastOf(800.0))
+    points = graph.node_points()
+    # east 600 m lies exactly 200 m from the land: not within the clearance
+    np.testing.assert_array_equal(graph.free, points[:, 1] <= 600.0)
+
+
+def test_no_edge_starts_or_ends_at_a_node_within_the_clearance_even_where_the_chart_says_the_leg_is_clear():
+    axis = np.arange(0.0, 1001.0, 100.0)
+    graph = build_grid_graph(axis, axis, reach=2, keep_out=_LandEastOf(800.0))
+    assert graph.free[graph.source].all() and graph.free[graph.target].all()
+    # and every move between two free nodes is an edge: 600 m wide strip, all of it kept
+    assert graph.source.size == build_grid_graph(axis, axis[:7], reach=2).source.size
+
+
+def test_a_node_reached_only_at_the_impassable_weight_cannot_be_reached():
+    graph = build_grid_graph(np.array([0.0]), np.array([0.0, 100.0]), reach=1)
+    tree = shortest_path_tree(graph, np.full(graph.source.size, IMPASSABLE), 0)
+    assert tree.cost[1] == IMPASSABLE
+    with pytest.raises(ValueError, match="the goal cannot be reached from the start on the routing grid"):
+        tree.path_to(1)
