@@ -97,6 +97,8 @@ def test_stand_on_must_act_is_one_rule_for_controller_and_analysis():
     # the CPA clears the separation, or lies behind: no need
     assert not stand_on_must_act(separation + 1.0, 300.0, 1.5 * separation, separation)
     assert not stand_on_must_act(100.0, -10.0, 1.5 * separation, separation)
+    # the CPA less than a second ahead is still ahead: act
+    assert stand_on_must_act(100.0, 0.5, 3.0 * separation, separation)
     # the thresholds are parameters
     assert stand_on_must_act(100.0, 900.0, 3.0 * separation, separation, action_tcpa_s=1000.0)
 

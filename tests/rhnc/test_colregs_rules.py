@@ -90,3 +90,67 @@ def test_the_tracker_without_obstacles_reports_no_encounter():
     assert tracker.update((0.0, 0.0), 0.0, 6.0, None) == []
     assert tracker.update((0.0, 0.0), 0.0, 6.0, np.zeros((0, 5))) == []
     assert tracker.locked == {}
+
+
+def test_cpa_tcpa_of_a_slow_closing_is_finite():
+    # a relative speed of 0.5 m/s is a real approach, not "no relative motion": TCPA 200 s
+    cpa, tcpa = cpa_tcpa((0.0, 0.0), (0.0, 0.0), (100.0, 30.0), (-0.5, 0.0))
+    assert tcpa == pytest.approx(200.0)
+    assert cpa == pytest.approx(30.0)
+
+
+def test_the_range_uses_both_coordinates_of_the_own_ship():
+    # own ship 1 km east of the origin, the target 4 km north of it: 4 km apart
+    encounter = classify((0.0, 1000.0), 0.0, 6.0, (4000.0, 1000.0), (-6.0, 0.0))
+    assert encounter.range_m == pytest.approx(4000.0)
+
+
+def test_a_cpa_exactly_at_the_tcpa_limit_is_a_risk_of_collision():
+    # own ship stopped, target 1000 m ahead closing at 10 m/s: TCPA exactly 100 s
+    encounter = classify((0.0, 0.0), 0.0, 0.0, (1000.0, 0.0), (-10.0, 0.0), tcpa_limit_s=100.0)
+    assert encounter.tcpa_s == 100.0
+    assert encounter.encounter_class == "head_on"
+    assert classify((0.0, 0.0), 0.0, 0.0, (1000.0, 0.0), (-10.0, 0.0), tcpa_limit_s=99.9).encounter_class == "none"
+
+
+def test_a_crossing_ship_dead_ahead_is_not_on_our_starboard_side():
+    # bearing exactly 0, crossing from port to starboard at 90 deg: Rule 15 gives way only to starboard
+    encounter = classify((0.0, 0.0), 0.0, 5.0, (4000.0, 0.0), (0.0, 5.0))
+    assert encounter.relative_bearing_deg == 0.0
+    assert encounter.encounter_class == "crossing_stand_on"
+
+
+def test_no_risk_of_collision_carries_no_borderline_note():
+    # opening at 112.5 deg from our bow: the geometry is at the overtaken boundary, but there is no encounter
+    encounter = classify((0.0, 0.0), 0.0, 10.0 * KN, _at(112.5, 1.0), _velocity(112.5, 10.0))
+    assert encounter.encounter_class == "none"
+    assert encounter.borderline == ""
+
+
+@pytest.mark.parametrize("aspect, expected", [(113.5, "overtaking"), (111.5, "crossing_stand_on")])
+def test_an_aspect_near_22_5_deg_abaft_the_targets_beam_is_borderline(aspect, expected):
+    # a slower ship ahead, the own ship seen from it at 113.5 deg (overtaking) or 111.5 deg
+    encounter = classify((0.0, 0.0), 0.0, 20.0 * KN, (NM, 0.0), _velocity(180.0 - aspect, 5.0))
+    assert encounter.aspect_deg == pytest.approx(aspect) and encounter.encounter_class == expected
+    assert encounter.borderline.startswith(f"overtaking: own ship {aspect:.1f} deg")
+
+
+def test_a_head_on_bearing_exactly_at_the_borderline_band_edge_is_borderline():
+    # bearing exactly 7.5 deg, 2.5 deg inside the head-on limit; exactly reciprocal courses
+    encounter = classify((0.0, 0.0), 0.0, 18.0 * KN, (4.0 * NM, 975.2817021274284), (-18.0 * KN, 0.0))
+    assert encounter.relative_bearing_deg == 7.5
+    assert encounter.encounter_class == "head_on"
+    assert encounter.borderline.startswith("head-on: bearing 7.5 deg")
+
+
+def test_a_course_difference_exactly_at_the_borderline_band_edge_is_borderline():
+    # dead ahead, courses exactly 12.5 deg from reciprocal (2.5 deg inside the limit)
+    encounter = classify((0.0, 0.0), 0.0, 18.0 * KN, (4.0 * NM, 0.0), (-9.040501025930583, -2.0042308250668417))
+    assert encounter.relative_bearing_deg == 0.0 and encounter.encounter_class == "head_on"
+    assert encounter.borderline.endswith("courses 12.5 deg from reciprocal (nearly: <= 15)")
+
+
+def test_the_latest_alteration_is_searched_in_10_s_steps_by_default():
+    # as in the square-turn case above, without giving the step: the latest wait is 130 s
+    assert latest_alteration_s((0.0, 0.0), (5.0, 0.0), (1000.0, 0.0), (0.0, 0.0), 300.02, 1.0,
+                               alteration_deg=90.0, turn_s=0.0) == 130.0
