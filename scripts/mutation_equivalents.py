@@ -301,7 +301,7 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      r"wrap_deg\(target_course_deg - own_course_deg \+ 180\.0\)",
      "the two arguments differ by 360 deg, which the wrap into (-180, 180] removes; abs() of the result is the "
      "same (180 at the wrap's own edge either way)"),
-    ("rhnc/encounters/colregs.py", r'if name != "overtaking" and abs\(abs\(beta\)', r'if name != "XXovertakingXX"',
+    ("rhnc/encounters/colregs.py", r'if name != "overtaking" and abs\(abs\(beta\)', r'if name != "(XXovertakingXX|OVERTAKING)"',
      "an overtaking class has a closing range (positive TCPA), which a target within 2.5 deg of 112.5 deg from our "
      "bow cannot give: we then move away from it (cos beta < 0) while it moves away from us (own ship more than "
      "112.5 deg from its bow), so the overtaken note is never due for an overtaking ship"),
@@ -332,4 +332,14 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      "doubles: an integer input gives the same prediction and Jacobian"),
     ("rhnc/control/disturbance_observer.py", r"c_n, c_e, w_u, w_v, w_r = np\.asarray\(disturbance, dtype=float\)",
      r"np\.asarray\(disturbance,\s*(dtype=None)?\s*\)", _FLOAT),
+    ("rhnc/encounters/colregs.py", r"np\.subtract\(target_velocity, own_velocity\)\.astype\(float\)",
+     r"np\.subtract\(target_velocity, own_velocity\)\.astype\(None\)",
+     "astype(None) converts to numpy's default dtype, float64, which is what astype(float) gives: the same array "
+     "for integer and float velocities alike"),
+    ("rhnc/encounters/colregs.py", r"self\._borderline\.pop\(index, None\)", r"self\._borderline\.pop\(None, None\)",
+     "the released note left behind is never read: _borderline[index] is read only while the index is locked, and "
+     "every lock writes a fresh note together with the class (the dict is private, no method exposes it)"),
+    ("rhnc/encounters/colregs.py", r"self\._borderline\.pop\(index, None\)", r"self\._borderline\.pop\(index,\s*\)",
+     "the default is never needed: the release runs only for a locked index, and _locked and _borderline get and "
+     "lose an index together, so the note is always there to pop"),
 ]
