@@ -28,6 +28,8 @@ from typing import Annotated
 
 from pydantic import PlainValidator
 
+from orchestrator.marked_blocks import replace_between
+
 EXIT_BAD_INPUT = 2
 
 
@@ -238,14 +240,12 @@ def main(argv=None) -> int:
 
 def replace_block(path: Path, marker: str, body: str, dry: bool = False) -> None:
     """Replace the text between ``<!-- marker:begin -->`` and ``<!-- marker:end -->`` in ``path``."""
-    text = path.read_text()
     begin, end = f"<!-- {marker}:begin -->", f"<!-- {marker}:end -->"
-    head, found, rest = text.partition(begin)
-    _, found_end, tail = rest.partition(end)
-    if not found or not found_end:
+    text = replace_between(path.read_text(), begin, end, body)
+    if text is None:
         raise ValueError(f"{path}: no {begin} ... {end} block to replace")
     if not dry:
-        path.write_text(f"{head}{begin}\n{body}\n{end}{tail}")
+        path.write_text(text)
 
 
 if __name__ == "__main__":

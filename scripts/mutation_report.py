@@ -54,6 +54,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from mutation_equivalents import EXPLAINED_RULES  # noqa: E402
 
+from orchestrator.marked_blocks import replace_between  # noqa: E402
+
 REPO = Path(__file__).resolve().parents[1]
 REPORT = REPO / "docs" / "mutation-report.md"
 VERDICTS = REPO / "docs" / "mutation-verdicts.json"
@@ -547,12 +549,9 @@ def readme_summary(verdicts: dict[str, Verdicts]) -> str:
 def write_readme(verdicts: dict[str, Verdicts], readme: Path | None = None) -> None:
     """Replace the README's block between the mutation-score markers (nothing when it has none)."""
     readme = README if readme is None else readme
-    text = readme.read_text()
-    if README_BEGIN not in text or README_END not in text:
-        return
-    head, rest = text.split(README_BEGIN, 1)
-    _, tail = rest.split(README_END, 1)
-    readme.write_text(head + README_BEGIN + "\n" + readme_summary(verdicts) + "\n" + README_END + tail)
+    text = replace_between(readme.read_text(), README_BEGIN, README_END, readme_summary(verdicts))
+    if text is not None:
+        readme.write_text(text)
 
 
 def main(argv=None) -> int:

@@ -18,6 +18,8 @@ import argparse
 import json
 from pathlib import Path
 
+from orchestrator.marked_blocks import replace_between
+
 ROOT = Path(__file__).resolve().parent.parent
 PASSAGES = ("biscay_crossing", "ligurian_crossing", "cyclades_islands", "gibraltar_strait")
 
@@ -114,12 +116,10 @@ def readme_lines(results: Path) -> list[str]:
 
 
 def write_readme_block(readme: Path, block: str) -> None:
-    text = readme.read_text()
-    if README_BEGIN not in text or README_END not in text:
+    text = replace_between(readme.read_text(), README_BEGIN, README_END, block)
+    if text is None:
         raise SystemExit(f"{readme}: no {README_BEGIN} ... {README_END} markers to write the passages between")
-    head, rest = text.split(README_BEGIN, 1)
-    _, tail = rest.split(README_END, 1)
-    readme.write_text(head + README_BEGIN + "\n" + block + "\n" + README_END + tail)
+    readme.write_text(text)
 
 
 def baseline_outcome(system: dict) -> str:

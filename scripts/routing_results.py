@@ -34,6 +34,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from orchestrator.marked_blocks import replace_between
+
 REPO = Path(__file__).resolve().parents[1]
 #: (comparison name, the weather in words, comparison file)
 WEATHERS = (
@@ -293,12 +295,10 @@ def readme_block(rows: list[dict], sweeps: dict) -> str:
 
 
 def write_readme_block(readme: Path, block: str, begin: str = README_BEGIN, end: str = README_END) -> None:
-    text = readme.read_text()
-    if begin not in text or end not in text:
+    text = replace_between(readme.read_text(), begin, end, block)
+    if text is None:
         raise SystemExit(f"{readme}: no {begin} ... {end} markers to write the routing summary between")
-    head, rest = text.split(begin, 1)
-    _, tail = rest.split(end, 1)
-    readme.write_text(head + begin + "\n" + block + "\n" + end + tail)
+    readme.write_text(text)
 
 
 def sailed_track(run: Path) -> tuple[np.ndarray, np.ndarray] | None:
