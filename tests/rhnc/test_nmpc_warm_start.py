@@ -65,3 +65,18 @@ def test_inactive_slots_push_nothing():
     slot[9] = 0.0
     push_guess_clear(z, slot, north(2), DT)
     np.testing.assert_array_equal(z[1, :2], [10.0, 0.5])
+
+
+@pytest.mark.parametrize("course_deg", [30.0, 90.0, -135.0])
+def test_the_push_turns_with_the_reference_course(course_deg):
+    # the first test's geometry turned to another course: the nodes move across that course,
+    # onto the same rim points turned with it
+    turn = math.radians(course_deg)
+    rotation = np.array([[math.cos(turn), -math.sin(turn)], [math.sin(turn), math.cos(turn)]])
+    points = np.array([(0.0, 0.0), (9.0, 0.5), (10.5, -1.0), (20.0, 0.5)])
+    z = guess(points @ rotation.T)
+    push_guess_clear(z, domain(rotation @ np.array([10.0, 0.0])), np.full((6, 4), turn), DT)
+    r_push = 1.1 * 2.0
+    expected = np.array([(0.0, 0.0), (9.0, math.sqrt(r_push ** 2 - 1.0)), (10.5, -math.sqrt(r_push ** 2 - 0.25)),
+                         (20.0, 0.5)])
+    np.testing.assert_allclose(z[:, :2], expected @ rotation.T, atol=1e-12)

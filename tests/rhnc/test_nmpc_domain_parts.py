@@ -1,0 +1,68 @@
+"""Parts of the NMPC's collision domains checked alone: the reach test of a shifted domain, which
+obstacles get the slots, and the alteration's heading bounds for any time values."""
+
+import math
+
+import numpy as np
+import pytest
+
+from rhnc.control.nmpc_alteration import heading_bounds
+from rhnc.control.nmpc_colregs import HEAD_ON_OFFSET, CollisionDomains, DomainReport, DomainSettings
+from rhnc.encounters.colregs import ENCOUNTER_CLASSES
+
+NM = 1852.0
+KNOT = NM / 3600.0
+SPEED = 18 * KNOT
+RADIUS = 1.0 * NM
+L = 230.0
+
+
+def test_a_head_on_domain_shifted_towards_the_own_ship_is_in_reach_sooner_than_its_target():
+    # a head-on target 6 nm ahead, southbound: its domain's centre lies a quarter rho ahead of
+    # it (towards us) and half a rho to its starboard; the reach test over the horizon measures
+    # from that centre, so the shortest horizon that gets it a slot follows from the shift
+    rho = RADIUS
+    target = np.array([6.0 * NM, 0.0, -12 * KNOT, 0.0, RADIUS])
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    forward, side = HEAD_ON_OFFSET
+    centre = target[:2] + rho * (forward * np.array([-1.0, 0.0]) + side * np.array([0.0, -1.0]))
+    domain_radius = rho * (1.0 + math.hypot(forward, side))
+    closing = 1.25 * SPEED + 12 * KNOT
+    horizon_s = (math.hypot(*centre) - domain_radius) / closing  # the domain's rim just within reach
+    for horizon, in_reach in ((horizon_s + 10.0, True), (horizon_s - 10.0, False)):
+        domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=1)
+        slots, report = domains.parameters(target[None, :], state, np.zeros(2), 1.25 * SPEED, 5.0, L, et=True,
+                                           horizon_s=horizon)
+        assert ENCOUNTER_CLASSES[int(report.class_codes[0])] == "head_on"
+        assert report.active[0] == float(in_reach)
+        if in_reach:
+            np.testing.assert_allclose(slots[4:6, 0] * L, centre - target[:2])  # the offset the test assumed
+            assert slots[6, 0] * L == pytest.approx(domain_radius)
+
+
+def test_with_more_obstacles_than_slots_the_nearest_by_position_get_them_whatever_their_speed():
+    # the far one lies still, the near one moves fast across: distance is measured between positions
+    domains = CollisionDomains(DomainSettings(colregs=False), max_obstacles=1)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    far = [0.0, 4.0 * NM, 0.0, 0.0, 0.1 * NM]
+    near = [0.0, 1.0 * NM, 10.0, 0.0, 0.1 * NM]
+    slots, report = domains.parameters(np.array([far, near]), state, np.zeros(2), SPEED, 5.0, L, et=True)
+    np.testing.assert_array_equal(report.active, [0.0, 1.0])
+    np.testing.assert_allclose(slots[0:2, 0] * L, near[:2], atol=1e-9)
+
+
+def test_the_alteration_bounds_are_the_same_for_integer_times():
+    # times in whole seconds (an integer array) must bound the headings as the same times in floats do
+    report = DomainReport(np.zeros(1), np.ones(1), alteration_floor=(0.0, 0.0, 0.5),
+                          alteration_ceiling=None)
+    whole = np.array([100, 400, 1000, 2000])
+    lower, upper = heading_bounds(report, 50.0, 0.45, 0.0, whole)
+    lower_f, _ = heading_bounds(report, 50.0, 0.45, 0.0, whole.astype(float))
+    assert upper is None
+    np.testing.assert_allclose(lower, lower_f)
+    assert lower[-1] == pytest.approx(0.5)  # the goal, reached long after the ramp
+    ceiling = DomainReport(np.zeros(1), np.ones(1), alteration_ceiling=(0.0, 0.0, -0.5))
+    _, upper = heading_bounds(ceiling, 50.0, -0.45, 0.0, whole)
+    _, upper_f = heading_bounds(ceiling, 50.0, -0.45, 0.0, whole.astype(float))
+    np.testing.assert_allclose(upper, upper_f)
+    assert upper[-1] == pytest.approx(-0.5)
