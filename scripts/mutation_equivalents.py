@@ -236,6 +236,25 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      "symbol up by name; the name is kept in the serialized graph the code-generation cache key is hashed from, "
      "so the key (the cached library's file name) changes, and the library compiled under it holds the same "
      "functions"),
+    ("rhnc/control/nmpc_problem.py", r'kind\.sym\("P", 6, 6\)', r'kind\.sym\("(XXPXX|p)", 6, 6\)',
+     "only the name of the terminal weight's symbol changes (in both the SX and the MX form of the NLP): CasADi "
+     "functions take their arguments by position and nothing looks a symbol up by name; the name is kept in the "
+     "serialized graph the code-generation cache key is hashed from, so the key changes, and the library compiled "
+     "under it holds the same functions"),
+    ("rhnc/control/nmpc_problem.py", r'np\.asarray\(terminal\)\.ravel\(order="F"\)',
+     r'np\.asarray\(terminal\)\.ravel\((order=None|order="C"|)\)',
+     "stacks the terminal weight row by row instead of column by column, which puts P^T where the NLP reads P "
+     "(ca.vec(P) in build_problem, the column-major reshape in nmpc_acados); P enters the NLP only through "
+     "terminal_cost's e' P e, and e' P^T e = e' P e for every e and every matrix P: the same cost, gradient and "
+     "Hessian, so the same solves"),
+    ("rhnc/control/nmpc_colregs.py", r"floor, ceiling = self\._alteration_bounds\(False, False\)",
+     r"self\._alteration_bounds\((None, False|False, None)\)",
+     "_alteration_bounds reads both flags only through 'not danger' and 'not no_port_turn', and 'not None' is "
+     "True, as 'not False' is"),
+    ("rhnc/control/nmpc_colregs.py", r"if clearance\[side\] < 0\.0 <= clearance\[-side\]:",
+     r"if clearance\[side\] <= 0\.0 <= clearance\[-side\]:|if clearance\[side\] < 0\.0 < clearance\[-side\]:",
+     "differs only when a side's clearance (side_clearance_m: a CPA less the target's clearance) is exactly "
+     "0.0, the threshold's own value: a CPA exactly on the clearance's rim"),
     ("rhnc/control/nmpc.py", r'library\.solver\("rhnc_nmpc(_relaxed)?"\)', r'library\.solver\("(XX\w+XX|[A-Z_]+)"\)',
      "only the name of an nlpsol changes: it labels the solver in CasADi's messages and nothing reads it back "
      "(the functions the solver loads from a compiled library are named after the NLP's oracle, not after it)"),
