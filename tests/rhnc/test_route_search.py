@@ -118,6 +118,22 @@ def test_an_edge_lookup_refuses_a_move_into_an_obstacle():
         graph.edge_between(np.array([3 * ny + 3, 3 * ny + 3]), np.array([3 * ny + 4, 4 * ny + 4]))
 
 
+@pytest.mark.parametrize("reach, di, dj", [
+    (1, 0, 0),     # a node with itself: no move, the look-up's fill
+    (1, 0, 2),     # beyond the reach, past the look-up's end
+    (1, 0, -2),    # beyond the reach, a negative index that would wrap round
+    (1, -2, 1),
+    (2, 2, 2),     # within the reach but not primitive (two diagonal moves)
+])
+def test_an_edge_lookup_refuses_an_offset_that_is_no_move(reach, di, dj):
+    axis = np.arange(0.0, 8.0)
+    graph = build_grid_graph(axis, axis, reach=reach)
+    ny = 8
+    source = 3 * ny + 3
+    with pytest.raises(ValueError, match="no edge between some of the given nodes"):
+        graph.edge_between(np.array([source]), np.array([source + di * ny + dj]))
+
+
 def test_a_two_column_grid_has_its_own_spacing():
     graph = build_grid_graph(np.array([0.0, 100.0, 200.0]), np.array([0.0, 300.0]), reach=1)
     east = int(np.flatnonzero((graph.moves == [0, 1]).all(axis=1))[0])
