@@ -220,7 +220,7 @@ def _validate(args) -> int:
     return 0
 
 
-def one_line(text: str) -> str:
+def one_line(text: object) -> str:
     """A message on one line: line breaks and other control characters escaped."""
     return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in str(text))
 

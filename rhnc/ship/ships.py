@@ -122,7 +122,7 @@ def load_ship(name: str = "KCS", ships_dir: Path = SHIPS_DIR) -> ShipParticulars
     return ShipParticulars(**values)
 
 
-def check_parameter_set(values: Mapping[str, object], ship: ShipParticulars, where: str) -> None:
+def check_parameter_set(values: Mapping[str, float], ship: ShipParticulars, where: str) -> None:
     """Refuse a plant parameter set whose particulars differ from the ship's file.
 
     Only the keys of ``PLANT_PARAMETERS`` the set has are compared (relative 1e-9).
