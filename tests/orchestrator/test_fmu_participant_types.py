@@ -17,7 +17,7 @@ from orchestrator import fmu_build, fmu_participant
 from orchestrator.errors import FmuError, ModelError, ScenarioError
 from orchestrator.fmi_slave import FmiSlave
 from orchestrator.fmu_participant import FmuParticipant, read_parameter_set, resolve_fmu
-from orchestrator.scenario_spec import ParticipantSpec
+from orchestrator.scenario_spec import ParticipantSpec, VariableMapping
 
 from fmu_copies import copy_with_description
 
@@ -209,6 +209,18 @@ def test_a_refused_input_is_named_by_fmi_set_real(typed_fmu, slave):
         slave.refused = {"set_reals"}
         with pytest.raises(ModelError, match=r"^vendor \(Vendor.fmu\): fmi2SetReal failed: "):
             vendor.step(0.0, 1.0, {"tau_u": 2.0})
+    finally:
+        vendor.terminate()
+
+
+def test_a_refused_scaled_input_is_named_by_fmi_set_real(typed_fmu, slave):
+    # a scaled port takes the converting path, not the plain one of the test above
+    vendor = participant(typed_fmu, {}, mapping={"tau_u": VariableMapping(variable="tau_u", scale=1000.0)})
+    try:
+        vendor.setup(0.0, {"tau_u": 1.0, "tau_r": 0.0})
+        slave.refused = {"set_reals"}
+        with pytest.raises(ModelError, match=r"^vendor \(Vendor.fmu\): fmi2SetReal failed: "):
+            vendor.step(0.0, 1.0, {"tau_u": 2000.0})
     finally:
         vendor.terminate()
 
