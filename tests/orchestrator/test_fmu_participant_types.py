@@ -202,25 +202,17 @@ def test_a_refused_parameter_is_named_by_the_fmi_function_of_its_type(typed_fmu,
         vendor.terminate()
 
 
-def test_a_refused_input_is_named_by_fmi_set_real(typed_fmu, slave):
-    vendor = participant(typed_fmu, {})
+@pytest.mark.parametrize("mapping", [
+    {},                                                                  # plain: the values as they come
+    {"tau_u": VariableMapping(variable="tau_u", scale=1000.0)},          # scaled: the converting path
+])
+def test_a_refused_input_is_named_by_fmi_set_real(typed_fmu, slave, mapping):
+    vendor = participant(typed_fmu, {}, mapping=mapping)
     try:
         vendor.setup(0.0, {"tau_u": 1.0, "tau_r": 0.0})
         slave.refused = {"set_reals"}
         with pytest.raises(ModelError, match=r"^vendor \(Vendor.fmu\): fmi2SetReal failed: "):
             vendor.step(0.0, 1.0, {"tau_u": 2.0})
-    finally:
-        vendor.terminate()
-
-
-def test_a_refused_scaled_input_is_named_by_fmi_set_real(typed_fmu, slave):
-    # a scaled port takes the converting path, not the plain one of the test above
-    vendor = participant(typed_fmu, {}, mapping={"tau_u": VariableMapping(variable="tau_u", scale=1000.0)})
-    try:
-        vendor.setup(0.0, {"tau_u": 1.0, "tau_r": 0.0})
-        slave.refused = {"set_reals"}
-        with pytest.raises(ModelError, match=r"^vendor \(Vendor.fmu\): fmi2SetReal failed: "):
-            vendor.step(0.0, 1.0, {"tau_u": 2000.0})
     finally:
         vendor.terminate()
 
