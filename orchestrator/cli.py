@@ -220,7 +220,7 @@ def _validate(args) -> int:
     return 0
 
 
-def one_line(text: str) -> str:
+def one_line(text: object) -> str:
     """A message on one line: line breaks and other control characters escaped."""
     return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in str(text))
 
@@ -236,16 +236,27 @@ def _build(args) -> int:
     return 0
 
 
+def _workers_refused(args) -> bool:
+    """Say so (one line) when ``--workers`` is below one: a batch's or a search's exit 2."""
+    if args.workers is not None and args.workers < 1:
+        print("error: --workers must be at least 1", file=sys.stderr)
+        return True
+    return False
+
+
+def _tls_files(args) -> dict | None:
+    """The ``--tls-*`` files given, or None."""
+    tls = {"ca": args.tls_ca, "cert": args.tls_cert, "key": args.tls_key}
+    return tls if any(tls.values()) else None
+
+
 def _batch(args) -> int:
     from orchestrator.batch import run_batch
 
-    if args.workers is not None and args.workers < 1:
-        print("error: --workers must be at least 1", file=sys.stderr)
+    if _workers_refused(args):
         return 2
-    tls = {"ca": args.tls_ca, "cert": args.tls_cert, "key": args.tls_key}
     report = run_batch(args.batch, args.results, workers=args.workers, scheduler=args.scheduler,
-                       progress=not args.no_progress, retry_failed=args.retry_failed,
-                       tls=tls if any(tls.values()) else None)
+                       progress=not args.no_progress, retry_failed=args.retry_failed, tls=_tls_files(args))
     table = report.table
     counts = ", ".join(f"{count} {status}" for status, count in table["status"].value_counts().items())
     print(f"{report.passed}/{report.total} runs passed ({counts}); ran {report.ran}, "
@@ -266,12 +277,10 @@ def _batch(args) -> int:
 def _search(args) -> int:
     from orchestrator.search import run_search
 
-    if args.workers is not None and args.workers < 1:
-        print("error: --workers must be at least 1", file=sys.stderr)
+    if _workers_refused(args):
         return 2
-    tls = {"ca": args.tls_ca, "cert": args.tls_cert, "key": args.tls_key}
     report = run_search(args.search, args.results, workers=args.workers, scheduler=args.scheduler,
-                        progress=not args.no_progress, tls=tls if any(tls.values()) else None,
+                        progress=not args.no_progress, tls=_tls_files(args),
                         evaluations=args.evaluations, sampler=args.sampler, seed=args.seed,
                         fails_below=args.fails_below, until_failure=args.until_failure)
     first = (f"first at evaluation {report.first_failure}" if report.first_failure is not None else "none found")

@@ -211,7 +211,7 @@ def load_comparison(path, extensions: tuple[str, ...] = ()) -> dict[str, Any]:
     spec = {**data, "runs": runs, "set": _resolved_overrides(top.set, path.parent, f"{path}: set")}
     if "sweep" in data:
         sweep = checked(SweepTable, data["sweep"], where, ("sweep",))
-        values = sweep.values if sweep.values is not None else sweep.range
+        values = sweep.values if sweep.values is not None else sweep.range or []  # the table holds one of them
         if sweep.key.split(".")[-1] == "file":
             values = [_file_value(v, path.parent, f"{path}: sweep.values[{i}]") for i, v in enumerate(values)]
         else:

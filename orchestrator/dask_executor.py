@@ -29,7 +29,7 @@ class TlsFiles:
     key: Path
 
 
-def check_scheduler(address: str, ca=None, cert=None, key=None) -> TlsFiles | None:
+def check_scheduler(address: str | None, ca=None, cert=None, key=None) -> TlsFiles | None:
     """The TLS files for ``address``, after checking that they fit it; raises ``BatchError`` (one line).
 
     ``tcp://host:port`` takes no TLS files; ``tls://host:port`` needs all three, and each must

@@ -231,7 +231,7 @@ def _complete_model_structure(source: Path, target: Path, units: dict[str, str] 
                 for index, variable in enumerate(variables, start=1):
                     if variable.get("causality") == "output":
                         ET.SubElement(initial, "Unknown", {"index": str(index)})
-                    unit = (units or {}).get(variable.get("name"))
+                    unit = (units or {}).get(variable.get("name", ""))
                     if unit:
                         child(variable, "Real").set("unit", unit)
                 used = sorted({unit for unit in (units or {}).values() if unit})
@@ -240,7 +240,7 @@ def _complete_model_structure(source: Path, target: Path, units: dict[str, str] 
                     for unit in used:
                         ET.SubElement(ET.SubElement(definitions, "Unit", {"name": unit}), "BaseUnit",
                                       {k: str(v) for k, v in BASE_UNITS.get(unit, {}).items()})
-                    position = list(root).index(root.find("CoSimulation")) + 1
+                    position = list(root).index(child(root, "CoSimulation")) + 1
                     root.insert(position, definitions)
                 ET.indent(root)
                 data = b'<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root)

@@ -203,6 +203,8 @@ def _fork(drawing: tuple) -> tuple[int, int]:
 
 def _wait(figure: _Figure) -> tuple[str, Any]:
     """The outcome a figure's process sent, once it has ended (its way of ending if none)."""
+    if figure.pid is None or figure.reader is None:
+        raise RuntimeError(f"figure '{figure.name}' is not being drawn in a process")
     chunks = []
     with os.fdopen(figure.reader, "rb") as pipe:
         while chunk := pipe.read(65536):

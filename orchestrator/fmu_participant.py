@@ -192,7 +192,7 @@ class FmuParticipant(Participant):
         # (the call, whether every port is the variable unscaled)
         self._input_writers: dict[tuple[str, ...], tuple[Callable[[list[float]], None], bool]] = {}
         self._slave = None
-        self._unzip_dir = None
+        self._unzip_dir: str | None = None
         self._unzip_lock = None
         self._messages: list[str] = []
 
@@ -212,7 +212,7 @@ class FmuParticipant(Participant):
 
     def _parameter_values(self, spec: ParticipantSpec, substitutions: Mapping[str, str]) -> dict:
         values = {}
-        if spec.parameter_set is not None:
+        if spec.parameter_set is not None and spec.fmu is not None:   # an FMU participant names its FMU
             values.update(read_parameter_set(spec.fmu, spec.parameter_set, self.where))
         values.update(spec.parameters)
         for name, value in values.items():
@@ -241,7 +241,7 @@ class FmuParticipant(Participant):
     def setup(self, start_time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
         unzip_dir, self._unzip_lock = owned_temp_folder("rhnc-fmu-")
         self._unzip_dir = str(unzip_dir)
-        extract_fmu(self.fmu_path, Path(self._unzip_dir), f"{self.where}.fmu")
+        extract_fmu(self.fmu_path, unzip_dir, f"{self.where}.fmu")
         self._slave = FmiSlave(self.model_description, self._unzip_dir, self.name, self._on_message)
         self._slave.instantiate()
         self._bind_calls()

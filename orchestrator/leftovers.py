@@ -122,11 +122,20 @@ def process_alive(pid: int) -> bool:
         return False
     except PermissionError:
         return True  # another user's process
+    return not _is_zombie(pid)
+
+
+def _is_zombie(pid: int) -> bool:
+    """The process has ended but nobody has reaped it (a container whose first process does
+    not reap orphans keeps a killed worker so): it will never write again."""
+    import psutil
+
     try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except (OSError, IndexError):
-        return True  # no /proc (not Linux): the signal check above is all there is
-    return state != "Z"
+        return psutil.Process(pid).status() == psutil.STATUS_ZOMBIE
+    except psutil.ZombieProcess:
+        return True
+    except psutil.Error:
+        return False  # gone meanwhile, or not to be read: the signal check above is all there is
 
 
 def _pid_after(name: str, prefix: str) -> int | None:

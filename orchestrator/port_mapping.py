@@ -79,6 +79,8 @@ class GeodeticBinding:
         lat0, lon0 = origin_deg
         model, radius = earth
         if model == "sphere":
+            if radius is None:
+                raise ValueError("a spherical earth needs its radius")
             surface = f"+R={float(radius)!r}"
             geographic = f"+proj=longlat {surface} +no_defs +type=crs"
         else:
@@ -149,7 +151,7 @@ def scalar_conversion(port: str, entry: VariableMapping, variable, model_descrip
             si = resolve_unit(unit_name, model_description)
         except UnitParseError as exc:
             raise _fail(where, f"FMU variable '{variable.name}': {exc}") from None
-    if entry.unit is not None and declared is not None and entry.unit != declared:
+    if entry.unit is not None and declared is not None and si is not None and entry.unit != declared:
         _check_same_unit(entry.unit, si, declared, variable.name, model_description, where)
     if spec is not None:
         if si is not None and spec.revolutions and si.dimension == ANGULAR_RATE:
@@ -284,13 +286,17 @@ def _vector_binding(name: str, entry: VectorMapping, take, model_description, ke
     else:
         fmu_form = "cartesian"
         parts = (("north", entry.north, "current_north"), ("east", entry.east, "current_east"))
-    names, conversions = [], []
-    for role, variable_name, like in parts:
+
+    def bind(role: str, variable_name: str | None, like: str) -> tuple[str, tuple[float, float]]:
+        if variable_name is None:   # VectorMapping holds both parts of its form
+            raise ScenarioError(f"{key}: no '{role}' variable")
         variable = take(f"{name}.{role}", variable_name, "input")
         sub = VariableMapping(variable=variable_name, unit=entry.units.get(role))
-        conversions.append(scalar_conversion(like, sub, variable, model_description, f"{key}.{role}"))
-        names.append(variable_name)
-    return VectorBinding(tuple(ports), canonical_form, tuple(names), fmu_form, tuple(conversions))
+        return variable_name, scalar_conversion(like, sub, variable, model_description, f"{key}.{role}")
+
+    (first, first_conversion), (second, second_conversion) = (bind(*part) for part in parts)
+    return VectorBinding(tuple(ports), canonical_form, (first, second), fmu_form,
+                         (first_conversion, second_conversion))
 
 
 def _geodetic_binding(spec: ParticipantSpec, geodetic: dict, variables, model_description, where: str):
@@ -300,9 +306,9 @@ def _geodetic_binding(spec: ParticipantSpec, geodetic: dict, variables, model_de
                             " and y = { variable = ..., geodetic = \"longitude\" }")
     if spec.geodetic_origin_deg is None:
         raise ScenarioError(f"{where}.geodetic: give origin_deg = [lat, lon] for the geodetic mapping of x and y")
-    conversions = tuple(_degree_conversion(geodetic[port], variables[geodetic[port].variable], model_description,
-                                           f"{where}.mapping.{port}") for port in ("x", "y"))
-    return GeodeticBinding((geodetic["x"].variable, geodetic["y"].variable), conversions, spec.geodetic_origin_deg,
+    north, east = (_degree_conversion(geodetic[port], variables[geodetic[port].variable], model_description,
+                                      f"{where}.mapping.{port}") for port in ("x", "y"))
+    return GeodeticBinding((geodetic["x"].variable, geodetic["y"].variable), (north, east), spec.geodetic_origin_deg,
                            spec.geodetic_earth)
 
 

@@ -175,7 +175,7 @@ class Recorder:
             rows.append(held.copy())
             self._emitted += 1
             if self.spool is not None and len(rows) >= self.chunk_rows:
-                self._flush()
+                self._flush(self.spool)
                 rows = self._rows
 
     def _place(self, columns: "_Columns"):
@@ -197,7 +197,7 @@ class Recorder:
         """Emit the rows up to the latest output and write what is buffered (with a spool)."""
         self.advance(self._latest)
         if self.spool is not None:
-            self._flush()
+            self._flush(self.spool)
 
     # -- reading back ------------------------------------------------------------------------------
     def to_frame(self) -> pd.DataFrame:
@@ -255,21 +255,22 @@ class Recorder:
         return pa.Table.from_arrays([pa.array(values[:, k], from_pandas=True) for k in range(values.shape[1])],
                                     names=self._columns)
 
-    def _flush(self) -> None:
-        """Write the buffered rows as one complete Parquet part (readable at once, even mid-run)."""
+    def _flush(self, spool: Path) -> None:
+        """Write the buffered rows as one complete Parquet part into ``spool`` (readable at once, even
+        mid-run)."""
         if not self._rows:
             return
 
         def write() -> None:
             import pyarrow.parquet as pq
 
-            self.spool.mkdir(parents=True, exist_ok=True)
-            part = self.spool / f"part-{len(self._parts):05d}.parquet"
+            spool.mkdir(parents=True, exist_ok=True)
+            part = spool / f"part-{len(self._parts):05d}.parquet"
             pq.write_table(self._buffered_table(), part)
             self._parts.append(part)
             self._rows = []
 
-        self._guard(write, self.spool)
+        self._guard(write, spool)
 
     def _merge_parts(self, target: Path) -> None:
         import pyarrow as pa

@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from orchestrator.errors import ResultsError
-from orchestrator.leftovers import OwnerLock
+from orchestrator.leftovers import OwnerLock, process_alive
 
 log = logging.getLogger(__name__)
 
@@ -144,26 +144,7 @@ def _owner_alive(staging: Path, run_id: str) -> bool:
     pid = int(pid_text)
     if pid == os.getpid():
         return False  # an attempt of this process that ended without publishing
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True  # another user's process
-    return not _is_zombie(pid)
-
-
-def _is_zombie(pid: int) -> bool:
-    """The process has ended but nobody has reaped it (a container whose first process does
-    not reap orphans keeps a killed worker so): it will never write again."""
-    import psutil
-
-    try:
-        return psutil.Process(pid).status() == psutil.STATUS_ZOMBIE
-    except psutil.ZombieProcess:
-        return True
-    except psutil.Error:
-        return False  # gone meanwhile, or not to be read: the signal check above is all there is
+    return process_alive(pid)
 
 
 def json_default(value):

@@ -141,7 +141,11 @@ class SimulationTable(ScenarioTable):
                 f"{MAX_STEPS}")
 
     def spec(self, default_name: str) -> SimulationSpec:
-        stop = self.stop_s if self.steps is None else self.start_s + self.steps * self.dt_s
+        if self.steps is None:
+            assert self.stop_s is not None  # the validator asks for exactly one of stop_s and steps
+            stop = self.stop_s
+        else:
+            stop = self.start_s + self.steps * self.dt_s
         return SimulationSpec(name=self.name or default_name, start_s=self.start_s, stop_s=stop, dt_s=self.dt_s,
                               stop_when=self.stop_when, exchange=self.exchange,
                               step_timeout_s=self.step_timeout_s)

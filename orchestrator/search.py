@@ -198,7 +198,7 @@ def _ask_round(spec: SearchSpec, study, size: int) -> tuple[list, list[dict]]:
         number = len(study.trials)
         study.sampler = make_sampler(spec.sampler, spec.seed, number)
         trial = study.ask()
-        overrides, parameters = draw_overrides(spec.batch.monte_carlo, TrialChoices(trial))
+        overrides, parameters = draw_overrides(spec.monte_carlo, TrialChoices(trial))
         overrides = {**spec.batch.fixed, **overrides}
         entries.append(_entry(spec, trial, overrides, parameters, study.trials[trial.number].system_attrs))
         trials.append(trial)
@@ -264,7 +264,7 @@ def _check_a_point(spec: SearchSpec) -> None:
     (every varied count at its largest), its overrides loaded and its participants built."""
     from orchestrator.search_spec import _SpaceRecorder
 
-    overrides, parameters = draw_overrides(spec.batch.monte_carlo, _SpaceRecorder())
+    overrides, parameters = draw_overrides(spec.monte_carlo, _SpaceRecorder())
     overrides = {**spec.batch.fixed, **overrides}
     check_against_scenario(spec.batch, [RunSpec(run_id(spec.batch.scenario_sha256, overrides), 0, overrides,
                                                  parameters)])

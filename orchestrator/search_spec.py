@@ -71,6 +71,14 @@ class SearchSpec:
     worst: int
     space: dict
 
+    @property
+    def monte_carlo(self) -> MonteCarloSpec:
+        """The batch's ``[monte_carlo]`` ranges, the space searched (:func:`load_search` refuses a
+        file without them)."""
+        if self.batch.monte_carlo is None:
+            raise ScenarioError("a search needs [monte_carlo]: its ranges are the parameters searched")
+        return self.batch.monte_carlo
+
     def identity(self) -> dict:
         """What must not change between a search and its resumption (the budget may)."""
         space = json.dumps(self.space, sort_keys=True, default=str)

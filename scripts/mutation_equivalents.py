@@ -303,14 +303,12 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("rhnc/routing/route_search.py", r"lookup = np\.full\(\(2 \* reach \+ 1, 2 \* reach \+ 1\), -1\)",
      r"np\.full\(\((3 \* reach \+ 1, 2 \* reach \+ 1|2 \* reach \+ 2, 2 \* reach \+ 1|2 \* reach \+ 1, 3 \* reach \+ 1|"
      r"2 \* reach \+ 1, 2 \* reach \+ 2)\), -1\)",
-     "a larger look-up table: an edge's offsets lie within +-reach, so it is read at rows and columns 0 to "
-     "2 reach only, and the added ones are never read"),
-    ("rhnc/routing/route_search.py", r"lookup = np\.full\(\(2 \* reach \+ 1, 2 \* reach \+ 1\), -1\)",
-     r"np\.full\(\(2 \* reach \+ 1, 2 \* reach \+ 1\), \+1\)",
-     "the entries left at the fill value are offsets that are no move ((0, 0) and the non-primitive ones), which "
-     "no edge has; edge_between is documented for edges only and its one caller, times_along_tree, passes the "
-     "tree's parent-child pairs, which are edges. (For such an offset the refusal does not work with -1 either: "
-     "edge_index[source, -1] is the last move's edge, so a node paired with itself returns an edge)"),
+     "a larger look-up table: edge_between refuses an offset beyond +-reach before it reads the table, so it "
+     "is read at rows and columns 0 to 2 reach only, and the added ones are never read"),
+    ("rhnc/routing/route_search.py", r"csr_matrix\(\(np\.asarray\(weights, dtype=float\)",
+     r"csr_matrix\(\(np\.asarray\(weights,\s*(dtype=None)?\s*\)",
+     "the edge matrices go to SciPy's dijkstra only (shortest_path_tree, cost_to_go_tree), which converts its graph "
+     "to float64 before it reads a weight: integer weights give the same costs and predecessors"),
     ("rhnc/routing/route_search.py", r'reverse_order = np\.argsort\(target, kind="stable"\)',
      r"np\.argsort\(target,\s*(kind=None)?\s*\)",
      "an unstable sort only reorders the edges into one target (each a different source): the reversed CSR matrix "

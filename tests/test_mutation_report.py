@@ -1,24 +1,20 @@
 """The mutation report marks a module's verdicts stale when a mutated file changed since its run."""
 
-import importlib.util
 import signal
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from script_module import module_of_file
 
 SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "mutation_report.py"
 
 
 @pytest.fixture(scope="module")
 def report():
-    spec = importlib.util.spec_from_file_location("mutation_report_under_test", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up by name
-    spec.loader.exec_module(module)
-    yield module
-    del sys.modules[spec.name]
+    yield module_of_file(SCRIPT, "mutation_report_under_test")
+    del sys.modules["mutation_report_under_test"]
 
 
 def verdicts(report, commit="", hashes=None):
@@ -73,12 +69,8 @@ C_SCRIPT = SCRIPT.parent / "mutation_c.py"
 
 @pytest.fixture(scope="module")
 def c_mutation():
-    spec = importlib.util.spec_from_file_location("mutation_c_under_test", C_SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    yield module
-    del sys.modules[spec.name]
+    yield module_of_file(C_SCRIPT, "mutation_c_under_test")
+    del sys.modules["mutation_c_under_test"]
 
 
 C_SOURCE = """/* a comment: a < b && c */

@@ -1,6 +1,5 @@
 """The passages' results table: a baseline that never arrived is listed with how far it got, never hidden."""
 
-import importlib.util
 import json
 import sys
 from pathlib import Path
@@ -8,18 +7,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from script_module import module_of_file
 
 SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "passage_results.py"
 
 
 @pytest.fixture(scope="module")
 def script():
-    spec = importlib.util.spec_from_file_location("passage_results_under_test", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    yield module
-    del sys.modules[spec.name]
+    yield module_of_file(SCRIPT, "passage_results_under_test")
+    del sys.modules["passage_results_under_test"]
 
 
 def trial(folder: Path, arrival_s, north_nm):

@@ -7,22 +7,17 @@ script's stated tolerances, so a change in the code that moves a quoted number f
 until the numbers (and the README) are regenerated.
 """
 
-import importlib.util
 import json
-import sys
 from pathlib import Path
 
 import pytest
+from script_module import module_of_file
 
 REPO = Path(__file__).resolve().parents[1]
 
 
 def load_script():
-    spec = importlib.util.spec_from_file_location("reproduce_readme", REPO / "scripts" / "reproduce_readme.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # its dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
+    return module_of_file(REPO / "scripts" / "reproduce_readme.py", "reproduce_readme")
 
 
 #: kind of each checked number (see TOLERANCES in the script)

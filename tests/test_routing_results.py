@@ -1,23 +1,19 @@
 """The routing sets' verdict: each set measured against the goal by the numbers it reports."""
 
-import importlib.util
 import sys
 from pathlib import Path
 
 import pandas as pd
 import pytest
+from script_module import module_of_file
 
 SCRIPT = Path(__file__).resolve().parents[1] / "scripts" / "routing_results.py"
 
 
 @pytest.fixture(scope="module")
 def script():
-    spec = importlib.util.spec_from_file_location("routing_results_under_test", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    yield module
-    del sys.modules[spec.name]
+    yield module_of_file(SCRIPT, "routing_results_under_test")
+    del sys.modules["routing_results_under_test"]
 
 
 def members(shares, savings, failed=None, arrived=None):

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, overload
 
 from orchestrator.errors import ScenarioError
 from orchestrator.geometry import KNOT, NM
@@ -265,6 +265,10 @@ def _prediction_model(options: Mapping[str, Any], overrides: Mapping[str, Any], 
         raise ScenarioError(f"{where}: {error}") from None
 
 
+@overload
+def _number(options: Mapping[str, Any], key: str, where: str, default: float) -> float: ...
+@overload
+def _number(options: Mapping[str, Any], key: str, where: str, default: None) -> float | None: ...
 def _number(options: Mapping[str, Any], key: str, where: str, default: float | None) -> float | None:
     if key not in options:
         return default

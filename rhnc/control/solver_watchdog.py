@@ -158,9 +158,9 @@ class BufferedCall:
         self._outputs = {solver.name_out(i): np.zeros(solver.numel_out(i)) for i in range(solver.n_out())}
         self._buffer, self._evaluate = solver.buffer()
         for i, (_, _, array) in enumerate(self._inputs):
-            self._buffer.set_arg(i, memoryview(array))  # type: ignore[call-arg]
+            self._buffer.set_arg(i, array.data)  # type: ignore[call-arg]
         for i, array in enumerate(self._outputs.values()):
-            self._buffer.set_res(i, memoryview(array))  # type: ignore[call-arg]
+            self._buffer.set_res(i, array.data)  # type: ignore[call-arg]
 
     @classmethod
     def of(cls, solver: ca.Function) -> "BufferedCall":

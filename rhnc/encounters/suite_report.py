@@ -38,6 +38,8 @@ import sys
 from collections import Counter
 from pathlib import Path
 
+from orchestrator.marked_blocks import replace_between
+
 RULES = ("rule_8", "rule_13", "rule_14", "rule_15", "rule_16", "rule_17")
 BEGIN = "<!-- suite-table:begin -->"
 END = "<!-- suite-table:end -->"
@@ -173,11 +175,10 @@ def markdown(rows: list[dict]) -> str:
 def with_table(path, table: str) -> str:
     """The text of ``path`` with ``table`` between :data:`BEGIN` and :data:`END` (ValueError
     naming the file when they are missing)."""
-    text = Path(path).read_text()
-    start, stop = text.find(BEGIN), text.find(END)
-    if start < 0 or stop < start:
+    text = replace_between(Path(path).read_text(), BEGIN, END, table)
+    if text is None:
         raise ValueError(f"{path}: no '{BEGIN}' ... '{END}' lines to write the table between")
-    return text[: start + len(BEGIN)] + "\n" + table + "\n" + text[stop:]
+    return text
 
 
 def main(argv=None) -> int:

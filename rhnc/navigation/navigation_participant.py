@@ -361,7 +361,8 @@ class NavigationParticipant(Participant):
         psi = float(measured.get("psi", bearing(x, y, *self.goal)))
         u = float(measured.get("u", self.speed))
         velocity = (u * np.cos(psi), u * np.sin(psi))
-        et = self.trigger.update(time, (x, y), velocity, self.goal, inputs.get("obstacles"))
+        obstacles = inputs.get("obstacles")  # an (n, 5) array, the same object
+        et = self.trigger.update(time, (x, y), velocity, self.goal, None if obstacles is None else np.asarray(obstacles))
         # planned for the instant the reference reaches the controller
         arrives = time + delay_s
         start_x, start_y, start_psi, start_u = self._planning_start(arrives, measured, inputs, measured_at=time)

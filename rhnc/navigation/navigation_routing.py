@@ -18,6 +18,7 @@ from orchestrator.geometry import KNOT
 from rhnc.ship.energy import EnergyParameters
 from rhnc.navigation.route_navigation import (DEFAULT_SWITCH_MARGIN, SPEED_STEP_MPS, RecedingRoutePlanner, RoutePlan,
                                    calm_water_time_price_usd_h)
+from rhnc.routing.routing_problem import plane_point
 from rhnc.routing.weather_routing import PRICE_MULTIPLES, RoutingProblem, optimal_route, straight_route, time_price_usd_h
 
 log = logging.getLogger(__name__)
@@ -99,7 +100,7 @@ class RoutingMethod:
         highest price tried is kept (it keeps the route straightest).  The route found (its
         turning points moved sideways while that pays) is the passage plan the planner
         starts out following (:meth:`RecedingRoutePlanner.follow`)."""
-        problem = RoutingProblem(tuple(point), tuple(self.goal), self.metocean, self.energy,
+        problem = RoutingProblem(plane_point(point), plane_point(self.goal), self.metocean, self.energy,
                                  resolution_nm=self.resolution_nm, departure_s=time, keep_out=self.keep_out)
         try:
             best = optimal_route(problem, arrival_s=self.arrival_s)

@@ -150,6 +150,26 @@ def _path_length(points: np.ndarray) -> float:
     return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
 
 
+def _plan_case(weather, settings: dict, case: dict) -> dict:
+    """One case's field, planned path and the fields sampled along it."""
+    field = SuperpositionField(weather, settings["goal"], settings["energy"], settings["guidance"],
+                               case["weights"])
+    field.update(settings["start"], settings["speed"])
+    path = plan_local_path(field, settings["start"], settings["step_m"], settings["horizon_steps"])
+    potential = field.potential()
+    xs, ys = path.points[:, 0], path.points[:, 1]
+    ec_field, em_field = field.ec, field.em
+    assert ec_field is not None and em_field is not None  # built by the update above
+    ec = field.sample(ec_field, xs, ys)
+    em = field.sample(em_field, xs, ys)
+    u = field.sample(potential, xs, ys)
+    w = case["weights"]
+    energy_part = field.sample(w.k1 * _normalised(ec_field) + w.k2 * _normalised(em_field), xs, ys)
+    log.info("case %s: %d points, reached goal %s", case["name"], len(xs), path.reached_goal)
+    return {"case": case, "path": path, "field": field, "potential": potential,
+            "ec": ec, "em": em, "u": u, "energy_part": energy_part}
+
+
 def run_offline_planning(scenario_path: Path, results_root: Path) -> Path:
     """Run an offline planning experiment (Experiment 1) and write its results.
 
@@ -177,22 +197,7 @@ def run_offline_planning(scenario_path: Path, results_root: Path) -> Path:
     weather = resample_weather(metocean, settings["resolution_nm"], t_s=0.0)  # planned before departure
     delta = settings["step_m"] / settings["speed"]
 
-    results = []
-    for case in settings["cases"]:
-        field = SuperpositionField(weather, settings["goal"], settings["energy"], settings["guidance"],
-                                   case["weights"])
-        field.update(settings["start"], settings["speed"])
-        path = plan_local_path(field, settings["start"], settings["step_m"], settings["horizon_steps"])
-        potential = field.potential()
-        xs, ys = path.points[:, 0], path.points[:, 1]
-        ec = field.sample(field.ec, xs, ys)
-        em = field.sample(field.em, xs, ys)
-        u = field.sample(potential, xs, ys)
-        w = case["weights"]
-        energy_part = field.sample(w.k1 * _normalised(field.ec) + w.k2 * _normalised(field.em), xs, ys)
-        results.append({"case": case, "path": path, "field": field, "potential": potential,
-                        "ec": ec, "em": em, "u": u, "energy_part": energy_part})
-        log.info("case %s: %d points, reached goal %s", case["name"], len(xs), path.reached_goal)
+    results = [_plan_case(weather, settings, case) for case in settings["cases"]]
 
     run_id = new_run_id(settings["hash"])
     folder = RunFolder(results_root, settings["name"], run_id)

@@ -124,15 +124,24 @@ class GridGraph:
         return node
 
     def edge_between(self, source: np.ndarray, target: np.ndarray) -> np.ndarray:
-        """Edge ids of the moves ``source -> target`` (node id arrays; each must be an edge)."""
+        """Edge ids of the moves ``source -> target`` (node id arrays).
+
+        Raises ``ValueError`` when some pair is no edge: a node with itself, an offset that is
+        no move (beyond the reach or not primitive), or a move into or out of an obstacle.
+        """
+        source = np.asarray(source)
+        target = np.asarray(target)
         ny = self.y_m.size
         di = target // ny - source // ny
         dj = target % ny - source % ny
         reach = int(np.max(np.abs(self.moves)))
         lookup = np.full((2 * reach + 1, 2 * reach + 1), -1)
         lookup[self.moves[:, 0] + reach, self.moves[:, 1] + reach] = np.arange(len(self.moves))
-        edges = self.edge_index[source, lookup[di + reach, dj + reach]]
-        if np.any(edges < 0):
+        if np.any((np.abs(di) > reach) | (np.abs(dj) > reach)):
+            raise ValueError("no edge between some of the given nodes")
+        move = lookup[di + reach, dj + reach]
+        edges = self.edge_index[source, move]
+        if np.any((move < 0) | (edges < 0)):
             raise ValueError("no edge between some of the given nodes")
         return edges
 

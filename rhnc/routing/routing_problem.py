@@ -75,6 +75,12 @@ class RoutingProblem:
     keep_out: KeepOut | None = None
 
 
+def plane_point(point) -> tuple[float, float]:
+    """``point`` (north, east) [m], any pair of numbers, as the pair of floats a
+    :class:`RoutingProblem` holds."""
+    return float(point[0]), float(point[1])
+
+
 @dataclasses.dataclass(frozen=True)
 class RouteResult:
     """A timed route and what it costs.
@@ -209,6 +215,7 @@ def straight_route(problem: RoutingProblem, *, speed_mps: float | None = None,
     polyline = shortest_clear_route(problem)
     if arrival_s is not None:
         speed_mps = speed_for_arrival(problem, polyline, arrival_s)
+    assert speed_mps is not None  # check_problem asks for exactly one of the two
     return costed_route(problem, polyline, speed_mps, "straight")
 
 

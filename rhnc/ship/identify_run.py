@@ -171,6 +171,7 @@ def run_identify(scenario_path, results_root="results", plant: str | None = None
     scenario = load_scenario(scenario_path)
     spec = find_plant_spec(scenario, plant)
     where = f"{scenario.path}: participants.{spec.name}"
+    assert spec.fmu is not None  # find_plant_spec returns FMU participants only
     path = resolve_fmu(spec.fmu, scenario.directory, where)
     probe = FmuParticipant(spec, path, where)
     identity = probe.identity

@@ -41,7 +41,7 @@ class ShipModelLibrary:
         return [ship_file(SHIP)]
 
     @staticmethod
-    def check_parameter_set(values: Mapping[str, object], where: str) -> None:
+    def check_parameter_set(values: Mapping[str, float], where: str) -> None:
         """Refuse a set whose particulars differ from ``ships/KCS.toml`` (ScenarioError)."""
         check_parameter_set(values, load_ship(SHIP), where)
 

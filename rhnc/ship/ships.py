@@ -82,6 +82,15 @@ def ship_file(name: str, ships_dir: Path = SHIPS_DIR) -> Path:
 
 
 @functools.lru_cache(maxsize=None)
+def _read_ship_file(path: Path) -> dict:
+    """The tables of the ship file ``path`` (ScenarioError naming it when it is no TOML)."""
+    try:
+        with path.open("rb") as handle:
+            return tomllib.load(handle)
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{path}: {exc}") from None
+
+
 def load_ship(name: str = "KCS", ships_dir: Path = SHIPS_DIR) -> ShipParticulars:
     """The particulars of ship ``name`` from ``ships/<name>.toml``.
 
@@ -95,11 +104,7 @@ def load_ship(name: str = "KCS", ships_dir: Path = SHIPS_DIR) -> ShipParticulars
     if not path.is_file():
         known = sorted(p.stem for p in Path(ships_dir).glob("*.toml"))
         raise ScenarioError(f"{path}: no particulars for ship '{name}' (known: {', '.join(known)})")
-    try:
-        with path.open("rb") as handle:
-            values = tomllib.load(handle)
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: {exc}") from None
+    values = _read_ship_file(path)
     values.pop("description", None)
     actuators = values.pop("actuators", None)
     if actuators is not None:
@@ -122,7 +127,7 @@ def load_ship(name: str = "KCS", ships_dir: Path = SHIPS_DIR) -> ShipParticulars
     return ShipParticulars(**values)
 
 
-def check_parameter_set(values: Mapping[str, object], ship: ShipParticulars, where: str) -> None:
+def check_parameter_set(values: Mapping[str, float], ship: ShipParticulars, where: str) -> None:
     """Refuse a plant parameter set whose particulars differ from the ship's file.
 
     Only the keys of ``PLANT_PARAMETERS`` the set has are compared (relative 1e-9).
@@ -212,11 +217,7 @@ def load_actuators(name_or_path: str, ships_dir: Path = SHIPS_DIR, base: Path | 
         path = ship_file(name_or_path, ships_dir)
     if not path.is_file():
         raise ScenarioError(f"{path}: ship file not found")
-    try:
-        with path.open("rb") as handle:
-            values = tomllib.load(handle)
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: {exc}") from None
+    values = _read_ship_file(path)
     if "actuators" not in values:
         raise ScenarioError(f"{path}: no [actuators] table (rudder and propeller data: {', '.join(ACTUATOR_KEYS)})")
     return path, check_actuators(values["actuators"], path)

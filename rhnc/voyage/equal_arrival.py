@@ -68,12 +68,12 @@ class EqualArrival:
     @property
     def bracket(self) -> tuple[ArrivalTrial, ArrivalTrial] | None:
         """The arrived trials nearest the target before and after it (None unless both exist)."""
-        arrived = [t for t in self.trials if t.arrival_s is not None]
-        early = [t for t in arrived if t.arrival_s <= self.target_s]
-        late = [t for t in arrived if t.arrival_s > self.target_s]
+        arrived = [(t.arrival_s, t) for t in self.trials if t.arrival_s is not None]
+        early = [(arrival_s, t) for arrival_s, t in arrived if arrival_s <= self.target_s]
+        late = [(arrival_s, t) for arrival_s, t in arrived if arrival_s > self.target_s]
         if not early or not late:
             return None
-        return max(early, key=lambda t: t.arrival_s), min(late, key=lambda t: t.arrival_s)
+        return max(early, key=lambda pair: pair[0])[1], min(late, key=lambda pair: pair[0])[1]
 
     @property
     def interpolated(self) -> bool:
@@ -92,8 +92,9 @@ class EqualArrival:
     def at_target(self, figure: Callable[[ArrivalTrial], float]) -> float:
         """``figure`` of the baseline at the target arrival: the best trial's when matched,
         else linear in the arrival time between the bracketing trials."""
-        if self.matched:
-            return float(figure(self.best))
+        best = self.best
+        if self.matched and best is not None:
+            return float(figure(best))
         if not self.interpolated:
             raise ValueError("the equal-arrival baseline has no trial at or around the target arrival")
         early, late = self.bracket

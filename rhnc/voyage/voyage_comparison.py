@@ -234,6 +234,7 @@ class VoyageComparison:
         scenario's own reference speed (taken as speed through water) arrives."""
         from rhnc.ship.energy import EnergyParameters
         from rhnc.weather.metocean_sources import from_scenario_table
+        from rhnc.routing.routing_problem import plane_point
         from rhnc.routing.weather_routing import RoutingProblem, optimal_route, straight_route
 
         speed_kn = self.nominal_speed_kn(overrides)
@@ -242,7 +243,7 @@ class VoyageComparison:
             raise ValueError("the equal-arrival scenario has no reference speed or no [metocean] table")
         metocean = from_scenario_table(loaded.metocean, loaded.directory, f"{loaded.path}: metocean")
         settings = self._optimal
-        problem = RoutingProblem(self.start_m, self.goal_m, metocean, energy=EnergyParameters(),
+        problem = RoutingProblem(plane_point(self.start_m), plane_point(self.goal_m), metocean, energy=EnergyParameters(),
                                  resolution_nm=settings.resolution_nm, avoid=settings.avoid_m)
         straight = straight_route(problem, speed_mps=speed_kn * KNOT)
         optimal = optimal_route(problem, arrival_s=straight.arrival_s, speed_profile=True)
@@ -287,8 +288,11 @@ class VoyageComparison:
             run = read_voyage(label, runner(settings.scenario, {**base, settings.speed_key: speed_kn}, label))
             return (run.arrival_s if run.usable else None), run
 
-        first = (self.straight_distance_nm - self.arrival_radius_nm) / (system.arrival_s / 3600.0)
-        return match_arrival_time(arrival_of, system.arrival_s, ARRIVAL_TOLERANCE_S, first, settings.max_trials)
+        target_s = system.arrival_s
+        if target_s is None:  # its callers match usable voyages only, which arrived
+            raise ValueError(f"{system.label} did not arrive: no arrival time to match")
+        first = (self.straight_distance_nm - self.arrival_radius_nm) / (target_s / 3600.0)
+        return match_arrival_time(arrival_of, target_s, ARRIVAL_TOLERANCE_S, first, settings.max_trials)
 
     def control_overrides(self, report, overrides: Mapping[str, Any]) -> dict[str, Any]:
         """Overrides giving the baseline's control participant the options of the system's,
@@ -334,13 +338,14 @@ class VoyageComparison:
             log.info("%s: no [metocean] table, no route costs", scenario)
             return {}
         from rhnc.routing.track_cost import constant_speed_times, densify
+        from rhnc.routing.routing_problem import plane_point
         from rhnc.routing.weather_routing import RoutingProblem, cost_of_track, optimal_route, straight_route
 
         metocean = from_scenario_table(loaded.metocean, loaded.directory,
                                                      f"{loaded.path}: metocean")
         energy = EnergyParameters()
         settings = self.optimal_route or OptimalRouteSettings()
-        problem = RoutingProblem(self.start_m, self.goal_m, metocean, energy=energy,
+        problem = RoutingProblem(plane_point(self.start_m), plane_point(self.goal_m), metocean, energy=energy,
                                  resolution_nm=settings.resolution_nm, avoid=settings.avoid_m)
         # a track may end in the part of the arrival circle off the map: it is costed, as it
         # was sailed, with the edge's weather held there; the routes stay on the map

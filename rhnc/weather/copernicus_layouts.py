@@ -53,6 +53,15 @@ def era5_packing(values: np.ndarray) -> tuple[float, float]:
     return scale, offset
 
 
+def _axis(ds, name: str, kind: str, values, **attributes: str) -> None:
+    """The coordinate variable ``name`` of ``ds`` on its own dimension: its values and CF attributes
+    (in the order given)."""
+    variable = ds.createVariable(name, kind, (name,))
+    for key, value in attributes.items():
+        setattr(variable, key, value)
+    variable[:] = values
+
+
 def write_era5_single_levels(path, lat_deg, lon_deg, times, u10, v10, swh, mwd) -> Path:
     """Write an ERA5 single-levels file.
 
@@ -81,15 +90,10 @@ def write_era5_single_levels(path, lat_deg, lon_deg, times, u10, v10, swh, mwd) 
         ds.createDimension("longitude", lon.size)
         ds.createDimension("latitude", lat.size)
         ds.createDimension("time", None)
-        variable = ds.createVariable("longitude", "f4", ("longitude",))
-        variable.units, variable.long_name = "degrees_east", "longitude"
-        variable[:] = lon[order_lon]
-        variable = ds.createVariable("latitude", "f4", ("latitude",))
-        variable.units, variable.long_name = "degrees_north", "latitude"
-        variable[:] = lat[order_lat]
-        variable = ds.createVariable("time", "i4", ("time",))
-        variable.units, variable.long_name, variable.calendar = "hours since 1900-01-01 00:00:00.0", "time", "gregorian"
-        variable[:] = hours.astype(np.int32)
+        _axis(ds, "longitude", "f4", lon[order_lon], units="degrees_east", long_name="longitude")
+        _axis(ds, "latitude", "f4", lat[order_lat], units="degrees_north", long_name="latitude")
+        _axis(ds, "time", "i4", hours.astype(np.int32), units="hours since 1900-01-01 00:00:00.0", long_name="time",
+              calendar="gregorian")
         for name, values in (("u10", u10), ("v10", v10), ("swh", swh), ("mwd", mwd)):
             values = np.asarray(values, dtype=float)[:, order_lat][:, :, order_lon]
             scale, offset = era5_packing(values)
@@ -128,18 +132,10 @@ def write_cmems_currents(path, lat_deg, lon_deg, times, uo, vo, depths_m=(CMEMS_
         ds.title = "daily/hourly mean fields from Global Ocean Physics Analysis and Forecast (layout; synthetic values)"
         for name, size in (("time", None), ("depth", depths.size), ("latitude", lat.size), ("longitude", lon.size)):
             ds.createDimension(name, size)
-        variable = ds.createVariable("time", "f8", ("time",))
-        variable.units, variable.standard_name, variable.calendar = "hours since 1950-01-01", "time", "gregorian"
-        variable[:] = hours
-        variable = ds.createVariable("depth", "f4", ("depth",))
-        variable.units, variable.positive, variable.standard_name = "m", "down", "depth"
-        variable[:] = depths
-        variable = ds.createVariable("latitude", "f4", ("latitude",))
-        variable.units, variable.standard_name = "degrees_north", "latitude"
-        variable[:] = lat[order_lat]
-        variable = ds.createVariable("longitude", "f4", ("longitude",))
-        variable.units, variable.standard_name = "degrees_east", "longitude"
-        variable[:] = lon[order_lon]
+        _axis(ds, "time", "f8", hours, units="hours since 1950-01-01", standard_name="time", calendar="gregorian")
+        _axis(ds, "depth", "f4", depths, units="m", positive="down", standard_name="depth")
+        _axis(ds, "latitude", "f4", lat[order_lat], units="degrees_north", standard_name="latitude")
+        _axis(ds, "longitude", "f4", lon[order_lon], units="degrees_east", standard_name="longitude")
         for name, values, standard in (("uo", uo, "eastward_sea_water_velocity"),
                                        ("vo", vo, "northward_sea_water_velocity")):
             values = np.asarray(values, dtype=float)

@@ -1,21 +1,16 @@
 """The search-vs-random comparison script: its declaration file checked, and how a count is read."""
 
-import importlib.util
-import sys
 from pathlib import Path
 
 import pytest
+from script_module import module_of_file
 
 REPO = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")
 def bench():
-    spec = importlib.util.spec_from_file_location("bench_search", REPO / "bench" / "bench_search.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # its dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
+    return module_of_file(REPO / "bench" / "bench_search.py", "bench_search")
 
 
 GOOD = """\

@@ -1,22 +1,17 @@
 """The script that compares full runs with runs ended by the separation watch: how it pairs and judges them."""
 
-import importlib.util
 import json
-import sys
 from pathlib import Path
 
 import pytest
+from script_module import module_of_file
 
 REPO = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")
 def bench():
-    spec = importlib.util.spec_from_file_location("bench_separation_watch", REPO / "bench" / "bench_separation_watch.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    return module
+    return module_of_file(REPO / "bench" / "bench_separation_watch.py", "bench_separation_watch")
 
 
 def _search(folder: Path, runs: list[tuple[dict, float, list[float], int]]) -> Path:

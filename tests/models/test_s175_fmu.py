@@ -3,12 +3,12 @@ independent integration (solve_ivp) of its equations with the coefficients of de
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
 import numpy as np
 from fmpy.validation import validate_fmu
 from scipy.integrate import solve_ivp
+from script_module import module_of_file
 
 KNOT = 1852.0 / 3600.0
 DEG = np.pi / 180.0
@@ -17,10 +17,7 @@ DERIVE = Path(__file__).resolve().parents[2] / "models" / "S175" / "derive.py"
 
 
 def coefficients():
-    spec = importlib.util.spec_from_file_location("s175_derive", DERIVE)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.derive()
+    return module_of_file(DERIVE, "s175_derive").derive()
 
 
 def test_validates(fmus):

@@ -84,35 +84,22 @@ def test_verbose_shows_the_toolchains_log_lines_only(tmp_path):
     assert {name.split(".")[0] for name in loggers} <= {"orchestrator", "rhnc"}, sorted(set(loggers))
 
 
-@pytest.fixture
-def small_batch(tmp_path):
-    from test_batch import BATCH, SCENARIO
-
-    def write(text=BATCH):
-        (tmp_path / "short_turn.toml").write_text(SCENARIO)
-        path = tmp_path / "small.toml"
-        path.write_text(textwrap.dedent(text))
-        return path
-
-    return write
-
-
-def test_a_batch_console_counts_the_failures_it_does_not_list(small_batch, tmp_path, capsys, monkeypatch):
+def test_a_batch_console_counts_the_failures_it_does_not_list(write_small_batch, tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(cli, "MAX_FAILURES_SHOWN", 3)
     results = tmp_path / "results"
-    assert main(["batch", str(small_batch()), "--results", str(results), "--no-progress", "--workers", "1"]) == 3
+    assert main(["batch", str(write_small_batch()), "--results", str(results), "--no-progress", "--workers", "1"]) == 3
     out = capsys.readouterr().out
     assert len(re.findall(r"^  \w+ finished: fast enough", out, flags=re.M)) == 3
     assert f"  ... and 1 more not passed: every one is in {results / 'small' / 'summary.csv'}" in out
 
 
-def test_an_interrupted_batch_counts_the_runs_that_ended_after_the_interrupt(small_batch, tmp_path, capsys):
+def test_an_interrupted_batch_counts_the_runs_that_ended_after_the_interrupt(write_small_batch, tmp_path, capsys):
     """The first run sends Ctrl-C to the batch process; it still completes and is counted."""
     from test_batch import BATCH
 
     text = BATCH.replace("[grid]", "[set]\n\"participants.helm.options.interrupt_batch_at_s\" = 100.0\n\n[grid]")
     results = tmp_path / "results"
-    assert main(["batch", str(small_batch(text)), "--results", str(results), "--no-progress", "--workers", "1"]) == 130
+    assert main(["batch", str(write_small_batch(text)), "--results", str(results), "--no-progress", "--workers", "1"]) == 130
     captured = capsys.readouterr()
     assert captured.out.startswith("0/6 runs passed (")
     assert "; ran 1, skipped 0 already done" in captured.out.splitlines()[0]

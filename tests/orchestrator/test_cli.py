@@ -128,3 +128,11 @@ def test_the_help_names_every_fmi_version_the_master_runs(capsys):
     out = " ".join(capsys.readouterr().out.split())
     assert f"(FMI {' and '.join(FMI_VERSIONS)} co-simulation master)" in out
     assert FMI_VERSIONS == ("2.0", "3.0")
+
+
+@pytest.mark.parametrize("command", ["batch", "search"])
+def test_fewer_than_one_worker_is_refused_in_one_line_and_nothing_written(tmp_path, capsys, command):
+    results = tmp_path / "results"
+    assert main([command, str(tmp_path / "missing.toml"), "--workers", "0", "--results", str(results)]) == 2
+    assert capsys.readouterr().err == "error: --workers must be at least 1\n"
+    assert not results.exists()

@@ -3,7 +3,6 @@
 import os
 import subprocess
 import sys
-import textwrap
 from pathlib import Path
 
 import pandas as pd
@@ -15,16 +14,6 @@ from orchestrator.results import RunFolder
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[1]
-
-
-@pytest.fixture
-def small_batch(tmp_path):
-    from test_batch import BATCH, SCENARIO
-
-    (tmp_path / "short_turn.toml").write_text(SCENARIO)
-    path = tmp_path / "small.toml"
-    path.write_text(textwrap.dedent(BATCH))
-    return path
 
 
 def test_a_batch_finds_its_results_folder_held_and_says_by_whom(small_batch, tmp_path, capsys):

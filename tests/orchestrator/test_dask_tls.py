@@ -1,22 +1,10 @@
 """Batches on a Dask cluster with TLS, and one-line errors for scheduler addresses that cannot work."""
 
-import textwrap
-
 import pandas as pd
 import pytest
 
 from orchestrator.batch import NONDETERMINISTIC_COLUMNS, run_batch
 from orchestrator.cli import main
-
-
-@pytest.fixture
-def small_batch(tmp_path):
-    from test_batch import BATCH, SCENARIO
-
-    (tmp_path / "short_turn.toml").write_text(SCENARIO)
-    path = tmp_path / "small.toml"
-    path.write_text(textwrap.dedent(BATCH))
-    return path
 
 
 @pytest.fixture

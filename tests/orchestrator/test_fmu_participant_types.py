@@ -17,7 +17,7 @@ from orchestrator import fmu_build, fmu_participant
 from orchestrator.errors import FmuError, ModelError, ScenarioError
 from orchestrator.fmi_slave import FmiSlave
 from orchestrator.fmu_participant import FmuParticipant, read_parameter_set, resolve_fmu
-from orchestrator.scenario_spec import ParticipantSpec
+from orchestrator.scenario_spec import ParticipantSpec, VariableMapping
 
 from fmu_copies import copy_with_description
 
@@ -202,8 +202,12 @@ def test_a_refused_parameter_is_named_by_the_fmi_function_of_its_type(typed_fmu,
         vendor.terminate()
 
 
-def test_a_refused_input_is_named_by_fmi_set_real(typed_fmu, slave):
-    vendor = participant(typed_fmu, {})
+@pytest.mark.parametrize("mapping", [
+    {},                                                                  # plain: the values as they come
+    {"tau_u": VariableMapping(variable="tau_u", scale=1000.0)},          # scaled: the converting path
+])
+def test_a_refused_input_is_named_by_fmi_set_real(typed_fmu, slave, mapping):
+    vendor = participant(typed_fmu, {}, mapping=mapping)
     try:
         vendor.setup(0.0, {"tau_u": 1.0, "tau_r": 0.0})
         slave.refused = {"set_reals"}

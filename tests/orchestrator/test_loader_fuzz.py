@@ -2,9 +2,7 @@
 process: every generated scenario either loads or is refused with one ScenarioError line;
 any other exception (a traceback for the user) fails the test."""
 
-import importlib.util
 import shutil
-import sys
 from pathlib import Path
 
 import pytest
@@ -12,6 +10,7 @@ import pytest
 from orchestrator.errors import ToolchainError
 from orchestrator.scenario import load_scenario
 from orchestrator.validate import check_scenario
+from script_module import module_of_file
 
 REPO = Path(__file__).resolve().parents[2]
 SAMPLE = 120
@@ -21,11 +20,7 @@ CHEAP = {"turning_circle.toml", "turning_circle_mmg.toml", "zigzag_10_10.toml", 
 
 
 def _fuzz_module():
-    spec = importlib.util.spec_from_file_location("fuzz_scenarios", REPO / "scripts" / "fuzz_scenarios.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("fuzz_scenarios", module)
-    spec.loader.exec_module(module)
-    return module
+    return module_of_file(REPO / "scripts" / "fuzz_scenarios.py", "fuzz_scenarios")
 
 
 @pytest.fixture(scope="module")

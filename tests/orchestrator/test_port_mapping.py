@@ -23,6 +23,17 @@ from fmu_copies import copy_with_description
 KNOT = 1852 / 3600
 NM = 1852.0
 
+VENDOR_B_MAPPING = """[participants.ship.mapping]
+x = { variable = "north_m", start = "north0_m" }
+y = "east_m"
+psi = { variable = "heading_deg", start = "heading0_deg" }
+u = { variable = "surge_speed_kn", start = "surge0_kn" }
+v = "sway_speed_kn"
+r = "yaw_rate_deg_s"
+tau_u = "thrust_kN"
+tau_r = "yaw_moment_kNm"
+"""
+
 S175_MAPPING = """
 [participants.ship.geodetic]
 origin_deg = [35.0, 140.0]
@@ -131,16 +142,7 @@ def test_vendor_b_by_declared_units_alone_matches_the_kcs(tmp_path):
     frames = []
     for fmu, mapping, initial in (
         ("KCS", "", "x_nm = 1.0\npsi_deg = 30.0\nu_kn = 18.0"),
-        ("KCSVendorB", """[participants.ship.mapping]
-x = { variable = "north_m", start = "north0_m" }
-y = "east_m"
-psi = { variable = "heading_deg", start = "heading0_deg" }
-u = { variable = "surge_speed_kn", start = "surge0_kn" }
-v = "sway_speed_kn"
-r = "yaw_rate_deg_s"
-tau_u = "thrust_kN"
-tau_r = "yaw_moment_kNm"
-""", "x_nm = 1.0\npsi_deg = 30.0\nu_kn = 18.0"),
+        ("KCSVendorB", VENDOR_B_MAPPING, "x_nm = 1.0\npsi_deg = 30.0\nu_kn = 18.0"),
     ):
         path = tmp_path / f"{fmu}.toml"
         text = s175_scenario(initial, mapping=mapping, fmu=f'"{fmu}"',
@@ -303,17 +305,6 @@ def test_unmapped_ports_keep_working(tmp_path):
     ship = build(path)
     assert {"x", "psi", "tau_u", "wind_direction"} <= set(ship.output_names) | set(ship.input_names)
 
-
-VENDOR_B_MAPPING = """[participants.ship.mapping]
-x = { variable = "north_m", start = "north0_m" }
-y = "east_m"
-psi = { variable = "heading_deg", start = "heading0_deg" }
-u = { variable = "surge_speed_kn", start = "surge0_kn" }
-v = "sway_speed_kn"
-r = "yaw_rate_deg_s"
-tau_u = "thrust_kN"
-tau_r = "yaw_moment_kNm"
-"""
 
 
 def test_a_plant_of_one_variable_per_port_steps_as_the_bindings_convert(write_scenario):

@@ -118,6 +118,33 @@ def test_an_edge_lookup_refuses_a_move_into_an_obstacle():
         graph.edge_between(np.array([3 * ny + 3, 3 * ny + 3]), np.array([3 * ny + 4, 4 * ny + 4]))
 
 
+@pytest.mark.parametrize("reach, di, dj", [
+    (1, 0, 0),     # a node with itself: no move, the look-up's fill
+    (1, 0, 2),     # beyond the reach, past the look-up's end
+    (1, 0, -2),    # beyond the reach, a negative index that would wrap round
+    (1, -2, 1),
+    (2, 2, 2),     # within the reach but not primitive (two diagonal moves)
+])
+def test_an_edge_lookup_refuses_an_offset_that_is_no_move(reach, di, dj):
+    axis = np.arange(0.0, 8.0)
+    graph = build_grid_graph(axis, axis, reach=reach)
+    ny = 8
+    source = 3 * ny + 3
+    with pytest.raises(ValueError, match="no edge between some of the given nodes"):
+        graph.edge_between(np.array([source]), np.array([source + di * ny + dj]))
+
+
+def test_the_trees_span_every_node_when_the_last_node_lies_in_an_obstacle():
+    # node 63, the highest id, has no edge in or out: the sparse matrices must still be 64 x 64
+    axis = np.arange(0.0, 8.0)
+    graph = build_grid_graph(axis, axis, reach=1, obstacles=[(7.0, 7.0, 0.5)])
+    assert not graph.free[63]
+    weights = graph.move_length_m[graph.move]
+    for tree in (shortest_path_tree(graph, weights, 0), cost_to_go_tree(graph, weights, 0)):
+        assert tree.cost.shape == (64,)
+        assert math.isinf(tree.cost[63]) and tree.cost[62] == pytest.approx(6.0 * math.sqrt(2.0) + 1.0)
+
+
 def test_a_two_column_grid_has_its_own_spacing():
     graph = build_grid_graph(np.array([0.0, 100.0, 200.0]), np.array([0.0, 300.0]), reach=1)
     east = int(np.flatnonzero((graph.moves == [0, 1]).all(axis=1))[0])

@@ -8,7 +8,7 @@ import pytest
 
 from orchestrator.errors import ScenarioError
 from orchestrator.fmu_build import MODELS_DIR
-from rhnc.ship.ships import PLANT_PARAMETERS, SHIPS_DIR, check_parameter_set, load_ship
+from rhnc.ship.ships import PLANT_PARAMETERS, SHIPS_DIR, check_parameter_set, load_actuators, load_ship
 
 GOOD = (SHIPS_DIR / "KCS.toml").read_text()
 
@@ -46,3 +46,10 @@ def test_an_unknown_ship_names_the_known_ones(tmp_path):
     (tmp_path / "KCS.toml").write_text(GOOD)
     with pytest.raises(ScenarioError, match=r"no particulars for ship 'Emma' \(known: KCS\)"):
         load_ship("Emma", tmp_path)
+
+
+@pytest.mark.parametrize("read", [lambda folder: load_ship("KCS", folder), lambda folder: load_actuators("KCS", folder)])
+def test_a_ship_file_that_is_no_toml_is_named_in_one_line(tmp_path, read):
+    (tmp_path / "KCS.toml").write_text("beam_m = = 32.2\n")
+    with pytest.raises(ScenarioError, match=r"KCS.toml: Invalid value \(at line 1, column 10\)$"):
+        read(tmp_path)

@@ -1,12 +1,12 @@
 """Whether a full-force manoeuvre can open the range to a target inside R + R_i within 60 s."""
 
-import importlib.util
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from rhnc.ship.ship_model import load_parameter_set
+from script_module import module_of_file
 
 REPO = Path(__file__).resolve().parents[2]
 KNOT = 1852.0 / 3600.0
@@ -14,11 +14,7 @@ KNOT = 1852.0 / 3600.0
 
 @pytest.fixture(scope="module")
 def feasibility():
-    spec = importlib.util.spec_from_file_location("started_inside_feasibility",
-                                                  REPO / "scripts" / "started_inside_feasibility.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return module_of_file(REPO / "scripts" / "started_inside_feasibility.py", "started_inside_feasibility")
 
 
 @pytest.fixture(scope="module")

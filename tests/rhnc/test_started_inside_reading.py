@@ -1,20 +1,16 @@
 """scripts/started_inside_reading.py: stored Rule 8/16 verdicts re-read for started-inside targets."""
 
-import importlib.util
 import json
 from pathlib import Path
 
 import pytest
+from script_module import module_of_file
 
 REPO = Path(__file__).resolve().parents[2]
 
 
 def load_script():
-    spec = importlib.util.spec_from_file_location("started_inside_reading",
-                                                  REPO / "scripts" / "started_inside_reading.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return module_of_file(REPO / "scripts" / "started_inside_reading.py", "started_inside_reading")
 
 
 def write_run(folder: Path, name: str, targets: list[dict]) -> None:

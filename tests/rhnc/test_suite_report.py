@@ -2,6 +2,8 @@
 
 import json
 
+import pytest
+
 from rhnc.encounters.suite_report import BEGIN, END, main, markdown, summarise
 
 
@@ -61,6 +63,16 @@ def test_table_is_written_between_the_markers(tmp_path, capsys):
     assert plain.read_text() == "no markers\n"
     assert "plain.md: no '<!-- suite-table:begin -->'" in capsys.readouterr().err
     assert main([str(tmp_path / "nothing")]) == 2
+
+
+@pytest.mark.parametrize("text", [f"{BEGIN}\nold\n", f"old\n{END}\n", f"{END}\nold\n{BEGIN}\n"])
+def test_a_file_with_one_marker_or_them_reversed_is_refused_and_left_as_it_was(tmp_path, capsys, text):
+    _run(tmp_path / "suite", "a", True, True, "pass", 0, 0.05, [{"side_correct": True}])
+    doc = tmp_path / "doc.md"
+    doc.write_text(text)
+    assert main([str(tmp_path / "suite"), "--write", str(doc)]) == 2
+    assert doc.read_text() == text
+    assert capsys.readouterr().err.startswith(f"suite_report: {doc}: no '{BEGIN}' ... '{END}' lines")
 
 
 def test_the_table_goes_to_every_file_named_or_to_none(tmp_path, capsys):
