@@ -6,7 +6,6 @@ calls the step's parts directly, without solving.
 """
 
 import json
-import math
 
 import casadi as ca
 import numpy as np
