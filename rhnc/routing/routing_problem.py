@@ -231,24 +231,11 @@ def shortest_clear_route(problem: RoutingProblem) -> np.ndarray:
     """The shortest route from start to goal that keeps clear of the avoided circles and of
     ``keep_out``: the straight line (or its way round the circles) where it is clear, else
     the shortest path on the search grid, shortened wherever a straight leg stays clear."""
-    from rhnc.routing.route_search import build_grid_graph, shortcut_path, shortest_path_tree
+    from rhnc.routing.clear_route import grid_clear_path
 
     polyline = shortest_route(problem.start_m, problem.goal_m, problem.avoid)
     keep_out = problem.keep_out
     if keep_out is None or np.all(keep_out.legs_clear(polyline[:-1], polyline[1:])):
         return polyline
-    x_min, x_max, y_min, y_max = problem.metocean.extent
-    step = problem.resolution_nm * NM
-    x = np.linspace(x_min, x_max, axis_node_count(x_max - x_min, step, "the route search's resolution_nm"))
-    y = np.linspace(y_min, y_max, axis_node_count(y_max - y_min, step, "the route search's resolution_nm"))
-    graph = build_grid_graph(x, y, problem.reach, problem.avoid, keep_out)
-    tree = shortest_path_tree(graph, graph.move_length_m[graph.move], graph.nearest_free_node(problem.start_m))
-    path = graph.node_points()[tree.path_to(graph.nearest_free_node(problem.goal_m))]
-    path = np.vstack([problem.start_m, path, problem.goal_m])
-
-    def lengths(i, js):
-        length = np.hypot(*(path[js] - path[i]).T)
-        return np.where(keep_out.legs_clear(np.broadcast_to(path[i], (len(js), 2)), path[js]), length, np.inf)
-
-    consecutive = np.hypot(*np.diff(path, axis=0).T)
-    return path[shortcut_path(len(path), lengths, consecutive_costs=consecutive)]
+    return grid_clear_path(keep_out, problem.start_m, problem.goal_m, problem.metocean.extent,
+                           problem.resolution_nm, problem.reach, problem.avoid)
