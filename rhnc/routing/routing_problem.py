@@ -25,6 +25,9 @@ from rhnc.routing.track_cost import constant_speed_times, cost_of_track, densify
 
 #: Bracket of the speed through water solved for a fixed arrival time [m/s].
 SPEED_BRACKET_MPS = (0.5, 30.0)
+#: How late [s] a ship a head current stops counts as, in the search for the speed that arrives
+#: (late past any arrival: the search then looks above that speed).
+NEVER_S = 1e12
 
 
 class KeepOut(Protocol):
@@ -191,14 +194,20 @@ def speed_for_arrival(problem: RoutingProblem, polyline: np.ndarray, arrival_s: 
             return problem.departure_s + float(np.sum(length[moving] / np.maximum(
                 speed + along[moving], 1e-3))) - arrival_s
 
+    def late_or_never_s(speed):  # a head current that stops the ship makes it later than any arrival
+        try:
+            return late_s(speed)
+        except ValueError:
+            return NEVER_S
+
     low, high = SPEED_BRACKET_MPS
-    if late_s(high) > 0:
+    if late_or_never_s(high) > 0:
         raise ValueError(f"arrival at {arrival_s:.0f} s needs more than {high:.0f} m/s through water")
-    if late_s(low) < 0:
+    if late_or_never_s(low) < 0:
         raise ValueError(f"arrival at {arrival_s:.0f} s needs less than {low:.1f} m/s through water")
     from scipy.optimize import brentq  # here: importing scipy.optimize takes 0.1 s, most runs never get here
 
-    return float(brentq(late_s, low, high, xtol=1e-6, rtol=1e-10))
+    return float(brentq(late_or_never_s, low, high, xtol=1e-6, rtol=1e-10))
 
 
 def straight_route(problem: RoutingProblem, *, speed_mps: float | None = None,
