@@ -81,3 +81,39 @@ def test_every_shipped_sea_route_baseline_keeps_the_declared_clearance_along_its
     north, east = chart.projection.to_local(waypoints[:, 0], waypoints[:, 1])
     route = np.stack([north, east], axis=1)
     assert np.min(chart.leg_distances_m(route[:-1], route[1:])) >= chart.clearance_m - TOUCH_M
+
+
+def sea_route_copy(tmp_path, waypoints):
+    """The strait's sea-route baseline in ``tmp_path`` with its files named absolutely and ``waypoints``."""
+    text = (PASSAGES / "gibraltar_strait_sea_route.toml").read_text()
+    text = text.replace('"weather/', f'"{PASSAGES}/weather/').replace('"gibraltar_strait.chart.toml"',
+                                                                      f'"{PASSAGES}/gibraltar_strait.chart.toml"')
+    shipped = tomllib.loads(text)["participants"]["route"]["options"]["waypoints_deg"]
+    text = text.replace(f"waypoints_deg = {shipped}".replace("'", ""), f"waypoints_deg = {waypoints}")
+    assert f"waypoints_deg = {waypoints}" in text
+    path = tmp_path / "sea_route.toml"
+    path.write_text(text)
+    return path
+
+
+def test_a_reference_path_on_a_chart_inside_its_clearance_stops_the_run_naming_the_leg(tmp_path, capsys):
+    from orchestrator.cli import main
+
+    # searoute's own route through the strait: its last leg runs 0.03 nm from the separation zone
+    path = sea_route_copy(tmp_path, "[[36.08, -4.95], [35.97289, -5.269383], [35.968819, -5.354867], [35.93, -6.15]]")
+    code = main(["run", str(path), "--results", str(tmp_path / "results"), "--no-progress"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert ("participants.route: option 'waypoints_deg': the leg from point 2 to point 3 comes 0.033 nm "
+            "from land or a no-go area, inside the clearance of 1 nm of chart") in err
+    assert len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "results").exists()
+
+
+def test_a_reference_path_on_a_chart_that_keeps_its_clearance_is_built():
+    from orchestrator.participant import BuildContext
+    from rhnc.navigation.reference_participant import ReferencePathParticipant
+
+    options = tomllib.loads((PASSAGES / "gibraltar_strait_sea_route.toml").read_text())["participants"]["route"]
+    context = BuildContext(where="route", scenario_dir=PASSAGES, step_size=60.0, start_time=0.0, stop_time=600.0)
+    assert ReferencePathParticipant.from_options("route", options["options"], context) is not None
