@@ -14,7 +14,9 @@ were fixed (ports, clearance, weather parameters) before any passage was run:
   closed-form fields below (a depression crossing the map, waves grown from its wind, a
   current), on the services' own grids (0.25 deg hourly; 1/12 deg hourly);
 * the baseline route: ``searoute``'s port-to-port route over its offline sea-route
-  network (searoute 1.6, the Eurostat/ORNL marnet network), between the start and the goal;
+  network (searoute 1.6, the Eurostat/ORNL marnet network), between the start and the goal,
+  made to keep the chart's clearance (``rhnc.routing.clear_route.route_kept_clear``: each leg
+  that comes within it replaced by the shortest clear path between its ends);
 * the scenarios: ``<name>.toml`` (RHNC: routing navigation on the chart, NMPC, KCS plant,
   MetOcean FMU), ``<name>_sea_route.toml`` (Offline-SPNC: the NMPC following the sea-route
   baseline) and ``<name>_compare.toml`` (both at equal arrival time, ``compare``).
@@ -29,8 +31,10 @@ from pathlib import Path
 import numpy as np
 
 from orchestrator.geometry import NM
+from rhnc.chart.chart import Chart, load_chart
 from rhnc.chart.land import land_geojson
 from rhnc.chart.projection import LocalProjection
+from rhnc.routing.clear_route import route_kept_clear
 from rhnc.weather.copernicus_layouts import write_cmems_currents, write_era5_single_levels
 
 OUT = Path(__file__).resolve().parent.parent / "scenarios" / "passages"
@@ -122,13 +126,20 @@ def weather(name: str, passage: dict) -> tuple[Path, Path]:
     return era5, cmems
 
 
-def sea_route(start, goal) -> list[tuple[float, float]]:
-    """searoute's network route between the two (lat, lon), its ends replaced by start and goal."""
+def sea_route(start, goal, chart: Chart) -> list[tuple[float, float]]:
+    """searoute's network route between the two (lat, lon), its ends replaced by start and goal,
+    each leg keeping the chart's clearance (the network knows nothing of it)."""
     import searoute
 
     found = searoute.searoute([start[1], start[0]], [goal[1], goal[0]])
     inner = [(lat, lon) for lon, lat in found.geometry["coordinates"][1:-1]]
-    return [tuple(start)] + inner + [tuple(goal)]
+    route = [tuple(start)] + inner + [tuple(goal)]
+    north, east = chart.projection.to_local(*np.array(route).T)
+    plane = np.stack([north, east], axis=1)
+    clear = route_kept_clear(chart, plane)
+    given = {tuple(point): geographic for point, geographic in zip(plane, route)}  # kept as searoute gave them
+    lat, lon = chart.projection.to_geographic(clear[:, 0], clear[:, 1])
+    return [given.get(tuple(point), (float(a), float(b))) for point, a, b in zip(clear, lat, lon)]
 
 
 def write_passage(name: str, passage: dict) -> None:
@@ -158,7 +169,7 @@ def write_passage(name: str, passage: dict) -> None:
         return [round(float(n) / NM, 3), round(float(e) / NM, 3)]
 
     start_nm, goal_nm = nm(passage["start"]), nm(passage["goal"])
-    route = sea_route(passage["start"], passage["goal"])
+    route = sea_route(passage["start"], passage["goal"], load_chart(OUT / f"{name}.chart.toml"))
     route_nm = [nm(p) for p in route]
     psi0 = math.atan2(goal_nm[1] - start_nm[1], goal_nm[0] - start_nm[0])
     distance = math.hypot(goal_nm[0] - start_nm[0], goal_nm[1] - start_nm[1])
@@ -324,7 +335,8 @@ chart = "{name}.chart.toml"          # land and no-go areas at the declared clea
 ''' + TAIL)
 
 SEA_ROUTE = ('''# Passage: {title}, Offline-SPNC baseline (scripts/make_passages.py): the NMPC follows
-# searoute's port-to-port route over its offline sea-route network, at one constant speed.
+# searoute's port-to-port route over its offline sea-route network, at one constant speed; each leg
+# that came within the chart's clearance replaced by the shortest clear path between its ends.
 # Route in the chart's plane (north, east) [nm]: {route_nm}
 ''' + CONNECTIONS.format(extra='''  "route.reference -> ctrl.reference", "ship.x -> route.x", "ship.y -> route.y",
 ''') + '''

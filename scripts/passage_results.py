@@ -142,12 +142,14 @@ def stalled_baseline_lines(results: Path, name: str) -> list[str]:
         return []
     import tomllib
 
+    from rhnc.ship.ship_model import load_parameter_set
     from rhnc.voyage.voyage_spec import plane_positions
 
     compare = ROOT / "scenarios" / "passages" / f"{name}_compare.toml"
     voyage = plane_positions(tomllib.loads(compare.read_text())["voyage"], compare)  # goal_deg into goal_nm
     goal = np.array(voyage["goal_nm"], dtype=float)
     lines = []
+    tau_u_max = load_parameter_set("default").tau_u_max  # the baselines' plant: the KCS's default set
     for trial in sorted((folder / "runs" / "RHNC_equal-arrival_baseline").glob("*/summary.json")):
         summary = json.loads(trial.read_text())
         if summary["participants"].get("goal", {}).get("arrival_time_s") is not None:
@@ -160,7 +162,9 @@ def stalled_baseline_lines(results: Path, name: str) -> list[str]:
                      f"{frame['time_s'].iloc[-1] / 3600.0:.1f} h (least {distance.min():.1f} nm from the goal); at the "
                      f"ship, median Hs {frame['env.hs'].median():.1f} m, wind {frame['env.wind_speed'].median():.1f} m/s "
                      f"from {np.median(off_bow):.0f} deg off the bow, speed through water "
-                     f"{frame['ship.u'].median() / 0.514444:.1f} kn")
+                     f"{frame['ship.u'].median() / 0.514444:.1f} kn; surge force within 1 % of the plant's bound "
+                     f"({tau_u_max / 1e6:.1f} MN) in {100.0 * np.mean(frame['ctrl.tau_u'] >= 0.99 * tau_u_max):.0f} % "
+                     f"of the samples")
     if not lines:
         return []
     return ["", f"{name}: the sea-route baseline arrived in no trial ({folder.relative_to(results.parent)}):", ""] + lines

@@ -27,7 +27,8 @@ def trial(folder: Path, arrival_s, north_nm):
                   "ship.y": np.full(count, 123.44 * 1852.0), "ship.psi": np.zeros(count), "ship.u": np.full(count, 3.0),
                   "env.hs": np.full(count, 10.0), "env.wind_speed": np.full(count, 20.0),
                   "env.wind_direction": np.full(count, np.radians(30.0)),
-                  "route.reference[0,4]": np.full(count, 15.0 * 0.514444)}).to_parquet(folder / "timeseries.parquet")
+                  "route.reference[0,4]": np.full(count, 15.0 * 0.514444),
+                  "ctrl.tau_u": 1.8e6 * np.minimum(1.0, 0.95 * np.arange(count))}).to_parquet(folder / "timeseries.parquet")
 
 
 def test_a_baseline_that_arrived_in_no_trial_is_listed_with_its_progress(script, tmp_path):
@@ -36,7 +37,8 @@ def test_a_baseline_that_arrived_in_no_trial_is_listed_with_its_progress(script,
     lines = script.stalled_baseline_lines(tmp_path, "biscay_crossing")
     assert "the sea-route baseline arrived in no trial" in lines[1]
     assert ("- reference 15.00 kn: made good 11.0 nm of 58.2 in 0.1 h (least 46.2 nm from the goal); at the ship, "
-            "median Hs 10.0 m, wind 20.0 m/s from 30 deg off the bow, speed through water 5.8 kn") in lines
+            "median Hs 10.0 m, wind 20.0 m/s from 30 deg off the bow, speed through water 5.8 kn; surge force "
+            "within 1 % of the plant's bound (1.8 MN) in 50 % of the samples") in lines
 
 
 def test_no_progress_lines_when_a_trial_arrived(script, tmp_path):

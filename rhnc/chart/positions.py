@@ -19,6 +19,8 @@ import numpy as np
 from orchestrator.errors import ScenarioError
 from orchestrator.geometry import NM
 
+#: How far inside the clearance a route's leg may come [m]: the rounding of positions in degrees.
+ROUNDING_M = 1e-3
 #: Positions that may be given either way: name -> whether it is a list of positions.
 POSITIONS = {"start": False, "goal": False, "waypoints": True}
 
@@ -58,6 +60,33 @@ def projected_options(options: Mapping[str, Any], where: str, scenario_dir,
         result[f"{name}_nm"] = plane.tolist() if POSITIONS[name] else plane[0].tolist()
         del result[key]
     return result
+
+
+def refuse_route_inside_clearance(scenario_dir, chart: str, waypoints_m, where: str, key: str) -> None:
+    """Stop a route whose legs come within the chart's clearance of land or a no-go area.
+
+    ``waypoints_m``: the route (k, 2), north and east [m]; ``key``: the option the user gave
+    it in, named by the message.  The test is the route search's (:meth:`Chart.legs_clear`:
+    every point of a leg, a leg from a start already inside the clearance allowed when it
+    comes no closer), with a millimetre for the rounding of positions written in degrees.
+
+    Raises
+    ------
+    ScenarioError
+        One line naming ``key``, the first leg that comes too close and how close.
+    """
+    from rhnc.chart.chart import load_chart
+
+    chart_file = load_chart(Path(scenario_dir) / chart)
+    points = np.asarray(waypoints_m, dtype=float).reshape(-1, 2)
+    clear = chart_file.legs_clear(points[:-1], points[1:])
+    for leg in np.nonzero(~clear)[0]:
+        distance = float(chart_file.leg_distances_m(points[leg:leg + 1], points[leg + 1:leg + 2])[0])
+        if distance < chart_file.clearance_m - ROUNDING_M:
+            raise ScenarioError(
+                f"{where}: option '{key}': the leg from point {leg} to point {leg + 1} comes "
+                f"{distance / NM:.3f} nm from land or a no-go area, inside the clearance of "
+                f"{chart_file.clearance_m / NM:g} nm of chart '{chart}'")
 
 
 def chart_projection(scenario_dir, chart: str):

@@ -27,7 +27,7 @@ import numpy as np
 from orchestrator.errors import ModelError, ScenarioError
 from orchestrator.geometry import KNOT, NM
 from orchestrator.participant import BuildContext, Participant, Value, is_finite_number, reject_unknown_options
-from rhnc.chart.positions import projected_options
+from rhnc.chart.positions import projected_options, refuse_route_inside_clearance
 
 
 
@@ -139,7 +139,9 @@ class ReferencePathParticipant(Participant):
         [deg], projected by the chart of option ``chart``.
     chart : str
         A chart file (relative to the scenario) whose projection puts the ``_deg``
-        positions in the plane.
+        positions in the plane.  A path of waypoints (or start and goal) on a chart must
+        keep its declared clearance from land and no-go areas along every leg; one that
+        does not is refused, naming the option and the leg.
     max_lead_nm : float
         With ``waypoints_nm`` or ``goal_nm``: the virtual ship is never more than this far
         along the path ahead of the ship (inputs ``x``, ``y`` [m]); default: no limit, the
@@ -168,6 +170,7 @@ class ReferencePathParticipant(Participant):
         """Build from scenario options (see class docstring); errors name the key."""
         where = context.where
         reject_unknown_options(options, cls.OPTIONS, where)
+        given = options
         options = projected_options(options, where, context.scenario_dir)
         if "speed_kn" not in options:
             raise ScenarioError(f"{where}: missing option 'speed_kn'")
@@ -184,6 +187,9 @@ class ReferencePathParticipant(Participant):
         if "waypoints_nm" in options or "goal_nm" in options:
             if len(waypoints) < 2 or np.any(np.hypot(*np.diff(waypoints, axis=0).T) == 0.0):
                 raise ScenarioError(f"{where}: option 'waypoints_nm' needs >= 2 distinct consecutive points")
+            if isinstance(options.get("chart"), str) and options["chart"]:  # a route on a chart keeps its clearance
+                key = next(k for k in ("waypoints_deg", "waypoints_nm", "goal_deg", "goal_nm") if k in given)
+                refuse_route_inside_clearance(context.scenario_dir, options["chart"], waypoints, where, key)
 
             def path(elapsed):
                 return waypoint_reference(elapsed, waypoints, speed)

@@ -25,6 +25,9 @@ from rhnc.routing.track_cost import constant_speed_times, cost_of_track, densify
 
 #: Bracket of the speed through water solved for a fixed arrival time [m/s].
 SPEED_BRACKET_MPS = (0.5, 30.0)
+#: How late [s] a ship a head current stops counts as, in the search for the speed that arrives
+#: (late past any arrival: the search then looks above that speed).
+NEVER_S = 1e12
 
 
 class KeepOut(Protocol):
@@ -197,14 +200,20 @@ def speed_for_arrival(problem: RoutingProblem, polyline: np.ndarray, arrival_s: 
             return problem.departure_s + float(np.sum(length[moving] / np.maximum(
                 speed + along[moving], 1e-3))) - arrival_s
 
+    def late_or_never_s(speed):  # a head current that stops the ship makes it later than any arrival
+        try:
+            return late_s(speed)
+        except ValueError:
+            return NEVER_S
+
     low, high = SPEED_BRACKET_MPS
-    if late_s(high) > 0:
+    if late_or_never_s(high) > 0:
         raise ValueError(f"arrival at {arrival_s:.0f} s needs more than {high:.0f} m/s through water")
-    if late_s(low) < 0:
+    if late_or_never_s(low) < 0:
         raise ValueError(f"arrival at {arrival_s:.0f} s needs less than {low:.1f} m/s through water")
     from scipy.optimize import brentq  # here: importing scipy.optimize takes 0.1 s, most runs never get here
 
-    return float(brentq(late_s, low, high, xtol=1e-6, rtol=1e-10))
+    return float(brentq(late_or_never_s, low, high, xtol=1e-6, rtol=1e-10))
 
 
 def straight_route(problem: RoutingProblem, *, speed_mps: float | None = None,
@@ -238,24 +247,11 @@ def shortest_clear_route(problem: RoutingProblem) -> np.ndarray:
     """The shortest route from start to goal that keeps clear of the avoided circles and of
     ``keep_out``: the straight line (or its way round the circles) where it is clear, else
     the shortest path on the search grid, shortened wherever a straight leg stays clear."""
-    from rhnc.routing.route_search import build_grid_graph, shortcut_path, shortest_path_tree
+    from rhnc.routing.clear_route import grid_clear_path
 
     polyline = shortest_route(problem.start_m, problem.goal_m, problem.avoid)
     keep_out = problem.keep_out
     if keep_out is None or np.all(keep_out.legs_clear(polyline[:-1], polyline[1:])):
         return polyline
-    x_min, x_max, y_min, y_max = problem.metocean.extent
-    step = problem.resolution_nm * NM
-    x = np.linspace(x_min, x_max, axis_node_count(x_max - x_min, step, "the route search's resolution_nm"))
-    y = np.linspace(y_min, y_max, axis_node_count(y_max - y_min, step, "the route search's resolution_nm"))
-    graph = build_grid_graph(x, y, problem.reach, problem.avoid, keep_out)
-    tree = shortest_path_tree(graph, graph.move_length_m[graph.move], graph.nearest_free_node(problem.start_m))
-    path = graph.node_points()[tree.path_to(graph.nearest_free_node(problem.goal_m))]
-    path = np.vstack([problem.start_m, path, problem.goal_m])
-
-    def lengths(i, js):
-        length = np.hypot(*(path[js] - path[i]).T)
-        return np.where(keep_out.legs_clear(np.broadcast_to(path[i], (len(js), 2)), path[js]), length, np.inf)
-
-    consecutive = np.hypot(*np.diff(path, axis=0).T)
-    return path[shortcut_path(len(path), lengths, consecutive_costs=consecutive)]
+    return grid_clear_path(keep_out, problem.start_m, problem.goal_m, problem.metocean.extent,
+                           problem.resolution_nm, problem.reach, problem.avoid)

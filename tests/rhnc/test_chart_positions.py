@@ -39,7 +39,9 @@ def test_a_goal_in_latitude_and_longitude_is_the_chart_projections_point():
 
 
 def test_waypoints_in_latitude_and_longitude_are_sailed_in_the_plane():
-    waypoints = [[36.08, -4.95], [35.97, -5.35], [35.93, -6.15]]
+    # the strait's sea route (a route on a chart must keep its clearance: a straighter one crosses the zone)
+    waypoints = [[36.08, -4.95], [35.97289, -5.269383], [35.968819, -5.354867], [35.94791430721023, -5.447368093662533],
+                 [35.93, -6.15]]
     participant = ReferencePathParticipant.from_options(
         "route", {"waypoints_deg": waypoints, "chart": CHART, "speed_kn": 12.0}, context("route"))
     reference = participant.reference_at(0.0)

@@ -7,7 +7,7 @@ from rhnc.ship.energy import EnergyParameters, brake_power, fuel_rate_t_h
 from orchestrator.geometry import KNOT, NM
 from rhnc.routing.route_search import segment_clearance
 from rhnc.routing.track_cost import constant_speed_times, cost_of_track
-from rhnc.routing.routing_problem import costed_route
+from rhnc.routing.routing_problem import costed_route, speed_for_arrival
 from rhnc.routing.weather_routing import (RouteSearch, RoutingProblem, _corners, _refine, cost_rate, optimal_route,
                                           straight_route)
 from weather_fixtures import storm_field, switched_field
@@ -412,3 +412,16 @@ def test_an_optimal_route_says_so():
     route = optimal_route(problem, speed_mps=SPEED)
     assert len(route.waypoints_m) > 2 and route.method == "optimal"
     assert straight_route(problem, speed_mps=SPEED).method == "straight"
+
+
+def test_the_speed_that_arrives_is_found_against_a_head_current_faster_than_the_slowest_speed_tried():
+    # 0.8 m/s against a northbound passage of 16 nm in 2 h, in weather that changes in time (a tidal
+    # stream's files): the slowest speed tried (0.5 m/s) is stopped by the current, and counts as late
+    from weather_fixtures import storm_field, switched_field
+
+    stream = storm_field(current_ms=(-0.8, 0.0))
+    problem = RoutingProblem((2.0 * NM, 10.0 * NM), (18.0 * NM, 10.0 * NM), switched_field(stream, stream, 1e5))
+    polyline = np.array([problem.start_m, problem.goal_m])
+    assert speed_for_arrival(problem, polyline, 7200.0) == pytest.approx(16.0 * NM / 7200.0 + 0.8, rel=1e-6)
+    result = straight_route(problem, arrival_s=7200.0)
+    assert result.arrival_s == pytest.approx(7200.0, abs=1e-3)
