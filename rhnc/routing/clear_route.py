@@ -24,7 +24,7 @@ from rhnc.weather.metocean_grid import axis_node_count
 REPAIR_GRIDS = ((10.0, 1.0), (30.0, 1.0), (10.0, 0.5))
 
 
-def grid_clear_path(keep_out, start_m: Sequence[float], goal_m: Sequence[float],
+def grid_clear_path(keep_out, start_m: Sequence[float] | np.ndarray, goal_m: Sequence[float] | np.ndarray,
                     extent: Sequence[float], resolution_nm: float, reach: int = 3,
                     avoid: Sequence[Sequence[float]] = ()) -> np.ndarray:
     """The shortest path from ``start_m`` to ``goal_m`` on a search grid that keeps clear of
