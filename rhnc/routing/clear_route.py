@@ -60,8 +60,8 @@ def grid_clear_path(keep_out, start_m: Sequence[float] | np.ndarray, goal_m: Seq
     x = np.linspace(x_min, x_max, axis_node_count(x_max - x_min, step, "the route search's resolution_nm"))
     y = np.linspace(y_min, y_max, axis_node_count(y_max - y_min, step, "the route search's resolution_nm"))
     graph = build_grid_graph(x, y, reach, avoid, keep_out)
-    tree = shortest_path_tree(graph, graph.move_length_m[graph.move], graph.nearest_free_node(start_m))
-    path = graph.node_points()[tree.path_to(graph.nearest_free_node(goal_m))]
+    tree = shortest_path_tree(graph, graph.move_length_m[graph.move], graph.nearest_free_node(tuple(start_m)))
+    path = graph.node_points()[tree.path_to(graph.nearest_free_node(tuple(goal_m)))]
     path = np.vstack([np.asarray(start_m, dtype=float), path, np.asarray(goal_m, dtype=float)])
 
     def lengths(i, js):
