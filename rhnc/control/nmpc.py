@@ -49,7 +49,11 @@ that is not finite (a state far outside the model's range) skips the solver.
 Failures: when neither attempt reports success, or the time limit stops the solve, the
 controller applies the previous plan shifted by one interval (its next input and
 predicted states) and flags the step; when no previous plan is left it holds the
-previous surge force with zero yaw moment.
+previous surge force with zero yaw moment, or, while a readily apparent alteration is
+held, with the yaw moment that steers to the alteration's heading
+(:func:`rhnc.control.nmpc_alteration.alteration_steering`).  A solve stopped at its
+iteration budget leaves its unfinished iterate as the next step's warm start, so that
+successive steps continue one solve (:class:`rhnc.control.nmpc_warm_start.PlanMemory`).
 
 Offset-free tracking: with ``disturbance_observer`` on, the current and body-frame loads
 estimated by :mod:`rhnc.control.disturbance_observer` enter the prediction model as parameters.
