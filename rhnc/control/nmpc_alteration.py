@@ -81,21 +81,25 @@ def heading_bounds(report, time_s: float, heading_rad: float, yaw_rate_rps: floa
 
 
 def alteration_steering(report, tau_r_max: float):
-    """The yaw moment of a fallback that keeps making the held alteration, or None (no alteration).
+    """The yaw moment of a fallback that opens the range or keeps making the held alteration, or
+    None (neither).
 
     When a solve fails before the controller has any plan to fall back on, holding the
     course with no yaw moment keeps the ship standing on towards the targets it is giving
-    way to, step after step while the solves fail.  With an alteration held (``report``'s
-    ``alteration_floor`` to starboard, else ``alteration_ceiling`` to port), the fallback
-    steers to the alteration's heading instead: ``steer(heading_rad, yaw_rate_rps) -> tau_r``,
-    a proportional-derivative law on the heading error with the yaw rate weighted by the
+    way to, step after step while the solves fail.  In immediate danger (a target inside its
+    clearance and closing: ``report``'s ``escape_heading``) the fallback steers straight away
+    from that target, where the range opens fastest (Rules 2(b), 17(b)); with an alteration
+    held (``alteration_floor`` to starboard, else ``alteration_ceiling`` to port), to the
+    alteration's heading.  ``steer(heading_rad, yaw_rate_rps) -> tau_r`` is a
+    proportional-derivative law on the heading error with the yaw rate weighted by the
     model's yaw time constant (``YAW_TIME_CONSTANT_S``), full moment from
     ``STEERING_BAND_DEG`` of error.
     """
+    escape = report.escape_heading
     alteration = report.alteration_floor if report.alteration_floor is not None else report.alteration_ceiling
-    if alteration is None:
+    if escape is None and alteration is None:
         return None
-    goal = float(alteration[2])
+    goal = float(escape if escape is not None else alteration[2])
     band = math.radians(STEERING_BAND_DEG)
 
     def steer(heading_rad: float, yaw_rate_rps: float) -> float:

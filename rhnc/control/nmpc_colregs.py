@@ -167,7 +167,8 @@ class DomainReport:
 
     ``risk``: the controller's own collision-risk assessment turned the constraints on
     (``colregs`` only; see :meth:`CollisionDomains.parameters`); ``danger``: a target is
-    inside its clearance and closing.
+    inside its clearance and closing; ``escape_heading``: then, the heading [rad] straight away
+    from the nearest such target (its range opens fastest), else None.
     ``alteration_floor`` / ``alteration_ceiling``: a readily apparent alteration to
     starboard / to port, as (time it began [s], heading then [rad], heading to reach
     [rad]), or None; see :func:`rhnc.control.nmpc_alteration.heading_bounds`.
@@ -180,6 +181,7 @@ class DomainReport:
     alteration_ceiling: tuple[float, float, float] | None = None
     risk: bool = False
     danger: bool = False
+    escape_heading: float | None = None
 
 
 class CollisionDomains:
@@ -300,7 +302,13 @@ class CollisionDomains:
             active_rows[i] = 1.0
             slot += 1
         floor, ceiling = self._alteration_bounds(danger, no_port_turn)
-        return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling, bool(risk and not et), danger)
+        closing_inside = [i for i in inside if range_rates[i] < 0.0]
+        escape = None
+        if closing_inside:
+            nearest = min(closing_inside, key=lambda i: ranges[i] - rhos[i])
+            escape = math.atan2(state[1] - rows[nearest, 1], state[0] - rows[nearest, 0])
+        return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling, bool(risk and not et), danger,
+                                   escape)
 
     def reference_turns(self, reference_heading_rad: float, heading_rad: float) -> float:
         """Whole turns [rad, a multiple of 2 pi] to take off the reference heading: the one within

@@ -1,6 +1,7 @@
 """What a failed NMPC step leaves for the next ones: the unfinished iterate of a solve stopped
 at its iteration budget is the next warm start (never the applied plan), and a fallback with
-no plan left keeps making a held alteration instead of holding the course."""
+no plan left opens the range from a target inside its clearance, or keeps making a held
+alteration, instead of holding the course."""
 
 import math
 from types import SimpleNamespace
@@ -115,13 +116,15 @@ def test_a_step_stopped_at_its_budget_hands_its_iterate_to_the_next_step(budgete
     assert np.max(np.abs(iterate_states[2:N, 0] - budgeted.memory.shifted(DT)[0][2:N, 0])) > 10.0   # 0.05 L
 
 
-def held(floor=None, ceiling=None):
-    return SimpleNamespace(alteration_floor=floor, alteration_ceiling=ceiling)
+def held(floor=None, ceiling=None, escape=None):
+    return SimpleNamespace(alteration_floor=floor, alteration_ceiling=ceiling, escape_heading=escape)
 
 
 @pytest.mark.parametrize("report, turn", [(held(floor=(0.0, 0.0, math.radians(35.0))), 1.0),
                                           (held(ceiling=(0.0, 0.0, math.radians(-35.0))), -1.0),
-                                          (held(), 0.0)], ids=["starboard", "port", "none"])
+                                          (held(escape=math.radians(35.0)), 1.0),
+                                          (held(floor=(0.0, 0.0, 0.6), escape=math.radians(-35.0)), -1.0),
+                                          (held(), 0.0)], ids=["starboard", "port", "escape", "escape-first", "none"])
 def test_a_fallback_without_a_plan_steers_to_the_held_alteration(report, turn):
     memory = PlanMemory(N, DT, yawing_rollout)
     state = np.array([0.0, 0.0, 0.0, 9.0, 0.0, 0.0])
@@ -150,7 +153,7 @@ def test_the_controllers_fallback_without_a_plan_steers_to_the_held_alteration(b
     budgeted.reset()
     state = np.array([0.0, 0.0, 0.3, 18 * KNOT, 0.0, 0.0])
     report = SimpleNamespace(alteration_floor=(0.0, 0.3, 0.3 + math.radians(35.0)), alteration_ceiling=None,
-                             class_codes=np.zeros(1), active=np.zeros(1))
+                             escape_heading=None, class_codes=np.zeros(1), active=np.zeros(1))
     failed = budgeted._fail(0.0, state, np.array([5e5, 0.0]), 0.1, 30, "fatrop_return_code_1", -1.0, -1.0, False,
                             np.zeros(5), report)
     assert failed.fallback and failed.tau[1] == pytest.approx(budgeted.params.tau_max[1])
