@@ -301,14 +301,8 @@ class CollisionDomains:
                               offset[1] / L, domain_radius / L, growth_mps / L, inflation, 1.0]
             active_rows[i] = 1.0
             slot += 1
-        floor, ceiling = self._alteration_bounds(danger, no_port_turn)
-        closing_inside = [i for i in inside if range_rates[i] < 0.0]
-        escape = None
-        if closing_inside:
-            nearest = min(closing_inside, key=lambda i: ranges[i] - rhos[i])
-            escape = math.atan2(state[1] - rows[nearest, 1], state[0] - rows[nearest, 0])
-        return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling, bool(risk and not et), danger,
-                                   escape)
+        return slots, DomainReport(codes, active_rows, no_port_turn, *self._alteration_bounds(danger, no_port_turn),
+                                   bool(risk and not et), danger, _escape_heading(rows, rhos, state, range_rates, inside))
 
     def reference_turns(self, reference_heading_rad: float, heading_rad: float) -> float:
         """Whole turns [rad, a multiple of 2 pi] to take off the reference heading: the one within
@@ -576,3 +570,13 @@ def side_clearance_m(own_xy, own_speed_mps: float, course_rad: float, traffic, h
         least = min(least, float(np.hypot(*(relative + closing * when))) - clearance)
     return least
 
+
+def _escape_heading(rows: np.ndarray, rhos: np.ndarray, state: np.ndarray, range_rates: np.ndarray,
+                    inside) -> float | None:
+    """The heading [rad] straight away from the nearest target (range less clearance) inside its
+    clearance and closing (its range opens fastest), or None when there is none."""
+    closing_inside = [i for i in inside if range_rates[i] < 0.0]
+    if not closing_inside:
+        return None
+    nearest = min(closing_inside, key=lambda i: math.hypot(*(rows[i, :2] - state[:2])) - rhos[i])
+    return math.atan2(state[1] - rows[nearest, 1], state[0] - rows[nearest, 0])
