@@ -332,7 +332,7 @@ class CollisionDomains:
         inside = {i for i in order if self.settings.colregs and ranges[i] < rhos[i]}
         return ranges, range_rates, inside, any(range_rates[i] < 0.0 for i in inside)
 
-    def _alteration_bounds(self, danger: bool, no_port_turn: bool):
+    def _alteration_bounds(self, danger: bool, no_port_turn: bool) -> tuple[tuple | None, tuple | None]:
         """The alteration to starboard (floor) or, failing one, to port (ceiling) the plan
         must hold: (time it began, heading then, heading to reach) or None; none in danger."""
         floors = [a[:3] for a in self._altering.values() if a[3] > 0]
