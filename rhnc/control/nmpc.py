@@ -49,7 +49,11 @@ that is not finite (a state far outside the model's range) skips the solver.
 Failures: when neither attempt reports success, or the time limit stops the solve, the
 controller applies the previous plan shifted by one interval (its next input and
 predicted states) and flags the step; when no previous plan is left it holds the
-previous surge force with zero yaw moment.
+previous surge force with zero yaw moment, or, while a readily apparent alteration is
+held, with the yaw moment that steers to the alteration's heading
+(:func:`rhnc.control.nmpc_alteration.alteration_steering`).  A solve stopped at its
+iteration budget leaves its unfinished iterate as the next step's warm start, so that
+successive steps continue one solve (:class:`rhnc.control.nmpc_warm_start.PlanMemory`).
 
 Offset-free tracking: with ``disturbance_observer`` on, the current and body-frame loads
 estimated by :mod:`rhnc.control.disturbance_observer` enter the prediction model as parameters.
@@ -71,7 +75,7 @@ from orchestrator.interrupts import stop_requested
 from rhnc.encounters.colregs import ENCOUNTER_CLASSES
 from rhnc.control.disturbance_observer import DisturbanceObserver, trimmed_reference
 from rhnc.control.nmpc_codegen import NLPLibrary
-from rhnc.control.nmpc_alteration import heading_bounds
+from rhnc.control.nmpc_alteration import alteration_steering, heading_bounds
 from rhnc.control.nmpc_coastline import CoastlineDomains
 from rhnc.control.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport
 from rhnc.control.nmpc_problem import (ACCEPTABLE_VIOLATION, DISTURBANCE_SIZE, FRESH_SOLVER_PLUGINS, OBSTACLE_FIELDS,
@@ -470,6 +474,7 @@ class NMPCController:
             # tolerance (never an infeasible iterate)
             out_of_budget = (s.iteration_budget is not None and not outcome.timed_out
                              and outcome.iterations >= self.attempt_iterations[attempt])
+            tally.out_of_budget = out_of_budget
             tally.accepted = ((outcome.acceptable or out_of_budget)
                               and bool(np.all(np.isfinite(outcome.x)) and np.all(np.isfinite(outcome.g)))
                               and problem.violation(outcome.x, outcome.g, lbx, ubx) <= ACCEPTABLE_VIOLATION)
@@ -500,6 +505,14 @@ class NMPCController:
         # tries the hard one first (solving the relaxed one alone after such a step failed
         # twenty steps in a row, Imazu 14)
         self.memory.clearance_relaxed = attempt.relaxed and self.settings.iteration_budget is None
+        if attempt.out_of_budget and finite:
+            # the budget stopped a solve that was on its way: the next step continues it
+            # (its unfinished iterate as the warm start) instead of restarting from the
+            # fallback's plan, which failed the same way step after step (trafficgen 13:
+            # 14 steps holding the course towards two targets)
+            self.memory.keep_iterate(time_s, self._from_scaled(x_opt[self.problem.z_index], step.origin),
+                                     np.clip(x_opt[self.problem.w_index], -1.0, 1.0) * self.input_scale,
+                                     outcome.lam_x, outcome.lam_g)
         return failed
 
     def _solved(self, time_s: float, step: "_StepProblem", attempt: "_Attempts") -> NMPCSolution:
@@ -571,10 +584,11 @@ class NMPCController:
         return lbx, ubx
 
     def _initial_guess(self, time_s, state, ref_scaled, w_d, origin, slots, disturbance) -> np.ndarray:
-        """Shifted previous solution (re-based on this origin) or the reference, pushed clear of the domains."""
+        """Shifted previous solution or unfinished iterate (re-based on this origin) or the reference,
+        pushed clear of the domains."""
         problem = self.problem
         guess = np.zeros(problem.size)
-        shifted = self.memory.shifted(time_s)
+        shifted = self.memory.guess(time_s)
         if shifted is not None:
             states, inputs = shifted
             # the heading on the measured one's turn: the plant wraps it at +-pi, and a plan
@@ -600,11 +614,14 @@ class NMPCController:
 
     def _fail(self, time_s, state, previous_tau, elapsed, iterations, status, cost, violation, timed_out,
               disturbance, report: DomainReport) -> NMPCSolution:
-        """Apply the fallback: the shifted previous plan, or hold the surge force with zero yaw moment."""
+        """Apply the fallback: the shifted previous plan, or hold the surge force with zero yaw moment
+        (with an alteration held: the yaw moment that steers to it)."""
         self.failure_count += 1
         self.fallback_count += 1
         self.timeout_count += int(timed_out)
-        states, inputs = self.memory.fallback_plan(time_s, state, previous_tau, self.params.tau_max, disturbance)
+        steer = alteration_steering(report, float(self.params.tau_max[1]))
+        states, inputs = self.memory.fallback_plan(time_s, state, previous_tau, self.params.tau_max, disturbance,
+                                                   steer)
         if self.observer is not None:
             self.observer.applied(inputs[0])
         LOG.info("NMPC solve at t = %.1f s failed (%s); fallback applied", time_s, status)
@@ -638,6 +655,7 @@ class _Attempts:
     relaxed: bool = False  # the last attempt was the relaxed problem
     success: bool = False
     accepted: bool = False  # an acceptable (or out-of-budget) point that keeps every constraint
+    out_of_budget: bool = False  # the last attempt stopped at its share of the iteration budget
     timed_out: bool = False
     status: str = ""
     elapsed: float = 0.0  # wall time of the solver calls [s]

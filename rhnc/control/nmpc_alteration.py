@@ -27,6 +27,9 @@ CATCH_UP_RATE_DEG_S = 0.3
 YAW_TIME_CONSTANT_S = 13.0
 #: numerical slack of that cap below the measured heading [deg]
 HEADING_TOLERANCE_DEG = 0.1
+#: heading error [deg] (yaw rate counted as its value over ``YAW_TIME_CONSTANT_S``) at which
+#: the fallback's steering (:func:`alteration_steering`) applies the full yaw moment
+STEERING_BAND_DEG = 10.0
 
 
 def heading_bounds(report, time_s: float, heading_rad: float, yaw_rate_rps: float,
@@ -75,3 +78,32 @@ def heading_bounds(report, time_s: float, heading_rad: float, yaw_rate_rps: floa
         start = heading_rad + tolerance + max(0.0, yaw_rate_rps) * ALTERATION_DELAY_S
         upper = np.maximum.reduce([np.full_like(times_s, goal), goal - size - rise, start - reachable])
     return lower, upper
+
+
+def alteration_steering(report, tau_r_max: float):
+    """The yaw moment of a fallback that opens the range or keeps making the held alteration, or
+    None (neither).
+
+    When a solve fails before the controller has any plan to fall back on, holding the
+    course with no yaw moment keeps the ship standing on towards the targets it is giving
+    way to, step after step while the solves fail.  In immediate danger (a target inside its
+    clearance and closing: ``report``'s ``escape_heading``) the fallback steers straight away
+    from that target, where the range opens fastest (Rules 2(b), 17(b)); with an alteration
+    held (``alteration_floor`` to starboard, else ``alteration_ceiling`` to port), to the
+    alteration's heading.  ``steer(heading_rad, yaw_rate_rps) -> tau_r`` is a
+    proportional-derivative law on the heading error with the yaw rate weighted by the
+    model's yaw time constant (``YAW_TIME_CONSTANT_S``), full moment from
+    ``STEERING_BAND_DEG`` of error.
+    """
+    escape = report.escape_heading
+    alteration = report.alteration_floor if report.alteration_floor is not None else report.alteration_ceiling
+    if escape is None and alteration is None:
+        return None
+    goal = float(escape if escape is not None else alteration[2])
+    band = math.radians(STEERING_BAND_DEG)
+
+    def steer(heading_rad: float, yaw_rate_rps: float) -> float:
+        error = math.remainder(goal - heading_rad, 2.0 * math.pi)
+        return tau_r_max * min(max((error - YAW_TIME_CONSTANT_S * yaw_rate_rps) / band, -1.0), 1.0)
+
+    return steer

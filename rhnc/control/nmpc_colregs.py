@@ -167,7 +167,8 @@ class DomainReport:
 
     ``risk``: the controller's own collision-risk assessment turned the constraints on
     (``colregs`` only; see :meth:`CollisionDomains.parameters`); ``danger``: a target is
-    inside its clearance and closing.
+    inside its clearance and closing; ``escape_heading``: then, the heading [rad] straight away
+    from the nearest such target (its range opens fastest), else None.
     ``alteration_floor`` / ``alteration_ceiling``: a readily apparent alteration to
     starboard / to port, as (time it began [s], heading then [rad], heading to reach
     [rad]), or None; see :func:`rhnc.control.nmpc_alteration.heading_bounds`.
@@ -180,6 +181,7 @@ class DomainReport:
     alteration_ceiling: tuple[float, float, float] | None = None
     risk: bool = False
     danger: bool = False
+    escape_heading: float | None = None
 
 
 class CollisionDomains:
@@ -299,8 +301,8 @@ class CollisionDomains:
                               offset[1] / L, domain_radius / L, growth_mps / L, inflation, 1.0]
             active_rows[i] = 1.0
             slot += 1
-        floor, ceiling = self._alteration_bounds(danger, no_port_turn)
-        return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling, bool(risk and not et), danger)
+        return slots, DomainReport(codes, active_rows, no_port_turn, *self._alteration_bounds(danger, no_port_turn),
+                                   bool(risk and not et), danger, _escape_heading(rows, rhos, state, range_rates, inside))
 
     def reference_turns(self, reference_heading_rad: float, heading_rad: float) -> float:
         """Whole turns [rad, a multiple of 2 pi] to take off the reference heading: the one within
@@ -330,7 +332,7 @@ class CollisionDomains:
         inside = {i for i in order if self.settings.colregs and ranges[i] < rhos[i]}
         return ranges, range_rates, inside, any(range_rates[i] < 0.0 for i in inside)
 
-    def _alteration_bounds(self, danger: bool, no_port_turn: bool):
+    def _alteration_bounds(self, danger: bool, no_port_turn: bool) -> tuple[tuple | None, tuple | None]:
         """The alteration to starboard (floor) or, failing one, to port (ceiling) the plan
         must hold: (time it began, heading then, heading to reach) or None; none in danger."""
         floors = [a[:3] for a in self._altering.values() if a[3] > 0]
@@ -568,3 +570,13 @@ def side_clearance_m(own_xy, own_speed_mps: float, course_rad: float, traffic, h
         least = min(least, float(np.hypot(*(relative + closing * when))) - clearance)
     return least
 
+
+def _escape_heading(rows: np.ndarray, rhos: np.ndarray, state: np.ndarray, range_rates: np.ndarray,
+                    inside) -> float | None:
+    """The heading [rad] straight away from the nearest target (range less clearance) inside its
+    clearance and closing (its range opens fastest), or None when there is none."""
+    closing_inside = [i for i in inside if range_rates[i] < 0.0]
+    if not closing_inside:
+        return None
+    nearest = min(closing_inside, key=lambda i: math.hypot(*(rows[i, :2] - state[:2])) - rhos[i])
+    return math.atan2(state[1] - rows[nearest, 1], state[0] - rows[nearest, 0])

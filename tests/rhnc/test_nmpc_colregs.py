@@ -546,6 +546,17 @@ def test_a_target_inside_the_clearance_must_see_the_range_open_and_may_be_left_t
     assert slots[7, 0] * 230.0 > 0.5  # ... and it must open
     assert np.allclose(slots[4:6, 0], 0.0)  # a plain circle about the target
     assert not report.no_port_turn and report.alteration_floor is None  # immediate danger: any way out
+    # a fallback's way out: straight away from the target (bearing 40 deg, so 220 deg)
+    assert math.degrees(report.escape_heading) % 360.0 == pytest.approx(220.0)
+
+
+def test_a_target_inside_the_clearance_and_opening_asks_no_escape():
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=1)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    # 0.8 nm on the starboard beam, running away to the east at 12 kn
+    target = np.array([[0.0, 0.8 * NM, 0.0, 12.0 * KNOT, RADIUS]])
+    _, report = domains.parameters(target, state, state[:2], SPEED, 5.0, 230.0, et=True, horizon_s=300.0)
+    assert not report.danger and report.escape_heading is None
 
 
 def _overtaken_by_two():
