@@ -123,7 +123,7 @@ class PlanMemory:
     def shifted(self, time_s: float) -> tuple[np.ndarray, np.ndarray] | None:
         """The previous plan advanced to ``time_s``: (states (N+1, 6), inputs (N, 2)) [SI], or None."""
         shift = self._shift(time_s)
-        if shift is None:
+        if shift is None or self.states is None or self.inputs is None:
             return None
         return self._advanced(self.states, self.inputs, shift)
 
