@@ -12,6 +12,7 @@ file and the dotted key (:func:`checked`).
 
 from __future__ import annotations
 
+from typing import TypeGuard
 import math
 import re
 import tomllib
@@ -25,7 +26,7 @@ from pydantic_core import PydanticCustomError
 from orchestrator.errors import ScenarioError
 
 
-def is_finite_number(value) -> bool:
+def is_finite_number(value) -> TypeGuard[int | float]:
     """True for a finite int or float that is not a bool: what every numeric option must be.
 
     (TOML's ``true`` is a Python bool, itself an int subclass, so it must be excluded.)

@@ -562,8 +562,8 @@ class _Buffered:
         self._result = np.zeros(function.numel_out(0))
         self._buffer, self._evaluate = function.buffer()
         for i, array in enumerate(self._arguments):
-            self._buffer.set_arg(i, memoryview(array))  # type: ignore[call-arg]
-        self._buffer.set_res(0, memoryview(self._result))  # type: ignore[call-arg]
+            self._buffer.set_arg(i, array.data)  # type: ignore[call-arg]
+        self._buffer.set_res(0, self._result.data)  # type: ignore[call-arg]
 
     def __call__(self, *values) -> np.ndarray:
         for array, value in zip(self._arguments, values):

@@ -127,9 +127,9 @@ class StepEvaluator:
         self._results = [np.zeros(step.numel_out(i)) for i in range(step.n_out())]
         self._buffer, self._evaluate = step.buffer()
         for i, array in enumerate(self._arguments):
-            self._buffer.set_arg(i, memoryview(array))  # type: ignore[call-arg]  # the size defaults at run time
+            self._buffer.set_arg(i, array.data)  # type: ignore[call-arg]  # the size defaults at run time
         for i, array in enumerate(self._results):
-            self._buffer.set_res(i, memoryview(array))  # type: ignore[call-arg]
+            self._buffer.set_res(i, array.data)  # type: ignore[call-arg]
 
     def __call__(self, z: np.ndarray, w: np.ndarray, d: np.ndarray) -> np.ndarray:
         for array, value in zip(self._arguments, (z, w, d)):

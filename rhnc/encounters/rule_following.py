@@ -105,7 +105,7 @@ class RuleFollowingTarget:
 
     def decide(self, others: np.ndarray) -> None:
         """Choose the course from the other ships' rows (x, y, vx, vy, radius) at the present time."""
-        encounters = self.tracker.update(self.position, self.course, self.speed, others)
+        encounters = self.tracker.update((float(self.position[0]), float(self.position[1])), self.course, self.speed, others)
         for index, encounter in enumerate(encounters):
             separation = max(self.radius_m, float(others[index, 4]))
             if index in self.acting:

@@ -178,6 +178,7 @@ def scripted_target(start_m, velocity_mps, entries: Any, radius_m: float, durati
         at = f"{here}[{i}]"
         reject_unknown_options(entry, MANOEUVRE_KEYS, at)
         time = _number(entry, "at_s", at, low=0.0)
+        assert time is not None  # a required number: _number raises where it is missing
         change = _number(entry, "course_change_deg", at, required=False)
         speed = _number(entry, "speed_kn", at, low=0.0, required=False)
         if change is None and speed is None:
@@ -194,7 +195,7 @@ def scripted_target(start_m, velocity_mps, entries: Any, radius_m: float, durati
     return ScriptedTarget(start_m, velocity_mps, manoeuvres, radius_m, duration_s)
 
 
-def recorded_target(entry: Mapping[str, Any], radius_m: float, scenario_dir: Path, where: str) -> RecordedTarget:
+def recorded_target(entry: Mapping[str, Any], radius_m: float, scenario_dir: Path | str, where: str) -> RecordedTarget:
     """A :class:`RecordedTarget` from ``track_file`` (+ ``mmsi``, ``origin_deg``, ``time_offset_s``)."""
     value = entry.get("track_file")
     if not isinstance(value, str) or not value:

@@ -164,7 +164,7 @@ class TrackerParticipant(Participant):
 
     # -- measurements ------------------------------------------------------------------------
     def _process(self, time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
-        measurements = []  # (time, kind, payload)
+        measurements: list[tuple[float, int, Any]] = []  # (time, kind, payload)
         if "ais_reports" in inputs:
             reports = np.asarray(inputs["ais_reports"], dtype=float).reshape(-1, 6)
             for row, report in enumerate(reports):

@@ -157,6 +157,7 @@ def load_traffic_situation(path, origin_nm: tuple[float, float] = (0.0, 0.0), pr
     if not isinstance(data, Mapping):
         raise ScenarioError(f"{path}: expected a traffic situation (a JSON object with 'ownShip')")
     own = reader.table(data, "ownShip", "")
+    assert own is not None  # a required table: the reader raises where it is missing
     own_raw = _raw_ship(reader, own, "ownShip")
     lat0, lon0 = own_raw["positions"][0]
     transformer = Transformer.from_crs(
@@ -194,7 +195,8 @@ def load_traffic_situation(path, origin_nm: tuple[float, float] = (0.0, 0.0), pr
         if not isinstance(node, Mapping):
             raise reader.fail(where, "expected an object")
         targets.append(plane(_raw_ship(reader, node, where), _name(node, f"target {i + 1}"), extend=True))
-    title = data.get("title") if isinstance(data.get("title"), str) else path.stem
+    title_node = data.get("title")
+    title = title_node if isinstance(title_node, str) else path.stem
     return TrafficSituation(path, title, lat0, lon0, own_ship, tuple(targets))
 
 
