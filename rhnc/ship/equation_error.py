@@ -57,8 +57,10 @@ def _smoothed(record: Record) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return values, rates, keep
 
 
-def regression_rows(record: Record, scales: tuple[float, float, float]):
-    """Rows ``A theta = b`` of the three equations for one record (scaled by ``scales``)."""
+def regression_rows(record: Record, scales: tuple[float, float, float], damping_speed: float = 0.0):
+    """Rows ``A theta = b`` of the three equations for one record (scaled by ``scales``); with
+    ``damping_speed`` [m/s] the linear sway-yaw damping's columns scale with ``u / damping_speed``
+    (:class:`rhnc.ship.ship_model.ShipParameters`' ``damping_speed_mps``)."""
     values, rates, keep = _smoothed(record)
     u, v, r = values[keep].T
     du, dv, dr = rates[keep].T
@@ -68,6 +70,9 @@ def regression_rows(record: Record, scales: tuple[float, float, float]):
     surge = [du, -v * r, zero, u, zero, zero, zero, zero, -r * r, np.abs(u) * u, zero, zero]
     sway = [u * r, dv, zero, zero, v, zero, r, zero, dr, zero, np.abs(v) * v, zero]
     yaw = [-u * v, u * v, dr, zero, zero, r, zero, v, dv + u * r, zero, zero, np.abs(r) * r]
+    if damping_speed > 0.0:
+        factor = u / damping_speed
+        sway[4], sway[6], yaw[5], yaw[7] = sway[4] * factor, sway[6] * factor, yaw[5] * factor, yaw[7] * factor
     equations = (surge, sway, yaw)
     for equation, v_power, r_power in HULL_POLYNOMIAL.values():   # right-hand-side forces: minus here
         for index, rows in enumerate(equations):
@@ -80,7 +85,7 @@ def regression_rows(record: Record, scales: tuple[float, float, float]):
 
 def fit_coefficients(records: dict[str, Record], tau_u_max: float, tau_r_max: float,
                      names: tuple[str, ...] = COEFFICIENTS,
-                     masses: MassBounds | None = None) -> tuple[np.ndarray, dict, dict]:
+                     masses: MassBounds | None = None, damping_speed: float = 0.0) -> tuple[np.ndarray, dict, dict]:
     """Bounded least-squares coefficients (in the order of ``names``), residual RMS and R² per equation.
 
     Masses and direct damping are kept positive (at least 1e-6 of the scale of their
@@ -88,12 +93,13 @@ def fit_coefficients(records: dict[str, Record], tau_u_max: float, tau_r_max: fl
     problem is well conditioned whatever the ship's size.  With ``masses`` the mass matrix
     stays within their bounds; with the hull polynomial among ``names`` its power stays
     dissipative on the sailed envelope's directions (:mod:`rhnc.ship.physical_bounds`: linear
-    inequalities, solved as a quadratic programme).
+    inequalities, solved as a quadratic programme).  With ``damping_speed`` [m/s] the linear
+    sway-yaw damping is fitted proportional to the speed (:func:`regression_rows`).
     """
     from scipy.optimize import lsq_linear
 
     scales = (tau_u_max, tau_u_max, tau_r_max)
-    blocks = [regression_rows(records[name], scales) for name in FIT_MANOEUVRES if name in records]
+    blocks = [regression_rows(records[name], scales, damping_speed) for name in FIT_MANOEUVRES if name in records]
     columns = [ALL_COEFFICIENTS.index(name) for name in names]
     a = np.vstack([block[0] for block in blocks])[:, columns]
     b = np.concatenate([block[1] for block in blocks])

@@ -2,8 +2,9 @@
 
 The plant sails the standard manoeuvres (:mod:`rhnc.ship.sea_trials`); each model class
 (:data:`MODEL_CLASSES`: the paper's diagonal linear model; with the sway-yaw mass coupling
-m23; with it and the quadratic damping; with all of these and the cubic MMG hull polynomial
-of full hull forms) is fitted by least squares on the equations of motion
+m23; with it and the quadratic damping; the same with its linear sway-yaw damping
+proportional to the speed, :data:`SPEED_SCALED`; with all of these and the cubic MMG hull
+polynomial of full hull forms) is fitted by least squares on the equations of motion
 (:mod:`rhnc.ship.equation_error`) and refined on the simulation error
 (:mod:`rhnc.ship.output_error`).
 
@@ -44,8 +45,15 @@ MODEL_CLASSES = {
     "linear": COEFFICIENTS,
     "coupled mass": COEFFICIENTS + ("m23",),
     "coupled mass, quadratic damping": QUADRATIC,
+    "coupled mass, quadratic damping, speed-scaled": QUADRATIC,
     "coupled mass, cubic damping": ALL_COEFFICIENTS,
 }
+#: Classes whose linear sway-yaw damping is proportional to the surge speed, equal to the
+#: fitted values at the service speed (``damping_speed_mps``): a hull's linear forces go
+#: with U^2 times derivatives in v/U and rL/U, so a ship that slows in a turn (a full hull
+#: form loses a third of its speed) turns faster under the same moment than one set of
+#: constant coefficients predicts.
+SPEED_SCALED = ("coupled mass, quadratic damping, speed-scaled",)
 #: A wider class is kept only when its held-out error is smaller by this fraction; the class
 #: with the hull polynomial (eleven coefficients more) also by at least this much of the
 #: weighted error (a tenth of a degree of heading, of 0.1 m/s, ...): below that, what its
@@ -137,21 +145,22 @@ def physical(coefficients: dict, records: dict[str, Record], masses: MassBounds 
                                                                                  *sailed_envelope(records))
 
 
-def _fit_class(records, tau_u_max, tau_r_max, names, refine, masses=None):
+def _fit_class(records, tau_u_max, tau_r_max, names, refine, masses=None, damping_speed=0.0):
     """One class fitted: (equation-error parameters, final parameters, rms, r2, note); a fit
-    that is not :func:`physical` is None."""
-    equation_error, rms, r2 = fit_coefficients(records, tau_u_max, tau_r_max, names, masses)
+    that is not :func:`physical` is None.  ``damping_speed`` [m/s]: see :data:`SPEED_SCALED`."""
+    equation_error, rms, r2 = fit_coefficients(records, tau_u_max, tau_r_max, names, masses, damping_speed)
     note = "equation error only"
     theta = equation_error
     if refine:
-        theta, note = refine_output_error(records, equation_error, names, masses)
+        theta, note = refine_output_error(records, equation_error, names, masses, damping_speed)
 
     def parameters(values, label):
         coefficients = {name: 0.0 for name in ALL_COEFFICIENTS}
         coefficients.update(zip(names, (float(v) for v in values)))
         if not physical(coefficients, records, masses):
             return None
-        return ShipParameters(**coefficients, tau_u_max=float(tau_u_max), tau_r_max=float(tau_r_max), name=label)
+        return ShipParameters(**coefficients, tau_u_max=float(tau_u_max), tau_r_max=float(tau_r_max),
+                              damping_speed_mps=float(damping_speed), name=label)
 
     return parameters(equation_error, "equation error only"), parameters(theta, "fitted"), rms, r2, note
 
@@ -160,7 +169,11 @@ def _refined_from_narrower(records: dict[str, Record], names: tuple[str, ...], c
                            masses: MassBounds | None = None):
     """The class ``names`` refined from the narrower candidate with the smallest held-out cost
     (its coefficients, the others zero; its masses brought within ``masses``' bounds):
-    (parameters or None, note)."""
+    (parameters or None, note).  A speed-scaled class is no start: the polynomial's class has
+    constant damping."""
+    candidates = {name: candidate for name, candidate in candidates.items() if name not in SPEED_SCALED}
+    if not candidates:
+        return None, "no narrower class with constant damping to start from"
     narrower_name = min(candidates, key=lambda name: candidates[name][0])
     narrower = candidates[narrower_name][2]
     if not math.isfinite(candidates[narrower_name][0]):
@@ -176,7 +189,7 @@ def _refined_from_narrower(records: dict[str, Record], names: tuple[str, ...], c
 
 
 def _fit_candidates(records: dict[str, Record], tau_u_max: float, tau_r_max: float, classes: tuple[str, ...],
-                    refine: bool, masses: MassBounds | None = None) -> dict:
+                    refine: bool, masses: MassBounds | None = None, service_speed: float = 0.0) -> dict:
     """Every class fitted and scored on the held-out manoeuvre: name -> (held-out cost,
     equation-error parameters, chosen parameters, residual RMS, R², note); a class without a
     physical fit is left out, and so is the hull polynomial's without ``masses``."""
@@ -191,7 +204,8 @@ def _fit_candidates(records: dict[str, Record], tau_u_max: float, tau_r_max: flo
         # the narrower classes keep their free masses: without the polynomial's structure an
         # effective mass is part of what they fit (bounded, the KVLCC2's held-out errors grew)
         equation_error, fitted, rms, r2, note = _fit_class(records, tau_u_max, tau_r_max, names, refine,
-                                                           masses if polynomial else None)
+                                                           masses if polynomial else None,
+                                                           service_speed if class_name in SPEED_SCALED else 0.0)
         cost = _model_cost(fitted, records) if fitted is not None else math.inf
         if refine and fitted is not None and equation_error is not None:
             # the refinement fits the fitting manoeuvres; where the class lacks the plant's
@@ -243,7 +257,7 @@ def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_
                              "--speed-kn")
     records = {name: record for name, record in records.items() if name not in short}
     held_out = records[VALIDATION_MANOEUVRE]
-    candidates = _fit_candidates(records, tau_u_max, tau_r_max, classes, refine, masses)
+    candidates = _fit_candidates(records, tau_u_max, tau_r_max, classes, refine, masses, runner.speed_mps)
     class_errors = {name: (candidates[name][0] if name in candidates else None) for name in classes}
     finite = [name for name in candidates if math.isfinite(candidates[name][0])]
     if not finite:

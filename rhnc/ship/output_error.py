@@ -44,7 +44,7 @@ def _coefficient_scales(theta: dict[str, float], speed_mps: float) -> dict[str, 
 
 def refine_output_error(records: dict[str, Record], theta: np.ndarray,
                         names: tuple[str, ...] = COEFFICIENTS,
-                        masses: MassBounds | None = None) -> tuple[np.ndarray, str]:
+                        masses: MassBounds | None = None, damping_speed: float = 0.0) -> tuple[np.ndarray, str]:
     """Coefficients improving ``theta`` (in the order of ``names``) on the simulation error
     of the fitting manoeuvres, and a note on how it went.
 
@@ -63,6 +63,8 @@ def refine_output_error(records: dict[str, Record], theta: np.ndarray,
     hull polynomial its power on the sailed envelope's directions is penalised where
     positive, and what is left of that afterwards is taken out by the pure cubic damping
     (:func:`rhnc.ship.physical_bounds.make_dissipative`), so the result is dissipative.
+    With ``damping_speed`` [m/s] the model's linear sway-yaw damping scales with the speed
+    (``damping_speed_mps`` of :class:`rhnc.ship.ship_model.ShipParameters`).
     """
     from scipy.optimize import least_squares
 
@@ -77,7 +79,7 @@ def refine_output_error(records: dict[str, Record], theta: np.ndarray,
     z0 = np.clip(np.array(z0), lower, upper)
     if np.any(np.array(lower) >= np.array(upper)):
         return np.asarray(theta, dtype=float), "not refined: a coefficient is zero"
-    evaluate, jacobian = _simulation_error(records, names, full, unit)
+    evaluate, jacobian = _simulation_error(records, names, full, unit, damping_speed)
     large = 1e4   # a diverged simulation: a large error, not a NaN that stops the optimiser
 
     def residual(z):
@@ -138,7 +140,7 @@ def _scaled_start_and_bounds(names, start: dict, full: dict, unit: dict, sign_fr
     return z0, lower, upper
 
 
-def _simulation_error(records: dict[str, Record], names, full: dict, unit: dict):
+def _simulation_error(records: dict[str, Record], names, full: dict, unit: dict, damping_speed: float = 0.0):
     """CasADi functions of the scaled coefficients: the weighted open-loop simulation errors
     over the fitting manoeuvres, and their Jacobian."""
     import casadi as ca
@@ -147,6 +149,7 @@ def _simulation_error(records: dict[str, Record], names, full: dict, unit: dict)
     symbolic = dict(full)
     for i, name in enumerate(names):
         symbolic[name] = variables[i] * max(unit[name], 1e-12)
+    symbolic["damping_speed_mps"] = damping_speed
     scaled = SimpleNamespace(**symbolic)
     scaled.sway_yaw_accelerations = lambda fv, fr: ShipParameters.sway_yaw_accelerations(scaled, fv, fr)
     state, tau = ca.SX.sym("X", 4), ca.SX.sym("tau", 2)   # psi, u, v, r

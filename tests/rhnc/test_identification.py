@@ -393,3 +393,36 @@ def test_the_cubic_model_is_the_one_the_nmpc_predicts_with():
     held = reference_inputs(turn, 60.0, p)[0]
     assert derivatives(turn[0], held, p)[[3, 5]] == pytest.approx([0.0, -p.m23 * derivatives(turn[0], held, p)[4] / p.m33],
                                                                   abs=1e-12)
+
+
+def test_a_hull_whose_damping_goes_with_its_speed_gets_the_speed_scaled_class():
+    """A plant whose linear sway-yaw damping is proportional to its speed (as a hull's forces
+    are) is fitted back by the speed-scaled class, chosen by its held-out error; the class with
+    constant coefficients predicts the held-out zig-zag worse."""
+    from rhnc.ship.identification import identify_model
+    from rhnc.ship.sea_trials import PlantRunner
+
+    true = _wide(_wide_kcs(), damping_speed_mps=9.26)
+    fit = identify_model(PlantRunner(lambda initial: ModelPlant(true, initial), 9.26), true.tau_u_max,
+                         true.tau_r_max, "fitted", refine=False)
+    assert fit.model_class == "coupled mass, quadratic damping, speed-scaled"
+    assert fit.parameters.damping_speed_mps == pytest.approx(9.26)
+    assert fit.class_errors["coupled mass, quadratic damping"] > 2 * fit.class_errors[fit.model_class]
+    for key in ("d22", "d33", "m23"):
+        assert getattr(fit.parameters, key) == pytest.approx(getattr(true, key), rel=0.05), key
+
+
+def test_the_refinement_simulates_the_speed_scaled_damping():
+    """The output-error refinement integrates the class's own model: started 30 % off in the
+    yaw damping, it finds the speed-scaled plant's coefficients again."""
+    from rhnc.ship.equation_error import QUADRATIC
+    from rhnc.ship.output_error import refine_output_error
+
+    true = _wide(_wide_kcs(), damping_speed_mps=9.26)
+    records = _standard_records(true)
+    start = np.array([getattr(true, key) * (1.3 if key == "d33" else 0.8 if key == "d22" else 1.0)
+                      for key in QUADRATIC])
+    theta, note = refine_output_error(records, start, QUADRATIC, damping_speed=9.26)
+    fitted = dict(zip(QUADRATIC, theta))
+    assert note.startswith("refined")
+    assert fitted["d33"] == pytest.approx(true.d33, rel=0.02) and fitted["d22"] == pytest.approx(true.d22, rel=0.02)
