@@ -106,7 +106,10 @@ def resample_weather(metocean, resolution_nm: float = 1.0, t_s: float | None = N
         Anything with axes ``x``, ``y`` [m] and ``sample(x, y, t_s) -> dict``.
     resolution_nm : float
         Node spacing of the planning grid [nm].  The grid starts at the met-ocean grid's
-        south-west node and stops at the last node inside its extent.
+        south-west node and stops at the last node inside its extent: the extent of its
+        data (``data_extent``), without a band of held edge values around it, which is there
+        so that a ship may sail over it, not to be planned on (a map grown by it changes the
+        normalised fields of Eq. 5 and so the route).
     t_s : float, optional
         Time [s, simulation clock] at which a time-varying field is taken (linear between
         its time steps; the two steps are combined first, then resampled in space, which
@@ -115,10 +118,12 @@ def resample_weather(metocean, resolution_nm: float = 1.0, t_s: float | None = N
     if resolution_nm <= 0:
         raise ValueError("planning resolution must be positive")
     step = resolution_nm * NM
-    axis_node_count(float(metocean.x[-1] - metocean.x[0]), step, "the planning resolution_nm")  # before allocating
-    axis_node_count(float(metocean.y[-1] - metocean.y[0]), step, "the planning resolution_nm")
-    x = np.arange(metocean.x[0], metocean.x[-1] + 1e-6, step)
-    y = np.arange(metocean.y[0], metocean.y[-1] + 1e-6, step)
+    x_min, x_max, y_min, y_max = getattr(metocean, "data_extent", (metocean.x[0], metocean.x[-1],
+                                                                   metocean.y[0], metocean.y[-1]))
+    axis_node_count(float(x_max - x_min), step, "the planning resolution_nm")  # before allocating
+    axis_node_count(float(y_max - y_min), step, "the planning resolution_nm")
+    x = np.arange(x_min, x_max + 1e-6, step)
+    y = np.arange(y_min, y_max + 1e-6, step)
     if x.size < 2 or y.size < 2:
         raise ValueError(f"planning resolution {resolution_nm} nm leaves fewer than 2 nodes on the map")
     xx, yy = np.meshgrid(x, y, indexing="ij")

@@ -27,6 +27,7 @@ def parameter_set_toml(fit: Fit, identity: dict[str, str | None], source: str) -
         "#        tau_u_max N; tau_r_max N m (the bounds given to identify); when the wider model class",
         "#        is chosen: m23 kg m (sway-yaw mass coupling); d11q, d22q kg/m; d33q kg m^2 (quadratic damping);",
         "#        x_vv.. n_rrr: the cubic MMG hull polynomial (units in rhnc/ship/ship_model.py, HULL_POLYNOMIAL).",
+        "#        damping_speed_mps m/s: the speed at which d22, d23, d32, d33 hold; they go with the surge speed.",
         "",
         f"[{p.name}]",
         f"description = \"Identified on {identity['model_name']}{through} from {source}; held-out "

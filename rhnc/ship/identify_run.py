@@ -24,7 +24,9 @@ from orchestrator.errors import ScenarioError
 from orchestrator.geometry import KNOT
 from orchestrator.results import RunFolder, new_run_id, versions
 from orchestrator.scenario import ParticipantSpec, load_scenario
-from rhnc.ship.identification import ALL_COEFFICIENTS, COEFFICIENTS, VALIDATION_MANOEUVRE, PlantRunner, check_bounds, identify_model
+from rhnc.ship.equation_error import ALL_COEFFICIENTS, COEFFICIENTS
+from rhnc.ship.identification import check_bounds, identify_model
+from rhnc.ship.sea_trials import VALIDATION_MANOEUVRE, PlantRunner
 from rhnc.ship.identification_report import parameter_set_toml, write_figures
 from rhnc.ship.plant_probe import probe_plant
 from rhnc.ship.ship_model import STATE_NAMES, load_parameter_set
@@ -127,7 +129,7 @@ def _build_participant(scenario, spec: ParticipantSpec):
     """A Python participant of the scenario built as a run builds it (step: the identification's sample)."""
     from orchestrator.participant_build import participant_class, participant_target
     from orchestrator.participant import BuildContext
-    from rhnc.ship.identification import SAMPLE_S
+    from rhnc.ship.sea_trials import SAMPLE_S
 
     where = f"{scenario.path}: participants.{spec.name}"
     context = BuildContext(where=where, scenario_dir=scenario.directory, step_size=SAMPLE_S,

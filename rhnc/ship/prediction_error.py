@@ -3,7 +3,7 @@
 The NMPC predicts from each measured state over its horizon; a model's error therefore
 shows in the distance between the positions it predicts from a measured state and those the
 plant reached.  :func:`position_error_growth` measures that on recorded manoeuvres
-(:class:`rhnc.ship.identification.Record`) and reduces it to one growth rate [m/s]: the NMPC
+(:class:`rhnc.ship.sea_trials.Record`) and reduces it to one growth rate [m/s]: the NMPC
 widens its collision domains by growth times prediction time, so that a plan grazing a
 domain does not take the plant into it (constraint tightening).
 """

@@ -41,6 +41,7 @@ the equations of motion, the NMPC's feed-forward and the disturbance observer us
 from __future__ import annotations
 
 import dataclasses
+import math
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
@@ -68,12 +69,12 @@ HULL_POLYNOMIAL = {
 HULL_POLYNOMIAL_KEYS = tuple(HULL_POLYNOMIAL)
 #: Keys of a parameter set that the prediction model uses.
 DYNAMICS_KEYS = ("m11", "m22", "m33", "d11", "d22", "d33", "d23", "d32", "tau_u_max", "tau_r_max",
-                 "m23", "d11q", "d22q", "d33q") + HULL_POLYNOMIAL_KEYS
+                 "m23", "d11q", "d22q", "d33q") + HULL_POLYNOMIAL_KEYS + ("damping_speed_mps",)
 #: Keys that may be absent (the paper's Eq. 11 has no cross-damping, no coupled mass, no
 #: quadratic damping and no hull polynomial).
-OPTIONAL_ZERO_KEYS = ("d23", "d32", "m23", "d11q", "d22q", "d33q") + HULL_POLYNOMIAL_KEYS
+OPTIONAL_ZERO_KEYS = ("d23", "d32", "m23", "d11q", "d22q", "d33q") + HULL_POLYNOMIAL_KEYS + ("damping_speed_mps",)
 #: The optional keys of the wider model classes, written into a set only when not zero.
-WIDE_MODEL_KEYS = ("m23", "d11q", "d22q", "d33q") + HULL_POLYNOMIAL_KEYS
+WIDE_MODEL_KEYS = ("m23", "d11q", "d22q", "d33q") + HULL_POLYNOMIAL_KEYS + ("damping_speed_mps",)
 
 STATE_NAMES = ("x", "y", "psi", "u", "v", "r")
 CONTROL_NAMES = ("tau_u", "tau_r")
@@ -101,6 +102,11 @@ class ShipParameters:
         Quadratic damping in surge [N·s²/m²], sway [N·s²/m²], yaw [N·m·s²/rad²].
     x_vv, x_vr, x_rr, y_vvv, y_vvr, y_vrr, y_rrr, n_vvv, n_vvr, n_vrr, n_rrr : float
         The hull polynomial's coefficients (:data:`HULL_POLYNOMIAL`, units there).
+    damping_speed_mps : float
+        Surge speed [m/s] at which the linear sway-yaw damping d22, d23, d32, d33 has the
+        values given; they scale with ``u / damping_speed_mps`` at other speeds, as a hull's
+        linear forces do (``0.5 rho L T U^2`` times derivatives in ``v / U`` and
+        ``r L / U``: proportional to the speed).  0 (the paper's model): constant.
     name : str
         Name of the parameter set the values came from.
     extras : Mapping[str, Any]
@@ -132,6 +138,7 @@ class ShipParameters:
     n_vvr: float = 0.0
     n_vrr: float = 0.0
     n_rrr: float = 0.0
+    damping_speed_mps: float = 0.0
     name: str = "custom"
     extras: Mapping[str, Any] = dataclasses.field(default_factory=lambda: MappingProxyType({}))
 
@@ -156,6 +163,9 @@ class ShipParameters:
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 raise ScenarioError(f"{where}: key '{key}' must be a number, got {value!r}")
             dynamics[key] = float(value)
+        if not (math.isfinite(dynamics["damping_speed_mps"]) and dynamics["damping_speed_mps"] >= 0.0):
+            raise ScenarioError(f"{where}: key 'damping_speed_mps' must be a speed of at least 0 m/s "
+                                f"(0: constant damping), got {dynamics['damping_speed_mps']!r}")
         extras = {k: v for k, v in values.items() if k not in DYNAMICS_KEYS}
         return cls(**dynamics, name=name, extras=MappingProxyType(extras))
 
@@ -188,10 +198,11 @@ class ShipParameters:
     def sway_yaw_matrix(self, u0: float) -> np.ndarray:
         """System matrix of ``[v, r]`` linearised about ``v = r = 0``, ``u = u0`` [1/s]."""
         mass = np.array([[self.m22, self.m23], [self.m23, self.m33]])
+        scale = u0 / self.damping_speed_mps if self.damping_speed_mps else 1.0   # see hull_forces
         forces = np.array(
             [
-                [-self.d22, -self.m11 * u0 - self.d23],
-                [(self.m11 - self.m22) * u0 - self.d32, -self.m23 * u0 - self.d33],
+                [-self.d22 * scale, -self.m11 * u0 - self.d23 * scale],
+                [(self.m11 - self.m22) * u0 - self.d32 * scale, -self.m23 * u0 - self.d33 * scale],
             ]
         )
         return np.linalg.solve(mass, forces)
@@ -261,9 +272,13 @@ def hull_forces(p: ShipParameters, u, v, r) -> tuple:
     equations without the inputs: Coriolis, damping and the hull polynomial, for numbers,
     numpy arrays or CasADi expressions of ``u``, ``v`` [m/s] and ``r`` [rad/s].  The
     accelerations follow from these plus ``tau`` through the mass matrix."""
+    d22, d23, d32, d33 = p.d22, p.d23, p.d32, p.d33
+    if _present(p.damping_speed_mps):   # the linear sway-yaw damping proportional to the speed
+        scale = u / p.damping_speed_mps
+        d22, d23, d32, d33 = d22 * scale, d23 * scale, d32 * scale, d33 * scale
     surge = p.m22 * v * r - p.d11 * u
-    sway = -p.m11 * u * r - p.d22 * v - p.d23 * r
-    yaw = (p.m11 - p.m22) * u * v - p.d32 * v - p.d33 * r
+    sway = -p.m11 * u * r - d22 * v - d23 * r
+    yaw = (p.m11 - p.m22) * u * v - d32 * v - d33 * r
     if _present(p.m23):
         surge = surge + p.m23 * r * r
         yaw = yaw - p.m23 * u * r

@@ -99,6 +99,9 @@ class MetOceanField:
             self._fields[name] = values
         self.source = source
         self.start_time = start_time
+        #: (x_min, x_max, y_min, y_max) [m] of the data: the grid's own extent, except where
+        #: :meth:`with_edges_held` grew the grid by held values, which are not data.
+        self.data_extent = self.extent
 
     # -- gridded quantities -------------------------------------------------------
     def _grid(self, name: str) -> np.ndarray:
@@ -166,8 +169,10 @@ class MetOceanField:
         fields = {name: np.pad(values, ((0, 0), (nx, nx), (ny, ny)), mode="edge") for name, values in self._fields.items()}
         if not self.is_time_varying:
             fields = {name: values[0] for name, values in fields.items()}
-        return MetOceanField(x, y, fields, source=f"{self.source} (edge values held {margin_m / NM:g} nm beyond)",
+        held = MetOceanField(x, y, fields, source=f"{self.source} (edge values held {margin_m / NM:g} nm beyond)",
                              times_s=self.times_s if self.is_time_varying else None, start_time=self.start_time)
+        held.data_extent = self.data_extent
+        return held
 
     # -- interpolation --------------------------------------------------------------
     def time_weights(self, t_s) -> tuple[np.ndarray, np.ndarray]:
@@ -244,7 +249,9 @@ class MetOceanField:
         k_array, w_array = self.time_weights(float(t_s))
         k, w = int(k_array), float(w_array)
         fields = {name: between(stack[k], stack[k + 1], w) for name, stack in self._fields.items()}
-        return MetOceanField(self.x, self.y, fields, source=f"{self.source} at t = {float(t_s):g} s")
+        static = MetOceanField(self.x, self.y, fields, source=f"{self.source} at t = {float(t_s):g} s")
+        static.data_extent = self.data_extent
+        return static
 
     # -- writers -------------------------------------------------------------------
     def to_dataset(self):

@@ -183,3 +183,29 @@ def test_final_approach_runs_straight_to_a_goal_within_the_horizon():
     plain = plan_local_path(field, start, 2222.4, 16)
     rel = plain.points - start
     assert np.max(np.abs(rel[:, 0] * direction[1] - rel[:, 1] * direction[0])) > 100.0
+
+
+@pytest.mark.parametrize("time_varying", [False, True])
+def test_the_planner_plans_on_the_data_not_on_a_band_of_held_edge_values(time_varying):
+    """A map grown by held edge values (so that a ship may sail over the band) is planned on
+    as the map itself: the band would change Eq. 5's normalisation and the route with it."""
+    from rhnc.weather.weather_generators import moving_storm
+
+    if time_varying:
+        field = moving_storm(x_range_nm=(0.0, 30.0), y_range_nm=(0.0, 30.0), resolution_nm=1.0)
+    else:
+        field = paper_default(x_range_nm=(0.0, 30.0), y_range_nm=(0.0, 30.0), resolution_nm=1.0)
+    held = field.with_edges_held(2.0 * NM)
+    t_s = 0.5 * float(field.times_s[-1])
+    plain, grown = resample_weather(field, 1.0, t_s=t_s), resample_weather(held, 1.0, t_s=t_s)
+    np.testing.assert_array_equal(grown.x, plain.x)
+    np.testing.assert_array_equal(grown.y, plain.y)
+    np.testing.assert_allclose(grown.hs, plain.hs, rtol=0, atol=1e-12)
+    assert held.snapshot(t_s).data_extent == field.data_extent   # a planner given the slice alike
+    goal = (30 * NM, 30 * NM)
+    paths = []
+    for planning in (plain, grown):
+        potential = SuperpositionField(planning, goal)
+        potential.update((1 * NM, 2 * NM), SPEED)
+        paths.append(plan_local_path(potential, (1 * NM, 2 * NM), STEP, 16).points)
+    np.testing.assert_allclose(paths[1], paths[0], rtol=0, atol=1e-6)

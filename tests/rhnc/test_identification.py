@@ -10,7 +10,10 @@ import pytest
 
 from orchestrator.cli import main
 from orchestrator.errors import ScenarioError
-from rhnc.ship.identification import COEFFICIENTS, Record, fit_coefficients, position_error_growth, simulate
+from rhnc.ship.equation_error import COEFFICIENTS, fit_coefficients
+from rhnc.ship.identification import simulate
+from rhnc.ship.prediction_error import position_error_growth
+from rhnc.ship.sea_trials import Record
 from rhnc.ship.identify_run import run_identify
 from rhnc.ship.ship_model import ShipParameters, load_parameter_set
 
@@ -66,7 +69,8 @@ def test_identify_sails_an_actuator_plant_through_the_scenarios_allocation():
 
     from orchestrator.fmu_participant import FmuParticipant, resolve_fmu
     from orchestrator.scenario import load_scenario
-    from rhnc.ship.identification import KNOT, PlantRunner
+    from orchestrator.geometry import KNOT
+    from rhnc.ship.sea_trials import PlantRunner
     from rhnc.ship.identify_run import AllocatedPlant, _build_participant, allocation_between, find_plant_spec
 
     scenario = load_scenario(REPO / "scenarios" / "exp3a_static_mmg.toml")
@@ -175,7 +179,7 @@ def _wide_kcs() -> ShipParameters:
 
 
 def test_the_wide_class_recovers_coupled_mass_and_quadratic_damping():
-    from rhnc.ship.identification import QUADRATIC
+    from rhnc.ship.equation_error import QUADRATIC
 
     true = _wide_kcs()
     trim = true.equilibrium_tau(9.26)[0]
@@ -194,7 +198,8 @@ def test_the_wide_class_recovers_coupled_mass_and_quadratic_damping():
 @pytest.mark.parametrize("plant_class", ["linear", "coupled mass, quadratic damping"])
 def test_the_model_class_is_chosen_by_held_out_error(plant_class):
     """A plant of the paper's class keeps the narrow model; a real hull gets the wide one."""
-    from rhnc.ship.identification import PlantRunner, identify_model
+    from rhnc.ship.identification import identify_model
+    from rhnc.ship.sea_trials import PlantRunner
 
     true = load_parameter_set("default") if plant_class == "linear" else _wide_kcs()
     fit = identify_model(PlantRunner(lambda initial: ModelPlant(true, initial), 9.26), true.tau_u_max,
@@ -242,7 +247,7 @@ def test_the_cubic_class_recovers_a_course_unstable_hull_and_its_polynomial():
     """Data of a known cubic model are fitted back: masses, linear damping and the polynomial's
     terms within 3 % (20 % for those the trials excite less), and its hull forces over the
     sailed states within 2 % of the force scale."""
-    from rhnc.ship.identification import ALL_COEFFICIENTS
+    from rhnc.ship.equation_error import ALL_COEFFICIENTS
     from rhnc.ship.ship_model import hull_forces
 
     true = _full_hull_kcs()
@@ -264,7 +269,8 @@ def test_the_cubic_class_recovers_a_course_unstable_hull_and_its_polynomial():
 
 def test_a_full_hull_gets_the_cubic_class_by_held_out_error():
     """The narrower classes diverge or miss the held-out zig-zag; the cubic one predicts it."""
-    from rhnc.ship.identification import PlantRunner, identify_model
+    from rhnc.ship.identification import identify_model
+    from rhnc.ship.sea_trials import PlantRunner
 
     true = _full_hull_kcs()
     fit = identify_model(PlantRunner(lambda initial: ModelPlant(true, initial), 9.26), true.tau_u_max,
@@ -280,8 +286,8 @@ def test_a_full_hull_gets_the_cubic_class_by_held_out_error():
 def test_the_cubic_class_is_refined_from_the_narrower_model_and_improves_on_it():
     """Started from a narrower model (the hull without its polynomial), the cubic class's
     refinement finds the polynomial and predicts the held-out zig-zag far better."""
-    from rhnc.ship.identification import (HULL_POLYNOMIAL_KEYS, MODEL_CLASSES, _model_cost,
-                                          _refined_from_narrower)
+    from rhnc.ship.identification import MODEL_CLASSES, _model_cost, _refined_from_narrower
+    from rhnc.ship.ship_model import HULL_POLYNOMIAL_KEYS
 
     true = _full_hull_kcs()
     trim = true.equilibrium_tau(9.26)[0]
@@ -299,7 +305,7 @@ def test_the_cubic_class_is_refined_from_the_narrower_model_and_improves_on_it()
 
 
 def test_helm_falls_with_the_square_of_the_speed_like_a_rudder():
-    from rhnc.ship.identification import helm_moment
+    from rhnc.ship.sea_trials import helm_moment
 
     assert helm_moment(1.0, 9.26, 9.26, 1.65e8) == pytest.approx(1.65e8)
     assert helm_moment(1.0, 4.63, 9.26, 1.65e8) == pytest.approx(1.65e8 / 4)
@@ -310,7 +316,7 @@ def test_helm_falls_with_the_square_of_the_speed_like_a_rudder():
 def test_a_turn_that_stops_the_ship_is_cut_short_not_a_traceback():
     """A ship that slows hard in a turn: the manoeuvre ends when it is slower than a fifth of
     the service speed, with a note, and keeps what it sailed."""
-    from rhnc.ship.identification import PlantRunner
+    from rhnc.ship.sea_trials import PlantRunner
 
     kcs = load_parameter_set("default")
 
@@ -331,7 +337,8 @@ def test_a_turn_that_stops_the_ship_is_cut_short_not_a_traceback():
 
 def test_a_plant_that_diverges_is_refused_in_one_line_saying_what_to_change(capsys):
     from orchestrator.errors import ToolchainError
-    from rhnc.ship.identification import PlantRunner, identify_model
+    from rhnc.ship.identification import identify_model
+    from rhnc.ship.sea_trials import PlantRunner
 
     kcs = load_parameter_set("default")
 
@@ -386,3 +393,36 @@ def test_the_cubic_model_is_the_one_the_nmpc_predicts_with():
     held = reference_inputs(turn, 60.0, p)[0]
     assert derivatives(turn[0], held, p)[[3, 5]] == pytest.approx([0.0, -p.m23 * derivatives(turn[0], held, p)[4] / p.m33],
                                                                   abs=1e-12)
+
+
+def test_a_hull_whose_damping_goes_with_its_speed_gets_the_speed_scaled_class():
+    """A plant whose linear sway-yaw damping is proportional to its speed (as a hull's forces
+    are) is fitted back by the speed-scaled class, chosen by its held-out error; the class with
+    constant coefficients predicts the held-out zig-zag worse."""
+    from rhnc.ship.identification import identify_model
+    from rhnc.ship.sea_trials import PlantRunner
+
+    true = _wide(_wide_kcs(), damping_speed_mps=9.26)
+    fit = identify_model(PlantRunner(lambda initial: ModelPlant(true, initial), 9.26), true.tau_u_max,
+                         true.tau_r_max, "fitted", refine=False)
+    assert fit.model_class == "coupled mass, quadratic damping, speed-scaled"
+    assert fit.parameters.damping_speed_mps == pytest.approx(9.26)
+    assert fit.class_errors["coupled mass, quadratic damping"] > 2 * fit.class_errors[fit.model_class]
+    for key in ("d22", "d33", "m23"):
+        assert getattr(fit.parameters, key) == pytest.approx(getattr(true, key), rel=0.05), key
+
+
+def test_the_refinement_simulates_the_speed_scaled_damping():
+    """The output-error refinement integrates the class's own model: started 30 % off in the
+    yaw damping, it finds the speed-scaled plant's coefficients again."""
+    from rhnc.ship.equation_error import QUADRATIC
+    from rhnc.ship.output_error import refine_output_error
+
+    true = _wide(_wide_kcs(), damping_speed_mps=9.26)
+    records = _standard_records(true)
+    start = np.array([getattr(true, key) * (1.3 if key == "d33" else 0.8 if key == "d22" else 1.0)
+                      for key in QUADRATIC])
+    theta, note = refine_output_error(records, start, QUADRATIC, damping_speed=9.26)
+    fitted = dict(zip(QUADRATIC, theta))
+    assert note.startswith("refined")
+    assert fitted["d33"] == pytest.approx(true.d33, rel=0.02) and fitted["d22"] == pytest.approx(true.d22, rel=0.02)

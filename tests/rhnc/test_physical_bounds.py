@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from orchestrator.cli import main
-from rhnc.ship.identification import ALL_COEFFICIENTS, fit_coefficients, physical, simulate
+from rhnc.ship.equation_error import ALL_COEFFICIENTS, fit_coefficients
+from rhnc.ship.identification import physical, simulate
 from rhnc.ship.physical_bounds import (MassBounds, is_dissipative, make_dissipative, mass_from_particulars,
                                        power_form)
 from rhnc.ship.ship_model import ShipParameters, load_parameter_set
@@ -75,7 +76,7 @@ def _plant() -> ShipParameters:
 
 
 def _records(true: ShipParameters) -> dict:
-    from rhnc.ship.identification import Record
+    from rhnc.ship.sea_trials import Record
 
     def sail(name, tau_of_t, duration_s):
         t = np.arange(0.0, duration_s + 0.5, 1.0)
@@ -97,7 +98,7 @@ def _masses(true: ShipParameters, factor: float = 1.0) -> MassBounds:
 def test_the_fitted_polynomial_is_dissipative_even_when_the_data_say_otherwise():
     """Fitted freely, the trials give back the plant's energy-feeding n_vrr; the fit keeps the
     polynomial's power non-positive in every direction, and such a model is not physical."""
-    from rhnc.ship.identification import sailed_envelope
+    from rhnc.ship.equation_error import sailed_envelope
 
     true = _plant()
     records = _records(true)
@@ -140,7 +141,8 @@ def test_the_narrower_classes_keep_their_free_masses():
     given bounds about 1.6 times its masses, still gets its own masses from the linear class."""
     from test_identification import ModelPlant
 
-    from rhnc.ship.identification import PlantRunner, identify_model
+    from rhnc.ship.identification import identify_model
+    from rhnc.ship.sea_trials import PlantRunner
 
     true = load_parameter_set("default")
     fit = identify_model(PlantRunner(lambda initial: ModelPlant(true, initial), 9.26), true.tau_u_max,

@@ -126,3 +126,36 @@ def test_the_ship_equations_are_integrated_by_one_rk4_only():
                 if {"k1", "k2", "k3", "k4"} <= stages:
                     found.append(f"{path.name}:{node.name}")
     assert found == ["ship_model.py:rk4_states"]
+
+
+def test_speed_scaled_damping_goes_with_the_surge_speed(kcs):
+    """With damping_speed_mps the linear sway-yaw damping has its values at that speed and is
+    proportional to the surge speed elsewhere (the numpy, CasADi and linearised models alike);
+    without it (0, the paper's model) it is constant."""
+    import dataclasses
+
+    from rhnc.ship.ship_model import hull_forces
+
+    scaled = dataclasses.replace(kcs, damping_speed_mps=9.26, d23=0.1 * kcs.d22 * 100.0, d32=0.05 * kcs.d33 / 100.0)
+    plain = dataclasses.replace(scaled, damping_speed_mps=0.0)
+    v, r = 0.3, 0.004
+    coriolis = lambda u: (-kcs.m11 * u * r, (kcs.m11 - kcs.m22) * u * v)   # noqa: E731
+    for u, factor in ((9.26, 1.0), (4.63, 0.5), (2.0, 2.0 / 9.26)):
+        _, sway, yaw = hull_forces(scaled, u, v, r)
+        _, sway_plain, yaw_plain = hull_forces(plain, u, v, r)
+        assert sway - coriolis(u)[0] == pytest.approx(factor * (sway_plain - coriolis(u)[0]), rel=1e-12)
+        assert yaw - coriolis(u)[1] == pytest.approx(factor * (yaw_plain - coriolis(u)[1]), rel=1e-12)
+    state, tau = np.array([0.0, 0.0, 0.3, 4.63, v, r]), np.array([1e5, 1e7])
+    np.testing.assert_allclose(np.array(casadi_derivatives(scaled)(state, tau)).ravel(),
+                               derivatives(state, tau, scaled), rtol=1e-12)
+    assert not np.allclose(derivatives(state, tau, scaled), derivatives(state, tau, plain))
+    half = dataclasses.replace(plain, d22=0.5 * kcs.d22, d23=0.5 * scaled.d23, d32=0.5 * scaled.d32, d33=0.5 * kcs.d33)
+    np.testing.assert_allclose(scaled.sway_yaw_matrix(4.63), half.sway_yaw_matrix(4.63), rtol=1e-12)
+
+
+def test_a_negative_damping_speed_is_refused(tmp_path):
+    path = tmp_path / "sets.toml"
+    path.write_text("[tiny]\nm11 = 1.0\nm22 = 2.0\nm33 = 3.0\nd11 = 1.0\nd22 = 1.0\nd33 = 1.0\ntau_u_max = 1.0\n"
+                    "tau_r_max = 1.0\ndamping_speed_mps = -2.0\n")
+    with pytest.raises(ScenarioError, match=r"\[tiny\]: key 'damping_speed_mps' must be a speed of at least 0 m/s"):
+        load_parameter_set("tiny", path=path)
