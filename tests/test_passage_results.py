@@ -101,3 +101,25 @@ def test_a_baseline_that_never_arrived_has_no_distance_beside_rhncs(script, tmp_
     figures = script.passage_figures(tmp_path, "arrived")
     assert figures["baseline_nm"] == 91.0
     assert figures["distance_alone"] == pytest.approx(100.0 * (1.0 - (98.0 / 91.0) ** 3))
+
+
+def test_the_readmes_passage_lines_agree_with_the_committed_results_table():
+    """Both are written by passage_results.py from the same comparisons: a README block left
+    behind by a merge (older savings, an older baseline clearance) is caught here."""
+    repo = SCRIPT.parents[1]
+    readme = (repo / "README.md").read_text(encoding="utf-8")
+    block = readme.split("<!-- passages-summary:begin -->")[1].split("<!-- passages-summary:end -->")[0]
+    rows = {}
+    for line in (repo / "docs" / "passages-results.md").read_text(encoding="utf-8").splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 13 and cells[0].endswith(("_crossing", "_islands", "_strait")):
+            rows[cells[0]] = cells
+    assert rows, "no passage rows in docs/passages-results.md"
+    for name, cells in rows.items():
+        line = next(x for x in block.splitlines() if x.startswith(f"- `{name}`"))
+        assert f"RHNC arrives at {cells[1]} min, {cells[10].split(' / ')[0]} nm from land" in line, name
+        if cells[5] != "-":
+            assert f"saves {cells[5]} % of cost and {cells[6]} % of CO2" in line, name
+            assert f"the baseline's clearance {cells[11].split(' ')[0]} nm" in line, name
+        else:
+            assert "no saving" in line, name
