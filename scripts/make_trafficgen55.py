@@ -24,10 +24,10 @@ import itertools
 import json
 import random
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 SUITE = Path(__file__).resolve().parents[1] / "scenarios" / "situations" / "trafficgen55"
-INPUT = SUITE / "input"
 
 # (trafficgen's encounter type, short name in the titles)
 CLASSES = [
@@ -94,30 +94,30 @@ def situation_definitions() -> list[dict]:
     return definitions
 
 
-def write_inputs() -> None:
-    """Write own ship, target ships and the 55 situation definitions under ``input/``."""
-    (INPUT / "situations").mkdir(parents=True, exist_ok=True)
-    (INPUT / "target_ships").mkdir(parents=True, exist_ok=True)
-    (INPUT / "own_ship.json").write_text(json.dumps(OWN_SHIP, indent=2) + "\n")
+def write_inputs(suite: Path) -> None:
+    """Write own ship, target ships and the 55 situation definitions under ``suite/input/``."""
+    inputs = suite / "input"
+    (inputs / "situations").mkdir(parents=True, exist_ok=True)
+    (inputs / "target_ships").mkdir(parents=True, exist_ok=True)
+    (inputs / "own_ship.json").write_text(json.dumps(OWN_SHIP, indent=2) + "\n")
     for stem, ship in TARGET_SHIPS.items():
-        (INPUT / "target_ships" / f"{stem}.json").write_text(json.dumps(ship, indent=2) + "\n")
+        (inputs / "target_ships" / f"{stem}.json").write_text(json.dumps(ship, indent=2) + "\n")
     for number, definition in enumerate(situation_definitions(), start=1):
-        path = INPUT / "situations" / f"tg55_{number:02d}.json"
+        path = inputs / "situations" / f"tg55_{number:02d}.json"
         path.write_text(json.dumps(definition, indent=2) + "\n")
 
 
-def generate(seed: int) -> list[str]:
+def generate(trafficgen_main: Callable, suite: Path, seed: int) -> list[str]:
     """Run trafficgen gen-situation on the inputs with ``random`` seeded; return short situations."""
-    from trafficgen.cli import main  # not a dependency of this package: pip install trafficgen==0.9.1
-
+    inputs = suite / "input"
     random.seed(seed)
-    main(
-        ["gen-situation", "-s", str(INPUT / "situations"), "-os", str(INPUT / "own_ship.json"), "-t", str(INPUT / "target_ships"), "-o", str(SUITE)],
+    trafficgen_main(
+        ["gen-situation", "-s", str(inputs / "situations"), "-os", str(inputs / "own_ship.json"), "-t", str(inputs / "target_ships"), "-o", str(suite)],
         standalone_mode=False,
     )
     short = []
     for number, definition in enumerate(situation_definitions(), start=1):
-        written = json.loads((SUITE / f"traffic_situation_{number:02d}.json").read_text())
+        written = json.loads((suite / f"traffic_situation_{number:02d}.json").read_text())
         asked, placed = len(definition["encounters"]), len(written.get("targetShips") or [])
         if placed != asked:
             short.append(f"traffic_situation_{number:02d}.json ({definition['title']}): {placed} of {asked} targets")
@@ -128,19 +128,30 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=int, default=55, help="seed of Python's random module for trafficgen")
     parser.add_argument("--attempts", type=int, default=20, help="seeds to try from --seed upward")
+    parser.add_argument("--folder", type=Path, default=SUITE, help="the suite's folder (its inputs in input/)")
     parser.add_argument("--inputs-only", action="store_true", help="write the definitions, do not run trafficgen")
     args = parser.parse_args(argv)
-    write_inputs()
-    if args.inputs_only:
+    if args.attempts < 1:
+        print(f"make_trafficgen55: --attempts {args.attempts}: give at least 1 seed to try", file=sys.stderr)
+        return 2
+    trafficgen_main = None
+    if not args.inputs_only:
+        try:
+            from trafficgen.cli import main as trafficgen_main  # not a dependency of this package
+        except ImportError:
+            print("make_trafficgen55: trafficgen is not installed (pip install trafficgen==0.9.1), or give --inputs-only", file=sys.stderr)
+            return 2
+    write_inputs(args.folder)
+    if trafficgen_main is None:
         return 0
     for seed in range(args.seed, args.seed + args.attempts):
-        short = generate(seed)
+        short = generate(trafficgen_main, args.folder, seed)
         for line in short:
             print(f"seed {seed}: trafficgen could not place every target: {line}")
         if not short:
-            print(f"seed {seed}: every target placed; the suite is in {SUITE}")
+            print(f"seed {seed}: every target placed; the suite is in {args.folder}")
             return 0
-    print(f"no seed in {args.seed}..{args.seed + args.attempts - 1} placed every target", file=sys.stderr)
+    print(f"make_trafficgen55: no seed in {args.seed}..{args.seed + args.attempts - 1} placed every target", file=sys.stderr)
     return 1
 
 
