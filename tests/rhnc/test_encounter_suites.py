@@ -32,7 +32,7 @@ def test_imazu_head_on_through_the_nmpc_is_judged_from_its_tracks(tmp_path):
     assert "track.png" in summary["figures"]
 
 
-@pytest.mark.parametrize("suite", ["imazu", "trafficgen", "drawn", "drawn2028", "drawn2029"])
+@pytest.mark.parametrize("suite", ["imazu", "trafficgen", "trafficgen55", "drawn", "drawn2028", "drawn2029"])
 def test_every_colregs_suite_has_a_calm_twin_and_runs_until_arrival(suite):
     from orchestrator.batch_spec import load_batch
 
@@ -49,3 +49,26 @@ def test_every_colregs_suite_has_a_calm_twin_and_runs_until_arrival(suite):
         same = {key: value for key, value in run.overrides.items() if not key.startswith("metocean.")}
         twin = next(other for other in weather if other.parameters["situation"] == run.parameters["situation"])
         assert same == twin.overrides
+
+
+def test_trafficgen55_holds_every_combination_of_one_to_three_classes_with_every_target_placed():
+    """DNV's baseline mix: 1, 2 and 3 targets over the five classes, each combination once."""
+    import itertools
+
+    folder = REPO / "scenarios" / "situations" / "trafficgen55"
+    classes = ["head-on", "crossing-give-way", "crossing-stand-on", "overtaking-give-way", "overtaking-stand-on"]
+    asked = {}
+    for path in sorted((folder / "input" / "situations").glob("*.json")):
+        definition = json.loads(path.read_text())
+        asked[definition["title"]] = [encounter["desiredEncounterType"] for encounter in definition["encounters"]]
+    every = [list(combo) for n in (1, 2, 3) for combo in itertools.combinations_with_replacement(classes, n)]
+    assert sorted(sorted(kinds) for kinds in asked.values()) == sorted(sorted(kinds) for kinds in every)
+    generated = sorted(folder.glob("*.json"))
+    assert len(generated) == 55
+    titles = set()
+    for path in generated:
+        situation = json.loads(path.read_text())
+        titles.add(situation["title"])
+        assert len(situation["targetShips"]) == len(asked[situation["title"]]), path.name
+        assert len(load_traffic_situation(path).targets) == len(asked[situation["title"]]), path.name
+    assert titles == set(asked)
