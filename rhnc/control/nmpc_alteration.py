@@ -13,6 +13,8 @@ import math
 
 import numpy as np
 
+from orchestrator.geometry import wrap_float
+
 #: the heading floor of a readily apparent alteration rises at this rate [deg/s] from the
 #: heading the ship had when the alteration began, after this delay [s]: the KCS model
 #: turns 10 deg in 51 s on 10/35 of its yaw moment and 180 deg in 207 s on all of it
@@ -103,7 +105,7 @@ def alteration_steering(report, tau_r_max: float):
     band = math.radians(STEERING_BAND_DEG)
 
     def steer(heading_rad: float, yaw_rate_rps: float) -> float:
-        error = math.remainder(goal - heading_rad, 2.0 * math.pi)
+        error = wrap_float(goal - heading_rad)
         return tau_r_max * min(max((error - YAW_TIME_CONSTANT_S * yaw_rate_rps) / band, -1.0), 1.0)
 
     return steer
