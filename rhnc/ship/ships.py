@@ -10,6 +10,7 @@ and by :func:`check_parameter_set`).
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import functools
 import tomllib
@@ -81,9 +82,14 @@ def ship_file(name: str, ships_dir: Path = SHIPS_DIR) -> Path:
     return Path(ships_dir) / f"{name}.toml"
 
 
-@functools.lru_cache(maxsize=None)
 def _read_ship_file(path: Path) -> dict:
-    """The tables of the ship file ``path`` (ScenarioError naming it when it is no TOML)."""
+    """The tables of the ship file ``path`` (ScenarioError naming it when it is no TOML): a copy
+    of what was parsed, so that a reader taking tables out of it leaves them for the next."""
+    return copy.deepcopy(_parsed_ship_file(path))
+
+
+@functools.lru_cache(maxsize=None)
+def _parsed_ship_file(path: Path) -> dict:
     try:
         with path.open("rb") as handle:
             return tomllib.load(handle)

@@ -53,3 +53,14 @@ def test_a_ship_file_that_is_no_toml_is_named_in_one_line(tmp_path, read):
     (tmp_path / "KCS.toml").write_text("beam_m = = 32.2\n")
     with pytest.raises(ScenarioError, match=r"KCS.toml: Invalid value \(at line 1, column 10\)$"):
         read(tmp_path)
+
+
+def test_the_particulars_and_the_actuators_read_from_one_file_in_either_order():
+    # both readers share one parsed copy of the file: taking the particulars must leave the
+    # [actuators] table for the allocation (a run's voyage analysis reads the particulars first)
+    from rhnc.ship.ships import ship_file
+
+    assert load_ship("KCS").lpp_m > 0
+    path, table = load_actuators("KCS")
+    assert path == ship_file("KCS") and table["rudder_area_m2"] > 0
+    assert load_ship("KCS") == load_ship("KCS")
