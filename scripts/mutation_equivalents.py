@@ -241,6 +241,24 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      "functions take their arguments by position and nothing looks a symbol up by name; the name is kept in the "
      "serialized graph the code-generation cache key is hashed from, so the key changes, and the library compiled "
      "under it holds the same functions"),
+    ("rhnc/control/nmpc_problem.py", r'kind\.sym\("(x|ref|w_d|w_prev|d|obs)"',
+     r'kind\.sym\("(XX\w+XX|X|REF|W_D|W_PREV|D|OBS)"',
+     "only the name of one of the NLP's symbols changes (in both the SX and the MX form): CasADi functions take "
+     "their arguments by position and nothing looks a symbol up by name; the name is kept in the serialized "
+     "graph the code-generation cache key is hashed from, so the key changes, and the library compiled under it "
+     "holds the same functions"),
+    ("", r'\.ravel\(order="F"\)', r'\.ravel\(order="f"\)',
+     "numpy reads the order letter in either case: ravel(order='f') is ravel(order='F'), the same array"),
+    ("rhnc/control/nmpc.py", r"-np\.inf if floor is None else floor", r"-np\.inf if \(floor is None\) and False else",
+     "np.clip reads a None bound as no bound: when floor is None the ceiling is set (the clip runs only when one "
+     "of them is), and np.clip(a, None, ceiling) gives what np.clip(a, -inf, ceiling) gives, NaN included"),
+    ("rhnc/control/nmpc.py", r"shift\[:2\] = origin\[:2\]", r"shift\[:2\] = origin\[:3\]",
+     "every origin is the 2-vector state[:2].copy() made in _prepare (passed on as the step's origin to "
+     "_to_scaled, _from_scaled and the warm start): origin[:3] of it is origin[:2]"),
+    ("rhnc/control/nmpc_warm_start.py", r"if shift > 0 else kept\[-1:\]", r"if shift >= 0 else kept\[-1:\]",
+     "at shift 0 the tail becomes a rollout of no inputs instead of the last kept state, and is never read: the "
+     "next line keeps the states as they are unless shift > 0; the one rollout a PlanMemory is given "
+     "(NMPCController._rollout) only computes, and for no inputs returns the start row"),
     ("rhnc/control/nmpc_problem.py", r'np\.asarray\(terminal\)\.ravel\(order="F"\)',
      r'np\.asarray\(terminal\)\.ravel\((order=None|order="C"|)\)',
      "stacks the terminal weight row by row instead of column by column, which puts P^T where the NLP reads P "
