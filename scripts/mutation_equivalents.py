@@ -255,6 +255,14 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("rhnc/control/nmpc.py", r"shift\[:2\] = origin\[:2\]", r"shift\[:2\] = origin\[:3\]",
      "every origin is the 2-vector state[:2].copy() made in _prepare (passed on as the step's origin to "
      "_to_scaled, _from_scaled and the warm start): origin[:3] of it is origin[:2]"),
+    ("rhnc/control/nmpc_problem.py", r"\(x - ubx\)\.max\(initial=0\.0\)\]", r"\(x - ubx\)\.max\(initial=None\)\]",
+     "without the initial value the upper-bound term is the largest x - ubx itself instead of max(that, 0), and "
+     "the outer np.max over [0.0, ...] takes 0 against it either way (NaN included); the two differ only for an "
+     "empty x, and x is always the NLP's whole decision vector (6 (N+1) + 2 N entries and more, N >= 1)"),
+    ("rhnc/control/nmpc_problem.py", r'"qpsol_options": \{.*"print_info": False', r'"print_info": True',
+     "qrqp's print_info only lets its QP log write a note into the iteration line's text (casadi_qp_log writes "
+     "d.msg when d.verbose); that line is printed only with print_iter, which is off: no output and the same "
+     "iterates (checked with CasADi 3.8.2: the same solution, iteration count and status, nothing printed)"),
     ("rhnc/control/nmpc_warm_start.py", r"if shift > 0 else kept\[-1:\]", r"if shift >= 0 else kept\[-1:\]",
      "at shift 0 the tail becomes a rollout of no inputs instead of the last kept state, and is never read: the "
      "next line keeps the states as they are unless shift > 0; the one rollout a PlanMemory is given "
