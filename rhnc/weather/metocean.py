@@ -70,10 +70,14 @@ class MetOceanField:
         field (one slice, valid at all times).
     start_time : str, optional
         Calendar time (ISO 8601) of t = 0, kept so that NetCDF round trips keep dates.
+    data_extent : (x_min, x_max, y_min, y_max), optional
+        Where the values are data [m]; omitted: the whole grid (a grid grown by held edge
+        values, :meth:`with_edges_held`, passes its data's extent on).
     """
 
     def __init__(self, x: np.ndarray, y: np.ndarray, fields: Mapping[str, np.ndarray], source: str = "",
-                 times_s=None, start_time: str | None = None):
+                 times_s=None, start_time: str | None = None,
+                 data_extent: tuple[float, float, float, float] | None = None):
         self.x = np.asarray(x, dtype=float)
         self.y = np.asarray(y, dtype=float)
         for axis_name, axis in (("x (north)", self.x), ("y (east)", self.y)):
@@ -101,7 +105,7 @@ class MetOceanField:
         self.start_time = start_time
         #: (x_min, x_max, y_min, y_max) [m] of the data: the grid's own extent, except where
         #: :meth:`with_edges_held` grew the grid by held values, which are not data.
-        self.data_extent = self.extent
+        self.data_extent: tuple[float, float, float, float] = self.extent if data_extent is None else data_extent
 
     # -- gridded quantities -------------------------------------------------------
     def _grid(self, name: str) -> np.ndarray:
@@ -169,10 +173,9 @@ class MetOceanField:
         fields = {name: np.pad(values, ((0, 0), (nx, nx), (ny, ny)), mode="edge") for name, values in self._fields.items()}
         if not self.is_time_varying:
             fields = {name: values[0] for name, values in fields.items()}
-        held = MetOceanField(x, y, fields, source=f"{self.source} (edge values held {margin_m / NM:g} nm beyond)",
-                             times_s=self.times_s if self.is_time_varying else None, start_time=self.start_time)
-        held.data_extent = self.data_extent
-        return held
+        return MetOceanField(x, y, fields, source=f"{self.source} (edge values held {margin_m / NM:g} nm beyond)",
+                             times_s=self.times_s if self.is_time_varying else None, start_time=self.start_time,
+                             data_extent=self.data_extent)
 
     # -- interpolation --------------------------------------------------------------
     def time_weights(self, t_s) -> tuple[np.ndarray, np.ndarray]:
@@ -249,9 +252,8 @@ class MetOceanField:
         k_array, w_array = self.time_weights(float(t_s))
         k, w = int(k_array), float(w_array)
         fields = {name: between(stack[k], stack[k + 1], w) for name, stack in self._fields.items()}
-        static = MetOceanField(self.x, self.y, fields, source=f"{self.source} at t = {float(t_s):g} s")
-        static.data_extent = self.data_extent
-        return static
+        return MetOceanField(self.x, self.y, fields, source=f"{self.source} at t = {float(t_s):g} s",
+                             data_extent=self.data_extent)
 
     # -- writers -------------------------------------------------------------------
     def to_dataset(self):
