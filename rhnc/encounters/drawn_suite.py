@@ -14,6 +14,13 @@ targets (drawn uniformly), each sailing straight.  A target's kind is drawn unif
 ``overtaking``     the own ship overtakes: course 000 deg +- 15 deg, 3-12 kn;
 ``overtaken``      a faster ship comes up from astern: course 000 deg +- 15 deg, 24-30 kn,
 
+and, in the ``wide`` recipe (``--recipe wide``; the default ``2027`` recipe drew the committed
+suites ``drawn``, ``drawn2028`` and ``drawn2029`` and is kept as it was), also
+
+``overtaken_quarter`` a faster ship converging from either quarter: course 000 deg +- 50 deg,
+                  20-30 kn, its start bearing more than 22.5 deg abaft the beam (Rule 13's
+                  words; a draw that starts further forward is drawn again),
+
 then its closest approach if nobody manoeuvred (DCPA 0-0.9 nm, on a side drawn at random:
 a risk of collision, inside R + R_i = 1 nm) and its start range (2-8 nm).  The start
 follows from them (the relative track passes the CPA at the drawn DCPA).  The kind names the
@@ -48,7 +55,11 @@ KINDS = ("head_on", "crossing", "crossing_port", "overtaking", "overtaken")
 #: kind -> (nominal course [deg], course spread [deg], speed range [kn])
 KIND_DRAWS = {"head_on": (180.0, 10.0, (6.0, 30.0)), "crossing": (270.0, 55.0, (6.0, 30.0)),
               "crossing_port": (90.0, 55.0, (6.0, 30.0)), "overtaking": (0.0, 15.0, (3.0, 12.0)),
-              "overtaken": (0.0, 15.0, (24.0, 30.0))}
+              "overtaken": (0.0, 15.0, (24.0, 30.0)), "overtaken_quarter": (0.0, 50.0, (20.0, 30.0))}
+#: recipe -> the kinds it draws from (uniformly)
+RECIPES = {"2027": KINDS, "wide": KINDS + ("overtaken_quarter",)}
+#: kind -> its start bearing's least angle from the own ship's bow [deg] (Rule 13: abaft the beam + 22.5)
+KIND_ABAFT_DEG = {"overtaken_quarter": 112.5}
 DCPA_NM = (0.0, 0.9)
 START_RANGE_NM = (2.0, 8.0)
 MAX_CLOSING_KN = 50.0
@@ -64,11 +75,11 @@ def _velocity(course_deg: float, speed_kn: float) -> np.ndarray:
     return speed_kn * np.array([math.cos(c), math.sin(c)])
 
 
-def draw_target(rng: np.random.Generator) -> dict:
+def draw_target(rng: np.random.Generator, kinds: tuple[str, ...] = KINDS) -> dict:
     """One target on a collision course: kind, start [nm], course [deg], speed [kn], the draw's DCPA and TCPA."""
     own_velocity = _velocity(0.0, OWN_SPEED_KN)
     while True:
-        kind = KINDS[int(rng.integers(len(KINDS)))]
+        kind = kinds[int(rng.integers(len(kinds)))]
         nominal, spread, speeds = KIND_DRAWS[kind]
         course = float((nominal + rng.uniform(-spread, spread)) % 360.0)
         speed = float(rng.uniform(*speeds))
@@ -84,6 +95,8 @@ def draw_target(rng: np.random.Generator) -> dict:
             continue
         normal = side * np.array([-relative[1], relative[0]]) / closing
         start = dcpa * normal - relative * tcpa_h
+        if abs(math.degrees(math.atan2(start[1], start[0]))) <= KIND_ABAFT_DEG.get(kind, 0.0):
+            continue
         return {"kind": kind, "start_nm": (float(start[0]), float(start[1])), "course_deg": course,
                 "speed_kn": speed, "dcpa_nm": dcpa, "tcpa_min": tcpa_h * 60.0}
 
@@ -97,14 +110,15 @@ def draw_inside_target(rng: np.random.Generator) -> dict:
             "dcpa_nm": None, "tcpa_min": None}
 
 
-def draw_suite(seed: int = SEED, count: int = SITUATIONS) -> list[list[dict]]:
+def draw_suite(seed: int = SEED, count: int = SITUATIONS, recipe: str = "2027") -> list[list[dict]]:
     """The targets of every situation (the own ship is not listed)."""
+    kinds = RECIPES[recipe]
     rng = np.random.default_rng(seed)
     suite = []
     for number in range(1, count + 1):
         targets = int(rng.integers(1, 4))
         drawn = [draw_inside_target(rng)] if number % INSIDE_EVERY == 0 else []
-        drawn += [draw_target(rng) for _ in range(targets - len(drawn))]
+        drawn += [draw_target(rng, kinds) for _ in range(targets - len(drawn))]
         suite.append(drawn)
     return suite
 
@@ -121,16 +135,17 @@ def _description(targets: list[dict]) -> str:
     return "; ".join(parts)
 
 
-def write_suite(folder, seed: int = SEED, count: int = SITUATIONS) -> list[Path]:
+def write_suite(folder, seed: int = SEED, count: int = SITUATIONS, recipe: str = "2027") -> list[Path]:
     """Write ``drawn_001.json`` ... into ``folder``."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     written = []
     own = {"start_nm": (0.0, 0.0), "course_deg": 0.0, "speed_kn": OWN_SPEED_KN}
-    for number, targets in enumerate(draw_suite(seed, count), start=1):
+    for number, targets in enumerate(draw_suite(seed, count, recipe), start=1):
         ships = [own] + [{key: target[key] for key in ("start_nm", "course_deg", "speed_kn")} for target in targets]
         document = situation_document(ships, f"drawn-{number:03d}",
-                                      f"drawn encounter {number} (seed {seed}): {_description(targets)}")
+                                      f"drawn encounter {number} (seed {seed}{'' if recipe == '2027' else f', recipe {recipe}'}): "
+                                      f"{_description(targets)}")
         path = folder / f"drawn_{number:03d}.json"
         path.write_text(json.dumps(document, indent=2) + "\n")
         written.append(path)
@@ -142,10 +157,12 @@ def main(argv=None) -> int:
     parser.add_argument("folder")
     parser.add_argument("--seed", type=int, default=SEED)
     parser.add_argument("--count", type=int, default=SITUATIONS)
+    parser.add_argument("--recipe", choices=sorted(RECIPES), default="2027",
+                        help="the kinds drawn: 2027 (the first suites') or wide (adds overtakers converging from a quarter)")
     args = parser.parse_args(argv)
     if args.count < 1:
         parser.error(f"--count must be at least 1, got {args.count}")
-    write_suite(args.folder, args.seed, args.count)
+    write_suite(args.folder, args.seed, args.count, args.recipe)
     return 0
 
 

@@ -71,3 +71,20 @@ def test_a_count_below_one_is_refused(tmp_path, capsys):
     assert exit_info.value.code == 2
     assert "--count must be at least 1" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_the_wide_recipe_draws_overtakers_from_abaft_the_beam_and_its_suite_is_committed(tmp_path):
+    suite = drawn_suite.draw_suite(2030, 80, "wide")
+    quarter = [target for situation in suite for target in situation if target["kind"] == "overtaken_quarter"]
+    assert quarter
+    for target in quarter:
+        start, relative = relative_motion(target)
+        assert abs(math.degrees(math.atan2(start[1], start[0]))) > 112.5
+        assert 20.0 <= target["speed_kn"] <= 30.0 and float(start @ relative) < 0.0
+    written = drawn_suite.write_suite(tmp_path, 2030, 80, "wide")
+    for path in written:
+        assert json.loads(path.read_text()) == json.loads((ROOT / "scenarios/situations/drawn2030" / path.name).read_text())
+
+
+def test_the_default_recipe_draws_no_quarter_overtaker():
+    assert all(target["kind"] != "overtaken_quarter" for situation in drawn_suite.draw_suite() for target in situation)
