@@ -40,6 +40,9 @@ telemetry as ``collision_slack``.
 Speed bound: u <= ``max_speed_mps`` at every node after the first (the KCS's service
 speed, 24 kn, unless the scenario says otherwise), and the reference speed is capped at
 the same value; a ship measured faster is allowed to slow down at its deceleration limit.
+While a readily apparent reduction of speed is held (``DomainReport.speed_goal_mps``, a
+ship overtaking us), the bound comes down from the measured speed at ``SLOWING_SHARE`` of the
+deceleration full astern force and the hull's drag give, to the speed asked for.
 
 Time limits: every solve is limited to ``max_iterations``, to ``cpu_time_limit_s`` of
 processor time per attempt and to ``wall_time_limit_s`` (both attempts together,
@@ -96,6 +99,9 @@ __all__ = ["OBSTACLE_FIELDS", "MIN_TERMINAL_SPEED_MPS", "SOLVERS", "NMPCSettings
 SLACK_TOLERANCE = 1e-3
 #: deceleration [m/s²] assumed when a ship measured above the speed bound slows down
 SLOW_DOWN_MPS2 = 0.02
+#: share of the deceleration full astern force and the hull's drag give at the speed to reach
+#: that a reduction of speed asks of the plan (the rest is margin for wind and waves)
+SLOWING_SHARE = 0.7
 #: cost and constraint violation reported when a solve left no finite iterate (stopped, NaN)
 UNKNOWN = -1.0
 
@@ -433,6 +439,12 @@ class NMPCController:
         if report.no_port_turn:  # Rules 14, 15, 17(c): no alteration to port
             allowance = math.radians(PORT_ALLOWANCE_DEG)
             lbx[heading_index] = np.minimum(ref_scaled[2, 1:] - allowance, state[2])
+        if report.speed_goal_mps is not None:  # a readily apparent reduction of speed (Rule 8(e), 17(b))
+            goal = report.speed_goal_mps
+            slowing = SLOWING_SHARE * (self.params.tau_max[0] + self.params.equilibrium_tau(goal)[0]) / self.params.m11
+            ramp = state[3] - slowing * np.arange(1, N + 1) * s.control_interval_s
+            speed_index = self.problem.z_index[1:, 3]
+            ubx[speed_index] = np.minimum(ubx[speed_index], np.maximum(goal, ramp) / self.speed_scale)
         if floor is not None:
             lbx[heading_index] = np.maximum(lbx[heading_index], floor)
         if ceiling is not None:

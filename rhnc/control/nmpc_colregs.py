@@ -24,6 +24,8 @@ shaped by the own ship's role:
     velocities) lies inside rho and either the CPA is less than ``stand_on_action_tcpa_s``
     away or the range is below ``stand_on_action_range_factor * rho``.  From then on the
     symmetric circle is on (Rule 17(b): act to avoid collision) until the encounter ends.
+    For a ship overtaking us the action may be a reduction of speed as well as, or instead
+    of, a turn (:meth:`CollisionDomains._stand_on_action`).
 ``static``, ``none``
     The symmetric circle.
 
@@ -112,6 +114,9 @@ CLOSE_QUARTERS_FACTOR = 2.0
 #: open at once, by turning and slowing together
 INSIDE_RESPONSE_S = 20.0
 INSIDE_OPENING_MPS = 1.0
+#: a readily apparent reduction of speed brings it to this fraction of the speed at its
+#: beginning (the analysis reads a reduction of at least half as readily apparent)
+SLOW_FACTOR = 0.45
 @dataclasses.dataclass(frozen=True)
 class DomainSettings:
     """How obstacles become collision domains.
@@ -169,6 +174,9 @@ class DomainReport:
     (``colregs`` only; see :meth:`CollisionDomains.parameters`); ``danger``: a target is
     inside its clearance and closing; ``escape_heading``: then, the heading [rad] straight away
     from the nearest such target (its range opens fastest), else None.
+    ``speed_goal_mps``: a readily apparent reduction of speed held for a ship overtaking us
+    (see :meth:`CollisionDomains._stand_on_action`): the speed [m/s] the plan must come down
+    to, at the deceleration the ship can make, or None.
     ``alteration_floor`` / ``alteration_ceiling``: a readily apparent alteration to
     starboard / to port, as (time it began [s], heading then [rad], heading to reach
     [rad]), or None; see :func:`rhnc.control.nmpc_alteration.heading_bounds`.
@@ -182,6 +190,7 @@ class DomainReport:
     risk: bool = False
     danger: bool = False
     escape_heading: float | None = None
+    speed_goal_mps: float | None = None
 
 
 class CollisionDomains:
@@ -203,6 +212,7 @@ class CollisionDomains:
         self._altering: dict[int, tuple[float, float, float, float]] = {}
         self._altered: set[int] = set()
         self._onset_heading: dict[int, float] = {}
+        self._slowing: dict[int, float] = {}
         self.stand_on_actions = 0
         self.alterations = 0
 
@@ -214,6 +224,7 @@ class CollisionDomains:
         self._altering = {}
         self._altered = set()
         self._onset_heading = {}
+        self._slowing = {}
 
     def parameters(self, obstacles: np.ndarray | None, state: np.ndarray, origin: np.ndarray, closing_speed_mps: float,
                    substep_s: float, length_scale_m: float, et: bool, reference_heading_rad: float | None = None,
@@ -302,7 +313,8 @@ class CollisionDomains:
             active_rows[i] = 1.0
             slot += 1
         return slots, DomainReport(codes, active_rows, no_port_turn, *self._alteration_bounds(danger, no_port_turn),
-                                   bool(risk and not et), danger, _escape_heading(rows, rhos, state, range_rates, inside))
+                                   bool(risk and not et), danger, _escape_heading(rows, rhos, state, range_rates, inside),
+                                   min(self._slowing.values()) if self._slowing and not danger else None)
 
     def reference_turns(self, reference_heading_rad: float, heading_rad: float) -> float:
         """Whole turns [rad, a multiple of 2 pi] to take off the reference heading: the one within
@@ -358,6 +370,7 @@ class CollisionDomains:
         self._altered &= locked
         self._altering = {i: v for i, v in self._altering.items() if i in locked}
         self._onset_heading = {i: v for i, v in self._onset_heading.items() if i in locked}
+        self._slowing = {i: v for i, v in self._slowing.items() if i in locked}
         for i in locked:  # the heading at the onset of risk, once per encounter
             self._onset_heading.setdefault(i, heading)
         return classes, codes
@@ -471,9 +484,10 @@ class CollisionDomains:
         s = self.settings
         if s.alteration_deg <= 0.0 or index in self._altered:
             return
-        if index in self._altering:
+        if index in self._altering or index in self._slowing:
             if encounter.tcpa_s <= 0.0 and encounter.range_m >= ALTERATION_CLEAR_FACTOR * separation_m:
-                del self._altering[index]  # past and clear
+                self._altering.pop(index, None)  # past and clear
+                self._slowing.pop(index, None)
                 self._altered.add(index)
             return
         name = encounter.encounter_class
@@ -503,6 +517,15 @@ class CollisionDomains:
                         side = -side
             if not port_allowed:
                 side = 1.0
+        slow = False
+        if name == "overtaken" and index in self._acting and encounter.tcpa_s > 0.0 and motion is not None and traffic:
+            side, slow = self._stand_on_action(side, port_allowed, reference_heading_rad, motion[0], motion[1], traffic)
+        if side == 0.0:  # a reduction of speed alone
+            self._slowing[index] = SLOW_FACTOR * motion[1]
+            self.alterations += 1
+            LOG.info("target %d (%s): slowing to %.0f %% of the speed (CPA %.0f m in %.0f s)", index, name,
+                     100.0 * SLOW_FACTOR, encounter.cpa_m, encounter.tcpa_s)
+            return
         goal = reference_heading_rad + side * math.radians(s.alteration_deg)
         onset = self._onset_heading.get(index)
         if onset is not None:
@@ -521,10 +544,42 @@ class CollisionDomains:
         if not begin:
             return
         self._altering[index] = (time_s, heading_rad, goal, side)
+        if slow:
+            self._slowing[index] = SLOW_FACTOR * motion[1]
         self.alterations += 1
         LOG.info("target %d (%s): altering %.0f deg to %s (CPA %.0f m in %.0f s)", index, name, s.alteration_deg,
                  "starboard" if side > 0 else "port", encounter.cpa_m, encounter.tcpa_s)
 
+
+    def _stand_on_action(self, side: float, port_allowed: bool, reference_heading_rad: float, own_xy,
+                         own_speed_mps: float, traffic) -> tuple[float, bool]:
+        """The readily apparent action of a ship overtaken by another that does not keep clear
+        (Rule 17(b)): the turn ``side`` chosen above at its speed when that keeps the whole
+        traffic clear (``side_clearance_m`` >= 0); else, of a turn to either side the rules
+        allow, a turn with the speed brought down to ``SLOW_FACTOR`` of it, and the speed
+        brought down alone, the one that keeps the traffic clearest.  Returns (side of the
+        turn, 0 for none; whether to slow down).
+
+        A ship overtaking us is faster and, converging from a quarter, crosses our course
+        ahead of us: a 35 deg turn alone, to the side another target leaves us (a head-on
+        ship ahead rules out a turn to port), kept it converging, and the plan then raced it
+        (18 -> 23 kn) and lost the clearance (15 of 28 such targets).  Slowing lets it pass
+        ahead; the speed is a manoeuvre Rules 8(e) and 17 name.  No turn to port is weighed
+        while another ship forward of our port quarter closes on us, classified yet or not: it
+        may become a ship crossing from port, for which Rule 17(c) rules out that turn (a turn to
+        port chosen for the clearance broke it twice)."""
+        alteration = math.radians(self.settings.alteration_deg)
+
+        def clearance(turn: float, factor: float) -> float:
+            return side_clearance_m(own_xy, factor * own_speed_mps, reference_heading_rad + turn * alteration, traffic)
+
+        if not port_allowed or _closing_on_the_port_side(own_xy, own_speed_mps, reference_heading_rad, traffic):
+            turns: tuple[float, ...] = (1.0,)
+        else:
+            turns = (side, -side)
+        options = [(turn, 1.0) for turn in turns] + [(turn, SLOW_FACTOR) for turn in turns] + [(0.0, SLOW_FACTOR)]
+        turn, factor = max(options, key=lambda option: clearance(*option))
+        return turn, factor < 1.0
 
     def _give_way_due(self, encounter, goal: float, side: float, separation_m: float, motion) -> bool:
         """Whether a give-way alteration to ``goal`` is due: the CPA at most
@@ -569,6 +624,19 @@ def side_clearance_m(own_xy, own_speed_mps: float, course_rad: float, traffic, h
         when = 0.0 if w2 < 1e-12 else min(max(-float(relative @ closing) / w2, 0.0), horizon_s)
         least = min(least, float(np.hypot(*(relative + closing * when))) - clearance)
     return least
+
+
+def _closing_on_the_port_side(own_xy, own_speed_mps: float, heading_rad: float, traffic) -> bool:
+    """Whether a ship of ``traffic`` ((position, velocity, clearance) per target) on our port
+    side, forward of 22.5 deg abaft the beam (relative bearing -112.5 to 0 deg from
+    ``heading_rad``), is closing on us."""
+    own_velocity = own_speed_mps * np.array([math.cos(heading_rad), math.sin(heading_rad)])
+    for position, velocity, _ in traffic:
+        relative = np.asarray(position, dtype=float) - np.asarray(own_xy, dtype=float)
+        bearing = math.degrees(wrap_angle(math.atan2(relative[1], relative[0]) - heading_rad))
+        if -112.5 < bearing < 0.0 and float(relative @ (np.asarray(velocity, dtype=float) - own_velocity)) < 0.0:
+            return True
+    return False
 
 
 def _escape_heading(rows: np.ndarray, rhos: np.ndarray, state: np.ndarray, range_rates: np.ndarray,
