@@ -10,8 +10,12 @@ The verdicts (thresholds are :class:`JudgementSettings`):
 
 Rule 8 (action to avoid collision), applicable to a give-way vessel and to any vessel that
 manoeuvred: the alteration is large enough to be readily apparent (a change of course of at
-least ``apparent_course_change_deg`` before the CPA, or a speed reduction of at least
-``apparent_speed_reduction`` of the speed at onset), made at least
+least ``apparent_course_change_deg``, or a speed reduction of at least
+``apparent_speed_reduction`` of the speed at onset, measured from the onset of risk to the
+CPA or, for a manoeuvre shown before the CPA, to ``alteration_completion_s`` after it was
+shown, whichever is later: an alteration that opens the range while it is still turning
+passes its CPA before it is complete, and is judged by what it became, not by the part of it
+that came before the CPA), made at least
 ``early_before_cpa_min`` before the CPA, and the ships pass at a safe distance (the
 separation R + R_i is kept).
 Rule 13 (overtaking): the overtaking vessel keeps out of the way: separation kept.
@@ -66,6 +70,10 @@ class JudgementSettings:
     risk_tcpa_min: float = 30.0
     stand_on_range_factor: float = STAND_ON_ACTION_RANGE_FACTOR
     inside_open_within_s: float = 60.0
+    #: the time [s] from a manoeuvre shown (``manoeuvre_threshold_deg``) to a readily apparent
+    #: alteration complete: 30 deg more at the 0.3 deg/s of a loaded merchant ship's steady turn
+    #: is 100 s, with 20 s for the rudder and the yaw to build up
+    alteration_completion_s: float = 120.0
     #: "early ... if the circumstances of the case admit": an alteration begun within this
     #: time [s] of the moment the ship was first called on to act (three control intervals)
     at_once_within_s: float = 60.0
@@ -216,7 +224,10 @@ def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter
         ahead = crossed_ahead(own_xy, target, onset_index, cpa_index)
         result["crossed"] = None if ahead is None else ("ahead" if ahead else "astern")
     result.update(_first_manoeuvre_fields(t, own_xy, course_rad, target, onset_index, cpa_time, settings))
-    before = (t >= t[onset_index]) & (t <= cpa_time)
+    until = cpa_time
+    if result["manoeuvre_time_s"] is not None:
+        until = max(cpa_time, result["manoeuvre_time_s"] + settings.alteration_completion_s)
+    before = (t >= t[onset_index]) & (t <= until)
     unwrapped = np.unwrap(course_rad)
     change = np.degrees(unwrapped[before] - unwrapped[onset_index])
     result["max_course_change_deg"] = float(np.max(np.abs(change))) if change.size else 0.0

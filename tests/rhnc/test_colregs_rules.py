@@ -154,3 +154,28 @@ def test_the_latest_alteration_is_searched_in_10_s_steps_by_default():
     # as in the square-turn case above, without giving the step: the latest wait is 130 s
     assert latest_alteration_s((0.0, 0.0), (5.0, 0.0), (1000.0, 0.0), (0.0, 0.0), 300.02, 1.0,
                                alteration_deg=90.0, turn_s=0.0) == 130.0
+
+
+def _turning_away_from_a_ship_on_the_port_bow():
+    """Own ship northbound at 18 kn, turning to starboard at 0.3 deg/s from 20 s to 40 deg; a
+    ship overtaken by us 1.0 nm ahead and 0.6 nm to port at 8 kn: the range opens while the
+    own ship is still turning."""
+    t = np.arange(0.0, 900.0, 5.0)
+    course = np.radians(np.clip(0.3 * (t - 20.0), 0.0, 40.0))
+    speed = np.full(t.size, 18.0 * 1852.0 / 3600.0)
+    step = np.stack([np.cos(course), np.sin(course)], axis=1) * speed[:, None] * 5.0
+    own = np.vstack([[0.0, 0.0], np.cumsum(step[:-1], axis=0)])
+    velocity = np.array([8.0 * 1852.0 / 3600.0, 0.0])
+    target = np.column_stack([1852.0 + velocity[0] * t, np.full(t.size, -0.6 * 1852.0),
+                              np.full(t.size, velocity[0]), np.zeros(t.size), np.full(t.size, 0.3 * 1852.0)])
+    return t, own, course, speed, target
+
+
+def test_an_alteration_that_opens_the_range_while_turning_is_judged_by_what_it_became():
+    from rhnc.encounters.colregs_judgement import JudgementSettings, judge_target
+    t, own, course, speed, target = _turning_away_from_a_ship_on_the_port_bow()
+    result = judge_target(t, own, course, speed, target, "overtaking", 0, 0.5 * 1852.0, JudgementSettings())
+    turned_by_cpa = math.degrees(course[t <= result["time_of_cpa_s"]][-1])
+    assert turned_by_cpa < 30.0  # the CPA comes before the alteration is readily apparent
+    assert result["max_course_change_deg"] >= 30.0
+    assert result["rule_8"] == "pass"
