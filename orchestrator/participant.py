@@ -29,6 +29,7 @@ from typing import Any, Union
 
 import numpy as np
 
+from orchestrator.errors import ModelError
 from orchestrator.toml_input import checked, is_finite_number  # noqa: F401 (part of the participant interface)
 
 Value = Union[float, np.ndarray]
@@ -72,6 +73,15 @@ class Participant(abc.ABC):
 
     def terminate(self) -> None:
         """Release resources; called once, also after a failed run."""
+
+    def require_inputs(self, inputs: Mapping[str, Value], names: Sequence[str] | None = None) -> None:
+        """Raise :class:`~orchestrator.errors.ModelError` naming every one of ``names`` (default: all
+        input ports) that ``inputs`` lacks: a port the participant cannot step without."""
+        missing = [port for port in (self.input_names if names is None else names) if port not in inputs]
+        if missing:
+            ports = ", ".join(f"'{port}'" for port in missing)
+            raise ModelError(f"participant '{self.name}': input{'s' if len(missing) > 1 else ''} {ports} "
+                             f"must be connected")
 
     def connected(self, sources: Mapping[str, "Participant"]) -> None:
         """Told once, after every connection is checked, which participant drives each input.

@@ -219,9 +219,7 @@ class RadarParticipant(Participant):
         return self._scan(start_time, inputs)
 
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
-        missing = [port for port in self.input_names if port not in inputs]
-        if missing:
-            raise ModelError(f"participant '{self.name}': input '{missing[0]}' must be connected")
+        self.require_inputs(inputs)
         return self._scan(time, inputs)
 
     def _scan(self, time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:

@@ -37,7 +37,6 @@ from typing import Any
 
 import numpy as np
 
-from orchestrator.errors import ModelError
 from orchestrator.geometry import KNOT, NM
 from orchestrator.participant import BuildContext, Participant, Value, check_options
 from orchestrator.toml_input import Positive, TomlTable
@@ -121,9 +120,7 @@ class SeparationWatch(Participant):
         return self._observe(start_time, inputs) if all(port in inputs for port in self.input_names) else {}
 
     def step(self, time: float, step_size: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
-        missing = [port for port in self.input_names if port not in inputs]
-        if missing:
-            raise ModelError(f"participant '{self.name}': inputs {', '.join(missing)} must be connected")
+        self.require_inputs(inputs)
         return self._observe(time, inputs)
 
     def _observe(self, time: float, inputs: Mapping[str, Value]) -> dict[str, Value]:
