@@ -425,3 +425,41 @@ def test_the_speed_that_arrives_is_found_against_a_head_current_faster_than_the_
     assert speed_for_arrival(problem, polyline, 7200.0) == pytest.approx(16.0 * NM / 7200.0 + 0.8, rel=1e-6)
     result = straight_route(problem, arrival_s=7200.0)
     assert result.arrival_s == pytest.approx(7200.0, abs=1e-3)
+
+
+def test_routes_turn_only_over_the_weather_data_not_over_the_held_band_round_it():
+    # an island on the north edge of the data: round it to the north is shorter, but only
+    # over the band of held edge values (no data there); every route goes round to the south
+    field = storm_field(base_wind_ms=6.0).with_edges_held(10 * NM)
+    island = (16 * NM, 10 * NM, 6 * NM)
+    problem = RoutingProblem((17 * NM, 2 * NM), (17 * NM, 18 * NM), field, avoid=(island,))
+    x_min, x_max, y_min, y_max = field.data_extent
+    assert field.extent[1] > x_max + 9 * NM          # the band is there to go round by
+    straight = straight_route(problem, speed_mps=SPEED)
+    routes = {"search": RouteSearch(problem).route(SPEED, 500.0, passes=1),
+              "straight": straight.waypoints_m,
+              "optimal": optimal_route(problem, speed_mps=SPEED).waypoints_m,
+              "timed": optimal_route(problem, arrival_s=straight.arrival_s).waypoints_m}
+    for name, route in routes.items():
+        turns = route[1:-1]
+        assert len(turns), name
+        assert np.all((turns[:, 0] >= x_min - 1e-6) & (turns[:, 0] <= x_max + 1e-6)), name
+        assert np.all((turns[:, 1] >= y_min - 1e-6) & (turns[:, 1] <= y_max + 1e-6)), name
+        assert np.min(turns[:, 0]) < island[0] - island[2] + 1e-6, name   # south of the island
+        assert np.min(segment_clearance(route[:-1], route[1:], island[:2])) >= island[2] * (1 - 1e-9), name
+
+
+def test_refining_keeps_the_turning_points_over_the_weather_data():
+    # a storm just south of a route along the north edge of the data: moving the turning
+    # points north pays, up to the edge; the band of held edge values beyond it is no data
+    field = storm_field(storms=[(16.0, 10.0, 3.0, 20.0)]).with_edges_held(10 * NM)
+    problem = RoutingProblem((19 * NM, 2 * NM), (19 * NM, 18 * NM), field)
+    polyline = np.array([[19.0, 2.0], [19.5, 10.0], [19.0, 18.0]]) * NM
+
+    def evaluate(points):
+        return costed_route(problem, points, SPEED, "optimal")
+
+    before = evaluate(polyline)
+    after = _refine(problem, polyline, before, evaluate)
+    assert after.cost_usd < before.cost_usd
+    assert np.max(after.waypoints_m[:, 0]) == pytest.approx(field.data_extent[1], abs=1e-6)
