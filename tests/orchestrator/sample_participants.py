@@ -84,6 +84,20 @@ class OneOutput(Participant):
     def setup(self, start_time, inputs):
         return {"ok": 1.0}
 
+    def block(self, time, label, wait):
+        """From ``at_s`` on, calls ``wait`` for ever and swallows KeyboardInterrupt (a hung
+        library call); says ``<label>: blocking`` on stdout once, when it begins."""
+        said = False
+        while time >= self.at:
+            try:
+                if not said:
+                    said = True
+                    print(f"{label}: blocking", flush=True)
+                wait()
+            except KeyboardInterrupt:
+                pass
+        return {"ok": 1.0}
+
 
 class Crash(OneOutput):
     """Raises a plain exception at a given time, or in its set-up (a participant's own bug)."""
@@ -107,16 +121,7 @@ class Stubborn(OneOutput):
     def step(self, time, step_size, inputs):
         import time as wallclock
 
-        said = False
-        while time >= self.at:
-            try:
-                if not said:
-                    said = True
-                    print("stubborn: blocking", flush=True)
-                wallclock.sleep(3600.0)
-            except KeyboardInterrupt:
-                pass
-        return {"ok": 1.0}
+        return self.block(time, "stubborn", lambda: wallclock.sleep(3600.0))
 
 
 class Beacon(Participant):
@@ -166,16 +171,7 @@ class Hog(OneOutput):
         import ctypes
 
         libc = ctypes.PyDLL(None)  # PyDLL: the call keeps the interpreter lock
-        said = False
-        while time >= self.at:
-            try:
-                if not said:
-                    said = True
-                    print("hog: blocking", flush=True)
-                libc.sleep(1000)
-            except KeyboardInterrupt:
-                pass
-        return {"ok": 1.0}
+        return self.block(time, "hog", lambda: libc.sleep(1000))
 
 
 class Sleeper(OneOutput):
