@@ -17,7 +17,7 @@ from pydantic import Field, PlainValidator, model_validator
 
 from orchestrator.errors import ScenarioError
 from orchestrator.scenario_spec import ParticipantSpec, ScenarioTable, VariableMapping, VectorMapping
-from orchestrator.toml_input import (Positive, Text, checked, fail, fail_whole, is_finite_number, one_of,
+from orchestrator.toml_input import (Positive, Table, Text, checked, fail, fail_whole, is_finite_number, one_of,
                                      shown, shown_text)
 
 #: Earth models of a geodetic mapping: the WGS84 ellipsoid, or a sphere (``sphere_radius_m``)
@@ -99,12 +99,6 @@ class GeodeticTable(ScenarioTable):
         return self
 
 
-def _table_of(value: Any) -> dict:
-    if not isinstance(value, dict):
-        raise fail("must be a table")
-    return value
-
-
 class FmuParticipantTable(ScenarioTable):
     """``[participants.<name>]`` of an FMU: the model, its parameters and how its ports map."""
 
@@ -113,9 +107,9 @@ class FmuParticipantTable(ScenarioTable):
     every: Every = 1
     parameter_set: Text | None = None
     parameters: dict[str, Annotated[Any, PlainValidator(_parameter)]] = {}
-    mapping: Annotated[dict, PlainValidator(_table_of)] = {}
+    mapping: Table = {}
     geodetic: GeodeticTable | None = None
-    initial: Annotated[dict, PlainValidator(_table_of)] = {}
+    initial: Table = {}
     #: wall-time limit of one set-up or step call [s]; None: the simulation's
     step_timeout_s: Positive | None = None
 

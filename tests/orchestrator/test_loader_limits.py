@@ -81,6 +81,8 @@ LOADER_CASES = {
                   r"'participants.helm.type' must be a non-empty string, got \[\]"),
     "mapping = 5": (lambda t: _edit(t, 'fmu = "KCS"', 'fmu = "KCS"\nmapping = 5'),
                     r"'participants.ship.mapping' must be a table"),
+    "initial = 5": (lambda t: _edit(t, 'fmu = "KCS"', 'fmu = "KCS"\ninitial = 5'),
+                    r"'participants.ship.initial' must be a table"),
     "geodetic origin_deg = 5": (lambda t: _edit(t, 'fmu = "KCS"', 'fmu = "KCS"\ngeodetic = { origin_deg = 5 }'),
                                 r"'participants.ship.geodetic.origin_deg' must be \[latitude, longitude\] in degrees, "
                                 r"got 5"),
