@@ -44,6 +44,14 @@ def _class_path(value: Any) -> str:
 Every = Annotated[int, PlainValidator(_every)]
 
 
+def _given_as_table(data: Any, key: str) -> Any:
+    """``data`` as it is, after refusing a ``key`` given as something other than a table (checked
+    before the fields, whose own message for a dict would not name the key)."""
+    if isinstance(data, dict) and key in data and not isinstance(data[key], dict):
+        raise fail_whole(f"'{{prefix}}{key}' must be a table")
+    return data
+
+
 class PythonParticipantTable(ScenarioTable):
     """``[participants.<name>]`` of a Python participant: a registered type or ``type = "python"``."""
 
@@ -57,9 +65,7 @@ class PythonParticipantTable(ScenarioTable):
     @model_validator(mode="before")
     @classmethod
     def _options_table(cls, data: Any) -> Any:
-        if isinstance(data, dict) and "options" in data and not isinstance(data["options"], dict):
-            raise fail_whole("'{prefix}options' must be a table")
-        return data
+        return _given_as_table(data, "options")
 
     @model_validator(mode="after")
     def _class_for_python(self):
@@ -116,9 +122,7 @@ class FmuParticipantTable(ScenarioTable):
     @model_validator(mode="before")
     @classmethod
     def _parameters_table(cls, data: Any) -> Any:
-        if isinstance(data, dict) and "parameters" in data and not isinstance(data["parameters"], dict):
-            raise fail_whole("'{prefix}parameters' must be a table")
-        return data
+        return _given_as_table(data, "parameters")
 
 
 def _fmu(value: Any) -> str:
