@@ -322,6 +322,19 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      r"np\.bincount\(owner\[:-1\], weights=[^)]*\)?,\s*\)",
      "every end owns at least two of the sampled points (pieces + 1, pieces at least 1), so owner[:-1] still "
      "holds every end's index and the count has len(ends) entries without the minimum length"),
+    ("rhnc/routing/weather_routing.py", r"for _ in range\(passes if times is not None else 1\)",
+     r"else 2\)",
+     "the else branch is taken for static weather (times is None), where every pass searches the same weights "
+     "from the same source: a second pass finds the same tree"),
+    ("rhnc/routing/weather_routing.py", r"polyline = np\.vstack\(\[np\.asarray\(p\.start_m, dtype=float\)",
+     r"np\.vstack\(\[np\.asarray\(p\.start_m,\s*(dtype=None)?\s*\)", _FLOAT),
+    ("rhnc/routing/weather_routing.py", r"np\.bincount\(leg_of, weights=.*minlength=len\(legs\)\)",
+     r"np\.bincount\(leg_of, weights=\(sub_speed <= 1e-3\) & \(length > 0\),\s*\)",
+     "every leg owns at least one sub-leg (pieces at least 1), so leg_of holds every leg's index and the count "
+     "has len(legs) entries without the minimum length"),
+    ("rhnc/routing/weather_routing.py", r"^evaluations = 0$", r"^evaluations = 1$",
+     "the budget is checked between sweeps over the turning points, not within one: starting the count at 1 "
+     "differs only when a sweep ends with exactly 199 evaluations, one below the budget (as 200 against 201 above)"),
     ("rhnc/routing/route_search.py", r"direct = np\.asarray\(segment_costs\(i, js\), dtype=float\)",
      r"direct = np\.asarray\(segment_costs\(i, js\),\s*(dtype=None)?\s*\)",
      "the costs are only compared (with inf, IMPASSABLE and the float sums along the path) and used to index: "
