@@ -496,15 +496,16 @@ def test_a_head_current_that_stops_the_ship_closes_segments_and_legs_however_sho
     assert np.isposinf(legs[0]) and np.isfinite(legs[1])
 
 
-def test_a_circle_that_bars_only_dearer_moves_leaves_the_refinement_as_it_is():
+def test_a_circle_or_chart_that_bars_only_dearer_moves_leaves_the_refinement_as_it_is():
     # a storm just east of a northbound route: the refinement moves it west; an island
-    # further east bars only moves east, which cost more anyway, so the route is the same
+    # further east, or a chart refusing legs that end east of the route, bars only moves
+    # east, which cost more anyway, so the route is the same
     field = storm_field(storms=[(10.0, 11.0, 2.0, 20.0)])
     polyline = np.array([[0.0, 10.0], [10.0, 10.0], [20.0, 10.0]]) * NM
     island = (10 * NM, 14 * NM, 2.5 * NM)
     refined = []
-    for avoid in ((), (island,)):
-        problem = RoutingProblem((0.0, 10 * NM), (20 * NM, 10 * NM), field, avoid=avoid)
+    for avoid, keep_out in (((), None), ((island,), None), ((), _KeepOutEast(10.5 * NM))):
+        problem = RoutingProblem((0.0, 10 * NM), (20 * NM, 10 * NM), field, avoid=avoid, keep_out=keep_out)
 
         def evaluate(points, problem=problem):
             return costed_route(problem, points, SPEED, "optimal")
@@ -513,3 +514,4 @@ def test_a_circle_that_bars_only_dearer_moves_leaves_the_refinement_as_it_is():
     assert np.min(refined[0][:, 1]) < 9.0 * NM                           # moved west, off the storm
     assert np.min(segment_clearance(refined[0][:-1], refined[0][1:], island[:2])) > island[2]
     np.testing.assert_array_equal(refined[1], refined[0])
+    np.testing.assert_array_equal(refined[2], refined[0])
