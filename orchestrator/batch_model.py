@@ -18,7 +18,7 @@ from pydantic_core import PydanticCustomError
 
 from orchestrator.errors import ScenarioError
 from orchestrator.plugins import LazyModule
-from orchestrator.toml_input import (Finite, FolderName, NonNegative, NonNegativeInt, PairNm, Positive, Text,
+from orchestrator.toml_input import (Finite, FolderName, NonNegative, NonNegativeInt, PairNm, Positive, Table, Text,
                                      TomlTable, checked, fail, fail_whole, is_finite_number, shown, shown_text)
 
 encounters = LazyModule("batch", "encounters")  # target placement, registered by the ship domain
@@ -200,12 +200,6 @@ def _dotted_key(value: Any) -> str:
     return value
 
 
-def _keyed_table(value: Any) -> dict:
-    if not isinstance(value, dict):
-        raise fail("must be a table")
-    return value
-
-
 class MonteCarloTable(TomlTable):
     """``[monte_carlo]``: seeded draws of encounters, obstacles and any scenario key."""
 
@@ -217,10 +211,10 @@ class MonteCarloTable(TomlTable):
     obstacles: ObstacleTable | None = None
     targets_key: Annotated[str, PlainValidator(_dotted_key)] = DEFAULT_TARGETS_KEY
     obstacles_key: Annotated[str, PlainValidator(_dotted_key)] = DEFAULT_OBSTACLES_KEY
-    uniform: Annotated[dict, PlainValidator(_keyed_table)] = {}
-    normal: Annotated[dict, PlainValidator(_keyed_table)] = {}
-    choice: Annotated[dict, PlainValidator(_keyed_table)] = {}
-    scale: Annotated[dict, PlainValidator(_keyed_table)] = {}
+    uniform: Table = {}
+    normal: Table = {}
+    choice: Table = {}
+    scale: Table = {}
 
     @model_validator(mode="after")
     def _own_ship_for_placements(self):

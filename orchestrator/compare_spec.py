@@ -14,7 +14,7 @@ from typing import Annotated, Any
 from pydantic import PlainValidator, model_validator
 
 from orchestrator.errors import ScenarioError
-from orchestrator.toml_input import FolderName, TomlTable, checked, fail, fail_whole, read_toml, shown_text
+from orchestrator.toml_input import FolderName, Table, TomlTable, checked, fail, fail_whole, read_toml, shown_text
 
 #: Most members of one ``[sweep]`` (each member is a whole comparison).
 MAX_SWEEP_MEMBERS = 10_000
@@ -51,20 +51,14 @@ class RunTable(TomlTable):
     label: Annotated[str, PlainValidator(_string)] = REQUIRED
     scenario: Annotated[str, PlainValidator(_string)] = REQUIRED
     set: Overrides = {}
-    paper: Annotated[dict, PlainValidator(lambda v: _table(v))] = {}
-    figures: Annotated[dict, PlainValidator(lambda v: _table(v))] = {}
+    paper: Table = {}
+    figures: Table = {}
 
     @model_validator(mode="after")
     def _named(self):
         if self.label is None or self.scenario is None:
             raise fail_whole("'label' and 'scenario' must be strings")
         return self
-
-
-def _table(value: Any) -> dict:
-    if not isinstance(value, dict):
-        raise fail("must be a table")
-    return value
 
 
 def _range(value: Any) -> list[int]:

@@ -336,10 +336,7 @@ class FmuParticipant(Participant):
             return
         touched = []
         for port, value in inputs.items():
-            number = float(value)
-            if not math.isfinite(number):
-                raise ModelError(f"{self.name}: input '{port}' received a non-finite value ({number})")
-            self._canonical_inputs[port] = number
+            self._canonical_inputs[port] = self._finite_input(port, value)
             binding = self._input_binding[port]
             if binding not in touched:
                 touched.append(binding)
@@ -374,12 +371,17 @@ class FmuParticipant(Participant):
                 return
         values = []
         for port, value in inputs.items():
-            number = float(value)
-            if not math.isfinite(number):
-                raise ModelError(f"{self.name}: input '{port}' received a non-finite value ({number})")
+            number = self._finite_input(port, value)
             _, scale, offset = scalar_inputs[port]
             values.append((number - offset) / scale)
         self._call("SetReal", write, values)
+
+    def _finite_input(self, port: str, value: Value) -> float:
+        """``value`` given to input ``port`` as a float, refused (naming both) when not finite."""
+        number = float(value)
+        if not math.isfinite(number):
+            raise ModelError(f"{self.name}: input '{port}' received a non-finite value ({number})")
+        return number
 
     def _read_outputs(self, time: float) -> dict[str, Value]:
         if not self._output_refs:

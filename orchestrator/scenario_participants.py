@@ -17,7 +17,7 @@ from pydantic import Field, PlainValidator, model_validator
 
 from orchestrator.errors import ScenarioError
 from orchestrator.scenario_spec import ParticipantSpec, ScenarioTable, VariableMapping, VectorMapping
-from orchestrator.toml_input import (Positive, Text, checked, fail, fail_whole, is_finite_number, one_of,
+from orchestrator.toml_input import (Positive, Table, Text, checked, fail, fail_whole, is_finite_number, one_of,
                                      shown, shown_text)
 
 #: Earth models of a geodetic mapping: the WGS84 ellipsoid, or a sphere (``sphere_radius_m``)
@@ -44,6 +44,14 @@ def _class_path(value: Any) -> str:
 Every = Annotated[int, PlainValidator(_every)]
 
 
+def _given_as_table(data: Any, key: str) -> Any:
+    """``data`` as it is, after refusing a ``key`` given as something other than a table (checked
+    before the fields, whose own message for a dict would not name the key)."""
+    if isinstance(data, dict) and key in data and not isinstance(data[key], dict):
+        raise fail_whole(f"'{{prefix}}{key}' must be a table")
+    return data
+
+
 class PythonParticipantTable(ScenarioTable):
     """``[participants.<name>]`` of a Python participant: a registered type or ``type = "python"``."""
 
@@ -57,9 +65,7 @@ class PythonParticipantTable(ScenarioTable):
     @model_validator(mode="before")
     @classmethod
     def _options_table(cls, data: Any) -> Any:
-        if isinstance(data, dict) and "options" in data and not isinstance(data["options"], dict):
-            raise fail_whole("'{prefix}options' must be a table")
-        return data
+        return _given_as_table(data, "options")
 
     @model_validator(mode="after")
     def _class_for_python(self):
@@ -99,12 +105,6 @@ class GeodeticTable(ScenarioTable):
         return self
 
 
-def _table_of(value: Any) -> dict:
-    if not isinstance(value, dict):
-        raise fail("must be a table")
-    return value
-
-
 class FmuParticipantTable(ScenarioTable):
     """``[participants.<name>]`` of an FMU: the model, its parameters and how its ports map."""
 
@@ -113,18 +113,16 @@ class FmuParticipantTable(ScenarioTable):
     every: Every = 1
     parameter_set: Text | None = None
     parameters: dict[str, Annotated[Any, PlainValidator(_parameter)]] = {}
-    mapping: Annotated[dict, PlainValidator(_table_of)] = {}
+    mapping: Table = {}
     geodetic: GeodeticTable | None = None
-    initial: Annotated[dict, PlainValidator(_table_of)] = {}
+    initial: Table = {}
     #: wall-time limit of one set-up or step call [s]; None: the simulation's
     step_timeout_s: Positive | None = None
 
     @model_validator(mode="before")
     @classmethod
     def _parameters_table(cls, data: Any) -> Any:
-        if isinstance(data, dict) and "parameters" in data and not isinstance(data["parameters"], dict):
-            raise fail_whole("'{prefix}parameters' must be a table")
-        return data
+        return _given_as_table(data, "parameters")
 
 
 def _fmu(value: Any) -> str:

@@ -285,6 +285,12 @@ def _text(value: Any) -> str:
     return value
 
 
+def _table(value: Any) -> dict:
+    if not isinstance(value, dict):
+        raise fail("must be a table")
+    return value
+
+
 def _pair(value: Any) -> tuple[float, float]:
     if not (isinstance(value, list) and len(value) == 2 and all(is_finite_number(v) for v in value)):
         raise fail(f"must be [north, east] in nm, got {shown(value)}")
@@ -369,6 +375,8 @@ PositiveInt = Annotated[int, PlainValidator(_positive_int)]
 NonNegativeInt = Annotated[int, PlainValidator(_non_negative_int)]
 #: A non-empty string.
 Text = Annotated[str, PlainValidator(_text)]
+#: A table (its entries are checked by whoever reads them).
+Table = Annotated[dict, PlainValidator(_table)]
 #: Two finite numbers, ``[north, east]`` [nm].
 PairNm = Annotated[tuple[float, float], PlainValidator(_pair)]
 #: A name that is safe as one results folder (no separators, control characters, leading dot).

@@ -192,6 +192,11 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
     ("orchestrator/fmu_participant.py", r'variable\.variability == "constant"', r'variability == "(XXconstantXX|CONSTANT)"',
      "no variable reaches this check as a constant parameter: FMPy's read_model_description (run on every FMU "
      "before) refuses causality='parameter' with variability='constant' as an illegal combination"),
+    ("orchestrator/fmu_participant.py", r"all\(scalar_inputs\[port\]\[1:\] == \(1\.0, 0\.0\) for port in ports\)",
+     r"scalar_inputs\[port\]\[2:\] ==",
+     "the quick path's test then compares the offset alone with a pair and is never true: every step takes the "
+     "general loop, which writes the same values ((number - 0.0) / 1.0 is the number, a non-finite one refused "
+     "there as on the quick path's fall-back), only with more work"),
     ("orchestrator/toml_input.py", r'raw\.decode\("utf-8"\)', r'raw\.decode\("UTF-8"\)',
      "Python looks codecs up by their normalised lower-case name: 'UTF-8' is the same codec as 'utf-8'"),
     ("orchestrator/toml_input.py", r'c\.encode\("unicode_escape"\)\.decode\("ascii"\)',
@@ -322,6 +327,19 @@ EXPLAINED_RULES: list[tuple[str, str, str, str]] = [
      r"np\.bincount\(owner\[:-1\], weights=[^)]*\)?,\s*\)",
      "every end owns at least two of the sampled points (pieces + 1, pieces at least 1), so owner[:-1] still "
      "holds every end's index and the count has len(ends) entries without the minimum length"),
+    ("rhnc/routing/weather_routing.py", r"for _ in range\(passes if times is not None else 1\)",
+     r"else 2\)",
+     "the else branch is taken for static weather (times is None), where every pass searches the same weights "
+     "from the same source: a second pass finds the same tree"),
+    ("rhnc/routing/weather_routing.py", r"polyline = np\.vstack\(\[np\.asarray\(p\.start_m, dtype=float\)",
+     r"np\.vstack\(\[np\.asarray\(p\.start_m,\s*(dtype=None)?\s*\)", _FLOAT),
+    ("rhnc/routing/weather_routing.py", r"np\.bincount\(leg_of, weights=.*minlength=len\(legs\)\)",
+     r"np\.bincount\(leg_of, weights=\(sub_speed <= 1e-3\) & \(length > 0\),\s*\)",
+     "every leg owns at least one sub-leg (pieces at least 1), so leg_of holds every leg's index and the count "
+     "has len(legs) entries without the minimum length"),
+    ("rhnc/routing/weather_routing.py", r"^evaluations = 0$", r"^evaluations = 1$",
+     "the budget is checked between sweeps over the turning points, not within one: starting the count at 1 "
+     "differs only when a sweep ends with exactly 199 evaluations, one below the budget (as 200 against 201 above)"),
     ("rhnc/routing/route_search.py", r"direct = np\.asarray\(segment_costs\(i, js\), dtype=float\)",
      r"direct = np\.asarray\(segment_costs\(i, js\),\s*(dtype=None)?\s*\)",
      "the costs are only compared (with inf, IMPASSABLE and the float sums along the path) and used to index: "

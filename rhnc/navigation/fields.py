@@ -40,7 +40,7 @@ import numpy as np
 from orchestrator.geometry import wrap_angle
 
 from rhnc.ship.energy import EnergyParameters, cost_rate, emission_rate, brake_power, speed_through_water
-from rhnc.weather.metocean_grid import axis_node_count
+from rhnc.weather.metocean_grid import axis_node_count, data_extent
 from rhnc.weather.metocean import bilinear
 from orchestrator.geometry import NM
 
@@ -118,8 +118,7 @@ def resample_weather(metocean, resolution_nm: float = 1.0, t_s: float | None = N
     if resolution_nm <= 0:
         raise ValueError("planning resolution must be positive")
     step = resolution_nm * NM
-    x_min, x_max, y_min, y_max = getattr(metocean, "data_extent", (metocean.x[0], metocean.x[-1],
-                                                                   metocean.y[0], metocean.y[-1]))
+    x_min, x_max, y_min, y_max = data_extent(metocean)
     axis_node_count(float(x_max - x_min), step, "the planning resolution_nm")  # before allocating
     axis_node_count(float(y_max - y_min), step, "the planning resolution_nm")
     x = np.arange(x_min, x_max + 1e-6, step)

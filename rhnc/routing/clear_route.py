@@ -32,8 +32,8 @@ def grid_clear_path(keep_out, start_m: Sequence[float] | np.ndarray, goal_m: Seq
 
     Parameters
     ----------
-    keep_out : KeepOut
-        Areas with their clearance (:class:`rhnc.chart.chart.Chart`).
+    keep_out : KeepOut or None
+        Areas with their clearance (:class:`rhnc.chart.chart.Chart`); None: none.
     start_m, goal_m : (north, east) [m]
     extent : (north_min, north_max, east_min, east_max) [m]
         Where the grid lies.
@@ -53,7 +53,7 @@ def grid_clear_path(keep_out, start_m: Sequence[float] | np.ndarray, goal_m: Seq
     ValueError
         When the goal cannot be reached from the start on the grid.
     """
-    from rhnc.routing.route_search import build_grid_graph, shortcut_path, shortest_path_tree
+    from rhnc.routing.route_search import build_grid_graph, segment_clearance, shortcut_path, shortest_path_tree
 
     x_min, x_max, y_min, y_max = extent
     step = resolution_nm * NM
@@ -65,8 +65,11 @@ def grid_clear_path(keep_out, start_m: Sequence[float] | np.ndarray, goal_m: Seq
     path = np.vstack([np.asarray(start_m, dtype=float), path, np.asarray(goal_m, dtype=float)])
 
     def lengths(i, js):
-        length = np.hypot(*(path[js] - path[i]).T)
-        return np.where(keep_out.legs_clear(np.broadcast_to(path[i], (len(js), 2)), path[js]), length, np.inf)
+        starts = np.broadcast_to(path[i], (len(js), 2))
+        clear = np.ones(len(js), dtype=bool) if keep_out is None else keep_out.legs_clear(starts, path[js])
+        for cx, cy, radius in avoid:
+            clear &= segment_clearance(starts, path[js], (cx, cy)) >= radius
+        return np.where(clear, np.hypot(*(path[js] - path[i]).T), np.inf)
 
     consecutive = np.hypot(*np.diff(path, axis=0).T)
     return path[shortcut_path(len(path), lengths, consecutive_costs=consecutive)]
@@ -93,8 +96,8 @@ def route_kept_clear(keep_out, waypoints_m, resolution_nm: float = 0.25) -> np.n
 
     Parameters
     ----------
-    keep_out : KeepOut
-        Areas with their clearance (:class:`rhnc.chart.chart.Chart`).
+    keep_out : KeepOut or None
+        Areas with their clearance (:class:`rhnc.chart.chart.Chart`); None: none.
     waypoints_m : array_like (k, 2)
         The route's points, north and east [m]; the first and the last are kept as they are.
     resolution_nm : float

@@ -19,7 +19,7 @@ import numpy as np
 from orchestrator.geometry import NM
 from rhnc.ship.energy import EnergyParameters, brake_power, fuel_rate_t_h
 from rhnc.weather.metocean import MetOceanField
-from rhnc.weather.metocean_grid import axis_node_count
+from rhnc.weather.metocean_grid import axis_node_count, data_extent
 from rhnc.routing.offline_route import shortest_route
 from rhnc.routing.track_cost import constant_speed_times, cost_of_track, densify, is_time_varying, sample_weather
 
@@ -52,7 +52,8 @@ class RoutingProblem:
     ----------
     start_m, goal_m : (north, east) [m]
     metocean : MetOceanField
-        Weather and current over the map; the search grid spans its extent.
+        Weather and current over the map; the search grid spans the extent of its data
+        (not a band of held edge values around it).
     energy : EnergyParameters
     resolution_nm : float
         Spacing of the search grid [nm].
@@ -131,8 +132,9 @@ def check_problem(problem: RoutingProblem, speed_mps, arrival_s) -> None:
         raise ValueError(f"arrival_s {arrival_s!r} must be after the departure {problem.departure_s!r} s")
     if not problem.resolution_nm > 0:
         raise ValueError(f"resolution_nm must be positive, got {problem.resolution_nm!r}")
-    for axis in (problem.metocean.x, problem.metocean.y):  # the search grid, refused before it is built
-        axis_node_count(float(axis[-1] - axis[0]), problem.resolution_nm * NM, "the route search's resolution_nm")
+    x_min, x_max, y_min, y_max = data_extent(problem.metocean)
+    for span in (x_max - x_min, y_max - y_min):  # the search grid, refused before it is built
+        axis_node_count(span, problem.resolution_nm * NM, "the route search's resolution_nm")
     for name, point in (("start", problem.start_m), ("goal", problem.goal_m)):
         if not bool(problem.metocean.contains(point[0], point[1])):
             raise ValueError(f"the {name} ({point[0]:.0f}, {point[1]:.0f}) m lies outside the met-ocean map")
@@ -245,13 +247,19 @@ def time_price_usd_h(problem: RoutingProblem, route: RouteResult) -> float:
 
 def shortest_clear_route(problem: RoutingProblem) -> np.ndarray:
     """The shortest route from start to goal that keeps clear of the avoided circles and of
-    ``keep_out``: the straight line (or its way round the circles) where it is clear, else
-    the shortest path on the search grid, shortened wherever a straight leg stays clear."""
+    ``keep_out``: the straight line (or its way round the circles) where it is clear and
+    turns only over the weather's data (not over a band of held edge values around it),
+    else the shortest path on the search grid over the data, shortened wherever a straight
+    leg stays clear."""
     from rhnc.routing.clear_route import grid_clear_path
 
     polyline = shortest_route(problem.start_m, problem.goal_m, problem.avoid)
     keep_out = problem.keep_out
-    if keep_out is None or np.all(keep_out.legs_clear(polyline[:-1], polyline[1:])):
+    x_min, x_max, y_min, y_max = extent = data_extent(problem.metocean)
+    turns = polyline[1:-1]
+    on_data = bool(np.all((turns[:, 0] >= x_min - 1e-6) & (turns[:, 0] <= x_max + 1e-6)
+                          & (turns[:, 1] >= y_min - 1e-6) & (turns[:, 1] <= y_max + 1e-6)))
+    if on_data and (keep_out is None or np.all(keep_out.legs_clear(polyline[:-1], polyline[1:]))):
         return polyline
-    return grid_clear_path(keep_out, problem.start_m, problem.goal_m, problem.metocean.extent,
+    return grid_clear_path(keep_out, problem.start_m, problem.goal_m, extent,
                            problem.resolution_nm, problem.reach, problem.avoid)

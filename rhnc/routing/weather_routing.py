@@ -39,7 +39,7 @@ import numpy as np
 
 from orchestrator.geometry import NM
 from rhnc.ship.energy import brake_power, fuel_rate_t_h
-from rhnc.weather.metocean_grid import axis_node_count
+from rhnc.weather.metocean_grid import axis_node_count, data_extent
 from rhnc.routing.route_search import (IMPASSABLE, GridGraph, build_grid_graph, segment_clearance, shortcut_path,
                                shortest_path_tree, times_along_tree)
 from rhnc.routing.routing_problem import (RouteResult, RoutingProblem, check_problem, costed_route, profiled_route,
@@ -94,7 +94,7 @@ class RouteSearch:
 
     def __init__(self, problem: RoutingProblem):
         self.problem = problem
-        x_min, x_max, y_min, y_max = problem.metocean.extent
+        x_min, x_max, y_min, y_max = data_extent(problem.metocean)   # not the held band round it
         step = problem.resolution_nm * NM
         what = "the route search's resolution_nm"
         x = np.linspace(x_min, x_max, axis_node_count(x_max - x_min, step, what))  # refused beyond the limit
@@ -337,7 +337,7 @@ def _refine(problem: RoutingProblem, polyline: np.ndarray, best: RouteResult, ev
     polyline = np.vstack([np.column_stack([polyline[:-1], 0.5 * (polyline[:-1] + polyline[1:])]).reshape(-1, 2),
                           polyline[-1]])
     step = 4.0 * problem.resolution_nm * NM
-    x_min, x_max, y_min, y_max = problem.metocean.extent
+    x_min, x_max, y_min, y_max = data_extent(problem.metocean)
     evaluations = 0
     while step >= 0.25 * problem.resolution_nm * NM and evaluations < max_evaluations:
         improved = False

@@ -53,3 +53,16 @@ def map_axis(range_nm, resolution_nm) -> np.ndarray:
         raise ValueError("resolution_nm must be positive")
     count = axis_node_count(stop - start, resolution_nm)
     return np.linspace(start, stop, max(count, 2)) * NM
+
+
+def data_extent(field) -> tuple[float, float, float, float]:
+    """(x_min, x_max, y_min, y_max) [m] where ``field`` holds data: its ``data_extent``
+    (a grid grown by held edge values, :meth:`rhnc.weather.metocean.MetOceanField.with_edges_held`,
+    keeps its data's), else the extent of its axes ``x``, ``y``.
+
+    Planners lay their grids over this extent: the held band around it lets a ship sail
+    there, but it is no weather to plan on.
+    """
+    extent = getattr(field, "data_extent", None)
+    x_min, x_max, y_min, y_max = (field.x[0], field.x[-1], field.y[0], field.y[-1]) if extent is None else extent
+    return float(x_min), float(x_max), float(y_min), float(y_max)

@@ -63,18 +63,46 @@ class Echo(Participant):
         return {"seen": float(inputs["value"])}
 
 
-class Crash(Participant):
-    """Raises a plain exception at a given time, or in its set-up (a participant's own bug)."""
+class OneOutput(Participant):
+    """Base of the participants below that misbehave from ``at_s`` on: one output ``ok``
+    (1 at set-up and at every step that returns); each option of ``DEFAULTS`` (name: default)
+    becomes an attribute of the same name."""
+
+    DEFAULTS: dict = {}
 
     @classmethod
     def from_options(cls, name, options, context):
         participant = cls(name)
         participant.at = options.get("at_s", 0.0)
-        participant.in_setup = options.get("in_setup", False)
+        for key, default in cls.DEFAULTS.items():
+            setattr(participant, key, options.get(key, default))
         return participant
 
     input_names = property(lambda self: [])
     output_names = property(lambda self: ["ok"])
+
+    def setup(self, start_time, inputs):
+        return {"ok": 1.0}
+
+    def block(self, time, label, wait):
+        """From ``at_s`` on, calls ``wait`` for ever and swallows KeyboardInterrupt (a hung
+        library call); says ``<label>: blocking`` on stdout once, when it begins."""
+        said = False
+        while time >= self.at:
+            try:
+                if not said:
+                    said = True
+                    print(f"{label}: blocking", flush=True)
+                wait()
+            except KeyboardInterrupt:
+                pass
+        return {"ok": 1.0}
+
+
+class Crash(OneOutput):
+    """Raises a plain exception at a given time, or in its set-up (a participant's own bug)."""
+
+    DEFAULTS = {"in_setup": False}
 
     def setup(self, start_time, inputs):
         if self.in_setup:
@@ -87,34 +115,13 @@ class Crash(Participant):
         return {"ok": 1.0}
 
 
-class Stubborn(Participant):
+class Stubborn(OneOutput):
     """From ``at_s`` on, a step that never returns and swallows KeyboardInterrupt (a hung library call)."""
-
-    @classmethod
-    def from_options(cls, name, options, context):
-        participant = cls(name)
-        participant.at = options.get("at_s", 0.0)
-        return participant
-
-    input_names = property(lambda self: [])
-    output_names = property(lambda self: ["ok"])
-
-    def setup(self, start_time, inputs):
-        return {"ok": 1.0}
 
     def step(self, time, step_size, inputs):
         import time as wallclock
 
-        said = False
-        while time >= self.at:
-            try:
-                if not said:
-                    said = True
-                    print("stubborn: blocking", flush=True)
-                wallclock.sleep(3600.0)
-            except KeyboardInterrupt:
-                pass
-        return {"ok": 1.0}
+        return self.block(time, "stubborn", lambda: wallclock.sleep(3600.0))
 
 
 class Beacon(Participant):
@@ -138,21 +145,9 @@ class Beacon(Participant):
         return {"alive": 1.0}
 
 
-class Swallower(Participant):
+class Swallower(OneOutput):
     """At ``at_s`` signals its own process (SIGINT) and swallows the KeyboardInterrupt, as a
     library that turns Ctrl-C into a failed call of its own does; then returns normally."""
-
-    @classmethod
-    def from_options(cls, name, options, context):
-        participant = cls(name)
-        participant.at = options.get("at_s", 0.0)
-        return participant
-
-    input_names = property(lambda self: [])
-    output_names = property(lambda self: ["ok"])
-
-    def setup(self, start_time, inputs):
-        return {"ok": 1.0}
 
     def step(self, time, step_size, inputs):
         import os
@@ -168,56 +163,23 @@ class Swallower(Participant):
         return {"ok": 1.0}
 
 
-class Hog(Participant):
+class Hog(OneOutput):
     """From ``at_s`` on, a native call that holds the interpreter lock and is restarted after
     every signal (like a library build that never checks for signals)."""
-
-    @classmethod
-    def from_options(cls, name, options, context):
-        participant = cls(name)
-        participant.at = options.get("at_s", 0.0)
-        return participant
-
-    input_names = property(lambda self: [])
-    output_names = property(lambda self: ["ok"])
-
-    def setup(self, start_time, inputs):
-        return {"ok": 1.0}
 
     def step(self, time, step_size, inputs):
         import ctypes
 
         libc = ctypes.PyDLL(None)  # PyDLL: the call keeps the interpreter lock
-        said = False
-        while time >= self.at:
-            try:
-                if not said:
-                    said = True
-                    print("hog: blocking", flush=True)
-                libc.sleep(1000)
-            except KeyboardInterrupt:
-                pass
-        return {"ok": 1.0}
+        return self.block(time, "hog", lambda: libc.sleep(1000))
 
 
-class Sleeper(Participant):
+class Sleeper(OneOutput):
     """From ``at_s`` on, a step that sleeps ``sleep_s``; with ``swallow`` it catches everything
     and sleeps again (a participant that no Python exception can stop); ``setup_sleep_s``: a
     set-up that sleeps that long."""
 
-    @classmethod
-    def from_options(cls, name, options, context):
-        participant = cls(name)
-        participant.at = options.get("at_s", 0.0)
-        participant.sleep_s = options.get("sleep_s", 3600.0)
-        participant.swallow = options.get("swallow", False)
-        participant.unless_exists = options.get("unless_exists")
-        participant.busy = options.get("busy", False)
-        participant.setup_sleep_s = options.get("setup_sleep_s", 0.0)
-        return participant
-
-    input_names = property(lambda self: [])
-    output_names = property(lambda self: ["ok"])
+    DEFAULTS = {"sleep_s": 3600.0, "swallow": False, "unless_exists": None, "busy": False, "setup_sleep_s": 0.0}
 
     def setup(self, start_time, inputs):
         import time as wallclock
@@ -258,7 +220,7 @@ def ctrl_c() -> None:
         time.sleep(0.01)
 
 
-class Misbehaving(Participant):
+class Misbehaving(OneOutput):
     """Fails in one of the ways a participant can fail outside a plain exception in its step.
 
     ``how``: ``"exit"`` (sys.exit(5) in its step at ``at_s``), ``"terminate"`` (terminate()
@@ -277,14 +239,10 @@ class Misbehaving(Participant):
             import sys
 
             sys.exit(4)
-        participant = cls(name)
+        participant = super().from_options(name, options, context)
         participant.how = how
-        participant.at = options.get("at_s", 0.0)
         participant.steps = 0
         return participant
-
-    input_names = property(lambda self: [])
-    output_names = property(lambda self: ["ok"])
 
     def setup(self, start_time, inputs):
         return {"ok": float("nan") if self.how == "nan_setup" else 1.0}
@@ -313,25 +271,12 @@ class Misbehaving(Participant):
         return {"steps": self.steps}
 
 
-class SelfKiller(Participant):
+class SelfKiller(OneOutput):
     """At ``at_s`` sends SIGKILL to its own process unless the file ``unless_exists`` exists
     (what the out-of-memory killer or an operator does to a worker); with ``exit``, calls
     ``os._exit(7)`` instead."""
 
-    @classmethod
-    def from_options(cls, name, options, context):
-        participant = cls(name)
-        participant.at = options.get("at_s", 0.0)
-        participant.unless_exists = options.get("unless_exists")
-        participant.crash = options.get("crash", False)
-        participant.exit = options.get("exit", False)
-        return participant
-
-    input_names = property(lambda self: [])
-    output_names = property(lambda self: ["ok"])
-
-    def setup(self, start_time, inputs):
-        return {"ok": 1.0}
+    DEFAULTS = {"unless_exists": None, "crash": False, "exit": False}
 
     def step(self, time, step_size, inputs):
         import os

@@ -99,6 +99,7 @@ def test_encounter_draws_become_traffic_targets_at_the_drawn_cpa_and_tcpa(tmp_pa
     ('[monte_carlo]\nseed = 1\nruns = 2\n[monte_carlo.scale]\n"metocean.current_kn" = [0.5, 1.5]\n',
      "the base scenario must set this key to a number or a list of numbers"),
     ('[[acceptance]]\nmetric = "status"\nop = "=="\n', "give exactly one of 'value' (a literal) or 'ref'"),
+    ('[monte_carlo]\nseed = 1\nruns = 2\nuniform = 5\n', "'monte_carlo.uniform' must be a table"),
 ])
 def test_batch_file_errors_name_the_key(tmp_path, text, message):
     with pytest.raises(ScenarioError, match="^" + re.escape(str(tmp_path / "b.toml")) + ": .*" + re.escape(message)):

@@ -77,6 +77,7 @@ def test_table_leaves_missing_figures_empty():
     ('[[runs]]\nlabel = "x"\nscenario = "slow.toml"\npaper = { speed = 1 }', r"runs\[2\].paper: 'speed' is not one of"),
     ('[[runs]]\nlabel = "x"\nscenario = "slow.toml"\nset = 3',
      r"compare.toml: 'runs\[2\].set' expected a table of dotted-key overrides"),
+    ('[[runs]]\nlabel = "x"\nscenario = "slow.toml"\nfigures = 3', r"compare.toml: 'runs\[2\].figures' must be a table"),
 ])
 def test_comparison_file_errors(tmp_path, extra, message):
     with pytest.raises(ScenarioError, match=message):

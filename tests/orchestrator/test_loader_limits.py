@@ -81,6 +81,13 @@ LOADER_CASES = {
                   r"'participants.helm.type' must be a non-empty string, got \[\]"),
     "mapping = 5": (lambda t: _edit(t, 'fmu = "KCS"', 'fmu = "KCS"\nmapping = 5'),
                     r"'participants.ship.mapping' must be a table"),
+    "initial = 5": (lambda t: _edit(t, 'fmu = "KCS"', 'fmu = "KCS"\ninitial = 5'),
+                    r"'participants.ship.initial' must be a table"),
+    "options = 5": (lambda t: _edit(t, "[participants.helm.options]\ntau_u_N = 7.7e5\ntau_r_steps = [[10.0, 3.3e8]]",
+                                    "options = 5"),
+                    r"'participants.helm.options' must be a table"),
+    "parameters = 5": (lambda t: _edit(t, "[participants.ship.parameters]\nu0 = 9.26", "parameters = 5"),
+                       r"'participants.ship.parameters' must be a table"),
     "geodetic origin_deg = 5": (lambda t: _edit(t, 'fmu = "KCS"', 'fmu = "KCS"\ngeodetic = { origin_deg = 5 }'),
                                 r"'participants.ship.geodetic.origin_deg' must be \[latitude, longitude\] in degrees, "
                                 r"got 5"),

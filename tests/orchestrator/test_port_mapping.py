@@ -307,11 +307,16 @@ def test_unmapped_ports_keep_working(tmp_path):
 
 
 
-def test_a_plant_of_one_variable_per_port_steps_as_the_bindings_convert(write_scenario):
+@pytest.mark.parametrize("fmu, mapping", [
+    ('"KCSVendorB"', VENDOR_B_MAPPING),
+    # every input given at a step scaled by 2 exactly: the loop's quick path is for a scale of 1 alone
+    ('"KCS"', '[participants.ship.mapping]\ntau_u = { variable = "tau_u", scale = 2.0 }\n'
+              'tau_r = { variable = "tau_r", scale = 2.0 }\n'),
+], ids=["vendor-b-units", "scale-2"])
+def test_a_plant_of_one_variable_per_port_steps_as_the_bindings_convert(write_scenario, fmu, mapping):
     """Where every port is one scaled variable the participant converts them in one loop: the
     same doubles as each binding's own conversion, the heading wrapped, through a full turn."""
-    path = write_scenario(s175_scenario("psi_deg = 170.0\nu_kn = 18.0", mapping=VENDOR_B_MAPPING,
-                                        fmu='"KCSVendorB"'))
+    path = write_scenario(s175_scenario("psi_deg = 170.0\nu_kn = 18.0", mapping=mapping, fmu=fmu))
     ships = [build(path), build(path)]
     assert ships[0]._scalar_inputs is not None and ships[0]._scalar_outputs is not None
     ships[1]._scalar_inputs = ships[1]._scalar_outputs = None  # each binding's own conversion

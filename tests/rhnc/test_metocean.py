@@ -163,3 +163,16 @@ def test_a_bad_edge_band_exits_2_from_the_cli_naming_the_key(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "held.toml" in err[0] and "metocean.hold_edges_nm" in err[0]
     assert not (tmp_path / "results").exists() or not any((tmp_path / "results").iterdir())
+
+
+def test_planners_read_the_data_extent_of_a_field_or_else_its_axes():
+    from types import SimpleNamespace
+
+    from rhnc.weather.metocean_grid import data_extent
+
+    field = paper_default(x_range_nm=(0.0, 10.0), y_range_nm=(2.0, 8.0), resolution_nm=1.0)
+    held = field.with_edges_held(1.5 * NM)
+    assert data_extent(held) == pytest.approx((0.0, 10.0 * NM, 2.0 * NM, 8.0 * NM))
+    assert data_extent(held) != pytest.approx(held.extent)
+    axes_only = SimpleNamespace(x=np.array([1.0, 2.0, 3.0]), y=np.array([-4.0, 5.0]))   # no data_extent
+    assert data_extent(axes_only) == (1.0, 3.0, -4.0, 5.0)

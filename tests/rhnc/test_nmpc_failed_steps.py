@@ -14,6 +14,7 @@ from rhnc.control.nmpc_alteration import alteration_steering
 from rhnc.control.nmpc_warm_start import PlanMemory
 from rhnc.navigation.reference_participant import line_or_turn_reference
 from rhnc.ship.ship_model import load_parameter_set
+from solver_stand_ins import solvers_replaced
 
 KNOT = 1852.0 / 3600.0
 DT = 20.0
@@ -99,15 +100,11 @@ def test_a_step_stopped_at_its_budget_hands_its_iterate_to_the_next_step(budgete
 
     budgeted.reset()
     starts = []
-    real = dict(budgeted.solvers._solvers)
-    for name, solver in real.items():
-        budgeted.solvers._solvers[name] = OutOfIterations(solver, budgeted.attempt_iterations[name], starts)
-    try:
+    with solvers_replaced(budgeted, lambda name, solver: OutOfIterations(solver, budgeted.attempt_iterations[name],
+                                                                          starts)):
         first = budgeted.solve(0.0, state, reference_at(0.0))
         iterate_states, _ = budgeted.memory.guess(DT)
         second = budgeted.solve(DT, first.states[1], reference_at(DT))
-    finally:
-        budgeted.solvers._solvers.update(real)
     assert first.fallback and second.fallback
     z = budgeted.problem.z_index
     # the second solve started from the first one's iterate (shifted), not from the applied plan

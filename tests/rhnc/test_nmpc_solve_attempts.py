@@ -13,6 +13,7 @@ from rhnc.control.nmpc_problem import renew_solver_after
 from rhnc.navigation.reference_participant import line_or_turn_reference
 from rhnc.ship.ship_model import load_parameter_set
 from rhnc.control.solver_watchdog import FATROP_ACCEPTABLE_FLAG, BoundedSolver, _outcome
+from solver_stand_ins import solvers_replaced
 
 KNOT = 1852.0 / 3600.0
 DT = 20.0
@@ -153,13 +154,9 @@ class AcceptableStop:
 def test_an_acceptable_point_is_used_only_when_it_keeps_the_constraints(controller, offset, used):
     state, reference_at = straight()
     controller.reset()
-    real = dict(controller.solvers._solvers)
-    for name, solver in real.items():  # both attempts stop at the same kind of point
-        controller.solvers._solvers[name] = AcceptableStop(solver, offset)
-    try:
+    # both attempts stop at the same kind of point
+    with solvers_replaced(controller, lambda name, solver: AcceptableStop(solver, offset)):
         solution = controller.solve(0.0, state, reference_at(0.0))
-    finally:
-        controller.solvers._solvers.update(real)
     assert solution.success is used and solution.fallback is not used
     if used:
         assert solution.status == "Solved_To_Acceptable_Level"
@@ -239,13 +236,9 @@ def test_with_a_budget_a_feasible_step_plans_as_the_hard_problem(budgeted, contr
 def test_a_point_at_the_end_of_the_budget_is_used_only_when_it_keeps_the_constraints(budgeted, offset, used):
     state, reference_at = straight()
     budgeted.reset()
-    real = dict(budgeted.solvers._solvers)
-    for name, solver in real.items():
-        budgeted.solvers._solvers[name] = OutOfIterations(solver, offset, budgeted.attempt_iterations[name])
-    try:
+    with solvers_replaced(budgeted, lambda name, solver: OutOfIterations(solver, offset,
+                                                                          budgeted.attempt_iterations[name])):
         solution = budgeted.solve(0.0, state, reference_at(0.0))
-    finally:
-        budgeted.solvers._solvers.update(real)
     assert solution.success is used and solution.fallback is not used
     if used:
         assert solution.status == "Iteration_Budget_Feasible_Point"
@@ -254,13 +247,9 @@ def test_a_point_at_the_end_of_the_budget_is_used_only_when_it_keeps_the_constra
 def test_without_a_budget_a_point_at_the_iteration_limit_is_not_used(controller):
     state, reference_at = straight()
     controller.reset()
-    real = dict(controller.solvers._solvers)
-    for name, solver in real.items():
-        controller.solvers._solvers[name] = OutOfIterations(solver, 0.0, controller.settings.max_iterations)
-    try:
+    with solvers_replaced(controller, lambda name, solver: OutOfIterations(solver, 0.0,
+                                                                            controller.settings.max_iterations)):
         solution = controller.solve(0.0, state, reference_at(0.0))
-    finally:
-        controller.solvers._solvers.update(real)
     assert solution.fallback
 
 
@@ -274,19 +263,18 @@ def test_a_budget_outside_its_range_is_refused():
 def test_with_a_budget_a_step_after_a_failed_one_is_again_one_relaxed_attempt(budgeted):
     state, reference_at = straight()
     budgeted.reset()
-    real = dict(budgeted.solvers._solvers)
-    for name, solver in real.items():  # the attempt runs out at an infeasible point
-        budgeted.solvers._solvers[name] = OutOfIterations(solver, 1e-3, budgeted.attempt_iterations[name])
     log = CallLog(budgeted)
-    try:
-        assert budgeted.solve(0.0, state, reference_at(0.0)).fallback
-        assert log.names == ["relaxed_alone"]
-        log.names.clear()
-        budgeted.solve(DT, state, reference_at(DT))
-        assert log.names == ["relaxed_alone"]
-    finally:
-        log.detach()
-        budgeted.solvers._solvers.update(real)
+    # the attempt runs out at an infeasible point
+    with solvers_replaced(budgeted, lambda name, solver: OutOfIterations(solver, 1e-3,
+                                                                          budgeted.attempt_iterations[name])):
+        try:
+            assert budgeted.solve(0.0, state, reference_at(0.0)).fallback
+            assert log.names == ["relaxed_alone"]
+            log.names.clear()
+            budgeted.solve(DT, state, reference_at(DT))
+            assert log.names == ["relaxed_alone"]
+        finally:
+            log.detach()
 
 
 def test_a_buffered_solver_call_gives_the_keyword_call_to_the_bit_with_the_defaults_of_inputs_not_given():

@@ -152,16 +152,15 @@ def test_a_two_column_grid_has_its_own_spacing():
     assert graph.move_length_m[east] == 300.0 and graph.move_length_m[north] == 100.0
 
 
-class _LandNorthOf:
-    """A stand-in chart: land north of ``north_m``, every leg clear (only the nodes' clearance counts here)."""
+class _LandBeyond:
+    """A stand-in chart: land beyond ``edge_m`` along one axis (0 north, 1 east), kept clear of by
+    ``clearance_m``; every leg clear (only the nodes' clearance counts here)."""
 
-    clearance_m = 150.0
-
-    def __init__(self, north_m):
-        self.north_m = north_m
+    def __init__(self, axis, edge_m, clearance_m):
+        self.axis, self.edge_m, self.clearance_m = axis, edge_m, clearance_m
 
     def distances_m(self, north, east):
-        return np.maximum(self.north_m - np.asarray(north, dtype=float), 0.0)
+        return np.maximum(self.edge_m - np.asarray((north, east)[self.axis], dtype=float), 0.0)
 
     def legs_clear(self, a, b, *_):
         return np.ones(np.shape(a)[:-1], dtype=bool)
@@ -169,7 +168,7 @@ class _LandNorthOf:
 
 def test_no_node_lies_within_the_charts_clearance():
     axis = np.arange(0.0, 1001.0, 100.0)
-    graph = build_grid_graph(axis, axis, reach=1, obstacles=[(100.0, 100.0, 50.0)], keep_out=_LandNorthOf(800.0))
+    graph = build_grid_graph(axis, axis, reach=1, obstacles=[(100.0, 100.0, 50.0)], keep_out=_LandBeyond(0, 800.0, 150.0))
     points = graph.node_points()
     np.testing.assert_array_equal(graph.free, (points[:, 0] <= 650.0) & ~((points[:, 0] == 100.0) & (points[:, 1] == 100.0)))
 
@@ -212,24 +211,9 @@ def test_a_node_inside_any_of_several_obstacles_is_not_free():
     np.testing.assert_array_equal(graph.free, ~inside)
 
 
-class _LandEastOf:
-    """A stand-in chart: land east of ``east_m``, every leg clear (only the nodes' clearance counts)."""
-
-    clearance_m = 200.0
-
-    def __init__(self, east_m):
-        self.east_m = east_m
-
-    def distances_m(self, north, east):
-        return np.maximum(self.east_m - np.asarray(east, dtype=float), 0.0)
-
-    def legs_clear(self, a, b, *_):
-        return np.ones(np.shape(a)[:-1], dtype=bool)
-
-
 def test_the_charts_clearance_is_measured_from_each_node_and_a_node_at_exactly_it_is_free():
     axis = np.arange(0.0, 1001.0, 100.0)
-    graph = build_grid_graph(axis, axis, reach=1, keep_out=_LandEastOf(800.0))
+    graph = build_grid_graph(axis, axis, reach=1, keep_out=_LandBeyond(1, 800.0, 200.0))
     points = graph.node_points()
     # east 600 m lies exactly 200 m from the land: not within the clearance
     np.testing.assert_array_equal(graph.free, points[:, 1] <= 600.0)
@@ -237,7 +221,7 @@ def test_the_charts_clearance_is_measured_from_each_node_and_a_node_at_exactly_i
 
 def test_no_edge_starts_or_ends_at_a_node_within_the_clearance_even_where_the_chart_says_the_leg_is_clear():
     axis = np.arange(0.0, 1001.0, 100.0)
-    graph = build_grid_graph(axis, axis, reach=2, keep_out=_LandEastOf(800.0))
+    graph = build_grid_graph(axis, axis, reach=2, keep_out=_LandBeyond(1, 800.0, 200.0))
     assert graph.free[graph.source].all() and graph.free[graph.target].all()
     # and every move between two free nodes is an edge: 600 m wide strip, all of it kept
     assert graph.source.size == build_grid_graph(axis, axis[:7], reach=2).source.size

@@ -7,7 +7,7 @@ from rhnc.ship.energy import EnergyParameters, brake_power, fuel_rate_t_h
 from orchestrator.geometry import KNOT, NM
 from rhnc.routing.route_search import segment_clearance
 from rhnc.routing.track_cost import constant_speed_times, cost_of_track
-from rhnc.routing.routing_problem import costed_route, speed_for_arrival
+from rhnc.routing.routing_problem import costed_route, speed_for_arrival, time_price_usd_h
 from rhnc.routing.weather_routing import (RouteSearch, RoutingProblem, _corners, _refine, cost_rate, optimal_route,
                                           straight_route)
 from weather_fixtures import storm_field, switched_field
@@ -425,3 +425,93 @@ def test_the_speed_that_arrives_is_found_against_a_head_current_faster_than_the_
     assert speed_for_arrival(problem, polyline, 7200.0) == pytest.approx(16.0 * NM / 7200.0 + 0.8, rel=1e-6)
     result = straight_route(problem, arrival_s=7200.0)
     assert result.arrival_s == pytest.approx(7200.0, abs=1e-3)
+
+
+def test_routes_turn_only_over_the_weather_data_not_over_the_held_band_round_it():
+    # an island on the north edge of the data: round it to the north is shorter, but only
+    # over the band of held edge values (no data there); every route goes round to the south
+    field = storm_field(base_wind_ms=6.0).with_edges_held(10 * NM)
+    island = (16 * NM, 10 * NM, 6 * NM)
+    problem = RoutingProblem((17 * NM, 2 * NM), (17 * NM, 18 * NM), field, avoid=(island,))
+    x_min, x_max, y_min, y_max = field.data_extent
+    assert field.extent[1] > x_max + 9 * NM          # the band is there to go round by
+    straight = straight_route(problem, speed_mps=SPEED)
+    routes = {"search": RouteSearch(problem).route(SPEED, 500.0, passes=1),
+              "straight": straight.waypoints_m,
+              "optimal": optimal_route(problem, speed_mps=SPEED).waypoints_m,
+              "timed": optimal_route(problem, arrival_s=straight.arrival_s).waypoints_m}
+    for name, route in routes.items():
+        turns = route[1:-1]
+        assert len(turns), name
+        assert np.all((turns[:, 0] >= x_min - 1e-6) & (turns[:, 0] <= x_max + 1e-6)), name
+        assert np.all((turns[:, 1] >= y_min - 1e-6) & (turns[:, 1] <= y_max + 1e-6)), name
+        assert np.min(turns[:, 0]) < island[0] - island[2] + 1e-6, name   # south of the island
+        assert np.min(segment_clearance(route[:-1], route[1:], island[:2])) >= island[2] * (1 - 1e-9), name
+
+
+def test_refining_keeps_the_turning_points_over_the_weather_data():
+    # a storm just south of a route along the north edge of the data: moving the turning
+    # points north pays, up to the edge; the band of held edge values beyond it is no data
+    field = storm_field(storms=[(16.0, 10.0, 3.0, 20.0)]).with_edges_held(10 * NM)
+    problem = RoutingProblem((19 * NM, 2 * NM), (19 * NM, 18 * NM), field)
+    polyline = np.array([[19.0, 2.0], [19.5, 10.0], [19.0, 18.0]]) * NM
+
+    def evaluate(points):
+        return costed_route(problem, points, SPEED, "optimal")
+
+    before = evaluate(polyline)
+    after = _refine(problem, polyline, before, evaluate)
+    assert after.cost_usd < before.cost_usd
+    assert np.max(after.waypoints_m[:, 0]) == pytest.approx(field.data_extent[1], abs=1e-6)
+
+
+def test_the_search_grid_has_the_requested_spacing_over_the_data():
+    field = storm_field(size_nm=20.0, resolution_nm=0.5)
+    for resolution_nm in (0.5, 1.0, 2.5):
+        graph = RouteSearch(RoutingProblem((0.0, 0.0), (20 * NM, 20 * NM), field, resolution_nm=resolution_nm)).graph
+        for axis in (graph.x_m, graph.y_m):
+            np.testing.assert_allclose(np.diff(axis), resolution_nm * NM)
+            np.testing.assert_allclose(axis[[0, -1]], [0.0, 20 * NM])
+
+
+def test_an_hour_is_priced_at_the_running_cost_or_at_the_multiples_of_the_shadow_price_given():
+    field = storm_field(storms=[(10.0, 10.6, 2.5, 20.0)])          # the storm above: a detour pays
+    problem = RoutingProblem((0.0, 0.0), (20 * NM, 20 * NM), field)
+    at_speed = optimal_route(problem, speed_mps=SPEED)
+    assert at_speed.time_price_usd_h == pytest.approx(problem.energy.running_cost_usd_day / 24.0, rel=1e-12)
+    arrival_s = straight_route(problem, speed_mps=SPEED).arrival_s
+    shadow_price = time_price_usd_h(problem, straight_route(problem, arrival_s=arrival_s))
+    for multiple in (0.3, 1.4):
+        timed = optimal_route(problem, arrival_s=arrival_s, price_multiples=(multiple,))
+        assert timed.time_price_usd_h == pytest.approx(multiple * shadow_price, rel=1e-12)
+
+
+def test_a_head_current_that_stops_the_ship_closes_segments_and_legs_however_short():
+    # 10 m/s towards the south against 9.3 m/s through water: no way north
+    search = RouteSearch(RoutingProblem((0.0, 0.0), (20 * NM, 20 * NM), storm_field(current_ms=(-10.0, 0.0))))
+    a = np.array([5 * NM, 5 * NM])
+    segments = search.segment_costs(a, a + np.array([[5 * NM, 0.0], [0.0, 5 * NM], [-5 * NM, 0.0]]), 0.0, SPEED, 100.0)
+    assert np.isposinf(segments[0]) and np.all(np.isfinite(segments[1:]))
+    legs = search.leg_costs(np.array([a, a + [0.5, 0.0], a + [0.5, 5 * NM]]), 0.0, SPEED, 100.0)   # half a metre north
+    assert np.isposinf(legs[0]) and np.isfinite(legs[1])
+
+
+def test_a_circle_or_chart_that_bars_only_dearer_moves_leaves_the_refinement_as_it_is():
+    # a storm just east of a northbound route: the refinement moves it west; an island
+    # further east, or a chart refusing legs that end east of the route, bars only moves
+    # east, which cost more anyway, so the route is the same
+    field = storm_field(storms=[(10.0, 11.0, 2.0, 20.0)])
+    polyline = np.array([[0.0, 10.0], [10.0, 10.0], [20.0, 10.0]]) * NM
+    island = (10 * NM, 14 * NM, 2.5 * NM)
+    refined = []
+    for avoid, keep_out in (((), None), ((island,), None), ((), _KeepOutEast(10.5 * NM))):
+        problem = RoutingProblem((0.0, 10 * NM), (20 * NM, 10 * NM), field, avoid=avoid, keep_out=keep_out)
+
+        def evaluate(points, problem=problem):
+            return costed_route(problem, points, SPEED, "optimal")
+
+        refined.append(_refine(problem, polyline, evaluate(polyline), evaluate).waypoints_m)
+    assert np.min(refined[0][:, 1]) < 9.0 * NM                           # moved west, off the storm
+    assert np.min(segment_clearance(refined[0][:-1], refined[0][1:], island[:2])) > island[2]
+    np.testing.assert_array_equal(refined[1], refined[0])
+    np.testing.assert_array_equal(refined[2], refined[0])
