@@ -275,10 +275,7 @@ class CollisionDomains:
         order = self._nearest(rows, rhos, origin)
         ranges, range_rates, inside, danger = self._closing(rows, rhos, state[:2], own_velocity, order)
         heading_now = float(state[2]) if reference_heading_rad is None else float(reference_heading_rad)
-        # Rules 14, 15, 17(c): no alteration to port while such a target's CPA is ahead; known
-        # before any alteration begins, so that an overtaking ship's turns to starboard then
-        no_port_turn = not danger and any(classes[i] is not None and classes[i].encounter_class in STARBOARD_CLASSES
-                                          and classes[i].tcpa_s > 0.0 for i in order)
+        no_port_turn = not danger and _port_turn_ruled_out(classes, order)
         # every target, for the side of an alteration the rules leave free (Rule 13)
         traffic = [(rows[j, :2], rows[j, 2:4], s.own_radius_m + rows[j, 4] + s.clearance_margin_m)
                    for j in range(len(rows))]
@@ -499,24 +496,7 @@ class CollisionDomains:
         manoeuvring = (not self._altering and abs(deviation) >= MANOEUVRE_DEG
                        and deviation * yaw_rate_rps > 0.0)
         if name in ("overtaking", "overtaken"):
-            # a turn the plan has begun is an avoiding one when overtaking (the constraint is on)
-            # or while another alteration is held; a stand-on ship that has kept its course has
-            # begun none: its deviation is the way back to the route, and continuing it turned
-            # a ship towards the overtaker it acted for (0.85 nm)
-            if abs(deviation) > PORT_ALLOWANCE_DEG and (name == "overtaking" or self._altering):
-                side = math.copysign(1.0, deviation)
-            else:
-                # away from the other ship (pass it on its port side when it is on our starboard
-                # side), unless the other side keeps the whole traffic clearer
-                side = -1.0 if encounter.relative_bearing_deg > 0.0 else 1.0
-                if motion is not None and traffic:
-                    clearance = {turn: side_clearance_m(motion[0], motion[1], reference_heading_rad
-                                                        + turn * math.radians(s.alteration_deg), traffic)
-                                 for turn in (side, -side)}
-                    if clearance[side] < 0.0 <= clearance[-side]:
-                        side = -side
-            if not port_allowed:
-                side = 1.0
+            side = self._free_side(encounter, deviation, reference_heading_rad, motion, traffic, port_allowed)
         slow = False
         if name == "overtaken" and index in self._acting and encounter.tcpa_s > 0.0 and motion is not None and traffic:
             side, slow = self._stand_on_action(side, port_allowed, reference_heading_rad, motion[0], motion[1], traffic)
@@ -550,6 +530,29 @@ class CollisionDomains:
         LOG.info("target %d (%s): altering %.0f deg to %s (CPA %.0f m in %.0f s)", index, name, s.alteration_deg,
                  "starboard" if side > 0 else "port", encounter.cpa_m, encounter.tcpa_s)
 
+
+    def _free_side(self, encounter, deviation_deg: float, reference_heading_rad: float, motion, traffic,
+                   port_allowed: bool) -> float:
+        """The side (+1 starboard, -1 port) of an alteration Rule 13 leaves free: overtaking or
+        being overtaken.
+
+        A turn the plan has begun is an avoiding one when overtaking (the constraint is on) or
+        while another alteration is held; a stand-on ship that has kept its course has begun
+        none: its deviation is the way back to the route, and continuing it turned a ship
+        towards the overtaker it acted for (0.85 nm).  Else away from the other ship (pass it on
+        its port side when it is on our starboard side), unless the other side keeps the whole
+        traffic clearer.  To starboard whenever a turn to port is ruled out."""
+        if abs(deviation_deg) > PORT_ALLOWANCE_DEG and (encounter.encounter_class == "overtaking" or self._altering):
+            side = math.copysign(1.0, deviation_deg)
+        else:
+            side = -1.0 if encounter.relative_bearing_deg > 0.0 else 1.0
+            if motion is not None and traffic:
+                alteration = math.radians(self.settings.alteration_deg)
+                clearance = {turn: side_clearance_m(motion[0], motion[1], reference_heading_rad + turn * alteration,
+                                                    traffic) for turn in (side, -side)}
+                if clearance[side] < 0.0 <= clearance[-side]:
+                    side = -side
+        return side if port_allowed else 1.0
 
     def _stand_on_action(self, side: float, port_allowed: bool, reference_heading_rad: float, own_xy,
                          own_speed_mps: float, traffic) -> tuple[float, bool]:
@@ -624,6 +627,14 @@ def side_clearance_m(own_xy, own_speed_mps: float, course_rad: float, traffic, h
         when = 0.0 if w2 < 1e-12 else min(max(-float(relative @ closing) / w2, 0.0), horizon_s)
         least = min(least, float(np.hypot(*(relative + closing * when))) - clearance)
     return least
+
+
+def _port_turn_ruled_out(classes, order) -> bool:
+    """Rules 14, 15, 17(c): no alteration to port while a head-on or crossing target's CPA is
+    ahead; known before any alteration begins, so that an overtaking ship's turns to starboard
+    then."""
+    return any(classes[i] is not None and classes[i].encounter_class in STARBOARD_CLASSES
+               and classes[i].tcpa_s > 0.0 for i in order)
 
 
 def _closing_on_the_port_side(own_xy, own_speed_mps: float, heading_rad: float, traffic) -> bool:

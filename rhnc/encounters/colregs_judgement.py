@@ -224,16 +224,8 @@ def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter
         ahead = crossed_ahead(own_xy, target, onset_index, cpa_index)
         result["crossed"] = None if ahead is None else ("ahead" if ahead else "astern")
     result.update(_first_manoeuvre_fields(t, own_xy, course_rad, target, onset_index, cpa_time, settings))
-    until = cpa_time
-    if result["manoeuvre_time_s"] is not None:
-        until = max(cpa_time, result["manoeuvre_time_s"] + settings.alteration_completion_s)
-    before = (t >= t[onset_index]) & (t <= until)
-    unwrapped = np.unwrap(course_rad)
-    change = np.degrees(unwrapped[before] - unwrapped[onset_index])
-    result["max_course_change_deg"] = float(np.max(np.abs(change))) if change.size else 0.0
-    speed0 = float(speed_mps[onset_index])
-    if speed0 > 0 and np.any(before):
-        result["max_speed_reduction"] = float(max(0.0, 1.0 - np.min(speed_mps[before]) / speed0))
+    result.update(_manoeuvre_size(t, course_rad, speed_mps, onset_index, cpa_time, result["manoeuvre_time_s"],
+                                  settings))
     verdicts, reasons = _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, target, settings,
                                   give_way_onsets_s)
     result.update(verdicts)
@@ -242,6 +234,22 @@ def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter
     applicable = [v for v in verdicts.values() if v != NOT_APPLICABLE]
     result["verdict"] = NOT_APPLICABLE if not applicable else (PASS if all(v == PASS for v in applicable) else FAIL)
     return result
+
+
+def _manoeuvre_size(t, course_rad, speed_mps, onset_index: int, cpa_time: float, manoeuvre_time: float | None,
+                    settings: JudgementSettings) -> dict:
+    """The largest change of course [deg] and reduction of speed (a fraction of the speed at the
+    onset) from the onset to the CPA or, for a manoeuvre shown before the CPA, to
+    ``alteration_completion_s`` after it was shown, whichever is later."""
+    until = cpa_time if manoeuvre_time is None else max(cpa_time, manoeuvre_time + settings.alteration_completion_s)
+    before = (t >= t[onset_index]) & (t <= until)
+    unwrapped = np.unwrap(course_rad)
+    change = np.degrees(unwrapped[before] - unwrapped[onset_index])
+    size = {"max_course_change_deg": float(np.max(np.abs(change))) if change.size else 0.0, "max_speed_reduction": 0.0}
+    speed0 = float(speed_mps[onset_index])
+    if speed0 > 0 and np.any(before):
+        size["max_speed_reduction"] = float(max(0.0, 1.0 - np.min(speed_mps[before]) / speed0))
+    return size
 
 
 def _first_manoeuvre_fields(t, own_xy, course_rad, target: np.ndarray, onset_index: int, cpa_time: float,
