@@ -549,3 +549,22 @@ def test_identify_without_an_nmpc_steering_the_plant_is_refused_in_one_line(tmp_
     assert len(err) == 1 and "turning_circle.toml" in err[0]
     assert "no participant of type 'control' steers the plant 'ship'" in err[0]
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("option, message", [
+    ("control_interval_s = -20.0", "option 'control_interval_s' must be > 0"),
+    ("horizon_steps = 0", "option 'horizon_steps' must be an integer from 1 to 400"),
+])
+def test_identify_refuses_an_nmpc_horizon_it_cannot_choose_for(tmp_path, capsys, option, message):
+    text = (REPO / "scenarios" / "exp3a_static.toml").read_text()
+    scenario = tmp_path / "bad.toml"
+    scenario.write_text(text.replace('parameter_set = "default"\nhorizon_steps = 15\n',
+                                     f'parameter_set = "default"\nhorizon_steps = 15\n{option}\n'.replace(
+                                         "horizon_steps = 15\nhorizon_steps = 0", "horizon_steps = 0")))
+    results = tmp_path / "results"
+    code = main(["identify", str(scenario), "--tau-u-max-N", "1.8e6", "--tau-r-max-Nm", "3.3e8",
+                 "--results", str(results), "--out", str(tmp_path / "set.toml")])
+    assert code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "bad.toml: participants.ctrl" in err[0] and message in err[0]
+    assert not results.exists() and not (tmp_path / "set.toml").exists()
