@@ -112,6 +112,16 @@ def controller_from_options(options: Mapping[str, Any], context: BuildContext):
     return params, settings, et_default, _delays(options, context)
 
 
+def prediction_horizon(options: Mapping[str, Any], context: BuildContext) -> tuple[int, float]:
+    """The NMPC's horizon these options give: (``horizon_steps``, control interval [s]), checked
+    as the participant checks them (the model ``identify`` fits is chosen for this horizon)."""
+    kwargs = _numeric_settings(options, context)
+    interval = kwargs["control_interval_s"]
+    if not interval > 0.0:
+        raise ScenarioError(f"{context.where}: option 'control_interval_s' must be > 0, got {interval!r}")
+    return int(kwargs.get("horizon_steps", NMPCSettings.horizon_steps)), float(interval)
+
+
 def chart_from_options(options: Mapping[str, Any], context: BuildContext):
     """The option ``chart``: land and no-go areas the NMPC keeps its clearance from (None without it)."""
     if "chart" not in options:

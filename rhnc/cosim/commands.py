@@ -53,11 +53,13 @@ class IdentifyCommand:
 
     @staticmethod
     def run(args) -> int:
+        from rhnc.cosim.identify_horizon import nmpc_horizon
         from rhnc.ship.identify_run import run_identify
 
         report = run_identify(args.scenario, args.results, plant=args.plant, speed_kn=args.speed_kn,
                               tau_u_max_N=args.tau_u_max_N, tau_r_max_Nm=args.tau_r_max_Nm,
-                              set_name=args.set_name, out=args.out, ship=args.ship)
+                              set_name=args.set_name, out=args.out, ship=args.ship,
+                              horizon=nmpc_horizon(args.scenario, args.plant))
         held = report.report["open_loop_errors"][f"held_out: {report.report['held_out']}"]
         print(f"finished: results in {report.folder}")
         print(f"  parameter set '{report.report['set']}' in {report.parameter_file}")

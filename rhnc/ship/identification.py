@@ -8,15 +8,22 @@ polynomial of full hull forms) is fitted by least squares on the equations of mo
 (:mod:`rhnc.ship.equation_error`) and refined on the simulation error
 (:mod:`rhnc.ship.output_error`).
 
-Validation: each fitted class is integrated open loop with the recorded inputs of the
-held-out manoeuvre, from its first sample, and compared with what the plant did; the
-class with the smallest held-out error is kept (a wider class only when it is better by
+Validation: each fitted class predicts the held-out manoeuvre over the NMPC's horizon
+(its ``horizon_steps`` times its control interval, from the settings the model is for)
+from every control interval's measured state, with the recorded inputs, as the NMPC uses
+it (:func:`rhnc.ship.prediction_error.horizon_cost`), and is compared with what the plant
+did; the class with the smallest held-out error is kept (a wider class only when it is better by
 more than 2 % and by more than a tenth of the weighted error's unit), and within a class the refined coefficients or the equation-error ones,
 whichever predict the held-out manoeuvre better.  A fit that cannot be made (too few samples, no class that stays finite
 on the held-out manoeuvre) is refused with one line saying what to change.
 
-Prediction error: from every 20 s of every manoeuvre the fitted model predicts 300 s ahead
-from the measured state, as the NMPC does; the growth of its position error with the
+The class is not chosen by one open-loop run over the whole manoeuvre: a model whose
+zig-zag drifts slowly out of phase scores worse there than one that barely turns, which
+predicts worse over every horizon the NMPC plans.  The refinement fits the same kind of
+error: segments of the horizon's length, each from the measured state.
+
+Prediction error: from every control interval of every manoeuvre the fitted model predicts
+over the horizon from the measured state, as the NMPC does; the growth of its position error with the
 prediction time (:func:`position_error_growth`) goes into the set as
 ``position_error_growth_mps``, the NMPC's default tightening of its collision domains.
 """
@@ -35,7 +42,7 @@ from rhnc.ship.equation_error import (ALL_COEFFICIENTS, COEFFICIENTS, FILTER_WIN
                                       sailed_envelope)
 from rhnc.ship.output_error import refine_output_error
 from rhnc.ship.physical_bounds import MassBounds, is_dissipative
-from rhnc.ship.prediction_error import position_error_growth
+from rhnc.ship.prediction_error import STATE_ERROR_WEIGHTS, horizon_cost, position_error_growth, windowed_predictions
 from rhnc.ship.sea_trials import VALIDATION_MANOEUVRE, PlantRunner, Record, sail_manoeuvres
 from rhnc.ship.ship_model import HULL_POLYNOMIAL_KEYS, ShipParameters, rk4_step
 
@@ -80,6 +87,9 @@ class Fit:
     model_class: str = "linear"
     class_errors: dict[str, float | None] = dataclasses.field(default_factory=dict)
     notes: list[str] = dataclasses.field(default_factory=list)
+    #: the held-out weighted error of one open-loop run over the whole manoeuvre, per class (reported only)
+    class_open_loop_errors: dict[str, float] = dataclasses.field(default_factory=dict)
+    horizon: Horizon | None = None
 
 
 def simulate(parameters: ShipParameters, record: Record) -> np.ndarray:
@@ -96,23 +106,60 @@ def simulate(parameters: ShipParameters, record: Record) -> np.ndarray:
     return states
 
 
-def held_out_cost(record: Record, predicted: np.ndarray) -> float:
-    """Weighted RMS open-loop error of a prediction (heading per degree, surge and sway per
-    0.1 m/s, yaw rate per 0.06 deg/s: the refinement's weights); inf when it diverged."""
-    weights = np.array([1.0 / math.radians(1.0), 10.0, 10.0, 1.0 / math.radians(0.06)])
-    error = (predicted[:, 2:6] - record.states[:, 2:6]) * weights
+@dataclasses.dataclass(frozen=True)
+class Horizon:
+    """The prediction the model is for: the NMPC's horizon [s] (``horizon_steps`` times the
+    control interval) and how often it predicts again from a measured state [s] (the control
+    interval)."""
+
+    horizon_s: float
+    interval_s: float
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.interval_s) and self.interval_s > 0 and math.isfinite(self.horizon_s)
+                and self.horizon_s >= self.interval_s):
+            raise ValueError(f"a prediction horizon of {self.horizon_s} s every {self.interval_s} s: both must be "
+                             "positive, the horizon at least one interval")
+
+
+def open_loop_cost(record: Record, predicted: np.ndarray) -> float:
+    """Weighted RMS error of one open-loop prediction over a whole record (heading per degree,
+    surge and sway per 0.1 m/s, yaw rate per 0.06 deg/s); inf when it diverged.  Reported, not
+    the choice: see :func:`model_cost`."""
+    error = (predicted[:, 2:6] - record.states[:, 2:6]) * STATE_ERROR_WEIGHTS
     value = float(np.sqrt(np.mean(error ** 2)))
     return value if math.isfinite(value) else math.inf
 
 
-def _model_cost(parameters: ShipParameters, records: dict[str, Record]) -> float:
-    """The held-out cost of a fitted model (:func:`held_out_cost`); inf when it diverges on the
-    held-out manoeuvre or on any fitting one (a polynomial can fit the samples and still
-    run away between them)."""
+def model_cost(parameters: ShipParameters, records: dict[str, Record], horizon: Horizon) -> float:
+    """What the class is chosen by: the weighted error of the model's predictions of the
+    held-out manoeuvre over the horizon, from every interval's measured state
+    (:func:`rhnc.ship.prediction_error.horizon_cost`); inf when a prediction of the horizon's
+    length from any measured state of any manoeuvre diverges (a polynomial can fit the
+    samples and still run away between them)."""
     for name, record in records.items():
-        if name != VALIDATION_MANOEUVRE and not np.all(np.isfinite(simulate(parameters, record))):
+        if name == VALIDATION_MANOEUVRE:
+            continue
+        windows = windowed_predictions(parameters, record, horizon.horizon_s, horizon.interval_s)
+        if windows is not None and not np.all(np.isfinite(windows[0])):
             return math.inf
-    return held_out_cost(records[VALIDATION_MANOEUVRE], simulate(parameters, records[VALIDATION_MANOEUVRE]))
+    return horizon_cost(parameters, records[VALIDATION_MANOEUVRE], horizon.horizon_s, horizon.interval_s)
+
+
+def choose_class(costs: dict[str, float]) -> str | None:
+    """The class kept among ``costs`` (class -> held-out cost, narrowest first): a wider class
+    replaces a narrower one only when its cost is smaller by :data:`WIDER_CLASS_GAIN` (the
+    hull polynomial's also by :data:`WIDER_CLASS_MARGIN`); None when no cost is finite."""
+    finite = [name for name, cost in costs.items() if math.isfinite(cost)]
+    if not finite:
+        return None
+    chosen = finite[0]
+    for name in finite[1:]:   # narrowest first: a wider class must earn its coefficients
+        best = costs[chosen]
+        margin = WIDER_CLASS_MARGIN if set(MODEL_CLASSES[name]) & set(HULL_POLYNOMIAL_KEYS) else 0.0
+        if costs[name] < min((1.0 - WIDER_CLASS_GAIN) * best, best - margin):
+            chosen = name
+    return chosen
 
 
 def validation_errors(record: Record, predicted: np.ndarray) -> dict[str, float]:
@@ -145,14 +192,14 @@ def physical(coefficients: dict, records: dict[str, Record], masses: MassBounds 
                                                                                  *sailed_envelope(records))
 
 
-def _fit_class(records, tau_u_max, tau_r_max, names, refine, masses=None, damping_speed=0.0):
+def _fit_class(records, tau_u_max, tau_r_max, names, refine, horizon: Horizon, masses=None, damping_speed=0.0):
     """One class fitted: (equation-error parameters, final parameters, rms, r2, note); a fit
     that is not :func:`physical` is None.  ``damping_speed`` [m/s]: see :data:`SPEED_SCALED`."""
     equation_error, rms, r2 = fit_coefficients(records, tau_u_max, tau_r_max, names, masses, damping_speed)
     note = "equation error only"
     theta = equation_error
     if refine:
-        theta, note = refine_output_error(records, equation_error, names, masses, damping_speed)
+        theta, note = refine_output_error(records, equation_error, names, masses, damping_speed, horizon.horizon_s)
 
     def parameters(values, label):
         coefficients = {name: 0.0 for name in ALL_COEFFICIENTS}
@@ -165,7 +212,7 @@ def _fit_class(records, tau_u_max, tau_r_max, names, refine, masses=None, dampin
     return parameters(equation_error, "equation error only"), parameters(theta, "fitted"), rms, r2, note
 
 
-def _refined_from_narrower(records: dict[str, Record], names: tuple[str, ...], candidates: dict,
+def _refined_from_narrower(records: dict[str, Record], names: tuple[str, ...], candidates: dict, horizon: Horizon,
                            masses: MassBounds | None = None):
     """The class ``names`` refined from the narrower candidate with the smallest held-out cost
     (its coefficients, the others zero; its masses brought within ``masses``' bounds):
@@ -181,7 +228,8 @@ def _refined_from_narrower(records: dict[str, Record], names: tuple[str, ...], c
     start = {name: getattr(narrower, name) for name in names}
     for name, (low, high) in (masses.bounds.items() if masses is not None else ()):
         start[name] = min(max(start[name], low), high)
-    theta, note = refine_output_error(records, np.array([start[name] for name in names]), names, masses)
+    theta, note = refine_output_error(records, np.array([start[name] for name in names]), names, masses,
+                                      horizon_s=horizon.horizon_s)
     parameters = dataclasses.replace(narrower, **dict(zip(names, (float(v) for v in theta))))
     if not physical({name: getattr(parameters, name) for name in ALL_COEFFICIENTS}, records, masses):
         return None, "not physical"
@@ -189,7 +237,7 @@ def _refined_from_narrower(records: dict[str, Record], names: tuple[str, ...], c
 
 
 def _fit_candidates(records: dict[str, Record], tau_u_max: float, tau_r_max: float, classes: tuple[str, ...],
-                    refine: bool, masses: MassBounds | None = None, service_speed: float = 0.0) -> dict:
+                    refine: bool, horizon: Horizon, masses: MassBounds | None = None, service_speed: float = 0.0) -> dict:
     """Every class fitted and scored on the held-out manoeuvre: name -> (held-out cost,
     equation-error parameters, chosen parameters, residual RMS, R², note); a class without a
     physical fit is left out, and so is the hull polynomial's without ``masses``."""
@@ -203,14 +251,14 @@ def _fit_candidates(records: dict[str, Record], tau_u_max: float, tau_r_max: flo
             continue
         # the narrower classes keep their free masses: without the polynomial's structure an
         # effective mass is part of what they fit (bounded, the KVLCC2's held-out errors grew)
-        equation_error, fitted, rms, r2, note = _fit_class(records, tau_u_max, tau_r_max, names, refine,
+        equation_error, fitted, rms, r2, note = _fit_class(records, tau_u_max, tau_r_max, names, refine, horizon,
                                                            masses if polynomial else None,
                                                            service_speed if class_name in SPEED_SCALED else 0.0)
-        cost = _model_cost(fitted, records) if fitted is not None else math.inf
+        cost = model_cost(fitted, records, horizon) if fitted is not None else math.inf
         if refine and fitted is not None and equation_error is not None:
             # the refinement fits the fitting manoeuvres; where the class lacks the plant's
             # structure that can cost on others, and the held-out manoeuvre decides
-            plain = _model_cost(equation_error, records)
+            plain = model_cost(equation_error, records, horizon)
             if plain < cost:
                 cost, fitted, note = plain, equation_error, f"equation error kept: held-out {plain:.4g} against " \
                                                             f"{cost:.4g} refined ({note})"
@@ -218,8 +266,8 @@ def _fit_candidates(records: dict[str, Record], tau_u_max: float, tau_r_max: flo
             # the polynomial's equation-error fit extrapolates and may run away: refine also from
             # the best narrower class's model, its polynomial zero, so the class starts where
             # the narrower one ended and can only improve on it
-            nested, nested_note = _refined_from_narrower(records, names, candidates, masses)
-            nested_cost = _model_cost(nested, records) if nested is not None else math.inf
+            nested, nested_note = _refined_from_narrower(records, names, candidates, horizon, masses)
+            nested_cost = model_cost(nested, records, horizon) if nested is not None else math.inf
             if nested_cost < cost:
                 cost, fitted, note = nested_cost, nested, nested_note
         if fitted is None:
@@ -232,8 +280,10 @@ def _fit_candidates(records: dict[str, Record], tau_u_max: float, tau_r_max: flo
 
 def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_name: str,
                    reference: ShipParameters | None = None, refine: bool = True,
-                   classes: tuple[str, ...] = tuple(MODEL_CLASSES), masses: MassBounds | None = None) -> Fit:
-    """Sail the manoeuvres, fit every model class, keep the one best on the held-out manoeuvre.
+                   classes: tuple[str, ...] = tuple(MODEL_CLASSES), masses: MassBounds | None = None, *,
+                   horizon: Horizon) -> Fit:
+    """Sail the manoeuvres, fit every model class, keep the one that predicts the held-out
+    manoeuvre best over ``horizon`` (the NMPC's, :class:`Horizon`).
 
     ``masses`` (the mass matrix the ship's particulars give, :mod:`rhnc.ship.physical_bounds`)
     bound the class with the hull polynomial; without them that class is not fitted.
@@ -257,19 +307,14 @@ def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_
                              "--speed-kn")
     records = {name: record for name, record in records.items() if name not in short}
     held_out = records[VALIDATION_MANOEUVRE]
-    candidates = _fit_candidates(records, tau_u_max, tau_r_max, classes, refine, masses, runner.speed_mps)
+    candidates = _fit_candidates(records, tau_u_max, tau_r_max, classes, refine, horizon, masses, runner.speed_mps)
     class_errors = {name: (candidates[name][0] if name in candidates else None) for name in classes}
-    finite = [name for name in candidates if math.isfinite(candidates[name][0])]
-    if not finite:
+    open_loop = {name: open_loop_cost(held_out, simulate(candidates[name][2], held_out)) for name in candidates}
+    chosen = choose_class({name: candidate[0] for name, candidate in candidates.items()})
+    if chosen is None:
         raise ToolchainError("identify: no model class predicts the held-out zig-zag without diverging (classes "
                              f"tried: {', '.join(classes)}): the manoeuvres may leave the ship's real range; give the "
                              "yaw moment of full rudder at service speed as --tau-r-max-Nm and check the probe's figures")
-    chosen = finite[0]
-    for name in finite[1:]:   # narrowest first: a wider class must earn its coefficients
-        best = candidates[chosen][0]
-        margin = WIDER_CLASS_MARGIN if set(MODEL_CLASSES[name]) & set(HULL_POLYNOMIAL_KEYS) else 0.0
-        if candidates[name][0] < min((1.0 - WIDER_CLASS_GAIN) * best, best - margin):
-            chosen = name
     _, equation_error, parameters, rms, r2, note = candidates[chosen]
     parameters = dataclasses.replace(parameters, name=set_name)
     predictions, validation = {}, {}
@@ -283,7 +328,7 @@ def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_
     if reference is not None:
         predicted = simulate(reference, held_out)
         validation[f"held_out with {reference.name}"] = validation_errors(held_out, predicted)
-    error = position_error_growth(parameters, records)
+    error = position_error_growth(parameters, records, horizon.horizon_s, horizon.interval_s)
     parameters = dataclasses.replace(parameters, extras={"position_error_growth_mps": error["growth_mps"],
                                                          "model_class": chosen})
     notes = list(runner.notes) + [f"{chosen}: {note}"]
@@ -292,7 +337,8 @@ def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_
                      "(identify --ship) to bound the mass matrix")
     elif masses is not None:
         notes.append(f"mass matrix of the hull-polynomial class bounded from {masses.source}")
-    return Fit(parameters, trim, rms, r2, validation, records, predictions, error, chosen, class_errors, notes)
+    return Fit(parameters, trim, rms, r2, validation, records, predictions, error, chosen, class_errors, notes,
+               open_loop, horizon)
 
 
 def check_bounds(tau_u_max: float | None, tau_r_max: float | None) -> tuple[float, float]:

@@ -25,7 +25,7 @@ from orchestrator.geometry import KNOT
 from orchestrator.results import RunFolder, new_run_id, versions
 from orchestrator.scenario import ParticipantSpec, load_scenario
 from rhnc.ship.equation_error import ALL_COEFFICIENTS, COEFFICIENTS
-from rhnc.ship.identification import check_bounds, identify_model
+from rhnc.ship.identification import Horizon, check_bounds, identify_model
 from rhnc.ship.sea_trials import VALIDATION_MANOEUVRE, PlantRunner
 from rhnc.ship.identification_report import parameter_set_toml, write_figures
 from rhnc.ship.plant_probe import probe_plant
@@ -150,8 +150,12 @@ def _own_names(spec, scenario) -> set[str]:
 
 def run_identify(scenario_path, results_root="results", plant: str | None = None, speed_kn: float = 18.0,
                  tau_u_max_N: float | None = None, tau_r_max_Nm: float | None = None,
-                 set_name: str | None = None, out: Path | None = None, ship: str | None = None) -> IdentifyReport:
+                 set_name: str | None = None, out: Path | None = None, ship: str | None = None, *,
+                 horizon: Horizon) -> IdentifyReport:
     """Identify the prediction model on the scenario's plant FMU and write the results.
+
+    ``horizon``: the NMPC's prediction horizon and control interval the model is chosen for
+    (:func:`rhnc.cosim.identify_horizon.nmpc_horizon` reads them from the scenario).
 
     ``ship`` (a name in ``ships/`` or a ship TOML file) gives the particulars that bound the
     mass matrix of the model class with the hull polynomial (:mod:`rhnc.ship.physical_bounds`).
@@ -186,7 +190,7 @@ def run_identify(scenario_path, results_root="results", plant: str | None = None
     name = set_name or identity["model_name"]
     kcs = load_parameter_set("default")
     fit = identify_model(PlantRunner(build, speed_kn * KNOT), tau_u_max, tau_r_max, name, reference=kcs,
-                         masses=masses)
+                         masses=masses, horizon=horizon)
     source = Path(scenario_path).as_posix()
     toml_text = parameter_set_toml(fit, {**identity, "through": allocation[0].name if allocation else None}, source)
     folder = RunFolder(Path(results_root), f"identify/{name}", new_run_id(scenario.sha256))
@@ -262,7 +266,10 @@ def _fit_report(fit, set_name: str, scenario, plant_entry: dict, speed_kn: float
         "trim_tau_u_N": fit.trim_tau_u,
         "set": set_name,
         "model_class": fit.model_class,
+        "horizon_s": fit.horizon.horizon_s if fit.horizon else None,
+        "control_interval_s": fit.horizon.interval_s if fit.horizon else None,
         "held_out_cost_per_class": fit.class_errors,
+        "held_out_open_loop_cost_per_class": fit.class_open_loop_errors,
         "notes": fit.notes,
         "coefficients": {k: getattr(fit.parameters, k) for k in ALL_COEFFICIENTS
                          if k in COEFFICIENTS or getattr(fit.parameters, k) != 0.0},
@@ -281,9 +288,13 @@ def _markdown(report: dict) -> str:
     lines = [f"# Identification of {report['set']} on {report['plant']['model_name']}", "",
              f"Plant `{report['plant']['participant']}` of `{report['scenario']}`, from {report['speed_kn']} kn, "
              f"weather off; surge force at trim {report['trim_tau_u_N']:.4g} N.", "",
-             f"Model class: {report['model_class']} (held-out weighted error per class: " + ", ".join(
+             f"Model class: {report['model_class']}, chosen by the weighted error of its predictions of the held-out "
+             f"manoeuvre over the NMPC's {report['horizon_s']:g}-s horizon from every {report['control_interval_s']:g} s "
+             "of measured state, per class: " + ", ".join(
                  f"{k} {v:.4g}" if v is not None else f"{k} no physical fit"
-                 for k, v in report["held_out_cost_per_class"].items()) + ").", "",
+                 for k, v in report["held_out_cost_per_class"].items()) + " (one open-loop run over the whole "
+             "manoeuvre: " + ", ".join(f"{k} {v:.4g}" for k, v in report["held_out_open_loop_cost_per_class"].items())
+             + ").", "",
              *[f"- {note}" for note in report["notes"]], "",
              "| coefficient | value |", "|---|---|"]
     lines += [f"| {k} | {v:.6g} |" for k, v in report["coefficients"].items()]

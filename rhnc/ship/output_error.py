@@ -12,6 +12,7 @@ import numpy as np
 from rhnc.ship.equation_error import (ALL_COEFFICIENTS, COEFFICIENTS, NOT_NEGATIVE, _made_dissipative,
                                       sailed_envelope)
 from rhnc.ship.physical_bounds import MassBounds, envelope_directions, power_rows
+from rhnc.ship.prediction_error import STATE_ERROR_WEIGHTS
 from rhnc.ship.sea_trials import FIT_MANOEUVRES, SAMPLE_S, Record
 from rhnc.ship.ship_model import (HULL_POLYNOMIAL, HULL_POLYNOMIAL_KEYS, ShipParameters, equations_of_motion,
                                    rk4_states)
@@ -45,14 +46,18 @@ def _coefficient_scales(theta: dict[str, float], speed_mps: float) -> dict[str, 
 
 def refine_output_error(records: dict[str, Record], theta: np.ndarray,
                         names: tuple[str, ...] = COEFFICIENTS,
-                        masses: MassBounds | None = None, damping_speed: float = 0.0) -> tuple[np.ndarray, str]:
+                        masses: MassBounds | None = None, damping_speed: float = 0.0,
+                        horizon_s: float | None = None) -> tuple[np.ndarray, str]:
     """Coefficients improving ``theta`` (in the order of ``names``) on the simulation error
     of the fitting manoeuvres, and a note on how it went.
 
     The equation-error fit is biased where the plant's structure differs from the model's
     (a quadratic hull resistance, say), and a prediction model is judged by what it
     predicts over a horizon.  So each fitting manoeuvre is integrated open loop with its
-    recorded inputs (RK4, the sampling step in two substeps) and the coefficients are
+    recorded inputs (RK4, the sampling step in two substeps), in segments of ``horizon_s``
+    each started again from the measured state (multiple shooting: the NMPC predicts over
+    its horizon from each measured state, never longer; None: the whole manoeuvre in one
+    run), and the coefficients are
     moved, within bounds, to minimise the errors of heading (per degree), surge and sway
     speed (per 0.1 m/s) and yaw rate (per 0.06 deg/s), with exact CasADi Jacobians
     (scipy's trust-region least squares).  The variables are the coefficients divided by
@@ -80,7 +85,7 @@ def refine_output_error(records: dict[str, Record], theta: np.ndarray,
     z0 = np.clip(np.array(z0), lower, upper)
     if np.any(np.array(lower) >= np.array(upper)):
         return np.asarray(theta, dtype=float), "not refined: a coefficient is zero"
-    evaluate, jacobian = _simulation_error(records, names, full, unit, damping_speed)
+    evaluate, jacobian = _simulation_error(records, names, full, unit, damping_speed, horizon_s)
     large = 1e4   # a diverged simulation: a large error, not a NaN that stops the optimiser
 
     def residual(z):
@@ -141,9 +146,11 @@ def _scaled_start_and_bounds(names, start: dict, full: dict, unit: dict, sign_fr
     return z0, lower, upper
 
 
-def _simulation_error(records: dict[str, Record], names, full: dict, unit: dict, damping_speed: float = 0.0):
+def _simulation_error(records: dict[str, Record], names, full: dict, unit: dict, damping_speed: float = 0.0,
+                      horizon_s: float | None = None):
     """CasADi functions of the scaled coefficients: the weighted open-loop simulation errors
-    over the fitting manoeuvres, and their Jacobian."""
+    over the fitting manoeuvres, in segments of ``horizon_s`` from the measured states (None:
+    one segment per manoeuvre), and their Jacobian."""
     import casadi as ca
 
     variables = ca.SX.sym("z", len(names))
@@ -162,7 +169,7 @@ def _simulation_error(records: dict[str, Record], names, full: dict, unit: dict,
 
     x = rk4_states(f, state, SAMPLE_S / 2.0, 2)[-1]
     step = ca.Function("step", [state, tau, variables], [x])
-    weights = np.array([1.0 / math.radians(1.0), 10.0, 10.0, 1.0 / math.radians(0.06)])
+    weights = STATE_ERROR_WEIGHTS
     residuals = []
     for name in FIT_MANOEUVRES:
         if name not in records:
@@ -170,9 +177,14 @@ def _simulation_error(records: dict[str, Record], names, full: dict, unit: dict,
         record = records[name]
         measured = record.states[:, 2:6]
         n = len(record.t) - 1
-        trajectory = step.mapaccum(n)(ca.DM(measured[0]), ca.DM(record.tau[:n].T), ca.repmat(variables, 1, n))
-        error = (trajectory - ca.DM(measured[1:].T)) * ca.DM(weights)
-        residuals.append(ca.vec(error) / math.sqrt(n))
+        length = n if horizon_s is None else max(1, min(n, int(round(horizon_s / SAMPLE_S))))
+        errors = []
+        for start in range(0, n, length):   # each segment from the measured state at its start
+            m = min(length, n - start)
+            trajectory = step.mapaccum(m)(ca.DM(measured[start]), ca.DM(record.tau[start:start + m].T),
+                                          ca.repmat(variables, 1, m))
+            errors.append(ca.vec((trajectory - ca.DM(measured[start + 1:start + m + 1].T)) * ca.DM(weights)))
+        residuals.append(ca.vertcat(*errors) / math.sqrt(n))
     if set(HULL_POLYNOMIAL_KEYS) & set(names):
         # the polynomial's power where positive on the envelope's directions, per the linear
         # damping's power there: a penalty that keeps the refinement near the dissipative set

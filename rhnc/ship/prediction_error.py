@@ -10,19 +10,63 @@ domain does not take the plant into it (constraint tightening).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from orchestrator.errors import ToolchainError
 from rhnc.ship.ship_model import ShipParameters, derivatives, rk4_states
 
-#: prediction time over which the position error's growth is measured [s] (15 NMPC intervals of 20 s)
-PREDICTION_HORIZON_S = 300.0
-#: spacing of the prediction windows [s]
-WINDOW_STRIDE_S = 20.0
+def windowed_predictions(parameters: ShipParameters, record, horizon_s: float,
+                         stride_s: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """The model's predictions over ``horizon_s`` from every ``stride_s`` of a record, as the
+    NMPC predicts from each measured state (multiple shooting: each window starts again from
+    the plant's state, with the recorded inputs).
+
+    Returns
+    -------
+    (predicted, measured) : ndarray (steps, 6, windows)
+        States after 1..steps samples of each window; None when the record is shorter than
+        the horizon.  A window whose model leaves the finite numbers holds NaN or inf.
+    """
+    dt = float(record.t[1] - record.t[0])
+    steps = int(round(horizon_s / dt))
+    starts = np.arange(0, len(record.t) - steps, max(1, int(round(stride_s / dt))))
+    if steps < 1 or not len(starts):
+        return None
+    state = record.states[starts].T.copy()          # (6, windows)
+    predicted = np.empty((steps, 6, len(starts)))
+    with np.errstate(over="ignore", invalid="ignore"):
+        for j in range(steps):
+            state = rk4_states(derivatives, state, dt / 2.0, 2, record.tau[starts + j].T, parameters)[-1]
+            predicted[j] = state
+    measured = np.stack([record.states[starts + j + 1].T for j in range(steps)])
+    return predicted, measured
 
 
-def position_error_growth(parameters: ShipParameters, records: dict,
-                          horizon_s: float = PREDICTION_HORIZON_S, stride_s: float = WINDOW_STRIDE_S) -> dict[str, float]:
+#: Weights of the state errors in the prediction cost: heading per degree, surge and sway
+#: speed per 0.1 m/s, yaw rate per 0.06 deg/s (the output-error refinement's weights).
+STATE_ERROR_WEIGHTS = np.array([1.0 / math.radians(1.0), 10.0, 10.0, 1.0 / math.radians(0.06)])
+
+
+def horizon_cost(parameters: ShipParameters, record, horizon_s: float, stride_s: float) -> float:
+    """Weighted RMS error of the model's predictions over the NMPC's horizon, from every
+    ``stride_s`` of ``record`` (:func:`windowed_predictions`; heading, surge, sway and yaw rate
+    weighted by :data:`STATE_ERROR_WEIGHTS`): how well the model predicts over the time the
+    NMPC uses it, not over one long run whose error grows with the phase of a zig-zag.  inf
+    when a window diverges or the record is shorter than the horizon."""
+    windows = windowed_predictions(parameters, record, horizon_s, stride_s)
+    if windows is None:
+        return math.inf
+    predicted, measured = windows
+    error = (predicted[:, 2:6] - measured[:, 2:6]) * STATE_ERROR_WEIGHTS[None, :, None]
+    with np.errstate(over="ignore", invalid="ignore"):
+        value = float(np.sqrt(np.mean(error ** 2)))
+    return value if math.isfinite(value) else math.inf
+
+
+def position_error_growth(parameters: ShipParameters, records: dict, horizon_s: float,
+                          stride_s: float) -> dict[str, float]:
     """How fast the model's predicted position drifts from the plant's: the NMPC's margin growth.
 
     From every ``stride_s`` of every record the model is integrated open loop over
@@ -40,7 +84,7 @@ def position_error_growth(parameters: ShipParameters, records: dict,
     records : dict of Record
         Manoeuvres at a constant sampling step (times, states (n, 6), inputs held (n, 2)).
     horizon_s, stride_s : float
-        Prediction time and spacing of the windows [s].
+        Prediction time and spacing of the windows [s]: the NMPC's horizon and control interval.
 
     Returns
     -------
@@ -56,19 +100,14 @@ def position_error_growth(parameters: ShipParameters, records: dict,
     ratios: list[float] = []
     marks: dict[float, list[float]] = {20.0: [], 60.0: [], float(horizon_s): []}
     for record in records.values():
-        dt = float(record.t[1] - record.t[0])
-        steps = int(round(horizon_s / dt))
-        times = dt * np.arange(1, steps + 1)
-        starts = np.arange(0, len(record.t) - steps, max(1, int(round(stride_s / dt))))
-        if not len(starts):
+        windows = windowed_predictions(parameters, record, horizon_s, stride_s)
+        if windows is None:
             continue
-        state = record.states[starts].T.copy()          # (6, windows)
-        errors = np.empty((steps, len(starts)))
-        for j in range(steps):
-            tau = record.tau[starts + j].T
-            state = rk4_states(derivatives, state, dt / 2.0, 2, tau, parameters)[-1]
-            measured = record.states[starts + j + 1]
-            errors[j] = np.hypot(state[0] - measured[:, 0], state[1] - measured[:, 1])
+        predicted, measured = windows
+        dt = float(record.t[1] - record.t[0])
+        steps = predicted.shape[0]
+        times = dt * np.arange(1, steps + 1)
+        errors = np.hypot(predicted[:, 0] - measured[:, 0], predicted[:, 1] - measured[:, 1])
         ratios.append(np.max(errors / times[:, None]))
         for mark in marks:
             marks[mark].append(np.max(errors[min(steps, int(round(mark / dt))) - 1]))

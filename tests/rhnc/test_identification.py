@@ -11,13 +11,15 @@ import pytest
 from orchestrator.cli import main
 from orchestrator.errors import ScenarioError
 from rhnc.ship.equation_error import COEFFICIENTS, fit_coefficients
-from rhnc.ship.identification import simulate
+from rhnc.ship.identification import Horizon, simulate
 from rhnc.ship.prediction_error import position_error_growth
 from rhnc.ship.sea_trials import Record
 from rhnc.ship.identify_run import run_identify
 from rhnc.ship.ship_model import ShipParameters, load_parameter_set
 
 REPO = Path(__file__).resolve().parents[2]
+#: the shipped scenarios' NMPC: 15 intervals of 20 s
+NMPC_HORIZON = Horizon(300.0, 20.0)
 
 
 def _record(name, params, tau_of_t, duration_s):
@@ -50,11 +52,11 @@ def test_position_error_growth_measures_how_far_the_model_predicts_from_the_plan
         "turn": _record("turn", true, lambda t: (trim, 0.5 * true.tau_r_max if t >= 60 else 0.0), 600),
         "zigzag": _record("zigzag", true, lambda t: (trim, 0.3 * true.tau_r_max * np.sign(np.sin(t / 90))), 700),
     }
-    exact = position_error_growth(true, records)
+    exact = position_error_growth(true, records, 300.0, 20.0)
     assert exact["growth_mps"] < 1e-6 and exact["max_error_300s_m"] < 1e-3
     values = {key: getattr(true, key) for key in (*COEFFICIENTS, "tau_u_max", "tau_r_max")}
     wrong = ShipParameters(**{**values, "d33": 1.3 * true.d33})
-    error = position_error_growth(wrong, records)
+    error = position_error_growth(wrong, records, 300.0, 20.0)
     # a weaker turn: the prediction falls behind the plant's turn by tens of metres in 5 min
     assert 0.05 < error["growth_mps"] < 10.0
     assert error["max_error_20s_m"] < error["max_error_60s_m"] < error["max_error_300s_m"]
@@ -99,7 +101,7 @@ def test_identify_sails_an_actuator_plant_through_the_scenarios_allocation():
 def test_identify_needs_the_bounds(capsys):
     scenario = REPO / "scenarios" / "exp3a_static.toml"
     with pytest.raises(ScenarioError, match="give --tau-u-max-N"):
-        run_identify(scenario, "unused", tau_r_max_Nm=3.3e8)
+        run_identify(scenario, "unused", tau_r_max_Nm=3.3e8, horizon=NMPC_HORIZON)
     assert main(["identify", str(scenario), "--tau-u-max-N", "-1", "--tau-r-max-Nm", "3e8"]) == 2
     assert "--tau-u-max-N must be a positive number" in capsys.readouterr().err
 
@@ -203,7 +205,8 @@ def test_the_model_class_is_chosen_by_held_out_error(plant_class):
 
     true = load_parameter_set("default") if plant_class == "linear" else _wide_kcs()
     fit = identify_model(PlantRunner(lambda initial: ModelPlant(true, initial), 9.26), true.tau_u_max,
-                         true.tau_r_max, "fitted", refine=False)
+                         true.tau_r_max, "fitted", refine=False,
+                         horizon=NMPC_HORIZON)
     assert fit.model_class == plant_class
     assert fit.validation["held_out: zigzag_20"]["heading_rms_deg"] < 0.2
     # without the ship's particulars the hull-polynomial class is not fitted, and the report says why
@@ -274,7 +277,8 @@ def test_a_full_hull_gets_the_cubic_class_by_held_out_error():
 
     true = _full_hull_kcs()
     fit = identify_model(PlantRunner(lambda initial: ModelPlant(true, initial), 9.26), true.tau_u_max,
-                         true.tau_r_max, "fitted", refine=False, masses=_masses_of(true))
+                         true.tau_r_max, "fitted", refine=False, masses=_masses_of(true),
+                         horizon=NMPC_HORIZON)
     assert fit.model_class == "coupled mass, cubic damping"
     assert fit.validation["held_out: zigzag_20"]["heading_rms_deg"] < 0.2
     narrower = [error for name, error in fit.class_errors.items() if name != fit.model_class and error is not None]
@@ -286,7 +290,7 @@ def test_a_full_hull_gets_the_cubic_class_by_held_out_error():
 def test_the_cubic_class_is_refined_from_the_narrower_model_and_improves_on_it():
     """Started from a narrower model (the hull without its polynomial), the cubic class's
     refinement finds the polynomial and predicts the held-out zig-zag far better."""
-    from rhnc.ship.identification import MODEL_CLASSES, _model_cost, _refined_from_narrower
+    from rhnc.ship.identification import MODEL_CLASSES, _refined_from_narrower, model_cost
     from rhnc.ship.ship_model import HULL_POLYNOMIAL_KEYS
 
     true = _full_hull_kcs()
@@ -295,12 +299,12 @@ def test_the_cubic_class_is_refined_from_the_narrower_model_and_improves_on_it()
     records["zigzag_20"] = _record("zigzag_20", true,
                                    lambda t: (trim, 0.5 * true.tau_r_max * np.sign(np.sin(t / 120))), 600)
     narrower = _wide(true, **{key: 0.0 for key in HULL_POLYNOMIAL_KEYS})
-    narrower_cost = _model_cost(narrower, records)
+    narrower_cost = model_cost(narrower, records, NMPC_HORIZON)
     candidates = {"coupled mass, quadratic damping": (narrower_cost, None, narrower, {}, {}, "")}
     refined, note = _refined_from_narrower(records, MODEL_CLASSES["coupled mass, cubic damping"], candidates,
-                                           _masses_of(true))
+                                           NMPC_HORIZON, _masses_of(true))
     assert note.startswith("from the coupled mass, quadratic damping model, refined")
-    assert _model_cost(refined, records) < 0.2 * narrower_cost
+    assert model_cost(refined, records, NMPC_HORIZON) < 0.2 * narrower_cost
     assert refined.n_rrr == pytest.approx(true.n_rrr, rel=0.3)
 
 
@@ -348,7 +352,7 @@ def test_a_plant_that_diverges_is_refused_in_one_line_saying_what_to_change(caps
     runner = PlantRunner(lambda initial: ModelPlant(kcs, initial, nan_in_turns), 9.26)
     with pytest.raises(ToolchainError, match=r"^identify: the manoeuvres .* ended after less than 63 s .*non-finite"
                                              r".*give a smaller --tau-r-max-Nm"):
-        identify_model(runner, kcs.tau_u_max, kcs.tau_r_max, "fitted", refine=False)
+        identify_model(runner, kcs.tau_u_max, kcs.tau_r_max, "fitted", refine=False, horizon=NMPC_HORIZON)
 
 
 def test_the_wide_model_is_the_one_the_nmpc_predicts_with():
@@ -404,7 +408,8 @@ def test_a_hull_whose_damping_goes_with_its_speed_gets_the_speed_scaled_class():
 
     true = _wide(_wide_kcs(), damping_speed_mps=9.26)
     fit = identify_model(PlantRunner(lambda initial: ModelPlant(true, initial), 9.26), true.tau_u_max,
-                         true.tau_r_max, "fitted", refine=False)
+                         true.tau_r_max, "fitted", refine=False,
+                         horizon=NMPC_HORIZON)
     assert fit.model_class == "coupled mass, quadratic damping, speed-scaled"
     assert fit.parameters.damping_speed_mps == pytest.approx(9.26)
     assert fit.class_errors["coupled mass, quadratic damping"] > 2 * fit.class_errors[fit.model_class]
@@ -426,3 +431,140 @@ def test_the_refinement_simulates_the_speed_scaled_damping():
     fitted = dict(zip(QUADRATIC, theta))
     assert note.startswith("refined")
     assert fitted["d33"] == pytest.approx(true.d33, rel=0.02) and fitted["d22"] == pytest.approx(true.d22, rel=0.02)
+
+
+# --------------------------------------------------------------------------------------
+# the class is chosen for the NMPC's horizon
+# --------------------------------------------------------------------------------------
+
+class SteadyMomentPlant(ModelPlant):
+    """The model as a plant with a steady yaw moment the trials do not record (a rudder or
+    propeller asymmetry, a list): the heading of a prediction without it drifts, slowly."""
+
+    moment_Nm = 0.0
+
+    def step(self, time, step_size, inputs):
+        return super().step(time, step_size, {**inputs, "tau_r": inputs["tau_r"] + self.moment_Nm})
+
+
+def test_the_class_is_chosen_by_its_error_over_the_nmpc_horizon_not_over_one_long_run():
+    """The plant's own dynamics predict every 300-s horizon well, but over one 900-s run the
+    unrecorded moment's drift builds up; a model with twice the yaw damping hides that drift
+    and predicts every horizon worse.  The long run prefers the wrong model; the chooser, scoring
+    over the horizon from each measured state, keeps the plant's."""
+    from rhnc.ship.identification import choose_class, model_cost, open_loop_cost
+    from rhnc.ship.sea_trials import PlantRunner, sail_manoeuvres
+
+    true = _wide_kcs()
+
+    class Plant(SteadyMomentPlant):
+        moment_Nm = 0.05 * true.tau_r_max
+
+    _, records = sail_manoeuvres(PlantRunner(lambda initial: Plant(true, initial), 9.26), true.tau_u_max,
+                                 true.tau_r_max)
+    held_out = records["zigzag_20"]
+    damped = _wide(true, d33=2.0 * true.d33)
+    # the constructed disagreement: one long run favours the damped model
+    assert open_loop_cost(held_out, simulate(damped, held_out)) < 0.9 * open_loop_cost(held_out,
+                                                                                      simulate(true, held_out))
+    costs = {"linear": model_cost(damped, records, NMPC_HORIZON),
+             "coupled mass, quadratic damping": model_cost(true, records, NMPC_HORIZON)}
+    assert costs["coupled mass, quadratic damping"] < 0.6 * costs["linear"]
+    assert choose_class(costs) == "coupled mass, quadratic damping"
+
+
+def test_the_horizon_cost_restarts_each_prediction_from_the_measured_state():
+    """A model that is exact but for an unrecorded steady moment: its error over a horizon stays
+    what the moment does in that horizon, however long the record; a longer horizon costs more."""
+    from rhnc.ship.prediction_error import horizon_cost
+
+    true = _wide_kcs()
+    plant = SteadyMomentPlant(true, {"u_mps": 9.26})
+    plant.moment_Nm = 0.02 * true.tau_r_max
+    record = _sailed_zigzag(plant, 1800)
+    t, tau = record.t, record.tau
+    first_half = Record("zigzag", t[:901], record.states[:901], tau[:901])
+    whole = horizon_cost(true, record, 300.0, 20.0)
+    assert whole == pytest.approx(horizon_cost(true, first_half, 300.0, 20.0), rel=0.1)
+    assert horizon_cost(true, record, 600.0, 20.0) > 1.5 * whole
+    assert horizon_cost(true, first_half, 1000.0, 20.0) == np.inf   # no window lasts the horizon
+
+
+def test_the_refinement_fits_segments_of_the_horizon_from_the_measured_states():
+    """The refinement's residuals with a horizon are the errors of predictions restarted from
+    the measured state at the start of each segment: the windows of the horizon cost."""
+    from rhnc.ship.equation_error import ALL_COEFFICIENTS, QUADRATIC
+    from rhnc.ship.output_error import _coefficient_scales, _simulation_error
+    from rhnc.ship.prediction_error import STATE_ERROR_WEIGHTS, windowed_predictions
+
+    true = _wide_kcs()
+    plant = SteadyMomentPlant(true, {"u_mps": 9.26})
+    plant.moment_Nm = 0.02 * true.tau_r_max
+    record = _sailed_zigzag(plant, 900)
+    full = {name: getattr(true, name) for name in ALL_COEFFICIENTS}
+    unit = _coefficient_scales(full, 9.26)
+    evaluate, _ = _simulation_error({"zigzag_10": record}, QUADRATIC, full, unit, horizon_s=300.0)
+    residual = np.asarray(evaluate(np.array([full[name] / unit[name] for name in QUADRATIC]))).ravel()
+    predicted, measured = windowed_predictions(true, record, 300.0, 300.0)
+    assert predicted.shape[2] == 3   # 900 s in three segments
+    expected = (predicted[:, 2:6] - measured[:, 2:6]) * STATE_ERROR_WEIGHTS[None, :, None]
+    segments = np.concatenate([expected[:, :, w].ravel() for w in range(expected.shape[2])]) / np.sqrt(900)
+    assert np.max(np.abs(segments)) * np.sqrt(900) > 1.0   # the moment shows: over a degree of heading
+    assert residual == pytest.approx(segments, rel=1e-6, abs=1e-9)
+
+
+def _sailed_zigzag(plant, duration_s):
+    """A square-wave helm on ``plant`` (a ModelPlant) sampled every second, as a Record."""
+    trim = plant.params.equilibrium_tau(9.26)[0]
+    t = np.arange(0.0, duration_s + 1.0)
+    tau = np.array([(trim, 0.3 * plant.params.tau_r_max * np.sign(np.sin(time / 90))) for time in t])
+    states = [plant.state.copy()]
+    for k in range(len(t) - 1):
+        plant.step(t[k], 1.0, {"tau_u": tau[k, 0], "tau_r": tau[k, 1]})
+        states.append(plant.state.copy())
+    return Record("zigzag_10", t, np.array(states), tau)
+
+
+def test_identify_takes_the_horizon_from_the_scenarios_nmpc(tmp_path):
+    """horizon_steps times the control interval of the control participant steering the plant."""
+    from rhnc.cosim.identify_horizon import nmpc_horizon
+
+    text = (REPO / "scenarios" / "exp3a_static.toml").read_text()
+    assert nmpc_horizon(REPO / "scenarios" / "exp3a_static.toml") == Horizon(300.0, 20.0)
+    ctrl = 'parameter_set = "default"\nhorizon_steps = 15\n'
+    assert ctrl in text
+    scenario = tmp_path / "short.toml"
+    scenario.write_text(text.replace(ctrl, 'parameter_set = "default"\nhorizon_steps = 8\n'))
+    assert nmpc_horizon(scenario) == Horizon(160.0, 20.0)
+    scenario.write_text(text.replace(ctrl, 'parameter_set = "default"\nhorizon_steps = 8\ncontrol_interval_s = 10.0\n'))
+    assert nmpc_horizon(scenario) == Horizon(80.0, 10.0)
+
+
+def test_identify_without_an_nmpc_steering_the_plant_is_refused_in_one_line(tmp_path, capsys):
+    scenario = REPO / "scenarios" / "turning_circle.toml"
+    code = main(["identify", str(scenario), "--tau-u-max-N", "1.8e6", "--tau-r-max-Nm", "3.3e8",
+                 "--results", str(tmp_path), "--out", str(tmp_path / "set.toml")])
+    assert code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "turning_circle.toml" in err[0]
+    assert "no participant of type 'control' steers the plant 'ship'" in err[0]
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("option, message", [
+    ("control_interval_s = -20.0", "option 'control_interval_s' must be > 0"),
+    ("horizon_steps = 0", "option 'horizon_steps' must be an integer from 1 to 400"),
+])
+def test_identify_refuses_an_nmpc_horizon_it_cannot_choose_for(tmp_path, capsys, option, message):
+    text = (REPO / "scenarios" / "exp3a_static.toml").read_text()
+    scenario = tmp_path / "bad.toml"
+    scenario.write_text(text.replace('parameter_set = "default"\nhorizon_steps = 15\n',
+                                     f'parameter_set = "default"\nhorizon_steps = 15\n{option}\n'.replace(
+                                         "horizon_steps = 15\nhorizon_steps = 0", "horizon_steps = 0")))
+    results = tmp_path / "results"
+    code = main(["identify", str(scenario), "--tau-u-max-N", "1.8e6", "--tau-r-max-Nm", "3.3e8",
+                 "--results", str(results), "--out", str(tmp_path / "set.toml")])
+    assert code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "bad.toml: participants.ctrl" in err[0] and message in err[0]
+    assert not results.exists() and not (tmp_path / "set.toml").exists()

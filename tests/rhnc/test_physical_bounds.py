@@ -139,14 +139,15 @@ def test_identify_refuses_an_unknown_ship_in_one_line(capsys, tmp_path):
 def test_the_narrower_classes_keep_their_free_masses():
     """The particulars bound the hull-polynomial class only: a plant of the paper's linear class,
     given bounds about 1.6 times its masses, still gets its own masses from the linear class."""
-    from test_identification import ModelPlant
+    from test_identification import NMPC_HORIZON, ModelPlant
 
     from rhnc.ship.identification import identify_model
     from rhnc.ship.sea_trials import PlantRunner
 
     true = load_parameter_set("default")
     fit = identify_model(PlantRunner(lambda initial: ModelPlant(true, initial), 9.26), true.tau_u_max,
-                         true.tau_r_max, "fitted", refine=False, masses=_masses(true, 1.6))
+                         true.tau_r_max, "fitted", refine=False, masses=_masses(true, 1.6),
+                         horizon=NMPC_HORIZON)
     assert fit.model_class == "linear"
     for name in ("m11", "m22", "m33"):
         assert getattr(fit.parameters, name) == pytest.approx(getattr(true, name), rel=0.05), name
