@@ -1,5 +1,8 @@
 """Parts of the NMPC's collision domains checked alone: the reach test of a shifted domain, which
-obstacles get the slots, and the alteration's heading bounds for any time values."""
+obstacles get the slots, the alteration's heading bounds for any time values, the classes
+reported without risk, the close-quarters range, a give-way alteration at the CPA itself, the
+plain circle for a ship already inside a shifted domain, and a stand-on target inside the
+clearance."""
 
 import math
 
@@ -66,3 +69,66 @@ def test_the_alteration_bounds_are_the_same_for_integer_times():
     _, upper_f = heading_bounds(ceiling, 50.0, -0.45, 0.0, whole.astype(float))
     np.testing.assert_allclose(upper, upper_f)
     assert upper[-1] == pytest.approx(-0.5)
+
+
+def test_without_risk_the_report_still_gives_every_obstacle_its_class():
+    # no trigger and no risk of collision (a ship 6 nm abeam, sailing with us): no constraint, but
+    # the classes are reported all the same (the telemetry's encounter_class)
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    abeam = np.array([[0.0, 6.0 * NM, SPEED, 0.0, RADIUS]])
+    _, report = domains.parameters(abeam, state, np.zeros(2), SPEED, 5.0, L, et=False)
+    assert not report.risk and list(report.active) == [0.0]
+    assert report.class_codes is not None and len(report.class_codes) == 1
+
+
+def test_a_ship_far_abeam_sailing_with_us_is_no_risk_of_collision():
+    # 5 nm to starboard, same course and speed: no closest approach ahead, and not within two
+    # clearances (the range counts both coordinates, not the one along our course alone)
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=1)
+    rows = np.array([[0.0, 5.0 * NM, SPEED, 0.0, RADIUS]])
+    assert not domains._collision_risk(rows, np.array([RADIUS]), np.zeros(2), np.array([SPEED, 0.0]))
+    assert domains._collision_risk(rows * [1.0, 0.3, 1.0, 1.0, 1.0], np.array([RADIUS]), np.zeros(2),
+                                   np.array([SPEED, 0.0]))  # 1.5 nm abeam: within two clearances
+
+
+def test_a_give_way_alteration_is_not_due_at_the_closest_approach_itself():
+    # TCPA exactly 0: the closest approach is now, nothing is ahead to give way for
+    from rhnc.encounters.colregs import Encounter
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=1)
+    now = Encounter("head_on", 0.0, 0.0, RADIUS, 0.2 * NM, 0.0)
+    ahead = Encounter("head_on", 0.0, 0.0, RADIUS, 0.2 * NM, 60.0)
+    assert not domains._give_way_due(now, 0.0, 1.0, RADIUS, None)
+    assert domains._give_way_due(ahead, 0.0, 1.0, RADIUS, None)
+
+
+def test_an_own_ship_already_inside_a_shifted_domain_gets_the_plain_circle():
+    # a head-on target whose shifted domain (moved towards its starboard bow) holds the own ship,
+    # though the plain circle about the target does not: the domain falls back to the plain circle
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=1)
+    rho = RADIUS
+    target = np.array([1.3 * NM, 1.2 * NM, -12 * KNOT, 0.0, RADIUS])  # south-bound, on our starboard bow
+    forward, side = HEAD_ON_OFFSET
+    shifted = target[:2] + rho * (forward * np.array([-1.0, 0.0]) + side * np.array([0.0, -1.0]))
+    own = np.zeros(2)
+    assert math.hypot(*(shifted - own)) < rho * (1.0 + math.hypot(forward, side))
+    assert math.hypot(*target[:2]) > rho
+    offset, radius, _ = domains._domain(target, rho, "head_on", own, math.hypot(*target[:2]), -10.0, False)
+    np.testing.assert_array_equal(offset, [0.0, 0.0])
+    assert radius == pytest.approx(rho)
+
+
+def test_a_stand_on_target_inside_the_clearance_gets_its_constraint_even_while_opening():
+    # a ship crossing from port, stood on for while far, is found inside the clearance and
+    # opening: Rule 17(b)'s prediction (no CPA ahead) no longer asks for action, but the ship
+    # inside the clearance does
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=1)
+    state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+    east = np.array([0.0, 15 * KNOT])
+    far = np.array([[6.0 * NM, -6.0 * NM * 15 / 18, *east, RADIUS]])  # meets us in 20 min
+    _, first = domains.parameters(far, state, np.zeros(2), SPEED, 5.0, L, et=True, time_s=0.0)
+    assert ENCOUNTER_CLASSES[int(first.class_codes[0])] == "crossing_stand_on" and list(first.active) == [0.0]
+    inside = np.array([[0.2 * NM, 0.9 * NM, *east, RADIUS]])  # ahead to starboard now, moving away
+    _, second = domains.parameters(inside, state, np.zeros(2), SPEED, 5.0, L, et=True, time_s=20.0)
+    assert ENCOUNTER_CLASSES[int(second.class_codes[0])] == "crossing_stand_on"
+    assert list(second.active) == [1.0]

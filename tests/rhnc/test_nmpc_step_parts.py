@@ -155,6 +155,22 @@ def test_the_sqp_method_takes_its_options_and_solves_quietly(capfd):
     assert capfd.readouterr().out == ""
 
 
+def test_the_sqp_method_stops_only_once_the_constraints_hold():
+    # from x = 0 the constraint x = 0.5 is violated by 0.5 while the objective has nothing to
+    # say (zero gradient): the method must go on to x = 0.5, not stop at the start
+    x = ca.SX.sym("x")
+    solver = ca.nlpsol("feasible_sqp", "sqpmethod", {"x": x, "f": 0 * x, "g": x},
+                       solver_options("sqpmethod", [], 50, None))
+    result = solver(x0=0.0, lbg=0.5, ubg=0.5)
+    assert float(result["x"]) == pytest.approx(0.5, abs=1e-6)
+
+
+def test_a_single_integration_substep_is_a_valid_setting():
+    assert NMPCSettings(substeps=1).substeps == 1
+    with pytest.raises(ValueError, match="substeps"):
+        NMPCSettings(substeps=0)
+
+
 def test_real_time_iterations_outside_acados_are_refused_with_the_setting_named():
     with pytest.raises(ValueError, match="real_time_iterations needs solver = 'acados', got solver = 'fatrop'"):
         NMPCSettings(solver="fatrop", real_time_iterations=True)
