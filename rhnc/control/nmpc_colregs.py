@@ -557,11 +557,11 @@ class CollisionDomains:
     def _stand_on_action(self, side: float, port_allowed: bool, reference_heading_rad: float, own_xy,
                          own_speed_mps: float, traffic) -> tuple[float, bool]:
         """The readily apparent action of a ship overtaken by another that does not keep clear
-        (Rule 17(b)): the turn ``side`` chosen above at its speed when that keeps the whole
-        traffic clear (``side_clearance_m`` >= 0); else, of a turn to either side the rules
-        allow, a turn with the speed brought down to ``SLOW_FACTOR`` of it, and the speed
-        brought down alone, the one that keeps the traffic clearest.  Returns (side of the
-        turn, 0 for none; whether to slow down).
+        (Rule 17(b)): of a turn to each side the rules allow (``side``, the one chosen above,
+        first), at the present speed and with the speed brought down to ``SLOW_FACTOR`` of it,
+        and the speed brought down alone, the one that keeps the traffic clearest
+        (``side_clearance_m``; a tie goes to the earlier).  Returns (side of the turn, 0 for
+        none; whether to slow down).
 
         A ship overtaking us is faster and, converging from a quarter, crosses our course
         ahead of us: a 35 deg turn alone, to the side another target leaves us (a head-on
