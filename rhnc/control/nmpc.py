@@ -81,6 +81,7 @@ from rhnc.control.nmpc_codegen import NLPLibrary
 from rhnc.control.nmpc_alteration import alteration_steering, heading_bounds
 from rhnc.control.nmpc_coastline import CoastlineDomains
 from rhnc.control.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport
+from rhnc.control.nmpc_manoeuvre import ManoeuvreResponse
 from rhnc.control.nmpc_problem import (ACCEPTABLE_VIOLATION, DISTURBANCE_SIZE, FRESH_SOLVER_PLUGINS, OBSTACLE_FIELDS,
                                StepEvaluator, build_problem, renew_solver_after, solver_options)
 from rhnc.control.nmpc_settings import SOLVERS, NMPCSettings, NMPCSolution
@@ -186,6 +187,9 @@ class NMPCController:
         else:
             self.library, self.solvers = self._nlpsol_solvers()
         self.domains = CollisionDomains(s.domain_settings(), s.max_obstacles)
+        # a manoeuvre is chosen with this ship's deceleration: full astern force at the share the
+        # speed bound ramps with, without the hull's drag, which only helps
+        self.domains.response = ManoeuvreResponse(deceleration_mps2=SLOWING_SHARE * params.tau_max[0] / params.m11)
         self.observer = (DisturbanceObserver(params, self.state_scale, s.observer_gain)
                          if s.disturbance_observer else None)
         self.memory = PlanMemory(s.horizon_steps, s.control_interval_s, self._rollout)

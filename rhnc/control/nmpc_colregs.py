@@ -85,6 +85,7 @@ from orchestrator.geometry import wrap_angle
 from rhnc.encounters.colregs import (ACTION_BUFFER_S, ENCOUNTER_CLASSES, STAND_ON_ACTION_RANGE_FACTOR,
                                     STAND_ON_ACTION_TCPA_S, EncounterTracker, cpa_tcpa, latest_alteration_s,
                                     stand_on_latest_s, stand_on_must_act)
+from rhnc.control.nmpc_manoeuvre import ManoeuvreResponse, response_clearance_m
 from rhnc.control.nmpc_problem import OBSTACLE_FIELDS
 
 LOG = logging.getLogger(__name__)
@@ -117,6 +118,9 @@ INSIDE_OPENING_MPS = 1.0
 #: a readily apparent reduction of speed brings it to this fraction of the speed at its
 #: beginning (the analysis reads a reduction of at least half as readily apparent)
 SLOW_FACTOR = 0.45
+#: the larger turns weighed when no readily apparent one keeps the traffic clear [deg]
+LARGER_ALTERATIONS_DEG = (60.0, 90.0)
+
 @dataclasses.dataclass(frozen=True)
 class DomainSettings:
     """How obstacles become collision domains.
@@ -213,6 +217,8 @@ class CollisionDomains:
         self._altered: set[int] = set()
         self._onset_heading: dict[int, float] = {}
         self._slowing: dict[int, float] = {}
+        #: how fast the own ship takes up a manoeuvre, for choosing one (the NMPC sets its ship's)
+        self.response = ManoeuvreResponse()
         self.stand_on_actions = 0
         self.alterations = 0
 
@@ -497,25 +503,13 @@ class CollisionDomains:
                        and deviation * yaw_rate_rps > 0.0)
         if name in ("overtaking", "overtaken"):
             side = self._free_side(encounter, deviation, reference_heading_rad, motion, traffic, port_allowed)
-        slow = False
+        size, slow = s.alteration_deg, False
         if name == "overtaken" and index in self._acting and encounter.tcpa_s > 0.0 and motion is not None and traffic:
-            side, slow = self._stand_on_action(side, port_allowed, reference_heading_rad, motion[0], motion[1], traffic)
+            side, size, slow = self._stand_on_action(side, port_allowed, reference_heading_rad, motion, traffic)
         if side == 0.0:  # a reduction of speed alone
-            self._slowing[index] = SLOW_FACTOR * motion[1]
-            self.alterations += 1
-            LOG.info("target %d (%s): slowing to %.0f %% of the speed (CPA %.0f m in %.0f s)", index, name,
-                     100.0 * SLOW_FACTOR, encounter.cpa_m, encounter.tcpa_s)
+            self._begin_slowing(index, encounter, motion[1])
             return
-        goal = reference_heading_rad + side * math.radians(s.alteration_deg)
-        onset = self._onset_heading.get(index)
-        if onset is not None:
-            # at least the alteration from the heading the ship had at the onset of risk, the
-            # course the other ship saw: a reference pointing back to the route after an
-            # earlier detour (or a turn under way at the onset) left alterations of 20-28 deg
-            # of course over ground from it, not readily apparent (Rule 8(b))
-            beyond = wrap_angle(onset + side * math.radians(s.alteration_deg) - goal)
-            if side * beyond > 0.0:
-                goal += beyond
+        goal = self._alteration_goal(index, reference_heading_rad, side, size)
         if name in GIVE_WAY_CLASSES:
             begin = ((self._give_way_due(encounter, goal, side, separation_m, motion) or manoeuvring)
                      and encounter.tcpa_s > 0.0 and encounter.cpa_m < s.risk_cpa_m)
@@ -523,13 +517,34 @@ class CollisionDomains:
             begin = index in self._acting and encounter.tcpa_s > 0.0
         if not begin:
             return
+        if name in GIVE_WAY_CLASSES and motion is not None and len(traffic) > 1:
+            side, size, slow = self._give_way_action(index, name, side, goal, reference_heading_rad, motion, traffic)
+            if side == 0.0:
+                self._begin_slowing(index, encounter, motion[1])
+                return
+            goal = self._alteration_goal(index, reference_heading_rad, side, size)
         self._altering[index] = (time_s, heading_rad, goal, side)
         if slow:
             self._slowing[index] = SLOW_FACTOR * motion[1]
         self.alterations += 1
-        LOG.info("target %d (%s): altering %.0f deg to %s (CPA %.0f m in %.0f s)", index, name, s.alteration_deg,
-                 "starboard" if side > 0 else "port", encounter.cpa_m, encounter.tcpa_s)
+        LOG.info("target %d (%s): altering %.0f deg to %s%s (CPA %.0f m in %.0f s)", index, name, size,
+                 "starboard" if side > 0 else "port", " and slowing" if slow else "", encounter.cpa_m,
+                 encounter.tcpa_s)
 
+    def _alteration_goal(self, index: int, reference_heading_rad: float, side: float, size_deg: float) -> float:
+        """The heading [rad] an alteration of ``size_deg`` to ``side`` holds: off the reference,
+        and at least ``alteration_deg`` off the heading the ship had at the target's onset of risk."""
+        goal = reference_heading_rad + side * math.radians(size_deg)
+        onset = self._onset_heading.get(index)
+        if onset is not None:
+            # at least the alteration from the heading the ship had at the onset of risk, the
+            # course the other ship saw: a reference pointing back to the route after an
+            # earlier detour (or a turn under way at the onset) left alterations of 20-28 deg
+            # of course over ground from it, not readily apparent (Rule 8(b))
+            beyond = wrap_angle(onset + side * math.radians(self.settings.alteration_deg) - goal)
+            if side * beyond > 0.0:
+                goal += beyond
+        return goal
 
     def _free_side(self, encounter, deviation_deg: float, reference_heading_rad: float, motion, traffic,
                    port_allowed: bool) -> float:
@@ -554,14 +569,44 @@ class CollisionDomains:
                     side = -side
         return side if port_allowed else 1.0
 
-    def _stand_on_action(self, side: float, port_allowed: bool, reference_heading_rad: float, own_xy,
-                         own_speed_mps: float, traffic) -> tuple[float, bool]:
+    def _begin_slowing(self, index: int, encounter, own_speed_mps: float) -> None:
+        """Hold a reduction of speed alone to ``SLOW_FACTOR`` of ``own_speed_mps`` for a target."""
+        self._slowing[index] = SLOW_FACTOR * own_speed_mps
+        self.alterations += 1
+        LOG.info("target %d (%s): slowing to %.0f %% of the speed (CPA %.0f m in %.0f s)", index,
+                 encounter.encounter_class, 100.0 * SLOW_FACTOR, encounter.cpa_m, encounter.tcpa_s)
+
+    def _clearance(self, motion, course_rad: float, factor: float, traffic) -> float:
+        """The least clearance [m] from ``traffic`` of a manoeuvre to ``course_rad`` at ``factor``
+        of the present speed, taken up as the ship can (``self.response``)."""
+        own_xy, own_speed, _, _, own_velocity = motion
+        heading = math.atan2(own_velocity[1], own_velocity[0])
+        return response_clearance_m(own_xy, own_speed, heading, course_rad, factor * own_speed, traffic,
+                                    self.response)
+
+    def _give_way_action(self, index: int, name: str, side: float, goal: float, reference_heading_rad: float,
+                         motion, traffic) -> tuple[float, float, bool]:
+        """The readily apparent action of a give-way ship among other traffic (Rules 8, 16):
+        the turn to ``goal`` at the present speed when it keeps every other target clear; else
+        the first of the manoeuvres :meth:`_choose` weighs, to the same side, that keeps the whole
+        traffic clear (not the reduction of speed alone for a head-on ship: Rule 14 asks for a
+        turn to starboard).  Returns (``side``, or 0 for no turn; size of the turn [deg];
+        whether to slow down).
+
+        A turn to starboard for a ship crossing ahead, with a faster ship converging from the
+        starboard quarter, took the own ship across the faster ship's bow (0.75 nm): the 35 deg
+        turn alone is what the rules ask of a ship with nobody else about."""
+        others = [target for j, target in enumerate(traffic) if j != index]
+        if self._clearance(motion, goal, 1.0, others) >= 0.0:
+            return side, self.settings.alteration_deg, False
+        return self._choose((side,), name != "head_on", reference_heading_rad, motion, traffic)
+
+    def _stand_on_action(self, side: float, port_allowed: bool, reference_heading_rad: float, motion,
+                         traffic) -> tuple[float, float, bool]:
         """The readily apparent action of a ship overtaken by another that does not keep clear
-        (Rule 17(b)): of a turn to each side the rules allow (``side``, the one chosen above,
-        first), at the present speed and with the speed brought down to ``SLOW_FACTOR`` of it,
-        and the speed brought down alone, the one that keeps the traffic clearest
-        (``side_clearance_m``; a tie goes to the earlier).  Returns (side of the turn, 0 for
-        none; whether to slow down).
+        (Rule 17(b)): the first of the manoeuvres :meth:`_choose` weighs, to each side the rules
+        allow (``side``, the one chosen above, first), that keeps the traffic clear.  Returns
+        (side of the turn, 0 for none; size of the turn [deg]; whether to slow down).
 
         A ship overtaking us is faster and, converging from a quarter, crosses our course
         ahead of us: a 35 deg turn alone, to the side another target leaves us (a head-on
@@ -571,18 +616,35 @@ class CollisionDomains:
         while another ship forward of our port quarter closes on us, classified yet or not: it
         may become a ship crossing from port, for which Rule 17(c) rules out that turn (a turn to
         port chosen for the clearance broke it twice)."""
-        alteration = math.radians(self.settings.alteration_deg)
-
-        def clearance(turn: float, factor: float) -> float:
-            return side_clearance_m(own_xy, factor * own_speed_mps, reference_heading_rad + turn * alteration, traffic)
-
-        if not port_allowed or _closing_on_the_port_side(own_xy, own_speed_mps, reference_heading_rad, traffic):
+        if not port_allowed or _closing_on_the_port_side(motion[0], motion[1], reference_heading_rad, traffic):
             turns: tuple[float, ...] = (1.0,)
         else:
             turns = (side, -side)
-        options = [(turn, 1.0) for turn in turns] + [(turn, SLOW_FACTOR) for turn in turns] + [(0.0, SLOW_FACTOR)]
-        turn, factor = max(options, key=lambda option: clearance(*option))
-        return turn, factor < 1.0
+        return self._choose(turns, True, reference_heading_rad, motion, traffic)
+
+    def _choose(self, sides: tuple[float, ...], slow_alone: bool, reference_heading_rad: float, motion,
+                traffic) -> tuple[float, float, bool]:
+        """Of the manoeuvres, in this order: a turn of ``alteration_deg`` to each of ``sides`` at
+        the present speed, the same turns with the speed brought down to ``SLOW_FACTOR`` of it, the
+        reduction of speed alone (if ``slow_alone``), then the larger turns of
+        ``LARGER_ALTERATIONS_DEG``, at speed and slowed: the first that keeps the whole traffic
+        clear (:meth:`_clearance`: the course and speed taken up as the ship can), else the one
+        that keeps it clearest (a tie goes to the earlier).  Returns (side, 0 for no turn; size
+        [deg]; whether to slow down).
+
+        With only 35 deg turns weighed, a ship crossing from port and a faster one coming up
+        from astern left none that kept both clear, and the least bad (turning and slowing)
+        let the overtaker by at 0.86 nm; a 60-75 deg turn at speed kept both clear."""
+        size = self.settings.alteration_deg
+        options = ([(turn, size, 1.0) for turn in sides] + [(turn, size, SLOW_FACTOR) for turn in sides]
+                   + ([(0.0, size, SLOW_FACTOR)] if slow_alone else [])
+                   + [(turn, larger, factor) for larger in LARGER_ALTERATIONS_DEG for turn in sides
+                      for factor in (1.0, SLOW_FACTOR)])
+        scores = [self._clearance(motion, reference_heading_rad + turn * math.radians(degrees), factor, traffic)
+                  for turn, degrees, factor in options]
+        clear = [option for option, score in zip(options, scores) if score >= 0.0]
+        turn, degrees, factor = clear[0] if clear else options[int(np.argmax(scores))]
+        return turn, degrees, factor < 1.0
 
     def _give_way_due(self, encounter, goal: float, side: float, separation_m: float, motion) -> bool:
         """Whether a give-way alteration to ``goal`` is due: the CPA at most

@@ -14,9 +14,9 @@ import pytest
 
 from rhnc.encounters.colregs import wrap_deg
 from rhnc.encounters.colregs import ENCOUNTER_CLASSES, cpa_tcpa
-from rhnc.control.nmpc import SLOWING_SHARE, NMPCController, NMPCSettings
+from rhnc.control.nmpc import NMPCController, NMPCSettings
 from rhnc.control.nmpc_alteration import CATCH_UP_RATE_DEG_S, HEADING_TOLERANCE_DEG, YAW_TIME_CONSTANT_S, heading_bounds
-from rhnc.control.nmpc_colregs import PORT_ALLOWANCE_DEG, SLOW_FACTOR, CollisionDomains, DomainReport, DomainSettings
+from rhnc.control.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport, DomainSettings
 from rhnc.control.nmpc_problem import OBSTACLE_FIELDS
 from rhnc.navigation.reference_participant import line_or_turn_reference
 from rhnc.ship.ship_model import load_parameter_set, rk4_step
@@ -628,75 +628,3 @@ def test_a_ship_turned_half_a_turn_off_its_reference_keeps_the_reference_on_the_
     mirrored = controller._trimmed_reference(0.0, port_state, line_or_turn_reference(
         20.0 * np.arange(11), (0.0, 0.0), math.radians(8.7), SPEED))[0]
     assert math.degrees(mirrored[0, 2]) == pytest.approx(8.7, abs=0.5)
-
-
-def _overtaken_from_the_starboard_quarter(head_on_ahead):
-    """Own ship northbound at 18 kn; a faster ship 1.5 nm off on the starboard quarter
-    (bearing 129 deg) converging at 5.6 kn on a collision course (CPA 0, 16 min ahead); with
-    ``head_on_ahead`` also a ship meeting us head-on 8 nm ahead (Rule 14: no turn to port)."""
-    bearing = math.radians(129.0)
-    position = 1.5 * NM * np.array([math.cos(bearing), math.sin(bearing)])
-    velocity = np.array([SPEED, 0.0]) - position / np.hypot(*position) * 5.6 * KNOT
-    targets = [[*position, *velocity, RADIUS]]
-    if head_on_ahead:
-        targets.insert(0, [8.0 * NM, 0.05 * NM, -20.0 * KNOT, 0.0, RADIUS])
-    return np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0]), np.array(targets)
-
-
-def test_overtaken_with_port_ruled_out_the_stand_on_ship_also_slows_down():
-    # a turn to starboard alone, the only one a head-on ship ahead leaves, keeps converging on the
-    # overtaker (and the plan raced it): the action adds a readily apparent reduction of speed
-    state, targets = _overtaken_from_the_starboard_quarter(head_on_ahead=True)
-    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=3)
-    _, report = domains.parameters(targets, state, np.zeros(2), SPEED, 5.0, 230.0, et=True,
-                                   reference_heading_rad=0.0, time_s=0.0)
-    assert [ENCOUNTER_CLASSES[int(code)] for code in report.class_codes] == ["head_on", "overtaken"]
-    assert report.alteration_floor is not None and report.alteration_ceiling is None
-    assert report.speed_goal_mps == pytest.approx(SLOW_FACTOR * SPEED)
-
-
-def test_overtaken_with_a_clear_turn_to_port_keeps_its_speed():
-    state, targets = _overtaken_from_the_starboard_quarter(head_on_ahead=False)
-    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=3)
-    _, report = domains.parameters(targets, state, np.zeros(2), SPEED, 5.0, 230.0, et=True,
-                                   reference_heading_rad=0.0, time_s=0.0)
-    assert report.alteration_ceiling is not None and report.speed_goal_mps is None
-
-
-def test_the_reduction_of_speed_ends_when_the_overtaker_is_past_and_clear():
-    state, targets = _overtaken_from_the_starboard_quarter(head_on_ahead=True)
-    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=3)
-    domains.parameters(targets, state, np.zeros(2), SPEED, 5.0, 230.0, et=True, reference_heading_rad=0.0, time_s=0.0)
-    past = targets.copy()
-    past[1, :2] = [1.8 * NM, -1.0 * NM]  # ahead and to port, opening: past, 2.06 nm off
-    _, report = domains.parameters(past, state, np.zeros(2), SPEED, 5.0, 230.0, et=True,
-                                   reference_heading_rad=0.0, time_s=20.0)
-    assert report.speed_goal_mps is None
-
-
-def test_a_plan_slowing_down_keeps_to_the_speed_the_ship_can_shed(kcs):
-    # the plan's speed comes down at least at the deceleration asked for, to the goal speed
-    state, targets = _overtaken_from_the_starboard_quarter(head_on_ahead=True)
-    controller = NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=20.0, colregs=True))
-    reference = line_or_turn_reference(20.0 * np.arange(N + 1), (0.0, 0.0), 0.0, SPEED)
-    solution = controller.solve(0.0, state, reference, targets, et=True)
-    controller.close()
-    goal = SLOW_FACTOR * SPEED
-    slowing = SLOWING_SHARE * (kcs.tau_max[0] + kcs.equilibrium_tau(goal)[0]) / kcs.m11
-    ramp = np.maximum(goal, SPEED - slowing * 20.0 * np.arange(1, N + 1))
-    assert not solution.fallback
-    assert np.all(solution.states[1:, 3] <= ramp + 1e-3)
-    assert solution.states[-1, 3] <= goal + 1e-3
-
-
-def test_overtaken_with_a_ship_closing_from_port_weighs_no_turn_to_port():
-    # the turn to port that keeps the overtaker clearest is not weighed while a ship on the port
-    # bow closes on us: it may become a ship crossing from port (Rule 17(c))
-    state, targets = _overtaken_from_the_starboard_quarter(head_on_ahead=False)
-    bearing = math.radians(-60.0)
-    crossing = [9.0 * NM * math.cos(bearing), 9.0 * NM * math.sin(bearing), 0.0, 15.0 * KNOT, RADIUS]
-    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=3)
-    _, report = domains.parameters(np.vstack([targets, crossing]), state, np.zeros(2), SPEED, 5.0, 230.0, et=True,
-                                   reference_heading_rad=0.0, time_s=0.0)
-    assert report.alteration_ceiling is None
-    assert report.alteration_floor is not None or report.speed_goal_mps is not None

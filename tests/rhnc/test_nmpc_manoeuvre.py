@@ -1,0 +1,189 @@
+"""The manoeuvre the COLREG-aware NMPC chooses among other traffic, and how its ship takes it up.
+
+A stand-on ship that acts for a ship overtaking it (Rule 17(b)), and a give-way ship whose plain
+35 deg turn would take it into another target, weigh turns of 35, 60 and 90 deg to the sides the
+rules allow, at speed and slowed, and the reduction of speed alone: the first that keeps every
+target clear, else the clearest (:mod:`rhnc.control.nmpc_colregs`), scored with the time the
+ship needs to turn and to slow (:mod:`rhnc.control.nmpc_manoeuvre`).  Own ship northbound at
+18 kn from the origin; every target's R_i is 1 nm.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from rhnc.control.nmpc import SLOWING_SHARE, NMPCController, NMPCSettings
+from rhnc.control.nmpc_colregs import SLOW_FACTOR, CollisionDomains, DomainSettings
+from rhnc.control.nmpc_manoeuvre import ManoeuvreResponse, own_track, response_clearance_m
+from rhnc.encounters.colregs import ENCOUNTER_CLASSES
+from rhnc.navigation.reference_participant import line_or_turn_reference
+from rhnc.ship.ship_model import load_parameter_set
+
+NM = 1852.0
+KNOT = NM / 3600.0
+N = 15
+SPEED = 18 * KNOT
+RADIUS = 1.0 * NM
+STATE = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+
+
+@pytest.fixture(scope="module")
+def kcs():
+    return load_parameter_set("default")
+
+
+def converging(bearing_deg, range_nm, closing_kn):
+    """A target ``range_nm`` off at ``bearing_deg``, closing on us at ``closing_kn`` (CPA 0)."""
+    bearing = math.radians(bearing_deg)
+    position = range_nm * NM * np.array([math.cos(bearing), math.sin(bearing)])
+    velocity = np.array([SPEED, 0.0]) - position / np.hypot(*position) * closing_kn * KNOT
+    return [*position, *velocity, RADIUS]
+
+
+def sailing(bearing_deg, range_nm, course_deg, speed_kn):
+    bearing, course = math.radians(bearing_deg), math.radians(course_deg)
+    return [range_nm * NM * math.cos(bearing), range_nm * NM * math.sin(bearing),
+            speed_kn * KNOT * math.cos(course), speed_kn * KNOT * math.sin(course), RADIUS]
+
+
+def act(targets, max_obstacles=3):
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=max_obstacles)
+    _, report = domains.parameters(np.array(targets, dtype=float), STATE, np.zeros(2), SPEED, 5.0, 230.0, et=True,
+                                   reference_heading_rad=0.0, time_s=0.0)
+    return domains, report
+
+
+def classes(report):
+    return [ENCOUNTER_CLASSES[int(code)] for code in report.class_codes]
+
+
+# -- the response the choice is scored with -------------------------------------------------
+
+def test_the_own_ship_holds_on_for_the_delay_then_turns_and_slows_at_its_rates():
+    response = ManoeuvreResponse(delay_s=20.0, turn_rate_rps=math.radians(0.5), deceleration_mps2=0.02, step_s=1.0,
+                                 horizon_s=600.0)
+    times, positions = own_track((0.0, 0.0), 10.0, 0.0, math.radians(30.0), 4.0, response)
+    assert positions[20] == pytest.approx([200.0, 0.0])  # 20 s straight on at 10 m/s
+    steps = np.diff(positions, axis=0)
+    headings = np.degrees(np.arctan2(steps[:, 1], steps[:, 0]))
+    speeds = np.hypot(*steps.T)
+    assert headings[60] == pytest.approx(0.5 * 40.5, abs=0.1)  # turning at 0.5 deg/s after the delay
+    assert headings[100] == pytest.approx(30.0, abs=1e-6)  # and holding the new course
+    assert speeds[120] == pytest.approx(10.0 - 0.02 * 100.5, abs=1e-6)  # slowing at 0.02 m/s^2
+    assert speeds[500] == pytest.approx(4.0)  # down to the goal, no further
+    assert times[-1] == pytest.approx(600.0)
+
+
+def test_a_reduction_of_speed_scores_less_than_if_it_came_at_once():
+    # a ship converging from the starboard quarter, 1.5 nm off (CPA 0): slowing lets it cross
+    # ahead, but the ship sheds its speed over minutes, and meanwhile the overtaker comes closer
+    position, velocity = np.split(np.array(converging(120.0, 1.5, 6.0)[:4]), 2)
+    target = (position, velocity, RADIUS)
+    slow = response_clearance_m((0.0, 0.0), SPEED, 0.0, 0.0, SLOW_FACTOR * SPEED, [target],
+                                ManoeuvreResponse(deceleration_mps2=0.02))
+    at_once = response_clearance_m((0.0, 0.0), SPEED, 0.0, 0.0, SLOW_FACTOR * SPEED, [target],
+                                   ManoeuvreResponse(delay_s=0.0, deceleration_mps2=1e3))
+    assert slow < at_once - 200.0
+
+
+# -- being overtaken (Rule 17(b)) ------------------------------------------------------------
+
+def test_overtaken_with_a_clear_turn_to_port_keeps_its_speed():
+    _, report = act([converging(129.0, 1.5, 5.6)])
+    assert report.alteration_ceiling is not None and report.speed_goal_mps is None
+
+
+def test_overtaken_from_both_quarters_the_stand_on_ship_slows_down():
+    # two faster ships converging from either quarter: a turn to either side runs into one of
+    # them; slowing lets both by ahead
+    _, report = act([converging(-135.0, 1.6, 7.0), converging(125.0, 1.6, 7.0)])
+    assert classes(report) == ["overtaken", "overtaken"]
+    assert report.alteration_floor is None and report.alteration_ceiling is None
+    assert report.speed_goal_mps == pytest.approx(SLOW_FACTOR * SPEED)
+
+
+def test_overtaken_with_a_ship_crossing_from_port_turns_further_than_35_deg():
+    # a ship overtaking from right astern and a fast one crossing from port (no turn to port,
+    # Rule 17(c)): no 35 deg turn, nor slowing, keeps both clear; 60 deg to starboard at speed does
+    _, report = act([converging(-170.0, 1.9, 6.0), sailing(-74.0, 4.0, 60.0, 24.0)])
+    assert classes(report) == ["overtaken", "crossing_stand_on"]
+    assert report.alteration_ceiling is None and report.speed_goal_mps is None
+    assert math.degrees(report.alteration_floor[2]) == pytest.approx(60.0)
+
+
+def test_with_no_manoeuvre_keeping_the_traffic_clear_the_clearest_is_taken():
+    # overtaken from the starboard quarter with a head-on ship ahead (no turn to port): every
+    # manoeuvre weighed leaves one of them inside its clearance; the one chosen leaves the least
+    targets = [sailing(0.0, 8.0, 180.0, 20.0), converging(129.0, 1.5, 5.6)]
+    domains, report = act(targets)
+    assert classes(report) == ["head_on", "overtaken"]
+    traffic = [(np.array(t[:2]), np.array(t[2:4]), RADIUS) for t in targets]
+    motion = (STATE[:2], SPEED, None, None, np.array([SPEED, 0.0]))
+    side, size, slow = domains._choose((1.0,), True, 0.0, motion, traffic)
+    scores = {(turn, degrees, factor): domains._clearance(motion, turn * math.radians(degrees), factor, traffic)
+              for turn in (0.0, 1.0) for degrees in (35.0, 60.0, 90.0) for factor in (1.0, SLOW_FACTOR)}
+    assert max(scores.values()) < 0.0
+    chosen = scores[(side, size, SLOW_FACTOR if slow else 1.0)]
+    assert chosen == pytest.approx(max(scores.values()))
+
+
+def test_overtaken_with_a_ship_closing_from_port_weighs_no_turn_to_port():
+    # the turn to port that keeps the overtaker clearest is not weighed while a ship on the port
+    # bow closes on us: it may become a ship crossing from port (Rule 17(c))
+    crossing = [9.0 * NM * math.cos(math.radians(-60.0)), 9.0 * NM * math.sin(math.radians(-60.0)), 0.0,
+                15.0 * KNOT, RADIUS]
+    _, report = act([converging(129.0, 1.5, 5.6), crossing])
+    assert report.alteration_ceiling is None
+    assert report.alteration_floor is not None or report.speed_goal_mps is not None
+
+
+def test_the_reduction_of_speed_ends_when_the_overtakers_are_past_and_clear():
+    targets = np.array([converging(-135.0, 1.6, 7.0), converging(125.0, 1.6, 7.0)])
+    domains, report = act(targets)
+    assert report.speed_goal_mps is not None
+    past = targets.copy()
+    past[0, :2] = [1.8 * NM, -1.0 * NM]  # ahead, opening: past, 2.06 nm off
+    past[1, :2] = [1.8 * NM, 1.0 * NM]
+    _, report = domains.parameters(past, STATE, np.zeros(2), SPEED, 5.0, 230.0, et=True,
+                                   reference_heading_rad=0.0, time_s=20.0)
+    assert report.speed_goal_mps is None
+
+
+def test_a_plan_slowing_down_keeps_to_the_speed_the_ship_can_shed(kcs):
+    # the plan's speed comes down at least at the deceleration asked for, to the goal speed
+    targets = np.array([converging(-135.0, 1.6, 7.0), converging(125.0, 1.6, 7.0)])
+    controller = NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=20.0, colregs=True))
+    reference = line_or_turn_reference(20.0 * np.arange(N + 1), (0.0, 0.0), 0.0, SPEED)
+    solution = controller.solve(0.0, STATE, reference, targets, et=True)
+    controller.close()
+    goal = SLOW_FACTOR * SPEED
+    slowing = SLOWING_SHARE * (kcs.tau_max[0] + kcs.equilibrium_tau(goal)[0]) / kcs.m11
+    ramp = np.maximum(goal, SPEED - slowing * 20.0 * np.arange(1, N + 1))
+    assert not solution.fallback
+    assert np.all(solution.states[1:, 3] <= ramp + 1e-3)
+    assert solution.states[-1, 3] <= goal + 1e-3
+
+
+# -- giving way among other traffic (Rules 8, 16) --------------------------------------------
+
+def _crossing_from_starboard():
+    """A ship crossing from starboard, 4 nm off on the starboard bow, on a collision course (CPA
+    0, about 11 min ahead): we give way."""
+    return converging(40.0, 4.0, 22.0)
+
+
+def test_a_give_way_ship_alone_turns_35_deg_at_speed():
+    _, report = act([_crossing_from_starboard()])
+    assert classes(report) == ["crossing_give_way"]
+    assert math.degrees(report.alteration_floor[2]) == pytest.approx(35.0) and report.speed_goal_mps is None
+
+
+def test_a_give_way_turn_into_an_overtaker_gives_way_otherwise():
+    # the same ship crossing from starboard and a faster ship converging from the starboard
+    # quarter, 3 nm off, not yet acted for (Rule 17: it may still keep clear): the 35 deg turn at
+    # speed would run across its bow, so the give-way ship gives way otherwise
+    domains, report = act([_crossing_from_starboard(), converging(130.0, 3.0, 8.0)])
+    assert classes(report) == ["crossing_give_way", "overtaken"] and domains._acting == set()
+    plain = report.alteration_floor is not None and math.isclose(math.degrees(report.alteration_floor[2]), 35.0)
+    assert not (plain and report.speed_goal_mps is None)
