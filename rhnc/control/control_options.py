@@ -57,6 +57,7 @@ OPTIONS = (
     "actuators_ship",
     "chart",
     "coastline_slots",
+    "reachable_reference",
 )
 WEIGHT_KEYS = ("q", "r", "r_rate")
 #: Largest values of the integer options: bounds on the size of the NLP built from them
@@ -163,7 +164,8 @@ def _numeric_settings(options: Mapping[str, Any], context: BuildContext) -> dict
             kwargs[key] = None if options[key] is False else _number(options, key, where, None)
     if "max_speed_kn" in options:
         kwargs["max_speed_mps"] = _number(options, "max_speed_kn", where, None) * KNOT
-    for key in ("colregs", "disturbance_observer", "codegen", "warm_start_duals", "real_time_iterations"):
+    for key in ("colregs", "disturbance_observer", "codegen", "warm_start_duals", "real_time_iterations",
+                "reachable_reference"):
         if key in options:
             if not isinstance(options[key], bool):
                 raise ScenarioError(f"{where}: option '{key}' must be true or false, got {options[key]!r}")

@@ -240,6 +240,10 @@ class ControlParticipant(Participant):
     coastline_slots : int
         Constraints for the chart's nearest edges along the predicted track (default 6,
         only with ``chart``).
+    reachable_reference : bool
+        The reference no farther ahead of the ship than the prediction model's speed reserve
+        makes up over the horizon (default false; :mod:`rhnc.control.reachable_reference`):
+        for a ship whose reference speed is close to its top speed.
     """
 
     OPTIONS = OPTIONS

@@ -118,6 +118,11 @@ class NMPCSettings:
         the real-time iteration scheme) instead of iterating to convergence; each step goes
         on from the last plan, so the plan converges over the steps.  Off by default: see
         ``docs/nmpc-performance.md`` for how its closed loop compares.
+    reachable_reference : bool
+        Move the reference back along its path until it leads the ship by no more than the
+        prediction model's speed reserve makes up over the horizon
+        (:mod:`rhnc.control.reachable_reference`): for a ship whose reference speed is close
+        to its top speed.  Off by default (the timed reference as it is).
     """
 
     horizon_steps: int = 15
@@ -152,6 +157,7 @@ class NMPCSettings:
     tau_rate_max: tuple[float, float] | None = None
     coastline_slots: int = 0
     real_time_iterations: bool = False
+    reachable_reference: bool = False
 
     def __post_init__(self) -> None:
         if self.iteration_budget is not None and not 2 <= self.iteration_budget <= self.max_iterations:
