@@ -593,6 +593,8 @@ class NMPCController:
             lbx = np.full(problem.size, -np.inf)
             ubx = np.full(problem.size, np.inf)
             lbx[problem.w_index.ravel()] = -1.0
+            if s.tau_u_min_N is not None:   # a propeller turning ahead only: no astern thrust to plan with
+                lbx[problem.w_index[:, 0]] = max(-1.0, s.tau_u_min_N / self.input_scale[0])
             ubx[problem.w_index.ravel()] = 1.0
             lbx[problem.z_index[1:, 3]] = 0.0  # u >= 0: no sailing backwards
             lbx[problem.sigma_index] = 0.0  # collision slacks
