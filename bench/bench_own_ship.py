@@ -25,7 +25,8 @@ The identified models are written by
     python -m orchestrator identify scenarios/own_ship/exp3a_kvlcc2_force.toml --tau-u-max-N 2.35e6 \\
         --tau-r-max-Nm 5.87e8 --speed-kn 15.5 --set KVLCC2 --out scenarios/own_ship/KVLCC2_identified.toml
     python -m orchestrator identify scenarios/own_ship/exp3a_kvlcc2_alloc.toml --tau-u-max-N 2.35e6 \\
-        --tau-r-max-Nm 5.87e8 --speed-kn 15.5 --set KVLCC2 --out scenarios/own_ship/KVLCC2_alloc_identified.toml
+        --tau-r-max-Nm 5.87e8 --speed-kn 15.5 --set KVLCC2 --ship KVLCC2 \\
+        --out scenarios/own_ship/KVLCC2_alloc_identified.toml
 """
 
 from __future__ import annotations

@@ -57,12 +57,16 @@ OPTIONS = (
     "actuators_ship",
     "chart",
     "coastline_slots",
+    "reachable_reference",
 )
 WEIGHT_KEYS = ("q", "r", "r_rate")
 #: Largest values of the integer options: bounds on the size of the NLP built from them
 #: (checked before it is built; the shipped scenarios use 15-120 intervals).
 INTEGER_LIMITS = {"horizon_steps": 400, "substeps": 50, "max_iterations": 100_000, "iteration_budget": 100_000,
                   "max_obstacles": 64, "coastline_slots": 64}
+#: Smallest surge force of the actuators ``actuators_ship`` declares [N]: the allocation turns
+#: the propeller ahead only (rhnc/control/allocation.py), so there is no astern thrust
+AHEAD_ONLY_SURGE_FORCE_N = 0.0
 #: Coastline slots with a chart when the options do not say (rhnc/control/nmpc_coastline.py)
 DEFAULT_COASTLINE_SLOTS = 6
 
@@ -104,6 +108,7 @@ def controller_from_options(options: Mapping[str, Any], context: BuildContext):
     kwargs.update(_slack_and_weights(options, where))
     if "actuators_ship" in options:
         kwargs["tau_rate_max"] = _tau_rate_limits(options, kwargs, context)
+        kwargs["tau_u_min_N"] = AHEAD_ONLY_SURGE_FORCE_N
     try:
         settings = NMPCSettings(**kwargs)
     except ValueError as error:
@@ -163,7 +168,8 @@ def _numeric_settings(options: Mapping[str, Any], context: BuildContext) -> dict
             kwargs[key] = None if options[key] is False else _number(options, key, where, None)
     if "max_speed_kn" in options:
         kwargs["max_speed_mps"] = _number(options, "max_speed_kn", where, None) * KNOT
-    for key in ("colregs", "disturbance_observer", "codegen", "warm_start_duals", "real_time_iterations"):
+    for key in ("colregs", "disturbance_observer", "codegen", "warm_start_duals", "real_time_iterations",
+                "reachable_reference"):
         if key in options:
             if not isinstance(options[key], bool):
                 raise ScenarioError(f"{where}: option '{key}' must be true or false, got {options[key]!r}")

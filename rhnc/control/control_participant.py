@@ -240,6 +240,15 @@ class ControlParticipant(Participant):
     coastline_slots : int
         Constraints for the chart's nearest edges along the predicted track (default 6,
         only with ``chart``).
+    actuators_ship : str
+        A ship name in ``ships/`` or a ship file whose ``[actuators]`` the NMPC's plant is
+        steered by through an allocation: the planned tau changes no faster than the steering
+        gear and shaft allow (:func:`rhnc.control.allocation.tau_rate_limits`), and the surge
+        force stays >= 0 (the allocation turns the propeller ahead only).
+    reachable_reference : bool
+        The reference no farther ahead of the ship than the prediction model's speed reserve
+        makes up over the horizon (default false; :mod:`rhnc.control.reachable_reference`):
+        for a ship whose reference speed is close to its top speed.
     """
 
     OPTIONS = OPTIONS

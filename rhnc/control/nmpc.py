@@ -87,6 +87,7 @@ from rhnc.control.nmpc_problem import (ACCEPTABLE_VIOLATION, DISTURBANCE_SIZE, F
 from rhnc.control.nmpc_settings import SOLVERS, NMPCSettings, NMPCSolution
 from rhnc.control.nmpc_terminal import MIN_TERMINAL_SPEED_MPS, TerminalWeight
 from rhnc.control.nmpc_warm_start import PlanMemory, push_guess_clear
+from rhnc.control.reachable_reference import reachable_lead_m, reachable_reference
 from rhnc.ship.ship_model import ShipParameters, hull_forces
 from rhnc.control.solver_watchdog import BoundedSolver
 
@@ -421,12 +422,23 @@ class NMPCController:
         reference[:, 2] -= self.domains.reference_turns(float(reference[0, 2]), float(state[2]))
         reference[:, 3] = np.minimum(reference[:, 3], s.max_speed_mps)
         if self.observer is None:
+            reference = self._within_reach(reference, state, 0.0)
             return reference, reference_inputs(reference, s.control_interval_s, self.params, self.input_scale), \
                 np.zeros(DISTURBANCE_SIZE)
         disturbance = self.observer.update(time_s, state)
+        reference = self._within_reach(reference, state, float(disturbance[2]))
         reference, tau_d = trimmed_reference(reference, disturbance, s.control_interval_s, self.params)
         reference[:, 3] = np.minimum(reference[:, 3], s.max_speed_mps)
         return reference, tau_d, disturbance
+
+    def _within_reach(self, reference: np.ndarray, state: np.ndarray, surge_load_N: float) -> np.ndarray:
+        """With ``reachable_reference``: the reference no farther ahead of the ship than the model's
+        speed reserve makes up over the horizon (:mod:`rhnc.control.reachable_reference`)."""
+        s = self.settings
+        if not s.reachable_reference:
+            return reference
+        lead = reachable_lead_m(self.params, reference, s.horizon_steps * s.control_interval_s, surge_load_N)
+        return reachable_reference(reference, state[:2], lead)
 
     def _rate_and_heading_bounds(self, lbx, ubx, state, ref_scaled, w_prev, report, floor, ceiling) -> None:
         """Narrow the bounds (in place) to the inputs the actuators can reach and the headings the
@@ -585,6 +597,8 @@ class NMPCController:
             lbx = np.full(problem.size, -np.inf)
             ubx = np.full(problem.size, np.inf)
             lbx[problem.w_index.ravel()] = -1.0
+            if s.tau_u_min_N is not None:   # a propeller turning ahead only: no astern thrust to plan with
+                lbx[problem.w_index[:, 0]] = max(-1.0, s.tau_u_min_N / self.input_scale[0])
             ubx[problem.w_index.ravel()] = 1.0
             lbx[problem.z_index[1:, 3]] = 0.0  # u >= 0: no sailing backwards
             lbx[problem.sigma_index] = 0.0  # collision slacks

@@ -9,6 +9,7 @@ explains the scaling the weights act on); :class:`NMPCSolution` is what one
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 
@@ -118,6 +119,15 @@ class NMPCSettings:
         the real-time iteration scheme) instead of iterating to convergence; each step goes
         on from the last plan, so the plan converges over the steps.  Off by default: see
         ``docs/nmpc-performance.md`` for how its closed loop compares.
+    reachable_reference : bool
+        Move the reference back along its path until it leads the ship by no more than the
+        prediction model's speed reserve makes up over the horizon
+        (:mod:`rhnc.control.reachable_reference`): for a ship whose reference speed is close
+        to its top speed.  Off by default (the timed reference as it is).
+    tau_u_min_N : float or None
+        Smallest surge force the actuators give [N] (0 for a propeller that turns ahead only,
+        as the allocation's does: the hull's drag alone slows the ship); None: the bound is
+        symmetric, -tau_u_max.
     """
 
     horizon_steps: int = 15
@@ -152,6 +162,8 @@ class NMPCSettings:
     tau_rate_max: tuple[float, float] | None = None
     coastline_slots: int = 0
     real_time_iterations: bool = False
+    reachable_reference: bool = False
+    tau_u_min_N: float | None = None
 
     def __post_init__(self) -> None:
         if self.iteration_budget is not None and not 2 <= self.iteration_budget <= self.max_iterations:
@@ -187,6 +199,8 @@ class NMPCSettings:
                 raise ValueError(f"{name} must be >= 0, got {getattr(self, name)}")
         if self.real_time_iterations and self.solver != "acados":
             raise ValueError(f"real_time_iterations needs solver = 'acados', got solver = '{self.solver}'")
+        if self.tau_u_min_N is not None and not math.isfinite(self.tau_u_min_N):
+            raise ValueError(f"tau_u_min_N must be a finite force [N] or None, got {self.tau_u_min_N}")
         if not 0.0 < self.observer_gain <= 1.0:
             raise ValueError(f"observer_gain must be in (0, 1], got {self.observer_gain}")
 

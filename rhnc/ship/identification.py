@@ -237,10 +237,12 @@ def _refined_from_narrower(records: dict[str, Record], names: tuple[str, ...], c
 
 
 def _fit_candidates(records: dict[str, Record], tau_u_max: float, tau_r_max: float, classes: tuple[str, ...],
-                    refine: bool, horizon: Horizon, masses: MassBounds | None = None, service_speed: float = 0.0) -> dict:
+                    refine: bool, horizon: Horizon, masses: MassBounds | None = None, service_speed: float = 0.0,
+                    bound_every_class: bool = False) -> dict:
     """Every class fitted and scored on the held-out manoeuvre: name -> (held-out cost,
     equation-error parameters, chosen parameters, residual RMS, R², note); a class without a
-    physical fit is left out, and so is the hull polynomial's without ``masses``."""
+    physical fit is left out, and so is the hull polynomial's without ``masses``.
+    ``bound_every_class``: ``masses`` bound the narrower classes' masses too."""
     candidates = {}
     for class_name in classes:
         names = MODEL_CLASSES[class_name]
@@ -252,7 +254,7 @@ def _fit_candidates(records: dict[str, Record], tau_u_max: float, tau_r_max: flo
         # the narrower classes keep their free masses: without the polynomial's structure an
         # effective mass is part of what they fit (bounded, the KVLCC2's held-out errors grew)
         equation_error, fitted, rms, r2, note = _fit_class(records, tau_u_max, tau_r_max, names, refine, horizon,
-                                                           masses if polynomial else None,
+                                                           masses if polynomial or bound_every_class else None,
                                                            service_speed if class_name in SPEED_SCALED else 0.0)
         cost = model_cost(fitted, records, horizon) if fitted is not None else math.inf
         if refine and fitted is not None and equation_error is not None:
@@ -281,7 +283,7 @@ def _fit_candidates(records: dict[str, Record], tau_u_max: float, tau_r_max: flo
 def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_name: str,
                    reference: ShipParameters | None = None, refine: bool = True,
                    classes: tuple[str, ...] = tuple(MODEL_CLASSES), masses: MassBounds | None = None, *,
-                   horizon: Horizon) -> Fit:
+                   horizon: Horizon, bound_every_class: bool = False) -> Fit:
     """Sail the manoeuvres, fit every model class, keep the one that predicts the held-out
     manoeuvre best over ``horizon`` (the NMPC's, :class:`Horizon`).
 
@@ -307,7 +309,8 @@ def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_
                              "--speed-kn")
     records = {name: record for name, record in records.items() if name not in short}
     held_out = records[VALIDATION_MANOEUVRE]
-    candidates = _fit_candidates(records, tau_u_max, tau_r_max, classes, refine, horizon, masses, runner.speed_mps)
+    candidates = _fit_candidates(records, tau_u_max, tau_r_max, classes, refine, horizon, masses, runner.speed_mps,
+                                 bound_every_class and masses is not None)
     class_errors = {name: (candidates[name][0] if name in candidates else None) for name in classes}
     open_loop = {name: open_loop_cost(held_out, simulate(candidates[name][2], held_out)) for name in candidates}
     chosen = choose_class({name: candidate[0] for name, candidate in candidates.items()})
@@ -336,7 +339,8 @@ def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_
         notes.append("the class with the hull polynomial was not fitted: it needs the ship's particulars "
                      "(identify --ship) to bound the mass matrix")
     elif masses is not None:
-        notes.append(f"mass matrix of the hull-polynomial class bounded from {masses.source}")
+        bounded = "every class" if bound_every_class else "the hull-polynomial class"
+        notes.append(f"mass matrix of {bounded} bounded from {masses.source}")
     return Fit(parameters, trim, rms, r2, validation, records, predictions, error, chosen, class_errors, notes,
                open_loop, horizon)
 

@@ -190,7 +190,7 @@ def run_identify(scenario_path, results_root="results", plant: str | None = None
     name = set_name or identity["model_name"]
     kcs = load_parameter_set("default")
     fit = identify_model(PlantRunner(build, speed_kn * KNOT), tau_u_max, tau_r_max, name, reference=kcs,
-                         masses=masses, horizon=horizon)
+                         masses=masses, horizon=horizon, bound_every_class=allocation is not None)
     source = Path(scenario_path).as_posix()
     toml_text = parameter_set_toml(fit, {**identity, "through": allocation[0].name if allocation else None}, source)
     folder = RunFolder(Path(results_root), f"identify/{name}", new_run_id(scenario.sha256))

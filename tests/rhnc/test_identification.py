@@ -568,3 +568,42 @@ def test_identify_refuses_an_nmpc_horizon_it_cannot_choose_for(tmp_path, capsys,
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "bad.toml: participants.ctrl" in err[0] and message in err[0]
     assert not results.exists() and not (tmp_path / "set.toml").exists()
+
+
+def test_through_an_allocation_every_class_keeps_the_mass_matrix_of_the_particulars():
+    """Behind an allocation the rudder's lag would be fitted as yaw inertia (the KVLCC2's m33
+    1.5 times its hull's, and the NMPC over-steered every small correction): with the
+    particulars' bounds for every class, the narrow classes keep the hull's masses too."""
+    from rhnc.ship.identification import identify_model
+    from rhnc.ship.sea_trials import PlantRunner
+
+    true = load_parameter_set("default")
+    masses = _masses_of(true, factor=1.5)   # particulars whose bounds leave out the data's masses
+    runner = PlantRunner(lambda initial: ModelPlant(true, initial), 9.26)
+    common = dict(refine=False, classes=("linear",), masses=masses, horizon=NMPC_HORIZON)
+    free = identify_model(runner, true.tau_u_max, true.tau_r_max, "fitted", **common)
+    bounded = identify_model(runner, true.tau_u_max, true.tau_r_max, "fitted", bound_every_class=True, **common)
+    assert free.parameters.m33 == pytest.approx(true.m33, rel=0.02)   # the hull-polynomial class alone is bounded
+    assert masses.contains({name: getattr(bounded.parameters, name) for name in ("m11", "m22", "m33", "m23")})
+    assert "mass matrix of every class bounded from the known model" in bounded.notes[-1]
+
+
+@pytest.mark.parametrize("scenario, through_allocation", [("exp3a_kvlcc2_alloc.toml", True),
+                                                          ("exp3a_kvlcc2_force.toml", False)])
+def test_identify_bounds_every_class_only_behind_an_allocation(monkeypatch, tmp_path, scenario, through_allocation):
+    import rhnc.ship.identify_run as identify_run
+
+    seen = {}
+
+    class Stop(Exception):
+        pass
+
+    def capture(*args, **kwargs):
+        seen.update(kwargs)
+        raise Stop
+
+    monkeypatch.setattr(identify_run, "identify_model", capture)
+    with pytest.raises(Stop):
+        run_identify(REPO / "scenarios" / "own_ship" / scenario, tmp_path, tau_u_max_N=2.35e6, tau_r_max_Nm=5.87e8,
+                     speed_kn=15.5, ship="KVLCC2", horizon=NMPC_HORIZON)
+    assert seen["bound_every_class"] is through_allocation and seen["masses"] is not None

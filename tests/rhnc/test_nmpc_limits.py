@@ -270,3 +270,25 @@ def test_the_ships_actuator_rates_reach_the_nmpc():
     assert 5e7 < expected[1] < 1.2e8 and 1e5 < expected[0] < 1.8e6
     with pytest.raises(ScenarioError, match=r"option 'actuators_ship' must be a ship name or a ship file path"):
         controller_from_options({"actuators_ship": 3}, context())
+
+
+def test_a_propeller_turning_ahead_only_gets_no_astern_thrust_in_the_plan(kcs):
+    """Asked to slow from 18 to 8 kn, the NMPC plans full astern force; with the ship's actuators
+    declared (the allocation turns the propeller ahead only) it plans no force below zero."""
+    from rhnc.control.control_options import controller_from_options
+
+    _, settings, _, _ = controller_from_options({"actuators_ship": "KVLCC2"}, context())
+    assert settings.tau_u_min_N == 0.0
+    assert controller_from_options({}, context())[1].tau_u_min_N is None
+    dt = 20.0
+    reference = line_or_turn_reference(np.arange(N + 1) * dt, (0.0, 0.0), 0.0, 8 * KNOT)
+    state = np.array([0.0, 0.0, 0.0, 18 * KNOT, 0.0, 0.0])
+    plans = {}
+    for floor in (None, 0.0):
+        controller = NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=dt, codegen=False,
+                                                      tau_u_min_N=floor))
+        plans[floor] = np.asarray(controller.solve(0.0, state, reference, previous_tau=kcs.equilibrium_tau(18 * KNOT))
+                                  .inputs)
+        controller.close()
+    assert plans[None][:, 0].min() < -0.5 * kcs.tau_u_max          # astern force to slow down
+    assert plans[0.0][:, 0].min() >= -1e-6 * kcs.tau_u_max          # the hull's drag alone
