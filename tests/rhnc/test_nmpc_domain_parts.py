@@ -132,3 +132,16 @@ def test_a_stand_on_target_inside_the_clearance_gets_its_constraint_even_while_o
     _, second = domains.parameters(inside, state, np.zeros(2), SPEED, 5.0, L, et=True, time_s=20.0)
     assert ENCOUNTER_CLASSES[int(second.class_codes[0])] == "crossing_stand_on"
     assert list(second.active) == [1.0]
+
+
+def test_an_alterations_heading_floor_rises_from_the_time_the_alteration_began():
+    # began at 300 s: at 370 s the floor has risen 0.3 deg/s for the 50 s after the 20-s delay
+    report = DomainReport(np.zeros(1), np.ones(1), alteration_floor=(300.0, 0.0, math.radians(35.0)))
+    lower, _ = heading_bounds(report, 360.0, math.radians(30.0), 0.0, np.array([370.0]))
+    assert math.degrees(lower[0]) == pytest.approx(15.0)
+
+
+def test_of_two_alterations_to_port_the_one_furthest_to_port_is_held():
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    domains._altering = {0: (10.0, 0.0, -0.3, -1.0), 1: (20.0, 0.0, -0.6, -1.0)}
+    assert domains._alteration_bounds(False, False) == (None, (20.0, 0.0, -0.6))

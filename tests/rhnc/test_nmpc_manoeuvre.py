@@ -187,3 +187,27 @@ def test_a_give_way_turn_into_an_overtaker_gives_way_otherwise():
     assert classes(report) == ["crossing_give_way", "overtaken"] and domains._acting == set()
     plain = report.alteration_floor is not None and math.isclose(math.degrees(report.alteration_floor[2]), 35.0)
     assert not (plain and report.speed_goal_mps is None)
+
+
+def test_a_plan_holds_an_alteration_to_port_to_its_heading(kcs):
+    # overtaking a slow ship fine on the starboard bow: the alteration goes to port, away from
+    # it (Rule 13 leaves the side free); the plan's heading reaches the alteration's 35 deg to
+    # port within the horizon, not just the few degrees the domain alone would ask for
+    controller = NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=20.0, colregs=True))
+    reference = line_or_turn_reference(20.0 * np.arange(N + 1), (0.0, 0.0), 0.0, SPEED)
+    slow_ahead = np.array([sailing(5.0, 2.0, 0.0, 6.0)])
+    solution = controller.solve(0.0, STATE, reference, slow_ahead, et=True)
+    controller.close()
+    assert not solution.fallback and controller.domains._altering
+    assert math.degrees(solution.states[-1, 2]) <= -35.0 + 0.5
+
+
+def test_an_iteration_budget_may_be_as_small_as_two():
+    assert NMPCSettings(iteration_budget=2).iteration_budget == 2
+    with pytest.raises(ValueError, match="iteration_budget"):
+        NMPCSettings(iteration_budget=1)
+
+
+def test_the_disturbance_observer_is_on_when_asked(kcs):
+    assert NMPCController(kcs, NMPCSettings(horizon_steps=5, disturbance_observer=True)).observer is not None
+    assert NMPCController(kcs, NMPCSettings(horizon_steps=5)).observer is None

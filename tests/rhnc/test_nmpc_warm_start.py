@@ -80,3 +80,13 @@ def test_the_push_turns_with_the_reference_course(course_deg):
     expected = np.array([(0.0, 0.0), (9.0, math.sqrt(r_push ** 2 - 1.0)), (10.5, -math.sqrt(r_push ** 2 - 0.25)),
                          (20.0, 0.5)])
     np.testing.assert_allclose(z[:, :2], expected @ rotation.T, atol=1e-12)
+
+
+def test_a_plan_stored_without_multipliers_keeps_none():
+    from rhnc.control.nmpc_warm_start import PlanMemory
+
+    memory = PlanMemory(5, 20.0, lambda *args: None)
+    memory.store(0.0, np.zeros((6, 6)), np.zeros((5, 2)))
+    assert memory.lam_x is None and memory.lam_g is None
+    memory.store(20.0, np.zeros((6, 6)), np.zeros((5, 2)), lam_x=np.ones(3), lam_g=np.ones(4))
+    assert memory.lam_g.shape == (4,)
