@@ -145,3 +145,12 @@ def test_of_two_alterations_to_port_the_one_furthest_to_port_is_held():
     domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
     domains._altering = {0: (10.0, 0.0, -0.3, -1.0), 1: (20.0, 0.0, -0.6, -1.0)}
     assert domains._alteration_bounds(False, False) == (None, (20.0, 0.0, -0.6))
+
+
+def test_a_reference_is_taken_on_the_turn_of_the_heading_an_alteration_is_measured_from():
+    # an alteration of 35 deg to starboard held to 35 deg: it is measured from 0 deg, and a
+    # reference at -125 deg is taken on that heading's turn (no whole turn off it), not on the
+    # turn of a heading 35 deg beyond the goal, from which it is more than half a turn away
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    domains._altering = {1: (0.0, 0.0, math.radians(35.0), 1.0)}
+    assert domains.reference_turns(math.radians(-125.0), math.radians(30.0)) == 0.0
