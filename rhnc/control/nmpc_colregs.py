@@ -85,7 +85,8 @@ from orchestrator.geometry import wrap_angle
 from rhnc.encounters.colregs import (ACTION_BUFFER_S, ENCOUNTER_CLASSES, STAND_ON_ACTION_RANGE_FACTOR,
                                     STAND_ON_ACTION_TCPA_S, EncounterTracker, cpa_tcpa, latest_alteration_s,
                                     stand_on_latest_s, stand_on_must_act)
-from rhnc.control.nmpc_manoeuvre import ManoeuvreResponse, response_clearance_m
+from rhnc.control.nmpc_manoeuvre import (ManoeuvreResponse, closing_on_the_port_side, response_clearance_m,
+                                         side_clearance_m)
 from rhnc.control.nmpc_problem import OBSTACLE_FIELDS
 
 LOG = logging.getLogger(__name__)
@@ -525,7 +526,7 @@ class CollisionDomains:
             goal = self._alteration_goal(index, reference_heading_rad, side, size)
         self._altering[index] = (time_s, heading_rad, goal, side)
         if slow:
-            self._slowing[index] = SLOW_FACTOR * motion[1]
+            self._reduce_speed(index, motion[1])
         self.alterations += 1
         LOG.info("target %d (%s): altering %.0f deg to %s%s (CPA %.0f m in %.0f s)", index, name, size,
                  "starboard" if side > 0 else "port", " and slowing" if slow else "", encounter.cpa_m,
@@ -569,9 +570,13 @@ class CollisionDomains:
                     side = -side
         return side if port_allowed else 1.0
 
-    def _begin_slowing(self, index: int, encounter, own_speed_mps: float) -> None:
-        """Hold a reduction of speed alone to ``SLOW_FACTOR`` of ``own_speed_mps`` for a target."""
+    def _reduce_speed(self, index: int, own_speed_mps: float) -> None:
+        """Hold a readily apparent reduction of speed, to ``SLOW_FACTOR`` of ``own_speed_mps``, for a target."""
         self._slowing[index] = SLOW_FACTOR * own_speed_mps
+
+    def _begin_slowing(self, index: int, encounter, own_speed_mps: float) -> None:
+        """Hold a reduction of speed alone for a target (:meth:`_reduce_speed`)."""
+        self._reduce_speed(index, own_speed_mps)
         self.alterations += 1
         LOG.info("target %d (%s): slowing to %.0f %% of the speed (CPA %.0f m in %.0f s)", index,
                  encounter.encounter_class, 100.0 * SLOW_FACTOR, encounter.cpa_m, encounter.tcpa_s)
@@ -616,7 +621,7 @@ class CollisionDomains:
         while another ship forward of our port quarter closes on us, classified yet or not: it
         may become a ship crossing from port, for which Rule 17(c) rules out that turn (a turn to
         port chosen for the clearance broke it twice)."""
-        if not port_allowed or _closing_on_the_port_side(motion[0], motion[1], reference_heading_rad, traffic):
+        if not port_allowed or closing_on_the_port_side(motion[0], motion[1], reference_heading_rad, traffic):
             turns: tuple[float, ...] = (1.0,)
         else:
             turns = (side, -side)
@@ -640,10 +645,12 @@ class CollisionDomains:
                    + ([(0.0, size, SLOW_FACTOR)] if slow_alone else [])
                    + [(turn, larger, factor) for larger in LARGER_ALTERATIONS_DEG for turn in sides
                       for factor in (1.0, SLOW_FACTOR)])
-        scores = [self._clearance(motion, reference_heading_rad + turn * math.radians(degrees), factor, traffic)
-                  for turn, degrees, factor in options]
-        clear = [option for option, score in zip(options, scores) if score >= 0.0]
-        turn, degrees, factor = clear[0] if clear else options[int(np.argmax(scores))]
+        scores = []
+        for turn, degrees, factor in options:
+            scores.append(self._clearance(motion, reference_heading_rad + turn * math.radians(degrees), factor, traffic))
+            if scores[-1] >= 0.0:
+                return turn, degrees, factor < 1.0
+        turn, degrees, factor = options[int(np.argmax(scores))]
         return turn, degrees, factor < 1.0
 
     def _give_way_due(self, encounter, goal: float, side: float, separation_m: float, motion) -> bool:
@@ -666,50 +673,12 @@ class CollisionDomains:
         return 0.0 < tcpa <= s.give_way_action_tcpa_s or latest <= ACTION_BUFFER_S
 
 
-def side_clearance_m(own_xy, own_speed_mps: float, course_rad: float, traffic, horizon_s: float = 1800.0) -> float:
-    """The least clearance [m] the own ship keeps from a set of targets on a new course: the
-    smallest CPA less the target's clearance, the own ship sailing ``course_rad`` at its speed
-    from ``own_xy`` and every target keeping its velocity, over ``horizon_s`` (the risk
-    window); ``inf`` without targets.  Compares the two sides of an alteration the rules
-    leave free (Rule 13).
-
-    Parameters
-    ----------
-    own_xy : (2,) [m]; own_speed_mps [m/s]; course_rad [rad]
-    traffic : iterable of (position (2,) [m], velocity (2,) [m/s], clearance [m])
-    horizon_s : float
-        A CPA further ahead counts at its range at this time [s].
-    """
-    velocity = own_speed_mps * np.array([math.cos(course_rad), math.sin(course_rad)])
-    least = math.inf
-    for position, target_velocity, clearance in traffic:
-        relative = np.asarray(position, dtype=float) - np.asarray(own_xy, dtype=float)
-        closing = np.asarray(target_velocity, dtype=float) - velocity
-        w2 = float(closing @ closing)
-        when = 0.0 if w2 < 1e-12 else min(max(-float(relative @ closing) / w2, 0.0), horizon_s)
-        least = min(least, float(np.hypot(*(relative + closing * when))) - clearance)
-    return least
-
-
 def _port_turn_ruled_out(classes, order) -> bool:
     """Rules 14, 15, 17(c): no alteration to port while a head-on or crossing target's CPA is
     ahead; known before any alteration begins, so that an overtaking ship's turns to starboard
     then."""
     return any(classes[i] is not None and classes[i].encounter_class in STARBOARD_CLASSES
                and classes[i].tcpa_s > 0.0 for i in order)
-
-
-def _closing_on_the_port_side(own_xy, own_speed_mps: float, heading_rad: float, traffic) -> bool:
-    """Whether a ship of ``traffic`` ((position, velocity, clearance) per target) on our port
-    side, forward of 22.5 deg abaft the beam (relative bearing -112.5 to 0 deg from
-    ``heading_rad``), is closing on us."""
-    own_velocity = own_speed_mps * np.array([math.cos(heading_rad), math.sin(heading_rad)])
-    for position, velocity, _ in traffic:
-        relative = np.asarray(position, dtype=float) - np.asarray(own_xy, dtype=float)
-        bearing = math.degrees(wrap_angle(math.atan2(relative[1], relative[0]) - heading_rad))
-        if -112.5 < bearing < 0.0 and float(relative @ (np.asarray(velocity, dtype=float) - own_velocity)) < 0.0:
-            return True
-    return False
 
 
 def _escape_heading(rows: np.ndarray, rhos: np.ndarray, state: np.ndarray, range_rates: np.ndarray,

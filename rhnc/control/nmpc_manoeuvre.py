@@ -9,6 +9,10 @@ holds its course and speed for a response delay, then turns towards the new cour
 rate and slows at the deceleration its engine and hull give, while every target keeps its
 velocity.  The candidates' ranking, not their absolute figures, is what counts: the NMPC then
 flies the chosen one with its own model.
+
+Beside it, the simpler measures the choice of a free side still uses: :func:`side_clearance_m`
+(the new course and speed taken at once) and :func:`closing_on_the_port_side` (a ship that may
+become one crossing from port, for which no turn to port is weighed).
 """
 
 from __future__ import annotations
@@ -79,3 +83,41 @@ def response_clearance_m(own_xy, speed_mps: float, heading_rad: float, course_ra
         target = np.asarray(position, dtype=float) + np.outer(times, np.asarray(velocity, dtype=float))
         least = min(least, float(np.min(np.hypot(*(target - positions).T))) - clearance)
     return least
+
+
+def side_clearance_m(own_xy, own_speed_mps: float, course_rad: float, traffic, horizon_s: float = 1800.0) -> float:
+    """The least clearance [m] the own ship keeps from a set of targets on a new course: the
+    smallest CPA less the target's clearance, the own ship sailing ``course_rad`` at its speed
+    from ``own_xy`` and every target keeping its velocity, over ``horizon_s`` (the risk
+    window); ``inf`` without targets.  Compares the two sides of an alteration the rules
+    leave free (Rule 13).
+
+    Parameters
+    ----------
+    own_xy : (2,) [m]; own_speed_mps [m/s]; course_rad [rad]
+    traffic : iterable of (position (2,) [m], velocity (2,) [m/s], clearance [m])
+    horizon_s : float
+        A CPA further ahead counts at its range at this time [s].
+    """
+    velocity = own_speed_mps * np.array([math.cos(course_rad), math.sin(course_rad)])
+    least = math.inf
+    for position, target_velocity, clearance in traffic:
+        relative = np.asarray(position, dtype=float) - np.asarray(own_xy, dtype=float)
+        closing = np.asarray(target_velocity, dtype=float) - velocity
+        w2 = float(closing @ closing)
+        when = 0.0 if w2 < 1e-12 else min(max(-float(relative @ closing) / w2, 0.0), horizon_s)
+        least = min(least, float(np.hypot(*(relative + closing * when))) - clearance)
+    return least
+
+
+def closing_on_the_port_side(own_xy, own_speed_mps: float, heading_rad: float, traffic) -> bool:
+    """Whether a ship of ``traffic`` ((position, velocity, clearance) per target) on our port
+    side, forward of 22.5 deg abaft the beam (relative bearing -112.5 to 0 deg from
+    ``heading_rad``), is closing on us."""
+    own_velocity = own_speed_mps * np.array([math.cos(heading_rad), math.sin(heading_rad)])
+    for position, velocity, _ in traffic:
+        relative = np.asarray(position, dtype=float) - np.asarray(own_xy, dtype=float)
+        bearing = math.degrees(wrap_angle(math.atan2(relative[1], relative[0]) - heading_rad))
+        if -112.5 < bearing < 0.0 and float(relative @ (np.asarray(velocity, dtype=float) - own_velocity)) < 0.0:
+            return True
+    return False
