@@ -154,3 +154,27 @@ def test_a_reference_is_taken_on_the_turn_of_the_heading_an_alteration_is_measur
     domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
     domains._altering = {1: (0.0, 0.0, math.radians(35.0), 1.0)}
     assert domains.reference_turns(math.radians(-125.0), math.radians(30.0)) == 0.0
+
+
+def test_without_colregs_no_row_is_classified():
+    domains = CollisionDomains(DomainSettings(colregs=False), max_obstacles=2)
+    row = np.array([[3000.0, 500.0, -5.0, 0.0, 1852.0]])
+    _, report = domains.parameters(row, np.array([0.0, 0.0, 0.0, 9.26, 0.0, 0.0]), np.zeros(2), 9.26, 5.0, 230.0,
+                                   et=True)
+    assert report.class_codes.tolist() == [-1.0]
+
+
+def test_without_a_reference_an_alteration_is_measured_from_the_measured_heading():
+    # a ship crossing from starboard on a collision course, 10 min ahead, the own ship heading
+    # 10 deg: the alteration holds 35 deg off that heading
+    heading = math.radians(10.0)
+    speed = 9.26
+    own_velocity = speed * np.array([math.cos(heading), math.sin(heading)])
+    meeting = 600.0 * own_velocity
+    target_velocity = np.array([0.0, -9.0])
+    row = np.array([[*(meeting - 600.0 * target_velocity), *target_velocity, 1852.0]])
+    domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+    _, report = domains.parameters(row, np.array([0.0, 0.0, heading, speed, 0.0, 0.0]), np.zeros(2), speed, 5.0,
+                                   230.0, et=True)
+    assert ENCOUNTER_CLASSES[int(report.class_codes[0])] == "crossing_give_way"
+    assert math.degrees(report.alteration_floor[2]) == pytest.approx(45.0)
