@@ -48,7 +48,10 @@ def heading_bounds(report, time_s: float, heading_rad: float, yaw_rate_rps: floa
     infeasible from a ship lagging behind it, it is capped by what the ship can reach from
     the measured state (``heading_rad`` at ``time_s``): the measured heading less what a yaw
     rate the other way carries it on over the delay (and ``HEADING_TOLERANCE_DEG``), plus a
-    first-order yaw response towards ``CATCH_UP_RATE_DEG_S``.  No larger allowance: the controller applies only the first
+    first-order yaw response towards ``CATCH_UP_RATE_DEG_S`` from the yaw rate the ship already
+    has towards the alteration.  Taken from rest at every solve, that response asked a ship
+    turning at 0.15 deg/s for no more than it did: it held that rate, half the ramp's, and an
+    alteration of 35 deg took 4 min.  No larger allowance: the controller applies only the first
     step of each plan, and a first step allowed to sag below the measured heading would
     postpone the alteration at every solve and never reach it.  Headings are brought to within half a turn of ``heading_rad``.
     """
@@ -57,8 +60,14 @@ def heading_bounds(report, time_s: float, heading_rad: float, yaw_rate_rps: floa
     times_s = np.asarray(times_s, dtype=float)
     tolerance = math.radians(HEADING_TOLERANCE_DEG)
     ahead_s = np.maximum(times_s - time_s, 0.0)
-    reachable = np.radians(CATCH_UP_RATE_DEG_S) * (
-        ahead_s - YAW_TIME_CONSTANT_S * (1.0 - np.exp(-ahead_s / YAW_TIME_CONSTANT_S)))
+    catch_up = math.radians(CATCH_UP_RATE_DEG_S)
+    lag = YAW_TIME_CONSTANT_S * (1.0 - np.exp(-ahead_s / YAW_TIME_CONSTANT_S))
+
+    def reachable(toward_rps: float) -> np.ndarray:
+        # heading gained by a first-order yaw response from the rate the ship has towards the
+        # alteration (none if it swings the other way: the start allows for that) to the catch-up rate
+        start_rate = min(max(toward_rps, 0.0), catch_up)
+        return catch_up * ahead_s - (catch_up - start_rate) * lag
 
     def near(angle: float) -> float:
         return angle - 2.0 * math.pi * round((angle - heading_rad) / (2.0 * math.pi))
@@ -73,12 +82,12 @@ def heading_bounds(report, time_s: float, heading_rad: float, yaw_rate_rps: floa
         rise, size = ramp(report.alteration_floor)
         goal = near(report.alteration_floor[2])
         start = heading_rad - tolerance - max(0.0, -yaw_rate_rps) * ALTERATION_DELAY_S
-        lower = np.minimum.reduce([np.full_like(times_s, goal), goal - size + rise, start + reachable])
+        lower = np.minimum.reduce([np.full_like(times_s, goal), goal - size + rise, start + reachable(yaw_rate_rps)])
     if report.alteration_ceiling is not None:
         rise, size = ramp(report.alteration_ceiling)
         goal = near(report.alteration_ceiling[2])
         start = heading_rad + tolerance + max(0.0, yaw_rate_rps) * ALTERATION_DELAY_S
-        upper = np.maximum.reduce([np.full_like(times_s, goal), goal - size - rise, start - reachable])
+        upper = np.maximum.reduce([np.full_like(times_s, goal), goal - size - rise, start - reachable(-yaw_rate_rps)])
     return lower, upper
 
 

@@ -247,6 +247,26 @@ def test_alteration_bound_rises_to_the_alteration_and_never_lets_the_first_step_
     assert lower is None and np.degrees(upper[-1]) == pytest.approx(-30.0)
 
 
+
+def test_a_ship_turning_behind_the_alteration_is_asked_to_turn_faster_than_it_does():
+    """From rest at every solve, the catch-up asked a ship turning at 0.15 deg/s for 2.9 deg
+    a 20-s step: no more than it turned, and it held half the ramp's rate to the end."""
+    report = DomainReport(np.zeros(1), np.ones(1), alteration_floor=(100.0, 0.0, math.radians(35.0)))
+    later = 300.0 + 20.0 * np.arange(1, 16)
+    turning = math.radians(0.15)
+    for sign, alteration in ((1.0, report), (-1.0, DomainReport(np.zeros(1), np.ones(1), alteration_ceiling=(
+            100.0, 0.0, math.radians(-35.0))))):
+        lower, upper = heading_bounds(alteration, 300.0, sign * math.radians(10.0), sign * turning, later)
+        first = sign * np.degrees(lower if sign > 0 else upper)[0]
+        assert first - 10.0 > 0.15 * 20.0 + 1.0  # more than the rate it has would carry it
+        still = sign * np.degrees(heading_bounds(alteration, 300.0, sign * math.radians(10.0), 0.0, later)[
+            0 if sign > 0 else 1])[0]
+        assert first > still  # the rate it has counts
+        # and never more than the catch-up rate itself asks from a ship already at it
+        at_rate = sign * np.degrees(heading_bounds(alteration, 300.0, sign * math.radians(10.0),
+                                                   sign * math.radians(1.0), later)[0 if sign > 0 else 1])[0]
+        assert at_rate - 10.0 == pytest.approx(CATCH_UP_RATE_DEG_S * 20.0 - HEADING_TOLERANCE_DEG)
+
 def test_give_way_alteration_starts_with_the_encounter_and_ends_when_clear():
     domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
     state = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
