@@ -106,6 +106,11 @@ PORT_ALLOWANCE_DEG = 2.0
 MANOEUVRE_DEG = 5.0
 #: the alteration ends when the target is past (TCPA <= 0) and this many R + R_i away
 ALTERATION_CLEAR_FACTOR = 2.0
+#: ... or, held at least this long [s], when the target no longer closes (TCPA <= 0, or the
+#: range closing slower than ``ALONGSIDE_CLOSING_MPS`` [m/s]) and a return to the reference
+#: keeps every target clear, taken up as the ship can (a ship staying alongside)
+ALTERATION_MIN_HOLD_S = 300.0
+ALONGSIDE_CLOSING_MPS = 0.05
 #: classes in which the own ship gives way (Rules 13-16)
 GIVE_WAY_CLASSES = ("head_on", "crossing_give_way", "overtaking")
 #: collision risk at the control rate: an obstacle closer than this many clearances rho
@@ -483,13 +488,19 @@ class CollisionDomains:
         past and clear (Rule 13(d)): TCPA <= 0 and the range at least
         ``ALTERATION_CLEAR_FACTOR`` times R + R_i (``separation_m``).  Ending it at TCPA <= 0 alone let a ship alongside an overtaken
         target, 1.3 nm off, turn back towards it, and the solver failed from that warm
-        start; holding it until the tracker's 4 nm release made long detours.
+        start; holding it until the tracker's 4 nm release made long detours.  A target that
+        stays alongside never gets that far: an alteration held at least
+        ``ALTERATION_MIN_HOLD_S`` also ends once the target no longer closes and a return to the
+        reference keeps every target clear (:meth:`_resumes_clear`).  A ship that stood on
+        for a ship crossing from port, which then kept our course and speed 1.05 nm off, held
+        its alteration for an hour and arrived late.
         """
         s = self.settings
         if s.alteration_deg <= 0.0 or index in self._altered:
             return
         if index in self._altering or index in self._slowing:
-            if encounter.tcpa_s <= 0.0 and encounter.range_m >= ALTERATION_CLEAR_FACTOR * separation_m:
+            past = encounter.tcpa_s <= 0.0 and encounter.range_m >= ALTERATION_CLEAR_FACTOR * separation_m
+            if past or self._resumes_clear(index, encounter, reference_heading_rad, time_s, motion, traffic):
                 self._altering.pop(index, None)  # past and clear
                 self._slowing.pop(index, None)
                 self._altered.add(index)
@@ -531,6 +542,23 @@ class CollisionDomains:
         LOG.info("target %d (%s): altering %.0f deg to %s%s (CPA %.0f m in %.0f s)", index, name, size,
                  "starboard" if side > 0 else "port", " and slowing" if slow else "", encounter.cpa_m,
                  encounter.tcpa_s)
+
+    def _resumes_clear(self, index: int, encounter, reference_heading_rad: float, time_s: float, motion,
+                       traffic) -> bool:
+        """Whether the alteration held for target ``index`` (for ``ALTERATION_MIN_HOLD_S`` at
+        least) may end before the target is past and clear: it no longer closes on us (TCPA <= 0,
+        or the range closing slower than ``ALONGSIDE_CLOSING_MPS``) and the turn back to the
+        reference at the present speed keeps the whole ``traffic`` clear (:meth:`_clearance`)."""
+        held = self._altering.get(index)
+        if held is None or motion is None or not traffic or time_s - held[0] < ALTERATION_MIN_HOLD_S:
+            return False
+        own_xy, _, target_xy, target_velocity, own_velocity = motion
+        relative = np.asarray(target_xy, dtype=float) - np.asarray(own_xy, dtype=float)
+        range_rate = float(relative @ (np.asarray(target_velocity, dtype=float) - own_velocity)) / max(
+            float(np.hypot(*relative)), 1.0)
+        if encounter.tcpa_s > 0.0 and range_rate < -ALONGSIDE_CLOSING_MPS:
+            return False
+        return self._clearance(motion, reference_heading_rad, 1.0, traffic) >= 0.0
 
     def _alteration_goal(self, index: int, reference_heading_rad: float, side: float, size_deg: float) -> float:
         """The heading [rad] an alteration of ``size_deg`` to ``side`` holds: off the reference,

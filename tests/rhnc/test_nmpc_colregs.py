@@ -290,9 +290,44 @@ def test_give_way_alteration_starts_with_the_encounter_and_ends_when_clear():
         return domains.parameters(np.array([[*where, *velocity, RADIUS]]), moved, moved[:2], SPEED, 5.0, 230.0,
                                   et=True, reference_heading_rad=0.0, time_s=time_s)[1]
 
-    assert passed(1.5, 900.0).alteration_floor is not None  # past, but not yet clear: held
-    assert passed(2.5, 920.0).alteration_floor is None  # past and clear (2 R + R_i): ended
-    assert passed(2.5, 940.0).alteration_floor is None and domains.alterations == 1  # not begun again
+    assert passed(1.5, 600.0).alteration_floor is not None  # past, not yet clear, held 4 min: held
+    assert passed(2.5, 620.0).alteration_floor is None  # past and clear (2 R + R_i): ended
+    assert passed(2.5, 640.0).alteration_floor is None and domains.alterations == 1  # not begun again
+
+
+def test_an_alteration_for_a_ship_that_stays_alongside_ends_once_the_way_back_is_clear():
+    """A ship on a parallel course at our speed never gets past and clear: the alteration
+    ends, after ALTERATION_MIN_HOLD_S, once a return to the reference keeps it clear, and is
+    held while that return would close it."""
+    from rhnc.control.nmpc_colregs import ALTERATION_MIN_HOLD_S
+
+    heading = math.radians(35.0)  # altered 35 deg to starboard of a reference on north
+    own = np.array([0.0, 0.0, heading, SPEED, 0.0, 0.0])
+    velocity = SPEED * np.array([math.cos(heading), math.sin(heading)])  # the same course and speed
+
+    def alongside(bearing_deg: float, time_s: float, reference_deg: float = 0.0, faster_kn: float = 0.0):
+        domains = CollisionDomains(DomainSettings(colregs=True), max_obstacles=2)
+        where = 1.05 * NM * np.array([math.cos(heading + math.radians(bearing_deg)),
+                                      math.sin(heading + math.radians(bearing_deg))])
+        start, crossing = target_on_collision_course(90.0, 15.0)  # first a ship crossing from port
+        north = np.array([0.0, 0.0, 0.0, SPEED, 0.0, 0.0])
+        domains.parameters(np.array([[*start, *crossing, RADIUS]]), north, north[:2], SPEED, 5.0, 230.0, et=True,
+                           reference_heading_rad=0.0, time_s=0.0)
+        assert domains.tracker.locked[0] == "crossing_stand_on"
+        on_course = velocity * (1.0 + faster_kn * KNOT / SPEED)
+        target = np.array([[*where, *on_course, RADIUS]])  # ... then on our course and speed, 1.05 nm off
+        domains._altering[0] = (0.0, 0.0, heading, 1.0)  # an alteration held since t = 0
+        domains.parameters(target, own, own[:2], SPEED, 5.0, 230.0, et=True,
+                           reference_heading_rad=math.radians(reference_deg), time_s=time_s)
+        return 0 in domains._altering
+
+    late = ALTERATION_MIN_HOLD_S + 60.0
+    assert not alongside(180.0, late)  # right astern: the way back opens the range: ended
+    assert alongside(180.0, ALTERATION_MIN_HOLD_S - 60.0)  # ... not before the alteration is shown
+    assert alongside(-90.0, late)  # abeam to port: turning back closes on it: held
+    assert alongside(180.0, late, reference_deg=-90.0)  # a way back across its bow: held
+    assert not alongside(90.0, late)  # abeam to starboard: the way back opens the range: ended
+    assert alongside(100.0, late, faster_kn=2.0)  # ... but coming up on us from abaft the beam: held
 
 
 def test_alteration_is_readily_apparent_from_the_heading_at_the_onset_of_risk():
