@@ -16,6 +16,8 @@ model check; for Experiment 2 also the distance left to the goal.
 The second test ship, the KVLCC2 tanker (models/KVLCC2), runs its own scenarios at force
 level and through the allocation (scenarios/own_ship/*_kvlcc2_*.toml: its service speed of
 15.5 kn, the runs longer by 18/15.5 to cover the same distance), with the shipped set-up only.
+So does the S175 through the allocation (scenarios/own_ship/*_s175_alloc.toml: its actuator
+interface, actuator_mode = 1, behind the allocation with ships/S175.toml).
 
 The identified models are written by
     python -m orchestrator identify scenarios/own_ship/exp3a_s175_kcs_model.toml \\
@@ -27,6 +29,8 @@ The identified models are written by
     python -m orchestrator identify scenarios/own_ship/exp3a_kvlcc2_alloc.toml --tau-u-max-N 2.35e6 \\
         --tau-r-max-Nm 5.87e8 --speed-kn 15.5 --set KVLCC2 --ship KVLCC2 \\
         --out scenarios/own_ship/KVLCC2_alloc_identified.toml
+    python -m orchestrator identify scenarios/own_ship/exp3a_s175_alloc.toml --tau-u-max-N 1.136e6 \
+        --tau-r-max-Nm 1.41e8 --set S175 --ship S175 --out scenarios/own_ship/S175_alloc_identified.toml
 """
 
 from __future__ import annotations
@@ -59,6 +63,11 @@ SCENARIOS = {
         "exp3b": OWN / "exp3b_s175_identified.toml",
         "exp2": OWN / "exp2_s175_identified.toml",
     },
+    "S175 + allocation (actuator level, mapped)": {
+        "exp3a": OWN / "exp3a_s175_alloc.toml",
+        "exp3b": OWN / "exp3b_s175_alloc.toml",
+        "exp2": OWN / "exp2_s175_alloc.toml",
+    },
     "KCSMMG + allocation (actuator level)": {
         "exp3a": REPO / "scenarios" / "exp3a_static_mmg.toml",
         "exp3b": REPO / "scenarios" / "exp3b_head_on_mmg.toml",
@@ -76,8 +85,9 @@ SCENARIOS = {
     },
 }
 #: Plants measured with the shipped set-up only (identified model, observer on): the second
-#: test ship, whose KCS-model and observer-off runs would say nothing new.
-SHIPPED_ONLY = ("KVLCC2",)
+#: test ship, and the S175 through the allocation, whose KCS-model and observer-off runs would
+#: say nothing new.
+SHIPPED_ONLY = ("KVLCC2", "S175 + allocation")
 KCS_MODEL = {"participants.ctrl.options.model_file": (REPO / "models" / "KCS" / "parameter_sets.toml").as_posix(),
              "participants.ctrl.options.model_set": "default",
              "participants.ctrl.options.disturbance_observer": False}
@@ -115,7 +125,8 @@ def measure(path: Path, overrides: dict, results: str, experiment: str) -> dict:
 
     try:
         report = run_scenario(path, results, progress=False, overrides=overrides or None)
-        summary, folder, error = report.summary, report.folder, ""
+        summary, folder = report.summary, report.folder
+        error = "" if summary["status"] == "finished" else (str(summary.get("reason") or "").splitlines() or [""])[0]
     except ToolchainError as exc:   # a run that failed part-way still has its summary and samples
         folder = max(Path(results).glob("*/*/summary.json"), key=lambda p: p.stat().st_mtime).parent
         summary, error = json.loads((folder / "summary.json").read_text()), str(exc).splitlines()[0]
@@ -187,7 +198,7 @@ def main() -> None:
                     exp2_steps = {"simulation.steps": args.exp2_steps} if args.exp2_steps else {}
                     if experiment == "exp2":
                         overrides.update(exp2_steps)
-                    if plant.startswith("S175") and setup == "KCS model":
+                    if plant.startswith("S175 (force level") and setup == "KCS model":
                         path_used, overrides = OWN / f"{experiment}_s175_kcs_model.toml", (
                             exp2_steps if experiment == "exp2" else {})
                     else:
