@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (
     FMU2Slave,
     defaultCallbacks,
@@ -96,3 +97,20 @@ def open_slave(tmp_path):
     yield factory
     for slave in opened:
         slave.close()
+
+
+@pytest.fixture
+def refused_at_initialization(fmus, open_slave):
+    """Check: refused_at_initialization(model, name, value, message): the model's FMU refuses
+    ``name = value`` when it leaves initialization mode, with ``message`` in its log."""
+
+    def check(model: str, name: str, value: float, message: str) -> None:
+        ship = open_slave(fmus[model])
+        ship.fmu.setupExperiment(startTime=0.0)
+        ship.fmu.enterInitializationMode()
+        ship.set({name: value})
+        with pytest.raises(FMICallException):
+            ship.fmu.exitInitializationMode()
+        assert message in ship.errors()
+
+    return check
