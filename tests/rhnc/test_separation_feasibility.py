@@ -35,13 +35,16 @@ def target(bearing_deg, range_nm, course_deg, speed_kn, turn_at_s=None, new_cour
             "turn_at_s": turn_at_s, "new_course_deg": new_course_deg, "speed_kn": speed_kn}
 
 
-def write_run(folder: Path, run_id: str, targets, lost=None, started_inside=(), parameter_set="default") -> Path:
+def write_run(folder: Path, run_id: str, targets, lost=None, started_inside=(), parameter_set="default",
+              classes=None) -> Path:
     """A run folder with the summary and time series the script reads (every target that started
-    outside lost unless ``lost`` names the ones that were)."""
+    outside lost unless ``lost`` names the ones that were; every target head-on unless ``classes``
+    gives the class the analysis recorded for each)."""
     run = folder / "runs" / run_id
     run.mkdir(parents=True)
     lost = range(len(targets)) if lost is None else lost
-    rows = [{"obstacle": k, "encounter_class": "head_on", "cpa_nm": 0.5 if k in lost else 1.5, "required_nm": 1.0,
+    classes = ["head_on"] * len(targets) if classes is None else classes
+    rows = [{"obstacle": k, "encounter_class": classes[k], "cpa_nm": 0.5 if k in lost else 1.5, "required_nm": 1.0,
              "separation_kept": k not in lost, "started_inside": k in started_inside} for k in range(len(targets))]
     (run / "summary.json").write_text(json.dumps({
         "run_id": run_id, "overrides": {}, "analyses": {"colregs": {"targets": rows}},
@@ -154,10 +157,12 @@ def test_main_prints_a_line_per_run_and_the_batch_totals(feasibility, tmp_path, 
     assert feasibility.main([str(batch)]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert len(lines) == 3
-    assert lines[0].startswith("suite a_head_on one.json: lost obstacle 0 head_on CPA 0.50 nm") and ": achievable" in lines[0]
+    assert lines[0].startswith("suite a_head_on one.json: lost obstacle 0 head_on CPA 0.50 nm")
+    assert ": achievable keeping every side" in lines[0]
     assert lines[1].startswith("suite b_beams two.json") and "not achievable by a single manoeuvre from the start" in lines[1]
-    assert lines[2] == ("suite: 3 lost targets in 2 runs; in runs where a single manoeuvre keeps all clear: 1 (1 runs); "
-                        "in runs where none does: 2 (1 runs)")
+    assert lines[2] == ("suite: 3 lost targets in 2 runs; achievable keeping every side: 1 (1 runs); "
+                        "achievable only against a side rule: 0 (0 runs); "
+                        "not achievable by a single manoeuvre from the start: 2 (1 runs)")
 
 
 def test_a_closest_approach_after_the_window_counts(feasibility):
@@ -176,3 +181,4 @@ def test_the_closest_approach_between_samples_counts(feasibility):
     stopped = feasibility.Tracks(times, np.zeros((2, 1, 2)), np.zeros((2, 1)), np.zeros((1, 2)))
     targets = feasibility.Targets(np.array([[-100 * 20 * KNOT, 1.5 * NM]]), np.array([[20 * KNOT, 0.0]]), np.array([NM]))
     assert feasibility.least_clearance(stopped, targets)[0] == pytest.approx(0.5 * NM)
+
