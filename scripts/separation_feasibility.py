@@ -34,6 +34,22 @@ For each run the best manoeuvre is the one with the largest least clearance, min
 and targets (started outside) of range - required; the run is "achievable" when that is at
 least 0; the line also gives the best manoeuvre that does not speed up (surge force at most
 the one holding the initial speed), since the speed bound is a setting of the controller.
+
+Each manoeuvre's track is also judged for the sides, as the run's ``colregs`` analysis
+judges a recorded track: :func:`rhnc.encounters.colregs_judgement.judge_target`, with the
+encounter class the analysis recorded for each target (``analyses.colregs.targets[i]``) and
+the onset of risk at t = 0, gives its ``side_correct``: a head-on ship passed port to port
+(the side of the own course over ground it is on at the closest approach); a ship crossing
+from starboard, that we give way to, not crossed ahead of (``crossed_ahead``: where the own
+track crosses her course line, or by where the own ship is along it at the closest approach
+when it never does); in a crossing from port, where we stand on, no first change of course
+to port (Rule 17(c); keeping the heading keeps it).  Overtaking, being overtaken and targets
+that started inside R + R_i have no side.  The tracks are judged to the run's end and on to
+the latest closest approach, both ships straight after the window.  The line then gives the
+best manoeuvre among those that keep every side, and the verdict: "achievable keeping every
+side", "achievable only against a side rule" (some manoeuvre keeps the separation, none of
+those keeps every side), or "not achievable by a single manoeuvre from the start"; the
+totals count the lost targets (and runs) under each, per batch and over all batches.
 This is a judgement by the ship's model with single manoeuvres, not a proof either
 way.  There is deliberately no second leg: a sequence of manoeuvres (turn, then turn back,
 or slow, then turn) can do better than any single one, so "not achievable" means "not by a
@@ -42,7 +58,7 @@ a few hundredths of a mile of 0 could go either way with a finer grid; the
 model's yaw moment does not fall with speed (a real rudder loses its grip as the ship stops),
 which flatters turns combined with stopping.  Reads the run folders of batch results
 (``runs/*/summary.json``, ``timeseries.parquet``; the batch's ``summary.csv`` for the
-situation) and prints one line per run and the totals per batch:
+situation) and prints one line per run, the totals per batch and over all batches:
 
     PYTHONPATH=. nice -n 10 python scripts/separation_feasibility.py results/suites_c4bf649/trafficgen55c_rhnc_colregs ...
 """
@@ -58,6 +74,8 @@ import numpy as np
 import pandas as pd
 
 from orchestrator.geometry import KNOT, NM
+from rhnc.cosim.colregs_analysis import ground_velocity
+from rhnc.encounters.colregs_judgement import JudgementSettings, judge_target
 from rhnc.ship.ship_model import ShipParameters, hull_forces, load_parameter_set, rk4_step
 
 WINDOW_S = 1800.0
@@ -80,6 +98,13 @@ SPEED_LIMIT_TIME_S = 10.0
 #: a target "turned" when its recorded velocity leaves its value at t = 0 by this much
 TURN_DEG, TURN_KN = 2.0, 0.3
 OWN_STATE = ["ship.x", "ship.y", "ship.psi", "ship.u", "ship.v", "ship.r"]
+#: the sides are judged on the tracks carried on past the window, sampled this often [s] (as the
+#: runs are recorded), until the run's end or the latest closest approach, at most this long after it
+AFTER_WINDOW_DT_S = 20.0
+AFTER_WINDOW_MAX_S = 6 * 3600.0
+#: below this speed over ground [kn] the own ship's course is its heading (a ship stopped has no
+#: course over ground: the positions' differences give the direction of a drift of millimetres)
+STOPPED_KN = 0.5
 
 
 @dataclasses.dataclass(frozen=True)
@@ -93,11 +118,13 @@ class Family:
 
 @dataclasses.dataclass(frozen=True)
 class Targets:
-    """The targets judged: position [m] and velocity [m/s] at t = 0, one row each, and R + R_i [m]."""
+    """The targets judged: position [m] and velocity [m/s] at t = 0, one row each, R + R_i [m],
+    and the encounter class the run's ``colregs`` analysis gave each (none given: no side judged)."""
 
     xy: np.ndarray
     velocity: np.ndarray
     required_m: np.ndarray
+    encounter_class: tuple[str, ...] = ()
 
 
 def manoeuvre_family(params: ShipParameters, u0: float, offsets_deg: np.ndarray = HEADING_OFFSETS_DEG,
@@ -185,6 +212,59 @@ def least_clearance(tracks: Tracks, targets: Targets) -> np.ndarray:
     return (closest - targets.required_m[None, :]).min(axis=1)
 
 
+def closest_approach_after_window_s(tracks: Tracks, targets: Targets) -> float:
+    """The latest closest approach [s] of any manoeuvre to any target once both sail on
+    straight after the window (the window's end when every pair is opening by then)."""
+    after = targets.xy[None, :, :] + tracks.times[-1] * targets.velocity[None, :, :] - tracks.positions[-1][:, None, :]
+    closing = targets.velocity[None, :, :] - tracks.end_velocity[:, None, :]
+    with np.errstate(all="ignore"):
+        t_cpa = -np.sum(after * closing, axis=-1) / np.sum(closing * closing, axis=-1)
+    t_cpa = t_cpa[np.isfinite(t_cpa)]
+    return float(tracks.times[-1] + np.clip(t_cpa.max(initial=0.0), 0.0, AFTER_WINDOW_MAX_S))
+
+
+def carried_on(tracks: Tracks, until_s: float) -> Tracks:
+    """The tracks carried on past the window, both ships straight at their velocities at its end,
+    sampled every :data:`AFTER_WINDOW_DT_S` to ``until_s`` [s] (at least one sample more)."""
+    end = tracks.times[-1]
+    later = end + AFTER_WINDOW_DT_S * np.arange(1, max(1, int(np.ceil((until_s - end) / AFTER_WINDOW_DT_S))) + 1)
+    positions = tracks.positions[-1][None] + (later - end)[:, None, None] * tracks.end_velocity[None]
+    return Tracks(np.concatenate([tracks.times, later]), np.concatenate([tracks.positions, positions]),
+                  np.concatenate([tracks.heading_rad, np.repeat(tracks.heading_rad[-1:], later.size, axis=0)]),
+                  tracks.end_velocity)
+
+
+def judged_sides(tracks: Tracks, targets: Targets, settings: JudgementSettings | None = None) -> np.ndarray:
+    """``side_correct`` (M, T) of every manoeuvre for every target, as the ``colregs`` analysis
+    judges its recorded tracks (:func:`rhnc.encounters.colregs_judgement.judge_target`): True, False,
+    or None where no side rule applies (its class, or a target that started inside R + R_i).
+
+    The onset of risk is t = 0 (the manoeuvre is the action taken for the encounter; in the
+    suites' runs that lost the separation the onsets are at t = 0 but one), each target sails the
+    straight line, and the own ship's course is the course over ground from its positions
+    (:func:`rhnc.cosim.colregs_analysis.ground_velocity`), its heading where it has stopped.
+    ``tracks`` should run to the closest approaches (:func:`carried_on`).  A manoeuvre whose
+    track is not finite (the model diverged) keeps no side (False).  ``settings``: the analysis's
+    thresholds (its defaults, as the suites run it, when None)."""
+    settings = settings or JudgementSettings()
+    sides = np.full((tracks.positions.shape[1], len(targets.encounter_class)), None, dtype=object)
+    target_tracks = [np.column_stack([xy + tracks.times[:, None] * velocity, np.tile(velocity, (tracks.times.size, 1)),
+                                      np.zeros(tracks.times.size)]) for xy, velocity in zip(targets.xy, targets.velocity)]
+    for m in range(sides.shape[0]):
+        own_xy = tracks.positions[:, m]
+        if not np.all(np.isfinite(own_xy)):
+            sides[m] = False
+            continue
+        north, east = ground_velocity(tracks.times, own_xy[:, 0], own_xy[:, 1])
+        speed = np.hypot(north, east)
+        course = np.where(speed < STOPPED_KN * KNOT, tracks.heading_rad[:, m], np.arctan2(east, north))
+        for i, (target, kind) in enumerate(zip(target_tracks, targets.encounter_class)):
+            onset = None if kind == "none" else 0
+            sides[m, i] = judge_target(tracks.times, own_xy, course, speed, target, kind, onset,
+                                       float(targets.required_m[i]), settings)["side_correct"]
+    return sides
+
+
 def turned_at_s(times: np.ndarray, velocity: np.ndarray) -> float | None:
     """First time [s] the recorded velocity (n, 2) [m/s] leaves its value at t = 0 by
     :data:`TURN_DEG` or :data:`TURN_KN`; None if it never does."""
@@ -206,8 +286,27 @@ def _parameter_set(summary: dict) -> str:
     return check.get("set") or "default"
 
 
+ACHIEVABLE_KEEPING_SIDES = "achievable keeping every side"
+ACHIEVABLE_AGAINST_SIDE = "achievable only against a side rule"
+NOT_ACHIEVABLE = "not achievable by a single manoeuvre from the start"
+VERDICTS = (ACHIEVABLE_KEEPING_SIDES, ACHIEVABLE_AGAINST_SIDE, NOT_ACHIEVABLE)
+
+
+def _targets_judged(series: pd.DataFrame, outside: list[dict]) -> Targets:
+    """The targets that started outside, as the run recorded them at t = 0, with their class."""
+    columns = [[f"traffic.obstacles[{target['obstacle']},{j}]" for j in range(4)] for target in outside]
+    return Targets(np.array([series[c[:2]].iloc[0].to_numpy(float) for c in columns]),
+                   np.array([series[c[2:]].iloc[0].to_numpy(float) for c in columns]),
+                   np.array([target["required_nm"] * NM for target in outside]),
+                   tuple(target.get("encounter_class") or "none" for target in outside))
+
+
 def judge_run(run: Path, parameter_sets: dict[str, ShipParameters]) -> dict | None:
-    """The verdict on one run folder, or None when it lost no target that started outside."""
+    """The verdict on one run folder, or None when it lost no target that started outside.
+
+    ``best`` is the manoeuvre with the largest least clearance, ``best_keeping_sides`` the one
+    among those that keep every side the ``colregs`` analysis judges (:func:`judged_sides`; None
+    when none does), ``against_sides`` the targets (obstacle, class) whose side ``best`` breaks."""
     summary = json.loads((run / "summary.json").read_text())
     targets = ((summary.get("analyses") or {}).get("colregs") or {}).get("targets") or []
     outside = [target for target in targets if target.get("started_inside") is False]
@@ -220,18 +319,25 @@ def judge_run(run: Path, parameter_sets: dict[str, ShipParameters]) -> dict | No
     params = parameter_sets[name]
     series = pd.read_parquet(run / "timeseries.parquet")
     own0 = series[OWN_STATE].iloc[0].to_numpy(dtype=float)
-    columns = [[f"traffic.obstacles[{target['obstacle']},{j}]" for j in range(4)] for target in outside]
-    judged = Targets(np.array([series[c[:2]].iloc[0].to_numpy(float) for c in columns]),
-                     np.array([series[c[2:]].iloc[0].to_numpy(float) for c in columns]),
-                     np.array([target["required_nm"] * NM for target in outside]))
-    turned = {target["obstacle"]: at for target, c in zip(outside, columns)
-              if (at := turned_at_s(series["time_s"].to_numpy(float), series[c[2:]].to_numpy(float))) is not None}
+    judged = _targets_judged(series, outside)
+    velocity_columns = [[f"traffic.obstacles[{target['obstacle']},{j}]" for j in (2, 3)] for target in outside]
+    turned = {target["obstacle"]: at for target, c in zip(outside, velocity_columns)
+              if (at := turned_at_s(series["time_s"].to_numpy(float), series[c].to_numpy(float))) is not None}
     family = manoeuvre_family(params, own0[3])
     with np.errstate(all="ignore"):   # a set out of its range (paper_table2 at speed) diverges
-        clearance = least_clearance(sail(own0, family, params, (0.0, _speed_bound_mps(summary))), judged)
+        tracks = sail(own0, family, params, (0.0, _speed_bound_mps(summary)))
+        clearance = least_clearance(tracks, judged)
+        # judged as the analysis judged the run: to its end, and on to the last closest approach
+        until_s = max(float(series["time_s"].iloc[-1]), closest_approach_after_window_s(tracks, judged))
+        sides = judged_sides(carried_on(tracks, until_s), judged)
     diverged = ~np.isfinite(clearance)
     clearance[diverged] = -np.inf
     best = int(np.argmax(clearance))
+    keeping = np.flatnonzero([all(side is not False for side in row) for row in sides])
+    best_keeping = int(keeping[np.argmax(clearance[keeping])]) if keeping.size else None
+    keeping_nm = -np.inf if best_keeping is None else float(clearance[best_keeping]) / NM
+    outcome = (ACHIEVABLE_KEEPING_SIDES if keeping_nm >= 0.0 else
+               ACHIEVABLE_AGAINST_SIDE if clearance[best] >= 0.0 else NOT_ACHIEVABLE)
     # the speed bound is the controller's, not the ship's design speed: say what is left without it
     no_faster = np.flatnonzero(family.surge_force_N <= params.equilibrium_tau(own0[3])[0])
     best_no_faster = int(no_faster[np.argmax(clearance[no_faster])])
@@ -239,7 +345,11 @@ def judge_run(run: Path, parameter_sets: dict[str, ShipParameters]) -> dict | No
             "lost": [(target["obstacle"], target.get("encounter_class", ""), target["cpa_nm"]) for target in lost],
             "turned": turned, "best": family.labels[best], "least_clearance_nm": float(clearance[best]) / NM,
             "achievable": bool(clearance[best] >= 0.0), "diverged": int(diverged.sum()), "best_no_faster": family.labels[best_no_faster],
-            "least_clearance_no_faster_nm": float(clearance[best_no_faster]) / NM}
+            "least_clearance_no_faster_nm": float(clearance[best_no_faster]) / NM,
+            "against_sides": [(target["obstacle"], kind) for target, kind, side in zip(outside, judged.encounter_class, sides[best])
+                              if side is False],
+            "best_keeping_sides": None if best_keeping is None else family.labels[best_keeping],
+            "least_clearance_keeping_sides_nm": keeping_nm, "verdict": outcome}
 
 
 def situations(folder: Path) -> dict[str, str]:
@@ -254,15 +364,28 @@ def situations(folder: Path) -> dict[str, str]:
 
 
 def run_line(batch: str, verdict: dict, situation: str) -> str:
-    """One run: the targets lost (with their CPA), the best manoeuvre and the verdict."""
+    """One run: the targets lost (with their CPA), the best manoeuvre (and the sides it breaks),
+    the best that keeps every side, and the verdict."""
     lost = ", ".join(f"obstacle {index} {kind} CPA {cpa:.2f} nm" for index, kind, cpa in verdict["lost"])
     turned = "".join(f" [obstacle {index} turned at {at:.0f} s]" for index, at in verdict["turned"].items())
-    outcome = "achievable" if verdict["achievable"] else "not achievable by a single manoeuvre from the start"
+    against = ", ".join(f"obstacle {index} {kind}" for index, kind in verdict["against_sides"])
+    against = f", against the side of {against}" if against else ""
+    keeping = ("none keeps every side" if verdict["best_keeping_sides"] is None else
+               f"{verdict['best_keeping_sides']}, {verdict['least_clearance_keeping_sides_nm']:+.3f} nm")
+    outcome = verdict["verdict"]
     if verdict["diverged"]:
         outcome += f" ({verdict['diverged']} manoeuvres left out: the model diverged under them)"
     return (f"{batch} {verdict['run']} {situation}".rstrip() + f": lost {lost}; best: {verdict['best']}, "
-            f"least clearance {verdict['least_clearance_nm']:+.3f} nm: {outcome}{turned} "
-            f"(without speeding up: {verdict['best_no_faster']}, {verdict['least_clearance_no_faster_nm']:+.3f} nm)")
+            f"least clearance {verdict['least_clearance_nm']:+.3f} nm{against}; keeping every side: {keeping}: "
+            f"{outcome}{turned} (without speeding up: {verdict['best_no_faster']}, "
+            f"{verdict['least_clearance_no_faster_nm']:+.3f} nm)")
+
+
+def totals_line(name: str, verdicts: list[dict]) -> str:
+    """The lost targets (and runs) under each verdict."""
+    counts = [[len(verdict["lost"]) for verdict in verdicts if verdict["verdict"] == outcome] for outcome in VERDICTS]
+    return (f"{name}: {sum(map(sum, counts))} lost targets in {len(verdicts)} runs; "
+            + "; ".join(f"{outcome}: {sum(lost)} ({len(lost)} runs)" for outcome, lost in zip(VERDICTS, counts)))
 
 
 def main(argv=None) -> int:
@@ -270,17 +393,17 @@ def main(argv=None) -> int:
     parser.add_argument("folders", nargs="+", type=Path, help="batch result folders (with runs/*/summary.json)")
     args = parser.parse_args(argv)
     parameter_sets: dict[str, ShipParameters] = {}
+    every: list[dict] = []
     for folder in args.folders:
         names = situations(folder)
         verdicts = [verdict for run in sorted(folder.glob("runs/*")) if (run / "summary.json").exists()
                     and (verdict := judge_run(run, parameter_sets)) is not None]
         for verdict in verdicts:
             print(run_line(folder.name, verdict, names.get(verdict["run"], "")))  # noqa: T201
-        kept = [len(verdict["lost"]) for verdict in verdicts if verdict["achievable"]]
-        not_kept = [len(verdict["lost"]) for verdict in verdicts if not verdict["achievable"]]
-        print(f"{folder.name}: {sum(kept) + sum(not_kept)} lost targets in {len(verdicts)} runs; "  # noqa: T201
-              f"in runs where a single manoeuvre keeps all clear: {sum(kept)} ({len(kept)} runs); "
-              f"in runs where none does: {sum(not_kept)} ({len(not_kept)} runs)")
+        print(totals_line(folder.name, verdicts))  # noqa: T201
+        every += verdicts
+    if len(args.folders) > 1:
+        print(totals_line(f"all {len(args.folders)} batches", every))  # noqa: T201
     return 0
 
 

@@ -35,13 +35,16 @@ def target(bearing_deg, range_nm, course_deg, speed_kn, turn_at_s=None, new_cour
             "turn_at_s": turn_at_s, "new_course_deg": new_course_deg, "speed_kn": speed_kn}
 
 
-def write_run(folder: Path, run_id: str, targets, lost=None, started_inside=(), parameter_set="default") -> Path:
+def write_run(folder: Path, run_id: str, targets, lost=None, started_inside=(), parameter_set="default",
+              classes=None) -> Path:
     """A run folder with the summary and time series the script reads (every target that started
-    outside lost unless ``lost`` names the ones that were)."""
+    outside lost unless ``lost`` names the ones that were; every target head-on unless ``classes``
+    gives the class the analysis recorded for each)."""
     run = folder / "runs" / run_id
     run.mkdir(parents=True)
     lost = range(len(targets)) if lost is None else lost
-    rows = [{"obstacle": k, "encounter_class": "head_on", "cpa_nm": 0.5 if k in lost else 1.5, "required_nm": 1.0,
+    classes = ["head_on"] * len(targets) if classes is None else classes
+    rows = [{"obstacle": k, "encounter_class": classes[k], "cpa_nm": 0.5 if k in lost else 1.5, "required_nm": 1.0,
              "separation_kept": k not in lost, "started_inside": k in started_inside} for k in range(len(targets))]
     (run / "summary.json").write_text(json.dumps({
         "run_id": run_id, "overrides": {}, "analyses": {"colregs": {"targets": rows}},
@@ -154,10 +157,23 @@ def test_main_prints_a_line_per_run_and_the_batch_totals(feasibility, tmp_path, 
     assert feasibility.main([str(batch)]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert len(lines) == 3
-    assert lines[0].startswith("suite a_head_on one.json: lost obstacle 0 head_on CPA 0.50 nm") and ": achievable" in lines[0]
+    assert lines[0].startswith("suite a_head_on one.json: lost obstacle 0 head_on CPA 0.50 nm")
+    assert ": achievable keeping every side" in lines[0]
     assert lines[1].startswith("suite b_beams two.json") and "not achievable by a single manoeuvre from the start" in lines[1]
-    assert lines[2] == ("suite: 3 lost targets in 2 runs; in runs where a single manoeuvre keeps all clear: 1 (1 runs); "
-                        "in runs where none does: 2 (1 runs)")
+    assert lines[2] == ("suite: 3 lost targets in 2 runs; achievable keeping every side: 1 (1 runs); "
+                        "achievable only against a side rule: 0 (0 runs); "
+                        "not achievable by a single manoeuvre from the start: 2 (1 runs)")
+
+
+def test_main_prints_the_totals_over_all_batches(feasibility, tmp_path, capsys):
+    write_run(tmp_path / "one", "a_head_on", [target(0.0, 5.0, 180.0, 18.0)])
+    write_run(tmp_path / "two", "b_bow", [target(70.0, 1.5, 270.0, 14.0)], classes=["crossing_give_way"])
+    assert feasibility.main([str(tmp_path / "one"), str(tmp_path / "two")]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert "against the side of obstacle 0 crossing_give_way" in lines[2]
+    assert lines[-1] == ("all 2 batches: 2 lost targets in 2 runs; achievable keeping every side: 1 (1 runs); "
+                         "achievable only against a side rule: 1 (1 runs); "
+                         "not achievable by a single manoeuvre from the start: 0 (0 runs)")
 
 
 def test_a_closest_approach_after_the_window_counts(feasibility):
@@ -176,3 +192,67 @@ def test_the_closest_approach_between_samples_counts(feasibility):
     stopped = feasibility.Tracks(times, np.zeros((2, 1, 2)), np.zeros((2, 1)), np.zeros((1, 2)))
     targets = feasibility.Targets(np.array([[-100 * 20 * KNOT, 1.5 * NM]]), np.array([[20 * KNOT, 0.0]]), np.array([NM]))
     assert feasibility.least_clearance(stopped, targets)[0] == pytest.approx(0.5 * NM)
+
+
+def _sides(feasibility, kcs, targets, classes, offsets_deg, surge_names=("speed held",)):
+    """``side_correct`` (manoeuvres, targets) and the least clearance [nm] of each manoeuvre."""
+    family = feasibility.manoeuvre_family(kcs, OWN[3], offsets_deg=np.array(offsets_deg), surge_names=surge_names)
+    judged = feasibility.Targets(np.array([each["xy"] for each in targets]), np.array([each["velocity"] for each in targets]),
+                                 np.full(len(targets), NM), tuple(classes))
+    tracks = feasibility.sail(OWN, family, kcs, (0.0, 24 * KNOT))
+    until_s = max(3200.0, feasibility.closest_approach_after_window_s(tracks, judged))
+    return (feasibility.judged_sides(feasibility.carried_on(tracks, until_s), judged),
+            feasibility.least_clearance(tracks, judged) / NM)
+
+
+def test_the_only_clear_turn_crosses_the_bow_of_a_ship_crossing_from_starboard(feasibility, tmp_path):
+    # 1.5 nm off on the starboard bow, crossing at 14 kn: a turn to port runs ahead of her and
+    # clear; to pass astern the own ship would have to turn towards her, and no turn does it in time
+    run = write_run(tmp_path, "bow", [target(70.0, 1.5, 270.0, 14.0)], classes=["crossing_give_way"])
+    verdict = feasibility.judge_run(run, {})
+    assert verdict["achievable"] and "to port" in verdict["best"]
+    assert verdict["against_sides"] == [(0, "crossing_give_way")]
+    assert verdict["least_clearance_keeping_sides_nm"] < -0.5
+    assert verdict["verdict"] == "achievable only against a side rule"
+    assert ": achievable only against a side rule" in feasibility.run_line("batch", verdict, "")
+
+
+def test_a_turn_to_starboard_passes_astern_of_a_ship_crossing_from_starboard(feasibility, kcs, tmp_path):
+    crossing = target(45.0, 3.0, 270.0, 18.0)   # on a collision course, 3 nm off
+    sides, clearance = _sides(feasibility, kcs, [crossing], ["crossing_give_way"], [-60.0, 60.0])
+    assert sides[:, 0].tolist() == [False, True]          # to port: ahead of her; to starboard: astern
+    assert clearance[1] > 0.2
+    verdict = feasibility.judge_run(write_run(tmp_path, "astern", [crossing], classes=["crossing_give_way"]), {})
+    assert verdict["verdict"] == "achievable keeping every side"
+    assert verdict["least_clearance_keeping_sides_nm"] > 0.2
+
+
+def test_a_head_on_ship_is_passed_port_to_port(feasibility, kcs, tmp_path):
+    # fine on the starboard bow, 2.6 nm off at 24 kn: a turn to port passes her starboard to
+    # starboard, clear and against Rule 14; with a ship 1.5 nm astern no turn to starboard (nor
+    # round) keeps the separation
+    head_on, astern = target(15.0, 2.6, 180.0, 24.0), target(180.0, 1.5, 0.0, 18.0)
+    sides, _ = _sides(feasibility, kcs, [head_on, astern], ["head_on", "overtaken"], [-30.0, 60.0])
+    assert sides.tolist() == [[False, None], [True, None]]     # starboard to starboard; across her bow, port to port
+    run = write_run(tmp_path, "head_on", [head_on, astern], classes=["head_on", "overtaken"], lost=[0])
+    verdict = feasibility.judge_run(run, {})
+    assert verdict["achievable"] and "to port" in verdict["best"]
+    assert verdict["against_sides"] == [(0, "head_on")]
+    assert verdict["verdict"] == "achievable only against a side rule"
+
+
+def test_a_stand_on_ship_does_not_turn_to_port_for_a_ship_crossing_from_port(feasibility, kcs):
+    sides, _ = _sides(feasibility, kcs, [target(-50.0, 2.6, 90.0, 12.0)], ["crossing_stand_on"], [-30.0, 0.0, 30.0],
+                      surge_names=("speed held", "full astern"))
+    assert sides[:, 0].tolist() == [False, True, True, False, True, True]   # Rule 17(c); holding on or stopping keep it
+
+
+@pytest.mark.parametrize("kind", ["overtaking", "overtaken", "static", "none"])
+def test_no_side_is_judged_where_the_analysis_judges_none(feasibility, kcs, kind):
+    sides, _ = _sides(feasibility, kcs, [target(-20.0, 2.0, 0.0, 10.0)], [kind], [-30.0, 30.0])
+    assert sides[:, 0].tolist() == [None, None]
+
+
+def test_no_side_is_judged_for_a_target_that_started_inside(feasibility, kcs):
+    sides, _ = _sides(feasibility, kcs, [target(10.0, 0.9, 180.0, 18.0)], ["head_on"], [-30.0, 30.0])
+    assert sides[:, 0].tolist() == [None, None]
