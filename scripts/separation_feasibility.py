@@ -73,7 +73,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from orchestrator.geometry import KNOT, NM
+from orchestrator.geometry import KNOT, NM, wrap_deg
 from rhnc.cosim.colregs_analysis import ground_velocity
 from rhnc.encounters.colregs_judgement import JudgementSettings, judge_target
 from rhnc.ship.ship_model import ShipParameters, hull_forces, load_parameter_set, rk4_step
@@ -269,7 +269,7 @@ def turned_at_s(times: np.ndarray, velocity: np.ndarray) -> float | None:
     """First time [s] the recorded velocity (n, 2) [m/s] leaves its value at t = 0 by
     :data:`TURN_DEG` or :data:`TURN_KN`; None if it never does."""
     heading = np.degrees(np.arctan2(velocity[:, 1], velocity[:, 0]))
-    swing = np.abs((heading - heading[0] + 180.0) % 360.0 - 180.0)
+    swing = np.abs(wrap_deg(heading - heading[0]))
     speed_change = np.abs(np.hypot(velocity[:, 0], velocity[:, 1]) - np.hypot(*velocity[0])) / KNOT
     moving = np.hypot(*velocity[0]) > 0.1 * KNOT
     changed = (speed_change > TURN_KN) | ((swing > TURN_DEG) & moving)
