@@ -32,8 +32,8 @@ def test_imazu_head_on_through_the_nmpc_is_judged_from_its_tracks(tmp_path):
     assert "track.png" in summary["figures"]
 
 
-@pytest.mark.parametrize("suite", ["imazu", "trafficgen", "trafficgen55", "trafficgen55b", "trafficgen55c", "trafficgen55d",
-                                   "drawn", "drawn2028", "drawn2029", "drawn2030", "drawn2031", "drawn2032"])
+@pytest.mark.parametrize("suite", ["imazu", "trafficgen", "trafficgen55", "trafficgen55b", "trafficgen55c", "trafficgen55d", "trafficgen55e",
+                                   "drawn", "drawn2028", "drawn2029", "drawn2030", "drawn2031", "drawn2032", "drawn2033"])
 def test_every_colregs_suite_has_a_calm_twin_and_runs_until_arrival(suite):
     from orchestrator.batch_spec import load_batch
 
