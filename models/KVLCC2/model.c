@@ -92,10 +92,6 @@ static double *field(ModelData *d, fmi2ValueReference vr) {
     }
 }
 
-static double clip(double value, double low, double high) {
-    return value > high ? high : (value < low ? low : value);
-}
-
 /* Rudder normal-force coefficient at the effective angle alpha: the lift slope up to the
  * stall angle, then a loss that grows to STALL_LOSS of the peak over a few degrees. */
 static double rudder_normal_coefficient(double alpha) {
@@ -120,7 +116,7 @@ static void loads(const ModelData *d, const double X[S_NSTATES], double F[3], do
     const double delta = force_mode(d) ? 0.0 : X[S_DELTA];
     double thrust, loading, slip, inner, uR, vR, FN, eta = D_P / H_R;
     if (force_mode(d)) {
-        thrust = fmax(clip(d->surge_demand_MN, -d->max_surge_MN, d->max_surge_MN) * 1e6, 0.0) / (1.0 - T_P);
+        thrust = fmax(plant_clip(d->surge_demand_MN, -d->max_surge_MN, d->max_surge_MN) * 1e6, 0.0) / (1.0 - T_P);
         *Q = 0.0;
     } else {
         thrust = RHO * D_P * D_P * (KT0 * nd * nd + KT1 * nd * ua + KT2 * ua * ua);
@@ -140,8 +136,8 @@ static void loads(const ModelData *d, const double X[S_NSTATES], double F[3], do
     F[2] = qh * LPP * (N_V * vp + N_R * rp + N_VVV * vp * vp * vp + N_VVR * vp * vp * rp + N_VRR * vp * rp * rp
                        + N_RRR * rp * rp * rp) - (X_R + A_H * X_H) * LPP * FN * cos(delta);
     if (force_mode(d)) {
-        F[0] += clip(d->surge_demand_MN, -d->max_surge_MN, d->max_surge_MN) * 1e6;
-        F[2] += clip(d->yaw_demand_MNm, -d->max_yaw_MNm, d->max_yaw_MNm) * 1e6;
+        F[0] += plant_clip(d->surge_demand_MN, -d->max_surge_MN, d->max_surge_MN) * 1e6;
+        F[2] += plant_clip(d->yaw_demand_MNm, -d->max_yaw_MNm, d->max_yaw_MNm) * 1e6;
     } else {
         F[0] += (1.0 - T_P) * thrust;
     }
@@ -162,7 +158,7 @@ static void loads(const ModelData *d, const double X[S_NSTATES], double F[3], do
 /* Engine torque (N m) of the PI governor at the state X: proportional plus integral part,
  * within [0, TORQUE_MAX] (the engine neither brakes nor exceeds its torque limit). */
 static double engine_torque(const double X[S_NSTATES]) {
-    return clip(GOV_KP * (X[S_NREF] - X[S_N]) + X[S_GOV], 0.0, TORQUE_MAX);
+    return plant_clip(GOV_KP * (X[S_NREF] - X[S_N]) + X[S_GOV], 0.0, TORQUE_MAX);
 }
 
 static void derivatives(const ModelData *d, const double X[S_NSTATES], double dX[S_NSTATES]) {
@@ -173,8 +169,8 @@ static void derivatives(const ModelData *d, const double X[S_NSTATES], double dX
     const double set = d->current_towards_deg * DEG, cur = d->current_mps;
     const double vn = u * cos(psi) - v * sin(psi) + cur * cos(set);
     const double ve = u * sin(psi) + v * cos(psi) + cur * sin(set);
-    const double delta_cmd = clip(d->rudder_order_deg * DEG, -RUDDER_MAX, RUDDER_MAX);
-    const double n_cmd = clip(d->shaft_order_rpm / 60.0, 0.0, RPS_MAX);
+    const double delta_cmd = plant_clip(d->rudder_order_deg * DEG, -RUDDER_MAX, RUDDER_MAX);
+    const double n_cmd = plant_clip(d->shaft_order_rpm / 60.0, 0.0, RPS_MAX);
     double F[3], T, Q, b1, b2, det, error, q_engine, raw;
     loads(d, X, F, &T, &Q);
     /* [m22, m23; m23, m33] [vdot; rdot] = [Y - m11 u r; N - m23 u r] */
@@ -191,8 +187,8 @@ static void derivatives(const ModelData *d, const double X[S_NSTATES], double dX
         dX[S_DELTA] = dX[S_N] = dX[S_NREF] = dX[S_GOV] = 0.0;
         return;
     }
-    dX[S_DELTA] = clip(RUDDER_GAIN * (delta_cmd - X[S_DELTA]), -RUDDER_RATE, RUDDER_RATE);
-    dX[S_NREF] = clip(SETPOINT_GAIN * (n_cmd - X[S_NREF]), -SETPOINT_RATE, SETPOINT_RATE);
+    dX[S_DELTA] = plant_clip(RUDDER_GAIN * (delta_cmd - X[S_DELTA]), -RUDDER_RATE, RUDDER_RATE);
+    dX[S_NREF] = plant_clip(SETPOINT_GAIN * (n_cmd - X[S_NREF]), -SETPOINT_RATE, SETPOINT_RATE);
     error = X[S_NREF] - X[S_N];
     raw = GOV_KP * error + X[S_GOV];
     q_engine = engine_torque(X);
@@ -219,7 +215,7 @@ static void initial_state(const ModelData *d, double X[S_NSTATES]) {
     X[S_U] = d->start_speed_kn * KNOT;
     X[S_N] = X[S_NREF] = d->start_shaft_rpm / 60.0;
     loads(d, X, F, &T, &Q);
-    X[S_GOV] = clip(Q, 0.0, TORQUE_MAX); /* the governor starts holding the shaft speed */
+    X[S_GOV] = plant_clip(Q, 0.0, TORQUE_MAX); /* the governor starts holding the shaft speed */
 }
 
 fmi2Status model_exit_initialization(ModelInstance *comp) {

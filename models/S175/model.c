@@ -82,14 +82,6 @@ static double *field(ModelData *d, fmi2ValueReference vr) {
     }
 }
 
-static double clamp(double value, double bound) {
-    return value > bound ? bound : (value < -bound ? -bound : value);
-}
-
-static double clip(double value, double low, double high) {
-    return value > high ? high : (value < low ? low : value);
-}
-
 static int actuator_mode(const ModelData *d) { return d->actuator_mode > 0.5; }
 
 /* Rudder normal-force coefficient at the effective angle alpha (rad): the lift slope up to the
@@ -128,8 +120,8 @@ static void over_ground(const ModelData *d, const double X[S_NSTATES], double *v
 
 static void derivatives(const ModelData *d, const double X[S_NSTATES], double dX[S_NSTATES]) {
     const double psi = X[S_PSI], u = X[S_U], v = X[S_V], r = X[S_R];
-    double tau_u = clamp(d->thrust_kN, d->max_thrust_kN) * 1e3;
-    double tau_r = clamp(d->moment_kNm, d->max_moment_kNm) * 1e3;
+    double tau_u = plant_clip(d->thrust_kN, -d->max_thrust_kN, d->max_thrust_kN) * 1e3;
+    double tau_r = plant_clip(d->moment_kNm, -d->max_moment_kNm, d->max_moment_kNm) * 1e3;
     double rudder_sway = 0.0, steering[3], thrust;
     const double sin_lat = sin(X[S_LAT]), w = 1.0 - WGS84_E2 * sin_lat * sin_lat;
     const double radius_m = WGS84_A * (1.0 - WGS84_E2) / (w * sqrt(w)); /* meridian */
@@ -161,9 +153,9 @@ static void derivatives(const ModelData *d, const double X[S_NSTATES], double dX
     dX[S_V] = (-M11 * u * r - D22 * v - D23 * r + wind[1] + rudder_sway) / M22;
     dX[S_R] = ((M11 - M22) * u * v - D32 * v - D33 * r + tau_r + wind[2]) / M33;
     if (actuator_mode(d)) {   /* steering gear at its rate; shaft lagging its order by 5.65 s / n */
-        const double n = X[S_N], n_order = clip(d->shaft_order_rpm, 0.0, RPM_MAX) / 60.0;
-        dX[S_DELTA] = clip(clip(d->rudder_order_deg * DEG, -RUDDER_MAX, RUDDER_MAX) - X[S_DELTA],
-                           -RUDDER_RATE, RUDDER_RATE);
+        const double n = X[S_N], n_order = plant_clip(d->shaft_order_rpm, 0.0, RPM_MAX) / 60.0;
+        dX[S_DELTA] = plant_clip(plant_clip(d->rudder_order_deg * DEG, -RUDDER_MAX, RUDDER_MAX) - X[S_DELTA],
+                                 -RUDDER_RATE, RUDDER_RATE);
         dX[S_N] = (n_order - n) / (n > 0.3 ? SHAFT_TIME / n : SHAFT_TIME_SLOW);
     } else {
         dX[S_DELTA] = dX[S_N] = 0.0;
@@ -237,7 +229,7 @@ fmi2Status model_get_real(ModelInstance *comp, fmi2ValueReference vr, fmi2Real *
     case vr_shaft_speed: *value = actuator_mode(d) ? X[S_N] * 60.0 : 0.0; return fmi2OK;
     case vr_shaft_thrust:   /* in the force mode: the surge force applied */
         if (!actuator_mode(d)) {
-            *value = clamp(d->thrust_kN, d->max_thrust_kN);
+            *value = plant_clip(d->thrust_kN, -d->max_thrust_kN, d->max_thrust_kN);
             return fmi2OK;
         }
         actuator_loads(X, F, &thrust);

@@ -1,5 +1,6 @@
 /* What the plant FMUs with equations of their own (KVLCC2, S175) share besides the FMI layer:
- * the communication step over rk4.h and the compass heading of their outputs. Their equations
+ * the communication step over rk4.h, the compass heading of their outputs and the limit of a
+ * value to a range. Their equations
  * and interfaces stay in their folders. */
 #ifndef PLANT_STEP_H
 #define PLANT_STEP_H
@@ -31,6 +32,11 @@ static inline fmi2Status plant_rk4_step(ModelInstance *comp, rk4_derivatives f, 
 static inline double plant_compass_deg(double angle) {
     double deg = fmod(angle / (M_PI / 180.0), 360.0);
     return deg < 0.0 ? deg + 360.0 : deg;
+}
+
+/* value limited to [low, high]. */
+static inline double plant_clip(double value, double low, double high) {
+    return value > high ? high : (value < low ? low : value);
 }
 
 #endif /* PLANT_STEP_H */
