@@ -292,11 +292,16 @@ NOT_ACHIEVABLE = "not achievable by a single manoeuvre from the start"
 VERDICTS = (ACHIEVABLE_KEEPING_SIDES, ACHIEVABLE_AGAINST_SIDE, NOT_ACHIEVABLE)
 
 
+def _obstacle_columns(target: dict, fields: range) -> list[str]:
+    """The time series' columns of a target's recorded x, y [m] (fields 0, 1) and vx, vy [m/s] (2, 3)."""
+    return [f"traffic.obstacles[{target['obstacle']},{j}]" for j in fields]
+
+
 def _targets_judged(series: pd.DataFrame, outside: list[dict]) -> Targets:
     """The targets that started outside, as the run recorded them at t = 0, with their class."""
-    columns = [[f"traffic.obstacles[{target['obstacle']},{j}]" for j in range(4)] for target in outside]
-    return Targets(np.array([series[c[:2]].iloc[0].to_numpy(float) for c in columns]),
-                   np.array([series[c[2:]].iloc[0].to_numpy(float) for c in columns]),
+    return Targets(np.array([series[_obstacle_columns(target, range(2))].iloc[0].to_numpy(float) for target in outside]),
+                   np.array([series[_obstacle_columns(target, range(2, 4))].iloc[0].to_numpy(float)
+                             for target in outside]),
                    np.array([target["required_nm"] * NM for target in outside]),
                    tuple(target.get("encounter_class") or "none" for target in outside))
 
@@ -320,9 +325,9 @@ def judge_run(run: Path, parameter_sets: dict[str, ShipParameters]) -> dict | No
     series = pd.read_parquet(run / "timeseries.parquet")
     own0 = series[OWN_STATE].iloc[0].to_numpy(dtype=float)
     judged = _targets_judged(series, outside)
-    velocity_columns = [[f"traffic.obstacles[{target['obstacle']},{j}]" for j in (2, 3)] for target in outside]
-    turned = {target["obstacle"]: at for target, c in zip(outside, velocity_columns)
-              if (at := turned_at_s(series["time_s"].to_numpy(float), series[c].to_numpy(float))) is not None}
+    times = series["time_s"].to_numpy(float)
+    turned = {target["obstacle"]: at for target in outside
+              if (at := turned_at_s(times, series[_obstacle_columns(target, range(2, 4))].to_numpy(float))) is not None}
     family = manoeuvre_family(params, own0[3])
     with np.errstate(all="ignore"):   # a set out of its range (paper_table2 at speed) diverges
         tracks = sail(own0, family, params, (0.0, _speed_bound_mps(summary)))
