@@ -29,7 +29,7 @@ The identified models are written by
     python -m orchestrator identify scenarios/own_ship/exp3a_kvlcc2_alloc.toml --tau-u-max-N 2.35e6 \\
         --tau-r-max-Nm 5.87e8 --speed-kn 15.5 --set KVLCC2 --ship KVLCC2 \\
         --out scenarios/own_ship/KVLCC2_alloc_identified.toml
-    python -m orchestrator identify scenarios/own_ship/exp3a_s175_alloc.toml --tau-u-max-N 1.136e6 \
+    python -m orchestrator identify scenarios/own_ship/exp3a_s175_alloc.toml --tau-u-max-N 1.136e6 \\
         --tau-r-max-Nm 1.41e8 --set S175 --ship S175 --out scenarios/own_ship/S175_alloc_identified.toml
 """
 
