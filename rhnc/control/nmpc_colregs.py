@@ -41,6 +41,14 @@ a stand-on crossing target the bound holds before we act too: avoiding a second 
 must not take us to port across the bow of a ship on our port side (seen in a
 two-target trial).
 
+The turn back to port (Rule 17(c), ``colregs`` only, whether the constraints are on or not):
+while a crossing target on our port side that we stand on for is still approaching, the heading
+may not fall to port of the present one (keep the course, Rule 17(a)(i)); else a turn of more
+than ``MANOEUVRE_DEG`` to port towards the reference (back to the route after an alteration, or
+a bend of the route) goes no further than keeps every target not yet in risk from becoming a
+ship crossing from port (:func:`rhnc.control.nmpc_manoeuvre.port_return_limit`).  Turning back
+at once made ships 4-6 nm on the port beam ships crossing from port in the middle of the turn.
+
 Collision risk at the control rate (``colregs`` only): the constraints are on while the
 navigation's trigger is set *or* any obstacle has a risk of collision by time (a CPA inside
 ``risk_cpa_m`` at most ``risk_tcpa_s`` ahead) or is within ``CLOSE_QUARTERS_FACTOR``
@@ -85,8 +93,8 @@ from orchestrator.geometry import wrap_angle
 from rhnc.encounters.colregs import (ACTION_BUFFER_S, ENCOUNTER_CLASSES, STAND_ON_ACTION_RANGE_FACTOR,
                                     STAND_ON_ACTION_TCPA_S, EncounterTracker, cpa_tcpa, latest_alteration_s,
                                     stand_on_latest_s, stand_on_must_act)
-from rhnc.control.nmpc_manoeuvre import (ManoeuvreResponse, closing_on_the_port_side, response_clearance_m,
-                                         side_clearance_m)
+from rhnc.control.nmpc_manoeuvre import (ManoeuvreResponse, closing_on_the_port_side, port_return_limit,
+                                         response_clearance_m, side_clearance_m)
 from rhnc.control.nmpc_problem import OBSTACLE_FIELDS
 
 LOG = logging.getLogger(__name__)
@@ -126,6 +134,9 @@ INSIDE_OPENING_MPS = 1.0
 SLOW_FACTOR = 0.45
 #: the larger turns weighed when no readily apparent one keeps the traffic clear [deg]
 LARGER_ALTERATIONS_DEG = (60.0, 90.0)
+#: the floor of a turn back to port held short (:meth:`CollisionDomains._return_floor`) is
+#: dated this far back [s]: its ramp (of no size) has long reached it
+RETURN_FLOOR_AGE_S = 3600.0
 
 @dataclasses.dataclass(frozen=True)
 class DomainSettings:
@@ -279,11 +290,12 @@ class CollisionDomains:
         own_course = float(state[2] + math.atan2(state[4], state[3]))
         own_speed = float(math.hypot(state[3], state[4]))
         classes, codes = self._classify(rows, state[:2], own_course, own_speed, float(state[2]))
+        return_floor = self._return_floor(rows, classes, state, own_course, own_speed, reference_heading_rad, time_s)
         rhos = s.own_radius_m + rows[:, 4] + s.clearance_margin_m
         own_velocity = own_speed * np.array([math.cos(own_course), math.sin(own_course)])
         risk = s.colregs and self._collision_risk(rows, rhos, state[:2], own_velocity)
         if not (et or risk):
-            return slots, DomainReport(codes, active_rows)
+            return slots, DomainReport(codes, active_rows, alteration_floor=return_floor)
         order = self._nearest(rows, rhos, origin)
         ranges, range_rates, inside, danger = self._closing(rows, rhos, state[:2], own_velocity, order)
         heading_now = float(state[2]) if reference_heading_rad is None else float(reference_heading_rad)
@@ -321,7 +333,10 @@ class CollisionDomains:
                               offset[1] / L, domain_radius / L, growth_mps / L, inflation, 1.0]
             active_rows[i] = 1.0
             slot += 1
-        return slots, DomainReport(codes, active_rows, no_port_turn, *self._alteration_bounds(danger, no_port_turn),
+        floor, ceiling = self._alteration_bounds(danger, no_port_turn)
+        if return_floor is not None and not danger and ceiling is None and (floor is None or return_floor[2] > floor[2]):
+            floor = return_floor
+        return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling,
                                    bool(risk and not et), danger, _escape_heading(rows, rhos, state, range_rates, inside),
                                    min(self._slowing.values()) if self._slowing and not danger else None)
 
@@ -342,6 +357,38 @@ class CollisionDomains:
             goal = held[2] - 2.0 * math.pi * round((held[2] - heading_rad) / (2.0 * math.pi))
             anchor = goal - math.copysign(math.radians(self.settings.alteration_deg), 1.0 if floor is not None else -1.0)
         return 2.0 * math.pi * round((reference_heading_rad - anchor) / (2.0 * math.pi))
+
+    def _return_floor(self, rows: np.ndarray, classes, state: np.ndarray, own_course: float, own_speed: float,
+                      reference_heading_rad: float | None, time_s: float) -> tuple[float, float, float] | None:
+        """The heading floor (as an alteration to starboard already made: time, heading, heading)
+        that keeps a turn to port back to the reference from making a ship crossing from port one
+        we stand on for with that turn under way (Rule 17(c)), or None (``colregs`` with
+        alterations only).
+
+        While a ship crossing from port that we stand on for is still to pass (TCPA > 0), no turn
+        to port at all: keep the course (Rule 17(a)(i)).  Else, a turn to port of more than
+        ``MANOEUVRE_DEG`` towards the reference goes only as far as
+        :func:`rhnc.control.nmpc_manoeuvre.port_return_limit` allows for the targets in no risk of
+        collision yet.  The bound is a floor like an alteration's, and yields to immediate danger.
+        """
+        s = self.settings
+        if not s.colregs or s.alteration_deg <= 0.0 or reference_heading_rad is None or own_speed < 1.0:
+            return None
+        drift = own_course - float(state[2])
+        reference_course = reference_heading_rad + drift
+        if wrap_angle(reference_course - own_course) > -math.radians(MANOEUVRE_DEG):
+            return None
+        if any(c is not None and c.encounter_class == "crossing_stand_on" and c.tcpa_s > 0.0 for c in classes):
+            limit: float | None = own_course
+        else:
+            free = [(rows[j, :2], rows[j, 2:4]) for j, c in enumerate(classes)
+                    if c is not None and c.encounter_class == "none"]
+            limit = port_return_limit(state[:2], own_speed, own_course, reference_course, free, s.risk_cpa_m,
+                                      s.risk_tcpa_s)
+        if limit is None:
+            return None
+        heading = limit - drift
+        return time_s - RETURN_FLOOR_AGE_S, heading, heading
 
     def _closing(self, rows: np.ndarray, rhos: np.ndarray, own_xy, own_velocity, order: list[int]):
         """Ranges [m] and range rates [m/s] of the rows, the rows inside their clearance

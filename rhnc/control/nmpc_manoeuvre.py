@@ -12,7 +12,8 @@ flies the chosen one with its own model.
 
 Beside it, the simpler measures the choice of a free side still uses: :func:`side_clearance_m`
 (the new course and speed taken at once) and :func:`closing_on_the_port_side` (a ship that may
-become one crossing from port, for which no turn to port is weighed).
+become one crossing from port, for which no turn to port is weighed); and how far a turn to port
+back to the route may go (:func:`port_return_course`).
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import math
 import numpy as np
 
 from orchestrator.geometry import wrap_angle
-from rhnc.encounters.colregs import APPARENT_ALTERATION_DEG, APPARENT_ALTERATION_TURN_S
+from rhnc.encounters.colregs import APPARENT_ALTERATION_DEG, APPARENT_ALTERATION_TURN_S, classify
 
 #: the response delay of :data:`rhnc.encounters.colregs.APPARENT_ALTERATION_TURN_S` [s]
 RESPONSE_DELAY_S = 20.0
@@ -121,3 +122,41 @@ def closing_on_the_port_side(own_xy, own_speed_mps: float, heading_rad: float, t
         if -112.5 < bearing < 0.0 and float(relative @ (np.asarray(velocity, dtype=float) - own_velocity)) < 0.0:
             return True
     return False
+
+
+#: the courses a turn back to port is weighed at, this far apart [deg]
+RETURN_STEP_DEG = 5.0
+
+
+def port_return_limit(own_xy, own_speed_mps: float, course_rad: float, reference_course_rad: float, targets,
+                      cpa_limit_m: float, tcpa_limit_s: float) -> float | None:
+    """How far [rad, a course within half a turn of ``course_rad``] a turn to port from
+    ``course_rad`` back towards ``reference_course_rad`` may go without making a ship of
+    ``targets`` ((position, velocity) each, none of them in a risk of collision with us yet) one
+    crossing from port: a ship we would then stand on for, with a turn to port under way at the
+    onset of risk, which Rule 17(c) rules out.  None when the whole turn is free, or the
+    reference is not to port of the course.
+
+    The courses are weighed every ``RETURN_STEP_DEG`` from ``course_rad`` to the reference,
+    each held at the present speed and classified as :func:`rhnc.encounters.colregs.classify`
+    (what the tracker locks at the onset of risk) does; the limit is the last before the first
+    that makes a ship crossing from port, less one more step: while turning, the course runs
+    a little past the bound.
+
+    A ship that had given way to one target turned back to its route as soon as that target was
+    past; the turn put a ship 5-6 nm on the port beam, no risk until then, on a CPA of 0.8-1.8 nm,
+    and the risk arose in the middle of a turn to port for a ship on the port side.
+    """
+    turn = float(wrap_angle(reference_course_rad - course_rad))
+    if turn >= 0.0:
+        return None
+    step = math.radians(RETURN_STEP_DEG)
+    courses = [course_rad - k * step for k in range(1, int(-turn / step) + 1)] + [course_rad + turn]
+    allowed = [course_rad, course_rad]  # the last two courses that made none
+    for course in courses:
+        for position, velocity in targets:
+            encounter = classify(own_xy, course, own_speed_mps, position, velocity, cpa_limit_m, tcpa_limit_s)
+            if encounter.encounter_class == "crossing_stand_on":
+                return allowed[0]
+        allowed = [allowed[1], course]
+    return None
