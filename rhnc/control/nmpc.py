@@ -80,7 +80,8 @@ from rhnc.control.disturbance_observer import DisturbanceObserver, trimmed_refer
 from rhnc.control.nmpc_codegen import NLPLibrary
 from rhnc.control.nmpc_alteration import alteration_steering, heading_bounds
 from rhnc.control.nmpc_coastline import CoastlineDomains
-from rhnc.control.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport
+from rhnc.control.nmpc_actions import PORT_ALLOWANCE_DEG
+from rhnc.control.nmpc_colregs import CollisionDomains, DomainReport
 from rhnc.control.nmpc_manoeuvre import ManoeuvreResponse
 from rhnc.control.nmpc_problem import (ACCEPTABLE_VIOLATION, DISTURBANCE_SIZE, FRESH_SOLVER_PLUGINS, OBSTACLE_FIELDS,
                                StepEvaluator, build_problem, renew_solver_after, solver_options)

@@ -25,7 +25,7 @@ shaped by the own ship's role:
     away or the range is below ``stand_on_action_range_factor * rho``.  From then on the
     symmetric circle is on (Rule 17(b): act to avoid collision) until the encounter ends.
     For a ship overtaking us the action may be a reduction of speed as well as, or instead
-    of, a turn (:meth:`CollisionDomains._stand_on_action`).
+    of, a turn (:meth:`rhnc.control.nmpc_actions.ActionDecisions._stand_on_action`).
 ``static``, ``none``
     The symmetric circle.
 
@@ -89,12 +89,10 @@ import math
 
 import numpy as np
 
-from orchestrator.geometry import wrap_angle
-from rhnc.encounters.colregs import (ACTION_BUFFER_S, ENCOUNTER_CLASSES, STAND_ON_ACTION_RANGE_FACTOR,
-                                    STAND_ON_ACTION_TCPA_S, EncounterTracker, cpa_tcpa, latest_alteration_s,
-                                    stand_on_latest_s, stand_on_must_act)
-from rhnc.control.nmpc_manoeuvre import (ManoeuvreResponse, closing_on_the_port_side, port_return_limit,
-                                         response_clearance_m, side_clearance_m)
+from rhnc.encounters.colregs import (ENCOUNTER_CLASSES, STAND_ON_ACTION_RANGE_FACTOR, STAND_ON_ACTION_TCPA_S,
+                                    EncounterTracker, cpa_tcpa, stand_on_latest_s, stand_on_must_act)
+from rhnc.control.nmpc_actions import STAND_ON_CLASSES, ActionDecisions
+from rhnc.control.nmpc_manoeuvre import ManoeuvreResponse
 from rhnc.control.nmpc_problem import OBSTACLE_FIELDS
 
 LOG = logging.getLogger(__name__)
@@ -104,23 +102,8 @@ HEAD_ON_OFFSET = (0.25, 0.5)
 GIVE_WAY_OFFSET = (0.5, 0.25)
 OVERTAKING_OFFSET = (0.25, 0.0)
 OFFSETS = {"head_on": HEAD_ON_OFFSET, "crossing_give_way": GIVE_WAY_OFFSET, "overtaking": OVERTAKING_OFFSET}
-STAND_ON_CLASSES = ("crossing_stand_on", "overtaken")
 #: classes under which the own ship must not alter to port while the target approaches
 STARBOARD_CLASSES = ("head_on", "crossing_give_way", "crossing_stand_on")
-#: how far to port of the reference heading the plan may go while that holds [deg]
-PORT_ALLOWANCE_DEG = 2.0
-#: a ship turning away from its reference by this much has begun a manoeuvre [deg] (the
-#: analysis's threshold of a change of course)
-MANOEUVRE_DEG = 5.0
-#: the alteration ends when the target is past (TCPA <= 0) and this many R + R_i away
-ALTERATION_CLEAR_FACTOR = 2.0
-#: ... or, held at least this long [s], when the target no longer closes (TCPA <= 0, or the
-#: range closing slower than ``ALONGSIDE_CLOSING_MPS`` [m/s]) and a return to the reference
-#: keeps every target clear, taken up as the ship can (a ship staying alongside)
-ALTERATION_MIN_HOLD_S = 300.0
-ALONGSIDE_CLOSING_MPS = 0.05
-#: classes in which the own ship gives way (Rules 13-16)
-GIVE_WAY_CLASSES = ("head_on", "crossing_give_way", "overtaking")
 #: collision risk at the control rate: an obstacle closer than this many clearances rho
 #: turns the collision constraints on whatever its CPA
 CLOSE_QUARTERS_FACTOR = 2.0
@@ -129,14 +112,6 @@ CLOSE_QUARTERS_FACTOR = 2.0
 #: open at once, by turning and slowing together
 INSIDE_RESPONSE_S = 20.0
 INSIDE_OPENING_MPS = 1.0
-#: a readily apparent reduction of speed brings it to this fraction of the speed at its
-#: beginning (the analysis reads a reduction of at least half as readily apparent)
-SLOW_FACTOR = 0.45
-#: the larger turns weighed when no readily apparent one keeps the traffic clear [deg]
-LARGER_ALTERATIONS_DEG = (60.0, 90.0)
-#: the floor of a turn back to port held short (:meth:`CollisionDomains._return_floor`) is
-#: dated this far back [s]: its ramp (of no size) has long reached it
-RETURN_FLOOR_AGE_S = 3600.0
 
 @dataclasses.dataclass(frozen=True)
 class DomainSettings:
@@ -196,7 +171,7 @@ class DomainReport:
     inside its clearance and closing; ``escape_heading``: then, the heading [rad] straight away
     from the nearest such target (its range opens fastest), else None.
     ``speed_goal_mps``: a readily apparent reduction of speed held for a ship overtaking us
-    (see :meth:`CollisionDomains._stand_on_action`): the speed [m/s] the plan must come down
+    (see :meth:`rhnc.control.nmpc_actions.ActionDecisions._stand_on_action`): the speed [m/s] the plan must come down
     to, at the deceleration the ship can make, or None.
     ``alteration_floor`` / ``alteration_ceiling``: a readily apparent alteration to
     starboard / to port, as (time it began [s], heading then [rad], heading to reach
@@ -214,7 +189,7 @@ class DomainReport:
     speed_goal_mps: float | None = None
 
 
-class CollisionDomains:
+class CollisionDomains(ActionDecisions):
     """Turn the obstacles seen at a solve into the NLP's slot parameters.
 
     Parameters
@@ -358,38 +333,6 @@ class CollisionDomains:
             anchor = goal - math.copysign(math.radians(self.settings.alteration_deg), 1.0 if floor is not None else -1.0)
         return 2.0 * math.pi * round((reference_heading_rad - anchor) / (2.0 * math.pi))
 
-    def _return_floor(self, rows: np.ndarray, classes, state: np.ndarray, own_course: float, own_speed: float,
-                      reference_heading_rad: float | None, time_s: float) -> tuple[float, float, float] | None:
-        """The heading floor (as an alteration to starboard already made: time, heading, heading)
-        that keeps a turn to port back to the reference from making a ship crossing from port one
-        we stand on for with that turn under way (Rule 17(c)), or None (``colregs`` with
-        alterations only).
-
-        While a ship crossing from port that we stand on for is still to pass (TCPA > 0), no turn
-        to port at all: keep the course (Rule 17(a)(i)).  Else, a turn to port of more than
-        ``MANOEUVRE_DEG`` towards the reference goes only as far as
-        :func:`rhnc.control.nmpc_manoeuvre.port_return_limit` allows for the targets in no risk of
-        collision yet.  The bound is a floor like an alteration's, and yields to immediate danger.
-        """
-        s = self.settings
-        if not s.colregs or s.alteration_deg <= 0.0 or reference_heading_rad is None or own_speed < 1.0:
-            return None
-        drift = own_course - float(state[2])
-        reference_course = reference_heading_rad + drift
-        if wrap_angle(reference_course - own_course) > -math.radians(MANOEUVRE_DEG):
-            return None
-        if any(c is not None and c.encounter_class == "crossing_stand_on" and c.tcpa_s > 0.0 for c in classes):
-            limit: float | None = own_course
-        else:
-            free = [(rows[j, :2], rows[j, 2:4]) for j, c in enumerate(classes)
-                    if c is not None and c.encounter_class == "none"]
-            limit = port_return_limit(state[:2], own_speed, own_course, reference_course, free, s.risk_cpa_m,
-                                      s.risk_tcpa_s)
-        if limit is None:
-            return None
-        heading = limit - drift
-        return time_s - RETURN_FLOOR_AGE_S, heading, heading
-
     def _closing(self, rows: np.ndarray, rhos: np.ndarray, own_xy, own_velocity, order: list[int]):
         """Ranges [m] and range rates [m/s] of the rows, the rows inside their clearance
         (``colregs``), and whether one of those is closing: immediate danger, the range must
@@ -505,248 +448,6 @@ class CollisionDomains:
             if cpa < s.risk_cpa_m and 0.0 < tcpa <= s.risk_tcpa_s:
                 return True
         return False
-
-    def _update_alteration(self, index: int, encounter, reference_heading_rad: float, heading_rad: float,
-                           time_s: float, separation_m: float, motion=None, port_allowed: bool = True,
-                           traffic=(), yaw_rate_rps: float = 0.0) -> None:
-        """Begin, keep or end the readily apparent alteration for one target (Rules 8, 16, 17).
-
-        A give-way ship begins it once the target's CPA is at most
-        ``give_way_action_tcpa_s`` ahead, predicted at the present velocities or with the
-        own ship already on the altered course (whichever comes first: turning away brings
-        the CPA forward, an overtaking ship's CPA most, as it closes slowly), or as soon as
-        the ship, holding no other alteration, turns away from its reference by
-        ``MANOEUVRE_DEG`` (the NMPC has begun to give way by itself: held to a readily
-        apparent alteration, not left at the 12-20 deg that opened the CPA just enough, a
-        succession of small alterations Rule 8(b) asks to avoid); a stand-on ship once it acts (Rule 17(b)).  It is
-        to starboard, except when overtaking or being overtaken, where either side is
-        allowed (Rule 13): then it continues a turn the plan has already begun (more than
-        ``PORT_ALLOWANCE_DEG`` off the reference; when overtaken, only while another alteration
-        is held), else it turns away from the other ship;
-        to starboard, though, when ``port_allowed`` is false (another target's Rule 14, 15
-        or 17(c) rules out a turn to port: a port alteration would be dropped, and with it
-        the give-way action).  Where the side is free (Rule 13), it is the one that keeps
-        away from this target unless that side takes the own ship, on the altered course,
-        into a clearance of ``traffic`` ((position, velocity, clearance) per target) and the
-        other side does not (:func:`side_clearance_m`): turning away from a ship overtaking
-        from astern took the own ship into a faster one on the other quarter.  Only then: a
-        side chosen for the least intrusion alone turned a ship away from a target it gave
-        way to to starboard.  It ends, for the rest of the encounter, when the target is
-        past and clear (Rule 13(d)): TCPA <= 0 and the range at least
-        ``ALTERATION_CLEAR_FACTOR`` times R + R_i (``separation_m``).  Ending it at TCPA <= 0 alone let a ship alongside an overtaken
-        target, 1.3 nm off, turn back towards it, and the solver failed from that warm
-        start; holding it until the tracker's 4 nm release made long detours.  A target that
-        stays alongside never gets that far: an alteration held at least
-        ``ALTERATION_MIN_HOLD_S`` also ends once the target no longer closes and a return to the
-        reference keeps every target clear (:meth:`_resumes_clear`).  A ship that stood on
-        for a ship crossing from port, which then kept our course and speed 1.05 nm off, held
-        its alteration for an hour and arrived late.
-        """
-        s = self.settings
-        if s.alteration_deg <= 0.0 or index in self._altered:
-            return
-        if index in self._altering or index in self._slowing:
-            past = encounter.tcpa_s <= 0.0 and encounter.range_m >= ALTERATION_CLEAR_FACTOR * separation_m
-            if past or self._resumes_clear(index, encounter, reference_heading_rad, time_s, motion, traffic):
-                self._altering.pop(index, None)  # past and clear
-                self._slowing.pop(index, None)
-                self._altered.add(index)
-            return
-        name = encounter.encounter_class
-        if name not in GIVE_WAY_CLASSES and name not in STAND_ON_CLASSES:
-            return
-        side = 1.0
-        deviation = math.degrees(wrap_angle(heading_rad - reference_heading_rad))
-        # turning away from the reference (not back to it) by more than a manoeuvre
-        manoeuvring = (not self._altering and abs(deviation) >= MANOEUVRE_DEG
-                       and deviation * yaw_rate_rps > 0.0)
-        if name in ("overtaking", "overtaken"):
-            side = self._free_side(encounter, deviation, reference_heading_rad, motion, traffic, port_allowed)
-        size, slow = s.alteration_deg, False
-        if name == "overtaken" and index in self._acting and encounter.tcpa_s > 0.0 and motion is not None and traffic:
-            side, size, slow = self._stand_on_action(side, port_allowed, reference_heading_rad, motion, traffic)
-        if side == 0.0:  # a reduction of speed alone
-            self._begin_slowing(index, encounter, motion[1])
-            return
-        goal = self._alteration_goal(index, reference_heading_rad, side, size)
-        if name in GIVE_WAY_CLASSES:
-            begin = ((self._give_way_due(encounter, goal, side, separation_m, motion) or manoeuvring)
-                     and encounter.tcpa_s > 0.0 and encounter.cpa_m < s.risk_cpa_m)
-        else:
-            begin = index in self._acting and encounter.tcpa_s > 0.0
-        if not begin:
-            return
-        if name in GIVE_WAY_CLASSES and motion is not None and len(traffic) > 1:
-            side, size, slow = self._give_way_action(index, name, side, goal, reference_heading_rad, motion, traffic)
-            if side == 0.0:
-                self._begin_slowing(index, encounter, motion[1])
-                return
-            goal = self._alteration_goal(index, reference_heading_rad, side, size)
-        self._altering[index] = (time_s, heading_rad, goal, side)
-        if slow:
-            self._reduce_speed(index, motion[1])
-        self.alterations += 1
-        LOG.info("target %d (%s): altering %.0f deg to %s%s (CPA %.0f m in %.0f s)", index, name, size,
-                 "starboard" if side > 0 else "port", " and slowing" if slow else "", encounter.cpa_m,
-                 encounter.tcpa_s)
-
-    def _resumes_clear(self, index: int, encounter, reference_heading_rad: float, time_s: float, motion,
-                       traffic) -> bool:
-        """Whether the alteration held for target ``index`` (for ``ALTERATION_MIN_HOLD_S`` at
-        least) may end before the target is past and clear: it no longer closes on us (TCPA <= 0,
-        or the range closing slower than ``ALONGSIDE_CLOSING_MPS``) and the turn back to the
-        reference at the present speed keeps the whole ``traffic`` clear (:meth:`_clearance`)."""
-        held = self._altering.get(index)
-        if held is None or motion is None or not traffic or time_s - held[0] < ALTERATION_MIN_HOLD_S:
-            return False
-        own_xy, _, target_xy, target_velocity, own_velocity = motion
-        relative = np.asarray(target_xy, dtype=float) - np.asarray(own_xy, dtype=float)
-        range_rate = float(relative @ (np.asarray(target_velocity, dtype=float) - own_velocity)) / max(
-            float(np.hypot(*relative)), 1.0)
-        if encounter.tcpa_s > 0.0 and range_rate < -ALONGSIDE_CLOSING_MPS:
-            return False
-        return self._clearance(motion, reference_heading_rad, 1.0, traffic) >= 0.0
-
-    def _alteration_goal(self, index: int, reference_heading_rad: float, side: float, size_deg: float) -> float:
-        """The heading [rad] an alteration of ``size_deg`` to ``side`` holds: off the reference,
-        and at least ``alteration_deg`` off the heading the ship had at the target's onset of risk."""
-        goal = reference_heading_rad + side * math.radians(size_deg)
-        onset = self._onset_heading.get(index)
-        if onset is not None:
-            # at least the alteration from the heading the ship had at the onset of risk, the
-            # course the other ship saw: a reference pointing back to the route after an
-            # earlier detour (or a turn under way at the onset) left alterations of 20-28 deg
-            # of course over ground from it, not readily apparent (Rule 8(b))
-            beyond = wrap_angle(onset + side * math.radians(self.settings.alteration_deg) - goal)
-            if side * beyond > 0.0:
-                goal += beyond
-        return goal
-
-    def _free_side(self, encounter, deviation_deg: float, reference_heading_rad: float, motion, traffic,
-                   port_allowed: bool) -> float:
-        """The side (+1 starboard, -1 port) of an alteration Rule 13 leaves free: overtaking or
-        being overtaken.
-
-        A turn the plan has begun is an avoiding one when overtaking (the constraint is on) or
-        while another alteration is held; a stand-on ship that has kept its course has begun
-        none: its deviation is the way back to the route, and continuing it turned a ship
-        towards the overtaker it acted for (0.85 nm).  Else away from the other ship (pass it on
-        its port side when it is on our starboard side), unless the other side keeps the whole
-        traffic clearer.  To starboard whenever a turn to port is ruled out."""
-        if abs(deviation_deg) > PORT_ALLOWANCE_DEG and (encounter.encounter_class == "overtaking" or self._altering):
-            side = math.copysign(1.0, deviation_deg)
-        else:
-            side = -1.0 if encounter.relative_bearing_deg > 0.0 else 1.0
-            if motion is not None and traffic:
-                alteration = math.radians(self.settings.alteration_deg)
-                clearance = {turn: side_clearance_m(motion[0], motion[1], reference_heading_rad + turn * alteration,
-                                                    traffic) for turn in (side, -side)}
-                if clearance[side] < 0.0 <= clearance[-side]:
-                    side = -side
-        return side if port_allowed else 1.0
-
-    def _reduce_speed(self, index: int, own_speed_mps: float) -> None:
-        """Hold a readily apparent reduction of speed, to ``SLOW_FACTOR`` of ``own_speed_mps``, for a target."""
-        self._slowing[index] = SLOW_FACTOR * own_speed_mps
-
-    def _begin_slowing(self, index: int, encounter, own_speed_mps: float) -> None:
-        """Hold a reduction of speed alone for a target (:meth:`_reduce_speed`)."""
-        self._reduce_speed(index, own_speed_mps)
-        self.alterations += 1
-        LOG.info("target %d (%s): slowing to %.0f %% of the speed (CPA %.0f m in %.0f s)", index,
-                 encounter.encounter_class, 100.0 * SLOW_FACTOR, encounter.cpa_m, encounter.tcpa_s)
-
-    def _clearance(self, motion, course_rad: float, factor: float, traffic) -> float:
-        """The least clearance [m] from ``traffic`` of a manoeuvre to ``course_rad`` at ``factor``
-        of the present speed, taken up as the ship can (``self.response``)."""
-        own_xy, own_speed, _, _, own_velocity = motion
-        heading = math.atan2(own_velocity[1], own_velocity[0])
-        return response_clearance_m(own_xy, own_speed, heading, course_rad, factor * own_speed, traffic,
-                                    self.response)
-
-    def _give_way_action(self, index: int, name: str, side: float, goal: float, reference_heading_rad: float,
-                         motion, traffic) -> tuple[float, float, bool]:
-        """The readily apparent action of a give-way ship among other traffic (Rules 8, 16):
-        the turn to ``goal`` at the present speed when it keeps every other target clear; else
-        the first of the manoeuvres :meth:`_choose` weighs, to the same side, that keeps the whole
-        traffic clear (not the reduction of speed alone for a head-on ship: Rule 14 asks for a
-        turn to starboard).  Returns (``side``, or 0 for no turn; size of the turn [deg];
-        whether to slow down).
-
-        A turn to starboard for a ship crossing ahead, with a faster ship converging from the
-        starboard quarter, took the own ship across the faster ship's bow (0.75 nm): the 35 deg
-        turn alone is what the rules ask of a ship with nobody else about."""
-        others = [target for j, target in enumerate(traffic) if j != index]
-        if self._clearance(motion, goal, 1.0, others) >= 0.0:
-            return side, self.settings.alteration_deg, False
-        return self._choose((side,), name != "head_on", reference_heading_rad, motion, traffic)
-
-    def _stand_on_action(self, side: float, port_allowed: bool, reference_heading_rad: float, motion,
-                         traffic) -> tuple[float, float, bool]:
-        """The readily apparent action of a ship overtaken by another that does not keep clear
-        (Rule 17(b)): the first of the manoeuvres :meth:`_choose` weighs, to each side the rules
-        allow (``side``, the one chosen above, first), that keeps the traffic clear.  Returns
-        (side of the turn, 0 for none; size of the turn [deg]; whether to slow down).
-
-        A ship overtaking us is faster and, converging from a quarter, crosses our course
-        ahead of us: a 35 deg turn alone, to the side another target leaves us (a head-on
-        ship ahead rules out a turn to port), kept it converging, and the plan then raced it
-        (18 -> 23 kn) and lost the clearance (15 of 28 such targets).  Slowing lets it pass
-        ahead; the speed is a manoeuvre Rules 8(e) and 17 name.  No turn to port is weighed
-        while another ship forward of our port quarter closes on us, classified yet or not: it
-        may become a ship crossing from port, for which Rule 17(c) rules out that turn (a turn to
-        port chosen for the clearance broke it twice)."""
-        if not port_allowed or closing_on_the_port_side(motion[0], motion[1], reference_heading_rad, traffic):
-            turns: tuple[float, ...] = (1.0,)
-        else:
-            turns = (side, -side)
-        return self._choose(turns, True, reference_heading_rad, motion, traffic)
-
-    def _choose(self, sides: tuple[float, ...], slow_alone: bool, reference_heading_rad: float, motion,
-                traffic) -> tuple[float, float, bool]:
-        """Of the manoeuvres, in this order: a turn of ``alteration_deg`` to each of ``sides`` at
-        the present speed, the same turns with the speed brought down to ``SLOW_FACTOR`` of it, the
-        reduction of speed alone (if ``slow_alone``), then the larger turns of
-        ``LARGER_ALTERATIONS_DEG``, at speed and slowed: the first that keeps the whole traffic
-        clear (:meth:`_clearance`: the course and speed taken up as the ship can), else the one
-        that keeps it clearest (a tie goes to the earlier).  Returns (side, 0 for no turn; size
-        [deg]; whether to slow down).
-
-        With only 35 deg turns weighed, a ship crossing from port and a faster one coming up
-        from astern left none that kept both clear, and the least bad (turning and slowing)
-        let the overtaker by at 0.86 nm; a 60-75 deg turn at speed kept both clear."""
-        size = self.settings.alteration_deg
-        options = ([(turn, size, 1.0) for turn in sides] + [(turn, size, SLOW_FACTOR) for turn in sides]
-                   + ([(0.0, size, SLOW_FACTOR)] if slow_alone else [])
-                   + [(turn, larger, factor) for larger in LARGER_ALTERATIONS_DEG for turn in sides
-                      for factor in (1.0, SLOW_FACTOR)])
-        scores = []
-        for turn, degrees, factor in options:
-            scores.append(self._clearance(motion, reference_heading_rad + turn * math.radians(degrees), factor, traffic))
-            if scores[-1] >= 0.0:
-                return turn, degrees, factor < 1.0
-        turn, degrees, factor = options[int(np.argmax(scores))]
-        return turn, degrees, factor < 1.0
-
-    def _give_way_due(self, encounter, goal: float, side: float, separation_m: float, motion) -> bool:
-        """Whether a give-way alteration to ``goal`` is due: the CPA at most
-        ``give_way_action_tcpa_s`` ahead at the present velocities or on the altered course,
-        or the last moment it still opens the CPA (plus margin) within ``ACTION_BUFFER_S``."""
-        s = self.settings
-        tcpa = encounter.tcpa_s
-        if motion is not None:  # turning away brings the CPA forward (an overtaker's most)
-            own_xy, own_speed, target_xy, target_velocity, _ = motion
-            altered = own_speed * np.array([math.cos(goal), math.sin(goal)])
-            tcpa_altered = cpa_tcpa(own_xy, altered, target_xy, target_velocity)[1]
-            if tcpa_altered > 0.0:
-                tcpa = min(tcpa, tcpa_altered)
-        latest = math.inf
-        if motion is not None:  # the last moment the alteration still opens the CPA (plus margin)
-            own_xy, _, target_xy, target_velocity, own_velocity = motion
-            latest = latest_alteration_s(own_xy, own_velocity, target_xy, target_velocity,
-                                         separation_m + s.clearance_margin_m, side)
-        return 0.0 < tcpa <= s.give_way_action_tcpa_s or latest <= ACTION_BUFFER_S
-
 
 def _port_turn_ruled_out(classes, order) -> bool:
     """Rules 14, 15, 17(c): no alteration to port while a head-on or crossing target's CPA is

@@ -16,7 +16,8 @@ from rhnc.encounters.colregs import wrap_deg
 from rhnc.encounters.colregs import ENCOUNTER_CLASSES, cpa_tcpa
 from rhnc.control.nmpc import NMPCController, NMPCSettings
 from rhnc.control.nmpc_alteration import CATCH_UP_RATE_DEG_S, HEADING_TOLERANCE_DEG, YAW_TIME_CONSTANT_S, heading_bounds
-from rhnc.control.nmpc_colregs import PORT_ALLOWANCE_DEG, CollisionDomains, DomainReport, DomainSettings
+from rhnc.control.nmpc_actions import PORT_ALLOWANCE_DEG
+from rhnc.control.nmpc_colregs import CollisionDomains, DomainReport, DomainSettings
 from rhnc.control.nmpc_problem import OBSTACLE_FIELDS
 from rhnc.navigation.reference_participant import line_or_turn_reference
 from rhnc.ship.ship_model import load_parameter_set, rk4_step
@@ -299,7 +300,7 @@ def test_an_alteration_for_a_ship_that_stays_alongside_ends_once_the_way_back_is
     """A ship on a parallel course at our speed never gets past and clear: the alteration
     ends, after ALTERATION_MIN_HOLD_S, once a return to the reference keeps it clear, and is
     held while that return would close it."""
-    from rhnc.control.nmpc_colregs import ALTERATION_MIN_HOLD_S
+    from rhnc.control.nmpc_actions import ALTERATION_MIN_HOLD_S
 
     heading = math.radians(35.0)  # altered 35 deg to starboard of a reference on north
     own = np.array([0.0, 0.0, heading, SPEED, 0.0, 0.0])

@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from rhnc.control.nmpc import SLOWING_SHARE, NMPCController, NMPCSettings
-from rhnc.control.nmpc_colregs import SLOW_FACTOR, CollisionDomains, DomainSettings
+from rhnc.control.nmpc_actions import SLOW_FACTOR
+from rhnc.control.nmpc_colregs import CollisionDomains, DomainSettings
 from rhnc.control.nmpc_manoeuvre import ManoeuvreResponse, own_track, response_clearance_m
 from rhnc.encounters.colregs import ENCOUNTER_CLASSES
 from rhnc.navigation.reference_participant import line_or_turn_reference

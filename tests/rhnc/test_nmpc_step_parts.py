@@ -19,8 +19,8 @@ import pytest
 from rhnc.control import nmpc_acados
 from rhnc.control.nmpc import NMPCController, NMPCSettings
 from rhnc.control.nmpc_alteration import STEERING_BAND_DEG, YAW_TIME_CONSTANT_S, alteration_steering
-from rhnc.control.nmpc_colregs import (ALTERATION_CLEAR_FACTOR, INSIDE_OPENING_MPS, INSIDE_RESPONSE_S, CollisionDomains,
-                                      DomainSettings)
+from rhnc.control.nmpc_actions import ALTERATION_CLEAR_FACTOR
+from rhnc.control.nmpc_colregs import INSIDE_OPENING_MPS, INSIDE_RESPONSE_S, CollisionDomains, DomainSettings
 from rhnc.control.nmpc_problem import DISTURBANCE_SIZE, OBSTACLE_FIELDS, solver_options, stage_function
 from rhnc.control.nmpc_warm_start import PlanMemory
 from rhnc.navigation.reference_participant import line_or_turn_reference
