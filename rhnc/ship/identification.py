@@ -122,6 +122,43 @@ class Horizon:
                              "positive, the horizon at least one interval")
 
 
+#: Keys of an identified parameter set recording the NMPC set-up its class was chosen for [s].
+NMPC_HORIZON_KEY = "nmpc_horizon_s"
+NMPC_INTERVAL_KEY = "nmpc_control_interval_s"
+
+
+def recorded_horizon(extras, where: str) -> Horizon | None:
+    """The NMPC set-up a parameter set records it was identified for; None when it records none.
+
+    Raises
+    ------
+    ScenarioError
+        Only one of the two keys, or values that are no horizon (named by ``where``).
+    """
+    present = [key for key in (NMPC_HORIZON_KEY, NMPC_INTERVAL_KEY) if key in extras]
+    if not present:
+        return None
+    if len(present) == 1:
+        raise ScenarioError(f"{where}: key '{present[0]}' needs its partner "
+                            f"'{NMPC_INTERVAL_KEY if present[0] == NMPC_HORIZON_KEY else NMPC_HORIZON_KEY}' "
+                            "(the NMPC set-up the model was identified for); write the file again with identify")
+    values = [extras[key] for key in (NMPC_HORIZON_KEY, NMPC_INTERVAL_KEY)]
+    try:
+        if any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in values):
+            raise ValueError("not numbers")
+        return Horizon(float(values[0]), float(values[1]))
+    except ValueError:
+        raise ScenarioError(f"{where}: keys '{NMPC_HORIZON_KEY}' = {values[0]!r}, '{NMPC_INTERVAL_KEY}' = "
+                            f"{values[1]!r} are no prediction horizon (seconds, the horizon at least one "
+                            "interval); write the file again with identify") from None
+
+
+def same_horizon(a: Horizon, b: Horizon) -> bool:
+    """Whether two NMPC set-ups predict over the same horizon from the same interval (to 1e-6 relative)."""
+    return math.isclose(a.horizon_s, b.horizon_s, rel_tol=1e-6) and math.isclose(a.interval_s, b.interval_s,
+                                                                                   rel_tol=1e-6)
+
+
 def open_loop_cost(record: Record, predicted: np.ndarray) -> float:
     """Weighted RMS error of one open-loop prediction over a whole record (heading per degree,
     surge and sway per 0.1 m/s, yaw rate per 0.06 deg/s); inf when it diverged.  Reported, not
