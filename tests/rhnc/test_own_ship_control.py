@@ -234,3 +234,15 @@ def test_summary_says_the_model_was_identified_for_another_set_up(tmp_path):
                               "this one 300-s horizon every 20 s)")
     assert (check["identified_for_horizon_s"], check["identified_for_control_interval_s"]) == (900.0, 60.0)
 
+
+#: Every shipped own-ship set-up that predicts with an identified model (the KCS-model ones
+#: are the comparison with no identified model).
+SHIPPED_IDENTIFIED = sorted(p for p in OWN.glob("exp*.toml") if "kcs_model" not in p.name) + sorted(
+    (REPO / "scenarios").glob("exp*_mmg.toml"))
+
+
+@pytest.mark.parametrize("scenario", SHIPPED_IDENTIFIED, ids=lambda p: p.stem)
+def test_every_shipped_set_up_predicts_with_a_model_identified_for_its_own_nmpc(scenario):
+    """The model class is chosen for the NMPC's horizon and interval: a scenario uses a set
+    identified on its own plant for its own set-up (Experiments 3a and 3b share one)."""
+    assert _ctrl(scenario).model_check["check"] == "identified"
