@@ -633,3 +633,17 @@ def test_the_parameter_file_records_the_nmpc_set_up_the_model_was_chosen_for(tmp
     with pytest.raises(ScenarioError, match=r"^set: keys 'nmpc_horizon_s' = 10.0, 'nmpc_control_interval_s' = 60.0 "
                                             "are no prediction horizon"):
         recorded_horizon({"nmpc_horizon_s": 10.0, "nmpc_control_interval_s": 60.0}, "set")
+
+
+def test_the_report_says_how_many_horizon_predictions_chose_the_class():
+    """A horizon as long as the held-out zig-zag leaves one prediction: the choice is then
+    that of one open-loop run, and the report says so."""
+    from rhnc.ship.identification import held_out_windows_note, windowed_starts
+
+    t = np.arange(0.0, 900.5, 1.0)
+    held_out = Record("zigzag_20", t, np.zeros((len(t), 6)), np.zeros((len(t), 2)))
+    assert len(windowed_starts(held_out, Horizon(300.0, 20.0))) == 31
+    assert held_out_windows_note(held_out, Horizon(300.0, 20.0)) == (
+        "chosen by 31 predictions of the 300-s horizon from the 900-s held-out zigzag_20, one every 20 s")
+    assert windowed_starts(held_out, Horizon(900.0, 60.0)) == [0.0]
+    assert "chosen as by one open-loop run over it" in held_out_windows_note(held_out, Horizon(900.0, 60.0))
