@@ -19,9 +19,18 @@ level and through the allocation (scenarios/own_ship/*_kvlcc2_*.toml: its servic
 So does the S175 through the allocation (scenarios/own_ship/*_s175_alloc.toml: its actuator
 interface, actuator_mode = 1, behind the allocation with ships/S175.toml).
 
-The identified models are written by
+The identified models are written by the commands below.  identify chooses the model class
+by its held-out error over the NMPC's prediction horizon (horizon_steps times the control
+interval) and records that set-up in the file; so each NMPC set-up has its own file, identified
+on a scenario with that set-up: Experiments 3a and 3b (15 intervals of 20 s, 300 s) share one,
+Experiment 2 (15 intervals of 60 s, 900 s) has its own.  A run with a set identified for another
+set-up says so in its model check.
+
+    # Experiments 3a and 3b: 15 x 20 s
     python -m orchestrator identify scenarios/own_ship/exp3a_s175_kcs_model.toml \\
         --tau-u-max-N 8e5 --tau-r-max-Nm 1.65e8 --out scenarios/own_ship/S175_identified.toml
+    python -m orchestrator identify scenarios/own_ship/exp3a_s175_alloc.toml --tau-u-max-N 1.136e6 \\
+        --tau-r-max-Nm 1.41e8 --set S175 --ship S175 --out scenarios/own_ship/S175_alloc_identified.toml
     python -m orchestrator identify scenarios/exp3a_static_mmg.toml --tau-u-max-N 1.8e6 \\
         --tau-r-max-Nm 2.4e8 --set KCSMMG --out scenarios/KCSMMG_identified.toml
     python -m orchestrator identify scenarios/own_ship/exp3a_kvlcc2_force.toml --tau-u-max-N 2.35e6 \\
@@ -29,8 +38,18 @@ The identified models are written by
     python -m orchestrator identify scenarios/own_ship/exp3a_kvlcc2_alloc.toml --tau-u-max-N 2.35e6 \\
         --tau-r-max-Nm 5.87e8 --speed-kn 15.5 --set KVLCC2 --ship KVLCC2 \\
         --out scenarios/own_ship/KVLCC2_alloc_identified.toml
-    python -m orchestrator identify scenarios/own_ship/exp3a_s175_alloc.toml --tau-u-max-N 1.136e6 \\
-        --tau-r-max-Nm 1.41e8 --set S175 --ship S175 --out scenarios/own_ship/S175_alloc_identified.toml
+    # Experiment 2: 15 x 60 s
+    python -m orchestrator identify scenarios/own_ship/exp2_s175_identified.toml \\
+        --tau-u-max-N 8e5 --tau-r-max-Nm 1.65e8 --out scenarios/own_ship/S175_exp2_identified.toml
+    python -m orchestrator identify scenarios/own_ship/exp2_s175_alloc.toml --tau-u-max-N 1.136e6 \\
+        --tau-r-max-Nm 1.41e8 --set S175 --ship S175 --out scenarios/own_ship/S175_alloc_exp2_identified.toml
+    python -m orchestrator identify scenarios/exp2_rhnc_mmg.toml --tau-u-max-N 1.8e6 \\
+        --tau-r-max-Nm 2.4e8 --set KCSMMG --out scenarios/KCSMMG_exp2_identified.toml
+    python -m orchestrator identify scenarios/own_ship/exp2_kvlcc2_force.toml --tau-u-max-N 2.35e6 \\
+        --tau-r-max-Nm 5.87e8 --speed-kn 15.5 --set KVLCC2 --out scenarios/own_ship/KVLCC2_exp2_identified.toml
+    python -m orchestrator identify scenarios/own_ship/exp2_kvlcc2_alloc.toml --tau-u-max-N 2.35e6 \\
+        --tau-r-max-Nm 5.87e8 --speed-kn 15.5 --set KVLCC2 --ship KVLCC2 \\
+        --out scenarios/own_ship/KVLCC2_alloc_exp2_identified.toml
 """
 
 from __future__ import annotations

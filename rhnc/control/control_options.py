@@ -17,6 +17,7 @@ from orchestrator.errors import ScenarioError
 from orchestrator.geometry import KNOT, NM
 from orchestrator.participant import BuildContext, is_finite_number, reject_unknown_options
 from rhnc.control.nmpc import SOLVERS, NMPCSettings
+from rhnc.ship.identification import recorded_horizon
 from rhnc.ship.ship_model import PARAMETER_SETS_FILE, available_parameter_sets, load_parameter_set
 
 OPTIONS = (
@@ -276,9 +277,11 @@ def _prediction_model(options: Mapping[str, Any], overrides: Mapping[str, Any], 
         raise ScenarioError(f"{where}: option '{'model_set' if 'model_file' in options else 'parameter_set'}' "
                             "must be a string")
     try:
-        return load_parameter_set(set_name, overrides, path=path)
+        params = load_parameter_set(set_name, overrides, path=path)
     except ScenarioError as error:
         raise ScenarioError(f"{where}: {error}") from None
+    recorded_horizon(params.extras, f"{where}: {path} [{set_name}]")   # a set-up record that is no horizon
+    return params
 
 
 @overload

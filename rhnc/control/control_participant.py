@@ -34,6 +34,7 @@ from rhnc.control.control_options import OPTIONS, chart_from_options, controller
 from rhnc.control.loop_delay import LoopDelay
 from rhnc.control.nmpc import NMPCController
 from rhnc.control.nmpc_acados import AcadosUnavailable
+from rhnc.ship.identification import Horizon, recorded_horizon, same_horizon
 from rhnc.ship.ship_model import STATE_NAMES
 
 LOG = logging.getLogger(__name__)
@@ -259,6 +260,8 @@ class ControlParticipant(Participant):
         self.delay = LoopDelay(loop_delay_s, controller.params)
         self.obstacle_age_s = obstacle_age_s
         self.model_check: dict[str, Any] = {"set": controller.params.name, "check": "plant not seen"}
+        self.scenario_file = "<this scenario>"   # for the identify command the model check asks for
+        self._recorded = recorded_horizon(controller.params.extras, f"model set '{controller.params.name}'")
         self.margin_source = "scenario" if controller.settings.clearance_margin_growth_mps else "none"
         self._tau_r_history: list[float] = []
         self.controller = controller
@@ -286,6 +289,8 @@ class ControlParticipant(Participant):
         if chart is not None:
             controller.use_chart(chart)
         participant = cls(name, controller, et_default, *delays)
+        if context.where.endswith(f": participants.{name}"):
+            participant.scenario_file = context.where[: -len(f": participants.{name}")]
         if "clearance_margin_growth_kn" in options:
             participant.margin_source = "scenario"
         elif "position_error_growth_mps" in params.extras:
@@ -452,9 +457,14 @@ class ControlParticipant(Participant):
     def connected(self, sources: Mapping[str, Participant]) -> None:
         """Check the prediction model against the plant feeding the measured state.
 
-        ``check``: ``identified`` (the set's ``plant_guid`` is the FMU's GUID),
-        ``declared`` (the FMU's model name is in the set's ``plant_fmu``), or
-        ``neither identified on nor declared for this plant`` with a logged warning.
+        ``check``: ``identified`` (the set's ``plant_guid`` is the FMU's GUID, and the set
+        was identified for this NMPC's horizon and control interval), ``identified for
+        another NMPC set-up (...)`` (a set that records another horizon or interval: its
+        model class was chosen for predictions over that one; a logged warning says to
+        identify on this scenario), ``identified (horizon not recorded)`` (a set written
+        before identify recorded it), ``declared`` (the FMU's model name is in the set's
+        ``plant_fmu``), or ``neither identified on nor declared for this plant`` with a
+        logged warning.
         """
         plant = sources.get("x")
         identity = getattr(plant, "identity", None)
@@ -465,17 +475,47 @@ class ControlParticipant(Participant):
         declared = [declared] if isinstance(declared, str) else list(declared)
         check = "neither identified on nor declared for this plant"
         if extras.get("plant_guid") == identity["guid"]:
-            check = "identified"
+            check = self._horizon_check()
         elif identity["model_name"] in declared:
             check = "declared"
             if "tau_r" not in plant.input_names and "rudder_angle_cmd" in plant.input_names:
                 check = "declared (through an allocation: the plant takes rudder and propeller)"
         self.model_check = {"set": self.controller.params.name, "plant": identity["model_name"],
-                            "plant_guid": identity["guid"], "check": check}
+                            "plant_guid": identity["guid"], "check": check, **self._horizons()}
+        if check.startswith("identified for another"):
+            LOG.warning("%s: the NMPC's prediction model '%s' was identified on the plant FMU %s for another NMPC "
+                        "set-up (%s; this one %s), and its model class was chosen for that horizon; fit one for "
+                        "this set-up with: python -m orchestrator identify %s (the bounds, --set and --ship as "
+                        "the set was identified with)", self.name, self.controller.params.name,
+                        identity["model_name"], self._setup_text(self._recorded), self._setup_text(self._own_horizon()),
+                        self.scenario_file)
         if check.startswith("neither"):
             LOG.warning("%s: the NMPC's prediction model '%s' was neither identified on nor declared for the "
                         "plant FMU %s (%s); fit one with: python -m orchestrator identify <scenario>",
                         self.name, self.controller.params.name, identity["model_name"], identity["guid"])
+
+    def _own_horizon(self) -> Horizon:
+        settings = self.controller.settings
+        return Horizon(settings.horizon_steps * settings.control_interval_s, settings.control_interval_s)
+
+    def _horizons(self) -> dict[str, float | None]:
+        own = self._own_horizon()
+        return {"horizon_s": own.horizon_s, "control_interval_s": own.interval_s,
+                "identified_for_horizon_s": self._recorded.horizon_s if self._recorded else None,
+                "identified_for_control_interval_s": self._recorded.interval_s if self._recorded else None}
+
+    @staticmethod
+    def _setup_text(horizon: Horizon | None) -> str:
+        return "not recorded" if horizon is None else f"{horizon.horizon_s:g}-s horizon every {horizon.interval_s:g} s"
+
+    def _horizon_check(self) -> str:
+        """The check of a set identified on this plant: for this NMPC's horizon and interval or not."""
+        if self._recorded is None:
+            return "identified (horizon not recorded)"
+        if same_horizon(self._recorded, self._own_horizon()):
+            return "identified"
+        return (f"identified for another NMPC set-up ({self._setup_text(self._recorded)}; "
+                f"this one {self._setup_text(self._own_horizon())})")
 
 
 def tau_r_sign_changes_per_100(tau_r: Sequence[float], tau_r_max: float, deadband: float = 0.01) -> float | None:

@@ -42,7 +42,8 @@ from rhnc.ship.equation_error import (ALL_COEFFICIENTS, COEFFICIENTS, FILTER_WIN
                                       sailed_envelope)
 from rhnc.ship.output_error import refine_output_error
 from rhnc.ship.physical_bounds import MassBounds, is_dissipative
-from rhnc.ship.prediction_error import STATE_ERROR_WEIGHTS, horizon_cost, position_error_growth, windowed_predictions
+from rhnc.ship.prediction_error import (STATE_ERROR_WEIGHTS, horizon_cost, position_error_growth, window_starts,
+                                       windowed_predictions)
 from rhnc.ship.sea_trials import VALIDATION_MANOEUVRE, PlantRunner, Record, sail_manoeuvres
 from rhnc.ship.ship_model import HULL_POLYNOMIAL_KEYS, ShipParameters, rk4_step
 
@@ -120,6 +121,62 @@ class Horizon:
                 and self.horizon_s >= self.interval_s):
             raise ValueError(f"a prediction horizon of {self.horizon_s} s every {self.interval_s} s: both must be "
                              "positive, the horizon at least one interval")
+
+
+#: Keys of an identified parameter set recording the NMPC set-up its class was chosen for [s].
+NMPC_HORIZON_KEY = "nmpc_horizon_s"
+NMPC_INTERVAL_KEY = "nmpc_control_interval_s"
+
+
+def recorded_horizon(extras, where: str) -> Horizon | None:
+    """The NMPC set-up a parameter set records it was identified for; None when it records none.
+
+    Raises
+    ------
+    ScenarioError
+        Only one of the two keys, or values that are no horizon (named by ``where``).
+    """
+    present = [key for key in (NMPC_HORIZON_KEY, NMPC_INTERVAL_KEY) if key in extras]
+    if not present:
+        return None
+    if len(present) == 1:
+        raise ScenarioError(f"{where}: key '{present[0]}' needs its partner "
+                            f"'{NMPC_INTERVAL_KEY if present[0] == NMPC_HORIZON_KEY else NMPC_HORIZON_KEY}' "
+                            "(the NMPC set-up the model was identified for); write the file again with identify")
+    values = [extras[key] for key in (NMPC_HORIZON_KEY, NMPC_INTERVAL_KEY)]
+    try:
+        if any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in values):
+            raise ValueError("not numbers")
+        return Horizon(float(values[0]), float(values[1]))
+    except ValueError:
+        raise ScenarioError(f"{where}: keys '{NMPC_HORIZON_KEY}' = {values[0]!r}, '{NMPC_INTERVAL_KEY}' = "
+                            f"{values[1]!r} are no prediction horizon (seconds, the horizon at least one "
+                            "interval); write the file again with identify") from None
+
+
+def same_horizon(a: Horizon, b: Horizon) -> bool:
+    """Whether two NMPC set-ups predict over the same horizon from the same interval (to 1e-6 relative)."""
+    return math.isclose(a.horizon_s, b.horizon_s, rel_tol=1e-6) and math.isclose(a.interval_s, b.interval_s,
+                                                                                   rel_tol=1e-6)
+
+
+def windowed_starts(record: Record, horizon: Horizon) -> list[float]:
+    """The times [s] of ``record`` from which the class choice predicts over ``horizon``
+    (:func:`rhnc.ship.prediction_error.windowed_predictions`: every interval, each window whole)."""
+    return [float(record.t[k]) for k in window_starts(record, horizon.horizon_s, horizon.interval_s)]
+
+
+def held_out_windows_note(held_out: Record, horizon: Horizon) -> str:
+    """How many predictions over the horizon the class was chosen by; with one, the choice is
+    that of one open-loop run over the held-out manoeuvre, not of the NMPC's re-planning."""
+    count = len(windowed_starts(held_out, horizon))
+    length = float(held_out.t[-1] - held_out.t[0])
+    text = (f"chosen by {count} prediction{'s' if count != 1 else ''} of the {horizon.horizon_s:g}-s horizon from the "
+            f"{length:g}-s held-out {VALIDATION_MANOEUVRE}, one every {horizon.interval_s:g} s")
+    if count == 1:
+        text += (": the held-out manoeuvre is about one horizon long, so the class is chosen as by one open-loop "
+                 "run over it, not by the NMPC's predictions from each measured state")
+    return text
 
 
 def open_loop_cost(record: Record, predicted: np.ndarray) -> float:
@@ -334,7 +391,9 @@ def identify_model(runner: PlantRunner, tau_u_max: float, tau_r_max: float, set_
     error = position_error_growth(parameters, records, horizon.horizon_s, horizon.interval_s)
     parameters = dataclasses.replace(parameters, extras={"position_error_growth_mps": error["growth_mps"],
                                                          "model_class": chosen})
-    notes = list(runner.notes) + [f"{chosen}: {note}"]
+    notes = list(runner.notes) + [f"{chosen}: {note}", held_out_windows_note(held_out, horizon)]
+    if len(windowed_starts(held_out, horizon)) == 1:
+        LOG.warning("identify: %s", notes[-1])
     if masses is None and any(set(MODEL_CLASSES[name]) & set(HULL_POLYNOMIAL_KEYS) for name in classes):
         notes.append("the class with the hull polynomial was not fitted: it needs the ship's particulars "
                      "(identify --ship) to bound the mass matrix")

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from orchestrator.geometry import KNOT
-from rhnc.ship.identification import VALIDATION_MANOEUVRE, Fit
+from rhnc.ship.identification import NMPC_HORIZON_KEY, NMPC_INTERVAL_KEY, VALIDATION_MANOEUVRE, Fit
 from rhnc.ship.ship_model import DYNAMICS_KEYS, WIDE_MODEL_KEYS
 
 
@@ -41,6 +41,12 @@ def parameter_set_toml(fit: Fit, identity: dict[str, str | None], source: str) -
     if "model_class" in p.extras:
         lines += ["# the model class chosen by its error on the held-out manoeuvre (rhnc/ship/identification.py)",
                   f"model_class = \"{p.extras['model_class']}\""]
+    if fit.horizon is not None:
+        lines += ["# s: the NMPC set-up the model class was chosen for (its prediction horizon, horizon_steps",
+                  "# times the control interval, and that interval); a control participant with another",
+                  "# set-up says so in its model_check",
+                  f"{NMPC_HORIZON_KEY} = {float(fit.horizon.horizon_s)!r}",
+                  f"{NMPC_INTERVAL_KEY} = {float(fit.horizon.interval_s)!r}"]
     if "position_error_growth_mps" in p.extras:
         lines += ["# m/s: growth of the model's position error with prediction time on the manoeuvres; the",
                   "# NMPC widens its collision domains by it unless the scenario sets clearance_margin_growth_kn",

@@ -17,6 +17,13 @@ import numpy as np
 from orchestrator.errors import ToolchainError
 from rhnc.ship.ship_model import ShipParameters, derivatives, rk4_states
 
+def window_starts(record, horizon_s: float, stride_s: float) -> np.ndarray:
+    """Sample indices of ``record`` from which a prediction over ``horizon_s`` starts, one every
+    ``stride_s``, each window within the record."""
+    dt = float(record.t[1] - record.t[0])
+    return np.arange(0, len(record.t) - int(round(horizon_s / dt)), max(1, int(round(stride_s / dt))))
+
+
 def windowed_predictions(parameters: ShipParameters, record, horizon_s: float,
                          stride_s: float) -> tuple[np.ndarray, np.ndarray] | None:
     """The model's predictions over ``horizon_s`` from every ``stride_s`` of a record, as the
@@ -31,7 +38,7 @@ def windowed_predictions(parameters: ShipParameters, record, horizon_s: float,
     """
     dt = float(record.t[1] - record.t[0])
     steps = int(round(horizon_s / dt))
-    starts = np.arange(0, len(record.t) - steps, max(1, int(round(stride_s / dt))))
+    starts = window_starts(record, horizon_s, stride_s)
     if steps < 1 or not len(starts):
         return None
     state = record.states[starts].T.copy()          # (6, windows)

@@ -128,6 +128,8 @@ def test_identify_on_the_kcs_fmu_finds_its_coefficients(tmp_path):
     with out.open("rb") as handle:
         table = tomllib.load(handle)["kcs_fit"]
     assert table["plant_fmu"] == "KCS" and table["plant_guid"].startswith("{6f1c2a8e")
+    # the NMPC set-up of exp3a_static.toml the class was chosen for: 15 intervals of 20 s
+    assert (table["nmpc_horizon_s"], table["nmpc_control_interval_s"]) == (300.0, 20.0)
     saved = json.loads((folder / "fit_report.json").read_text())
     assert saved["open_loop_errors"]["held_out: zigzag_20"]["heading_rms_deg"] < 0.3
     assert saved["held_out"] == "zigzag_20" and (folder / "fit_zigzag_20.png").is_file()
@@ -607,3 +609,41 @@ def test_identify_bounds_every_class_only_behind_an_allocation(monkeypatch, tmp_
         run_identify(REPO / "scenarios" / "own_ship" / scenario, tmp_path, tau_u_max_N=2.35e6, tau_r_max_Nm=5.87e8,
                      speed_kn=15.5, ship="KVLCC2", horizon=NMPC_HORIZON)
     assert seen["bound_every_class"] is through_allocation and seen["masses"] is not None
+
+
+def test_the_parameter_file_records_the_nmpc_set_up_the_model_was_chosen_for(tmp_path):
+    """identify writes the horizon and interval it chose the class for; the NMPC reads them back."""
+    from types import SimpleNamespace
+
+    from rhnc.ship.identification import recorded_horizon
+    from rhnc.ship.identification_report import parameter_set_toml
+    from rhnc.ship.sea_trials import VALIDATION_MANOEUVRE
+
+    kcs = load_parameter_set("default")
+    fitted = SimpleNamespace(parameters=_wide(kcs, name="fitted"), horizon=Horizon(900.0, 60.0),
+                             validation={"held_out: " + VALIDATION_MANOEUVRE: {"heading_rms_deg": 1.0}})
+    out = tmp_path / "set.toml"
+    out.write_text(parameter_set_toml(fitted, {"model_name": "KCS", "guid": "{g}"}, "s.toml"))
+    params = load_parameter_set("fitted", path=out)
+    assert recorded_horizon(params.extras, "set") == Horizon(900.0, 60.0)
+    # a file written before identify recorded it has none
+    assert recorded_horizon(load_parameter_set("default").extras, "set") is None
+    with pytest.raises(ScenarioError, match=r"^set: key 'nmpc_horizon_s' needs its partner 'nmpc_control_interval_s'"):
+        recorded_horizon({"nmpc_horizon_s": 900.0}, "set")
+    with pytest.raises(ScenarioError, match=r"^set: keys 'nmpc_horizon_s' = 10.0, 'nmpc_control_interval_s' = 60.0 "
+                                            "are no prediction horizon"):
+        recorded_horizon({"nmpc_horizon_s": 10.0, "nmpc_control_interval_s": 60.0}, "set")
+
+
+def test_the_report_says_how_many_horizon_predictions_chose_the_class():
+    """A horizon as long as the held-out zig-zag leaves one prediction: the choice is then
+    that of one open-loop run, and the report says so."""
+    from rhnc.ship.identification import held_out_windows_note, windowed_starts
+
+    t = np.arange(0.0, 900.5, 1.0)
+    held_out = Record("zigzag_20", t, np.zeros((len(t), 6)), np.zeros((len(t), 2)))
+    assert len(windowed_starts(held_out, Horizon(300.0, 20.0))) == 31
+    assert held_out_windows_note(held_out, Horizon(300.0, 20.0)) == (
+        "chosen by 31 predictions of the 300-s horizon from the 900-s held-out zigzag_20, one every 20 s")
+    assert windowed_starts(held_out, Horizon(900.0, 60.0)) == [0.0]
+    assert "chosen as by one open-loop run over it" in held_out_windows_note(held_out, Horizon(900.0, 60.0))

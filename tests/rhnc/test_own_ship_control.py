@@ -182,3 +182,67 @@ def test_the_own_ship_and_actuator_plant_scenarios_validate(path, capsys):
     from orchestrator.cli import main
 
     assert main(["validate", str(path)]) == 0, capsys.readouterr().err
+
+
+def _set_with_record(tmp_path, record: str) -> str:
+    """The S175 force-level set, with ``record`` (lines) in place of the NMPC set-up it records."""
+    lines = [line for line in (OWN / "S175_identified.toml").read_text().splitlines()
+             if not line.startswith(("nmpc_horizon_s", "nmpc_control_interval_s"))]
+    path = tmp_path / "S175_set.toml"
+    path.write_text("\n".join(lines + record.splitlines()) + "\n")
+    return path.as_posix()
+
+
+def test_a_model_identified_for_another_nmpc_set_up_is_flagged(tmp_path, caplog):
+    """The model class was chosen for one horizon and interval; another NMPC set-up is named in
+    the check and a warning says which identify to run, and a set without the record still loads."""
+    scenario = OWN / "exp3a_s175_identified.toml"   # 15 intervals of 20 s
+    recorded = {"participants.ctrl.options.model_file": _set_with_record(
+        tmp_path, "nmpc_horizon_s = 300.0\nnmpc_control_interval_s = 20.0")}
+    with caplog.at_level(logging.WARNING, logger="rhnc.control.control_participant"):
+        ctrl = _ctrl(scenario, recorded)
+    assert ctrl.model_check["check"] == "identified"
+    assert ctrl.model_check["identified_for_horizon_s"] == 300.0 and ctrl.model_check["horizon_s"] == 300.0
+    assert caplog.text == ""
+    with caplog.at_level(logging.WARNING, logger="rhnc.control.control_participant"):
+        ctrl = _ctrl(scenario, {**recorded, "participants.ctrl.options.horizon_steps": 45})
+    assert ctrl.model_check["check"] == ("identified for another NMPC set-up (300-s horizon every 20 s; "
+                                         "this one 900-s horizon every 20 s)")
+    assert ctrl.model_check["horizon_s"] == 900.0 and ctrl.model_check["identified_for_horizon_s"] == 300.0
+    assert f"fit one for this set-up with: python -m orchestrator identify {scenario}" in caplog.text
+    # the same horizon predicted again less often is another set-up too
+    other_interval = {"participants.ctrl.options.model_file": _set_with_record(
+        tmp_path, "nmpc_horizon_s = 300.0\nnmpc_control_interval_s = 60.0")}
+    assert _ctrl(scenario, other_interval).model_check["check"].startswith("identified for another NMPC set-up")
+    # a set written before identify recorded its set-up
+    old = {"participants.ctrl.options.model_file": _set_with_record(tmp_path, "")}
+    ctrl = _ctrl(scenario, old)
+    assert ctrl.model_check["check"] == "identified (horizon not recorded)"
+    assert ctrl.model_check["identified_for_horizon_s"] is None
+    half = {"participants.ctrl.options.model_file": _set_with_record(tmp_path, "nmpc_horizon_s = 300.0")}
+    with pytest.raises(ScenarioError, match=r"participants\.ctrl: .*S175_set\.toml \[S175\]: key 'nmpc_horizon_s' "
+                                            "needs its partner 'nmpc_control_interval_s'"):
+        _ctrl(scenario, half)
+
+
+def test_summary_says_the_model_was_identified_for_another_set_up(tmp_path):
+    model = _set_with_record(tmp_path, "nmpc_horizon_s = 900.0\nnmpc_control_interval_s = 60.0")
+    report = run_scenario(OWN / "exp3a_s175_identified.toml", tmp_path / "results", progress=False,
+                          overrides={"simulation.steps": 8, "participants.ctrl.options.model_file": model})
+    check = json.loads((report.folder / "summary.json").read_text())["participants"]["ctrl"]["model_check"]
+    assert check["check"] == ("identified for another NMPC set-up (900-s horizon every 60 s; "
+                              "this one 300-s horizon every 20 s)")
+    assert (check["identified_for_horizon_s"], check["identified_for_control_interval_s"]) == (900.0, 60.0)
+
+
+#: Every shipped own-ship set-up that predicts with an identified model (the KCS-model ones
+#: are the comparison with no identified model).
+SHIPPED_IDENTIFIED = sorted(p for p in OWN.glob("exp*.toml") if "kcs_model" not in p.name) + sorted(
+    (REPO / "scenarios").glob("exp*_mmg.toml"))
+
+
+@pytest.mark.parametrize("scenario", SHIPPED_IDENTIFIED, ids=lambda p: p.stem)
+def test_every_shipped_set_up_predicts_with_a_model_identified_for_its_own_nmpc(scenario):
+    """The model class is chosen for the NMPC's horizon and interval: a scenario uses a set
+    identified on its own plant for its own set-up (Experiments 3a and 3b share one)."""
+    assert _ctrl(scenario).model_check["check"] == "identified"
