@@ -11,17 +11,14 @@ from __future__ import annotations
 
 import logging
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from orchestrator.geometry import wrap_angle
+from rhnc.control.nmpc_domain_settings import DomainSettings
 from rhnc.control.nmpc_manoeuvre import (ManoeuvreResponse, closing_on_the_port_side, port_return_limit,
                                          response_clearance_m, side_clearance_m)
 from rhnc.encounters.colregs import ACTION_BUFFER_S, cpa_tcpa, latest_alteration_s
-
-if TYPE_CHECKING:
-    from rhnc.control.nmpc_colregs import DomainSettings
 
 LOG = logging.getLogger(__name__)
 

@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from orchestrator.geometry import KNOT
-from rhnc.control.nmpc_colregs import DomainSettings
+from rhnc.control.nmpc_domain_settings import DomainSettings
 from rhnc.control.nmpc_problem import DISTURBANCE_SIZE
 
 #: the KCS's service speed [m/s]: the default speed bound
