@@ -247,18 +247,12 @@ class CollisionDomains(ActionDecisions):
             offset, domain_radius, growth_mps = self._domain(rows[i], rhos[i], name, state[:2], ranges[i],
                                                              range_rates[i], i in inside)
             closing = closing_speed_mps + math.hypot(rows[i, 2], rows[i, 3])
-            if horizon_s is not None:
-                centre = rows[i, :2] + offset
-                if (np.hypot(*(centre - state[:2])) - closing * horizon_s
-                        > domain_radius + s.clearance_margin_growth_mps * horizon_s):
-                    continue  # out of reach within the horizon: no constraint needed
+            if horizon_s is not None and self._out_of_reach(rows[i], offset, domain_radius, state, closing, horizon_s):
+                continue  # out of reach within the horizon: no constraint needed
             if slot >= self.max_obstacles:
                 continue
-            x, y, vx, vy, _ = rows[i]
-            L = length_scale_m
-            inflation = (closing * substep_s / (2.0 * domain_radius)) ** 2
-            slots[:, slot] = [(x - origin[0]) / L, (y - origin[1]) / L, vx / L, vy / L, offset[0] / L,
-                              offset[1] / L, domain_radius / L, growth_mps / L, inflation, 1.0]
+            slots[:, slot] = _slot_column(rows[i], origin, offset, domain_radius, growth_mps,
+                                          (closing * substep_s / (2.0 * domain_radius)) ** 2, length_scale_m)
             active_rows[i] = 1.0
             slot += 1
         floor, ceiling = self._alteration_bounds(danger, no_port_turn)
@@ -267,6 +261,14 @@ class CollisionDomains(ActionDecisions):
         return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling,
                                    bool(risk and not et), danger, _escape_heading(rows, rhos, state, range_rates, inside),
                                    min(self._slowing.values()) if self._slowing and not danger else None)
+
+    def _out_of_reach(self, row: np.ndarray, offset: np.ndarray, domain_radius: float, state: np.ndarray,
+                      closing_mps: float, horizon_s: float) -> bool:
+        """True when the target's domain cannot be reached within the horizon, whatever either
+        ship does at its present speed."""
+        centre = row[:2] + offset
+        return bool(np.hypot(*(centre - state[:2])) - closing_mps * horizon_s
+                    > domain_radius + self.settings.clearance_margin_growth_mps * horizon_s)
 
     def reference_turns(self, reference_heading_rad: float, heading_rad: float) -> float:
         """Whole turns [rad, a multiple of 2 pi] to take off the reference heading: the one within
@@ -401,6 +403,16 @@ class CollisionDomains(ActionDecisions):
             if cpa < s.risk_cpa_m and 0.0 < tcpa <= s.risk_tcpa_s:
                 return True
         return False
+
+def _slot_column(row: np.ndarray, origin: np.ndarray, offset: np.ndarray, domain_radius: float, growth_mps: float,
+                 inflation: float, length_scale_m: float) -> list[float]:
+    """One obstacle slot (OBSTACLE_FIELDS values), lengths scaled by L: position from the
+    origin, velocity, domain offset, radius and growth, chord inflation, active flag."""
+    x, y, vx, vy, _ = row
+    L = length_scale_m
+    return [(x - origin[0]) / L, (y - origin[1]) / L, vx / L, vy / L, offset[0] / L,
+            offset[1] / L, domain_radius / L, growth_mps / L, inflation, 1.0]
+
 
 def _port_turn_ruled_out(classes, order) -> bool:
     """Rules 14, 15, 17(c): no alteration to port while a head-on or crossing target's CPA is
