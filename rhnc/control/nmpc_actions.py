@@ -67,11 +67,18 @@ class ActionDecisions:
         we stand on for with that turn under way (Rule 17(c)), or None (``colregs`` with
         alterations only).
 
-        While a ship crossing from port that we stand on for is still to pass (TCPA > 0), no turn
-        to port at all: keep the course (Rule 17(a)(i)).  Else, a turn to port of more than
+        While a ship crossing from port that we stand on for is still in risk of collision (its CPA
+        at the present velocities within ``risk_cpa_m`` and ``risk_tcpa_s`` ahead), no turn to port
+        at all: keep the course (Rule 17(a)(i)).  Else, a turn to port of more than
         ``MANOEUVRE_DEG`` towards the reference goes only as far as
         :func:`rhnc.control.nmpc_manoeuvre.port_return_limit` allows for the targets in no risk of
-        collision yet.  The bound is a floor like an alteration's, and yields to immediate danger.
+        collision: those not classified yet and those we stand on for that our course has taken
+        out of risk.  The bound is a floor like an alteration's, and yields to immediate danger.
+
+        Holding the course for as long as such a ship was still to pass (TCPA > 0, the CPA
+        anywhere) trapped a ship that had turned to starboard for another target: beside two
+        ships crossing from port, 3 nm off and no longer in risk, it kept a course parallel to
+        theirs for 75 minutes while its speed fell, and arrived 73 minutes late.
         """
         s = self.settings
         if not s.colregs or s.alteration_deg <= 0.0 or reference_heading_rad is None or own_speed < 1.0:
@@ -80,11 +87,12 @@ class ActionDecisions:
         reference_course = reference_heading_rad + drift
         if wrap_angle(reference_course - own_course) > -math.radians(MANOEUVRE_DEG):
             return None
-        if any(c is not None and c.encounter_class == "crossing_stand_on" and c.tcpa_s > 0.0 for c in classes):
+        standing_on = [c is not None and c.encounter_class == "crossing_stand_on" and c.tcpa_s > 0.0 for c in classes]
+        if any(on and c.cpa_m <= s.risk_cpa_m and c.tcpa_s <= s.risk_tcpa_s for on, c in zip(standing_on, classes)):
             limit: float | None = own_course
         else:
             free = [(rows[j, :2], rows[j, 2:4]) for j, c in enumerate(classes)
-                    if c is not None and c.encounter_class == "none"]
+                    if c is not None and (c.encounter_class == "none" or standing_on[j])]
             limit = port_return_limit(state[:2], own_speed, own_course, reference_course, free, s.risk_cpa_m,
                                       s.risk_tcpa_s)
         if limit is None:

@@ -19,7 +19,7 @@ import pytest
 
 from rhnc.control.nmpc_colregs import CollisionDomains, DomainSettings
 from rhnc.control.nmpc_manoeuvre import RETURN_STEP_DEG, port_return_limit
-from rhnc.encounters.colregs import ENCOUNTER_CLASSES, classify
+from rhnc.encounters.colregs import ENCOUNTER_CLASSES, classify, cpa_tcpa
 
 NM = 1852.0
 KNOT = NM / 3600.0
@@ -118,3 +118,20 @@ def test_a_ship_standing_on_for_a_ship_crossing_from_port_keeps_its_course():
     _, report = solve([CROSSING_FROM_PORT], 0.0)
     assert report.alteration_floor is not None
     assert report.alteration_floor[2] == pytest.approx(COURSE)
+
+
+def test_a_ship_crossing_from_port_out_of_risk_no_longer_holds_the_course():
+    # locked as crossing from port on a collision course; then it alters (or we did) and its CPA
+    # opens beyond the risk limit while it is still to pass: the course is no longer held; the
+    # turn back is limited as for any ship in no risk, which this one may come back into
+    domains, report = solve([CROSSING_FROM_PORT], 0.0)
+    assert report.alteration_floor is not None and report.alteration_floor[2] == pytest.approx(COURSE)
+    opened = (vector(-30.0, 3.0 * NM), vector(40.0, 12.0 * KNOT))
+    cpa, tcpa = cpa_tcpa((0.0, 0.0), vector(35.0, SPEED), *opened)
+    assert cpa > CPA_LIMIT and 0.0 < tcpa < TCPA_LIMIT
+    _, report = solve([opened], 0.0, domains=domains)
+    assert [ENCOUNTER_CLASSES[int(c)] for c in report.class_codes] == ["crossing_stand_on"]  # still locked
+    limit = port_return_limit((0.0, 0.0), SPEED, COURSE, 0.0, [opened], CPA_LIMIT, TCPA_LIMIT)
+    assert limit is not None and limit < COURSE - 1e-6  # on the route's course it comes back into risk
+    assert report.alteration_floor is not None
+    assert report.alteration_floor[2] == pytest.approx(limit)
