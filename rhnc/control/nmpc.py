@@ -78,7 +78,7 @@ from orchestrator.interrupts import stop_requested
 from rhnc.encounters.colregs import ENCOUNTER_CLASSES
 from rhnc.control.disturbance_observer import DisturbanceObserver, trimmed_reference
 from rhnc.control.nmpc_codegen import NLPLibrary
-from rhnc.control.nmpc_alteration import alteration_steering, heading_bounds
+from rhnc.control.nmpc_alteration import ALTERATION_DELAY_S, alteration_steering, heading_bounds
 from rhnc.control.nmpc_coastline import CoastlineDomains
 from rhnc.control.nmpc_actions import PORT_ALLOWANCE_DEG
 from rhnc.control.nmpc_colregs import CollisionDomains, DomainReport
@@ -455,7 +455,13 @@ class NMPCController:
         heading_index = self.problem.z_index[1:, 2]
         if report.no_port_turn:  # Rules 14, 15, 17(c): no alteration to port
             allowance = math.radians(PORT_ALLOWANCE_DEG)
-            lbx[heading_index] = np.minimum(ref_scaled[2, 1:] - allowance, state[2])
+            # a ship already swinging to port carries on for a while whatever the rudder does: the
+            # bound starts below the measured heading by what that swing adds over the alteration
+            # delay, as the alteration floor's start does (at the measured heading, a ship that had
+            # turned to port for a target inside its domain found no feasible plan when a ship
+            # crossing from starboard ruled out port turns, and fell back)
+            swing = max(0.0, -float(state[5])) * ALTERATION_DELAY_S
+            lbx[heading_index] = np.minimum(ref_scaled[2, 1:] - allowance, state[2] - swing)
         if report.speed_goal_mps is not None:  # a readily apparent reduction of speed (Rule 8(e), 17(b))
             goal = report.speed_goal_mps
             slowing = SLOWING_SHARE * (self.params.tau_max[0] + self.params.equilibrium_tau(goal)[0]) / self.params.m11

@@ -222,6 +222,25 @@ def test_no_port_turn_for_a_crossing_target_on_the_port_side_even_while_standing
     assert not report.no_port_turn
 
 
+def test_a_ship_swinging_to_port_when_port_turns_are_ruled_out_still_gets_a_plan(kcs):
+    # turned to port for a target inside its domain, the ship swings on at 0.86 deg/s when a ship
+    # crossing from port (we stand on for it) rules out turns to port (Rule 17(c)): no rudder
+    # stops that swing at once, so a bound at the measured heading has no feasible plan, and the
+    # controller fell back (five trafficgen situations at t = 40 s)
+    controller = NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=20.0, colregs=True))
+    yaw_rate = math.radians(-0.86)
+    state = np.array([0.0, 0.0, math.radians(-24.0), 7.1, 0.0, yaw_rate])
+    start, velocity = target_on_collision_course(90.0, 15.0)  # from port, 4.5 nm off
+    obstacles = np.array([[*start, *velocity, RADIUS]])
+    reference = line_or_turn_reference(20.0 * np.arange(N + 1), (0.0, 0.0), 0.0, SPEED)
+    solution = controller.solve(0.0, state, reference, obstacles, et=True)
+    assert controller.domains.parameters(obstacles, state, np.zeros(2), SPEED, 5.0, 230.0, et=True)[1].no_port_turn
+    assert not solution.fallback, solution.status
+    heading = solution.states[:, 2]
+    assert heading.min() < state[2] - math.radians(1.0)  # the swing carries on ...
+    assert heading[-1] > state[2] + math.radians(20.0)  # ... and is stopped and turned back
+    controller.close()
+
 def test_alteration_bound_rises_to_the_alteration_and_never_lets_the_first_step_sag():
     report = DomainReport(np.zeros(1), np.ones(1), alteration_floor=(100.0, 0.0, math.radians(30.0)))
     times = 100.0 + 20.0 * np.arange(1, 31)
