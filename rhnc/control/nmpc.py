@@ -78,7 +78,8 @@ from orchestrator.interrupts import stop_requested
 from rhnc.encounters.colregs import ENCOUNTER_CLASSES
 from rhnc.control.disturbance_observer import DisturbanceObserver, trimmed_reference
 from rhnc.control.nmpc_codegen import NLPLibrary
-from rhnc.control.nmpc_alteration import ALTERATION_DELAY_S, alteration_steering, heading_bounds
+from rhnc.control.nmpc_alteration import (ALTERATION_DELAY_S, HEADING_TOLERANCE_DEG, REACH_MOMENT_SHARE,
+                                          alteration_steering, heading_bounds)
 from rhnc.control.nmpc_coastline import CoastlineDomains
 from rhnc.control.nmpc_actions import PORT_ALLOWANCE_DEG
 from rhnc.control.nmpc_colregs import CollisionDomains, DomainReport
@@ -379,8 +380,11 @@ class NMPCController:
                                                 horizon_s=N * s.control_interval_s, time_s=time_s)
         slots = self._with_coastline(slots, time_s, state, origin, reference, closing)
         # Rules 8, 16, 17: a readily apparent alteration once the ship gives way or acts
+        reach = (self._heading_reach(state, previous_tau, disturbance)
+                 if report.alteration_floor is not None or report.alteration_ceiling is not None
+                 or report.no_port_turn else None)
         floor, ceiling = heading_bounds(report, time_s, float(state[2]), float(state[5]),
-                                        time_s + s.control_interval_s * np.arange(1, N + 1))
+                                        time_s + s.control_interval_s * np.arange(1, N + 1), reach)
         if floor is not None or ceiling is not None:
             # the heading asked for within the alteration's bounds: a cost pulling across a bound
             # checked at the interval ends only is paid by dips between them (a yaw moment
@@ -389,7 +393,8 @@ class NMPCController:
                                         np.inf if ceiling is None else ceiling)
         p = self.problem.parameters(ref_scaled, w_d, w_prev, P, disturbance, slots)
         lbx, ubx = self._bounds(state, origin)
-        self._rate_and_heading_bounds(lbx, ubx, state, ref_scaled, w_prev, report, floor, ceiling)
+        self._rate_and_heading_bounds(lbx, ubx, state, ref_scaled, w_prev, report, floor, ceiling,
+                                      None if reach is None else reach[0])
         x0 = self._initial_guess(time_s, state, ref_scaled, w_d, origin, slots, disturbance)
         return _StepProblem(state, origin, previous_tau, disturbance, report, p, lbx, ubx, x0)
 
@@ -441,9 +446,27 @@ class NMPCController:
         lead = reachable_lead_m(self.params, reference, s.horizon_steps * s.control_interval_s, surge_load_N)
         return reachable_reference(reference, state[:2], lead)
 
-    def _rate_and_heading_bounds(self, lbx, ubx, state, ref_scaled, w_prev, report, floor, ceiling) -> None:
+    def _heading_reach(self, state: np.ndarray, previous_tau: np.ndarray, disturbance) -> tuple[np.ndarray, np.ndarray]:
+        """Headings [rad] over the horizon of the prediction model turning from ``state`` to
+        starboard and to port with ``REACH_MOMENT_SHARE`` of its yaw moment (reached at the input
+        rate limit, if any, from the last applied moment), the surge force held."""
+        s = self.settings
+        goal = REACH_MOMENT_SHARE * self.params.tau_max[1]
+        k = np.arange(1, s.horizon_steps + 1)
+        headings = []
+        for sign in (1.0, -1.0):
+            yaw = np.full(s.horizon_steps, sign * goal)
+            if s.tau_rate_max is not None:  # interval j may differ from the last input by j + 1 steps
+                start = float(np.clip(previous_tau[1], -self.params.tau_max[1], self.params.tau_max[1]))
+                yaw = sign * np.minimum(sign * start + s.tau_rate_max[1] * s.control_interval_s * k, goal)
+            inputs = np.column_stack([np.full(s.horizon_steps, previous_tau[0]), yaw])
+            headings.append(self._rollout(state, inputs, disturbance)[1:, 2])
+        return headings[0], headings[1]
+
+    def _rate_and_heading_bounds(self, lbx, ubx, state, ref_scaled, w_prev, report, floor, ceiling,
+                                 starboard_reach=None) -> None:
         """Narrow the bounds (in place) to the inputs the actuators can reach and the headings the
-        rules allow."""
+        rules allow (``starboard_reach``: :meth:`_heading_reach`'s turn to starboard)."""
         s = self.settings
         N = s.horizon_steps
         if s.tau_rate_max is not None:   # what the actuators can reach from the last applied input
@@ -462,6 +485,8 @@ class NMPCController:
             # crossing from starboard ruled out port turns, and fell back)
             swing = max(0.0, -float(state[5])) * ALTERATION_DELAY_S
             lbx[heading_index] = np.minimum(ref_scaled[2, 1:] - allowance, state[2] - swing)
+            if starboard_reach is not None:  # nor above the model's own turn to starboard
+                lbx[heading_index] = np.minimum(lbx[heading_index], starboard_reach - math.radians(HEADING_TOLERANCE_DEG))
         if report.speed_goal_mps is not None:  # a readily apparent reduction of speed (Rule 8(e), 17(b))
             goal = report.speed_goal_mps
             slowing = SLOWING_SHARE * (self.params.tau_max[0] + self.params.equilibrium_tau(goal)[0]) / self.params.m11

@@ -27,6 +27,9 @@ ALTERATION_DELAY_S = 20.0
 #: progress from the first step of every plan
 CATCH_UP_RATE_DEG_S = 0.3
 YAW_TIME_CONSTANT_S = 13.0
+#: share of the yaw moment with which the prediction model's own turn from the measured state
+#: caps the bounds (``heading_bounds``' ``reach``): what the plan is never asked to beat
+REACH_MOMENT_SHARE = 0.5
 #: numerical slack of that cap below the measured heading [deg]
 HEADING_TOLERANCE_DEG = 0.1
 #: heading error [deg] (yaw rate counted as its value over ``YAW_TIME_CONSTANT_S``) at which
@@ -35,7 +38,8 @@ STEERING_BAND_DEG = 10.0
 
 
 def heading_bounds(report, time_s: float, heading_rad: float, yaw_rate_rps: float,
-                   times_s: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
+                   times_s: np.ndarray, reach: tuple[np.ndarray, np.ndarray] | None = None,
+                   ) -> tuple[np.ndarray | None, np.ndarray | None]:
     """Lower and upper heading bounds [rad] at the absolute ``times_s`` [s] (None: unbounded).
 
     ``report`` is the solve's :class:`rhnc.control.nmpc_colregs.DomainReport` (its
@@ -54,6 +58,13 @@ def heading_bounds(report, time_s: float, heading_rad: float, yaw_rate_rps: floa
     alteration of 35 deg took 4 min.  No larger allowance: the controller applies only the first
     step of each plan, and a first step allowed to sag below the measured heading would
     postpone the alteration at every solve and never reach it.  Headings are brought to within half a turn of ``heading_rad``.
+
+    ``reach``: the headings [rad] at ``times_s`` of the prediction model itself turning from the
+    measured state to starboard and to port with ``REACH_MOMENT_SHARE`` of its yaw moment
+    (:meth:`rhnc.control.nmpc.NMPCController._heading_reach`).  The bounds never ask for more
+    than those: the first-order response above is the KCS's at speed, and a ship swinging the
+    other way at 12 m/s took 40-100 s to reverse under the full moment, far behind the ramp and
+    its cap (every solve of those steps failed, and the controller fell back).
     """
     if report.alteration_floor is None and report.alteration_ceiling is None:
         return None, None  # no alteration: nothing to compute (most steps)
@@ -72,6 +83,10 @@ def heading_bounds(report, time_s: float, heading_rad: float, yaw_rate_rps: floa
     def near(angle: float) -> float:
         return angle - 2.0 * math.pi * round((angle - heading_rad) / (2.0 * math.pi))
 
+    def near_all(angles: np.ndarray) -> np.ndarray:
+        angles = np.asarray(angles, dtype=float)
+        return angles - 2.0 * math.pi * np.round((angles[0] - heading_rad) / (2.0 * math.pi))
+
     def ramp(alteration) -> tuple[np.ndarray, float]:
         began_s, heading_then, goal = alteration
         rise = np.radians(ALTERATION_RATE_DEG_S) * np.maximum(times_s - began_s - ALTERATION_DELAY_S, 0.0)
@@ -83,11 +98,15 @@ def heading_bounds(report, time_s: float, heading_rad: float, yaw_rate_rps: floa
         goal = near(report.alteration_floor[2])
         start = heading_rad - tolerance - max(0.0, -yaw_rate_rps) * ALTERATION_DELAY_S
         lower = np.minimum.reduce([np.full_like(times_s, goal), goal - size + rise, start + reachable(yaw_rate_rps)])
+        if reach is not None:
+            lower = np.minimum(lower, near_all(reach[0]) - tolerance)
     if report.alteration_ceiling is not None:
         rise, size = ramp(report.alteration_ceiling)
         goal = near(report.alteration_ceiling[2])
         start = heading_rad + tolerance + max(0.0, yaw_rate_rps) * ALTERATION_DELAY_S
         upper = np.maximum.reduce([np.full_like(times_s, goal), goal - size - rise, start - reachable(-yaw_rate_rps)])
+        if reach is not None:
+            upper = np.maximum(upper, near_all(reach[1]) + tolerance)
     return lower, upper
 
 

@@ -241,6 +241,33 @@ def test_a_ship_swinging_to_port_when_port_turns_are_ruled_out_still_gets_a_plan
     assert heading[-1] > state[2] + math.radians(20.0)  # ... and is stopped and turned back
     controller.close()
 
+def test_an_alteration_to_starboard_asks_no_more_than_the_model_can_turn_from_a_swing_to_port(kcs):
+    # a ship at 12.3 m/s swinging to port at 1.14 deg/s, held to a 35 deg alteration to
+    # starboard with no turn to port allowed: the prediction model needs some 100 s under the
+    # full moment to reverse that swing, far behind the floor's first-order cap, and every solve
+    # failed (trafficgen situations, 1-5 fallbacks each). The floor now stays below the model's
+    # own turn at REACH_MOMENT_SHARE of the moment, and the step has a plan
+    import dataclasses
+    controller = NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=20.0, colregs=True))
+    parameters = controller.domains.parameters
+
+    def held_alteration(*args, **kwargs):
+        slots, report = parameters(*args, **kwargs)
+        return slots, dataclasses.replace(report, no_port_turn=True,
+                                          alteration_floor=(0.0, 0.0, math.radians(35.0)))
+
+    controller.domains.parameters = held_alteration
+    state = np.array([0.0, 0.0, math.radians(-8.0), 12.3, 0.0, math.radians(-1.14)])
+    reference = line_or_turn_reference(300.0 + 20.0 * np.arange(N + 1), (0.0, 0.0), 0.0, SPEED)
+    previous = np.array([0.0, -kcs.tau_max[1]])  # full port moment until now
+    step = controller._prepare(300.0, state, reference, None, True, previous)
+    starboard, _ = controller._heading_reach(state, previous, step.disturbance)
+    floor = step.lbx[controller.problem.z_index[1:, 2]]
+    assert np.all(floor <= starboard - math.radians(HEADING_TOLERANCE_DEG) + 1e-12)
+    solution = controller.solve(300.0, state, reference, None, et=True, previous_tau=previous)
+    assert not solution.fallback, solution.status
+    controller.close()
+
 def test_alteration_bound_rises_to_the_alteration_and_never_lets_the_first_step_sag():
     report = DomainReport(np.zeros(1), np.ones(1), alteration_floor=(100.0, 0.0, math.radians(30.0)))
     times = 100.0 + 20.0 * np.arange(1, 31)
