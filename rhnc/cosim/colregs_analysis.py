@@ -16,7 +16,10 @@ test every verdict.  Per target it reports
   the tracks never cross);
 * the first manoeuvre after the onset: the first time the course over ground departs from
   the course at the onset by ``manoeuvre_threshold_deg`` or more and stays beyond it for
-  ``manoeuvre_hold_s`` (a sustained alteration, not yaw in a seaway), and its side;
+  ``manoeuvre_hold_s`` (a sustained alteration, not yaw in a seaway), or the speed over ground
+  falls below ``1 - manoeuvre_speed_reduction`` of the speed at the onset and stays below it as
+  long, whichever comes first (``manoeuvre_kind``: ``course`` or ``speed``), and the side of
+  the first change of course;
 * a verdict per rule, ``"pass"``, ``"fail"`` or ``"not applicable"``, with the reason.
 
 Manoeuvres are read from the course over ground (COG, from the sampled positions), not from
@@ -166,7 +169,7 @@ def colregs_analysis(frame, scenario, cosim, out_dir, manoeuvre_threshold_deg: f
                      apparent_speed_reduction: float = 0.5, early_before_cpa_min: float = 5.0,
                      stand_on_wait_min: float = 10.0, risk_cpa_nm: float = 2.0, risk_tcpa_min: float = 30.0,
                      stand_on_range_factor: float = STAND_ON_ACTION_RANGE_FACTOR,
-                     at_once_within_s: float = 60.0) -> dict:
+                     at_once_within_s: float = 60.0, manoeuvre_speed_reduction: float = 0.1) -> dict:
     """The ``colregs`` analysis of a run: :func:`judge_encounters` on its recorded tracks.
 
     The obstacles are the true ones (the array feeding an ``obstacles`` input, or the truth behind a
@@ -180,7 +183,8 @@ def colregs_analysis(frame, scenario, cosim, out_dir, manoeuvre_threshold_deg: f
     settings = JudgementSettings(manoeuvre_threshold_deg, manoeuvre_hold_s, apparent_course_change_deg,
                                  apparent_speed_reduction, early_before_cpa_min, stand_on_wait_min,
                                  risk_cpa_nm, risk_tcpa_min, stand_on_range_factor,
-                                 at_once_within_s=at_once_within_s)
+                                 at_once_within_s=at_once_within_s,
+                                 manoeuvre_speed_reduction=manoeuvre_speed_reduction)
     plant = plant_name(cosim)
     from rhnc.cosim.obstacle_ports import true_obstacles_column
 

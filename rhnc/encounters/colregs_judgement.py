@@ -77,6 +77,10 @@ class JudgementSettings:
     #: "early ... if the circumstances of the case admit": an alteration begun within this
     #: time [s] of the moment the ship was first called on to act (three control intervals)
     at_once_within_s: float = 60.0
+    #: a reduction of the speed over ground by this fraction of the speed at the onset, held
+    #: ``manoeuvre_hold_s``, shows a manoeuvre as ``manoeuvre_threshold_deg`` of course does
+    #: (Rule 8(b): "any alteration of course and/or speed"; 8(e): slacken her speed)
+    manoeuvre_speed_reduction: float = 0.1
 
     def __post_init__(self) -> None:
         for field in dataclasses.fields(self):
@@ -130,6 +134,25 @@ def first_manoeuvre(t, heading_rad, start_index: int, end_time_s: float,
         if held and t[-1] >= t[k] + settings.manoeuvre_hold_s:
             return float(t[k]), "starboard" if sign > 0 else "port"
     return None, None
+
+
+def first_speed_reduction(t, speed_mps, start_index: int, end_time_s: float, settings: JudgementSettings) -> float | None:
+    """Time [s] of the first sustained reduction of speed after ``start_index``: the speed over
+    ground below ``1 - manoeuvre_speed_reduction`` of its value at ``start_index`` and staying
+    below it for ``manoeuvre_hold_s`` (not the surge of a seaway); only reductions that begin
+    before ``end_time_s`` count.  None without one."""
+    t = np.asarray(t, dtype=float)
+    speed = np.asarray(speed_mps, dtype=float)
+    limit = (1.0 - settings.manoeuvre_speed_reduction) * speed[start_index]
+    if settings.manoeuvre_speed_reduction <= 0.0 or speed[start_index] <= 0.0:
+        return None
+    for k in np.nonzero(speed[start_index:] < limit)[0] + start_index:
+        if t[k] > end_time_s:
+            break
+        window = (t >= t[k]) & (t <= t[k] + settings.manoeuvre_hold_s)
+        if np.all(speed[window] < limit) and t[-1] >= t[k] + settings.manoeuvre_hold_s:
+            return float(t[k])
+    return None
 
 
 def crossed_ahead(own_xy: np.ndarray, target: np.ndarray, start: int, cpa_index: float) -> bool | None:
@@ -223,7 +246,8 @@ def judge_target(t, own_xy, course_rad, speed_mps, target: np.ndarray, encounter
     if encounter_class.startswith("crossing"):
         ahead = crossed_ahead(own_xy, target, onset_index, cpa_index)
         result["crossed"] = None if ahead is None else ("ahead" if ahead else "astern")
-    result.update(_first_manoeuvre_fields(t, own_xy, course_rad, target, onset_index, cpa_time, settings))
+    result.update(_first_manoeuvre_fields(t, own_xy, course_rad, speed_mps, target, onset_index, cpa_time,
+                                          settings))
     result.update(_manoeuvre_size(t, course_rad, speed_mps, onset_index, cpa_time, result["manoeuvre_time_s"],
                                   settings))
     verdicts, reasons = _verdicts(result, encounter_class, t, own_xy, course_rad, onset_index, target, settings,
@@ -252,17 +276,44 @@ def _manoeuvre_size(t, course_rad, speed_mps, onset_index: int, cpa_time: float,
     return size
 
 
-def _first_manoeuvre_fields(t, own_xy, course_rad, target: np.ndarray, onset_index: int, cpa_time: float,
-                            settings: JudgementSettings) -> dict:
-    """The first manoeuvre's time (5 deg shown) and side, when it began, and the CPA predicted then."""
-    manoeuvre_time, side = first_manoeuvre(t, course_rad, onset_index, cpa_time, settings)
-    fields = {"manoeuvre_time_s": manoeuvre_time, "manoeuvre_side": side}
+def _first_manoeuvre_fields(t, own_xy, course_rad, speed_mps, target: np.ndarray, onset_index: int,
+                            cpa_time: float, settings: JudgementSettings) -> dict:
+    """The first manoeuvre's time (5 deg of course, or a tenth of the speed, shown), its kind
+    (``course`` or ``speed``), the side of the first change of course, when the manoeuvre began,
+    and the CPA predicted then.
+
+    A reduction of speed alone is a manoeuvre (Rules 8(b), 8(e)): read from the course alone, a
+    ship that gave way to three ships crossing from starboard by slowing from 18 to 8 kn 1 min
+    after the onset got "no alteration before the CPA" for all three."""
+    course_time, side = first_manoeuvre(t, course_rad, onset_index, cpa_time, settings)
+    speed_time = first_speed_reduction(t, speed_mps, onset_index, cpa_time, settings)
+    by_speed = speed_time is not None and (course_time is None or speed_time < course_time)
+    manoeuvre_time = speed_time if by_speed else course_time
+    fields = {"manoeuvre_time_s": manoeuvre_time, "manoeuvre_side": side,
+              "manoeuvre_kind": None if manoeuvre_time is None else ("speed" if by_speed else "course")}
     if manoeuvre_time is not None:
-        k_before, _, tcpa = _prediction_before_manoeuvre(t, own_xy, course_rad, target, onset_index, manoeuvre_time,
-                                                         settings)
+        k_before = (_last_full_speed_sample(t, speed_mps, onset_index, int(np.searchsorted(t, manoeuvre_time)),
+                                            settings) if by_speed
+                    else _last_steady_sample(t, course_rad, onset_index, int(np.searchsorted(t, manoeuvre_time)),
+                                             settings))
+        _, tcpa = _prediction_at(t, own_xy, target, k_before)
         fields["manoeuvre_start_s"] = float(t[k_before])
         fields["predicted_time_of_cpa_s"] = float(t[k_before] + tcpa) if 0.0 < tcpa < math.inf else None
     return fields
+
+
+def _prediction_at(t, own_xy, target: np.ndarray, k: int) -> tuple[float, float]:
+    """The CPA [m] and TCPA [s] predicted at sample ``k`` with both ships' velocities there."""
+    own_velocity = np.gradient(own_xy, t, axis=0)[k]
+    return cpa_tcpa(own_xy[k], own_velocity, target[k, :2], target[k, 2:4])
+
+
+def _last_full_speed_sample(t, speed_mps, onset_index: int, index: int, settings: JudgementSettings) -> int:
+    """The last sample before ``index`` whose speed is within half the manoeuvre's reduction of
+    the speed at the onset (where the reduction began); the onset if none."""
+    speed = np.asarray(speed_mps[onset_index:index + 1], dtype=float)
+    full = np.nonzero(speed >= (1.0 - 0.5 * settings.manoeuvre_speed_reduction) * speed[0])[0]
+    return onset_index + int(full[-1]) if full.size else onset_index
 
 
 def _side_correct(result: dict, encounter_class: str) -> bool | None:
@@ -289,21 +340,9 @@ def predicted_time_of_cpa(t, own_xy, course_rad, target: np.ndarray, onset_index
     (:func:`early_by`): the manoeuvre itself moves the sailed CPA (an overtaking ship that
     turns away meets its CPA as it turns).
     """
-    k_before, _, tcpa = _prediction_before_manoeuvre(t, own_xy, course_rad, target, onset_index, manoeuvre_time_s,
-                                                     settings)
+    k_before = _last_steady_sample(t, course_rad, onset_index, int(np.searchsorted(t, manoeuvre_time_s)), settings)
+    _, tcpa = _prediction_at(t, own_xy, target, k_before)
     return float(t[k_before] + tcpa) if 0.0 < tcpa < math.inf else None
-
-
-def _prediction_before_manoeuvre(t, own_xy, course_rad, target: np.ndarray, onset_index: int,
-                                 manoeuvre_time_s: float, settings: JudgementSettings) -> tuple[int, float, float]:
-    """The last steady sample before the manoeuvre (it is detected once the course has moved
-    by the threshold) and the CPA [m] and TCPA [s] predicted there, with the velocity the
-    own ship had before it began."""
-    k = int(np.searchsorted(t, manoeuvre_time_s))
-    k_before = _last_steady_sample(t, course_rad, onset_index, k, settings)
-    own_velocity = np.gradient(own_xy, t, axis=0)[k_before]
-    cpa, tcpa = cpa_tcpa(own_xy[k_before], own_velocity, target[k_before, :2], target[k_before, 2:4])
-    return k_before, cpa, tcpa
 
 
 def _last_steady_sample(t, course_rad, onset_index: int, index: int, settings: JudgementSettings) -> int:
@@ -442,8 +481,8 @@ def _stand_on_failures(result, encounter_class, t, own_xy, course_rad, onset_ind
     """A stand-on ship's alteration judged with the velocity it stood on with before it began:
     made while the give-way vessel's action could still suffice (and not while giving way to another)."""
     # judge the decision with the velocity the ship stood on with before it began
-    k_before, cpa, tcpa = _prediction_before_manoeuvre(t, own_xy, course_rad, target, onset_index,
-                                                       result["manoeuvre_time_s"], settings)
+    k_before = int(np.searchsorted(t, result["manoeuvre_start_s"]))
+    cpa, tcpa = _prediction_at(t, own_xy, target, k_before)
     range_m = float(np.hypot(*(target[k_before, :2] - own_xy[k_before])))
     giving_way = any(onset <= result["manoeuvre_time_s"] for onset in give_way_onsets_s)
     offset = target[k_before, :2] - own_xy[k_before]
@@ -454,6 +493,7 @@ def _stand_on_failures(result, encounter_class, t, own_xy, course_rad, onset_ind
     if not giving_way and not stand_on_must_act(cpa, tcpa, range_m, result["required_nm"] * NM,
                                                 settings.stand_on_wait_min * 60.0,
                                                 settings.stand_on_range_factor, latest):
-        return [f"altered course with predicted CPA {cpa / NM:.2f} nm in {tcpa / 60:.1f} min at "
+        action = "reduced speed" if result.get("manoeuvre_kind") == "speed" else "altered course"
+        return [f"{action} with predicted CPA {cpa / NM:.2f} nm in {tcpa / 60:.1f} min at "
                 f"{range_m / NM:.2f} nm: the give-way vessel's action could still suffice"]
     return []

@@ -444,3 +444,45 @@ def test_rules_8_and_16_judge_a_target_starting_inside_by_the_range_opening():
     slow = judge(track, target_states(track[0], (0.3, 0.5), 250.0, 20.0))
     assert slow["started_inside"] and slow["range_opening_s"] > 60.0
     assert (slow["rule_8"], slow["rule_16"]) == (FAIL, FAIL)
+
+
+# -- a reduction of speed as the manoeuvre (Rules 8(b), 8(e)) ---------------------------------
+def _crossing_from_starboard(t):
+    # from starboard, heading west, would meet us 4.5 nm ahead in 15 min
+    return target_states(t, (4.5, 4.5), 270.0, 18.0)
+
+
+def test_a_reduction_of_speed_alone_is_a_give_way_manoeuvre():
+    # 18 -> 8 kn one minute after the onset, the course kept: the ship crossing from starboard
+    # passes ahead, and the slowing is an early and readily apparent action
+    track = own_track(30, slow_down=(1.0, 8.0))
+    result = judge(track, _crossing_from_starboard(track[0]))
+    assert result["encounter_class"] == "crossing_give_way" and result["separation_kept"]
+    assert result["manoeuvre_kind"] == "speed" and result["manoeuvre_side"] is None
+    assert result["manoeuvre_time_s"] == pytest.approx(60.0, abs=DT_S)
+    assert result["manoeuvre_start_s"] == pytest.approx(55.0, abs=DT_S)
+    assert result["rule_16"] == PASS and result["rule_8"] == PASS, result["reasons"]
+    # a course change later on does not make the slowing any less the first manoeuvre
+    track = own_track(30, turns=[(4.0, 40.0)], slow_down=(1.0, 8.0))
+    result = judge(track, _crossing_from_starboard(track[0]))
+    assert result["manoeuvre_kind"] == "speed" and result["manoeuvre_side"] == "starboard"
+
+
+def test_the_surge_of_a_seaway_is_no_manoeuvre():
+    t = np.arange(0.0, 30 * 60.0 + DT_S / 2, DT_S)
+    speed = 18.0 * KN * (1.0 + 0.15 * np.sin(2 * math.pi * t / 60.0))  # +-15 % over a minute
+    x = np.concatenate([[0.0], np.cumsum(speed[1:] * DT_S)])
+    result = judge((t, x, np.zeros_like(t), np.zeros_like(t)), _crossing_from_starboard(t))
+    assert result["manoeuvre_time_s"] is None and result["manoeuvre_kind"] is None
+    assert result["rule_16"] == FAIL and "no alteration" in result["reasons"]["rule_16"]
+    # a lasting loss of a twentieth is no manoeuvre either
+    track = own_track(30, slow_down=(1.0, 17.1))
+    assert judge(track, _crossing_from_starboard(track[0]))["manoeuvre_time_s"] is None
+
+
+def test_a_stand_on_ship_that_slows_early_fails_rule_17():
+    track = own_track(30, slow_down=(1.0, 8.0))  # TCPA 14 min: too early to give up standing on
+    result = judge(track, _stand_on_target(track[0]))
+    assert result["manoeuvre_kind"] == "speed"
+    assert result["rule_17"] == FAIL and "reduced speed" in result["reasons"]["rule_17"]
+    assert result["side_correct"] is True  # no turn to port
