@@ -478,14 +478,15 @@ class NMPCController:
         heading_index = self.problem.z_index[1:, 2]
         if report.no_port_turn:  # Rules 14, 15, 17(c): no alteration to port
             allowance = math.radians(PORT_ALLOWANCE_DEG)
-            # a ship already swinging to port carries on for a while whatever the rudder does: the
-            # bound starts below the measured heading by what that swing adds over the alteration
-            # delay, as the alteration floor's start does (at the measured heading, a ship that had
-            # turned to port for a target inside its domain found no feasible plan when a ship
-            # crossing from starboard ruled out port turns, and fell back)
-            swing = max(0.0, -float(state[5])) * ALTERATION_DELAY_S
-            lbx[heading_index] = np.minimum(ref_scaled[2, 1:] - allowance, state[2] - swing)
-            if starboard_reach is not None:  # nor above the model's own turn to starboard
+            lbx[heading_index] = np.minimum(ref_scaled[2, 1:] - allowance, state[2])
+            if starboard_reach is not None:
+                # a ship already swinging to port carries on for a while whatever the rudder does:
+                # the bound dips below the measured heading only as far as the model itself, turning
+                # to starboard, swings on, and comes back with it (at the measured heading a ship
+                # that had turned to port for a target inside its domain found no feasible plan when
+                # a ship crossing from starboard ruled out port turns, and fell back; a fixed margin
+                # below the measured heading moved down with every step and let a ship returning
+                # to its track carry on to port past a ship meeting it)
                 lbx[heading_index] = np.minimum(lbx[heading_index], starboard_reach - math.radians(HEADING_TOLERANCE_DEG))
         if report.speed_goal_mps is not None:  # a readily apparent reduction of speed (Rule 8(e), 17(b))
             goal = report.speed_goal_mps
