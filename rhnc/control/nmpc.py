@@ -78,7 +78,7 @@ from orchestrator.interrupts import stop_requested
 from rhnc.encounters.colregs import ENCOUNTER_CLASSES
 from rhnc.control.disturbance_observer import DisturbanceObserver, trimmed_reference
 from rhnc.control.nmpc_codegen import NLPLibrary
-from rhnc.control.nmpc_alteration import (ALTERATION_DELAY_S, HEADING_TOLERANCE_DEG, REACH_MOMENT_SHARE,
+from rhnc.control.nmpc_alteration import (HEADING_TOLERANCE_DEG, REACH_MOMENT_SHARE,
                                           alteration_steering, heading_bounds)
 from rhnc.control.nmpc_coastline import CoastlineDomains
 from rhnc.control.nmpc_actions import PORT_ALLOWANCE_DEG
