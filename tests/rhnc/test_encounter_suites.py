@@ -32,8 +32,16 @@ def test_imazu_head_on_through_the_nmpc_is_judged_from_its_tracks(tmp_path):
     assert "track.png" in summary["figures"]
 
 
-@pytest.mark.parametrize("suite", ["imazu", "trafficgen", "trafficgen55", "trafficgen55b", "trafficgen55c", "trafficgen55d", "trafficgen55e",
-                                   "drawn", "drawn2028", "drawn2029", "drawn2030", "drawn2031", "drawn2032", "drawn2033"])
+COLREGS_SUITES = sorted(path.name.removesuffix("_rhnc_colregs_calm.toml") for path in (REPO / "batches").glob("*_rhnc_colregs_calm.toml"))
+TRAFFICGEN55_SUITES = sorted(path.name for path in (REPO / "scenarios" / "situations").glob("trafficgen55*") if path.is_dir())
+
+
+def test_the_suites_are_found():
+    assert {"imazu", "trafficgen", "drawn", "drawn2028", "trafficgen55"} <= set(COLREGS_SUITES)
+    assert "trafficgen55" in TRAFFICGEN55_SUITES and len(TRAFFICGEN55_SUITES) > 1
+
+
+@pytest.mark.parametrize("suite", COLREGS_SUITES)
 def test_every_colregs_suite_has_a_calm_twin_and_runs_until_arrival(suite):
     from orchestrator.batch_spec import load_batch
 
@@ -52,11 +60,12 @@ def test_every_colregs_suite_has_a_calm_twin_and_runs_until_arrival(suite):
         assert same == twin.overrides
 
 
-def test_trafficgen55_holds_every_combination_of_one_to_three_classes_with_every_target_placed():
+@pytest.mark.parametrize("suite", TRAFFICGEN55_SUITES)
+def test_trafficgen55_holds_every_combination_of_one_to_three_classes_with_every_target_placed(suite):
     """DNV's baseline mix: 1, 2 and 3 targets over the five classes, each combination once."""
     import itertools
 
-    folder = REPO / "scenarios" / "situations" / "trafficgen55"
+    folder = REPO / "scenarios" / "situations" / suite
     classes = ["head-on", "crossing-give-way", "crossing-stand-on", "overtaking-give-way", "overtaking-stand-on"]
     asked = {}
     for path in sorted((folder / "input" / "situations").glob("*.json")):
