@@ -28,7 +28,7 @@ import sys
 from collections import Counter
 from pathlib import Path
 
-from rhnc.encounters.suite_report import failures
+from rhnc.encounters.suite_report import failures, run_situations
 
 CLASSES = ("separation", "inside", "side", "rule_8", "rule_13", "rule_14", "rule_15", "rule_16",
            "rule_17", "fallback", "fallback only")
@@ -36,9 +36,8 @@ STOPPED = re.compile(r"stopped at t = ([0-9.]+) s")
 
 
 def situations(batch: Path) -> dict[str, str]:
-    """Run id -> situation of a batch folder (from its ``batch.json``)."""
-    runs = json.loads((batch / "batch.json").read_text()).get("runs", [])
-    return {run["run_id"]: str(run.get("parameters", {}).get("situation", run["run_id"])) for run in runs}
+    """Run id -> situation of a batch folder (the run id for a run without one)."""
+    return {run: situation or run for run, situation in run_situations(batch).items()}
 
 
 def failed_classes(batch: Path) -> dict[str, set[str]]:
@@ -78,10 +77,10 @@ def compare(before: Path, after: Path) -> tuple[list[str], Counter, list[float]]
     for kind in CLASSES:
         worse = sorted(situation for situation in new if kind in new[situation] and kind not in old[situation])
         better = sorted(situation for situation in new if kind in old[situation] and kind not in new[situation])
-        counts[f"before:{kind}"] += sum(kind in classes for classes in old.values())
-        counts[f"after:{kind}"] += sum(kind in classes for classes in new.values())
-        if counts[f"before:{kind}"] or counts[f"after:{kind}"]:
-            text = f"  {kind}: {sum(kind in c for c in old.values())} -> {sum(kind in c for c in new.values())} runs"
+        before_runs = counts[f"before:{kind}"] = sum(kind in classes for classes in old.values())
+        after_runs = counts[f"after:{kind}"] = sum(kind in classes for classes in new.values())
+        if before_runs or after_runs:
+            text = f"  {kind}: {before_runs} -> {after_runs} runs"
             if worse:
                 text += f"; now failing: {', '.join(Path(s).stem for s in worse)}"
             if better:

@@ -104,15 +104,21 @@ def summarise(folder) -> dict:
             "solve_cpu_max_ms": 1000.0 * max(cpu_max) if cpu_max else None}
 
 
+def run_situations(folder) -> dict[str, str]:
+    """Run id -> the situation file its run was drawn from, from the batch folder's
+    ``batch.json`` (empty without one; runs of a batch without situations map to '')."""
+    batch_json = Path(folder) / "batch.json"
+    if not batch_json.is_file():
+        return {}
+    return {run["run_id"]: str(run.get("parameters", {}).get("situation", ""))
+            for run in json.loads(batch_json.read_text()).get("runs", [])}
+
+
 def failures(folder) -> list[tuple[str, str, str, str, str]]:
     """Every failing target of a batch folder, by class (see the module docstring), as
     (class, batch, run id, target, detail) rows; a run with fallbacks is one row."""
     folder = Path(folder)
-    situations = {}
-    batch_json = folder / "batch.json"
-    if batch_json.is_file():
-        situations = {run["run_id"]: str(run.get("parameters", {}).get("situation", ""))
-                      for run in json.loads(batch_json.read_text()).get("runs", [])}
+    situations = run_situations(folder)
     rows = []
     for path in sorted((folder / "runs").glob("*/summary.json")):
         summary = json.loads(path.read_text())
