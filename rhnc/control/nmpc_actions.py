@@ -2,8 +2,9 @@
 
 :class:`ActionDecisions` is the part of :class:`rhnc.control.nmpc_colregs.CollisionDomains` that
 decides, at every solve, when a give-way ship's alteration begins and when it ends, to which side
-and how large, whether the speed comes down with it or alone (a stand-on ship overtaken by
-another that does not keep clear), and how far a turn back to port may go (Rule 17(c)).  The
+and how large, whether the speed comes down with it or alone, or, for a stand-on ship overtaken
+by another that does not keep clear and left no other way, goes up, and how far a turn back to
+port may go (Rule 17(c)).  The
 domains module turns those decisions into the NMPC's heading and speed bounds.
 """
 
@@ -40,6 +41,8 @@ GIVE_WAY_CLASSES = ("head_on", "crossing_give_way", "overtaking")
 #: a readily apparent reduction of speed brings it to this fraction of the speed at its
 #: beginning (the analysis reads a reduction of at least half as readily apparent)
 SLOW_FACTOR = 0.45
+#: a stand-on ship weighs speeding up to its top speed only when that is at least this much faster
+SPEED_UP_MIN_GAIN = 0.05
 #: the larger turns weighed when no readily apparent one keeps the traffic clear [deg]
 LARGER_ALTERATIONS_DEG = (60.0, 90.0)
 #: the floor of a turn back to port held short (:meth:`ActionDecisions._return_floor`) is
@@ -59,6 +62,7 @@ class ActionDecisions:
     _altered: set[int]
     _onset_heading: dict[int, float]
     _slowing: dict[int, float]
+    _hastening: dict[int, float]
 
     def _return_floor(self, rows: np.ndarray, classes, state: np.ndarray, own_course: float, own_speed: float,
                       reference_heading_rad: float | None, time_s: float) -> tuple[float, float, float] | None:
@@ -140,11 +144,12 @@ class ActionDecisions:
         s = self.settings
         if s.alteration_deg <= 0.0 or index in self._altered:
             return
-        if index in self._altering or index in self._slowing:
+        if index in self._altering or index in self._slowing or index in self._hastening:
             past = encounter.tcpa_s <= 0.0 and encounter.range_m >= ALTERATION_CLEAR_FACTOR * separation_m
             if past or self._resumes_clear(index, encounter, reference_heading_rad, time_s, motion, traffic):
                 self._altering.pop(index, None)  # past and clear
                 self._slowing.pop(index, None)
+                self._hastening.pop(index, None)
                 self._altered.add(index)
             return
         name = encounter.encounter_class
@@ -157,11 +162,11 @@ class ActionDecisions:
                        and deviation * yaw_rate_rps > 0.0)
         if name in ("overtaking", "overtaken"):
             side = self._free_side(encounter, deviation, reference_heading_rad, motion, traffic, port_allowed)
-        size, slow = s.alteration_deg, False
+        size, speed = s.alteration_deg, 1.0
         if name == "overtaken" and index in self._acting and encounter.tcpa_s > 0.0 and motion is not None and traffic:
-            side, size, slow = self._stand_on_action(side, port_allowed, reference_heading_rad, motion, traffic)
-        if side == 0.0:  # a reduction of speed alone
-            self._begin_slowing(index, encounter, motion[1])
+            side, size, speed = self._stand_on_action(side, port_allowed, reference_heading_rad, motion, traffic)
+        if side == 0.0:  # a change of speed alone
+            self._begin_speed_change(index, encounter, motion[1], speed)
             return
         goal = self._alteration_goal(index, reference_heading_rad, side, size)
         if name in GIVE_WAY_CLASSES:
@@ -171,18 +176,22 @@ class ActionDecisions:
             begin = index in self._acting and encounter.tcpa_s > 0.0
         if not begin:
             return
-        if name in GIVE_WAY_CLASSES and motion is not None and len(traffic) > 1:
-            side, size, slow = self._give_way_action(index, name, side, goal, reference_heading_rad, motion, traffic)
+        # a stand-on ship overtaken has chosen among the traffic above; one crossing ahead of a
+        # ship from port chooses here, to starboard (Rule 17(c)), as a give-way ship does
+        if (name in GIVE_WAY_CLASSES or name == "crossing_stand_on") and motion is not None and len(traffic) > 1:
+            side, size, speed = self._action_among_traffic(index, name, side, goal, reference_heading_rad, motion,
+                                                           traffic)
             if side == 0.0:
-                self._begin_slowing(index, encounter, motion[1])
+                self._begin_speed_change(index, encounter, motion[1], speed)
                 return
             goal = self._alteration_goal(index, reference_heading_rad, side, size)
         self._altering[index] = (time_s, heading_rad, goal, side)
-        if slow:
-            self._reduce_speed(index, motion[1])
+        if speed != 1.0:
+            self._change_speed(index, motion[1], speed)
         self.alterations += 1
         LOG.info("target %d (%s): altering %.0f deg to %s%s (CPA %.0f m in %.0f s)", index, name, size,
-                 "starboard" if side > 0 else "port", " and slowing" if slow else "", encounter.cpa_m,
+                 "starboard" if side > 0 else "port",
+                 "" if speed == 1.0 else " and slowing" if speed < 1.0 else " and speeding up", encounter.cpa_m,
                  encounter.tcpa_s)
 
     def _resumes_clear(self, index: int, encounter, reference_heading_rad: float, time_s: float, motion,
@@ -240,48 +249,61 @@ class ActionDecisions:
                     side = -side
         return side if port_allowed else 1.0
 
-    def _reduce_speed(self, index: int, own_speed_mps: float) -> None:
-        """Hold a readily apparent reduction of speed, to ``SLOW_FACTOR`` of ``own_speed_mps``, for a target."""
-        self._slowing[index] = SLOW_FACTOR * own_speed_mps
+    def _change_speed(self, index: int, own_speed_mps: float, factor: float) -> None:
+        """Hold a change of speed to ``factor`` of ``own_speed_mps`` for a target: a readily
+        apparent reduction (``SLOW_FACTOR``), or speeding up (to the top speed)."""
+        if factor < 1.0:
+            self._slowing[index] = factor * own_speed_mps
+        else:
+            self._hastening[index] = factor * own_speed_mps
 
-    def _begin_slowing(self, index: int, encounter, own_speed_mps: float) -> None:
-        """Hold a reduction of speed alone for a target (:meth:`_reduce_speed`)."""
-        self._reduce_speed(index, own_speed_mps)
+    def _begin_speed_change(self, index: int, encounter, own_speed_mps: float, factor: float) -> None:
+        """Hold a change of speed alone for a target (:meth:`_change_speed`)."""
+        self._change_speed(index, own_speed_mps, factor)
         self.alterations += 1
-        LOG.info("target %d (%s): slowing to %.0f %% of the speed (CPA %.0f m in %.0f s)", index,
-                 encounter.encounter_class, 100.0 * SLOW_FACTOR, encounter.cpa_m, encounter.tcpa_s)
+        LOG.info("target %d (%s): %s to %.0f %% of the speed (CPA %.0f m in %.0f s)", index, encounter.encounter_class,
+                 "slowing" if factor < 1.0 else "speeding up", 100.0 * factor, encounter.cpa_m, encounter.tcpa_s)
 
     def _clearance(self, motion, course_rad: float, factor: float, traffic) -> float:
         """The least clearance [m] from ``traffic`` of a manoeuvre to ``course_rad`` at ``factor``
-        of the present speed, taken up as the ship can (``self.response``)."""
+        of the present speed, taken up as the ship can (``self.response``).  Speeding up is
+        followed past the risk window to the end of the encounter: ahead of a ship faster still,
+        it only puts the closest approach off (two ships coming up on both quarters, one nm in
+        half an hour, scored it the clearest of all)."""
         own_xy, own_speed, _, _, own_velocity = motion
         heading = math.atan2(own_velocity[1], own_velocity[0])
         return response_clearance_m(own_xy, own_speed, heading, course_rad, factor * own_speed, traffic,
-                                    self.response)
+                                    self.response, beyond=factor > 1.0)
 
-    def _give_way_action(self, index: int, name: str, side: float, goal: float, reference_heading_rad: float,
-                         motion, traffic) -> tuple[float, float, bool]:
-        """The readily apparent action of a give-way ship among other traffic (Rules 8, 16):
-        the turn to ``goal`` at the present speed when it keeps every other target clear; else
-        the first of the manoeuvres :meth:`_choose` weighs, to the same side, that keeps the whole
-        traffic clear (not the reduction of speed alone for a head-on ship: Rule 14 asks for a
-        turn to starboard).  Returns (``side``, or 0 for no turn; size of the turn [deg];
-        whether to slow down).
+    def _action_among_traffic(self, index: int, name: str, side: float, goal: float, reference_heading_rad: float,
+                              motion, traffic) -> tuple[float, float, float]:
+        """The readily apparent action of a give-way ship among other traffic (Rules 8, 16), or
+        of a ship standing on for one crossing from port that acts (Rule 17(b)): the turn to
+        ``goal`` at the present speed when it keeps every other target clear; else the first of
+        the manoeuvres :meth:`_choose` weighs, to the same side, that keeps the whole traffic
+        clear (not the reduction of speed alone for a head-on ship: Rule 14 asks for a turn to
+        starboard; nor for the stand-on ship, whose slowing takes it into the path of a give-way
+        ship passing astern of it; speeding up only for the stand-on ship).  Returns (``side``, or 0 for no
+        turn; size of the turn [deg]; the speed to take, as a factor of the present one).
 
         A turn to starboard for a ship crossing ahead, with a faster ship converging from the
         starboard quarter, took the own ship across the faster ship's bow (0.75 nm): the 35 deg
-        turn alone is what the rules ask of a ship with nobody else about."""
+        turn alone is what the rules ask of a ship with nobody else about.  The same for a ship
+        standing on for one crossing from port, with a ship coming up slowly on its starboard
+        quarter: the plain turn to starboard took it across the overtaker's course (0.86 nm)."""
         others = [target for j, target in enumerate(traffic) if j != index]
         if self._clearance(motion, goal, 1.0, others) >= 0.0:
-            return side, self.settings.alteration_deg, False
-        return self._choose((side,), name != "head_on", reference_heading_rad, motion, traffic)
+            return side, self.settings.alteration_deg, 1.0
+        return self._choose((side,), name not in ("head_on", "crossing_stand_on"), reference_heading_rad, motion,
+                            traffic, speed_up=name == "crossing_stand_on")
 
     def _stand_on_action(self, side: float, port_allowed: bool, reference_heading_rad: float, motion,
-                         traffic) -> tuple[float, float, bool]:
+                         traffic) -> tuple[float, float, float]:
         """The readily apparent action of a ship overtaken by another that does not keep clear
         (Rule 17(b)): the first of the manoeuvres :meth:`_choose` weighs, to each side the rules
-        allow (``side``, the one chosen above, first), that keeps the traffic clear.  Returns
-        (side of the turn, 0 for none; size of the turn [deg]; whether to slow down).
+        allow (``side``, the one chosen above, first), that keeps the traffic clear, speeding up
+        among them.  Returns (side of the turn, 0 for none; size of the turn [deg]; the speed to
+        take, as a factor of the present one).
 
         A ship overtaking us is faster and, converging from a quarter, crosses our course
         ahead of us: a 35 deg turn alone, to the side another target leaves us (a head-on
@@ -290,22 +312,29 @@ class ActionDecisions:
         ahead; the speed is a manoeuvre Rules 8(e) and 17 name.  No turn to port is weighed
         while another ship forward of our port quarter closes on us, classified yet or not: it
         may become a ship crossing from port, for which Rule 17(c) rules out that turn (a turn to
-        port chosen for the clearance broke it twice)."""
+        port chosen for the clearance broke it twice).
+
+        Speeding up is weighed last: a ship coming up slowly from the starboard quarter,
+        converging, with a ship crossing from port ruling out the turn to port, left no turn
+        nor reduction of speed that kept it clear (0.86 nm), where holding the course at the
+        top speed kept every target clear."""
         if not port_allowed or closing_on_the_port_side(motion[0], motion[1], reference_heading_rad, traffic):
             turns: tuple[float, ...] = (1.0,)
         else:
             turns = (side, -side)
-        return self._choose(turns, True, reference_heading_rad, motion, traffic)
+        return self._choose(turns, True, reference_heading_rad, motion, traffic, speed_up=True)
 
     def _choose(self, sides: tuple[float, ...], slow_alone: bool, reference_heading_rad: float, motion,
-                traffic) -> tuple[float, float, bool]:
+                traffic, speed_up: bool = False) -> tuple[float, float, float]:
         """Of the manoeuvres, in this order: a turn of ``alteration_deg`` to each of ``sides`` at
         the present speed, the same turns with the speed brought down to ``SLOW_FACTOR`` of it, the
         reduction of speed alone (if ``slow_alone``), then the larger turns of
-        ``LARGER_ALTERATIONS_DEG``, at speed and slowed: the first that keeps the whole traffic
-        clear (:meth:`_clearance`: the course and speed taken up as the ship can), else the one
-        that keeps it clearest (a tie goes to the earlier).  Returns (side, 0 for no turn; size
-        [deg]; whether to slow down).
+        ``LARGER_ALTERATIONS_DEG``, at speed and slowed, and last (if ``speed_up`` and the ship's
+        top speed, ``response.top_speed_mps``, is ``SPEED_UP_MIN_GAIN`` faster) the reference course
+        and the turns of ``alteration_deg`` at the top speed: the first that keeps the whole
+        traffic clear (:meth:`_clearance`: the course and speed taken up as the ship can), else
+        the one that keeps it clearest (a tie goes to the earlier).  Returns (side, 0 for no
+        turn; size [deg]; the speed to take, as a factor of the present one).
 
         With only 35 deg turns weighed, a ship crossing from port and a faster one coming up
         from astern left none that kept both clear, and the least bad (turning and slowing)
@@ -315,13 +344,18 @@ class ActionDecisions:
                    + ([(0.0, size, SLOW_FACTOR)] if slow_alone else [])
                    + [(turn, larger, factor) for larger in LARGER_ALTERATIONS_DEG for turn in sides
                       for factor in (1.0, SLOW_FACTOR)])
+        top = self.response.top_speed_mps
+        own_speed = float(motion[1])
+        if speed_up and top is not None and own_speed > 0.0 and top >= (1.0 + SPEED_UP_MIN_GAIN) * own_speed:
+            faster = top / own_speed
+            options += [(0.0, size, faster)] + [(turn, size, faster) for turn in sides]
         scores = []
         for turn, degrees, factor in options:
             scores.append(self._clearance(motion, reference_heading_rad + turn * math.radians(degrees), factor, traffic))
             if scores[-1] >= 0.0:
-                return turn, degrees, factor < 1.0
+                return turn, degrees, factor
         turn, degrees, factor = options[int(np.argmax(scores))]
-        return turn, degrees, factor < 1.0
+        return turn, degrees, factor
 
     def _give_way_due(self, encounter, goal: float, side: float, separation_m: float, motion) -> bool:
         """Whether a give-way alteration to ``goal`` is due: the CPA at most

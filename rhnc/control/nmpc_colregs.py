@@ -126,6 +126,10 @@ class DomainReport:
     ``speed_goal_mps``: a readily apparent reduction of speed held for a ship overtaking us
     (see :meth:`rhnc.control.nmpc_actions.ActionDecisions._stand_on_action`): the speed [m/s] the plan must come down
     to, at the deceleration the ship can make, or None.
+    ``speed_up_goal_mps``: speeding up held as a stand-on ship's action (a ship overtaking us,
+    or one crossing from port) when nothing else kept the traffic clear (held only without a
+    reduction of speed): the speed [m/s] the plan is asked to come up to, at the acceleration
+    the ship can make, or None.
     ``alteration_floor`` / ``alteration_ceiling``: a readily apparent alteration to
     starboard / to port, as (time it began [s], heading then [rad], heading to reach
     [rad]), or None; see :func:`rhnc.control.nmpc_alteration.heading_bounds`.
@@ -140,6 +144,7 @@ class DomainReport:
     danger: bool = False
     escape_heading: float | None = None
     speed_goal_mps: float | None = None
+    speed_up_goal_mps: float | None = None
 
 
 class CollisionDomains(ActionDecisions):
@@ -162,6 +167,7 @@ class CollisionDomains(ActionDecisions):
         self._altered: set[int] = set()
         self._onset_heading: dict[int, float] = {}
         self._slowing: dict[int, float] = {}
+        self._hastening: dict[int, float] = {}
         #: how fast the own ship takes up a manoeuvre, for choosing one (the NMPC sets its ship's)
         self.response = ManoeuvreResponse()
         self.stand_on_actions = 0
@@ -176,6 +182,7 @@ class CollisionDomains(ActionDecisions):
         self._altered = set()
         self._onset_heading = {}
         self._slowing = {}
+        self._hastening = {}
 
     def parameters(self, obstacles: np.ndarray | None, state: np.ndarray, origin: np.ndarray, closing_speed_mps: float,
                    substep_s: float, length_scale_m: float, et: bool, reference_heading_rad: float | None = None,
@@ -260,7 +267,9 @@ class CollisionDomains(ActionDecisions):
             floor = return_floor
         return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling,
                                    bool(risk and not et), danger, _escape_heading(rows, rhos, state, range_rates, inside),
-                                   min(self._slowing.values()) if self._slowing and not danger else None)
+                                   min(self._slowing.values()) if self._slowing and not danger else None,
+                                   max(self._hastening.values()) if self._hastening and not self._slowing
+                                   and not danger else None)
 
     def _out_of_reach(self, row: np.ndarray, offset: np.ndarray, domain_radius: float, state: np.ndarray,
                       closing_mps: float, horizon_s: float) -> bool:
@@ -325,6 +334,7 @@ class CollisionDomains(ActionDecisions):
         self._altering = {i: v for i, v in self._altering.items() if i in locked}
         self._onset_heading = {i: v for i, v in self._onset_heading.items() if i in locked}
         self._slowing = {i: v for i, v in self._slowing.items() if i in locked}
+        self._hastening = {i: v for i, v in self._hastening.items() if i in locked}
         for i in locked:  # the heading at the onset of risk, once per encounter
             self._onset_heading.setdefault(i, heading)
         return classes, codes

@@ -6,8 +6,8 @@ target over the risk window.  Scored as if the ship took its new course and spee
 reduction of speed looked far better than it is: a ship of 20 000 t slows from 18 to 8 kn in
 about 4 min, while a ship overtaking it at 28 kn closes 1.3 nm in that time.  Here the own ship
 holds its course and speed for a response delay, then turns towards the new course at a steady
-rate and slows at the deceleration its engine and hull give, while every target keeps its
-velocity.  The candidates' ranking, not their absolute figures, is what counts: the NMPC then
+rate and slows (or gathers way) at the rate its engine and hull give, while every target keeps
+its velocity.  The candidates' ranking, not their absolute figures, is what counts: the NMPC then
 flies the chosen one with its own model.
 
 Beside it, the simpler measures the choice of a free side still uses: :func:`side_clearance_m`
@@ -44,6 +44,12 @@ class ManoeuvreResponse:
     deceleration_mps2 : float
         Loss of speed per second while slowing [m/s^2] (the NMPC gives its ship's figure:
         full astern force and the hull's drag, at the share its speed bound ramps with).
+    acceleration_mps2 : float
+        Gain of speed per second while speeding up [m/s^2] (the NMPC gives its ship's figure:
+        full ahead force less the hull's drag at the top speed, at the share its reference
+        speed ramps up with).
+    top_speed_mps : float or None
+        The fastest the ship may go [m/s] (the NMPC's speed bound); None: no speeding up weighed.
     step_s : float
         Time between the samples of the approach [s].
     horizon_s : float
@@ -53,6 +59,8 @@ class ManoeuvreResponse:
     delay_s: float = RESPONSE_DELAY_S
     turn_rate_rps: float = math.radians(APPARENT_ALTERATION_DEG) / (APPARENT_ALTERATION_TURN_S - RESPONSE_DELAY_S)
     deceleration_mps2: float = 0.02
+    acceleration_mps2: float = 0.005
+    top_speed_mps: float | None = None
     step_s: float = 5.0
     horizon_s: float = 1800.0
 
@@ -64,7 +72,10 @@ def own_track(own_xy, speed_mps: float, heading_rad: float, course_rad: float, g
     acting = np.maximum(times - response.delay_s, 0.0)
     turn = float(wrap_angle(course_rad - heading_rad))
     headings = heading_rad + np.sign(turn) * np.minimum(response.turn_rate_rps * acting, abs(turn))
-    speeds = np.maximum(speed_mps - response.deceleration_mps2 * acting, min(goal_speed_mps, speed_mps))
+    if goal_speed_mps > speed_mps:
+        speeds = np.minimum(speed_mps + response.acceleration_mps2 * acting, goal_speed_mps)
+    else:
+        speeds = np.maximum(speed_mps - response.deceleration_mps2 * acting, goal_speed_mps)
     # positions by the trapezoidal rule over each step
     velocity = speeds[:, None] * np.column_stack([np.cos(headings), np.sin(headings)])
     steps = 0.5 * (velocity[1:] + velocity[:-1]) * np.diff(times)[:, None]
@@ -73,16 +84,27 @@ def own_track(own_xy, speed_mps: float, heading_rad: float, course_rad: float, g
 
 
 def response_clearance_m(own_xy, speed_mps: float, heading_rad: float, course_rad: float, goal_speed_mps: float,
-                         traffic, response: ManoeuvreResponse) -> float:
+                         traffic, response: ManoeuvreResponse, beyond: bool = False) -> float:
     """The least clearance [m] the own ship keeps from ``traffic`` ((position, velocity,
     clearance) per target, each keeping its velocity) while it turns from ``heading_rad`` to
-    ``course_rad`` and slows to ``goal_speed_mps`` as ``response`` says: the smallest range
-    less the target's clearance over the samples; ``inf`` without targets."""
+    ``course_rad`` and slows or speeds up to ``goal_speed_mps`` as ``response`` says: the smallest range
+    less the target's clearance over the samples; ``inf`` without targets.
+
+    With ``beyond``, also after the samples, each ship holding its last velocity for ever: the
+    whole encounter, for a manoeuvre that may only put the closest approach off past the risk
+    window (speeding up ahead of a ship that is faster still)."""
     times, positions = own_track(own_xy, speed_mps, heading_rad, course_rad, goal_speed_mps, response)
+    last_velocity = (positions[-1] - positions[-2]) / (times[-1] - times[-2])
     least = math.inf
     for position, velocity, clearance in traffic:
-        target = np.asarray(position, dtype=float) + np.outer(times, np.asarray(velocity, dtype=float))
+        velocity = np.asarray(velocity, dtype=float)
+        target = np.asarray(position, dtype=float) + np.outer(times, velocity)
         least = min(least, float(np.min(np.hypot(*(target - positions).T))) - clearance)
+        if beyond:
+            relative, closing = target[-1] - positions[-1], velocity - last_velocity
+            w2 = float(closing @ closing)
+            when = 0.0 if w2 < 1e-12 else max(-float(relative @ closing) / w2, 0.0)
+            least = min(least, float(np.hypot(*(relative + closing * when))) - clearance)
     return least
 
 
