@@ -84,9 +84,10 @@ MODULES = {
     "planner": Module(("rhnc/navigation/planner.py",), ("tests/rhnc/test_fields_planner.py", "tests/rhnc/test_planner_guards.py")),
     "fields": Module(("rhnc/navigation/fields.py",), ("tests/rhnc/test_fields_planner.py", "tests/rhnc/test_fields_guards.py")),
     # the NMPC's parts together (slow: some 4000 mutants against solver runs; see --sample) ...
-    "nmpc": Module(("rhnc/control/nmpc.py", "rhnc/control/nmpc_settings.py", "rhnc/control/nmpc_problem.py", "rhnc/control/nmpc_terminal.py",
-                    "rhnc/control/nmpc_warm_start.py", "rhnc/control/nmpc_colregs.py", "rhnc/control/nmpc_actions.py",
-                    "rhnc/control/nmpc_alteration.py", "rhnc/control/nmpc_manoeuvre.py"),
+    "nmpc": Module(("rhnc/control/nmpc.py", "rhnc/control/nmpc_bounds.py", "rhnc/control/nmpc_settings.py",
+                    "rhnc/control/nmpc_problem.py", "rhnc/control/nmpc_terminal.py", "rhnc/control/nmpc_warm_start.py",
+                    "rhnc/control/nmpc_colregs.py", "rhnc/control/nmpc_actions.py", "rhnc/control/nmpc_alteration.py",
+                    "rhnc/control/nmpc_manoeuvre.py"),
                    ("tests/rhnc/test_nmpc.py", "tests/rhnc/test_nmpc_colregs.py", "tests/rhnc/test_nmpc_manoeuvre.py",
                     "tests/rhnc/test_return_to_route.py",
                     "tests/rhnc/test_nmpc_limits.py",

@@ -83,10 +83,9 @@ from orchestrator.interrupts import stop_requested
 from rhnc.encounters.colregs import ENCOUNTER_CLASSES
 from rhnc.control.disturbance_observer import DisturbanceObserver, trimmed_reference
 from rhnc.control.nmpc_codegen import NLPLibrary
-from rhnc.control.nmpc_alteration import (HEADING_TOLERANCE_DEG, REACH_MOMENT_SHARE,
-                                          alteration_steering, heading_bounds)
+from rhnc.control.nmpc_alteration import alteration_steering, heading_bounds
+from rhnc.control.nmpc_bounds import SLOWING_SHARE, SPEEDING_SHARE, StepBounds
 from rhnc.control.nmpc_coastline import CoastlineDomains
-from rhnc.control.nmpc_actions import PORT_ALLOWANCE_DEG
 from rhnc.control.nmpc_colregs import CollisionDomains, DomainReport
 from rhnc.control.nmpc_manoeuvre import ManoeuvreResponse
 from rhnc.control.nmpc_problem import (ACCEPTABLE_VIOLATION, DISTURBANCE_SIZE, FRESH_SOLVER_PLUGINS, OBSTACLE_FIELDS,
@@ -106,15 +105,6 @@ __all__ = ["OBSTACLE_FIELDS", "MIN_TERMINAL_SPEED_MPS", "SOLVERS", "NMPCSettings
 #: collision slack (scaled clearance, |p - c|^2 / rho^2 - 1) below which a plan counts as
 #: keeping its clearance: the solver's tolerance, about 0.05 % of the distance
 SLACK_TOLERANCE = 1e-3
-#: deceleration [m/s²] assumed when a ship measured above the speed bound slows down
-SLOW_DOWN_MPS2 = 0.02
-#: share of the deceleration full astern force and the hull's drag give at the speed to reach
-#: that a reduction of speed asks of the plan (the rest is margin for wind and waves)
-SLOWING_SHARE = 0.7
-#: share of the acceleration full ahead force less the hull's drag at the top speed give that
-#: speeding up asks of the plan and assumes in choosing it (the rest is margin for a turn made
-#: with it, wind and waves)
-SPEEDING_SHARE = 0.5
 #: cost and constraint violation reported when a solve left no finite iterate (stopped, NaN)
 UNKNOWN = -1.0
 
@@ -159,7 +149,7 @@ def reference_inputs(reference: np.ndarray, dt: float, params: ShipParameters,
     return np.minimum(np.maximum(tau, -bound, out=tau), bound, out=tau)
 
 
-class NMPCController:
+class NMPCController(StepBounds):
     """Multiple-shooting NMPC of the 3-DOF ship, built once, re-solved every interval.
 
     Parameters
@@ -463,70 +453,6 @@ class NMPCController:
         lead = reachable_lead_m(self.params, reference, s.horizon_steps * s.control_interval_s, surge_load_N)
         return reachable_reference(reference, state[:2], lead)
 
-    def _heading_reach(self, state: np.ndarray, previous_tau: np.ndarray, disturbance) -> tuple[np.ndarray, np.ndarray]:
-        """Headings [rad] over the horizon of the prediction model turning from ``state`` to
-        starboard and to port with ``REACH_MOMENT_SHARE`` of its yaw moment (reached at the input
-        rate limit, if any, from the last applied moment), the surge force held."""
-        s = self.settings
-        goal = REACH_MOMENT_SHARE * self.params.tau_max[1]
-        k = np.arange(1, s.horizon_steps + 1)
-        headings = []
-        for sign in (1.0, -1.0):
-            yaw = np.full(s.horizon_steps, sign * goal)
-            if s.tau_rate_max is not None:  # interval j may differ from the last input by j + 1 steps
-                start = float(np.clip(previous_tau[1], -self.params.tau_max[1], self.params.tau_max[1]))
-                yaw = sign * np.minimum(sign * start + s.tau_rate_max[1] * s.control_interval_s * k, goal)
-            inputs = np.column_stack([np.full(s.horizon_steps, previous_tau[0]), yaw])
-            headings.append(self._rollout(state, inputs, disturbance)[1:, 2])
-        return headings[0], headings[1]
-
-    def _speed_asked(self, report: DomainReport, state: np.ndarray) -> np.ndarray | None:
-        """The speed [m/s] each node after the first is asked for while speeding up is held: up
-        from the measured speed at ``speeding_mps2`` to the speed asked for (within the speed
-        bound), or None."""
-        goal = report.speed_up_goal_mps
-        if goal is None:
-            return None
-        s = self.settings
-        ramp = state[3] + self.speeding_mps2 * np.arange(1, s.horizon_steps + 1) * s.control_interval_s
-        return np.minimum(ramp, max(min(goal, s.max_speed_mps), 0.0))
-
-    def _rate_and_heading_bounds(self, lbx, ubx, state, ref_scaled, w_prev, report, floor, ceiling,
-                                 starboard_reach=None) -> None:
-        """Narrow the bounds (in place) to the inputs the actuators can reach and the headings the
-        rules allow (``starboard_reach``: :meth:`_heading_reach`'s turn to starboard)."""
-        s = self.settings
-        N = s.horizon_steps
-        if s.tau_rate_max is not None:   # what the actuators can reach from the last applied input
-            reach = (np.arange(1, N + 1)[:, None] * s.control_interval_s * np.asarray(s.tau_rate_max)
-                     / self.input_scale)
-            index = self.problem.w_index
-            lbx[index] = np.maximum(lbx[index], w_prev - reach)
-            ubx[index] = np.minimum(ubx[index], w_prev + reach)
-        heading_index = self.problem.z_index[1:, 2]
-        if report.no_port_turn:  # Rules 14, 15, 17(c): no alteration to port
-            allowance = math.radians(PORT_ALLOWANCE_DEG)
-            lbx[heading_index] = np.minimum(ref_scaled[2, 1:] - allowance, state[2])
-            if starboard_reach is not None:
-                # a ship already swinging to port carries on for a while whatever the rudder does:
-                # the bound dips below the measured heading only as far as the model itself, turning
-                # to starboard, swings on, and comes back with it (at the measured heading a ship
-                # that had turned to port for a target inside its domain found no feasible plan when
-                # a ship crossing from starboard ruled out port turns, and fell back; a fixed margin
-                # below the measured heading moved down with every step and let a ship returning
-                # to its track carry on to port past a ship meeting it)
-                lbx[heading_index] = np.minimum(lbx[heading_index], starboard_reach - math.radians(HEADING_TOLERANCE_DEG))
-        if report.speed_goal_mps is not None:  # a readily apparent reduction of speed (Rule 8(e), 17(b))
-            goal = report.speed_goal_mps
-            slowing = SLOWING_SHARE * (self.params.tau_max[0] + self.params.equilibrium_tau(goal)[0]) / self.params.m11
-            ramp = state[3] - slowing * np.arange(1, N + 1) * s.control_interval_s
-            speed_index = self.problem.z_index[1:, 3]
-            ubx[speed_index] = np.minimum(ubx[speed_index], np.maximum(goal, ramp) / self.speed_scale)
-        if floor is not None:
-            lbx[heading_index] = np.maximum(lbx[heading_index], floor)
-        if ceiling is not None:
-            ubx[heading_index] = np.minimum(ubx[heading_index], ceiling)
-
     def _attempts(self, time_s: float, step: "_StepProblem") -> "_Attempts":
         """Solve the hard problem (slacks fixed at zero: the paper's constraints), and only when it
         fails, the soft one (slacks free): the plan that violates the clearance least.
@@ -647,32 +573,6 @@ class NMPCController:
         if self.settings.iteration_budget is not None or self.memory.clearance_relaxed or danger:
             return (True,)
         return (False, True)
-
-    def _bounds(self, state: np.ndarray, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Bounds of the decision variables for a solve from ``state``: the fixed ones (inputs,
-        u >= 0, slacks >= 0) copied from templates built once, then the speed bound and the
-        initial state."""
-        s = self.settings
-        problem = self.problem
-        if self._bound_templates is None:
-            lbx = np.full(problem.size, -np.inf)
-            ubx = np.full(problem.size, np.inf)
-            lbx[problem.w_index.ravel()] = -1.0
-            if s.tau_u_min_N is not None:   # a propeller turning ahead only: no astern thrust to plan with
-                lbx[problem.w_index[:, 0]] = max(-1.0, s.tau_u_min_N / self.input_scale[0])
-            ubx[problem.w_index.ravel()] = 1.0
-            lbx[problem.z_index[1:, 3]] = 0.0  # u >= 0: no sailing backwards
-            lbx[problem.sigma_index] = 0.0  # collision slacks
-            self._bound_templates = (lbx, ubx, np.arange(1, s.horizon_steps + 1))
-        lbx_template, ubx_template, k = self._bound_templates
-        lbx, ubx = lbx_template.copy(), ubx_template.copy()
-        # u <= max speed; a ship measured faster may take its deceleration limit to get there
-        u_max = np.maximum(s.max_speed_mps, state[3] - SLOW_DOWN_MPS2 * k * s.control_interval_s)
-        ubx[problem.z_index[1:, 3]] = u_max / self.speed_scale
-        z0 = self._to_scaled(state, origin)
-        lbx[problem.z_index[0]] = z0
-        ubx[problem.z_index[0]] = z0
-        return lbx, ubx
 
     def _initial_guess(self, time_s, state, ref_scaled, w_d, origin, slots, disturbance) -> np.ndarray:
         """Shifted previous solution or unfinished iterate (re-based on this origin) or the reference,

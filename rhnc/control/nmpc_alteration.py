@@ -61,7 +61,7 @@ def heading_bounds(report, time_s: float, heading_rad: float, yaw_rate_rps: floa
 
     ``reach``: the headings [rad] at ``times_s`` of the prediction model itself turning from the
     measured state to starboard and to port with ``REACH_MOMENT_SHARE`` of its yaw moment
-    (:meth:`rhnc.control.nmpc.NMPCController._heading_reach`).  The bounds never ask for more
+    (:meth:`rhnc.control.nmpc_bounds.StepBounds._heading_reach`).  The bounds never ask for more
     than those: the first-order response above is the KCS's at speed, and a ship swinging the
     other way at 12 m/s took 40-100 s to reverse under the full moment, far behind the ramp and
     its cap (every solve of those steps failed, and the controller fell back).

@@ -11,7 +11,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from rhnc.control.nmpc import SLOW_DOWN_MPS2, NMPCController, NMPCSettings
+from rhnc.control.nmpc import NMPCController, NMPCSettings
+from rhnc.control.nmpc_bounds import SLOW_DOWN_MPS2
 from rhnc.control.nmpc_problem import OBSTACLE_FIELDS, solver_options
 from rhnc.navigation.reference_participant import line_or_turn_reference
 from rhnc.ship.ship_model import load_parameter_set
