@@ -145,8 +145,9 @@ MODULES = {
     # on short synthetic records in test_disturbance_observer.py: the estimate, its bounds, the trimmed reference)
     "disturbance_observer": Module(("rhnc/control/disturbance_observer.py",),
                                    ("tests/rhnc/test_disturbance_observer.py", "tests/rhnc/test_nmpc_limits.py")),
-    "solver_watchdog": Module(("rhnc/control/solver_watchdog.py",),
+    "solver_watchdog": Module(("rhnc/control/solver_watchdog.py", "rhnc/control/solve_pace.py"),
                               ("tests/rhnc/test_solver_watchdog_protocol.py", "tests/rhnc/test_solver_worker_lifetime.py",
+                               "tests/rhnc/test_solve_time_bound.py",
                                "tests/rhnc/test_nmpc_solve_attempts.py", "tests/rhnc/test_nmpc_limits.py")),
     "colregs": Module(("rhnc/encounters/colregs.py",), ("tests/rhnc/test_colregs.py", "tests/rhnc/test_colregs_rules.py",
                                                         "tests/rhnc/test_imazu.py", "tests/rhnc/test_nmpc_colregs.py")),

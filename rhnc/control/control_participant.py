@@ -437,6 +437,7 @@ class ControlParticipant(Participant):
             "failure_count": self.controller.failure_count,
             "relaxed_clearance_steps": self._slack_steps,
             "timeout_count": self._timeouts,
+            "iteration_capped_steps": self.controller.pace.capped,
             "solve_cpu_time_median_s": float(np.median(self._cpu_times)) if self._cpu_times else None,
             "solve_cpu_time_max_s": float(np.max(self._cpu_times)) if self._cpu_times else None,
             "step_cpu_time_median_s": float(np.median(self._step_cpu_times)) if self._step_cpu_times else None,

@@ -51,7 +51,8 @@ under the speed made the relaxed problem of a ship already inside a domain fail 
 
 Time limits: every solve is limited to ``max_iterations``, to ``cpu_time_limit_s`` of
 processor time per attempt and to ``wall_time_limit_s`` (both attempts together,
-:mod:`rhnc.control.solver_watchdog`).  A prediction from the measured state
+:mod:`rhnc.control.solver_watchdog`), and its iterations to the cap that fits in the
+processor-time limit at this run's measured pace (:mod:`rhnc.control.solve_pace`).  A prediction from the measured state
 that is not finite (a state far outside the model's range) skips the solver.
 
 Failures: when neither attempt reports success, or the time limit stops the solve, the
@@ -95,6 +96,7 @@ from rhnc.control.nmpc_terminal import MIN_TERMINAL_SPEED_MPS, TerminalWeight
 from rhnc.control.nmpc_warm_start import PlanMemory, push_guess_clear
 from rhnc.control.reachable_reference import reachable_lead_m, reachable_reference
 from rhnc.ship.ship_model import ShipParameters, hull_forces
+from rhnc.control.solve_pace import IterationPace
 from rhnc.control.solver_watchdog import BoundedSolver
 
 LOG = logging.getLogger(__name__)
@@ -184,6 +186,7 @@ class NMPCController(StepBounds):
         budget = s.iteration_budget
         limit = s.max_iterations if budget is None else budget
         self.attempt_iterations = {"hard": limit, "relaxed": limit, "relaxed_alone": limit}
+        self.pace = IterationPace(None)  # the nlpsol solvers' watchdog sets the limit
         if s.solver == "acados":
             self.library, self.solvers = self._acados_solvers()
         else:
@@ -217,12 +220,19 @@ class NMPCController(StepBounds):
         library = NLPLibrary(self.problem.nlp, s.solver, options, s.codegen, self.problem.compact_nlp)
         budget = s.iteration_budget
 
+        def limited(iterations: int) -> dict:
+            return solver_options(s.solver, self.problem.equality, iterations, s.wall_time_limit_s,
+                                  s.cpu_time_limit_s, s.warm_start_duals)
+
         def factory(nlp_name: str, attempt: str):
-            if budget is None:
-                return lambda: library.solver(nlp_name)
-            capped = solver_options(s.solver, self.problem.equality, self.attempt_iterations[attempt],
-                                    s.wall_time_limit_s, s.cpu_time_limit_s, s.warm_start_duals)
-            return lambda: library.solver(nlp_name, capped)
+            share = self.attempt_iterations[attempt]
+
+            def build(cap: int | None = None):
+                # cap: the iterations the processor time allows (rhnc.control.solve_pace)
+                if cap is not None:
+                    return library.solver(nlp_name, limited(min(cap, share)))
+                return library.solver(nlp_name) if budget is None else library.solver(nlp_name, limited(share))
+            return build
 
         factories = {"hard": factory("rhnc_nmpc", "hard")}
         solvers = {"hard": factories["hard"]()}
@@ -241,7 +251,10 @@ class NMPCController(StepBounds):
         # a new solver object after a difficult solve, where building one is cheap (compiled:
         # about 1 ms; interpreted, nlpsol derives the NLP's functions anew: about 0.5 s)
         renew = renew_rule(s.solver, library.mode == "compiled", budget)
-        return library, BoundedSolver(solvers, factories, s.wall_time_limit_s, s.cpu_time_limit_s, renew=renew)
+        bounded = BoundedSolver(solvers, factories, s.wall_time_limit_s, s.cpu_time_limit_s, renew=renew)
+        # iteration caps from the measured pace: where the worker's timer bounds the solve
+        self.pace = IterationPace(bounded.cpu_time_s if bounded.in_worker else None)
+        return library, bounded
 
     def _acados_solvers(self):
         """The generated acados solver (cached once per machine) and the attempts' solver objects:
@@ -477,8 +490,11 @@ class NMPCController(StepBounds):
                 self.solvers.wall_time_s = max(budget - tally.elapsed, 1e-3)
             attempt = "hard" if not relaxed else ("relaxed_alone" if len(attempts) == 1 and "relaxed_alone"
                                                   in self.solvers.factories else "relaxed")
+            allowed = self.attempt_iterations[attempt]
+            cap = self.pace.cap(allowed)
             outcome = self.solvers.solve(attempt, x0=step.x0, p=step.p, lbx=lbx, ubx=ubx,
-                                         lbg=problem.lbg, ubg=problem.ubg, **duals)
+                                         lbg=problem.lbg, ubg=problem.ubg, iteration_cap=cap, **duals)
+            self.pace.record(outcome.iterations, outcome.cpu_time_s, outcome.stopped_by == "cpu", allowed, cap)
             tally.relaxed, tally.outcome = relaxed, outcome
             tally.elapsed += outcome.wall_time_s
             tally.cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
@@ -487,8 +503,8 @@ class NMPCController(StepBounds):
             # a point the solver stopped at as acceptable, or at the end of its share of the
             # iteration budget, is used only when it keeps every constraint to the solver's
             # tolerance (never an infeasible iterate)
-            out_of_budget = (s.iteration_budget is not None and not outcome.timed_out
-                             and outcome.iterations >= self.attempt_iterations[attempt])
+            out_of_budget = ((s.iteration_budget is not None or cap is not None) and not outcome.timed_out
+                             and outcome.iterations >= (allowed if cap is None else cap))
             tally.out_of_budget = out_of_budget
             tally.accepted = ((outcome.acceptable or out_of_budget)
                               and bool(np.all(np.isfinite(outcome.x)) and np.all(np.isfinite(outcome.g)))

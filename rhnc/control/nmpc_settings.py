@@ -49,9 +49,12 @@ class NMPCSettings:
         optimal; the next step goes on from it): bounded solves at the control rate.
     cpu_time_limit_s : float or None
         Limit of the processor time of each solver attempt [s] (Linux, see
-        :mod:`rhnc.control.solver_watchdog`): set far above the normal solve (tens of ms) so that
-        it stops runaways only; processor time, not wall time, so that the verdict does not
-        depend on the machine's load.
+        :mod:`rhnc.control.solver_watchdog`): the worker's timer ends a solve there, wherever
+        it is.  Processor time, not wall time, so that the verdict does not depend on the
+        machine's load.  The default (2 s) stops runaways only; the encounter suites bound
+        every solve at 0.2 s, and with an iteration budget the controller then caps the
+        iterations at what fits at the processor time per iteration measured in the run
+        (:mod:`rhnc.control.solve_pace`), so that a solve stops at a plan it can use.
     wall_time_limit_s : float or None
         Hard wall-time limit of one control step's solves [s], whatever the load.  Both
         None: iteration limit only, solves in this process.

@@ -16,7 +16,17 @@ through a pipe and waits for the answer under two limits,
   and for a process whose times cannot be read.
 
 When a limit is hit, the child is killed, the call reports ``wall_time_exceeded`` and
-the next call forks a fresh worker.  The pipe adds some 0.1-0.3 ms per solve.  Where
+the next call forks a fresh worker.  The processor-time limit is also exact: the worker arms
+a profiling timer (``ITIMER_PROF``, the process's own processor time) at the limit when it
+takes a request, and the timer's signal ends it wherever the solve is, native code included;
+the parent's check every ``POLL_S`` is then only the backstop.
+
+Iteration caps: a call may ask for an iteration cap (``solve(..., iteration_cap=n)``); the
+worker then serves it with a solver object built by ``factories[name](n)`` (kept, and
+renewed, with that cap while the calls ask for it).  The controller derives the cap from
+the processor time per iteration it has measured (:mod:`rhnc.control.solve_pace`), so
+that a long solve stops at its cap, at a point it can still use, before the timer ends it
+with nothing.  The pipe adds some 0.1-0.3 ms per solve.  Where
 ``os.fork`` does not exist (Windows), or with both limits None, solves run in this
 process under the iteration limit only.
 
@@ -104,6 +114,9 @@ class SolveOutcome:
         The solver stopped at a point that meets its relaxed ("acceptable") tolerances
         rather than its tolerance (fatrop's return flag, IPOPT's status); ``success`` is
         then False, and the caller judges the point.
+    iteration_cap : int or None
+        The iteration cap the call asked for and its solver object had (None: the solver's
+        own iteration limit).
     """
 
     x: np.ndarray
@@ -120,6 +133,7 @@ class SolveOutcome:
     lam_g: np.ndarray | None = None
     preparation_cpu_s: float = 0.0
     acceptable: bool = False
+    iteration_cap: int | None = None
 
 
 #: fatrop's return flag (``stats()["fatrop"]["return_flag"]``) for a stop at an acceptable point
@@ -195,36 +209,51 @@ def _timed_call(solver, arguments) -> SolveOutcome:
     return _outcome(solver, result, time.perf_counter() - start, time.process_time() - cpu_start)
 
 
-def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, Callable[[], ca.Function]],
-           renew: Callable[[SolveOutcome], bool] | None) -> None:
-    """Child's loop: receive (solver name, arguments), solve, send the outcome; replace the
-    solver just used, once the answer is sent, when ``renew`` says so."""
+def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, Callable[..., ca.Function]],
+           renew: Callable[[SolveOutcome], bool] | None, cpu_time_s: float | None = None) -> None:
+    """Child's loop: receive (solver name, arguments, iteration cap), solve, send the outcome;
+    replace the solver just used, once the answer is sent, when ``renew`` says so.
+
+    ``cpu_time_s``: the profiling timer ends this process when a call has used that much
+    processor time (module docstring)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+    signal.signal(signal.SIGPROF, signal.SIG_DFL)  # the timer's signal ends the process
     preparation = dict.fromkeys(solvers, 0.0)
+    caps: dict[str, int | None] = dict.fromkeys(solvers)  # the iteration cap of each object
     while True:
         cpu_start = time.process_time()  # waiting for a request costs no processor time
         try:
-            name, arguments = connection.recv()
+            name, arguments, cap = connection.recv()
         except (EOFError, OSError):
             return
+        if cpu_time_s is not None:
+            signal.setitimer(signal.ITIMER_PROF, cpu_time_s)
         try:
-            if name not in solvers:
-                solvers[name] = factories[name]()
+            if name not in solvers or caps.get(name) != cap:
+                solvers[name], caps[name] = _build(factories[name], cap), cap
             outcome = _timed_call(solvers[name], arguments)
         except Exception as error:  # noqa: BLE001 - a solver refusing its call: raised by the controller
+            signal.setitimer(signal.ITIMER_PROF, 0.0)
             if not _send(connection, SolverError(f"{type(error).__name__}: {' '.join(str(error).split())}")):
                 return
             continue
+        signal.setitimer(signal.ITIMER_PROF, 0.0)
         # the worker's share of the call: unpacking the request, solving, building the answer
         outcome.cpu_time_s = time.process_time() - cpu_start
         outcome.preparation_cpu_s = preparation.get(name, 0.0)
+        outcome.iteration_cap = cap
         if not _send(connection, outcome):
             return
         preparation[name] = 0.0
         if renew is not None and renew(outcome):  # the controller is not waiting now
             start = time.process_time()
-            solvers[name] = factories[name]()
+            solvers[name] = _build(factories[name], cap)
             preparation[name] = time.process_time() - start
+
+
+def _build(factory: Callable[..., ca.Function], cap: int | None) -> ca.Function:
+    """A new solver object from its factory, with the iteration cap when there is one."""
+    return factory() if cap is None else factory(cap)
 
 
 def _send(connection, message) -> bool:
@@ -280,6 +309,7 @@ class BoundedSolver:
         self.cpu_time_s = cpu_time_s
         self.renew = renew
         self._solvers: dict[str, ca.Function] = dict(solvers)
+        self._caps: dict[str, int | None] = dict.fromkeys(solvers)  # the iteration cap of each object
         self._pid: int | None = None
         self._process: psutil.Process | int | None = None  # the worker, whose processor time is read
         self._connection = None
@@ -299,21 +329,23 @@ class BoundedSolver:
         """Solves run in the forked worker (False: in this process)."""
         return self.wall_time_s is not None or self.cpu_time_s is not None
 
-    def solve(self, name: str, **arguments) -> SolveOutcome:
-        """Call solver ``name`` with nlpsol arguments (x0, p, lbx, ubx, lbg, ubg, optionally lam_x0, lam_g0)."""
+    def solve(self, name: str, *, iteration_cap: int | None = None, **arguments) -> SolveOutcome:
+        """Call solver ``name`` with nlpsol arguments (x0, p, lbx, ubx, lbg, ubg, optionally lam_x0, lam_g0);
+        ``iteration_cap``: served by an object built with that cap (module docstring)."""
         if not self.in_worker:
-            if name not in self._solvers:
-                self._solvers[name] = self.factories[name]()
+            if name not in self._solvers or self._caps.get(name) != iteration_cap:
+                self._solvers[name], self._caps[name] = _build(self.factories[name], iteration_cap), iteration_cap
             outcome = _timed_call(self._solvers[name], arguments)
+            outcome.iteration_cap = iteration_cap
             if self.renew is not None and self.renew(outcome):  # here the replacement is part of the step
                 start = time.process_time()
-                self._solvers[name] = self.factories[name]()
+                self._solvers[name] = _build(self.factories[name], iteration_cap)
                 outcome.preparation_cpu_s = time.process_time() - start
             return outcome
         arguments = {key: np.asarray(value, dtype=float) for key, value in arguments.items()}
         start = time.perf_counter()
         self._ensure_worker()
-        self._connection.send((name, arguments))
+        self._connection.send((name, arguments, iteration_cap))
         cpu_start = process_cpu_time_s(self._process) if self.cpu_time_s is not None else None
         wall_limit = math.inf if self.wall_time_s is None else self.wall_time_s
         while not self._connection.poll(min(POLL_S, wall_limit)):
@@ -327,13 +359,26 @@ class BoundedSolver:
                 self.close()
                 stopped = self._stopped(arguments, elapsed, WALL_TIME_STATUS)
                 stopped.stopped_by = "cpu" if over_cpu else "wall"
+                stopped.cpu_time_s = cpu - cpu_start if cpu is not None else float("nan")
+                stopped.iteration_cap = iteration_cap
                 return stopped
         try:
             outcome = self._connection.recv()
-        except EOFError:  # the worker died (out of memory, a crash in the solver)
-            LOG.warning("NMPC solver worker died; starting a new one")
+        except EOFError:  # the worker's timer ended it, or it died (out of memory, a crash in the solver)
+            signalled, cpu = self._reap()
+            elapsed = time.perf_counter() - start
             self.close()
-            return self._stopped(arguments, time.perf_counter() - start, "solver_worker_died")
+            if signalled == signal.SIGPROF:
+                self.timeouts += 1
+                LOG.warning("NMPC solve stopped at its processor-time limit (%.3g s)", self.cpu_time_s)
+                stopped = self._stopped(arguments, elapsed, WALL_TIME_STATUS)
+                stopped.stopped_by = "cpu"
+                stopped.cpu_time_s = (cpu - cpu_start if cpu is not None and cpu_start is not None
+                                      else float(self.cpu_time_s or "nan"))
+                stopped.iteration_cap = iteration_cap
+                return stopped
+            LOG.warning("NMPC solver worker died; starting a new one")
+            return self._stopped(arguments, elapsed, "solver_worker_died")
         if isinstance(outcome, SolverError):
             raise outcome
         outcome.wall_time_s = time.perf_counter() - start
@@ -345,6 +390,21 @@ class BoundedSolver:
         ng = len(np.atleast_1d(arguments.get("lbg", [])))
         return SolveOutcome(np.full(n, np.nan), np.full(ng, np.nan), float("nan"), False, -1, status, elapsed,
                             timed_out=status == WALL_TIME_STATUS, lam_x=np.full(n, np.nan), lam_g=np.full(ng, np.nan))
+
+    def _reap(self) -> tuple[int | None, float | None]:
+        """Wait for the ended worker: the signal that ended it (None: it exited) and its whole
+        processor time [s] (None when it cannot be read)."""
+        if self._pid is None:
+            return None, None
+        try:
+            _, status, usage = os.wait4(self._pid, 0)
+        except (ChildProcessError, OSError):
+            return None, None
+        if self._finalizer is not None:  # reaped: its number may be another process's from now on
+            self._finalizer.detach()
+            self._finalizer = None
+        signalled = os.WTERMSIG(status) if os.WIFSIGNALED(status) else None
+        return signalled, usage.ru_utime + usage.ru_stime
 
     def _ensure_worker(self) -> None:
         if self._pid is not None:
@@ -358,7 +418,7 @@ class BoundedSolver:
             # code must not outlive it
             die_with_parent(parent)
             try:
-                _serve(child_end, dict(self._solvers), self.factories, self.renew)
+                _serve(child_end, dict(self._solvers), self.factories, self.renew, self.cpu_time_s)
             finally:
                 os._exit(0)
         child_end.close()

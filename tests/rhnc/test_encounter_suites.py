@@ -51,6 +51,7 @@ def test_every_colregs_suite_has_a_calm_twin_and_runs_until_arrival(suite):
     for run in weather:
         assert run.overrides["simulation.steps"] == 450  # 150 min: every run ends on arrival
         assert run.overrides["participants.ctrl.options.iteration_budget"] == 200
+        assert run.overrides["participants.ctrl.options.cpu_time_limit_s"] == 0.2  # the 200 ms bound
         assert "metocean.current_kn" not in run.overrides
     for run in calm:
         assert run.overrides["metocean.current_kn"] == 0.0

@@ -244,6 +244,27 @@ def test_a_point_at_the_end_of_the_budget_is_used_only_when_it_keeps_the_constra
         assert solution.status == "Iteration_Budget_Feasible_Point"
 
 
+def test_a_point_at_the_cap_the_measured_pace_set_is_used_as_at_the_end_of_the_budget(budgeted, monkeypatch):
+    """A solve capped below its budget by the processor time per iteration (solve_pace) that
+    stops at its cap, at a point keeping the constraints, has found a plan."""
+    state, reference_at = straight()
+    budgeted.reset()
+    asked = []
+    monkeypatch.setattr(budgeted.pace, "cap", lambda allowed: asked.append(allowed) or 12)
+    for name, build in list(budgeted.solvers.factories.items()):
+        monkeypatch.setitem(budgeted.solvers.factories, name,
+                            lambda cap=None, build=build: OutOfIterations(build(cap), 0.0, cap))
+    real, caps = dict(budgeted.solvers._solvers), dict(budgeted.solvers._caps)
+    try:
+        solution = budgeted.solve(0.0, state, reference_at(0.0))
+    finally:  # the module's controller gets its own solver objects back
+        budgeted.solvers._solvers.update(real)
+        budgeted.solvers._caps.update(caps)
+    assert asked == [30]
+    assert solution.success and solution.status == "Iteration_Budget_Feasible_Point"
+    assert solution.iterations == 12
+
+
 def test_without_a_budget_a_point_at_the_iteration_limit_is_not_used(controller):
     state, reference_at = straight()
     controller.reset()

@@ -72,9 +72,11 @@ def sigint_restored():
     signal.signal(signal.SIGINT, before)
 
 
-def serve(requests, solvers, factories=None, renew=None, broken=None):
-    end = ScriptedEnd(requests, broken)
-    _serve(end, solvers, factories or {}, renew)
+def serve(requests, solvers, factories=None, renew=None, broken=None, cpu_time_s=None):
+    """The worker's loop on ``requests``: (name, arguments) asks for no iteration cap, (name,
+    arguments, cap) for one."""
+    end = ScriptedEnd([request if len(request) == 3 else (*request, None) for request in requests], broken)
+    _serve(end, solvers, factories or {}, renew, cpu_time_s)
     return end
 
 

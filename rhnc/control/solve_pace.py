@@ -1,0 +1,74 @@
+"""The processor time an NLP iteration takes on this machine, and the iteration cap it allows.
+
+An iteration budget bounds a control step's solve in iterations; the goal is a bound in
+processor time, and the time of an iteration is the machine's: the same 200 iterations took
+120 ms on one machine and up to 274 ms on a slower one.  The solver (fatrop) has no clock of
+its own, so the watchdog's timer ends a solve at its processor-time limit
+(:mod:`rhnc.control.solver_watchdog`); such a solve leaves nothing, and the next step falls
+back.  :class:`IterationPace` keeps the step from reaching the timer: it measures the
+processor time per iteration of this run's long solves and caps the next solve's
+iterations at what fits in ``PACE_SHARE`` of the limit, so that a long solve stops at its
+cap, at an iterate the controller can still use (a feasible point, or the warm start of the
+next step), as it does at the iteration budget.
+
+Where the budget fits in the limit (a fast machine), no cap is asked for and the steps are
+those of the iteration budget alone, to the bit; where it does not, the cap depends on the
+times measured, and so do the results: the run summary counts the steps that stopped at
+their cap (``iteration_capped_steps``) and the solves the timer ended (``timeout_count``).
+"""
+
+from __future__ import annotations
+
+import collections
+import math
+
+#: solves with at least this many iterations measure the pace (in shorter ones the fixed cost
+#: of a call, about a millisecond, weighs on the time per iteration)
+PACE_MIN_ITERATIONS = 30
+#: the pace is the slowest of this many latest measurements
+PACE_MEMORY = 8
+#: share of the processor-time limit the capped iterations may take at that pace: the rest is
+#: for the call's fixed costs and iterations slower than the slowest measured
+PACE_SHARE = 0.85
+
+
+class IterationPace:
+    """Processor time per iteration of recent long solves, and the iteration cap it allows.
+
+    Parameters
+    ----------
+    cpu_time_limit_s : float or None
+        The processor-time limit of one solve [s]; None: never a cap.
+    """
+
+    def __init__(self, cpu_time_limit_s: float | None) -> None:
+        self.cpu_time_limit_s = cpu_time_limit_s
+        self._paces: collections.deque[float] = collections.deque(maxlen=PACE_MEMORY)
+        self.capped = 0  # solves that stopped at their cap
+
+    @property
+    def pace_s(self) -> float | None:
+        """The slowest recent processor time per iteration [s] (None before any long solve)."""
+        return max(self._paces) if self._paces else None
+
+    def record(self, iterations: int, cpu_time_s: float, stopped_by_timer: bool, iterations_allowed: int,
+               cap: int | None = None) -> None:
+        """Measure a solve: ``iterations`` it ran in ``cpu_time_s``; one the timer ended ran
+        at most ``iterations_allowed`` (its budget's share, or ``cap``) in the whole limit,
+        which bounds its pace from below.  A solve that ran to its ``cap`` is counted."""
+        self.capped += int(cap is not None and iterations >= cap)
+        if cap is not None:
+            iterations_allowed = min(iterations_allowed, cap)
+        if stopped_by_timer and self.cpu_time_limit_s is not None:
+            self._paces.append(self.cpu_time_limit_s / max(iterations_allowed, 1))
+        elif iterations >= PACE_MIN_ITERATIONS and math.isfinite(cpu_time_s):
+            self._paces.append(cpu_time_s / iterations)
+
+    def cap(self, iterations_allowed: int) -> int | None:
+        """The iteration cap of the next solve, allowed ``iterations_allowed`` by its budget:
+        None when those fit in ``PACE_SHARE`` of the limit at the measured pace."""
+        pace = self.pace_s
+        if self.cpu_time_limit_s is None or pace is None:
+            return None
+        fits = max(1, math.floor(PACE_SHARE * self.cpu_time_limit_s / pace))
+        return None if fits >= iterations_allowed else fits
