@@ -16,10 +16,14 @@ through a pipe and waits for the answer under two limits,
   and for a process whose times cannot be read.
 
 When a limit is hit, the child is killed, the call reports ``wall_time_exceeded`` and
-the next call forks a fresh worker.  The processor-time limit is also exact: the worker arms
-a profiling timer (``ITIMER_PROF``, the process's own processor time) at the limit when it
-takes a request, and the timer's signal ends it wherever the solve is, native code included;
-the parent's check every ``POLL_S`` is then only the backstop.
+the next call forks a fresh worker.  The processor-time limit is also kept to the
+millisecond: the worker arms a profiling timer (``ITIMER_PROF``, the process's own processor
+time) when it takes a request, ``TIMER_MARGIN_S`` short of the limit (the kernel counts it
+by its clock tick: a 100 ms timer was seen to end a process after 85-103 ms), and the
+timer's signal ends it wherever the solve is, native code included; the parent's check
+every ``POLL_S`` is then only the backstop.  The processor time of a call the timer ended
+is the worker's whole processor time at its end less what it had used when it took the
+request (written to memory shared with the parent).
 
 Iteration caps: a call may ask for an iteration cap (``solve(..., iteration_cap=n)``); the
 worker then serves it with a solver object built by ``factories[name](n)`` (kept, and
@@ -65,6 +69,9 @@ LOG = logging.getLogger(__name__)
 WALL_TIME_STATUS = "wall_time_exceeded"
 #: how often the parent checks the worker's processor time [s]
 POLL_S = 0.02
+#: the worker's timer is armed this much short of the processor-time limit [s]: the kernel
+#: counts processor-time timers by its clock tick
+TIMER_MARGIN_S = 0.01
 
 
 def process_cpu_time_s(pid: int | psutil.Process) -> float | None:
@@ -210,12 +217,14 @@ def _timed_call(solver, arguments) -> SolveOutcome:
 
 
 def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, Callable[..., ca.Function]],
-           renew: Callable[[SolveOutcome], bool] | None, cpu_time_s: float | None = None) -> None:
+           renew: Callable[[SolveOutcome], bool] | None, cpu_time_s: float | None = None,
+           started=None) -> None:
     """Child's loop: receive (solver name, arguments, iteration cap), solve, send the outcome;
     replace the solver just used, once the answer is sent, when ``renew`` says so.
 
     ``cpu_time_s``: the profiling timer ends this process when a call has used that much
-    processor time (module docstring)."""
+    processor time (module docstring); ``started``: a shared ``multiprocessing`` value that
+    gets this process's processor time as each request is taken."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     signal.signal(signal.SIGPROF, signal.SIG_DFL)  # the timer's signal ends the process
     preparation = dict.fromkeys(solvers, 0.0)
@@ -226,8 +235,10 @@ def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, 
             name, arguments, cap = connection.recv()
         except (EOFError, OSError):
             return
+        if started is not None:
+            started.value = time.process_time()
         if cpu_time_s is not None:
-            signal.setitimer(signal.ITIMER_PROF, cpu_time_s)
+            signal.setitimer(signal.ITIMER_PROF, max(cpu_time_s - TIMER_MARGIN_S, cpu_time_s / 2))
         try:
             if name not in solvers or caps.get(name) != cap:
                 solvers[name], caps[name] = _build(factories[name], cap), cap
@@ -314,6 +325,7 @@ class BoundedSolver:
         self._process: psutil.Process | int | None = None  # the worker, whose processor time is read
         self._connection = None
         self._finalizer = None
+        self._request_cpu = None  # shared with the worker (_ensure_worker)
         self.timeouts = 0
         if (wall_time_s is not None or cpu_time_s is not None) and not hasattr(os, "fork"):
             LOG.warning("no os.fork on this platform: NMPC solves are limited by iterations only")
@@ -367,13 +379,14 @@ class BoundedSolver:
         except EOFError:  # the worker's timer ended it, or it died (out of memory, a crash in the solver)
             signalled, cpu = self._reap()
             elapsed = time.perf_counter() - start
+            request_cpu = self._request_cpu.value if self._request_cpu is not None else None
             self.close()
             if signalled == signal.SIGPROF:
                 self.timeouts += 1
                 LOG.warning("NMPC solve stopped at its processor-time limit (%.3g s)", self.cpu_time_s)
                 stopped = self._stopped(arguments, elapsed, WALL_TIME_STATUS)
                 stopped.stopped_by = "cpu"
-                stopped.cpu_time_s = (cpu - cpu_start if cpu is not None and cpu_start is not None
+                stopped.cpu_time_s = (cpu - request_cpu if cpu is not None and request_cpu is not None
                                       else float(self.cpu_time_s or "nan"))
                 stopped.iteration_cap = iteration_cap
                 return stopped
@@ -410,6 +423,8 @@ class BoundedSolver:
         if self._pid is not None:
             return
         parent_end, child_end = multiprocessing.Pipe()
+        # the worker's processor time when it took its latest request (for a call its timer ends)
+        self._request_cpu = multiprocessing.RawValue("d", math.nan)
         parent = os.getpid()
         pid = os.fork()
         if pid == 0:  # child
@@ -418,7 +433,8 @@ class BoundedSolver:
             # code must not outlive it
             die_with_parent(parent)
             try:
-                _serve(child_end, dict(self._solvers), self.factories, self.renew, self.cpu_time_s)
+                _serve(child_end, dict(self._solvers), self.factories, self.renew, self.cpu_time_s,
+                       self._request_cpu)
             finally:
                 os._exit(0)
         child_end.close()

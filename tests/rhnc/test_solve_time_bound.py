@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import rhnc.control.solver_watchdog as watchdog
-from rhnc.control.solve_pace import PACE_MEMORY, PACE_MIN_ITERATIONS, PACE_SHARE, IterationPace
+from rhnc.control.solve_pace import PACE_MEMORY, PACE_MIN_ITERATIONS, PACE_SHARE, PRIOR_PACE_S, IterationPace
 from rhnc.control.solver_watchdog import WALL_TIME_STATUS, BoundedSolver, _serve
 
 
@@ -38,12 +38,15 @@ class Burning:
 def test_the_workers_timer_ends_a_solve_at_its_processor_time_limit(monkeypatch):
     # the parent's own check every POLL_S is put off beyond the solve: only the timer can stop it
     monkeypatch.setattr(watchdog, "POLL_S", 60.0)
-    bounded = BoundedSolver({"slow": Burning(8.0), "quick": Burning(0.0)}, {}, wall_time_s=120.0, cpu_time_s=0.1)
+    bounded = BoundedSolver({"slow": Burning(8.0), "under": Burning(0.3), "quick": Burning(0.0)}, {},
+                            wall_time_s=120.0, cpu_time_s=0.5)
     try:
+        assert bounded.solve("under", x0=np.zeros(3)).success  # 0.3 s: under the limit
         stopped = bounded.solve("slow", x0=np.zeros(3))
         assert stopped.timed_out and stopped.stopped_by == "cpu" and stopped.status == WALL_TIME_STATUS
         assert not stopped.success and np.isnan(stopped.x).all()
-        assert math.isfinite(stopped.cpu_time_s) and stopped.cpu_time_s > 0.0
+        # this call's processor time, ended about the limit (the worker had used 0.3 s before it)
+        assert 0.3 < stopped.cpu_time_s < 0.6
         assert bounded.timeouts == 1
         after = bounded.solve("quick", x0=np.ones(3))  # a new worker serves the next call
         assert after.success and not after.timed_out
@@ -110,10 +113,11 @@ def test_the_same_in_this_process():
     assert built == [40, None]  # kept while the cap stays (no renewal rule here)
 
 
-def test_no_cap_before_a_long_solve_or_without_a_limit():
+def test_before_a_long_solve_the_prior_pace_caps_and_without_a_limit_nothing_does():
     pace = IterationPace(0.2)
     pace.record(PACE_MIN_ITERATIONS - 1, 1.0, False, 200)  # short: its fixed costs would weigh
-    assert pace.pace_s is None and pace.cap(200) is None
+    assert pace.pace_s == PRIOR_PACE_S
+    assert pace.cap(200) == math.floor(PACE_SHARE * 0.2 / PRIOR_PACE_S)
     unlimited = IterationPace(None)
     unlimited.record(100, 1.0, False, 200)
     assert unlimited.cap(200) is None
