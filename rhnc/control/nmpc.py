@@ -109,6 +109,9 @@ __all__ = ["OBSTACLE_FIELDS", "MIN_TERMINAL_SPEED_MPS", "SOLVERS", "NMPCSettings
 SLACK_TOLERANCE = 1e-3
 #: cost and constraint violation reported when a solve left no finite iterate (stopped, NaN)
 UNKNOWN = -1.0
+#: times one attempt may go on from the iterate it stopped at, at the cap of an estimated pace,
+#: within the step's processor-time limit (rhnc.control.solve_pace)
+MAX_CONTINUATIONS = 2
 
 
 def renew_every_solve(outcome) -> bool:
@@ -491,25 +494,37 @@ class NMPCController(StepBounds):
             attempt = "hard" if not relaxed else ("relaxed_alone" if len(attempts) == 1 and "relaxed_alone"
                                                   in self.solvers.factories else "relaxed")
             allowed = self.attempt_iterations[attempt]
-            cap = self.pace.cap(allowed)
-            outcome = self.solvers.solve(attempt, x0=step.x0, p=step.p, lbx=lbx, ubx=ubx,
-                                         lbg=problem.lbg, ubg=problem.ubg, iteration_cap=cap, **duals)
-            self.pace.record(outcome.iterations, outcome.cpu_time_s, outcome.stopped_by == "cpu", allowed, cap)
-            tally.relaxed, tally.outcome = relaxed, outcome
-            tally.elapsed += outcome.wall_time_s
-            tally.cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
-            tally.preparation += outcome.preparation_cpu_s
-            tally.iterations += max(outcome.iterations, 0)
-            # a point the solver stopped at as acceptable, or at the end of its share of the
-            # iteration budget, is used only when it keeps every constraint to the solver's
-            # tolerance (never an infeasible iterate)
-            out_of_budget = ((s.iteration_budget is not None or cap is not None) and not outcome.timed_out
-                             and outcome.iterations >= (allowed if cap is None else cap))
-            tally.out_of_budget = out_of_budget
-            tally.accepted = ((outcome.acceptable or out_of_budget)
-                              and bool(np.all(np.isfinite(outcome.x)) and np.all(np.isfinite(outcome.g)))
-                              and problem.violation(outcome.x, outcome.g, lbx, ubx) <= ACCEPTABLE_VIOLATION)
-            tally.success = (outcome.success or tally.accepted) and bool(np.all(np.isfinite(outcome.x)))
+            cap, x0, cpu_left = self.pace.cap(allowed), step.x0, self.pace.cpu_time_limit_s
+            for _ in range(MAX_CONTINUATIONS + 1):
+                outcome = self.solvers.solve(attempt, x0=x0, p=step.p, lbx=lbx, ubx=ubx, lbg=problem.lbg,
+                                             ubg=problem.ubg, iteration_cap=cap, cpu_time_s=cpu_left, **duals)
+                self.pace.record(outcome.iterations, outcome.cpu_time_s, outcome.stopped_by == "cpu", allowed, cap)
+                tally.relaxed, tally.outcome = relaxed, outcome
+                tally.elapsed += outcome.wall_time_s
+                tally.cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
+                tally.preparation += outcome.preparation_cpu_s
+                tally.iterations += max(outcome.iterations, 0)
+                # a point the solver stopped at as acceptable, or at the end of its share of the
+                # iteration budget, is used only when it keeps every constraint to the solver's
+                # tolerance (never an infeasible iterate)
+                out_of_budget = ((s.iteration_budget is not None or cap is not None) and not outcome.timed_out
+                                 and outcome.iterations >= (allowed if cap is None else cap))
+                tally.out_of_budget = out_of_budget
+                tally.accepted = ((outcome.acceptable or out_of_budget)
+                                  and bool(np.all(np.isfinite(outcome.x)) and np.all(np.isfinite(outcome.g)))
+                                  and problem.violation(outcome.x, outcome.g, lbx, ubx) <= ACCEPTABLE_VIOLATION)
+                tally.success = (outcome.success or tally.accepted) and bool(np.all(np.isfinite(outcome.x)))
+                if tally.success or outcome.timed_out or cap is None or not out_of_budget:
+                    break
+                # stopped at the cap of an estimated pace with processor time left in the step: the
+                # same attempt goes on from its iterate, capped at what the time left allows
+                cap = self.pace.continuation(allowed - tally.iterations, tally.cpu)
+                if cap is None or not np.all(np.isfinite(outcome.x)):
+                    break
+                cpu_left = self.pace.time_left(tally.cpu)
+                x0 = outcome.x.copy()
+                if s.warm_start_duals:
+                    duals = {"lam_x0": outcome.lam_x, "lam_g0": outcome.lam_g}
             if tally.success or outcome.timed_out:
                 tally.timed_out = outcome.timed_out
                 break

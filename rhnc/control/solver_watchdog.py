@@ -219,11 +219,12 @@ def _timed_call(solver, arguments) -> SolveOutcome:
 def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, Callable[..., ca.Function]],
            renew: Callable[[SolveOutcome], bool] | None, cpu_time_s: float | None = None,
            started=None) -> None:
-    """Child's loop: receive (solver name, arguments, iteration cap), solve, send the outcome;
-    replace the solver just used, once the answer is sent, when ``renew`` says so.
+    """Child's loop: receive (solver name, arguments, iteration cap, processor-time limit),
+    solve, send the outcome; replace the solver just used, once the answer is sent, when
+    ``renew`` says so.
 
     ``cpu_time_s``: the profiling timer ends this process when a call has used that much
-    processor time (module docstring); ``started``: a shared ``multiprocessing`` value that
+    processor time, or the request's own limit when it has one (module docstring); ``started``: a shared ``multiprocessing`` value that
     gets this process's processor time as each request is taken."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     signal.signal(signal.SIGPROF, signal.SIG_DFL)  # the timer's signal ends the process
@@ -232,13 +233,14 @@ def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, 
     while True:
         cpu_start = time.process_time()  # waiting for a request costs no processor time
         try:
-            name, arguments, cap = connection.recv()
+            name, arguments, cap, limit = connection.recv()
         except (EOFError, OSError):
             return
         if started is not None:
             started.value = time.process_time()
-        if cpu_time_s is not None:
-            signal.setitimer(signal.ITIMER_PROF, max(cpu_time_s - TIMER_MARGIN_S, cpu_time_s / 2))
+        limit = cpu_time_s if limit is None else limit
+        if limit is not None:
+            signal.setitimer(signal.ITIMER_PROF, max(limit - TIMER_MARGIN_S, limit / 2))
         try:
             if name not in solvers or caps.get(name) != cap:
                 solvers[name], caps[name] = _build(factories[name], cap), cap
@@ -341,9 +343,11 @@ class BoundedSolver:
         """Solves run in the forked worker (False: in this process)."""
         return self.wall_time_s is not None or self.cpu_time_s is not None
 
-    def solve(self, name: str, *, iteration_cap: int | None = None, **arguments) -> SolveOutcome:
+    def solve(self, name: str, *, iteration_cap: int | None = None, cpu_time_s: float | None = None,
+              **arguments) -> SolveOutcome:
         """Call solver ``name`` with nlpsol arguments (x0, p, lbx, ubx, lbg, ubg, optionally lam_x0, lam_g0);
-        ``iteration_cap``: served by an object built with that cap (module docstring)."""
+        ``iteration_cap``: served by an object built with that cap (module docstring);
+        ``cpu_time_s``: this call's processor-time limit, below the solver's own (None: that one)."""
         if not self.in_worker:
             if name not in self._solvers or self._caps.get(name) != iteration_cap:
                 self._solvers[name], self._caps[name] = _build(self.factories[name], iteration_cap), iteration_cap
@@ -357,13 +361,14 @@ class BoundedSolver:
         arguments = {key: np.asarray(value, dtype=float) for key, value in arguments.items()}
         start = time.perf_counter()
         self._ensure_worker()
-        self._connection.send((name, arguments, iteration_cap))
-        cpu_start = process_cpu_time_s(self._process) if self.cpu_time_s is not None else None
+        limit = self.cpu_time_s if cpu_time_s is None or self.cpu_time_s is None else min(cpu_time_s, self.cpu_time_s)
+        self._connection.send((name, arguments, iteration_cap, limit))
+        cpu_start = process_cpu_time_s(self._process) if limit is not None else None
         wall_limit = math.inf if self.wall_time_s is None else self.wall_time_s
         while not self._connection.poll(min(POLL_S, wall_limit)):
             elapsed = time.perf_counter() - start
             cpu = process_cpu_time_s(self._process) if cpu_start is not None else None
-            over_cpu = cpu is not None and cpu - cpu_start > self.cpu_time_s
+            over_cpu = cpu is not None and cpu - cpu_start > limit
             if elapsed > wall_limit or over_cpu:
                 self.timeouts += 1
                 LOG.warning("NMPC solve stopped at its time limit (%.3g s wall, %s s CPU)", elapsed,
@@ -383,11 +388,11 @@ class BoundedSolver:
             self.close()
             if signalled == signal.SIGPROF:
                 self.timeouts += 1
-                LOG.warning("NMPC solve stopped at its processor-time limit (%.3g s)", self.cpu_time_s)
+                LOG.warning("NMPC solve stopped at its processor-time limit (%.3g s)", limit)
                 stopped = self._stopped(arguments, elapsed, WALL_TIME_STATUS)
                 stopped.stopped_by = "cpu"
                 stopped.cpu_time_s = (cpu - request_cpu if cpu is not None and request_cpu is not None
-                                      else float(self.cpu_time_s or "nan"))
+                                      else float(limit or "nan"))
                 stopped.iteration_cap = iteration_cap
                 return stopped
             LOG.warning("NMPC solver worker died; starting a new one")

@@ -10,6 +10,7 @@ import pytest
 
 from rhnc.control.nmpc import NMPCController, NMPCSettings, renew_rule
 from rhnc.control.nmpc_problem import renew_solver_after
+from rhnc.control.solve_pace import IterationPace
 from rhnc.navigation.reference_participant import line_or_turn_reference
 from rhnc.ship.ship_model import load_parameter_set
 from rhnc.control.solver_watchdog import FATROP_ACCEPTABLE_FLAG, BoundedSolver, _outcome
@@ -263,6 +264,39 @@ def test_a_point_at_the_cap_the_measured_pace_set_is_used_as_at_the_end_of_the_b
     assert asked == [30]
     assert solution.success and solution.status == "Iteration_Budget_Feasible_Point"
     assert solution.iterations == 12
+
+
+def test_a_solve_stopped_at_the_cap_of_an_estimated_pace_goes_on_from_its_iterate_in_the_step(budgeted,
+                                                                                                monkeypatch):
+    """With processor time left in the step, an infeasible point at the cap is not the end:
+    the same attempt goes on from it, capped at what the time left allows, within the budget."""
+    state, reference_at = straight()
+    budgeted.reset()
+    pace = IterationPace(0.2)
+    pace.record(100, 1.0, False, 200)  # 10 ms an iteration: the budget of 30 does not fit
+    first_cap = pace.cap(30)
+    monkeypatch.setattr(budgeted, "pace", pace)
+    calls = []
+
+    class Recording(OutOfIterations):
+        def __call__(self, **arguments):
+            calls.append((self.cap, np.array(arguments["x0"], dtype=float)))
+            result = super().__call__(**arguments)
+            calls[-1] += (np.array(result["x"], dtype=float),)
+            return result
+
+    for name, build in list(budgeted.solvers.factories.items()):
+        monkeypatch.setitem(budgeted.solvers.factories, name,
+                            lambda cap=None, build=build: Recording(build(cap), 1e-3, cap))
+    real, caps = dict(budgeted.solvers._solvers), dict(budgeted.solvers._caps)
+    try:
+        solution = budgeted.solve(0.0, state, reference_at(0.0))
+    finally:  # the module's controller gets its own solver objects back
+        budgeted.solvers._solvers.update(real)
+        budgeted.solvers._caps.update(caps)
+    assert first_cap == 17 and [cap for cap, *_ in calls] == [17, 13]  # 13: the rest of the budget of 30
+    np.testing.assert_array_equal(calls[1][1], calls[0][2])  # from the first solve's point
+    assert solution.fallback and solution.iterations == 30  # still off the constraints: the fallback
 
 
 def test_without_a_budget_a_point_at_the_iteration_limit_is_not_used(controller):

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import rhnc.control.solver_watchdog as watchdog
-from rhnc.control.solve_pace import PACE_MEMORY, PACE_MIN_ITERATIONS, PACE_SHARE, PRIOR_PACE_S, IterationPace
+from rhnc.control.solve_pace import CONTINUATION_MIN_ITERATIONS, PACE_MEMORY, PACE_MIN_ITERATIONS, PACE_SHARE, PRIOR_PACE_S, IterationPace
 from rhnc.control.solver_watchdog import WALL_TIME_STATUS, BoundedSolver, _serve
 
 
@@ -85,8 +85,8 @@ def test_the_worker_serves_a_cap_with_an_object_built_for_it_and_renews_it_with_
         built.append(cap)
         return Burning(0.0, cap)
 
-    end = ScriptedEnd([("nlp", {"x0": np.zeros(1)}, None), ("nlp", {"x0": np.zeros(1)}, 40),
-                       ("nlp", {"x0": np.zeros(1)}, 40), ("nlp", {"x0": np.zeros(1)}, None)])
+    end = ScriptedEnd([("nlp", {"x0": np.zeros(1)}, None, None), ("nlp", {"x0": np.zeros(1)}, 40, None),
+                       ("nlp", {"x0": np.zeros(1)}, 40, None), ("nlp", {"x0": np.zeros(1)}, None, None)])
     before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGPROF)
     try:
         _serve(end, {"nlp": Burning(0.0)}, {"nlp": factory}, renew=lambda outcome: True)
@@ -156,3 +156,13 @@ def test_a_solve_the_timer_ended_lowers_the_cap_below_what_it_was_allowed():
     assert pace.cap(200) == math.floor(PACE_SHARE * 200)
     pace.record(-1, float("nan"), True, 200, cap=pace.cap(200))  # ended again, at its cap
     assert pace.cap(200) == math.floor(PACE_SHARE * math.floor(PACE_SHARE * 200))
+
+
+def test_a_continuation_gets_what_the_time_left_allows_within_the_iterations_left():
+    pace = IterationPace(0.2)
+    pace.record(100, 0.1, False, 200)  # 1 ms an iteration
+    assert pace.continuation(150, 0.1) == math.floor(PACE_SHARE * 0.1 / 1e-3)  # 0.1 s left
+    assert pace.continuation(40, 0.1) == 40  # the budget's rest is the smaller
+    assert pace.continuation(CONTINUATION_MIN_ITERATIONS - 1, 0.0) is None  # too few left to go on
+    assert pace.continuation(150, 0.195) is None  # 5 ms left: too little time
+    assert IterationPace(None).continuation(150, 0.0) is None

@@ -73,9 +73,9 @@ def sigint_restored():
 
 
 def serve(requests, solvers, factories=None, renew=None, broken=None, cpu_time_s=None):
-    """The worker's loop on ``requests``: (name, arguments) asks for no iteration cap, (name,
-    arguments, cap) for one."""
-    end = ScriptedEnd([request if len(request) == 3 else (*request, None) for request in requests], broken)
+    """The worker's loop on ``requests``: (name, arguments) asks for no iteration cap and no limit
+    of its own, (name, arguments, cap, limit) for them."""
+    end = ScriptedEnd([request if len(request) == 4 else (*request, None, None) for request in requests], broken)
     _serve(end, solvers, factories or {}, renew, cpu_time_s)
     return end
 
