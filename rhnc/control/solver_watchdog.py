@@ -21,7 +21,7 @@ millisecond: the worker arms a profiling timer (``ITIMER_PROF``, the process's o
 time) when it takes a request, ``TIMER_MARGIN_S`` short of the limit (the kernel counts it
 by its clock tick: a 100 ms timer was seen to end a process after 85-103 ms), and the
 timer's signal ends it wherever the solve is, native code included; the parent's check
-every ``POLL_S`` is then only the backstop.  The processor time of a call the timer ended
+every ``POLL_S`` is then only the backstop, ``POLL_GRACE_S`` past the limit.  The processor time of a call the timer ended
 is the worker's whole processor time at its end less what it had used when it took the
 request (written to memory shared with the parent).
 
@@ -70,8 +70,12 @@ WALL_TIME_STATUS = "wall_time_exceeded"
 #: how often the parent checks the worker's processor time [s]
 POLL_S = 0.02
 #: the worker's timer is armed this much short of the processor-time limit [s]: the kernel
-#: counts processor-time timers by its clock tick
-TIMER_MARGIN_S = 0.01
+#: counts processor-time timers by its clock tick (seen ending a call 12 ms past the time armed)
+TIMER_MARGIN_S = 0.02
+#: the parent's own check stops a worker only this much past the limit [s], so that the
+#: worker's timer acts first: the parent reads the worker's time through /proc in 10 ms ticks,
+#: from before the worker has taken the request (it may still be building a renewed solver)
+POLL_GRACE_S = 0.05
 
 
 def process_cpu_time_s(pid: int | psutil.Process) -> float | None:
@@ -368,7 +372,7 @@ class BoundedSolver:
         while not self._connection.poll(min(POLL_S, wall_limit)):
             elapsed = time.perf_counter() - start
             cpu = process_cpu_time_s(self._process) if cpu_start is not None else None
-            over_cpu = cpu is not None and cpu - cpu_start > limit
+            over_cpu = cpu is not None and cpu - cpu_start > limit + POLL_GRACE_S
             if elapsed > wall_limit or over_cpu:
                 self.timeouts += 1
                 LOG.warning("NMPC solve stopped at its time limit (%.3g s wall, %s s CPU)", elapsed,
