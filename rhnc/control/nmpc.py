@@ -495,10 +495,16 @@ class NMPCController(StepBounds):
                                                   in self.solvers.factories else "relaxed")
             allowed = self.attempt_iterations[attempt]
             cap, x0, cpu_left = self.pace.cap(allowed), step.x0, self.pace.cpu_time_limit_s
+            stopped_at_cap = None  # the point a solve stopped at, at the cap, before going on
             for _ in range(MAX_CONTINUATIONS + 1):
                 outcome = self.solvers.solve(attempt, x0=x0, p=step.p, lbx=lbx, ubx=ubx, lbg=problem.lbg,
                                              ubg=problem.ubg, iteration_cap=cap, cpu_time_s=cpu_left, **duals)
                 self.pace.record(outcome.iterations, outcome.cpu_time_s, outcome.stopped_by == "cpu", allowed, cap)
+                if outcome.timed_out and stopped_at_cap is not None:
+                    # the timer ended the going-on: the point it went on from stays the step's
+                    tally.cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
+                    tally.elapsed += outcome.wall_time_s
+                    break
                 tally.relaxed, tally.outcome = relaxed, outcome
                 tally.elapsed += outcome.wall_time_s
                 tally.cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
@@ -522,7 +528,7 @@ class NMPCController(StepBounds):
                 if cap is None or not np.all(np.isfinite(outcome.x)):
                     break
                 cpu_left = self.pace.time_left(tally.cpu)
-                x0 = outcome.x.copy()
+                x0, stopped_at_cap = outcome.x.copy(), outcome
                 if s.warm_start_duals:
                     duals = {"lam_x0": outcome.lam_x, "lam_g0": outcome.lam_g}
             if tally.success or outcome.timed_out:

@@ -18,8 +18,10 @@ iterations at 0.2 s), where without a prior the timer ended the first one or two
 of 110 held-out runs, and each fell back with no plan to shift.  That capped solve is the
 run's first measurement.  A solve stopped at the cap of an estimated pace goes on, in the
 same step, from its own iterate, capped at what the processor time left allows at the pace
-measured now (:meth:`IterationPace.continuation`): with the prior alone the first solves
-of 6 of 34 runs stopped at 85 iterations, infeasible, with 40-140 ms of the limit unused.
+measured now (:meth:`IterationPace.continuation`), keeping ``CONTINUATION_RESERVE_S``
+free: with the prior alone the first solves of 6 of 34 runs stopped at 85 iterations,
+infeasible, with 40-140 ms of the limit unused.  Should the timer end the going-on solve,
+the point it went on from is kept for the next step as if it had not gone on.
 
 Where the budget fits in the limit at the measured pace (a fast machine), no cap is asked
 for after that first one; where it does not, the cap depends on the times measured, and so
@@ -41,6 +43,10 @@ PACE_MEMORY = 8
 PRIOR_PACE_S = 2e-3
 #: a solve stopped at its cap goes on within the step only for at least this many iterations
 CONTINUATION_MIN_ITERATIONS = 10
+#: of the time left, what a going-on solve keeps free [s]: the worker's timer is armed 20 ms
+#: short of it, and a new solver object and the call cost a few ms (with 10 ms kept free, the
+#: timer ended 12 going-on solves of 270 runs, each then falling back)
+CONTINUATION_RESERVE_S = 0.03
 #: share of the processor-time limit the capped iterations may take at that pace: the rest is
 #: for the call's fixed costs and iterations slower than the slowest measured
 PACE_SHARE = 0.85
@@ -90,7 +96,7 @@ class IterationPace:
         left = self.time_left(cpu_spent_s)
         if left is None or iterations_left < CONTINUATION_MIN_ITERATIONS:
             return None
-        fits = math.floor(PACE_SHARE * left / self.pace_s)
+        fits = math.floor(PACE_SHARE * (left - CONTINUATION_RESERVE_S) / self.pace_s)
         return None if fits < CONTINUATION_MIN_ITERATIONS else min(fits, iterations_left)
 
     def cap(self, iterations_allowed: int) -> int | None:

@@ -21,9 +21,10 @@ millisecond: the worker arms a profiling timer (``ITIMER_PROF``, the process's o
 time) when it takes a request, ``TIMER_MARGIN_S`` short of the limit (the kernel counts it
 by its clock tick: a 100 ms timer was seen to end a process after 85-103 ms), and the
 timer's signal ends it wherever the solve is, native code included; the parent's check
-every ``POLL_S`` is then only the backstop, ``POLL_GRACE_S`` past the limit.  The processor time of a call the timer ended
-is the worker's whole processor time at its end less what it had used when it took the
-request (written to memory shared with the parent).
+every ``POLL_S`` is then only the backstop, ``POLL_GRACE_S`` past the limit.  The processor
+time of a call the timer ended is the worker's user time at its end less its user time when it
+took the request (written to memory shared with the parent); its system time is left out, as
+it counts the unmapping of the worker's memory at its end (10-90 ms, measured), not the solve.
 
 Iteration caps: a call may ask for an iteration cap (``solve(..., iteration_cap=n)``); the
 worker then serves it with a solver object built by ``factories[name](n)`` (kept, and
@@ -228,8 +229,9 @@ def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, 
     ``renew`` says so.
 
     ``cpu_time_s``: the profiling timer ends this process when a call has used that much
-    processor time, or the request's own limit when it has one (module docstring); ``started``: a shared ``multiprocessing`` value that
-    gets this process's processor time as each request is taken."""
+    processor time, or the request's own limit when it has one (module docstring);
+    ``started``: a shared ``multiprocessing`` value that gets this process's user processor
+    time as each request is taken."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     signal.signal(signal.SIGPROF, signal.SIG_DFL)  # the timer's signal ends the process
     preparation = dict.fromkeys(solvers, 0.0)
@@ -241,7 +243,7 @@ def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, 
         except (EOFError, OSError):
             return
         if started is not None:
-            started.value = time.process_time()
+            started.value = os.times().user
         limit = cpu_time_s if limit is None else limit
         if limit is not None:
             signal.setitimer(signal.ITIMER_PROF, max(limit - TIMER_MARGIN_S, limit / 2))
@@ -415,7 +417,8 @@ class BoundedSolver:
 
     def _reap(self) -> tuple[int | None, float | None]:
         """Wait for the ended worker: the signal that ended it (None: it exited) and its whole
-        processor time [s] (None when it cannot be read)."""
+        user processor time [s] (None when it cannot be read): its system time also counts the
+        unmapping of its memory as it ends (10-90 ms, measured), which is not the solve's."""
         if self._pid is None:
             return None, None
         try:
@@ -426,13 +429,13 @@ class BoundedSolver:
             self._finalizer.detach()
             self._finalizer = None
         signalled = os.WTERMSIG(status) if os.WIFSIGNALED(status) else None
-        return signalled, usage.ru_utime + usage.ru_stime
+        return signalled, usage.ru_utime
 
     def _ensure_worker(self) -> None:
         if self._pid is not None:
             return
         parent_end, child_end = multiprocessing.Pipe()
-        # the worker's processor time when it took its latest request (for a call its timer ends)
+        # the worker's user processor time when it took its latest request (for a call its timer ends)
         self._request_cpu = multiprocessing.RawValue("d", math.nan)
         parent = os.getpid()
         pid = os.fork()

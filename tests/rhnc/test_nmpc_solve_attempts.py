@@ -10,10 +10,10 @@ import pytest
 
 from rhnc.control.nmpc import NMPCController, NMPCSettings, renew_rule
 from rhnc.control.nmpc_problem import renew_solver_after
-from rhnc.control.solve_pace import IterationPace
+from rhnc.control.solve_pace import CONTINUATION_MIN_ITERATIONS, IterationPace
 from rhnc.navigation.reference_participant import line_or_turn_reference
 from rhnc.ship.ship_model import load_parameter_set
-from rhnc.control.solver_watchdog import FATROP_ACCEPTABLE_FLAG, BoundedSolver, _outcome
+from rhnc.control.solver_watchdog import FATROP_ACCEPTABLE_FLAG, WALL_TIME_STATUS, BoundedSolver, _outcome
 from solver_stand_ins import solvers_replaced
 
 KNOT = 1852.0 / 3600.0
@@ -245,6 +245,20 @@ def test_a_point_at_the_end_of_the_budget_is_used_only_when_it_keeps_the_constra
         assert solution.status == "Iteration_Budget_Feasible_Point"
 
 
+def step_with_capped_stand_ins(controller, monkeypatch, stand_in, state, reference):
+    """One step of ``controller`` whose solver objects, built with a cap or without, are
+    ``stand_in(solver, cap)``; its own objects are back afterwards, also on failure."""
+    for name, build in list(controller.solvers.factories.items()):
+        monkeypatch.setitem(controller.solvers.factories, name,
+                            lambda cap=None, build=build: stand_in(build(cap), cap))
+    real, caps = dict(controller.solvers._solvers), dict(controller.solvers._caps)
+    try:
+        return controller.solve(0.0, state, reference)
+    finally:
+        controller.solvers._solvers.update(real)
+        controller.solvers._caps.update(caps)
+
+
 def test_a_point_at_the_cap_the_measured_pace_set_is_used_as_at_the_end_of_the_budget(budgeted, monkeypatch):
     """A solve capped below its budget by the processor time per iteration (solve_pace) that
     stops at its cap, at a point keeping the constraints, has found a plan."""
@@ -252,15 +266,8 @@ def test_a_point_at_the_cap_the_measured_pace_set_is_used_as_at_the_end_of_the_b
     budgeted.reset()
     asked = []
     monkeypatch.setattr(budgeted.pace, "cap", lambda allowed: asked.append(allowed) or 12)
-    for name, build in list(budgeted.solvers.factories.items()):
-        monkeypatch.setitem(budgeted.solvers.factories, name,
-                            lambda cap=None, build=build: OutOfIterations(build(cap), 0.0, cap))
-    real, caps = dict(budgeted.solvers._solvers), dict(budgeted.solvers._caps)
-    try:
-        solution = budgeted.solve(0.0, state, reference_at(0.0))
-    finally:  # the module's controller gets its own solver objects back
-        budgeted.solvers._solvers.update(real)
-        budgeted.solvers._caps.update(caps)
+    solution = step_with_capped_stand_ins(budgeted, monkeypatch, lambda solver, cap: OutOfIterations(solver, 0.0, cap),
+                                          state, reference_at(0.0))
     assert asked == [30]
     assert solution.success and solution.status == "Iteration_Budget_Feasible_Point"
     assert solution.iterations == 12
@@ -285,18 +292,42 @@ def test_a_solve_stopped_at_the_cap_of_an_estimated_pace_goes_on_from_its_iterat
             calls[-1] += (np.array(result["x"], dtype=float),)
             return result
 
-    for name, build in list(budgeted.solvers.factories.items()):
-        monkeypatch.setitem(budgeted.solvers.factories, name,
-                            lambda cap=None, build=build: Recording(build(cap), 1e-3, cap))
-    real, caps = dict(budgeted.solvers._solvers), dict(budgeted.solvers._caps)
-    try:
-        solution = budgeted.solve(0.0, state, reference_at(0.0))
-    finally:  # the module's controller gets its own solver objects back
-        budgeted.solvers._solvers.update(real)
-        budgeted.solvers._caps.update(caps)
-    assert first_cap == 17 and [cap for cap, *_ in calls] == [17, 13]  # 13: the rest of the budget of 30
+    solution = step_with_capped_stand_ins(budgeted, monkeypatch, lambda solver, cap: Recording(solver, 1e-3, cap),
+                                          state, reference_at(0.0))
+    assert first_cap == 17 and len(calls) == 2 and calls[0][0] == 17
+    # the second: what the time left allows at 10 ms an iteration, at most the 13 left of the budget of 30
+    assert CONTINUATION_MIN_ITERATIONS <= calls[1][0] <= 13
     np.testing.assert_array_equal(calls[1][1], calls[0][2])  # from the first solve's point
-    assert solution.fallback and solution.iterations == 30  # still off the constraints: the fallback
+    assert solution.fallback and solution.iterations == 17 + calls[1][0]  # still off the constraints
+
+
+def test_a_going_on_solve_the_timer_ended_leaves_the_point_it_went_on_from(budgeted, monkeypatch):
+    """Should the worker's timer end the solve that went on from a point at the cap, that
+    point is still the next step's warm start, and the step is flagged as stopped by time."""
+    state, reference_at = straight()
+    budgeted.reset()
+    pace = IterationPace(0.2)
+    pace.record(100, 1.0, False, 200)  # 10 ms an iteration: capped at 17, then going on
+    monkeypatch.setattr(budgeted, "pace", pace)
+    solve, points, kept = budgeted.solvers.solve, [], []
+
+    def timer_ends_the_second(name, **arguments):
+        if points:  # the going-on solve: ended by the timer
+            stopped = BoundedSolver._stopped(arguments, 0.05, WALL_TIME_STATUS)
+            stopped.stopped_by, stopped.cpu_time_s = "cpu", 0.05
+            return stopped
+        outcome = solve(name, **arguments)
+        points.append(outcome.x.copy())
+        return outcome
+
+    monkeypatch.setattr(budgeted.solvers, "solve", timer_ends_the_second)
+    monkeypatch.setattr(budgeted.memory, "keep_iterate", lambda time_s, states, *rest: kept.append(states))
+    solution = step_with_capped_stand_ins(budgeted, monkeypatch, lambda solver, cap: OutOfIterations(solver, 1e-3, cap),
+                                          state, reference_at(0.0))
+    assert solution.fallback and solution.timed_out and solution.iterations == 17
+    assert len(points) == 1 and len(kept) == 1
+    first = points[0][budgeted.problem.z_index] * budgeted.state_scale  # heading and speeds: not shifted
+    np.testing.assert_allclose(kept[0][:, 2:], first[:, 2:])
 
 
 def test_without_a_budget_a_point_at_the_iteration_limit_is_not_used(controller):

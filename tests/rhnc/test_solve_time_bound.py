@@ -9,16 +9,19 @@ import numpy as np
 import pytest
 
 import rhnc.control.solver_watchdog as watchdog
-from rhnc.control.solve_pace import CONTINUATION_MIN_ITERATIONS, PACE_MEMORY, PACE_MIN_ITERATIONS, PACE_SHARE, PRIOR_PACE_S, IterationPace
+from rhnc.control.solve_pace import (CONTINUATION_MIN_ITERATIONS, CONTINUATION_RESERVE_S, PACE_MEMORY,
+                                     PACE_MIN_ITERATIONS, PACE_SHARE, PRIOR_PACE_S, IterationPace)
 from rhnc.control.solver_watchdog import WALL_TIME_STATUS, BoundedSolver, _serve
 
 
 def busy(cpu_s):
-    """Spend ``cpu_s`` of this process's processor time."""
+    """Spend ``cpu_s`` of this process's processor time, nearly all of it user time (as a solver
+    does: the clock is read by a system call, so only every 20,000 sines)."""
     end = time.process_time() + cpu_s
     x = 0.0
     while time.process_time() < end:
-        x = math.sin(x + 1.0)
+        for _ in range(20_000):
+            x = math.sin(x + 1.0)
 
 
 class Burning:
@@ -56,9 +59,9 @@ def test_the_workers_timer_ends_a_solve_at_its_processor_time_limit(monkeypatch)
 
 def test_the_timer_is_disarmed_between_calls():
     """A worker waiting for its next request is not ended by a timer left running."""
-    bounded = BoundedSolver({"nlp": Burning(0.02)}, {}, wall_time_s=60.0, cpu_time_s=0.05)
+    bounded = BoundedSolver({"nlp": Burning(0.05)}, {}, wall_time_s=60.0, cpu_time_s=0.2)
     try:
-        for _ in range(6):  # 0.12 s of processor time over the calls: only each call's own counts
+        for _ in range(6):  # 0.3 s of processor time over the calls: only each call's own counts
             assert bounded.solve("nlp", x0=np.zeros(1)).success
         assert bounded.timeouts == 0
     finally:
@@ -161,8 +164,8 @@ def test_a_solve_the_timer_ended_lowers_the_cap_below_what_it_was_allowed():
 def test_a_continuation_gets_what_the_time_left_allows_within_the_iterations_left():
     pace = IterationPace(0.2)
     pace.record(100, 0.1, False, 200)  # 1 ms an iteration
-    assert pace.continuation(150, 0.1) == math.floor(PACE_SHARE * 0.1 / 1e-3)  # 0.1 s left
+    assert pace.continuation(150, 0.1) == math.floor(PACE_SHARE * (0.1 - CONTINUATION_RESERVE_S) / 1e-3)  # 0.1 s left
     assert pace.continuation(40, 0.1) == 40  # the budget's rest is the smaller
     assert pace.continuation(CONTINUATION_MIN_ITERATIONS - 1, 0.0) is None  # too few left to go on
-    assert pace.continuation(150, 0.195) is None  # 5 ms left: too little time
+    assert pace.continuation(150, 0.2 - CONTINUATION_RESERVE_S - 0.005) is None  # 5 ms beyond the reserve
     assert IterationPace(None).continuation(150, 0.0) is None
