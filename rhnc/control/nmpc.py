@@ -493,44 +493,7 @@ class NMPCController(StepBounds):
                 self.solvers.wall_time_s = max(budget - tally.elapsed, 1e-3)
             attempt = "hard" if not relaxed else ("relaxed_alone" if len(attempts) == 1 and "relaxed_alone"
                                                   in self.solvers.factories else "relaxed")
-            allowed = self.attempt_iterations[attempt]
-            cap, x0, cpu_left = self.pace.cap(allowed), step.x0, self.pace.cpu_time_limit_s
-            stopped_at_cap = None  # the point a solve stopped at, at the cap, before going on
-            for _ in range(MAX_CONTINUATIONS + 1):
-                outcome = self.solvers.solve(attempt, x0=x0, p=step.p, lbx=lbx, ubx=ubx, lbg=problem.lbg,
-                                             ubg=problem.ubg, iteration_cap=cap, cpu_time_s=cpu_left, **duals)
-                self.pace.record(outcome.iterations, outcome.cpu_time_s, outcome.stopped_by == "cpu", allowed, cap)
-                if outcome.timed_out and stopped_at_cap is not None:
-                    # the timer ended the going-on: the point it went on from stays the step's
-                    tally.cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
-                    tally.elapsed += outcome.wall_time_s
-                    break
-                tally.relaxed, tally.outcome = relaxed, outcome
-                tally.elapsed += outcome.wall_time_s
-                tally.cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
-                tally.preparation += outcome.preparation_cpu_s
-                tally.iterations += max(outcome.iterations, 0)
-                # a point the solver stopped at as acceptable, or at the end of its share of the
-                # iteration budget, is used only when it keeps every constraint to the solver's
-                # tolerance (never an infeasible iterate)
-                out_of_budget = ((s.iteration_budget is not None or cap is not None) and not outcome.timed_out
-                                 and outcome.iterations >= (allowed if cap is None else cap))
-                tally.out_of_budget = out_of_budget
-                tally.accepted = ((outcome.acceptable or out_of_budget)
-                                  and bool(np.all(np.isfinite(outcome.x)) and np.all(np.isfinite(outcome.g)))
-                                  and problem.violation(outcome.x, outcome.g, lbx, ubx) <= ACCEPTABLE_VIOLATION)
-                tally.success = (outcome.success or tally.accepted) and bool(np.all(np.isfinite(outcome.x)))
-                if tally.success or outcome.timed_out or cap is None or not out_of_budget:
-                    break
-                # stopped at the cap of an estimated pace with processor time left in the step: the
-                # same attempt goes on from its iterate, capped at what the time left allows
-                cap = self.pace.continuation(allowed - tally.iterations, tally.cpu)
-                if cap is None or not np.all(np.isfinite(outcome.x)):
-                    break
-                cpu_left = self.pace.time_left(tally.cpu)
-                x0, stopped_at_cap = outcome.x.copy(), outcome
-                if s.warm_start_duals:
-                    duals = {"lam_x0": outcome.lam_x, "lam_g0": outcome.lam_g}
+            outcome = self._attempt(tally, attempt, relaxed, step, lbx, ubx, duals)
             if tally.success or outcome.timed_out:
                 tally.timed_out = outcome.timed_out
                 break
@@ -541,6 +504,52 @@ class NMPCController(StepBounds):
         elif s.solver == "fatrop" and not tally.timed_out:  # fatrop reports an integer code
             tally.status = "Solve_Succeeded" if outcome.success else f"fatrop_return_code_{tally.status}"
         return tally
+
+    def _attempt(self, tally: "_Attempts", attempt: str, relaxed: bool, step: "_StepProblem", lbx, ubx,
+                 duals: dict):
+        """One attempt of a step (its solver ``attempt``), going on from a point at the cap of an
+        estimated pace while processor time is left (:mod:`rhnc.control.solve_pace`); ``tally``
+        gathers it.  Returns the last solver outcome (one the timer ended included)."""
+        s, problem = self.settings, self.problem
+        allowed = self.attempt_iterations[attempt]
+        cap, x0, cpu_left = self.pace.cap(allowed), step.x0, self.pace.cpu_time_limit_s
+        stopped_at_cap = None  # the point a solve stopped at, at the cap, before going on
+        for _ in range(MAX_CONTINUATIONS + 1):
+            outcome = self.solvers.solve(attempt, x0=x0, p=step.p, lbx=lbx, ubx=ubx, lbg=problem.lbg,
+                                         ubg=problem.ubg, iteration_cap=cap, cpu_time_s=cpu_left, **duals)
+            self.pace.record(outcome.iterations, outcome.cpu_time_s, outcome.stopped_by == "cpu", allowed, cap)
+            if outcome.timed_out and stopped_at_cap is not None:
+                # the timer ended the going-on: the point it went on from stays the step's
+                tally.cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
+                tally.elapsed += outcome.wall_time_s
+                break
+            tally.relaxed, tally.outcome = relaxed, outcome
+            tally.elapsed += outcome.wall_time_s
+            tally.cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
+            tally.preparation += outcome.preparation_cpu_s
+            tally.iterations += max(outcome.iterations, 0)
+            # a point the solver stopped at as acceptable, or at the end of its share of the
+            # iteration budget, is used only when it keeps every constraint to the solver's
+            # tolerance (never an infeasible iterate)
+            out_of_budget = ((s.iteration_budget is not None or cap is not None) and not outcome.timed_out
+                             and outcome.iterations >= (allowed if cap is None else cap))
+            tally.out_of_budget = out_of_budget
+            tally.accepted = ((outcome.acceptable or out_of_budget)
+                              and bool(np.all(np.isfinite(outcome.x)) and np.all(np.isfinite(outcome.g)))
+                              and problem.violation(outcome.x, outcome.g, lbx, ubx) <= ACCEPTABLE_VIOLATION)
+            tally.success = (outcome.success or tally.accepted) and bool(np.all(np.isfinite(outcome.x)))
+            if tally.success or outcome.timed_out or cap is None or not out_of_budget:
+                break
+            # stopped at the cap of an estimated pace with processor time left in the step: the
+            # same attempt goes on from its iterate, capped at what the time left allows
+            cap = self.pace.continuation(allowed - tally.iterations, tally.cpu)
+            if cap is None or not np.all(np.isfinite(outcome.x)):
+                break
+            cpu_left = self.pace.time_left(tally.cpu)
+            x0, stopped_at_cap = outcome.x.copy(), outcome
+            if s.warm_start_duals:
+                duals = {"lam_x0": outcome.lam_x, "lam_g0": outcome.lam_g}
+        return outcome
 
     def _failed_solve(self, time_s: float, step: "_StepProblem", attempt: "_Attempts") -> NMPCSolution:
         """No attempt gave a plan: the fallback, with what the last attempt left."""
