@@ -162,7 +162,8 @@ def _pytest(work: Path, tests: tuple[str, ...], cpu_limit_s: float | None) -> tu
     it with SIGXCPU), so that the verdict does not depend on how busy the machine is; the wall
     cap (:data:`WALL_CAP_PER_CPU_S` times it) only catches a run that waits without computing.
     """
-    command = [sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", "-m", "not slow", *tests]
+    # in one process (-n 0: no xdist workers), whose processor time the limit below bounds
+    command = [sys.executable, "-m", "pytest", "-q", "-x", "-n", "0", "-p", "no:cacheprovider", "-m", "not slow", *tests]
 
     def limit_cpu() -> None:  # in the test run's process, before it starts
         if cpu_limit_s is not None:

@@ -328,7 +328,8 @@ def run_module(key: str, children: int, timeout_multiplier: float, timeout_const
                     "source_hashes": {source: committed_hash(source, "HEAD") for source in module.sources}}
         config = (f"\n[tool.mutmut]\nsource_paths = {json.dumps(list(module.sources))}\n"
                   f"pytest_add_cli_args_test_selection = {json.dumps(list(module.tests))}\n"
-                  f"pytest_add_cli_args = {json.dumps(['-p', 'no:cacheprovider', *settings['pytest_args']])}\n"
+                  # mutmut runs the tests in its own process (-n 0: no xdist workers), where its switch is
+                  f"pytest_add_cli_args = {json.dumps(['-n', '0', '-p', 'no:cacheprovider', *settings['pytest_args']])}\n"
                   f"also_copy = {json.dumps(data_folders)}\n"
                   f"timeout_multiplier = {timeout_multiplier}\ntimeout_constant = {timeout_constant}\n")
         with open(work / "pyproject.toml", "a") as handle:
