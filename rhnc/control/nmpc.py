@@ -518,14 +518,11 @@ class NMPCController(StepBounds):
             outcome = self.solvers.solve(attempt, x0=x0, p=step.p, lbx=lbx, ubx=ubx, lbg=problem.lbg,
                                          ubg=problem.ubg, iteration_cap=cap, cpu_time_s=cpu_left, **duals)
             self.pace.record(outcome.iterations, outcome.cpu_time_s, outcome.stopped_by == "cpu", allowed, cap)
-            if outcome.timed_out and stopped_at_cap is not None:
-                # the timer ended the going-on: the point it went on from stays the step's
-                tally.cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
-                tally.elapsed += outcome.wall_time_s
-                break
-            tally.relaxed, tally.outcome = relaxed, outcome
             tally.elapsed += outcome.wall_time_s
             tally.cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
+            if outcome.timed_out and stopped_at_cap is not None:
+                break  # the timer ended the going-on: the point it went on from stays the step's
+            tally.relaxed, tally.outcome = relaxed, outcome
             tally.preparation += outcome.preparation_cpu_s
             tally.iterations += max(outcome.iterations, 0)
             # a point the solver stopped at as acceptable, or at the end of its share of the

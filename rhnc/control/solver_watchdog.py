@@ -376,15 +376,11 @@ class BoundedSolver:
             cpu = process_cpu_time_s(self._process) if cpu_start is not None else None
             over_cpu = cpu is not None and cpu - cpu_start > limit + POLL_GRACE_S
             if elapsed > wall_limit or over_cpu:
-                self.timeouts += 1
                 LOG.warning("NMPC solve stopped at its time limit (%.3g s wall, %s s CPU)", elapsed,
                             "?" if cpu is None else f"{cpu - cpu_start:.3g}")
                 self.close()
-                stopped = self._stopped(arguments, elapsed, WALL_TIME_STATUS)
-                stopped.stopped_by = "cpu" if over_cpu else "wall"
-                stopped.cpu_time_s = cpu - cpu_start if cpu is not None else float("nan")
-                stopped.iteration_cap = iteration_cap
-                return stopped
+                return self._stopped_at_limit(arguments, elapsed, "cpu" if over_cpu else "wall",
+                                              cpu - cpu_start if cpu is not None else float("nan"), iteration_cap)
         try:
             outcome = self._connection.recv()
         except EOFError:  # the worker's timer ended it, or it died (out of memory, a crash in the solver)
@@ -393,14 +389,10 @@ class BoundedSolver:
             request_cpu = self._request_cpu.value if self._request_cpu is not None else None
             self.close()
             if signalled == signal.SIGPROF:
-                self.timeouts += 1
                 LOG.warning("NMPC solve stopped at its processor-time limit (%.3g s)", limit)
-                stopped = self._stopped(arguments, elapsed, WALL_TIME_STATUS)
-                stopped.stopped_by = "cpu"
-                stopped.cpu_time_s = (cpu - request_cpu if cpu is not None and request_cpu is not None
-                                      else float(limit or "nan"))
-                stopped.iteration_cap = iteration_cap
-                return stopped
+                return self._stopped_at_limit(arguments, elapsed, "cpu",
+                                              cpu - request_cpu if cpu is not None and request_cpu is not None
+                                              else float(limit or "nan"), iteration_cap)
             LOG.warning("NMPC solver worker died; starting a new one")
             return self._stopped(arguments, elapsed, "solver_worker_died")
         if isinstance(outcome, SolverError):
@@ -414,6 +406,14 @@ class BoundedSolver:
         ng = len(np.atleast_1d(arguments.get("lbg", [])))
         return SolveOutcome(np.full(n, np.nan), np.full(ng, np.nan), float("nan"), False, -1, status, elapsed,
                             timed_out=status == WALL_TIME_STATUS, lam_x=np.full(n, np.nan), lam_g=np.full(ng, np.nan))
+
+    def _stopped_at_limit(self, arguments, elapsed: float, stopped_by: str, cpu_time_s: float,
+                          iteration_cap: int | None) -> SolveOutcome:
+        """A call a time limit stopped (``stopped_by``: ``"cpu"`` or ``"wall"``), counted."""
+        self.timeouts += 1
+        stopped = self._stopped(arguments, elapsed, WALL_TIME_STATUS)
+        stopped.stopped_by, stopped.cpu_time_s, stopped.iteration_cap = stopped_by, cpu_time_s, iteration_cap
+        return stopped
 
     def _reap(self) -> tuple[int | None, float | None]:
         """Wait for the ended worker: the signal that ended it (None: it exited) and its whole
