@@ -44,8 +44,9 @@ While a readily apparent reduction of speed is held (``DomainReport.speed_goal_m
 ship overtaking us), the bound comes down from the measured speed at ``SLOWING_SHARE`` of the
 deceleration full astern force and the hull's drag give, to the speed asked for.  While
 speeding up is held instead (``DomainReport.speed_up_goal_mps``, a ship overtaking us that nothing
-else kept clear), the reference speed goes up from the measured speed at ``SPEEDING_SHARE`` of
-the acceleration the ship has left at the speed asked for.  It is a cost, not a bound: a floor
+else kept clear), the reference speed goes up from the speed and time it began at (or from the
+measured speed, where that asks for more) at ``SPEEDING_SHARE`` of the acceleration the ship has
+left at the speed asked for.  It is a cost, not a bound: a floor
 under the speed made the relaxed problem of a ship already inside a domain fail (fatrop),
 33 times in one run, where the cost alone sped the ship up as asked.
 
@@ -411,7 +412,7 @@ class NMPCController(StepBounds):
             # changing sign every interval while the ship rides the bound)
             ref_scaled[2, 1:] = np.clip(ref_scaled[2, 1:], -np.inf if floor is None else floor,
                                         np.inf if ceiling is None else ceiling)
-        speed_asked = self._speed_asked(report, state)
+        speed_asked = self._speed_asked(report, state, time_s)
         if speed_asked is not None:  # speeding up (Rule 17(b)): the speed asked for as it can be reached
             ref_scaled[3, 1:] = np.maximum(ref_scaled[3, 1:], speed_asked / self.speed_scale)
         p = self.problem.parameters(ref_scaled, w_d, w_prev, P, disturbance, slots)

@@ -62,7 +62,7 @@ class ActionDecisions:
     _altered: set[int]
     _onset_heading: dict[int, float]
     _slowing: dict[int, float]
-    _hastening: dict[int, float]
+    _hastening: dict[int, tuple[float, float, float]]  # speed asked for [m/s], since [s], from [m/s]
 
     def _return_floor(self, rows: np.ndarray, classes, state: np.ndarray, own_course: float, own_speed: float,
                       reference_heading_rad: float | None, time_s: float) -> tuple[float, float, float] | None:
@@ -166,7 +166,7 @@ class ActionDecisions:
         if name == "overtaken" and index in self._acting and encounter.tcpa_s > 0.0 and motion is not None and traffic:
             side, size, speed = self._stand_on_action(side, port_allowed, reference_heading_rad, motion, traffic)
         if side == 0.0:  # a change of speed alone
-            self._begin_speed_change(index, encounter, motion[1], speed)
+            self._begin_speed_change(index, encounter, motion[1], speed, time_s)
             return
         goal = self._alteration_goal(index, reference_heading_rad, side, size)
         if name in GIVE_WAY_CLASSES:
@@ -182,12 +182,12 @@ class ActionDecisions:
             side, size, speed = self._action_among_traffic(index, name, side, goal, reference_heading_rad, motion,
                                                            traffic)
             if side == 0.0:
-                self._begin_speed_change(index, encounter, motion[1], speed)
+                self._begin_speed_change(index, encounter, motion[1], speed, time_s)
                 return
             goal = self._alteration_goal(index, reference_heading_rad, side, size)
         self._altering[index] = (time_s, heading_rad, goal, side)
         if speed != 1.0:
-            self._change_speed(index, motion[1], speed)
+            self._change_speed(index, motion[1], speed, time_s)
         self.alterations += 1
         LOG.info("target %d (%s): altering %.0f deg to %s%s (CPA %.0f m in %.0f s)", index, name, size,
                  "starboard" if side > 0 else "port",
@@ -249,17 +249,19 @@ class ActionDecisions:
                     side = -side
         return side if port_allowed else 1.0
 
-    def _change_speed(self, index: int, own_speed_mps: float, factor: float) -> None:
+    def _change_speed(self, index: int, own_speed_mps: float, factor: float, time_s: float) -> None:
         """Hold a change of speed to ``factor`` of ``own_speed_mps`` for a target: a readily
-        apparent reduction (``SLOW_FACTOR``), or speeding up (to the top speed)."""
+        apparent reduction (``SLOW_FACTOR``), or speeding up (to the top speed), which keeps the
+        time ``time_s`` [s] and the speed it began at (its ramp runs from them)."""
         if factor < 1.0:
             self._slowing[index] = factor * own_speed_mps
         else:
-            self._hastening[index] = factor * own_speed_mps
+            self._hastening[index] = (factor * own_speed_mps, time_s, own_speed_mps)
 
-    def _begin_speed_change(self, index: int, encounter, own_speed_mps: float, factor: float) -> None:
+    def _begin_speed_change(self, index: int, encounter, own_speed_mps: float, factor: float,
+                            time_s: float) -> None:
         """Hold a change of speed alone for a target (:meth:`_change_speed`)."""
-        self._change_speed(index, own_speed_mps, factor)
+        self._change_speed(index, own_speed_mps, factor, time_s)
         self.alterations += 1
         LOG.info("target %d (%s): %s to %.0f %% of the speed (CPA %.0f m in %.0f s)", index, encounter.encounter_class,
                  "slowing" if factor < 1.0 else "speeding up", 100.0 * factor, encounter.cpa_m, encounter.tcpa_s)

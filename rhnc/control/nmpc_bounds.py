@@ -64,15 +64,26 @@ class StepBounds:
             headings.append(self._rollout(state, inputs, disturbance)[1:, 2])
         return headings[0], headings[1]
 
-    def _speed_asked(self, report: DomainReport, state: np.ndarray) -> np.ndarray | None:
-        """The speed [m/s] each node after the first is asked for while speeding up is held: up
-        from the measured speed at ``speeding_mps2`` to the speed asked for (within the speed
-        bound), or None."""
+    def _speed_asked(self, report: DomainReport, state: np.ndarray, time_s: float) -> np.ndarray | None:
+        """The speed [m/s] each node after the first is asked for at ``time_s`` [s] while speeding up
+        is held: up at ``speeding_mps2`` from the speed and time it began at
+        (``report.speed_up_since``), or from the measured speed where that asks for more, to the
+        speed asked for (within the speed bound), or None.
+
+        From the measured speed alone, the ramp never asked the ship to make up speed it lost:
+        a stand-on ship turning 35 deg and speeding up shed 18 -> 16.4 kn in the turn, each
+        step's ramp starting lower, and gathered way only once the turn was done, 160 s after
+        the decision (a ship overtaking us at 29 kn then passed 0.91 nm off, where the choice had
+        counted on the ramp)."""
         goal = report.speed_up_goal_mps
         if goal is None:
             return None
         s = self.settings
-        ramp = state[3] + self.speeding_mps2 * np.arange(1, s.horizon_steps + 1) * s.control_interval_s
+        ahead = np.arange(1, s.horizon_steps + 1) * s.control_interval_s
+        ramp = state[3] + self.speeding_mps2 * ahead
+        if report.speed_up_since is not None:
+            since_s, from_mps = report.speed_up_since
+            ramp = np.maximum(ramp, from_mps + self.speeding_mps2 * (time_s - since_s + ahead))
         return np.minimum(ramp, max(min(goal, s.max_speed_mps), 0.0))
 
     def _rate_and_heading_bounds(self, lbx, ubx, state, ref_scaled, w_prev, report, floor, ceiling,

@@ -129,7 +129,8 @@ class DomainReport:
     ``speed_up_goal_mps``: speeding up held as a stand-on ship's action (a ship overtaking us,
     or one crossing from port) when nothing else kept the traffic clear (held only without a
     reduction of speed): the speed [m/s] the plan is asked to come up to, at the acceleration
-    the ship can make, or None.
+    the ship can make, or None; ``speed_up_since``: then, the time [s] it began and the speed
+    [m/s] it began at, where that ramp starts.
     ``alteration_floor`` / ``alteration_ceiling``: a readily apparent alteration to
     starboard / to port, as (time it began [s], heading then [rad], heading to reach
     [rad]), or None; see :func:`rhnc.control.nmpc_alteration.heading_bounds`.
@@ -145,6 +146,7 @@ class DomainReport:
     escape_heading: float | None = None
     speed_goal_mps: float | None = None
     speed_up_goal_mps: float | None = None
+    speed_up_since: tuple[float, float] | None = None
 
 
 class CollisionDomains(ActionDecisions):
@@ -167,7 +169,7 @@ class CollisionDomains(ActionDecisions):
         self._altered: set[int] = set()
         self._onset_heading: dict[int, float] = {}
         self._slowing: dict[int, float] = {}
-        self._hastening: dict[int, float] = {}
+        self._hastening: dict[int, tuple[float, float, float]] = {}
         #: how fast the own ship takes up a manoeuvre, for choosing one (the NMPC sets its ship's)
         self.response = ManoeuvreResponse()
         self.stand_on_actions = 0
@@ -268,8 +270,16 @@ class CollisionDomains(ActionDecisions):
         return slots, DomainReport(codes, active_rows, no_port_turn, floor, ceiling,
                                    bool(risk and not et), danger, _escape_heading(rows, rhos, state, range_rates, inside),
                                    min(self._slowing.values()) if self._slowing and not danger else None,
-                                   max(self._hastening.values()) if self._hastening and not self._slowing
-                                   and not danger else None)
+                                   *self._speed_up(danger))
+
+    def _speed_up(self, danger: bool) -> tuple[float | None, tuple[float, float] | None]:
+        """The speeding up held, as ``DomainReport.speed_up_goal_mps`` and ``speed_up_since``: the
+        fastest asked for, from when and what speed it began (None, None: none held, or a
+        reduction of speed held, or danger)."""
+        if not self._hastening or self._slowing or danger:
+            return None, None
+        goal, since_s, from_mps = max(self._hastening.values())
+        return goal, (since_s, from_mps)
 
     def _out_of_reach(self, row: np.ndarray, offset: np.ndarray, domain_radius: float, state: np.ndarray,
                       closing_mps: float, horizon_s: float) -> bool:

@@ -208,6 +208,25 @@ def test_a_plan_speeding_up_gathers_way_towards_the_speed_asked_for(kcs):
     assert solution.states[-1, 3] >= SPEED + 0.8 * controller.speeding_mps2 * 20.0 * N
 
 
+def test_the_speed_asked_for_runs_from_where_speeding_up_began_not_from_the_speed_lost_since(kcs):
+    # the decision at t = 0 at 18 kn; two minutes later the ship, turning as well, is down to
+    # 16 kn: the plan is asked for the speed the ramp from the decision has reached, which the
+    # choice counted on, not a new ramp from 16 kn
+    domains, report = act(_overtaken_slowly_with_a_ship_crossing_from_port(), response=_kcs_response(kcs))
+    assert report.speed_up_since == (0.0, pytest.approx(SPEED))
+    controller = NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=20.0, colregs=True))
+    controller.close()
+    slowed = STATE.copy()
+    slowed[3] = 16 * KNOT
+    asked = controller._speed_asked(report, slowed, 120.0)
+    ramp = SPEED + controller.speeding_mps2 * (120.0 + 20.0 * np.arange(1, N + 1))
+    assert asked == pytest.approx(np.minimum(ramp, 24 * KNOT))
+    # a ship that made more way than the ramp (a following wind) is asked for more still
+    ahead = STATE.copy()
+    ahead[3] = 21 * KNOT
+    assert controller._speed_asked(report, ahead, 120.0)[0] == pytest.approx(21 * KNOT + controller.speeding_mps2 * 20.0)
+
+
 def test_speeding_up_is_not_chosen_for_a_ship_faster_than_the_top_speed(kcs):
     # a ship right astern at 26 kn, 3 nm off, and only the speed to choose with: speeding up to
     # 24 kn keeps it off for the risk window, and no further; it does not count as clear
