@@ -46,7 +46,9 @@ deceleration full astern force and the hull's drag give, to the speed asked for.
 speeding up is held instead (``DomainReport.speed_up_goal_mps``, a ship overtaking us that nothing
 else kept clear), the reference speed goes up from the speed and time it began at (or from the
 measured speed, where that asks for more) at ``SPEEDING_SHARE`` of the acceleration the ship has
-left at the speed asked for.  It is a cost, not a bound: a floor
+left at the speed asked for, and the reference positions run from the ship along the reference
+course at that speed (the route's positions pulled a ship turned off its route back down to the
+route's speed times the cosine of the turn).  It is a cost, not a bound: a floor
 under the speed made the relaxed problem of a ship already inside a domain fail (fatrop),
 33 times in one run, where the cost alone sped the ship up as asked.
 
@@ -415,6 +417,7 @@ class NMPCController(StepBounds):
         speed_asked = self._speed_asked(report, state, time_s)
         if speed_asked is not None:  # speeding up (Rule 17(b)): the speed asked for as it can be reached
             ref_scaled[3, 1:] = np.maximum(ref_scaled[3, 1:], speed_asked / self.speed_scale)
+            self._track_asked(ref_scaled, state)
         p = self.problem.parameters(ref_scaled, w_d, w_prev, P, disturbance, slots)
         lbx, ubx = self._bounds(state, origin)
         self._rate_and_heading_bounds(lbx, ubx, state, ref_scaled, w_prev, report, floor, ceiling,

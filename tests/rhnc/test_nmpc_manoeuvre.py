@@ -227,6 +227,22 @@ def test_the_speed_asked_for_runs_from_where_speeding_up_began_not_from_the_spee
     assert controller._speed_asked(report, ahead, 120.0)[0] == pytest.approx(21 * KNOT + controller.speeding_mps2 * 20.0)
 
 
+def test_a_plan_turning_and_speeding_up_gathers_way_in_the_turn(kcs):
+    # drawn_020's traffic when the own ship acts: ships overtaking at 25 and 29 kn from the
+    # starboard quarter and one crossing from port that we stand on for; the action is a 35 deg
+    # turn to starboard at the top speed.  The plan must gather way through the turn as the
+    # choice assumed, not shed it to keep near the route it turns away from
+    targets = np.array([sailing(165.4, 2.83, 354.2, 25.06), sailing(136.0, 3.56, 345.6, 29.24),
+                        sailing(-43.4, 2.57, 60.3, 8.66)])
+    controller = NMPCController(kcs, NMPCSettings(horizon_steps=N, control_interval_s=20.0, colregs=True))
+    reference = line_or_turn_reference(20.0 * np.arange(N + 1), (0.0, 0.0), 0.0, SPEED)
+    solution = controller.solve(0.0, STATE, reference, targets, et=True)
+    controller.close()
+    assert controller.domains._hastening and controller.domains._altering and not solution.fallback
+    assert math.degrees(solution.states[-1, 2]) > 30.0
+    assert solution.states[-1, 3] >= SPEED + 0.8 * controller.speeding_mps2 * 20.0 * N
+
+
 def test_speeding_up_is_not_chosen_for_a_ship_faster_than_the_top_speed(kcs):
     # a ship right astern at 26 kn, 3 nm off, and only the speed to choose with: speeding up to
     # 24 kn keeps it off for the risk window, and no further; it does not count as clear
