@@ -360,7 +360,7 @@ class NMPCController(StepBounds):
         cpu_start = time.process_time()
         solution = self._step(time_s, state, reference, obstacles, et, previous_tau)
         here = time.process_time() - cpu_start  # in-process solves: with their new solver objects
-        solution.step_cpu_time_s = (here + solution.solve_cpu_time_s if self.solvers.in_worker
+        solution.step_cpu_time_s = (here + solution.solve_cpu_time_s + solution.build_cpu_s if self.solvers.in_worker
                                     else here - solution.preparation_cpu_s)
         return solution
 
@@ -524,6 +524,7 @@ class NMPCController(StepBounds):
             self.pace.record(outcome.iterations, outcome.cpu_time_s, outcome.stopped_by == "cpu", allowed, cap)
             tally.elapsed += outcome.wall_time_s
             tally.cpu += outcome.cpu_time_s if np.isfinite(outcome.cpu_time_s) else 0.0
+            tally.build += outcome.build_cpu_s
             if outcome.timed_out and stopped_at_cap is not None:
                 break  # the timer ended the going-on: the point it went on from stays the step's
             tally.relaxed, tally.outcome = relaxed, outcome
@@ -561,7 +562,8 @@ class NMPCController(StepBounds):
         failed = self._fail(time_s, step.state, step.previous_tau, attempt.elapsed, attempt.iterations,
                             attempt.status, outcome.f if finite else UNKNOWN, violation, attempt.timed_out,
                             step.disturbance, step.report)
-        failed.solve_cpu_time_s, failed.preparation_cpu_s = attempt.cpu, attempt.preparation
+        failed.solve_cpu_time_s, failed.preparation_cpu_s, failed.build_cpu_s = (attempt.cpu, attempt.preparation,
+                                                                                 attempt.build)
         # with an iteration budget, a relaxed attempt that ran out says nothing of the hard
         # problem's feasibility, and the relaxed problem is the slower one: the next step
         # tries the hard one first (solving the relaxed one alone after such a step failed
@@ -595,7 +597,8 @@ class NMPCController(StepBounds):
                                 cost=outcome.f, constraint_violation=violation, collision_slack=slack,
                                 timed_out=False, disturbance=step.disturbance,
                                 encounter_classes=step.report.class_codes, domain_active=step.report.active)
-        solution.solve_cpu_time_s, solution.preparation_cpu_s = attempt.cpu, attempt.preparation
+        solution.solve_cpu_time_s, solution.preparation_cpu_s, solution.build_cpu_s = (attempt.cpu, attempt.preparation,
+                                                                                       attempt.build)
         self.memory.store(time_s, states, inputs, outcome.lam_x, outcome.lam_g)
         self.memory.clearance_relaxed = slack > 0.0
         if self.observer is not None:
@@ -699,4 +702,5 @@ class _Attempts:
     elapsed: float = 0.0  # wall time of the solver calls [s]
     cpu: float = 0.0  # their processor time [s]
     preparation: float = 0.0  # processor time of fresh solver objects [s]
+    build: float = 0.0  # processor time of solver objects built for a new cap while the step waited [s]
     iterations: int = 0

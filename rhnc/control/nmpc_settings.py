@@ -265,11 +265,15 @@ class NMPCSolution:
         Processor time [s] spent outside the solve on new solver objects (fatrop, after a
         difficult solve: built by the worker after its answer, see
         :mod:`rhnc.control.solver_watchdog`).
+    build_cpu_s : float
+        Processor time [s] of solver objects built within the step for a new iteration cap
+        (outside ``solve_cpu_time_s`` and its limit; part of ``step_cpu_time_s``).
     step_cpu_time_s : float
         Processor time of the whole control step [s]: the controller's own work around the
         solve (reference, domains, warm start, unpacking) in this process, plus the solver
-        calls wherever they ran (the watchdog's worker's share included, its preparation of
-        new solver objects left out as in ``solve_cpu_time_s``).
+        calls wherever they ran (the watchdog's worker's share included, with the solver
+        objects it built for the step's caps; its preparation of new solver objects after an
+        answer left out as in ``solve_cpu_time_s``).
     """
 
     tau: np.ndarray
@@ -289,4 +293,5 @@ class NMPCSolution:
     domain_active: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     solve_cpu_time_s: float = 0.0
     preparation_cpu_s: float = 0.0
+    build_cpu_s: float = 0.0
     step_cpu_time_s: float = 0.0

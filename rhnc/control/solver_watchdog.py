@@ -18,17 +18,20 @@ through a pipe and waits for the answer under two limits,
 When a limit is hit, the child is killed, the call reports ``wall_time_exceeded`` and
 the next call forks a fresh worker.  The processor-time limit is also kept to the
 millisecond: the worker arms a profiling timer (``ITIMER_PROF``, the process's own processor
-time) when it takes a request, ``TIMER_MARGIN_S`` short of the limit (the kernel counts it
+time) when it starts the solver call, ``TIMER_MARGIN_S`` short of the limit (the kernel counts it
 by its clock tick: a 100 ms timer was seen to end a process after 85-103 ms), and the
 timer's signal ends it wherever the solve is, native code included; the parent's check
-every ``POLL_S`` is then only the backstop, ``POLL_GRACE_S`` past the limit.  The processor
+every ``POLL_S`` (the worker's user time since the call started, read from the parent) is
+then only the backstop, ``POLL_GRACE_S`` past the limit.  The processor
 time of a call the timer ended is the worker's user time at its end less its user time when it
-took the request (written to memory shared with the parent); its system time is left out, as
+started the call (written to memory shared with the parent); its system time is left out, as
 it counts the unmapping of the worker's memory at its end (10-90 ms, measured), not the solve.
 
 Iteration caps: a call may ask for an iteration cap (``solve(..., iteration_cap=n)``); the
 worker then serves it with a solver object built by ``factories[name](n)`` (kept, and
-renewed, with that cap while the calls ask for it).  The controller derives the cap from
+renewed, with that cap while the calls ask for it); an object built for a new cap is built
+before the timer is armed, and its processor time is reported apart (``build_cpu_s``), not
+as the solve's.  The controller derives the cap from
 the processor time per iteration it has measured (:mod:`rhnc.control.solve_pace`), so
 that a long solve stops at its cap, at a point it can still use, before the timer ends it
 with nothing.  The pipe adds some 0.1-0.3 ms per solve.  Where
@@ -79,17 +82,6 @@ TIMER_MARGIN_S = 0.02
 POLL_GRACE_S = 0.05
 
 
-def process_cpu_time_s(pid: int | psutil.Process) -> float | None:
-    """User + system processor time [s] of process ``pid`` (or of a psutil ``Process``, which
-    halves the cost of a reading: its identity is not looked up again) so far, or None when it
-    cannot be read (the process is gone, or the platform does not tell)."""
-    try:
-        times = (pid if isinstance(pid, psutil.Process) else psutil.Process(pid)).cpu_times()
-    except psutil.Error:
-        return None
-    return times.user + times.system
-
-
 @dataclasses.dataclass
 class SolveOutcome:
     """What one bounded solve returned.
@@ -129,6 +121,9 @@ class SolveOutcome:
     iteration_cap : int or None
         The iteration cap the call asked for and its solver object had (None: the solver's
         own iteration limit).
+    build_cpu_s : float
+        Processor time [s] of a solver object built for this call, while the caller waited (a
+        new iteration cap): outside the call's processor-time limit and ``cpu_time_s``.
     """
 
     x: np.ndarray
@@ -146,6 +141,7 @@ class SolveOutcome:
     preparation_cpu_s: float = 0.0
     acceptable: bool = False
     iteration_cap: int | None = None
+    build_cpu_s: float = 0.0
 
 
 #: fatrop's return flag (``stats()["fatrop"]["return_flag"]``) for a stop at an acceptable point
@@ -231,7 +227,7 @@ def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, 
     ``cpu_time_s``: the profiling timer ends this process when a call has used that much
     processor time, or the request's own limit when it has one (module docstring);
     ``started``: a shared ``multiprocessing`` value that gets this process's user processor
-    time as each request is taken."""
+    time as each solver call starts."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     signal.signal(signal.SIGPROF, signal.SIG_DFL)  # the timer's signal ends the process
     preparation = dict.fromkeys(solvers, 0.0)
@@ -242,14 +238,20 @@ def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, 
             name, arguments, cap, limit = connection.recv()
         except (EOFError, OSError):
             return
-        if started is not None:
-            started.value = os.times().user
         limit = cpu_time_s if limit is None else limit
-        if limit is not None:
-            signal.setitimer(signal.ITIMER_PROF, max(limit - TIMER_MARGIN_S, limit / 2))
+        built_s = 0.0
         try:
+            # a new cap's object is built before the timer is armed: its building (about 1 ms
+            # compiled, 0.5-1 s interpreted) is not the solve's, and ended by the timer it
+            # failed the step (a calm solve after an ended one, interpreted, on a loaded machine)
             if name not in solvers or caps.get(name) != cap:
+                start = time.process_time()
                 solvers[name], caps[name] = _build(factories[name], cap), cap
+                built_s = time.process_time() - start
+            if started is not None:
+                started.value = os.times().user
+            if limit is not None:
+                signal.setitimer(signal.ITIMER_PROF, max(limit - TIMER_MARGIN_S, limit / 2))
             outcome = _timed_call(solvers[name], arguments)
         except Exception as error:  # noqa: BLE001 - a solver refusing its call: raised by the controller
             signal.setitimer(signal.ITIMER_PROF, 0.0)
@@ -258,9 +260,9 @@ def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, 
             continue
         signal.setitimer(signal.ITIMER_PROF, 0.0)
         # the worker's share of the call: unpacking the request, solving, building the answer
-        outcome.cpu_time_s = time.process_time() - cpu_start
+        outcome.cpu_time_s = time.process_time() - cpu_start - built_s
         outcome.preparation_cpu_s = preparation.get(name, 0.0)
-        outcome.iteration_cap = cap
+        outcome.iteration_cap, outcome.build_cpu_s = cap, built_s
         if not _send(connection, outcome):
             return
         preparation[name] = 0.0
@@ -355,10 +357,13 @@ class BoundedSolver:
         ``iteration_cap``: served by an object built with that cap (module docstring);
         ``cpu_time_s``: this call's processor-time limit, below the solver's own (None: that one)."""
         if not self.in_worker:
+            built_s = 0.0
             if name not in self._solvers or self._caps.get(name) != iteration_cap:
+                start = time.process_time()
                 self._solvers[name], self._caps[name] = _build(self.factories[name], iteration_cap), iteration_cap
+                built_s = time.process_time() - start
             outcome = _timed_call(self._solvers[name], arguments)
-            outcome.iteration_cap = iteration_cap
+            outcome.iteration_cap, outcome.build_cpu_s = iteration_cap, built_s
             if self.renew is not None and self.renew(outcome):  # here the replacement is part of the step
                 start = time.process_time()
                 self._solvers[name] = _build(self.factories[name], iteration_cap)
@@ -368,19 +373,20 @@ class BoundedSolver:
         start = time.perf_counter()
         self._ensure_worker()
         limit = self.cpu_time_s if cpu_time_s is None or self.cpu_time_s is None else min(cpu_time_s, self.cpu_time_s)
+        if self._request_cpu is not None:  # the worker writes its time here as the solver call starts
+            self._request_cpu.value = math.nan
         self._connection.send((name, arguments, iteration_cap, limit))
-        cpu_start = process_cpu_time_s(self._process) if limit is not None else None
         wall_limit = math.inf if self.wall_time_s is None else self.wall_time_s
         while not self._connection.poll(min(POLL_S, wall_limit)):
             elapsed = time.perf_counter() - start
-            cpu = process_cpu_time_s(self._process) if cpu_start is not None else None
-            over_cpu = cpu is not None and cpu - cpu_start > limit + POLL_GRACE_S
+            cpu = self._call_cpu_s() if limit is not None else None
+            over_cpu = cpu is not None and cpu > limit + POLL_GRACE_S
             if elapsed > wall_limit or over_cpu:
                 LOG.warning("NMPC solve stopped at its time limit (%.3g s wall, %s s CPU)", elapsed,
-                            "?" if cpu is None else f"{cpu - cpu_start:.3g}")
+                            "?" if cpu is None else f"{cpu:.3g}")
                 self.close()
                 return self._stopped_at_limit(arguments, elapsed, "cpu" if over_cpu else "wall",
-                                              cpu - cpu_start if cpu is not None else float("nan"), iteration_cap)
+                                              cpu if cpu is not None else float("nan"), iteration_cap)
         try:
             outcome = self._connection.recv()
         except EOFError:  # the worker's timer ended it, or it died (out of memory, a crash in the solver)
@@ -399,6 +405,19 @@ class BoundedSolver:
             raise outcome
         outcome.wall_time_s = time.perf_counter() - start
         return outcome
+
+    def _call_cpu_s(self) -> float | None:
+        """Processor time [s] the worker's solver call has used so far: its user time since the
+        call started (None before it has started: the worker is unpacking the request or building
+        a solver object for a new cap; or when it cannot be read)."""
+        started = self._request_cpu.value if self._request_cpu is not None else math.nan
+        if not math.isfinite(started):
+            return None
+        try:
+            process = self._process if isinstance(self._process, psutil.Process) else psutil.Process(self._process)
+            return process.cpu_times().user - started
+        except (psutil.Error, TypeError, ValueError):
+            return None
 
     @staticmethod
     def _stopped(arguments, elapsed: float, status: str) -> SolveOutcome:
@@ -435,7 +454,7 @@ class BoundedSolver:
         if self._pid is not None:
             return
         parent_end, child_end = multiprocessing.Pipe()
-        # the worker's user processor time when it took its latest request (for a call its timer ends)
+        # the worker's user processor time when its latest solver call started (for a call its timer ends)
         self._request_cpu = multiprocessing.RawValue("d", math.nan)
         parent = os.getpid()
         pid = os.fork()

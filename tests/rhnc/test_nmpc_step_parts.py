@@ -234,7 +234,7 @@ def outcome(problem, *, success=False, acceptable=False, wall_time_s=0.1, iterat
     clearances are not negative)."""
     return SimpleNamespace(x=np.zeros(problem.size), g=np.zeros(problem.lbg.size), f=1.0, success=success,
                            acceptable=acceptable, timed_out=False, wall_time_s=wall_time_s, cpu_time_s=0.0,
-                           preparation_cpu_s=0.0, iterations=iterations, status=status, stopped_by="",
+                           preparation_cpu_s=0.0, build_cpu_s=0.0, iterations=iterations, status=status, stopped_by="",
                            lam_x=np.zeros(problem.size), lam_g=np.zeros(problem.lbg.size))
 
 

@@ -102,6 +102,40 @@ def test_the_worker_serves_a_cap_with_an_object_built_for_it_and_renews_it_with_
     assert built == [None, 40, 40, 40, None, None]
 
 
+def test_building_an_object_for_a_new_cap_is_not_the_solves_time(monkeypatch):
+    # building a solver object takes 0.5-1 s interpreted: for a new cap the worker builds it
+    # before the timer is armed, the parent's check counts from the solver call's start, and the
+    # building is reported apart; a solve of its own under the limit is then not ended
+    monkeypatch.setattr(watchdog, "POLL_S", 0.01)  # the parent checks all through the building
+
+    def slow_to_build(cap=None):
+        busy(0.4)
+        return Burning(0.02, cap)
+
+    bounded = BoundedSolver({"nlp": Burning(0.02)}, {"nlp": slow_to_build}, wall_time_s=60.0, cpu_time_s=0.2)
+    try:
+        outcome = bounded.solve("nlp", x0=np.zeros(1), iteration_cap=40)
+        assert outcome.success and not outcome.timed_out and bounded.timeouts == 0
+        assert outcome.build_cpu_s >= 0.38 and outcome.cpu_time_s < 0.15
+        again = bounded.solve("nlp", x0=np.zeros(1), iteration_cap=40)
+        assert again.success and again.build_cpu_s == 0.0  # kept while the cap stays: no building
+    finally:
+        bounded.close()
+
+    def slow_to_build_and_to_solve(cap=None):
+        busy(0.4)
+        return Burning(8.0, cap)
+
+    # a solve that does go over the limit is still ended, its building left out of its time
+    bounded = BoundedSolver({"nlp": Burning(0.0)}, {"nlp": slow_to_build_and_to_solve}, wall_time_s=60.0,
+                            cpu_time_s=0.2)
+    try:
+        stopped = bounded.solve("nlp", x0=np.zeros(1), iteration_cap=30)
+        assert stopped.timed_out and stopped.stopped_by == "cpu" and 0.1 < stopped.cpu_time_s < 0.3
+    finally:
+        bounded.close()
+
+
 def test_the_same_in_this_process():
     built = []
 
