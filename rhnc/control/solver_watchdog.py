@@ -239,15 +239,11 @@ def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, 
         except (EOFError, OSError):
             return
         limit = cpu_time_s if limit is None else limit
-        built_s = 0.0
         try:
-            # a new cap's object is built before the timer is armed: its building (about 1 ms
+            # a new cap's object is built before the timer is armed: its building (about 3 ms
             # compiled, 0.5-1 s interpreted) is not the solve's, and ended by the timer it
             # failed the step (a calm solve after an ended one, interpreted, on a loaded machine)
-            if name not in solvers or caps.get(name) != cap:
-                start = time.process_time()
-                solvers[name], caps[name] = _build(factories[name], cap), cap
-                built_s = time.process_time() - start
+            built_s = _object_for_cap(solvers, caps, factories, name, cap)
             if started is not None:
                 started.value = os.times().user
             if limit is not None:
@@ -275,6 +271,17 @@ def _serve(connection, solvers: dict[str, ca.Function], factories: Mapping[str, 
 def _build(factory: Callable[..., ca.Function], cap: int | None) -> ca.Function:
     """A new solver object from its factory, with the iteration cap when there is one."""
     return factory() if cap is None else factory(cap)
+
+
+def _object_for_cap(solvers: dict, caps: dict, factories: Mapping[str, Callable[..., ca.Function]], name: str,
+                    cap: int | None) -> float:
+    """Make ``solvers[name]`` an object built with iteration cap ``cap`` (the one there is kept
+    while the calls ask for its cap); returns the processor time [s] the building took (0: kept)."""
+    if name in solvers and caps.get(name) == cap:
+        return 0.0
+    start = time.process_time()
+    solvers[name], caps[name] = _build(factories[name], cap), cap
+    return time.process_time() - start
 
 
 def _send(connection, message) -> bool:
@@ -357,11 +364,7 @@ class BoundedSolver:
         ``iteration_cap``: served by an object built with that cap (module docstring);
         ``cpu_time_s``: this call's processor-time limit, below the solver's own (None: that one)."""
         if not self.in_worker:
-            built_s = 0.0
-            if name not in self._solvers or self._caps.get(name) != iteration_cap:
-                start = time.process_time()
-                self._solvers[name], self._caps[name] = _build(self.factories[name], iteration_cap), iteration_cap
-                built_s = time.process_time() - start
+            built_s = _object_for_cap(self._solvers, self._caps, self.factories, name, iteration_cap)
             outcome = _timed_call(self._solvers[name], arguments)
             outcome.iteration_cap, outcome.build_cpu_s = iteration_cap, built_s
             if self.renew is not None and self.renew(outcome):  # here the replacement is part of the step
